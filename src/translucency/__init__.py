@@ -1,0 +1,36 @@
+"""translucency — measure, fit, evaluate and render heterogeneous translucent materials
+with the empirical subsurface-scattering model of Fuchs, Goesele, Chen and Seidel.
+
+Pipeline: :mod:`translucency.model` → acquire → :mod:`translucency.fit` →
+:mod:`translucency.evaluate` → render, with :mod:`translucency.io` and
+:mod:`translucency.cli` beside.  Units: mm, R_d in mm⁻², σ in mm⁻¹, linear RGB.
+"""
+
+from ._validate import TranslucencyError
+from .io.model_file import ModelFileError, load_model, save_model
+from .model import (
+    MATERIALS,
+    BurleyModel,
+    DipoleModel,
+    ExponentialModel,
+    PlanarAlpha,
+    VertexAlpha,
+    material,
+)
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "TranslucencyError",
+    "ModelFileError",
+    "load_model",
+    "save_model",
+    "ExponentialModel",
+    "DipoleModel",
+    "BurleyModel",
+    "PlanarAlpha",
+    "VertexAlpha",
+    "MATERIALS",
+    "material",
+    "__version__",
+]

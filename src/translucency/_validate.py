@@ -1,0 +1,85 @@
+"""Input validation at the API boundary.
+
+Every user mistake becomes one :class:`TranslucencyError` whose message is a
+single line naming the file, parameter or point at fault.  The CLI prints that
+line and exits with status 2; library callers can catch the exception.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+class TranslucencyError(ValueError):
+    """A user-facing error: one line that names what is wrong and where."""
+
+
+def as_float_array(name: str, value, *, ndim: int | None = None, shape=None) -> np.ndarray:
+    """Convert ``value`` to a float64 array and check its rank, shape and finiteness.
+
+    Parameters
+    ----------
+    name : str
+        The parameter's name, used in the error message.
+    value : array_like
+        The value to check.
+    ndim : int, optional
+        Required number of dimensions.
+    shape : tuple, optional
+        Required shape; ``None`` entries match any length.
+
+    Examples
+    --------
+    >>> as_float_array("pitch", [0.25]).shape
+    (1,)
+    """
+    try:
+        arr = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise TranslucencyError(f"{name}: expected numbers, got {type(value).__name__}") from None
+    if ndim is not None and arr.ndim != ndim:
+        raise TranslucencyError(f"{name}: expected {ndim} dimensions, got shape {arr.shape}")
+    if shape is not None:
+        if arr.ndim != len(shape) or any(s is not None and s != a for s, a in zip(shape, arr.shape)):
+            want = ", ".join("*" if s is None else str(s) for s in shape)
+            want = f"({want},)" if len(shape) == 1 else f"({want})"
+            raise TranslucencyError(f"{name}: expected shape {want}, got {arr.shape}")
+    check_finite(name, arr)
+    return arr
+
+
+def check_finite(name: str, arr: np.ndarray) -> None:
+    """Raise if ``arr`` holds a NaN or an infinity, naming the first bad index."""
+    bad = ~np.isfinite(arr)
+    if bad.any():
+        idx = tuple(int(i) for i in np.argwhere(bad)[0])
+        raise TranslucencyError(f"{name}: non-finite value {arr[idx]} at index {idx}")
+
+
+def check_nonnegative(name: str, arr: np.ndarray) -> None:
+    """Raise if ``arr`` holds a negative entry, naming the first one."""
+    bad = arr < 0
+    if bad.any():
+        idx = tuple(int(i) for i in np.argwhere(bad)[0])
+        raise TranslucencyError(f"{name}: negative value {arr[idx]:g} at index {idx}; must be >= 0")
+
+
+def check_positive(name: str, arr: np.ndarray) -> None:
+    """Raise if ``arr`` holds an entry <= 0, naming the first one."""
+    bad = ~(arr > 0)
+    if bad.any():
+        idx = tuple(int(i) for i in np.argwhere(bad)[0])
+        raise TranslucencyError(f"{name}: value {arr[idx]:g} at index {idx}; must be > 0")
+
+
+def as_index_array(name: str, value, n: int) -> np.ndarray:
+    """Convert ``value`` to an int64 index array with entries in ``[0, n)``."""
+    arr = np.asarray(value)
+    if arr.dtype.kind not in "iu":
+        raise TranslucencyError(f"{name}: expected integer indices, got dtype {arr.dtype}")
+    arr = arr.astype(np.int64)
+    bad = (arr < 0) | (arr >= n)
+    if bad.any():
+        idx = tuple(int(i) for i in np.argwhere(bad)[0])
+        raise TranslucencyError(f"{name}: index {arr[idx]} at {idx} out of range [0, {n})")
+    return arr

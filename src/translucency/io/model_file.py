@@ -1,0 +1,303 @@
+"""The translucency model file, format version 1.
+
+A model file is a Zarr v3 store packed in a single zip file (suggested suffix
+``.model.zip``); any Zarr v3 reader can open it.  No pickle is involved.
+
+Layout::
+
+    /                     group; attrs["translucency_model"] = header (below)
+    x_i                   (N, D) float32   incident points, mm (D = 2 planar, 3 mesh)
+    frame                 (N, 3, 3) float32  mesh only: rows tangent, bitangent, normal
+    alpha/values          (H, W) planar or (V,) mesh; dtype = header["dtype"]
+    alpha/vertices        (V, 3) float32   mesh only: vertex positions, mm
+    params/...            per kind, dtype = header["dtype"]:
+        exponential:  c, d (N, C, m, n) in mm⁻² and mm⁻¹; s_g, s_b (N,) when C = 1
+        dipole:       sigma_a, sigma_s_prime (N, 3) in mm⁻¹
+        burley:       A (N, 3); s (N, 3) in mm⁻¹
+
+Header (JSON): ``format`` = "translucency-model", ``version`` = 1, ``kind``
+("exponential" | "dipole" | "burley"), ``geometry`` ("planar" | "mesh"),
+``dtype`` ("float32" | "float16"), ``units``, ``alpha`` ({origin, pitch} for
+planar), ``eta`` (dipole), ``meta`` (free-form provenance), ``software`` and
+``checksum``: the SHA-256 of every array's decoded bytes in a fixed order, so
+that corruption that survives decompression is still caught.
+
+Arrays are compressed with Blosc (zstd, byte shuffle), one chunk per field (all
+points of one parameter, term and direction), which keeps spatially coherent
+values together; parameter arrays may be stored as float16 to make models small.  Writes go to a temporary file in the
+target directory and are moved into place with an atomic rename.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import warnings
+import zipfile
+from pathlib import Path
+
+import numpy as np
+
+from .._validate import TranslucencyError
+from ..model import BurleyModel, DipoleModel, ExponentialModel, PlanarAlpha, VertexAlpha
+from ..model._base import ReflectanceModel
+from .atomic import atomic_path
+
+FORMAT = "translucency-model"
+VERSION = 1
+HEADER_KEY = "translucency_model"
+
+#: parameter arrays of each model kind, in checksum order
+_PARAMS = {
+    "exponential": ("c", "d", "s_g", "s_b"),
+    "dipole": ("sigma_a", "sigma_s_prime"),
+    "burley": ("A", "s"),
+}
+
+
+class ModelFileError(TranslucencyError):
+    """A model file that cannot be read or is not valid; the message names the file."""
+
+
+# -- writing -------------------------------------------------------------------
+def _model_arrays(model: ReflectanceModel, dtype: str) -> dict[str, np.ndarray]:
+    """Every array of the file, keyed by its path in the store, already cast."""
+    params = {name: getattr(model, name) for name in _PARAMS[model.kind]}
+    with np.errstate(over="ignore"):  # overflow in the cast is reported by save_model
+        return _cast_arrays(model, params, dtype)
+
+
+def _cast_arrays(model: ReflectanceModel, params: dict, dtype: str) -> dict[str, np.ndarray]:
+    arrays = {"x_i": model.x_i.astype(np.float32)}
+    if model.frame is not None:
+        arrays["frame"] = model.frame.astype(np.float32)
+    arrays["alpha/values"] = model.alpha.values.astype(dtype)
+    if isinstance(model.alpha, VertexAlpha):
+        arrays["alpha/vertices"] = model.alpha.vertices.astype(np.float32)
+    for name, value in params.items():
+        if value is not None:
+            arrays[f"params/{name}"] = value.astype(dtype)
+    return arrays
+
+
+def _checksum(arrays: dict[str, np.ndarray]) -> str:
+    h = hashlib.sha256()
+    for key in sorted(arrays):
+        a = np.ascontiguousarray(arrays[key])
+        h.update(f"{key}:{a.dtype.str}:{a.shape}".encode())
+        h.update(a.tobytes())
+    return h.hexdigest()
+
+
+def save_model(model: ReflectanceModel, path, *, dtype: str = "float32", meta: dict | None = None) -> Path:
+    """Write ``model`` to ``path`` atomically.
+
+    Parameters
+    ----------
+    model : ExponentialModel, DipoleModel or BurleyModel
+        The model to store.
+    path : str or Path
+        Destination; an existing file is replaced only once the new one is
+        complete.
+    dtype : {"float32", "float16"}
+        Storage precision of parameters and α (positions and frames stay
+        float32).  float16 halves the size; a value that would not survive the
+        cast (overflow, or a d that rounds to 0 and breaks eq. (2)) is refused.
+    meta : dict, optional
+        JSON-serialisable provenance stored in the header.
+
+    Returns
+    -------
+    Path
+        The written file.
+
+    Examples
+    --------
+    >>> import tempfile, translucency as tl
+    >>> m = tl.ExponentialModel([[0.0, 0.0]], [[[[1.0]]]], [[[[-2.0]]]],
+    ...                         tl.PlanarAlpha.uniform((2, 2)), s_g=[1.0], s_b=[1.0])
+    >>> p = save_model(m, tempfile.mkdtemp() + "/m.model.zip")
+    >>> load_model(p).d.ravel()
+    array([-2.])
+    """
+    path = Path(path)
+    if dtype not in ("float32", "float16"):
+        raise TranslucencyError(f"dtype: expected 'float32' or 'float16', got {dtype!r}")
+    if not isinstance(model, (ExponentialModel, DipoleModel, BurleyModel)):
+        raise TranslucencyError(f"model: cannot store a {type(model).__name__}")
+    arrays = _model_arrays(model, dtype)
+    # the stored (cast) values must still form a valid model
+    for key, a in arrays.items():
+        if not np.isfinite(a).all():
+            raise TranslucencyError(f"{path}: {key} overflows {dtype}; store with dtype='float32'")
+    try:
+        _from_arrays(arrays, _header(model, dtype, meta, ""))
+    except TranslucencyError as exc:
+        raise TranslucencyError(f"{path}: not representable in {dtype}: {exc}") from None
+
+    _write_store(path, _header(model, dtype, meta, _checksum(arrays)), arrays)
+    return path
+
+
+def _write_store(path: Path, header: dict, arrays: dict[str, np.ndarray]) -> None:
+    """Pack a header and arrays into a zipped Zarr v3 store at ``path``, atomically."""
+    import zarr
+    from zarr.codecs import BloscCodec
+
+    with atomic_path(path) as tmp:
+        tmp.unlink()  # ZipStore creates the archive itself
+        store = zarr.storage.ZipStore(tmp, mode="w")
+        root = zarr.create_group(store, attributes={HEADER_KEY: header})
+        compressor = BloscCodec(cname="zstd", clevel=9, shuffle="shuffle")
+        for key, a in arrays.items():
+            # one chunk per field over all points (e.g. c of term k, direction l): neighbouring
+            # points have similar values, which the bit-shuffle + zstd compressor exploits
+            chunks = a.shape if key.startswith("alpha/") else (a.shape[0],) + (1,) * (a.ndim - 1)
+            root.create_array(key, shape=a.shape, dtype=a.dtype, chunks=chunks,
+                              compressors=compressor)[...] = a
+        store.close()
+
+
+def _header(model: ReflectanceModel, dtype: str, meta: dict | None, checksum: str) -> dict:
+    from .. import __version__
+
+    header = {
+        "format": FORMAT,
+        "version": VERSION,
+        "kind": model.kind,
+        "geometry": model.geometry,
+        "dtype": dtype,
+        "units": {"length": "mm", "R_d": "mm^-2", "c": "mm^-2", "d": "mm^-1", "sigma": "mm^-1"},
+        "n_points": model.n_points,
+        "software": {"translucency": __version__},
+        "meta": meta or {},
+        "checksum": checksum,
+    }
+    if isinstance(model.alpha, PlanarAlpha):
+        header["alpha"] = {"origin": [float(v) for v in model.alpha.origin], "pitch": model.alpha.pitch}
+    if isinstance(model, DipoleModel):
+        header["eta"] = model.eta
+    if isinstance(model, ExponentialModel):
+        header.update(n_terms=model.n_terms, n_directions=model.n_directions, colour=model.colour)
+    try:
+        json.dumps(header)
+    except TypeError as exc:
+        raise TranslucencyError(f"meta: not JSON-serialisable ({exc})") from None
+    return header
+
+
+# -- reading -------------------------------------------------------------------
+def _from_arrays(arrays: dict[str, np.ndarray], header: dict) -> ReflectanceModel:
+    """Build (and so validate) a model from decoded arrays and the header."""
+    x_i = arrays["x_i"]
+    frame = arrays.get("frame")
+    if header["geometry"] == "planar":
+        a = header["alpha"]
+        alpha = PlanarAlpha(arrays["alpha/values"], np.asarray(a["origin"]), a["pitch"])
+    else:
+        alpha = VertexAlpha(arrays["alpha/values"], arrays["alpha/vertices"])
+    p = {name: arrays.get(f"params/{name}") for name in _PARAMS[header["kind"]]}
+    if header["kind"] == "exponential":
+        return ExponentialModel(x_i, p["c"], p["d"], alpha, s_g=p["s_g"], s_b=p["s_b"], frame=frame)
+    if header["kind"] == "dipole":
+        return DipoleModel(x_i, p["sigma_a"], p["sigma_s_prime"], header["eta"], alpha, frame=frame)
+    return BurleyModel(x_i, p["A"], p["s"], alpha, frame=frame)
+
+
+def _required(header: dict) -> list[str]:
+    keys = ["x_i", "alpha/values"]
+    if header["geometry"] == "mesh":
+        keys += ["frame", "alpha/vertices"]
+    params = _PARAMS[header["kind"]]
+    if header["kind"] == "exponential" and header.get("colour") != "shared":
+        params = ("c", "d")
+    return keys + [f"params/{p}" for p in params]
+
+
+def read_header(path) -> dict:
+    """The JSON header of a model file, checked for format and version."""
+    return _open(Path(path))[1]
+
+
+def _open(path: Path):
+    import zarr
+
+    if not path.exists():
+        raise ModelFileError(f"{path}: no such file")
+    if not zipfile.is_zipfile(path):
+        raise ModelFileError(f"{path}: not a translucency model file (not a zip archive; truncated or corrupted?)")
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            store = zarr.storage.ZipStore(path, mode="r")
+            root = zarr.open_group(store, mode="r")
+            header = dict(root.attrs).get(HEADER_KEY)
+    except Exception as exc:  # noqa: BLE001 — any failure of the container is the file's fault
+        raise ModelFileError(f"{path}: unreadable model file ({type(exc).__name__}: {_first_line(exc)})") from None
+    if not isinstance(header, dict) or header.get("format") != FORMAT:
+        raise ModelFileError(f"{path}: not a translucency model file (no '{HEADER_KEY}' header)")
+    version = header.get("version")
+    if version != VERSION:
+        raise ModelFileError(f"{path}: format version {version!r} is not supported (this reader knows {VERSION})")
+    for key, allowed in (("kind", tuple(_PARAMS)), ("geometry", ("planar", "mesh")),
+                         ("dtype", ("float32", "float16"))):
+        if header.get(key) not in allowed:
+            raise ModelFileError(f"{path}: header field {key!r} = {header.get(key)!r}, expected one of {allowed}")
+    return root, header
+
+
+def _first_line(exc: Exception) -> str:
+    text = str(exc).strip().splitlines()
+    return text[0][:200] if text else "no detail"
+
+
+def load_model(path) -> ReflectanceModel:
+    """Read and validate a model file.
+
+    Checks the format name and version, the presence, shapes, dtypes and
+    finiteness of every array, eq. (2) and the checksum; any fault raises
+    :class:`ModelFileError` with one line naming the file and the fault.
+
+    Parameters
+    ----------
+    path : str or Path
+        A file written by :func:`save_model`.
+
+    Returns
+    -------
+    ExponentialModel, DipoleModel or BurleyModel
+    """
+    path = Path(path)
+    root, header = _open(path)
+    want_dtype = np.dtype(header["dtype"])
+    arrays = {}
+    required = _required(header)
+    optional = [k for k in ("params/s_g", "params/s_b") if k not in required]
+    for key in required + optional:
+        try:
+            arr = root[key]
+        except KeyError:
+            if key in required:
+                raise ModelFileError(f"{path}: missing array {key!r}") from None
+            continue
+        except Exception as exc:  # noqa: BLE001
+            raise ModelFileError(f"{path}: unreadable array {key!r} ({_first_line(exc)})") from None
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                a = np.asarray(arr[...])
+        except Exception as exc:  # noqa: BLE001 — CRC or codec failures: corrupted data
+            raise ModelFileError(f"{path}: array {key!r} is corrupted ({type(exc).__name__}: {_first_line(exc)})") from None
+        expect = np.float32 if key in ("x_i", "frame", "alpha/vertices") else want_dtype
+        if a.dtype != expect:
+            raise ModelFileError(f"{path}: array {key!r} has dtype {a.dtype}, expected {np.dtype(expect)}")
+        if not np.isfinite(a).all():
+            idx = tuple(int(v) for v in np.argwhere(~np.isfinite(a))[0])
+            raise ModelFileError(f"{path}: array {key!r} holds a non-finite value at index {idx}")
+        arrays[key] = a
+    if _checksum(arrays) != header.get("checksum"):
+        raise ModelFileError(f"{path}: checksum mismatch: the file's arrays were altered or corrupted")
+    try:
+        return _from_arrays({k: v.astype(np.float64) for k, v in arrays.items()}, header)
+    except (TranslucencyError, KeyError, TypeError) as exc:
+        raise ModelFileError(f"{path}: invalid model: {_first_line(exc)}") from None

@@ -1,0 +1,217 @@
+"""The model file: exact round trips; corrupted, truncated, wrong-version, NaN-bearing
+and eq. (2)-violating files are refused with one line naming the file and the fault."""
+
+import json
+import zipfile
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from conftest import random_exponential_model
+from translucency import ModelFileError, TranslucencyError, load_model, save_model
+from translucency.io import model_file as mf
+from translucency.model import MATERIALS, BurleyModel, DipoleModel, PlanarAlpha
+
+
+def assert_same(a, b):
+    assert type(a) is type(b)
+    np.testing.assert_array_equal(a.x_i, b.x_i)
+    np.testing.assert_array_equal(a.alpha.values, b.alpha.values)
+    for name in mf._PARAMS[a.kind]:
+        va, vb = getattr(a, name), getattr(b, name)
+        assert (va is None) == (vb is None)
+        if va is not None:
+            np.testing.assert_array_equal(va, vb)
+
+
+@pytest.mark.parametrize("dtype", ["float32", "float16"])
+@pytest.mark.parametrize("m,colour,geometry", [(1, "shared", "planar"), (8, "shared", "planar"),
+                                               (8, "per-channel", "planar"), (1, "shared", "mesh")])
+def test_round_trip_is_exact(tmp_path, rng, dtype, m, colour, geometry):
+    model = random_exponential_model(rng, n_points=6, m=m, colour=colour, geometry=geometry)
+    path = save_model(model, tmp_path / "m.model.zip", dtype=dtype, meta={"sample": "test"})
+    back = load_model(path)
+    assert_same(model, back)
+    if geometry == "mesh":
+        np.testing.assert_array_equal(model.frame, back.frame)
+    assert mf.read_header(path)["meta"] == {"sample": "test"}
+
+
+def test_baseline_models_round_trip(tmp_path):
+    mats = [MATERIALS["marble"], MATERIALS["apple"]]
+    alpha = PlanarAlpha.uniform((3, 3))
+    sa = np.array([m.sigma_a for m in mats]).astype(np.float32).astype(float)
+    sp = np.array([m.sigma_s_prime for m in mats]).astype(np.float32).astype(float)
+    dip = DipoleModel([[0, 0], [1, 1]], sa, sp, 1.3, alpha)
+    bur = BurleyModel([[0, 0], [1, 1]], [[0.5, 0.5, 0.25]] * 2, [[1.0, 2.0, 0.5]] * 2, alpha)
+    for model in (dip, bur):
+        back = load_model(save_model(model, tmp_path / f"{model.kind}.model.zip"))
+        assert_same(model, back)
+    assert load_model(tmp_path / "dipole.model.zip").eta == pytest.approx(1.3)
+
+
+def test_float16_refuses_values_it_cannot_hold(tmp_path, rng):
+    model = random_exponential_model(rng, n_points=2)
+    model.d[0, 0, 0, 0] = -1e-9  # rounds to -0.0 in float16: eq. (2) would break
+    with pytest.raises(TranslucencyError, match="not representable in float16: eq. \\(2\\) violated at incident point 0"):
+        save_model(model, tmp_path / "m.model.zip", dtype="float16")
+    model.d[0, 0, 0, 0] = -1.0
+    model.c[1, 0, 0, 2] = 1e6
+    with pytest.raises(TranslucencyError, match="params/c overflows float16"):
+        save_model(model, tmp_path / "m.model.zip", dtype="float16")
+    assert not (tmp_path / "m.model.zip").exists()
+    assert list(tmp_path.iterdir()) == []  # no temporary debris
+
+
+def test_failed_write_keeps_the_old_file(tmp_path, rng, monkeypatch):
+    path = save_model(random_exponential_model(rng), tmp_path / "m.model.zip")
+    before = path.read_bytes()
+
+    def boom(*a, **k):
+        raise OSError("disk full")
+
+    monkeypatch.setattr(mf, "_checksum", lambda arrays: "x")
+    import zarr
+
+    monkeypatch.setattr(zarr, "create_group", boom)
+    with pytest.raises(OSError):
+        save_model(random_exponential_model(rng), path)
+    assert path.read_bytes() == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["m.model.zip"]
+
+
+@pytest.fixture(scope="module")
+def good_file(tmp_path_factory):
+    rng = np.random.default_rng(7)
+    model = random_exponential_model(rng, n_points=8, m=8)
+    path = save_model(model, tmp_path_factory.mktemp("good") / "m.model.zip", dtype="float16")
+    return path, model
+
+
+def _one_line(exc, path):
+    msg = str(getattr(exc, "value", exc))
+    assert "\n" not in msg
+    assert str(path) in msg
+    return msg
+
+
+@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(data=st.data())
+def test_corrupted_byte_is_refused_or_harmless(tmp_path, good_file, data):
+    """Flip one byte anywhere: the file is refused with a one-line error, or — when the byte
+    was one no reader depends on (a timestamp, say) — loads as exactly the same model."""
+    path, model = good_file
+    raw = bytearray(path.read_bytes())
+    pos = data.draw(st.integers(0, len(raw) - 1))
+    raw[pos] ^= data.draw(st.integers(1, 255))
+    bad = tmp_path / f"bad-{pos}.model.zip"
+    bad.write_bytes(bytes(raw))
+    try:
+        back = load_model(bad)
+    except ModelFileError as exc:
+        _one_line(exc, bad)
+    else:
+        assert_same(model, back)
+
+
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(frac=st.floats(0.0, 0.999))
+def test_truncated_file_is_refused(tmp_path, good_file, frac):
+    path, _ = good_file
+    raw = path.read_bytes()
+    bad = tmp_path / "trunc.model.zip"
+    bad.write_bytes(raw[: int(frac * len(raw))])
+    with pytest.raises(ModelFileError) as exc:
+        load_model(bad)
+    _one_line(exc, bad)
+
+
+def _rewrite(src, dst, edit_header=None, edit_arrays=None, fix_checksum=True):
+    """Re-pack a model file with a doctored header or arrays (bypassing save_model's checks)."""
+    root, header = mf._open(src)
+    arrays = {k: np.asarray(root[k][...]) for k in mf._required(header)}
+    if edit_arrays:
+        edit_arrays(arrays)
+    if fix_checksum:
+        header["checksum"] = mf._checksum(arrays)
+    if edit_header:
+        edit_header(header)
+    mf._write_store(dst, header, arrays)
+    return dst
+
+
+@pytest.mark.parametrize("version", [0, 2, "1", None])
+def test_wrong_version_is_refused(tmp_path, good_file, version):
+    bad = _rewrite(good_file[0], tmp_path / "v.model.zip", edit_header=lambda h: h.update(version=version))
+    with pytest.raises(ModelFileError, match="format version .* is not supported") as exc:
+        load_model(bad)
+    _one_line(exc, bad)
+
+
+@pytest.mark.parametrize("key,index", [("params/c", (3, 0, 5, 1)), ("params/d", (0, 0, 0, 0)),
+                                       ("alpha/values", (2, 2)), ("x_i", (1, 0))])
+def test_nan_is_refused(tmp_path, good_file, key, index):
+    def poison(arrays):
+        arrays[key] = arrays[key].copy()
+        arrays[key][index] = np.nan
+
+    bad = _rewrite(good_file[0], tmp_path / "nan.model.zip", edit_arrays=poison)
+    with pytest.raises(ModelFileError, match=f"array '{key}' holds a non-finite value at index") as exc:
+        load_model(bad)
+    _one_line(exc, bad)
+
+
+def test_eq2_violation_is_refused(tmp_path, good_file):
+    def flip(arrays):
+        arrays["params/d"] = arrays["params/d"].copy()
+        arrays["params/d"][5, 0, 2, 1] = 0.5
+
+    bad = _rewrite(good_file[0], tmp_path / "eq2.model.zip", edit_arrays=flip)
+    with pytest.raises(ModelFileError, match=r"invalid model: eq. \(2\) violated at incident point 5: "
+                                             r"d\[channel block 0, direction 2, term 1\] = 0.5") as exc:
+        load_model(bad)
+    _one_line(exc, bad)
+
+
+def test_altered_values_fail_the_checksum(tmp_path, good_file):
+    def nudge(arrays):
+        arrays["params/c"] = arrays["params/c"] * np.float16(1.5)
+
+    bad = _rewrite(good_file[0], tmp_path / "sum.model.zip", edit_arrays=nudge, fix_checksum=False)
+    with pytest.raises(ModelFileError, match="checksum mismatch"):
+        load_model(bad)
+
+
+def test_wrong_shape_and_dtype_and_missing_are_refused(tmp_path, good_file):
+    def reshape(arrays):
+        arrays["params/s_g"] = arrays["params/s_g"][:-1]
+
+    bad = _rewrite(good_file[0], tmp_path / "shape.model.zip", edit_arrays=reshape)
+    with pytest.raises(ModelFileError, match=r"invalid model: s_g: expected shape \(8,\), got \(7,\)"):
+        load_model(bad)
+
+    def retype(arrays):
+        arrays["params/c"] = arrays["params/c"].astype(np.float64)
+
+    bad = _rewrite(good_file[0], tmp_path / "dtype.model.zip", edit_arrays=retype)
+    with pytest.raises(ModelFileError, match="array 'params/c' has dtype float64, expected float16"):
+        load_model(bad)
+
+    bad = _rewrite(good_file[0], tmp_path / "miss.model.zip", edit_arrays=lambda a: a.pop("params/d"))
+    with pytest.raises(ModelFileError, match="missing array 'params/d'"):
+        load_model(bad)
+
+
+def test_not_a_model(tmp_path):
+    p = tmp_path / "x.model.zip"
+    p.write_text("hello")
+    with pytest.raises(ModelFileError, match="not a zip archive"):
+        load_model(p)
+    with zipfile.ZipFile(p, "w") as z:
+        z.writestr("zarr.json", json.dumps({"zarr_format": 3, "node_type": "group", "attributes": {}}))
+    with pytest.raises(ModelFileError, match="no 'translucency_model' header"):
+        load_model(p)
+    with pytest.raises(ModelFileError, match="no such file"):
+        load_model(tmp_path / "absent.model.zip")
