@@ -91,8 +91,20 @@ def materials(
 
 @app.command()
 @user_errors
-def info(path: Path = typer.Argument(..., help="A model file (.model.zip).")):
-    """Describe a model file: kind, geometry, sizes, parameter ranges, size on disk, validity."""
+def info(path: Path = typer.Argument(..., help="A model file (.model.zip) or a data set (.zarr directory).")):
+    """Describe a model file or a data set: what it holds, its size on disk, whether it is valid."""
+    if path.is_dir():
+        from ..io.dataset import describe, open_dataset
+
+        table = Table(title=str(path), show_header=False)
+        for key, value in describe(open_dataset(path)).items():
+            table.add_row(f"[bold]{key}[/]", str(value))
+        console.print(table)
+        return
+    _info_model(path)
+
+
+def _info_model(path: Path) -> None:
     from ..io.model_file import ModelFileError, load_model, read_header
 
     size = path.stat().st_size if path.exists() else 0
@@ -122,6 +134,53 @@ def info(path: Path = typer.Argument(..., help="A model file (.model.zip).")):
     table.add_row("total R_d (R,G,B)", "mean " + " ".join(f"{v:.4g}" for v in total.mean(axis=0)))
     table.add_row("99.9% energy radius", f"{np.min(radius):.3g} … {np.max(radius):.3g} mm")
     console.print(table)
+
+
+acquire_app = typer.Typer(help="Virtual DISCO: simulate measurements by photon transport (Mitsuba 3 / Dr.Jit).",
+                          no_args_is_help=True)
+app.add_typer(acquire_app, name="acquire")
+
+
+@acquire_app.command("planar")
+@user_errors
+def acquire_planar_cmd(
+    out: Path = typer.Option(..., "--out", "-o", help="Output data set (Zarr directory)."),
+    material: str = typer.Option(None, "--material", "-m",
+                                 help="Sample generator: homogeneous:<name>, marble, apple-slice, skin, fibers."),
+    volume: Path = typer.Option(None, "--volume", help="A user's volume: .npz with sigma_s, sigma_a (Z,Y,X,3) in 1/mm, voxel_mm."),
+    photons: int = typer.Option(10_000, "--photons", "-N", help="Photons per incident point and channel."),
+    seed: int = typer.Option(0, "--seed", help="Random seed (results are deterministic for a seed)."),
+    grid: int = typer.Option(8, "--grid", help="Incident points per axis (grid x grid)."),
+    span: float = typer.Option(8.0, "--span", help="Side of the incident grid, mm (centred on the sample)."),
+    pitch: float = typer.Option(0.25, "--pitch", help="Pixel size, mm."),
+    window: float = typer.Option(8.0, "--window", help="Window side around each incident point, mm."),
+    size: tuple[float, float, float] = typer.Option((20.0, 20.0, 8.0), "--size",
+                                                    help="Generated slab: width height thickness, mm."),
+    voxel: float = typer.Option(0.25, "--voxel", help="Voxel size of generated samples, mm."),
+    g: float = typer.Option(0.0, "--g", help="Henyey-Greenstein anisotropy of generated samples."),
+    angle: float = typer.Option(0.0, "--angle", help="Angle of incidence from the normal, degrees."),
+    index_matched: bool = typer.Option(False, "--index-matched", help="No Fresnel reflection at the boundary."),
+    chunk: int = typer.Option(16, "--chunk", help="Incident points per chunk (unit of resuming)."),
+    dtype: str = typer.Option("float32", "--dtype", help="Storage of R_d and variance: float32 or float16."),
+    overwrite: bool = typer.Option(False, "--overwrite", help="Replace a data set made with other arguments."),
+):
+    """Scan a pencil beam over a planar sample and record R_d around each incident point."""
+    from ..acquire import PlanarSetup, acquire_planar, estimate_seconds, load_volume, make_sample
+
+    if (material is None) == (volume is None):
+        raise TranslucencyError("give exactly one of --material NAME or --volume FILE.npz")
+    vol = load_volume(volume) if volume is not None else make_sample(material, size, voxel, g=g, seed=seed)
+    setup = PlanarSetup(grid=(grid, grid), span=(span, span), pitch=pitch, window=window, photons=photons,
+                        seed=seed, theta_inc_deg=angle, index_matched=index_matched, chunk_points=chunk, dtype=dtype)
+    setup.check(vol)
+    est = estimate_seconds(vol, setup)
+    err_console.print(f"{grid * grid} incident points x {photons:,} photons x 3 channels on a "
+                      f"{' x '.join(f'{v:g}' for v in vol.size_mm)} mm slab; estimated time ~{est:.0f} s")
+    with progress() as bar:
+        task = bar.add_task("acquire", total=grid * grid, item="")
+        acquire_planar(vol, setup, out, overwrite=overwrite,
+                       progress=lambda done, total: bar.update(task, completed=done, item=f"points"))
+    console.print(f"data set: {out}")
 
 
 def main() -> None:

@@ -1,0 +1,62 @@
+"""Start Dr.Jit / Mitsuba 3 on the right backend.
+
+On the CPU, Dr.Jit's LLVM backend needs a libLLVM >= 16.  We take it from the
+``karellen-llvm-core`` wheel (PyPI), so nothing has to come from apt:
+``DRJIT_LIBLLVM_PATH`` must point at it *before* drjit is imported.  A CUDA
+device, when present, is used automatically (``TRANSLUCENCY_BACKEND=llvm`` or
+``=cuda`` forces one).
+"""
+
+from __future__ import annotations
+
+import os
+from functools import lru_cache
+
+from .._validate import TranslucencyError
+
+
+def _find_libllvm() -> str | None:
+    """Path of libLLVM.so shipped by the karellen-llvm-core wheel, if installed."""
+    try:
+        from importlib.metadata import PackageNotFoundError, distribution
+    except ImportError:  # pragma: no cover
+        return None
+    try:
+        dist = distribution("karellen-llvm-core")
+    except PackageNotFoundError:
+        return None
+    for f in dist.files or ():
+        if f.name.startswith("libLLVM") and ".so" in f.name:
+            path = os.path.realpath(dist.locate_file(f))
+            if os.path.exists(path):
+                return path
+    return None
+
+
+@lru_cache(maxsize=1)
+def mitsuba(variant: str | None = None):
+    """Import Mitsuba 3 with a suitable variant and return the module.
+
+    ``variant`` defaults to ``cuda_ad_rgb`` when a CUDA device works and to
+    ``llvm_ad_rgb`` otherwise.
+    """
+    if "DRJIT_LIBLLVM_PATH" not in os.environ:
+        lib = _find_libllvm()
+        if lib:
+            os.environ["DRJIT_LIBLLVM_PATH"] = lib
+    try:
+        import drjit as dr
+        import mitsuba as mi
+    except ImportError as exc:  # pragma: no cover - dependency missing
+        raise TranslucencyError(f"mitsuba/drjit not importable ({exc}); reinstall translucency") from None
+    forced = os.environ.get("TRANSLUCENCY_BACKEND", "").lower()
+    if variant is None:
+        cuda_ok = forced != "llvm" and dr.has_backend(dr.JitBackend.CUDA)
+        if forced == "cuda" and not cuda_ok:
+            raise TranslucencyError("TRANSLUCENCY_BACKEND=cuda, but no CUDA device is available")
+        variant = "cuda_ad_rgb" if cuda_ok else "llvm_ad_rgb"
+    if variant.startswith("llvm") and not dr.has_backend(dr.JitBackend.LLVM):
+        raise TranslucencyError("Dr.Jit's LLVM backend is unavailable: libLLVM >= 16 not found "
+                                "(install karellen-llvm-core or set DRJIT_LIBLLVM_PATH)")
+    mi.set_variant(variant)
+    return mi

@@ -1,0 +1,226 @@
+"""Virtual DISCO on a planar slab: a grid of pencil beams, a window of pixels around each.
+
+For every incident point x_i of a regular grid and every channel, photons
+are traced by :func:`~translucency.acquire.transport.random_walk` and those
+leaving through the top face are counted per pixel of the window around x_i:
+
+    R_d = n_px / (N · pitch²)  [mm⁻²],   Var(R_d) = p̂ (1 − p̂) / (N · pitch⁴),  p̂ = n_px / N.
+
+Incident points are snapped to pixel centres of one lattice over the sample
+(pixel [row, col] centred at pitch · (col + 1/2, row + 1/2)), and windows have
+an odd number of pixels with x_i at the centre pixel, so windows of different
+points align on the same outgoing pixels (what the modulation-texture fit
+needs).  Work runs in chunks of incident points; each finished chunk is
+flagged in the data set, and a re-run with the same arguments resumes.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Callable
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+from .._validate import TranslucencyError
+from ..io.dataset import FORMAT, VERSION, create_dataset
+from .transport import TOP, check_memory, random_walk
+from .volume import Volume
+
+
+@dataclass(frozen=True)
+class PlanarSetup:
+    """Arguments of a planar acquisition (lengths in mm).
+
+    ``grid``: incident points (nx, ny); ``span``: extent (mm) of the incident
+    grid, centred on the slab; ``pitch``: pixel size; ``window``: window side.
+    """
+
+    grid: tuple[int, int] = (8, 8)
+    span: tuple[float, float] = (8.0, 8.0)
+    pitch: float = 0.25
+    window: float = 8.0
+    photons: int = 10_000
+    seed: int = 0
+    theta_inc_deg: float = 0.0
+    index_matched: bool = False
+    chunk_points: int = 16
+    dtype: str = "float32"
+
+    def check(self, volume: Volume) -> None:
+        """Refuse bad arguments before any work, naming the parameter."""
+        W, H, _ = volume.size_mm
+        if min(self.grid) < 1:
+            raise TranslucencyError(f"grid: need at least one incident point per axis, got {self.grid}")
+        if not (np.isfinite(self.pitch) and self.pitch > 0):
+            raise TranslucencyError(f"pitch: must be a positive length in mm, got {self.pitch}")
+        if not (np.isfinite(self.window) and self.window >= self.pitch):
+            raise TranslucencyError(f"window: must be at least one pixel ({self.pitch} mm), got {self.window}")
+        if self.window > min(W, H):
+            raise TranslucencyError(f"window: {self.window} mm is larger than the sample ({W:g} x {H:g} mm)")
+        if any(not (0 <= s <= lim) for s, lim in zip(self.span, (W, H))):
+            raise TranslucencyError(f"span: incident grid {self.span} mm does not fit on the {W:g} x {H:g} mm sample")
+        if self.photons < 1:
+            raise TranslucencyError(f"photons: must be >= 1, got {self.photons}")
+        if not 0 <= self.theta_inc_deg < 90:
+            raise TranslucencyError(f"angle: must lie in [0, 90) degrees, got {self.theta_inc_deg}")
+        if self.dtype not in ("float32", "float16"):
+            raise TranslucencyError(f"dtype: expected float32 or float16, got {self.dtype!r}")
+        if self.chunk_points < 1:
+            raise TranslucencyError(f"chunk: must be >= 1, got {self.chunk_points}")
+
+    def window_pixels(self) -> int:
+        """Odd number of pixels per window side (x_i sits in the centre pixel)."""
+        n = max(1, int(round(self.window / self.pitch)))
+        return n if n % 2 == 1 else n + 1
+
+    def incident_points(self, volume: Volume) -> np.ndarray:
+        """Incident points (P, 2) in mm: a grid centred on the slab, snapped to pixel centres."""
+        W, H, _ = volume.size_mm
+        nx, ny = self.grid
+        sx, sy = self.span
+        xs = W / 2 - sx / 2 + (np.arange(nx) + 0.5) * sx / nx
+        ys = H / 2 - sy / 2 + (np.arange(ny) + 0.5) * sy / ny
+        snap = lambda v: (np.floor(v / self.pitch) + 0.5) * self.pitch  # noqa: E731
+        gx, gy = np.meshgrid(snap(xs), snap(ys))
+        return np.stack([gx.ravel(), gy.ravel()], axis=1)
+
+
+def estimate_seconds(volume: Volume, setup: PlanarSetup, steps_per_second: float = 3e7) -> float:
+    """Rough run time: photons × channels × expected steps per photon / throughput.
+
+    Expected steps per photon ~ majorant · mean path; the mean path of a
+    reflected photon in a thick slab scales like 1 / (σ_t' √(3 σ_a / σ_t')),
+    capped by the slab size.  Good to a factor of about two.
+    """
+    sigma_t = volume.sigma_t.reshape(-1, 3).mean(axis=0)
+    sigma_a = np.maximum(volume.sigma_a.reshape(-1, 3).mean(axis=0), 1e-4)
+    path = np.minimum(1.0 / np.sqrt(3 * sigma_a * sigma_t), max(volume.size_mm))
+    steps = volume.majorant() * path
+    n = setup.grid[0] * setup.grid[1] * setup.photons
+    return float(n * steps.sum() / steps_per_second)
+
+
+def acquire_planar(volume: Volume, setup: PlanarSetup, out, *, overwrite: bool = False,
+                   progress: Callable[[int, int], None] | None = None, batch_photons: int = 4_000_000,
+                   memory_limit: float = 8 * 2**30) -> "object":
+    """Run a virtual DISCO acquisition of ``volume`` and write the data set to ``out``.
+
+    Parameters
+    ----------
+    volume : Volume
+        The slab.
+    setup : PlanarSetup
+        Grid, pixels, window, photons, seed, angle.
+    out : path
+        Zarr directory; an unfinished data set with the same arguments is resumed.
+    overwrite : bool
+        Replace a data set made with other arguments.
+    progress : callable(done_points, total_points), optional
+        Called after each chunk.
+    batch_photons : int
+        Photons traced per Dr.Jit launch (memory).
+
+    Returns
+    -------
+    PlanarDataset
+    """
+    from .. import __version__
+
+    setup.check(volume)
+    check_memory(min(batch_photons, setup.photons * setup.chunk_points), volume, memory_limit)
+    mi_versions = _engine_versions()
+    x_i = setup.incident_points(volume)
+    n = setup.window_pixels()
+    P = len(x_i)
+    origin = x_i - setup.pitch * n / 2.0
+    # as stored (JSON: tuples become lists), so that a resume compares like with like
+    request = json.loads(json.dumps({"setup": asdict(setup), "volume": _volume_fingerprint(volume)}))
+    header = {
+        "format": FORMAT, "version": VERSION,
+        "units": {"length": "mm", "R_d": "mm^-2", "variance": "mm^-4"},
+        "pitch_mm": setup.pitch, "window": [n, n], "n_points": P, "chunk_points": setup.chunk_points,
+        "dtype": setup.dtype,
+        "sample": {"size_mm": list(volume.size_mm), "voxel_mm": volume.voxel_mm, "g": volume.g, "eta": volume.eta,
+                   "description": volume.description},
+        "acquisition": {"photons": setup.photons, "seed": setup.seed, "theta_inc_deg": setup.theta_inc_deg,
+                        "index_matched": setup.index_matched, "estimator": "analog photon tally, delta tracking"},
+        "software": {"translucency": __version__, **mi_versions},
+        "request": request,
+    }
+    ds = create_dataset(out, header, overwrite=overwrite)
+    g = ds.group
+    g["x_i"][...] = x_i.astype(np.float32)
+    g["window_origin"][...] = origin.astype(np.float32)
+    done = np.asarray(g["chunk_done"][...])
+    W, H, _ = volume.size_mm
+    k = setup.chunk_points
+    area = setup.pitch**2
+    for c in range(len(done)):
+        lo, hi = c * k, min(P, (c + 1) * k)
+        if done[c]:
+            if progress:
+                progress(hi, P)
+            continue
+        counts = np.zeros((hi - lo, n, n, 3))
+        spec = np.zeros((hi - lo, 3))
+        top = np.zeros((hi - lo, 3))
+        per_launch = max(1, batch_photons // setup.photons)
+        for ch in range(3):
+            for b0 in range(lo, hi, per_launch):
+                b1 = min(hi, b0 + per_launch)
+                res = random_walk(volume, ch, x_i[b0:b1], setup.photons, seed=setup.seed, first_point=b0,
+                                  theta_inc_deg=setup.theta_inc_deg, index_matched=setup.index_matched)
+                m = b1 - b0
+                off = b0 - lo  # first row of this launch within the chunk
+                local = np.arange(m).repeat(setup.photons)  # launch-local point of each photon
+                spec[off:off + m, ch] = np.bincount(local, weights=res.code == -1, minlength=m)
+                is_top = res.code == TOP
+                pt = local[is_top]
+                top[off:off + m, ch] = np.bincount(pt, minlength=m)
+                # pixel of each exit in its own window
+                col = np.floor((res.x[is_top] - origin[b0 + pt, 0]) / setup.pitch).astype(np.int64)
+                row = np.floor((res.y[is_top] - origin[b0 + pt, 1]) / setup.pitch).astype(np.int64)
+                inside = (col >= 0) & (col < n) & (row >= 0) & (row < n)
+                flat = ((off + pt[inside]) * n + row[inside]) * n + col[inside]
+                counts[..., ch] += np.bincount(flat, minlength=(hi - lo) * n * n).reshape(hi - lo, n, n)
+        N = float(setup.photons)
+        p_hat = counts / N
+        R_d = p_hat / area
+        var = p_hat * (1.0 - p_hat) / (N * area**2)
+        # pixel centres on the sample?
+        cx = origin[lo:hi, 0, None, None] + setup.pitch * (np.arange(n)[None, None, :] + 0.5)
+        cy = origin[lo:hi, 1, None, None] + setup.pitch * (np.arange(n)[None, :, None] + 0.5)
+        mask = (cx >= 0) & (cx <= W) & (cy >= 0) & (cy <= H)
+        g["R_d"][lo:hi] = R_d.astype(setup.dtype)
+        g["variance"][lo:hi] = var.astype(setup.dtype)
+        g["mask"][lo:hi] = mask
+        g["specular"][lo:hi] = (spec / N).astype(np.float32)
+        g["total_diffuse"][lo:hi] = (top / N).astype(np.float32)
+        g["chunk_done"][c] = True  # last: the chunk is complete
+        if progress:
+            progress(hi, P)
+    return ds
+
+
+def _volume_fingerprint(volume: Volume) -> dict:
+    import hashlib
+
+    h = hashlib.sha256()
+    for a in (volume.sigma_s, volume.sigma_a):
+        h.update(np.ascontiguousarray(a).tobytes())
+    return {"sha256": h.hexdigest(), "shape": list(volume.shape), "voxel_mm": volume.voxel_mm,
+            "g": volume.g, "eta": volume.eta}
+
+
+def _engine_versions() -> dict:
+    from importlib.metadata import version
+
+    out = {}
+    for pkg in ("mitsuba", "drjit"):
+        try:
+            out[pkg] = version(pkg)
+        except Exception:  # noqa: BLE001
+            out[pkg] = "unknown"
+    return out
+

@@ -1,0 +1,171 @@
+"""Planar measurement data sets (format version 1): a chunked Zarr v3 directory.
+
+What a DISCO-style acquisition produces — for each incident point x_i, a
+window of pixels around it holding R_d(x_i, x_o) per channel — in a layout
+that scales out (chunks of incident points) and that any Zarr reader opens.
+
+Layout (P incident points, windows of H × W pixels, 3 channels)::
+
+    /                  group; attrs["translucency_dataset"] = header (below)
+    x_i                (P, 2) float32   incident points, mm
+    window_origin      (P, 2) float32   corner (x, y) of each window, mm; pixel [row, col]
+                                        is centred at origin + pitch * (col + 1/2, row + 1/2)
+    R_d                (P, H, W, 3)     diffuse reflectance, mm⁻² per unit incident power
+    variance           (P, H, W, 3)     variance estimate of R_d, mm⁻⁴
+    mask               (P, H, W) bool   pixel lies on the sample (valid measurement)
+    specular           (P, 3) float32   Fresnel reflection at entry (fraction of the power), not in R_d
+    total_diffuse      (P, 3) float32   all light leaving the top face, inside the window or not
+    chunk_done         (n_chunks,) bool written last for each chunk of points: resume marker
+
+Header (JSON): ``format`` = "translucency-dataset", ``version`` = 1,
+``units`` ({length: mm, R_d: mm^-2, variance: mm^-4}), ``pitch_mm``,
+``window`` [H, W], ``n_points``, ``chunk_points``, ``dtype``, ``sample``
+(size, voxel, g, eta, generator description), ``acquisition`` (photons per
+point, seed, angle of incidence, index matching), ``software`` (versions),
+and ``request``: the arguments that define the data, compared on resume.
+"""
+
+from __future__ import annotations
+
+import json
+import shutil
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .._validate import TranslucencyError
+
+FORMAT = "translucency-dataset"
+VERSION = 1
+HEADER_KEY = "translucency_dataset"
+_ARRAYS = ("x_i", "window_origin", "R_d", "variance", "mask", "specular", "total_diffuse", "chunk_done")
+
+
+@dataclass
+class PlanarDataset:
+    """An opened data set; arrays are read lazily from the Zarr group."""
+
+    path: Path
+    header: dict
+    group: object
+
+    @property
+    def n_points(self) -> int:
+        return int(self.header["n_points"])
+
+    @property
+    def pitch(self) -> float:
+        return float(self.header["pitch_mm"])
+
+    @property
+    def window(self) -> tuple[int, int]:
+        return tuple(self.header["window"])
+
+    def __getitem__(self, key: str) -> np.ndarray:
+        if key not in _ARRAYS:
+            raise KeyError(key)
+        return np.asarray(self.group[key][...])
+
+    def complete(self) -> bool:
+        return bool(np.all(self["chunk_done"]))
+
+
+def create_dataset(path, header: dict, *, overwrite: bool = False):
+    """Create (or reopen for resuming) a data set at ``path``.
+
+    If ``path`` holds a data set with the same ``request``, it is reopened so
+    that finished chunks are kept; a data set made with other arguments is
+    refused unless ``overwrite``.
+    """
+    import zarr
+    from zarr.codecs import BloscCodec
+
+    path = Path(path)
+    if path.exists():
+        try:
+            old = open_dataset(path)
+        except TranslucencyError:
+            old = None
+        if old is not None and old.header.get("request") == header["request"] and not overwrite:
+            return old
+        if not overwrite:
+            why = "was made with other arguments" if old is not None else "is not a translucency data set"
+            raise TranslucencyError(f"{path}: exists and {why}; choose another --out or pass --overwrite")
+        shutil.rmtree(path) if path.is_dir() else path.unlink()
+    P = header["n_points"]
+    H, W = header["window"]
+    k = header["chunk_points"]
+    n_chunks = -(-P // k)
+    dtype = header["dtype"]
+    root = zarr.open_group(str(path), mode="w", attributes={HEADER_KEY: header})
+    comp = BloscCodec(cname="zstd", clevel=5, shuffle="shuffle")
+    specs = {
+        "x_i": ((P, 2), "float32", (P, 2)),
+        "window_origin": ((P, 2), "float32", (P, 2)),
+        "R_d": ((P, H, W, 3), dtype, (k, H, W, 3)),
+        "variance": ((P, H, W, 3), dtype, (k, H, W, 3)),
+        "mask": ((P, H, W), "bool", (k, H, W)),
+        "specular": ((P, 3), "float32", (k, 3)),
+        "total_diffuse": ((P, 3), "float32", (k, 3)),
+        "chunk_done": ((n_chunks,), "bool", (1,)),
+    }
+    for name, (shape, dt, chunks) in specs.items():
+        root.create_array(name, shape=shape, dtype=dt, chunks=chunks, compressors=comp, fill_value=0)
+    return PlanarDataset(path, header, root)
+
+
+def open_dataset(path) -> PlanarDataset:
+    """Open a data set and check its header and arrays; one-line errors name the fault."""
+    import zarr
+
+    path = Path(path)
+    if not path.exists():
+        raise TranslucencyError(f"{path}: no such data set")
+    try:
+        root = zarr.open_group(str(path), mode="r+" if _writable(path) else "r")
+        header = dict(root.attrs).get(HEADER_KEY)
+    except Exception as exc:  # noqa: BLE001
+        raise TranslucencyError(f"{path}: not a readable Zarr data set ({type(exc).__name__})") from None
+    if not isinstance(header, dict) or header.get("format") != FORMAT:
+        raise TranslucencyError(f"{path}: not a translucency data set (no '{HEADER_KEY}' header)")
+    if header.get("version") != VERSION:
+        raise TranslucencyError(f"{path}: data set version {header.get('version')!r} is not supported "
+                                f"(this reader knows {VERSION})")
+    units = header.get("units", {})
+    if units.get("length") != "mm" or units.get("R_d") != "mm^-2":
+        raise TranslucencyError(f"{path}: units {units} are not mm / mm^-2")
+    P, (H, W) = header["n_points"], header["window"]
+    expect = {"x_i": (P, 2), "window_origin": (P, 2), "R_d": (P, H, W, 3), "variance": (P, H, W, 3),
+              "mask": (P, H, W), "specular": (P, 3), "total_diffuse": (P, 3)}
+    for name, shape in expect.items():
+        if name not in root:
+            raise TranslucencyError(f"{path}: missing array {name!r}")
+        if tuple(root[name].shape) != shape:
+            raise TranslucencyError(f"{path}: array {name!r} has shape {tuple(root[name].shape)}, expected {shape}")
+    return PlanarDataset(path, header, root)
+
+
+def _writable(path: Path) -> bool:
+    import os
+
+    return os.access(path, os.W_OK)
+
+
+def describe(ds: PlanarDataset) -> dict:
+    """A JSON-friendly summary for ``translucency info``."""
+    h = ds.header
+    done = ds["chunk_done"]
+    size = sum(f.stat().st_size for f in ds.path.rglob("*") if f.is_file())
+    return {
+        "format": f"{h['format']} v{h['version']}",
+        "incident points": h["n_points"],
+        "window": f"{h['window'][0]} x {h['window'][1]} px at {h['pitch_mm']} mm",
+        "sample": json.dumps(h.get("sample", {}))[:300],
+        "photons per point": h.get("acquisition", {}).get("photons"),
+        "seed": h.get("acquisition", {}).get("seed"),
+        "complete": f"{int(done.sum())}/{done.size} chunks",
+        "dtype": h["dtype"],
+        "size on disk": f"{size:,} bytes ({size / 1e6:.2f} MB)",
+        "software": json.dumps(h.get("software", {})),
+    }
