@@ -1,0 +1,185 @@
+"""Virtual DISCO against references that no one here wrote, and its contracts
+(determinism, resuming, bad input)."""
+
+import numpy as np
+import pytest
+
+from translucency import TranslucencyError
+from translucency.acquire import PlanarSetup, Volume, acquire_planar, load_volume, make_sample
+from translucency.acquire.transport import OTHER_FACE, TOP, random_walk
+from translucency.io.dataset import open_dataset
+from translucency.model import dipole_R_d, material
+
+iad = pytest.importorskip("iadpython")
+
+
+@pytest.mark.parametrize("a,b,g,n", [(0.9, 2.0, 0.5, 1.3), (0.99, 8.0, 0.0, 1.4), (0.5, 1.0, 0.8, 1.0),
+                                     (0.95, 4.0, -0.3, 1.5)])
+def test_total_reflectance_matches_adding_doubling(a, b, g, n):
+    """Slab of albedo a, optical thickness b, anisotropy g, index n: MC total reflectance
+    (specular + diffuse) against iadpython's UR1 within 3 standard errors."""
+    d = 1.0  # mm
+    ur1 = float(iad.Sample(a=a, b=b, g=g, d=d, n=n, n_above=1.0, n_below=1.0, quad_pts=16).rt()[0])
+    sigma_t = b / d
+    # laterally 100 mm: side losses are negligible for a 1 mm slab
+    vol = Volume.homogeneous((4, 400, 400), 0.25, [a * sigma_t] * 3, [(1 - a) * sigma_t] * 3, g=g, eta=n)
+    N = 200_000
+    res = random_walk(vol, 0, np.array([[50.0, 50.0]]), N, seed=11)
+    R = np.mean((res.code == TOP) | (res.code == -1))
+    se = np.sqrt(R * (1 - R) / N)
+    assert abs(R - ur1) < 3 * se, (R, ur1, se)
+
+
+def test_specular_fraction_is_fresnel_at_normal_incidence():
+    vol = make_sample("homogeneous:skin1", (10, 10, 2), 0.5)
+    res = random_walk(vol, 0, np.array([[5.0, 5.0]]), 100_000, seed=5)
+    spec = np.mean(res.code == -1)
+    expect = ((1.3 - 1) / (1.3 + 1)) ** 2
+    assert abs(spec - expect) < 4 * np.sqrt(expect * (1 - expect) / 100_000)
+
+
+def test_radial_profile_against_dipole_beyond_two_mfp():
+    """Thick homogeneous marble (g = 0, η = 1.3): the radial profile agrees with the dipole
+    within 10 % for 2 mfp < r < 4 mm; closer in the dipole is off (the paper's motivation)."""
+    m = material("marble")
+    ch = 1
+    vol = make_sample("homogeneous:marble", (40, 40, 20), 1.0)
+    N = 600_000
+    res = random_walk(vol, ch, np.array([[20.0, 20.0]]), N, seed=21)
+    top = res.code == TOP
+    r = np.hypot(res.x[top] - 20.0, res.y[top] - 20.0)
+    mfp = 1.0 / (m.sigma_a[ch] + m.sigma_s_prime[ch])
+    edges = np.linspace(0.0, 4.0, 41)
+    counts = np.histogram(r, edges)[0]
+    ring_area = np.pi * np.diff(edges**2)
+    mc = counts / N / ring_area
+    centre = 0.5 * (edges[1:] + edges[:-1])
+    # ring average of the dipole (its curvature matters near x_i)
+    fine = np.linspace(0, 4, 4001)
+    dip_fine = dipole_R_d(fine, m.sigma_a[ch], m.sigma_s_prime[ch], 1.3)
+    dip = np.array([np.trapezoid(dip_fine[(fine >= a) & (fine <= b)] * fine[(fine >= a) & (fine <= b)],
+                                 fine[(fine >= a) & (fine <= b)]) * 2 * np.pi / ar
+                    for a, b, ar in zip(edges[:-1], edges[1:], ring_area)])
+    far = centre > 2 * mfp
+    rel = mc[far] / dip[far] - 1
+    assert np.max(np.abs(rel)) < 0.10, rel
+    near = centre < 0.5 * mfp
+    assert np.max(np.abs(mc[near] / dip[near] - 1)) > 0.10  # the near field is where the dipole fails
+
+
+def test_hg_mean_cosine_is_g():
+    # one scattering event in an infinite-like medium: check via a thin, purely scattering slab is
+    # indirect; instead sample the phase function through the walk's helper directly
+    from translucency.acquire._engine import mitsuba
+    from translucency.acquire.transport import _hg_sample
+    import drjit as dr
+
+    mi = mitsuba()
+    n = 200_000
+    rng = np.random.default_rng(0)
+    d = mi.Vector3f(0.0, 0.0, 1.0)
+    for g in (-0.5, 0.0, 0.3, 0.9):
+        new = _hg_sample(mi, dr, d, g, mi.Float(rng.random(n)), mi.Float(rng.random(n)))
+        cos = np.asarray(new.z)
+        assert abs(cos.mean() - g) < 4 * cos.std() / np.sqrt(n)
+        assert np.allclose(np.asarray(new.x) ** 2 + np.asarray(new.y) ** 2 + cos**2, 1, atol=1e-5)
+
+
+SMALL = PlanarSetup(grid=(3, 3), span=(4.0, 4.0), pitch=0.5, window=6.0, photons=2000, seed=3, chunk_points=4)
+
+
+def test_deterministic_and_resumable(tmp_path):
+    vol = make_sample("marble", (12, 12, 4), 0.5, seed=1)
+    full = acquire_planar(vol, SMALL, tmp_path / "a.zarr")
+    again = acquire_planar(vol, SMALL, tmp_path / "b.zarr")
+    np.testing.assert_array_equal(full["R_d"], again["R_d"])
+
+    class Stop(Exception):
+        pass
+
+    def interrupt(done, total):
+        if done >= 4:
+            raise Stop
+
+    with pytest.raises(Stop):
+        acquire_planar(vol, SMALL, tmp_path / "c.zarr", progress=interrupt)
+    partial = open_dataset(tmp_path / "c.zarr")
+    assert partial["chunk_done"].tolist() == [True, False, False]
+    resumed = acquire_planar(vol, SMALL, tmp_path / "c.zarr")
+    assert resumed.complete()
+    for key in ("R_d", "variance", "mask", "specular", "total_diffuse"):
+        np.testing.assert_array_equal(resumed[key], full[key])
+    # other arguments on the same path are refused, not mixed in
+    with pytest.raises(TranslucencyError, match="made with other arguments"):
+        acquire_planar(vol, PlanarSetup(**{**SMALL.__dict__, "seed": 4}), tmp_path / "c.zarr")
+
+
+def test_dataset_content_is_consistent(tmp_path):
+    vol = make_sample("homogeneous:skin2", (12, 12, 4), 0.5)
+    ds = acquire_planar(vol, SMALL, tmp_path / "s.zarr")
+    R, var, mask = ds["R_d"], ds["variance"], ds["mask"]
+    n = ds.window[0]
+    assert n % 2 == 1 and R.shape == (9, n, n, 3)
+    # the window sum never exceeds all light leaving the top
+    inside = R.sum(axis=(1, 2)) * ds.pitch**2
+    assert (inside <= ds["total_diffuse"] + 1e-6).all()
+    # binomial variance, and the brightest pixel is the one under the beam
+    N = ds.header["acquisition"]["photons"]
+    np.testing.assert_allclose(var, R * (1 / ds.pitch**2 - R) / N, rtol=1e-5, atol=1e-12)
+    peak = np.unravel_index(R[4, ..., 1].argmax(), (n, n))
+    assert peak == (n // 2, n // 2)
+    assert mask.all()  # the windows fit on this sample
+
+
+@pytest.mark.parametrize("name", ["marble", "apple-slice", "skin", "fibers", "homogeneous:apple"])
+def test_generators_make_valid_volumes(name):
+    v = make_sample(name, (8, 8, 3), 0.25, seed=2)
+    assert v.shape == (12, 32, 32)
+    assert (v.sigma_t > 0).all()
+    again = make_sample(name, (8, 8, 3), 0.25, seed=2)
+    np.testing.assert_array_equal(v.sigma_s, again.sigma_s)
+
+
+def test_fibers_spread_light_farther_along_x():
+    vol = make_sample("fibers", (20, 20, 6), 0.1, seed=0)
+    res = random_walk(vol, 1, np.array([[10.05, 10.05]]), 100_000, seed=2)
+    top = res.code == TOP
+    sx = np.sqrt(np.mean((res.x[top] - 10.05) ** 2))
+    sy = np.sqrt(np.mean((res.y[top] - 10.05) ** 2))
+    assert sx > 1.3 * sy
+
+
+def test_bad_volumes_are_named(tmp_path):
+    good = np.ones((2, 3, 3, 3), np.float32)
+    with pytest.raises(TranslucencyError, match=r"sigma_a: negative value -1 at index \(0, 0, 0, 0\)"):
+        Volume(good, -good, 0.5)
+    bad = good.copy()
+    bad[1, 2, 0, 1] = np.nan
+    with pytest.raises(TranslucencyError, match=r"sigma_s: non-finite value at voxel \(1, 2, 0, 1\)"):
+        Volume(bad, good, 0.5)
+    with pytest.raises(TranslucencyError, match="empty volume"):
+        Volume(np.ones((0, 3, 3, 3)), np.ones((0, 3, 3, 3)), 0.5)
+    with pytest.raises(TranslucencyError, match="g: "):
+        Volume(good, good, 0.5, g=1.0)
+    p = tmp_path / "v.npz"
+    np.savez(p, sigma_s=good, sigma_a=good)
+    with pytest.raises(TranslucencyError, match="v.npz: missing array 'voxel_mm'"):
+        load_volume(p)
+    np.savez(p, sigma_s=good, sigma_a=good[..., :2], voxel_mm=0.5)
+    with pytest.raises(TranslucencyError, match=r"v.npz: sigma_a: expected shape \(Z, Y, X, 3\)"):
+        load_volume(p)
+    np.savez(p, sigma_s=good, sigma_a=good * 0.01, voxel_mm=0.5, g=0.2)
+    assert load_volume(p).g == pytest.approx(0.2)
+
+
+def test_bad_setups_are_refused_before_work():
+    vol = make_sample("homogeneous:marble", (10, 10, 2), 0.5)
+    for kwargs, needle in [({"window": 12.0}, "window: 12.0 mm is larger than the sample"),
+                           ({"pitch": -1.0}, "pitch"), ({"photons": 0}, "photons"),
+                           ({"span": (20.0, 4.0)}, "span"), ({"theta_inc_deg": 95.0}, "angle")]:
+        with pytest.raises(TranslucencyError, match=needle):
+            PlanarSetup(**{**SMALL.__dict__, **kwargs}).check(vol)
+    from translucency.acquire.transport import check_memory
+
+    with pytest.raises(TranslucencyError, match="GiB"):
+        check_memory(10**12, vol, 8 * 2**30)
