@@ -7,7 +7,7 @@ PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 OUT    ?= results
 
-.PHONY: demo test test-slow test-all bench clean
+.PHONY: demo test test-slow test-all bench clean default-data
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -32,3 +32,9 @@ bench: $(STAMP)
 
 clean:
 	rm -rf $(VENV) $(OUT) .pytest_cache .hypothesis
+
+# the embedded default data set (about 1 minute on 2 cores)
+default-data: $(STAMP)
+	$(VENV)/bin/translucency acquire planar --material marble --size 32 32 10 --voxel 0.25 \
+	  --grid 32 --span 16 --pitch 0.25 --window 12 --photons 20000 --seed 1 --dtype float16 \
+	  --chunk 64 --out src/translucency/data/marble_default.zarr --overwrite

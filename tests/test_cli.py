@@ -58,3 +58,27 @@ def test_demo_writes_real_outputs(tmp_path):
     model = load_model(tmp_path / "dipole_fits.model.zip")
     assert model.n_points == 12 and model.colour == "per-channel"
     assert not [p for p in tmp_path.iterdir() if ".tmp-" in p.name]
+
+
+def test_demo_fits_the_embedded_measurement(tmp_path):
+    res = runner.invoke(app, ["demo", "--out", str(tmp_path)])
+    assert res.exit_code == 0, res.output
+    pts = json.loads((tmp_path / "measured_profiles.json").read_text())["points"]
+    assert len(pts) == 4
+    for row in pts.values():
+        # near x_i the exponential sum follows the photon data far better than the dipole
+        assert row["exponential"]["near"] < 0.5 * row["dipole"]["near"]
+
+
+def test_acquire_planar_cli(tmp_path):
+    out = tmp_path / "m.zarr"
+    args = ["acquire", "planar", "--material", "marble", "--out", str(out), "--grid", "2", "--photons", "500",
+            "--size", "10", "10", "3", "--voxel", "0.5", "--window", "4", "--pitch", "0.5"]
+    res = runner.invoke(app, args)
+    assert res.exit_code == 0, res.output
+    info = runner.invoke(app, ["info", str(out)])
+    assert info.exit_code == 0 and "translucency-dataset v1" in info.output and "1/1 chunks" in info.output
+    bad = runner.invoke(app, args[:-2] + ["--window", "40"])
+    assert bad.exit_code == 2 and "error: window: 40.0 mm is larger than the sample" in bad.output
+    both = runner.invoke(app, ["acquire", "planar", "--out", str(out)])
+    assert both.exit_code == 2 and "exactly one of --material" in both.output

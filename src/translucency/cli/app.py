@@ -61,7 +61,7 @@ def demo(
     from ..pipeline import run_demo
 
     with progress() as bar:
-        task = bar.add_task("profiles", total=len(MATERIALS), item="")
+        task = bar.add_task("demo", total=len(MATERIALS) + 4, item="")
 
         def step(name):
             bar.update(task, advance=1, item=name)
