@@ -138,16 +138,7 @@ def fit_burley_profile(r, y, *, A0: float = 0.5, s0: float = 1.0) -> tuple[float
     """
     from ..model.burley import burley_R
 
-    r = as_float_array("r", r, ndim=1)
-    y = as_float_array("y", y, shape=r.shape)
-    if not (y > 0).all():
-        raise TranslucencyError("y: relative least squares needs y > 0")
-
-    def residual(x):
-        return burley_R(r, np.exp(x[0]), np.exp(x[1])) / y - 1.0
-
-    sol = least_squares(residual, np.log([A0, s0]), method="lm")
-    return float(np.exp(sol.x[0])), float(np.exp(sol.x[1])), float(np.linalg.norm(sol.fun) / np.sqrt(r.size))
+    return _fit_positive_params(lambda r, p: burley_R(r, p[0], p[1]), r, y, (A0, s0))
 
 
 def fit_dipole_profile(r, y, eta: float = 1.3, *, sigma_a0: float = 0.01, sigma_s_prime0: float = 1.0):
@@ -169,13 +160,21 @@ def fit_dipole_profile(r, y, eta: float = 1.3, *, sigma_a0: float = 0.01, sigma_
     """
     from ..model.dipole import dipole_R_d
 
+    return _fit_positive_params(lambda r, p: dipole_R_d(r, p[0], p[1], eta), r, y, (sigma_a0, sigma_s_prime0))
+
+
+def _fit_positive_params(profile, r, y, x0) -> tuple[float, ...]:
+    """Relative least squares of ``profile(r, params)`` to y over the logs of positive params.
+
+    Returns the parameters followed by the rms relative error.
+    """
     r = as_float_array("r", r, ndim=1)
     y = as_float_array("y", y, shape=r.shape)
     if not (y > 0).all():
         raise TranslucencyError("y: relative least squares needs y > 0")
 
-    def residual(x):
-        return dipole_R_d(r, np.exp(x[0]), np.exp(x[1]), eta) / y - 1.0
+    def residual(log_p):
+        return profile(r, np.exp(log_p)) / y - 1.0
 
-    sol = least_squares(residual, np.log([sigma_a0, sigma_s_prime0]), method="lm")
-    return float(np.exp(sol.x[0])), float(np.exp(sol.x[1])), float(np.linalg.norm(sol.fun) / np.sqrt(r.size))
+    sol = least_squares(residual, np.log(np.asarray(x0, dtype=float)), method="lm")
+    return (*(float(v) for v in np.exp(sol.x)), float(np.linalg.norm(sol.fun) / np.sqrt(r.size)))
