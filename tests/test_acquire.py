@@ -183,3 +183,15 @@ def test_bad_setups_are_refused_before_work():
 
     with pytest.raises(TranslucencyError, match="GiB"):
         check_memory(10**12, vol, 8 * 2**30)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("a,b,g,n", [(0.9, 2.0, 0.5, 1.3), (0.99, 8.0, 0.0, 1.4), (0.95, 4.0, -0.3, 1.5)])
+def test_total_reflectance_matches_adding_doubling_precisely(a, b, g, n):
+    """As above with 2 M photons: standard errors ~4e-4, still within 3 of them."""
+    ur1 = float(iad.Sample(a=a, b=b, g=g, d=1.0, n=n, n_above=1.0, n_below=1.0, quad_pts=16).rt()[0])
+    vol = Volume.homogeneous((4, 400, 400), 0.25, [a * b] * 3, [(1 - a) * b] * 3, g=g, eta=n)
+    N = 2_000_000
+    res = random_walk(vol, 0, np.array([[50.0, 50.0]]), N, seed=99)
+    R = np.mean((res.code == TOP) | (res.code == -1))
+    assert abs(R - ur1) < 3 * np.sqrt(R * (1 - R) / N)
