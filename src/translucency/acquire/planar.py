@@ -23,7 +23,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from .._validate import TranslucencyError
-from ..io.dataset import FORMAT, VERSION, create_dataset
+from ..io.dataset import FORMAT, VERSION, PlanarDataset, create_dataset
 from .transport import TOP, check_memory, random_walk
 from .volume import Volume
 
@@ -103,7 +103,7 @@ def estimate_seconds(volume: Volume, setup: PlanarSetup, steps_per_second: float
 
 def acquire_planar(volume: Volume, setup: PlanarSetup, out, *, overwrite: bool = False,
                    progress: Callable[[int, int], None] | None = None, batch_photons: int = 4_000_000,
-                   memory_limit: float = 8 * 2**30) -> "object":
+                   memory_limit: float = 8 * 2**30) -> PlanarDataset:
     """Run a virtual DISCO acquisition of ``volume`` and write the data set to ``out``.
 
     Parameters

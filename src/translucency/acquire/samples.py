@@ -103,7 +103,6 @@ def apple_slice(size_mm, voxel_mm, g=0.0, seed=0) -> Volume:
     cx, cy = w / 2, h / 2
     radius = 0.5 * min(w, h)
     r = np.hypot(x - cx, y - cy) / radius
-    phi = np.arctan2(y - cy, x - cx)
     flesh_ss, flesh_sa = _coeffs("apple", g)
     ring = np.exp(-((r - 0.4) / 0.03) ** 2)
     texture = 1.0 + 0.15 * _noise(z.shape, max(0.3 / voxel_mm, 0.5), rng)
@@ -123,7 +122,6 @@ def apple_slice(size_mm, voxel_mm, g=0.0, seed=0) -> Volume:
         s[seed_mask] = [2.0, 2.0, 2.0]
     outside = r > 1.0
     s[outside] *= 0.05
-    del phi
     return Volume(s, a, voxel_mm, g, ETA, {"generator": "apple-slice", "seed": seed, "g": g})
 
 

@@ -144,7 +144,7 @@ def random_walk(volume: Volume, channel: int, entry_xy: np.ndarray, n_photons: i
         tx = dr.select(direction.x > 0, (W - pos.x) / direction.x, dr.select(direction.x < 0, -pos.x / direction.x, inf))
         ty = dr.select(direction.y > 0, (H - pos.y) / direction.y, dr.select(direction.y < 0, -pos.y / direction.y, inf))
         tz = dr.select(direction.z > 0, -pos.z / direction.z, dr.select(direction.z < 0, (-T - pos.z) / direction.z, inf))
-        t_face = dr.minimum(dr.maximum(dr.minimum(dr.minimum(tx, ty), tz), 0.0), inf)
+        t_face = dr.maximum(dr.minimum(dr.minimum(tx, ty), tz), 0.0)
         collide = t < t_face
 
         # -- inside: real or null collision at pos + t d ------------------------------------

@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .._validate import TranslucencyError, check_nonnegative, check_positive
+from .._validate import TranslucencyError, check_nonnegative
 
 
 @dataclass(frozen=True, eq=False)
@@ -72,7 +72,6 @@ class Volume:
             if not (isinstance(v, (int, float, np.floating)) and np.isfinite(v) and lo < v < hi):
                 raise TranslucencyError(f"{name}: {v!r} is outside ({lo}, {hi})")
             object.__setattr__(self, name, float(v))
-        check_positive("voxel_mm", np.asarray(self.voxel_mm))
 
     @classmethod
     def homogeneous(cls, shape, voxel_mm, sigma_s, sigma_a, g=0.0, eta=1.3, description=None) -> "Volume":

@@ -179,7 +179,7 @@ def acquire_planar_cmd(
     with progress() as bar:
         task = bar.add_task("acquire", total=grid * grid, item="")
         acquire_planar(vol, setup, out, overwrite=overwrite,
-                       progress=lambda done, total: bar.update(task, completed=done, item=f"points"))
+                       progress=lambda done, total: bar.update(task, completed=done, item="points"))
     console.print(f"data set: {out}")
 
 

@@ -84,7 +84,7 @@ def create_dataset(path, header: dict, *, overwrite: bool = False):
     path = Path(path)
     if path.exists():
         try:
-            old = open_dataset(path)
+            old = open_dataset(path, writable=True)
         except TranslucencyError:
             old = None
         if old is not None and old.header.get("request") == header["request"] and not overwrite:
@@ -115,15 +115,18 @@ def create_dataset(path, header: dict, *, overwrite: bool = False):
     return PlanarDataset(path, header, root)
 
 
-def open_dataset(path) -> PlanarDataset:
-    """Open a data set and check its header and arrays; one-line errors name the fault."""
+def open_dataset(path, *, writable: bool = False) -> PlanarDataset:
+    """Open a data set and check its header and arrays; one-line errors name the fault.
+
+    Read-only unless ``writable`` (used when resuming an acquisition).
+    """
     import zarr
 
     path = Path(path)
     if not path.exists():
         raise TranslucencyError(f"{path}: no such data set")
     try:
-        root = zarr.open_group(str(path), mode="r+" if _writable(path) else "r")
+        root = zarr.open_group(str(path), mode="r+" if writable else "r")
         header = dict(root.attrs).get(HEADER_KEY)
     except Exception as exc:  # noqa: BLE001
         raise TranslucencyError(f"{path}: not a readable Zarr data set ({type(exc).__name__})") from None
@@ -144,12 +147,6 @@ def open_dataset(path) -> PlanarDataset:
         if tuple(root[name].shape) != shape:
             raise TranslucencyError(f"{path}: array {name!r} has shape {tuple(root[name].shape)}, expected {shape}")
     return PlanarDataset(path, header, root)
-
-
-def _writable(path: Path) -> bool:
-    import os
-
-    return os.access(path, os.W_OK)
 
 
 def describe(ds: PlanarDataset) -> dict:
