@@ -1,0 +1,120 @@
+r"""Errors of a fitted model against a planar data set.
+
+Over the valid pairs :math:`(\vec x_i, \vec x_o)` of the data set (mask set,
+finite, r at least the exclusion radius), summed over the three channels:
+
+.. math:: \mathrm{rel\_l2} = \frac{\lVert \hat R_d - R_d \rVert_2}{\lVert R_d \rVert_2},
+
+and the same restricted to the distance bands near (r < 1 mm), mid
+(1–4 mm) and far (> 4 mm).  ``noise`` is the part of it that the
+measurement noise alone explains, :math:`\sqrt{\sum \sigma^2}/\lVert R_d\rVert`
+in each band — a perfect model would score about that.
+
+Maps: the error per incident point, :math:`\lVert \hat R_{d,i} - R_{d,i}\rVert / \lVert R_{d,i}\rVert`
+over its window, and per outgoing pixel of the sample, the same over every
+window containing that pixel (the paper's Figure 1, right).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..fit._windows import SampleGrid, window_geometry
+from ..io.dataset import PlanarDataset, open_dataset
+
+BANDS = {"near": (0.0, 1.0), "mid": (1.0, 4.0), "far": (4.0, np.inf)}
+
+
+@dataclass
+class PlanarErrors:
+    """Error statistics of one model on one data set."""
+
+    rel_l2: float
+    bands: dict  # band -> rel_l2
+    noise: dict  # "all" and band -> noise floor
+    per_point: np.ndarray  # (P,) relative error per incident point (NaN where flagged/no data)
+    per_pixel: np.ndarray  # (H, W) relative error per outgoing pixel on the sample grid
+    grid: SampleGrid
+
+    def summary(self) -> dict:
+        """The JSON fields of ``translucency evaluate``."""
+        out = {"rel_l2": self.rel_l2}
+        out.update({f"rel_l2_{b}": v for b, v in self.bands.items()})
+        out["noise_floor"] = self.noise
+        pp = self.per_point[np.isfinite(self.per_point)]
+        out["per_point"] = {"median": float(np.median(pp)) if pp.size else None,
+                            "p95": float(np.quantile(pp, 0.95)) if pp.size else None}
+        return out
+
+
+def planar_errors(model, dataset, *, exclusion_mm: float | None = None, chunk_points: int = 256,
+                  flagged=None) -> PlanarErrors:
+    """Relative L2 errors of ``model`` on a planar data set, overall, per band and as maps.
+
+    Parameters
+    ----------
+    model : ReflectanceModel
+        A planar model whose incident points are those of the data set.
+    dataset : PlanarDataset or path
+    exclusion_mm : float, optional
+        Pairs closer than this are left out; default one pixel (as the fit).
+    flagged : array of bool, optional
+        Incident points to leave out (points the fit flagged).
+
+    Returns
+    -------
+    PlanarErrors
+    """
+    from .._validate import TranslucencyError
+
+    ds = dataset if isinstance(dataset, PlanarDataset) else open_dataset(dataset)
+    x_i = ds["x_i"].astype(np.float64)
+    if model.n_points != ds.n_points or not np.allclose(model.x_i[:, :2], x_i, atol=1e-4):
+        raise TranslucencyError(f"{ds.path}: the model's {model.n_points} incident points are not the data set's "
+                                f"{ds.n_points}; evaluate a model on the data set it was fitted to")
+    exclusion = ds.pitch if exclusion_mm is None else float(exclusion_mm)
+    origin = ds["window_origin"].astype(np.float64)
+    grid = SampleGrid.covering(origin, ds.pitch, ds.window)
+    flagged = np.zeros(ds.n_points, bool) if flagged is None else np.asarray(flagged, bool)
+    err2 = {b: 0.0 for b in BANDS}
+    ref2 = {b: 0.0 for b in BANDS}
+    var = {b: 0.0 for b in BANDS}
+    per_point = np.full(ds.n_points, np.nan)
+    pix_err = np.zeros(grid.shape[0] * grid.shape[1])
+    pix_ref = np.zeros_like(pix_err)
+    for s in range(0, ds.n_points, chunk_points):
+        e = min(s + chunk_points, ds.n_points)
+        k = e - s
+        y = np.asarray(ds.group["R_d"][s:e], dtype=np.float64).reshape(k, -1, 3)
+        v = np.asarray(ds.group["variance"][s:e], dtype=np.float64).reshape(k, -1, 3)
+        mask = np.asarray(ds.group["mask"][s:e]).reshape(k, -1)
+        geom = window_geometry(x_i[s:e], origin[s:e], grid, ds.window)
+        pred = model.R_d_window(np.arange(s, e), origin[s:e], ds.pitch, ds.window).reshape(k, -1, 3)
+        ok = (mask & np.isfinite(y).all(2) & np.isfinite(v).all(2) & (geom.r >= exclusion)
+              & ~flagged[s:e, None])
+        d2 = np.where(ok, ((pred - y) ** 2).sum(2), 0.0)
+        y2 = np.where(ok, (y**2).sum(2), 0.0)
+        v2 = np.where(ok, v.sum(2), 0.0)
+        for b, (lo, hi) in BANDS.items():
+            sel = (geom.r >= lo) & (geom.r < hi)
+            err2[b] += float(d2[sel].sum())
+            ref2[b] += float(y2[sel].sum())
+            var[b] += float(v2[sel].sum())
+        den = y2.sum(1)
+        per_point[s:e] = np.where(den > 0, np.sqrt(d2.sum(1) / np.where(den > 0, den, 1.0)), np.nan)
+        n_px = pix_err.size
+        pix_err += np.bincount(geom.pixel.ravel(), d2.ravel(), minlength=n_px)
+        pix_ref += np.bincount(geom.pixel.ravel(), y2.ravel(), minlength=n_px)
+
+    def ratio(a, b):
+        return float(np.sqrt(a / b)) if b > 0 else float("nan")
+
+    tot_e, tot_r, tot_v = sum(err2.values()), sum(ref2.values()), sum(var.values())
+    per_pixel = np.where(pix_ref > 0, np.sqrt(pix_err / np.where(pix_ref > 0, pix_ref, 1.0)), np.nan)
+    return PlanarErrors(
+        rel_l2=ratio(tot_e, tot_r),
+        bands={b: ratio(err2[b], ref2[b]) for b in BANDS},
+        noise={"all": ratio(tot_v, tot_r), **{b: ratio(var[b], ref2[b]) for b in BANDS}},
+        per_point=per_point, per_pixel=per_pixel.reshape(grid.shape), grid=grid)

@@ -1,0 +1,534 @@
+r"""Fit eq. (1) — or a baseline — to a planar data set, with the modulation texture α.
+
+The data are the windows :math:`y_{ij} \approx R_d(\vec x_i, \vec x_{o,j})` of
+a planar data set (:mod:`translucency.io.dataset`).  The model is
+
+.. math:: R_d(\vec x_i, \vec x_o) = \alpha(\vec x_o)\, P_i(\vec x_o),
+
+with :math:`P_i` the per-incident-point profile of the chosen family:
+
+``iso``     :math:`(1, s_g, s_b) \sum_k c_k e^{d_k r}` (the paper's isotropic model),
+``aniso``   :math:`(1, s_g, s_b) \sum_l w_l(\theta) \sum_k c_{lk} e^{d_{lk} r}` (m directions),
+``dipole``  Jensen's dipole with per-point, per-channel :math:`\sigma_a, \sigma_s'`,
+``burley``  Christensen–Burley with per-point, per-channel A and s.
+
+(``colour="per-channel"`` gives the exponential families one fall-off per
+channel instead of the colour scale.)
+
+**Objective.**  Weighted least squares over every valid pair,
+
+.. math:: \Phi = \sum_{i,j,\lambda} w_{ij\lambda}^2
+          \bigl(\alpha_j P_{i\lambda}(\vec x_j) - y_{ij\lambda}\bigr)^2, \qquad
+          w^{-2} = (\rho\, \alpha P)^2 + \sigma^2,
+
+a relative error of tolerance ρ (default 5 %) where the data are precise and
+the measurement variance σ² (the data set's estimate, at least the Poisson
+variance of the model for the data set's photon count) where they are not —
+so values spread over orders of magnitude count alike and noise is honoured.
+Weights are refreshed from the current model each round (iteratively
+reweighted); the first round uses ring means of the data instead.  Masked,
+non-finite and excluded pixels (r below ``exclusion_mm``, one pixel by
+default) have weight 0.
+
+**Alternation.**  Each round (1) fits every point's parameters with α fixed,
+batched over all points (:mod:`._varpro` for exponentials, :mod:`._lm` for
+the baselines; radii grouped exactly as in :mod:`._windows`); (2) for the
+shared-colour model solves :math:`s_\lambda` per point in closed form; (3)
+solves α per pixel in closed form,
+:math:`\alpha_j = \sum w^2 P y / \sum w^2 P^2`; and fixes the scale by mean
+α = 1 (for families with a free amplitude; the dipole's amplitude is tied to
+its shape, so α keeps the scale there).  Rounds stop when Φ falls by less
+than ``tol`` relatively.  The anisotropic model updates its directions by
+block coordinate descent: directions that share no pixel (even, then odd l)
+are fitted together, with the neighbours' contributions held fixed.
+
+Work runs in chunks of incident points read from the Zarr store, so a data
+set larger than memory can be fitted; with ``checkpoint`` the state is saved
+after every chunk and an interrupted fit resumes from it.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .._validate import TranslucencyError
+from ..io.atomic import atomic_path
+from ..io.dataset import PlanarDataset, open_dataset
+from ..model import BurleyModel, DipoleModel, ExponentialModel, PlanarAlpha
+from ..model.burley import burley_R
+from ..model.dipole import dipole_R_d
+from ._lm import _lm, fit_params_batched
+from ._varpro import fit_exponentials_batched
+from ._windows import SampleGrid, group_sums, radius_groups, window_geometry
+
+KINDS = ("iso", "aniso", "dipole", "burley")
+_DIPOLE_STARTS = [(0.01, 1.0), (0.002, 3.0), (0.05, 0.3)]
+_BURLEY_STARTS = [(0.8, 1.0), (0.5, 0.3), (0.95, 4.0)]
+
+
+@dataclass
+class PlanarFit:
+    """Result of :func:`fit_planar`.
+
+    Attributes
+    ----------
+    model : ReflectanceModel
+        The fitted model (α included).
+    flagged : ndarray of bool, shape (P,)
+        Incident points without usable data (all masked, NaN or zero); their
+        parameters are inert (zero reflectance) and the report lists them.
+    history : list of float
+        Objective Φ after each round's parameter fit.
+    seconds : float
+        Wall time of the fit.
+    options : dict
+        The options used (stored in the model file).
+    """
+
+    model: object
+    flagged: np.ndarray
+    history: list
+    seconds: float
+    options: dict = field(default_factory=dict)
+
+
+# -- per-point profile families (without α) ---------------------------------------
+def _exp_sum(c, a, r):
+    """Σ_k c_k e^{−a_k r}: c, a (..., n) broadcast against r (...)."""
+    return np.einsum("...k,...k->...", c, np.exp(-a * r[..., None]))
+
+
+def _dipole_profile(eta):
+    return lambda r, p: dipole_R_d(r[None, :], p[:, :1], p[:, 1:2], eta)
+
+
+def _burley_profile(r, p):
+    return burley_R(r[None, :], p[:, :1], p[:, 1:2])
+
+
+class _State:
+    """Everything a fit carries between chunks and rounds (and saves in a checkpoint)."""
+
+    def __init__(self, kind, P, C, m, n, grid_shape):
+        self.arrays = {
+            "c": np.zeros((P, C, m, n)), "a": np.ones((P, C, m, n)),  # exponential families
+            "p": np.ones((P, 3, 2)),  # dipole (σ_a, σ_s') or Burley (A, s)
+            "s": np.ones((P, 3)),  # colour scale (1, s_g, s_b) of the shared-colour model
+            "alpha": np.ones(grid_shape),
+            "num": np.zeros(grid_shape), "den": np.zeros(grid_shape),
+            "ready": np.zeros(P, dtype=bool), "flagged": np.zeros(P, dtype=bool),
+            "history": np.zeros(0), "phi": np.zeros(1), "cursor": np.zeros(2, dtype=np.int64),
+        }
+
+    def __getattr__(self, name):
+        try:
+            return self.__dict__["arrays"][name]
+        except KeyError:
+            raise AttributeError(name) from None
+
+    def save(self, path: Path, request: str) -> None:
+        with atomic_path(path) as tmp:
+            with open(tmp, "wb") as f:
+                np.savez(f, request=np.array(request), **self.arrays)
+
+    def load(self, path: Path, request: str) -> bool:
+        try:
+            with np.load(path) as z:
+                if str(z["request"]) != request:
+                    return False
+                loaded = {k: z[k] for k in self.arrays}
+        except Exception:  # noqa: BLE001 — an unreadable checkpoint is simply not used
+            return False
+        if any(loaded[k].shape != v.shape for k, v in self.arrays.items() if k not in ("history",)):
+            return False
+        self.arrays.update(loaded)
+        return True
+
+
+def fit_planar(dataset, model: str = "iso", *, n_terms: int = 3, n_directions: int = 8,
+               colour: str = "shared", exclusion_mm: float | None = None, rel_sigma: float = 0.05,
+               max_rounds: int = 6, tol: float = 1e-3, radius_step: float | None | str = "auto",
+               sweeps: int = 2, chunk_points: int = 512, checkpoint=None,
+               progress: Callable[[int, int, str], None] | None = None) -> PlanarFit:
+    """Fit a model family to every incident point of a planar data set, with α.
+
+    Parameters
+    ----------
+    dataset : PlanarDataset or path
+        The measurement (:func:`translucency.io.dataset.open_dataset`).
+    model : {"iso", "aniso", "dipole", "burley"}
+        Model family (see the module docstring).
+    n_terms : int
+        n, exponential terms per profile (1–4).
+    n_directions : int
+        m, directions of the anisotropic model (≥ 2).
+    colour : {"shared", "per-channel"}
+        Exponential families: the paper's (1, s_g, s_b) scale of one fall-off,
+        or one fall-off per channel.
+    exclusion_mm : float, optional
+        Pixels closer than this to x_i are ignored; default one pixel.
+    rel_sigma : float
+        ρ, the relative tolerance in the weights.
+    max_rounds, tol : int, float
+        Alternation stops after ``max_rounds`` or when Φ falls by less than ``tol``.
+    radius_step : float, None or "auto"
+        Merge radii beyond 1 mm into rings of this width (mm); ``None`` groups
+        exactly equal radii only; ``"auto"`` is a quarter pixel.
+    sweeps : int
+        Block-coordinate sweeps over the directions per round (aniso).
+    chunk_points : int
+        Incident points read and fitted together.
+    checkpoint : path, optional
+        Save the state after each chunk and resume from it.
+    progress : callable, optional
+        ``progress(done, total, message)``.
+
+    Returns
+    -------
+    PlanarFit
+
+    Examples
+    --------
+    >>> from translucency.data import default_dataset_path
+    >>> fit = fit_planar(default_dataset_path(), "iso", max_rounds=1)   # doctest: +SKIP
+    """
+    ds = dataset if isinstance(dataset, PlanarDataset) else open_dataset(dataset)
+    t0 = time.perf_counter()
+    if model not in KINDS:
+        raise TranslucencyError(f"model: expected one of {', '.join(KINDS)}, got {model!r}")
+    if not 1 <= int(n_terms) <= 4:
+        raise TranslucencyError(f"terms: n must be between 1 and 4, got {n_terms}")
+    if model == "aniso" and int(n_directions) < 2:
+        raise TranslucencyError(f"directions: the anisotropic model needs m >= 2, got {n_directions}")
+    if colour not in ("shared", "per-channel"):
+        raise TranslucencyError(f"colour: expected 'shared' or 'per-channel', got {colour!r}")
+    if not ds.complete():
+        raise TranslucencyError(f"{ds.path}: the acquisition is unfinished; resume it before fitting")
+    if not (rel_sigma > 0 and np.isfinite(rel_sigma)):
+        raise TranslucencyError(f"rel_sigma: must be > 0, got {rel_sigma}")
+    pitch = ds.pitch
+    exclusion = pitch if exclusion_mm is None else float(exclusion_mm)
+    if exclusion < 0 or not np.isfinite(exclusion):
+        raise TranslucencyError(f"exclusion: must be >= 0 mm, got {exclusion_mm}")
+    step = pitch / 4 if radius_step == "auto" else radius_step
+    m = int(n_directions) if model == "aniso" else 1
+    n = int(n_terms)
+    C = 1 if (colour == "shared" and model in ("iso", "aniso")) else 3
+    P = ds.n_points
+    x_i = ds["x_i"].astype(np.float64)
+    origin = ds["window_origin"].astype(np.float64)
+    grid = SampleGrid.covering(origin, pitch, ds.window)
+    photons = ds.header.get("acquisition", {}).get("photons")
+    poisson = 1.0 / (float(photons) * pitch * pitch) if photons else 0.0
+    eta = float(ds.header.get("sample", {}).get("eta", 1.3))
+    options = {"model": model, "n_terms": n, "n_directions": m, "colour": colour if C == 1 or model in
+               ("iso", "aniso") else "per-channel", "exclusion_mm": exclusion, "rel_sigma": rel_sigma,
+               "max_rounds": max_rounds, "tol": tol, "radius_step": step, "sweeps": sweeps}
+    request = json.dumps({"dataset": str(Path(ds.path).resolve()), "header": hashlib.sha256(
+        json.dumps(ds.header, sort_keys=True).encode()).hexdigest(), "chunk": chunk_points, **options},
+        sort_keys=True)
+
+    state = _State(model, P, C, m, n, grid.shape)
+    ckpt = Path(checkpoint) if checkpoint else None
+    if ckpt is not None and ckpt.exists() and state.load(ckpt, request) and progress:
+        progress(0, 0, f"resuming from {ckpt.name}: round {int(state.cursor[0]) + 1}")
+    ctx = _Context(ds, model, n, m, C, exclusion, rel_sigma, poisson, eta, step, sweeps, grid, x_i, origin)
+    chunks = [(s, min(s + chunk_points, P)) for s in range(0, P, chunk_points)]
+    total = max_rounds * len(chunks)
+    while state.cursor[0] < max_rounds:
+        rnd, first = int(state.cursor[0]), int(state.cursor[1])
+        for ci in range(first, len(chunks)):
+            if progress:
+                progress(rnd * len(chunks) + ci, total, f"round {rnd + 1}: points {chunks[ci][0]}–{chunks[ci][1] - 1}")
+            _fit_chunk(ctx, state, *chunks[ci])
+            state.cursor[1] = ci + 1
+            if ckpt is not None:
+                state.save(ckpt, request)
+        # α in closed form, then the scale fixed by mean α = 1
+        _update_alpha(state, model)
+        state.arrays["history"] = np.append(state.history, state.phi[0])
+        state.phi[0] = 0.0
+        state.cursor[:] = (rnd + 1, 0)
+        h = state.history
+        if len(h) >= 3 and (h[-2] - h[-1]) <= tol * h[-2]:  # round 1 used data-based weights
+            state.cursor[0] = max_rounds
+        if ckpt is not None:
+            state.save(ckpt, request)
+    if progress:
+        progress(total, total, "done")
+    fitted = _build_model(ctx, state)
+    if ckpt is not None and ckpt.exists():
+        ckpt.unlink()
+    return PlanarFit(fitted, state.flagged.copy(), [float(v) for v in state.history],
+                     time.perf_counter() - t0, options)
+
+
+@dataclass
+class _Context:
+    ds: PlanarDataset
+    kind: str
+    n: int
+    m: int
+    C: int
+    exclusion: float
+    rel_sigma: float
+    poisson: float
+    eta: float
+    radius_step: float | None
+    sweeps: int
+    grid: SampleGrid
+    x_i: np.ndarray
+    origin: np.ndarray
+
+
+@dataclass
+class _Chunk:
+    """The data of k incident points, flattened to (k, J, 3), and their geometry."""
+
+    y: np.ndarray
+    var: np.ndarray
+    valid: np.ndarray  # (k, J) bool
+    r: np.ndarray
+    theta: np.ndarray
+    pixel: np.ndarray
+    gid: np.ndarray  # (k, J) radius group
+    r_g: np.ndarray  # (G,)
+    alpha: np.ndarray  # (k, J) current α at each pixel
+
+
+def _load_chunk(ctx: _Context, state: _State, s: int, e: int) -> _Chunk:
+    ds = ctx.ds
+    k = e - s
+    y = np.asarray(ds.group["R_d"][s:e], dtype=np.float64).reshape(k, -1, 3)
+    var = np.asarray(ds.group["variance"][s:e], dtype=np.float64).reshape(k, -1, 3)
+    mask = np.asarray(ds.group["mask"][s:e]).reshape(k, -1)
+    geom = window_geometry(ctx.x_i[s:e], ctx.origin[s:e], ctx.grid, ds.window)
+    valid = mask & np.isfinite(y).all(axis=2) & np.isfinite(var).all(axis=2) & (geom.r >= ctx.exclusion)
+    y = np.where(valid[..., None], y, 0.0)
+    var = np.where(valid[..., None], np.maximum(var, 0.0), 0.0)
+    gid, r_g = radius_groups(geom.r, ctx.grid.pitch, r_exact=1.0, radius_step=ctx.radius_step)
+    alpha = state.alpha.ravel()[geom.pixel]
+    return _Chunk(y, var, valid, geom.r, geom.theta, geom.pixel, gid, r_g, alpha)
+
+
+def _group_profiles(ctx: _Context, state: _State, sl: slice, r_g: np.ndarray) -> np.ndarray:
+    """Each point's profile at the group radii, (k, G, C, m), without α or colour scale."""
+    if ctx.kind in ("dipole", "burley"):
+        p = state.p[sl][:, None]  # (k, 1, 3, 2)
+        r = r_g[None, :, None]
+        f = (dipole_R_d(r, p[..., 0], p[..., 1], ctx.eta) if ctx.kind == "dipole"
+             else burley_R(r, p[..., 0], p[..., 1]))
+        return f[..., None]
+    return _exp_sum(state.c[sl][:, None], state.a[sl][:, None], r_g[None, :, None, None])
+
+
+def _at_pixels(F: np.ndarray, ch: _Chunk, m: int, direction=None) -> np.ndarray:
+    """Gather group profiles F (k, G, C, m) at the pixels: blended by the hat weights,
+    or of one ``direction`` (k, J) per pixel; returns (k, J, C)."""
+    b = np.arange(F.shape[0])[:, None]
+    if direction is not None:
+        return F[b, ch.gid, :, direction]
+    if m == 1:
+        return F[b, ch.gid, :, 0]
+    l0, t = _hat(ch.theta, m)
+    return (1 - t)[..., None] * F[b, ch.gid, :, l0] + t[..., None] * F[b, ch.gid, :, (l0 + 1) % m]
+
+
+def _predict(ctx: _Context, state: _State, sl: slice, ch: _Chunk) -> np.ndarray:
+    """Current P_i at every pixel of the chunk, (k, J, 3), without α."""
+    f = _at_pixels(_group_profiles(ctx, state, sl, ch.r_g), ch, ctx.m)
+    return f * state.s[sl][:, None, :] if ctx.C == 1 else f
+
+
+def _hat(theta, m):
+    """Lower direction l0 and the fraction t towards l0 + 1 of each angle (hat weights)."""
+    u = np.mod(theta / (2 * np.pi / m), m)
+    l0 = np.floor(u)
+    return l0.astype(np.int64) % m, u - l0
+
+
+def _weights(ctx: _Context, ch: _Chunk, f: np.ndarray | None) -> np.ndarray:
+    """w² per pixel and channel (module docstring); f is P_i without α, (k, J, 3)."""
+    if f is None:  # first round: ring means of y/α stand in for the model
+        k, G = ch.y.shape[0], ch.r_g.size
+        idx = (np.arange(k)[:, None] * G + ch.gid)[..., None] * 3 + np.arange(3)
+        ok = ch.valid[..., None] & (ch.alpha[..., None] > 0)
+        num = group_sums(idx, np.where(ok, ch.y / np.where(ch.alpha > 0, ch.alpha, 1.0)[..., None], 0.0), k * G * 3)
+        cnt = group_sums(idx, ok.astype(float), k * G * 3)
+        f = (num / np.maximum(cnt, 1)).reshape(k, G, 3)[np.arange(k)[:, None], ch.gid]
+    model = ch.alpha[..., None] * f
+    floor = 1e-6 * np.max(np.where(ch.valid[..., None], model, 0.0), axis=1, keepdims=True)
+    model = np.maximum(model, np.maximum(floor, 1e-30))
+    var = np.maximum(ch.var, model * ctx.poisson)
+    return np.where(ch.valid[..., None], 1.0 / ((ctx.rel_sigma * model) ** 2 + var), 0.0)
+
+
+def _fit_chunk(ctx: _Context, state: _State, s: int, e: int) -> None:
+    """One round's work on points s..e: parameters, colour scale, α statistics, Φ."""
+    sl = slice(s, e)
+    ch = _load_chunk(ctx, state, s, e)
+    k = e - s
+    usable = (ch.valid.sum(axis=1) >= 2 * ctx.n + 2) & ((ch.y * ch.valid[..., None]).sum(axis=(1, 2)) > 0)
+    state.flagged[sl] = ~usable
+    if k and not state.ready[sl].all() and ctx.C == 1:  # colour scale from the window sums
+        tot = ch.y.sum(axis=1)
+        state.s[sl] = np.where(state.ready[sl, None], state.s[sl],
+                               tot / np.maximum(tot[:, :1], 1e-300) * (tot[:, :1] > 0) + (tot[:, :1] <= 0))
+    f_prev = _predict(ctx, state, sl, ch) if state.ready[sl].all() else None
+    w2 = _weights(ctx, ch, f_prev)
+    if ctx.kind in ("dipole", "burley"):
+        _fit_baseline(ctx, state, sl, ch, w2)
+    else:
+        _fit_exponential(ctx, state, sl, ch, w2)
+        if ctx.C == 1:
+            _fit_colour(ctx, state, sl, ch, w2)
+    # inert parameters where a point has no data
+    bad = np.flatnonzero(~usable) + s
+    state.c[bad] = 0.0
+    state.a[bad] = 1.0
+    if ctx.kind == "burley":
+        state.p[bad, :, 0] = 0.0
+    state.ready[sl] = True
+    # Φ and the α statistics with the new parameters
+    f = _predict(ctx, state, sl, ch)
+    w2 = np.where(usable[:, None, None], w2, 0.0)
+    state.phi[0] += float(np.sum(w2 * (ch.alpha[..., None] * f - ch.y) ** 2))
+    n_px = state.num.size
+    state.num.ravel()[:] += group_sums(ch.pixel[..., None], w2 * f * ch.y, n_px)
+    state.den.ravel()[:] += group_sums(ch.pixel[..., None], w2 * f * f, n_px)
+
+
+def _grouped(ch: _Chunk, w2, kappa, target, bins_per_point: int, sub: np.ndarray | None, n_sub: int):
+    """Sums A = Σ w² κ² and B = Σ w² κ y per (point, sub-problem, radius group) → W, Y (k·n_sub, G)."""
+    k, G = ch.y.shape[0], ch.r_g.size
+    idx = np.arange(k)[:, None, None] * (n_sub * G) + ch.gid[..., None]
+    if sub is not None:
+        idx = idx + sub * G
+    A = group_sums(idx, w2 * kappa * kappa, k * n_sub * G).reshape(k * n_sub, G)
+    B = group_sums(idx, w2 * kappa * target, k * n_sub * G).reshape(k * n_sub, G)
+    W = np.sqrt(A)
+    return W, np.divide(B, A, out=np.zeros_like(B), where=A > 0)
+
+
+def _solve_exponentials(ctx, state, sl, r_g, W, Y, index):
+    """Fit the sub-problems at ``index`` (into c/a viewed as (k·C·m, n)); warm where ready."""
+    c = state.c[sl].reshape(-1, ctx.n)
+    a = state.a[sl].reshape(-1, ctx.n)
+    ready = np.repeat(state.ready[sl], state.c.shape[1] * state.c.shape[2])[index]
+    for warm in (True, False):
+        sel = ready if warm else ~ready
+        if not sel.any():
+            continue
+        rows = index[sel]
+        cc, aa, _ = fit_exponentials_batched(r_g, W[sel], Y[sel], ctx.n,
+                                             rates0=a[rows] if warm else None, n_starts=3)
+        c[rows], a[rows] = cc, aa
+    state.c[sl] = c.reshape(state.c[sl].shape)
+    state.a[sl] = a.reshape(state.a[sl].shape)
+
+
+def _fit_exponential(ctx: _Context, state: _State, sl: slice, ch: _Chunk, w2) -> None:
+    k, C, m = ch.y.shape[0], ctx.C, ctx.m
+    s_col = state.s[sl][:, None, :] if C == 1 else np.ones((k, 1, 3))
+    kappa = ch.alpha[..., None] * s_col  # (k, J, 3)
+    chan = np.zeros(3, dtype=np.int64) if C == 1 else np.arange(3)  # which colour row each channel feeds
+    if m == 1:
+        W, Y = _grouped(ch, w2, kappa, ch.y, C, chan[None, None, :], C)
+        _solve_exponentials(ctx, state, sl, ch.r_g, W, Y, np.arange(k * C))
+        return
+    if not state.ready[sl].all():  # start every direction from the isotropic fit
+        W, Y = _grouped(ch, w2, kappa, ch.y, C, chan[None, None, :], C)
+        cc, aa, _ = fit_exponentials_batched(ch.r_g, W, Y, ctx.n, n_starts=3)
+        state.c[sl] = np.repeat(cc.reshape(k, C, 1, ctx.n), m, axis=2)
+        state.a[sl] = np.repeat(aa.reshape(k, C, 1, ctx.n), m, axis=2)
+        state.ready[sl] = True
+    l0, t = _hat(ch.theta, m)
+    l1 = (l0 + 1) % m
+    classes = [np.arange(0, m, 2), np.arange(1, m, 2)] if m % 2 == 0 else [np.array([l]) for l in range(m)]
+    for _ in range(ctx.sweeps):
+        for cls in classes:
+            in0, in1 = np.isin(l0, cls), np.isin(l1, cls)
+            L = np.where(in0, l0, l1)  # the direction being fitted
+            O = np.where(in0, l1, l0)  # its neighbour, held fixed
+            u = np.where(in0, 1 - t, np.where(in1, t, 0.0))
+            f_other = _at_pixels(_group_profiles(ctx, state, sl, ch.r_g), ch, m, O)  # (k, J, C)
+            if C == 1:
+                f_other = f_other * s_col
+            other = np.where(in0, t, 1 - t)[..., None] * ch.alpha[..., None] * f_other
+            w_cls = np.where((in0 | in1)[..., None], w2, 0.0)
+            sub = (chan[None, None, :] * m + L[..., None])
+            W, Y = _grouped(ch, w_cls, kappa * u[..., None], ch.y - other, C * m, sub, C * m)
+            rows = (np.arange(k)[:, None, None] * C + np.arange(C)[None, :, None]) * m + cls[None, None, :]
+            rows = rows.ravel()
+            _solve_exponentials(ctx, state, sl, ch.r_g, W[rows], Y[rows], rows)
+
+
+def _fit_colour(ctx: _Context, state: _State, sl: slice, ch: _Chunk, w2) -> None:
+    """Closed-form s_λ = Σ w² α P y / Σ w² (α P)², then (1, s_g, s_b) with the red scale moved into c."""
+    state.s[sl] = 1.0
+    f = ch.alpha[..., None] * _predict(ctx, state, sl, ch)  # s = 1 here
+    num = np.einsum("kjc,kjc->kc", w2 * f, ch.y)
+    den = np.einsum("kjc,kjc->kc", w2 * f, f)
+    s = np.divide(num, den, out=np.ones_like(num), where=den > 0)
+    red = np.where(s[:, :1] > 0, s[:, :1], 1.0)
+    state.s[sl] = s / red
+    state.c[sl] *= red[:, :, None, None]
+
+
+def _fit_baseline(ctx: _Context, state: _State, sl: slice, ch: _Chunk, w2) -> None:
+    """Dipole or Burley: two positive parameters per point and channel."""
+    k = ch.y.shape[0]
+    W, Y = _grouped(ch, w2, np.broadcast_to(ch.alpha[..., None], ch.y.shape), ch.y, 3,
+                    np.arange(3)[None, None, :], 3)
+    profile = _dipole_profile(ctx.eta) if ctx.kind == "dipole" else _burley_profile
+    starts = _DIPOLE_STARTS if ctx.kind == "dipole" else _BURLEY_STARTS
+    p = state.p[sl].reshape(-1, 2)
+    ready = np.repeat(state.ready[sl], 3)
+    if ready.any():  # warm: the previous round's parameters, kept unless the refit is better
+        p[ready] = _warm_params(profile, ch.r_g, W[ready], Y[ready], p[ready])
+    if (~ready).any():
+        pc, _ = fit_params_batched(profile, ch.r_g, W[~ready], Y[~ready], starts)
+        p[~ready] = pc
+    state.p[sl] = p.reshape(k, 3, 2)
+
+
+def _warm_params(profile, r, W, Y, p0):
+    """One LM run from each problem's own previous parameters."""
+    x, _ = _lm(profile, r, W, Y, np.log(np.maximum(p0, 1e-12)), 40, 1e-10)
+    return np.exp(x)
+
+
+def _update_alpha(state: _State, kind: str) -> None:
+    seen = state.den > 0
+    alpha = np.where(seen, state.num / np.where(seen, state.den, 1.0), 1.0)
+    alpha = np.maximum(alpha, 0.0)
+    if kind != "dipole" and seen.any():
+        mean = float(alpha[seen].mean())
+        if mean > 0:
+            alpha = np.where(seen, alpha / mean, 1.0)
+            if kind == "burley":
+                state.p[:, :, 0] *= mean
+            else:
+                state.c[...] *= mean
+    state.alpha[...] = alpha
+    state.num[...] = 0.0
+    state.den[...] = 0.0
+
+
+def _build_model(ctx: _Context, state: _State):
+    alpha = PlanarAlpha(state.alpha.copy(), ctx.grid.origin, ctx.grid.pitch)
+    if ctx.kind == "dipole":
+        return DipoleModel(ctx.x_i, state.p[:, :, 0], state.p[:, :, 1], ctx.eta, alpha)
+    if ctx.kind == "burley":
+        return BurleyModel(ctx.x_i, state.p[:, :, 0], state.p[:, :, 1], alpha)
+    d = -state.a
+    if ctx.C == 1:
+        return ExponentialModel(ctx.x_i, state.c, d, alpha, s_g=state.s[:, 1], s_b=state.s[:, 2])
+    return ExponentialModel(ctx.x_i, state.c, d, alpha)
