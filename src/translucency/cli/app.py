@@ -183,6 +183,91 @@ def acquire_planar_cmd(
     console.print(f"data set: {out}")
 
 
+@app.command()
+@user_errors
+def fit(
+    data: Path = typer.Argument(..., help="A planar data set (.zarr directory)."),
+    out: Path = typer.Option(..., "--out", "-o", help="Model file to write (.model.zip)."),
+    model: str = typer.Option("iso", "--model", help="iso | aniso | dipole | burley."),
+    terms: int = typer.Option(3, "--terms", "-n", help="Exponential terms n per profile (1-4)."),
+    directions: int = typer.Option(8, "--directions", "-m", help="Directions m of the anisotropic model."),
+    colour: str = typer.Option("per-channel", "--colour",
+                               help="shared: the paper's (1, s_g, s_b) scale of one fall-off; per-channel: one fall-off per channel."),
+    exclusion: float = typer.Option(None, "--exclusion", help="Ignore pixels closer than this to x_i, mm (default one pixel)."),
+    rounds: int = typer.Option(6, "--rounds", help="Most alternation rounds (parameters, then alpha)."),
+    chunk: int = typer.Option(512, "--chunk", help="Incident points read and fitted together."),
+    float16: bool = typer.Option(False, "--float16", help="Store parameters as float16 (smaller file)."),
+):
+    """Fit a model per incident point, with the modulation texture alpha, to a planar data set.
+
+    An interrupted fit resumes from OUT.partial.npz when run again with the same arguments.
+    """
+    from ..fit.planar import fit_planar
+    from ..io.model_file import save_model
+
+    ckpt = out.with_name(out.name + ".partial.npz")
+    with progress() as bar:
+        task = bar.add_task(f"fit {model}", total=None, item="")
+
+        def report(done, total, message):
+            bar.update(task, completed=done, total=total or None, item=message)
+
+        result = fit_planar(data, model, n_terms=terms, n_directions=directions, colour=colour,
+                            exclusion_mm=exclusion, max_rounds=rounds, chunk_points=chunk, checkpoint=ckpt,
+                            progress=report)
+    meta = {"dataset": str(data), "fit": result.options, "objective_per_round": result.history,
+            "seconds": round(result.seconds, 2), "flagged_points": np.flatnonzero(result.flagged).tolist()}
+    path = save_model(result.model, out, dtype="float16" if float16 else "float32", meta=meta)
+    if result.flagged.any():
+        err_console.print(f"[yellow]warning:[/] {int(result.flagged.sum())} incident points have no usable data "
+                          f"(all masked, NaN or zero) and are flagged in the model: "
+                          f"{np.flatnonzero(result.flagged)[:10].tolist()}…")
+    console.print(f"model: {path} ({result.seconds:.1f} s, {len(result.history)} rounds)")
+
+
+@app.command()
+@user_errors
+def evaluate(
+    model: Path = typer.Argument(..., help="The model file to evaluate (.model.zip)."),
+    data: Path = typer.Argument(..., help="The planar data set it was fitted to (.zarr directory)."),
+    report: Path = typer.Option(Path("report"), "--report", help="Directory for the figures and index.html."),
+    json_out: Path = typer.Option(None, "--json", help="Write the error summary (rel_l2, rel_l2_near/mid/far) here."),
+    compare: list[Path] = typer.Option(None, "--compare", help="Other model files of the same data (repeatable)."),
+    points: str = typer.Option(None, "--points", help="Incident points for the profiles, e.g. '0,17,40'."),
+):
+    """Relative L2 errors (overall and per distance band), error maps, profiles and an HTML report."""
+    from ..evaluate.report import model_label, write_report
+    from ..io.model_file import ModelFileError, load_model, read_header
+
+    models, flagged = {}, {}
+    for path in [model, *(compare or [])]:
+        try:
+            m = load_model(path)
+            fl = read_header(path).get("meta", {}).get("flagged_points", [])
+        except ModelFileError as exc:
+            raise TranslucencyError(str(exc)) from None
+        name = model_label(m)
+        name = name if name not in models else f"{name} ({path.name})"
+        models[name] = m
+        mask = np.zeros(m.n_points, bool)
+        mask[np.asarray(fl, dtype=int)] = True
+        flagged[name] = mask
+    try:
+        picks = None if points is None else [int(v) for v in points.split(",") if v.strip()]
+    except ValueError:
+        raise TranslucencyError(f"--points: expected comma-separated integers, got {points!r}") from None
+    summary = write_report(models, data, report, points=picks, flagged=flagged, json_path=json_out)
+    table = Table(title=f"relative L2 error on {data}")
+    for col in ("model", "all", "near <1 mm", "mid 1-4 mm", "far >4 mm"):
+        table.add_column(col)
+    for name, s in summary["models"].items():
+        table.add_row(name, *(f"{100 * s[k]:.2f} %" for k in ("rel_l2", "rel_l2_near", "rel_l2_mid", "rel_l2_far")))
+    nf = summary["noise_floor"]
+    table.add_row("[dim]noise alone[/]", *(f"[dim]{100 * nf[k]:.2f} %[/]" for k in ("all", "near", "mid", "far")))
+    console.print(table)
+    console.print(f"report: {report / 'index.html'}")
+
+
 def main() -> None:
     """Console entry point."""
     app()

@@ -118,7 +118,7 @@ def rate_bounds(r: np.ndarray) -> tuple[float, float]:
 
 
 def fit_exponentials_batched(r, W, Y, n_terms: int, *, rates0=None, n_starts: int = 3,
-                             max_iter: int = 50, tol: float = 1e-10, bounds=None, block: int = 256):
+                             max_iter: int = 50, tol: float = 1e-7, bounds=None, block: int = 1024):
     """Fit :math:`\\sum_k c_k e^{-a_k r}` to B weighted profiles at once.
 
     Parameters
@@ -195,44 +195,47 @@ def _fit_block(r, W2, Y, n, rates0, n_starts, max_iter, tol, bounds):
 
 
 def _lm(r, Wr, Wy, YY, theta, lo, hi, max_iter, tol):
-    """Levenberg–Marquardt over θ = log a with amplitudes re-projected (see module doc)."""
+    """Levenberg–Marquardt over θ = log a with amplitudes re-projected (see module doc).
+
+    Problems that have converged leave the working set, so late iterations
+    cost only what is still moving.
+    """
     B, n = theta.shape
     lam = np.full(B, 1e-3)
     (K0, K1, K2), (k0, k1) = _moments(r, Wr, Wy, np.exp(theta))
     c, cost = nnls_small(K0, k0, YY)
-    active = np.ones(B, dtype=bool)
+    active = np.arange(B)
     eye = np.eye(2 * n)
     for _ in range(max_iter):
-        if not active.any():
+        if active.size == 0:
             break
-        a = np.exp(theta)
-        ac = a * c  # ∂f/∂θ_k = −a_k c_k r e^{−a_k r}
+        i = active
+        a = np.exp(theta[i])
+        ac = a * c[i]  # ∂f/∂θ_k = −a_k c_k r e^{−a_k r}
         # Gauss–Newton system of the joint (c, θ) problem from the moments
-        JTJ = np.empty((B, 2 * n, 2 * n))
-        JTJ[:, :n, :n] = K0
-        JTJ[:, :n, n:] = -K1 * ac[:, None, :]
-        JTJ[:, n:, :n] = -K1 * ac[:, :, None]
-        JTJ[:, n:, n:] = K2 * ac[:, :, None] * ac[:, None, :]
-        g = np.concatenate([np.einsum("bkl,bl->bk", K0, c) - k0,
-                            -ac * (np.einsum("bkl,bl->bk", K1, c) - k1)], axis=1)
+        JTJ = np.empty((i.size, 2 * n, 2 * n))
+        JTJ[:, :n, :n] = K0[i]
+        JTJ[:, :n, n:] = -K1[i] * ac[:, None, :]
+        JTJ[:, n:, :n] = -K1[i] * ac[:, :, None]
+        JTJ[:, n:, n:] = K2[i] * ac[:, :, None] * ac[:, None, :]
+        g = np.concatenate([np.einsum("bkl,bl->bk", K0[i], c[i]) - k0[i],
+                            -ac * (np.einsum("bkl,bl->bk", K1[i], c[i]) - k1[i])], axis=1)
         diag = np.einsum("bii->bi", JTJ)
         scale = diag.max(axis=1, keepdims=True)
-        damp = lam[:, None] * (diag + 1e-9 * scale) + 1e-15 * scale
+        damp = lam[i, None] * (diag + 1e-9 * scale) + 1e-15 * scale
         step = np.linalg.solve(JTJ + damp[:, :, None] * eye, -g[:, :, None])[:, :, 0]
-        trial = np.clip(theta + step[:, n:], lo, hi)
-        (tK0, tK1, tK2), (tk0, tk1) = _moments(r, Wr, Wy, np.exp(trial))
-        tc, tcost = nnls_small(tK0, tk0, YY)
-        better = active & (tcost < cost)
-        rel_gain = np.where(better, (cost - tcost) / np.maximum(cost, 1e-300), 0.0)
-        small_step = np.abs(trial - theta).max(axis=1) < 1e-7
+        trial = np.clip(theta[i] + step[:, n:], lo, hi)
+        (tK0, tK1, tK2), (tk0, tk1) = _moments(r, Wr[i], Wy[i], np.exp(trial))
+        tc, tcost = nnls_small(tK0, tk0, YY[i])
+        better = tcost < cost[i]
+        rel_gain = np.where(better, (cost[i] - tcost) / np.maximum(cost[i], 1e-300), 0.0)
+        small_step = np.abs(trial - theta[i]).max(axis=1) < 1e-7
         # accept where the projected cost fell
-        theta = np.where(better[:, None], trial, theta)
-        for cur, new in ((K0, tK0), (K1, tK1), (K2, tK2)):
-            cur[better] = new[better]
-        for cur, new in ((k0, tk0), (k1, tk1)):
-            cur[better] = new[better]
-        c[better], cost[better] = tc[better], tcost[better]
-        lam = np.where(better, lam / 3.0, lam * 4.0)
-        done = (better & ((rel_gain < tol) | small_step)) | (lam > 1e10) | (cost <= 1e-24 * YY)
-        active &= ~done
+        j = i[better]
+        theta[j] = trial[better]
+        K0[j], K1[j], K2[j], k0[j], k1[j] = tK0[better], tK1[better], tK2[better], tk0[better], tk1[better]
+        c[j], cost[j] = tc[better], tcost[better]
+        lam[i] = np.where(better, lam[i] / 3.0, lam[i] * 4.0)
+        done = (better & ((rel_gain < tol) | small_step)) | (lam[i] > 1e10) | (cost[i] <= 1e-24 * YY[i])
+        active = i[~done]
     return c, np.exp(theta), cost

@@ -22,8 +22,8 @@ channel instead of the colour scale.)
           w^{-2} = (\rho\, \alpha P)^2 + \sigma^2,
 
 a relative error of tolerance ρ (default 5 %) where the data are precise and
-the measurement variance σ² (the data set's estimate, at least the Poisson
-variance of the model for the data set's photon count) where they are not —
+the measurement variance σ² (the Poisson variance of the model for the data
+set's photon count, or the data's variance averaged over rings) where they are not —
 so values spread over orders of magnitude count alike and noise is honoured.
 Weights are refreshed from the current model each round (iteratively
 reweighted); the first round uses ring means of the data instead.  Masked,
@@ -153,9 +153,9 @@ class _State:
 
 
 def fit_planar(dataset, model: str = "iso", *, n_terms: int = 3, n_directions: int = 8,
-               colour: str = "shared", exclusion_mm: float | None = None, rel_sigma: float = 0.05,
+               colour: str = "per-channel", exclusion_mm: float | None = None, rel_sigma: float = 0.05,
                max_rounds: int = 6, tol: float = 1e-3, radius_step: float | None | str = "auto",
-               sweeps: int = 2, chunk_points: int = 512, checkpoint=None,
+               sweeps: int = 2, balance: bool = True, chunk_points: int = 512, checkpoint=None,
                progress: Callable[[int, int, str], None] | None = None) -> PlanarFit:
     """Fit a model family to every incident point of a planar data set, with α.
 
@@ -230,7 +230,7 @@ def fit_planar(dataset, model: str = "iso", *, n_terms: int = 3, n_directions: i
     eta = float(ds.header.get("sample", {}).get("eta", 1.3))
     options = {"model": model, "n_terms": n, "n_directions": m, "colour": colour if C == 1 or model in
                ("iso", "aniso") else "per-channel", "exclusion_mm": exclusion, "rel_sigma": rel_sigma,
-               "max_rounds": max_rounds, "tol": tol, "radius_step": step, "sweeps": sweeps}
+               "max_rounds": max_rounds, "tol": tol, "radius_step": step, "sweeps": sweeps, "balance": balance}
     request = json.dumps({"dataset": str(Path(ds.path).resolve()), "header": hashlib.sha256(
         json.dumps(ds.header, sort_keys=True).encode()).hexdigest(), "chunk": chunk_points, **options},
         sort_keys=True)
@@ -239,7 +239,7 @@ def fit_planar(dataset, model: str = "iso", *, n_terms: int = 3, n_directions: i
     ckpt = Path(checkpoint) if checkpoint else None
     if ckpt is not None and ckpt.exists() and state.load(ckpt, request) and progress:
         progress(0, 0, f"resuming from {ckpt.name}: round {int(state.cursor[0]) + 1}")
-    ctx = _Context(ds, model, n, m, C, exclusion, rel_sigma, poisson, eta, step, sweeps, grid, x_i, origin)
+    ctx = _Context(ds, model, n, m, C, exclusion, rel_sigma, poisson, eta, step, sweeps, balance, grid, x_i, origin)
     chunks = [(s, min(s + chunk_points, P)) for s in range(0, P, chunk_points)]
     total = max_rounds * len(chunks)
     while state.cursor[0] < max_rounds:
@@ -283,6 +283,7 @@ class _Context:
     eta: float
     radius_step: float | None
     sweeps: int
+    balance: bool
     grid: SampleGrid
     x_i: np.ndarray
     origin: np.ndarray
@@ -355,19 +356,34 @@ def _hat(theta, m):
 
 
 def _weights(ctx: _Context, ch: _Chunk, f: np.ndarray | None) -> np.ndarray:
-    """w² per pixel and channel (module docstring); f is P_i without α, (k, J, 3)."""
-    if f is None:  # first round: ring means of y/α stand in for the model
-        k, G = ch.y.shape[0], ch.r_g.size
-        idx = (np.arange(k)[:, None] * G + ch.gid)[..., None] * 3 + np.arange(3)
-        ok = ch.valid[..., None] & (ch.alpha[..., None] > 0)
-        num = group_sums(idx, np.where(ok, ch.y / np.where(ch.alpha > 0, ch.alpha, 1.0)[..., None], 0.0), k * G * 3)
+    """w² per pixel and channel (module docstring); f is P_i without α, (k, J, 3).
+
+    The variance is taken from the model, never from the pixel's own value: a
+    pixel-wise estimate is proportional to the noisy count (Poisson), and
+    weighting by it would pull the fit below the data where counts are few.
+    With the data set's photon count it is the Poisson variance of the model,
+    :math:`\alpha P/(N p^2)`; otherwise the ring mean of the data's variance.
+    """
+    k, G = ch.y.shape[0], ch.r_g.size
+    idx = (np.arange(k)[:, None] * G + ch.gid)[..., None] * 3 + np.arange(3)
+    b = np.arange(k)[:, None]
+
+    def ring_mean(v, ok):
+        num = group_sums(idx, np.where(ok, v, 0.0), k * G * 3)
         cnt = group_sums(idx, ok.astype(float), k * G * 3)
-        f = (num / np.maximum(cnt, 1)).reshape(k, G, 3)[np.arange(k)[:, None], ch.gid]
+        return (num / np.maximum(cnt, 1)).reshape(k, G, 3)[b, ch.gid]
+
+    ok = ch.valid[..., None] & (ch.alpha[..., None] > 0)
+    if f is None:  # first round: ring means of y/α stand in for the model
+        f = ring_mean(ch.y / np.where(ch.alpha > 0, ch.alpha, 1.0)[..., None], ok)
     model = ch.alpha[..., None] * f
     floor = 1e-6 * np.max(np.where(ch.valid[..., None], model, 0.0), axis=1, keepdims=True)
     model = np.maximum(model, np.maximum(floor, 1e-30))
-    var = np.maximum(ch.var, model * ctx.poisson)
-    return np.where(ch.valid[..., None], 1.0 / ((ctx.rel_sigma * model) ** 2 + var), 0.0)
+    var = model * ctx.poisson if ctx.poisson > 0 else ring_mean(ch.var, ch.valid[..., None] & np.ones_like(ok))
+    w2 = 1.0 / ((ctx.rel_sigma * model) ** 2 + var)
+    if ctx.balance:  # each mm of distance counts alike: rings beyond 1 mm weighted by 1 mm / r
+        w2 = w2 * np.minimum(1.0, 1.0 / np.maximum(ch.r, 1e-9))[..., None]
+    return np.where(ch.valid[..., None], w2, 0.0)
 
 
 def _fit_chunk(ctx: _Context, state: _State, s: int, e: int) -> None:
@@ -427,8 +443,8 @@ def _solve_exponentials(ctx, state, sl, r_g, W, Y, index):
         if not sel.any():
             continue
         rows = index[sel]
-        cc, aa, _ = fit_exponentials_batched(r_g, W[sel], Y[sel], ctx.n,
-                                             rates0=a[rows] if warm else None, n_starts=3)
+        cc, aa, _ = fit_exponentials_batched(r_g, W[sel], Y[sel], ctx.n, rates0=a[rows] if warm else None,
+                                             n_starts=3, max_iter=20 if warm else 50)
         c[rows], a[rows] = cc, aa
     state.c[sl] = c.reshape(state.c[sl].shape)
     state.a[sl] = a.reshape(state.a[sl].shape)
