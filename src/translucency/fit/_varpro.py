@@ -161,13 +161,15 @@ def fit_exponentials_batched(r, W, Y, n_terms: int, *, rates0=None, n_starts: in
     Y = np.asarray(Y, dtype=np.float64)
     B, n = Y.shape[0], int(n_terms)
     bounds = bounds if bounds is not None else rate_bounds(r)
-    out = [np.empty((B, n)), np.empty((B, n)), np.empty(B)]
-    for s in range(0, B, block):
-        sl = slice(s, s + block)
-        res = _fit_block(r, W2[sl], Y[sl], n, None if rates0 is None else np.asarray(rates0)[sl],
+    # problems without data (all weights 0) get c = 0 and unit rates
+    out = [np.zeros((B, n)), np.ones((B, n)), np.zeros(B)]
+    todo = np.flatnonzero((W2 > 0).any(axis=1))
+    for s in range(0, todo.size, block):
+        rows = todo[s:s + block]
+        res = _fit_block(r, W2[rows], Y[rows], n, None if rates0 is None else np.asarray(rates0)[rows],
                          n_starts, max_iter, tol, bounds)
         for o, x in zip(out, res):
-            o[sl] = x
+            o[rows] = x
     return tuple(out)
 
 

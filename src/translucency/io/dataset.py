@@ -115,6 +115,85 @@ def create_dataset(path, header: dict, *, overwrite: bool = False):
     return PlanarDataset(path, header, root)
 
 
+def write_dataset(path, x_i, window_origin, R_d, pitch: float, *, variance=None, mask=None, eta: float = 1.3,
+                  photons: int | None = None, description: dict | None = None, dtype: str = "float32",
+                  chunk_points: int = 64, overwrite: bool = False) -> PlanarDataset:
+    """Write measured windows (a real rig's, or any other) as a planar data set.
+
+    Parameters
+    ----------
+    path : path
+        Zarr directory to create.
+    x_i : array_like, shape (P, 2)
+        Incident points, mm.
+    window_origin : array_like, shape (P, 2)
+        Corner (x, y) of each window, mm.
+    R_d : array_like, shape (P, H, W, 3)
+        Diffuse reflectance per unit incident power, mm⁻², linear RGB.
+    pitch : float
+        Pixel size, mm.
+    variance : array_like, shape (P, H, W, 3), optional
+        Variance of R_d, mm⁻⁴ (default 0: noise-free).
+    mask : array_like of bool, shape (P, H, W), optional
+        Valid pixels (default all).
+    eta : float
+        Relative index of refraction of the sample (the dipole baseline uses it).
+    photons : int, optional
+        Photons per incident point, if the data are photon counts (the fitter
+        then uses the Poisson variance of its model).
+
+    Returns
+    -------
+    PlanarDataset
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> ds = write_dataset(Path(tempfile.mkdtemp()) / "d.zarr", [[1.0, 1.0]], [[0.0, 0.0]],
+    ...                    np.full((1, 8, 8, 3), 0.01), 0.25)
+    >>> ds.n_points, ds.window, ds.complete()
+    (1, (8, 8), True)
+    """
+    from .. import __version__
+    from .._validate import as_float_array
+
+    R_d = np.asarray(R_d, dtype=np.float64)  # NaN allowed: unmeasured pixels, flagged by the fitter
+    if R_d.ndim != 4 or R_d.shape[3] != 3:
+        raise TranslucencyError(f"R_d: expected shape (P, H, W, 3), got {R_d.shape}")
+    P, H, W, _ = R_d.shape
+    x_i = as_float_array("x_i", x_i, shape=(P, 2))
+    window_origin = as_float_array("window_origin", window_origin, shape=(P, 2))
+    variance = np.zeros_like(R_d) if variance is None else np.asarray(variance, dtype=np.float64)
+    if variance.shape != R_d.shape:
+        raise TranslucencyError(f"variance: expected shape {R_d.shape}, got {variance.shape}")
+    if (variance < 0).any():
+        raise TranslucencyError("variance: negative values")
+    mask = np.ones((P, H, W), bool) if mask is None else np.asarray(mask, dtype=bool)
+    if mask.shape != (P, H, W):
+        raise TranslucencyError(f"mask: expected shape {(P, H, W)}, got {mask.shape}")
+    if not pitch > 0:
+        raise TranslucencyError(f"pitch: must be > 0 mm, got {pitch}")
+    header = {
+        "format": FORMAT, "version": VERSION, "units": {"length": "mm", "R_d": "mm^-2", "variance": "mm^-4"},
+        "pitch_mm": float(pitch), "window": [H, W], "n_points": P, "chunk_points": int(chunk_points),
+        "dtype": dtype, "sample": {"eta": float(eta), "description": description or {"source": "user data"}},
+        "acquisition": {"photons": photons}, "software": {"translucency": __version__},
+        "request": {"written_by": "write_dataset"},
+    }
+    if path is not None and Path(path).exists() and not overwrite:
+        raise TranslucencyError(f"{path}: exists; choose another path or pass overwrite=True")
+    ds = create_dataset(path, header, overwrite=True)
+    g = ds.group
+    g["x_i"][...] = x_i.astype(np.float32)
+    g["window_origin"][...] = window_origin.astype(np.float32)
+    g["R_d"][...] = R_d.astype(dtype)
+    g["variance"][...] = variance.astype(dtype)
+    g["mask"][...] = mask
+    g["total_diffuse"][...] = (np.nansum(R_d, axis=(1, 2)) * pitch**2).astype(np.float32)
+    g["chunk_done"][...] = True
+    return ds
+
+
 def open_dataset(path, *, writable: bool = False) -> PlanarDataset:
     """Open a data set and check its header and arrays; one-line errors name the fault.
 
