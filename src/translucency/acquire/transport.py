@@ -49,6 +49,7 @@ class WalkResult:
     x: np.ndarray  # exit position (mm) for TOP exits
     y: np.ndarray
     steps: int  # loop iterations summed over photons (free-flight events incl. null collisions)
+    cos_exit: np.ndarray | None = None  # cosine of the exit direction to the top normal (+z) for TOP exits, else 0
 
 
 def _hg_sample(mi, dr, d, g: float, u1, u2):
@@ -189,10 +190,15 @@ def random_walk(volume: Volume, channel: int, entry_xy: np.ndarray, n_photons: i
 
     pos, direction, rng, code, steps = dr.while_loop(
         state=(pos, direction, rng, code, steps), cond=cond, body=body, label="photon_walk")
-    dr.eval(pos, code, steps)
+    dr.eval(pos, direction, code, steps)
     code_np = np.asarray(code).astype(np.int64)
     code_np[code_np == TOP + 100] = -1
-    return WalkResult(code=code_np, x=np.asarray(pos.x), y=np.asarray(pos.y), steps=int(dr.sum(steps)[0]))
+    # cosine of the outgoing direction to +z for TOP exits (radiance tallies need it):
+    # Snell's law refracts the inside cosine c to sqrt(1 - η²(1 - c²)) outside
+    c_in = np.where(code_np == TOP, np.asarray(direction.z, dtype=np.float64), 0.0)
+    cos_exit = np.where(code_np == TOP, np.sqrt(np.clip(1.0 - eta**2 * (1.0 - c_in**2), 0.0, 1.0)), 0.0)
+    return WalkResult(code=code_np, x=np.asarray(pos.x), y=np.asarray(pos.y), steps=int(dr.sum(steps)[0]),
+                      cos_exit=cos_exit)
 
 
 def check_memory(n_photons_batch: int, volume: Volume, limit_bytes: float) -> None:
