@@ -63,11 +63,17 @@ def test_demo_writes_real_outputs(tmp_path):
 def test_demo_fits_the_embedded_measurement(tmp_path):
     res = runner.invoke(app, ["demo", "--out", str(tmp_path)])
     assert res.exit_code == 0, res.output
-    pts = json.loads((tmp_path / "measured_profiles.json").read_text())["points"]
-    assert len(pts) == 4
-    for row in pts.values():
-        # near x_i the exponential sum follows the photon data far better than the dipole
-        assert row["exponential"]["near"] < 0.5 * row["dipole"]["near"]
+    rep = json.loads((tmp_path / "report" / "report.json").read_text())
+    iso, aniso, dip = (rep["models"][k] for k in ("iso", "aniso", "dipole"))
+    noise = rep["noise_floor"]
+    # the exponential sums follow the photon data down to its noise; the dipole does not
+    assert iso["rel_l2"] < dip["rel_l2"] and iso["rel_l2_near"] < 0.7 * dip["rel_l2_near"]
+    assert iso["rel_l2_near"] < 1.1 * noise["near"] < dip["rel_l2_near"]
+    assert aniso["rel_l2"] <= iso["rel_l2"]
+    for name in ("index.html", "profiles.png", "error_maps.png", "alpha.png", "params.png"):
+        assert (tmp_path / "report" / name).stat().st_size > 1000
+    for label in ("iso", "aniso", "dipole", "burley"):
+        assert load_model(tmp_path / "fits" / f"{label}.model.zip").n_points == 1024
 
 
 def test_acquire_planar_cli(tmp_path):

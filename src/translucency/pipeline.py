@@ -3,11 +3,10 @@
 1. compares the dipole, Christensen–Burley and a least-squares exponential
    fit of the dipole for every material of Jensen's table, and writes a model
    file of those fits;
-2. reads the embedded default measurement (a virtual DISCO scan of the
-   generated marble sample) and fits the three profile families to the ring
-   profiles of a few incident points (the paper's Figure 1, left).
-
-Later stages (planar fits with α, meshes) extend it.
+2. fits the embedded default measurement (a virtual DISCO scan of the
+   generated marble sample) per incident point with α — isotropic and
+   anisotropic exponentials, the dipole and Christensen–Burley — and writes
+   the evaluation report with the paper's Figure 1 (profiles and error maps).
 """
 
 from __future__ import annotations
@@ -19,14 +18,25 @@ import numpy as np
 
 from .data import default_dataset_path
 from .evaluate.baselines import material_profiles, plot_profiles
-from .evaluate.measured import BANDS, measured_profile, plot_measured
+from .evaluate.report import write_report
+from .fit.planar import fit_planar
 from .io.dataset import open_dataset
 from .io.atomic import atomic_path, write_json
 from .io.model_file import save_model
 from .model import MATERIALS, ExponentialModel, PlanarAlpha
 
 
-def run_demo(out_dir, *, n_terms: int = 3, step: Callable[[str], None] | None = None, dataset=None) -> dict:
+#: the planar fits of the main job: label -> fit_planar arguments
+DEMO_FITS = {
+    "iso": dict(model="iso"),
+    "aniso": dict(model="aniso", n_directions=8),
+    "dipole": dict(model="dipole"),
+    "burley": dict(model="burley"),
+}
+
+
+def run_demo(out_dir, *, n_terms: int = 3, step: Callable[[str], None] | None = None, dataset=None,
+             max_rounds: int = 3) -> dict:
     """Run the main job and write its outputs under ``out_dir``.
 
     Outputs
@@ -38,10 +48,13 @@ def run_demo(out_dir, *, n_terms: int = 3, step: Callable[[str], None] | None = 
     ``dipole_fits.model.zip``
         The exponential fits as a per-channel model file: one incident point
         per material, 1 mm apart along x (``meta["materials"]`` names them).
-    ``measured_profiles.png``, ``measured_profiles.json``
-        Ring profiles of the default data set (``dataset`` overrides it) at
-        four incident points with exponential, dipole and Burley fits, and
-        their relative errors per distance band.
+    ``fits/<label>.model.zip``
+        The planar fits of the default data set (``dataset`` overrides it):
+        iso, aniso (m = 8), dipole and Burley, each with its α.
+    ``report/``
+        Their evaluation (:func:`translucency.evaluate.report.write_report`):
+        Figure 1's profiles and error maps, α, parameters, ``report.json``
+        and ``index.html``.
 
     Returns
     -------
@@ -71,20 +84,19 @@ def run_demo(out_dir, *, n_terms: int = 3, step: Callable[[str], None] | None = 
     mpath = save_model(model, out_dir / "dipole_fits.model.zip",
                        meta={"materials": list(MATERIALS), "source": "3-term fits of the Jensen 2001 dipole"})
 
-    # -- the embedded measurement: Figure 1 (left) ------------------------------------
+    # -- the embedded measurement: planar fits and Figure 1 -------------------------
     ds = open_dataset(dataset or default_dataset_path())
-    n = int(np.sqrt(ds.n_points))
-    picks = sorted({0, n // 2 * n + n // 2, n * (n // 4) + 3 * n // 4, ds.n_points - 1})
-    measured = []
-    for p in picks:
+    models, flagged = {}, {}
+    for label, kw in DEMO_FITS.items():
         if step:
-            step(f"measured point {p}")
-        measured.append(measured_profile(ds, p, channel=1, n_terms=n_terms))
-    mpng = out_dir / "measured_profiles.png"
-    with atomic_path(mpng) as tmp:
-        plot_measured(measured, tmp, f"{ds.path.name}: ring profiles around incident points and fitted models")
-    mjs = write_json(out_dir / "measured_profiles.json", {
-        "dataset": str(ds.path), "bands_mm": {k: list(v) for k, v in BANDS.items()}, "channel": "G",
-        "points": {str(m.point): {w: m.band_errors(w) for w in ("exponential", "dipole", "burley")}
-                   for m in measured}})
-    return {"figure": png, "summary": js, "model": mpath, "measured": mpng, "measured_summary": mjs}
+            step(f"fit {label}")
+        fit = fit_planar(ds, n_terms=n_terms, max_rounds=max_rounds, **kw)
+        save_model(fit.model, out_dir / "fits" / f"{label}.model.zip",
+                   meta={"dataset": str(ds.path), "fit": fit.options, "objective_per_round": fit.history,
+                         "seconds": round(fit.seconds, 2), "flagged_points": np.flatnonzero(fit.flagged).tolist()})
+        models[label], flagged[label] = fit.model, fit.flagged
+    if step:
+        step("report")
+    write_report(models, ds, out_dir / "report", flagged=flagged)
+    return {"figure": png, "summary": js, "model": mpath, "fits": out_dir / "fits",
+            "report": out_dir / "report" / "index.html"}

@@ -11,8 +11,9 @@ measurement noise alone explains, :math:`\sqrt{\sum \sigma^2}/\lVert R_d\rVert`
 in each band — a perfect model would score about that.
 
 Maps: the error per incident point, :math:`\lVert \hat R_{d,i} - R_{d,i}\rVert / \lVert R_{d,i}\rVert`
-over its window, and per outgoing pixel of the sample, the same over every
-window containing that pixel (the paper's Figure 1, right).
+over its window, and per outgoing pixel of the sample, the same over the pairs
+that end in that pixel with r < ``map_radius`` (4 mm: beyond, photon noise
+dominates every model's error) — the paper's Figure 1, right.
 """
 
 from __future__ import annotations
@@ -37,6 +38,7 @@ class PlanarErrors:
     per_point: np.ndarray  # (P,) relative error per incident point (NaN where flagged/no data)
     per_pixel: np.ndarray  # (H, W) relative error per outgoing pixel on the sample grid
     grid: SampleGrid
+    map_radius: float
 
     def summary(self) -> dict:
         """The JSON fields of ``translucency evaluate``."""
@@ -50,7 +52,7 @@ class PlanarErrors:
 
 
 def planar_errors(model, dataset, *, exclusion_mm: float | None = None, chunk_points: int = 256,
-                  flagged=None) -> PlanarErrors:
+                  flagged=None, map_radius: float = 4.0) -> PlanarErrors:
     """Relative L2 errors of ``model`` on a planar data set, overall, per band and as maps.
 
     Parameters
@@ -105,8 +107,9 @@ def planar_errors(model, dataset, *, exclusion_mm: float | None = None, chunk_po
         den = y2.sum(1)
         per_point[s:e] = np.where(den > 0, np.sqrt(d2.sum(1) / np.where(den > 0, den, 1.0)), np.nan)
         n_px = pix_err.size
-        pix_err += np.bincount(geom.pixel.ravel(), d2.ravel(), minlength=n_px)
-        pix_ref += np.bincount(geom.pixel.ravel(), y2.ravel(), minlength=n_px)
+        near = geom.r < map_radius
+        pix_err += np.bincount(geom.pixel[near], d2[near], minlength=n_px)
+        pix_ref += np.bincount(geom.pixel[near], y2[near], minlength=n_px)
 
     def ratio(a, b):
         return float(np.sqrt(a / b)) if b > 0 else float("nan")
@@ -117,4 +120,4 @@ def planar_errors(model, dataset, *, exclusion_mm: float | None = None, chunk_po
         rel_l2=ratio(tot_e, tot_r),
         bands={b: ratio(err2[b], ref2[b]) for b in BANDS},
         noise={"all": ratio(tot_v, tot_r), **{b: ratio(var[b], ref2[b]) for b in BANDS}},
-        per_point=per_point, per_pixel=per_pixel.reshape(grid.shape), grid=grid)
+        per_point=per_point, per_pixel=per_pixel.reshape(grid.shape), grid=grid, map_radius=map_radius)

@@ -86,18 +86,30 @@ def plot_error_maps(errors: dict[str, PlanarErrors], x_i: np.ndarray, path) -> N
     """Figure 1 (right): relative error per outgoing pixel and per incident point, shared colour scale."""
     plt = _plt()
     names = list(errors)
-    vmax = max(np.nanquantile(e.per_pixel, 0.98) for e in errors.values())
+    vmax = max(max(np.nanquantile(e.per_pixel, 0.98), np.nanquantile(e.per_point, 0.98)) for e in errors.values())
+    side = int(round(np.sqrt(len(x_i))))
+    on_grid = side * side == len(x_i) and side > 1
     fig, axes = plt.subplots(2, len(names), figsize=(4.0 * len(names), 7.2), squeeze=False)
     for j, name in enumerate(names):
         e = errors[name]
         h, w = e.grid.shape
         ext = [e.grid.origin[0], e.grid.origin[0] + w * e.grid.pitch, e.grid.origin[1], e.grid.origin[1] + h * e.grid.pitch]
         im = axes[0][j].imshow(e.per_pixel, origin="lower", extent=ext, cmap="magma", vmin=0, vmax=vmax)
-        axes[0][j].set_title(f"{name}\nper outgoing pixel (rel_l2 {100 * e.rel_l2:.1f} %)", fontsize=9)
-        sc = axes[1][j].scatter(x_i[:, 0], x_i[:, 1], c=e.per_point, cmap="magma", vmin=0, vmax=vmax, s=12,
-                                marker="s")
+        axes[0][j].set_title(f"{name}\nper outgoing pixel, pairs r < {e.map_radius:g} mm", fontsize=9)
+        lo, hi = x_i.min(axis=0) - 1.0, x_i.max(axis=0) + 1.0  # the scanned area
+        axes[0][j].set_xlim(lo[0], hi[0])
+        axes[0][j].set_ylim(lo[1], hi[1])
+        if on_grid:  # a scan grid (rows of constant y): one pixel per incident point
+            order = np.lexsort((x_i[:, 0], x_i[:, 1]))
+            half = (x_i[:, 0].max() - x_i[:, 0].min()) / (side - 1) / 2
+            sc = axes[1][j].imshow(e.per_point[order].reshape(side, side), origin="lower", cmap="magma", vmin=0,
+                                   vmax=vmax, extent=[x_i[:, 0].min() - half, x_i[:, 0].max() + half,
+                                                      x_i[:, 1].min() - half, x_i[:, 1].max() + half])
+        else:
+            sc = axes[1][j].scatter(x_i[:, 0], x_i[:, 1], c=e.per_point, cmap="magma", vmin=0, vmax=vmax, s=12,
+                                    marker="s")
         axes[1][j].set_aspect("equal")
-        axes[1][j].set_title("per incident point", fontsize=9)
+        axes[1][j].set_title(f"per incident point (rel_l2 {100 * e.rel_l2:.1f} %)", fontsize=9)
         for ax in axes[:, j]:
             ax.set_xlabel("x [mm]")
             ax.set_ylabel("y [mm]")
@@ -189,7 +201,7 @@ def write_report(models, dataset, out_dir, *, points=None, flagged=None, json_pa
         per_model[name] = e.summary()
         fl = flagged.get(name)
         per_model[name]["flagged_points"] = [] if fl is None else np.flatnonzero(fl).tolist()
-    summary = {"dataset": str(ds.path), "model": first, **per_model[first], "bands_mm": {k: list(v) for k, v in BANDS.items()},
+    summary = {"dataset": str(ds.path), "model": first, **per_model[first], "bands_mm": {k: [lo, hi if np.isfinite(hi) else None] for k, (lo, hi) in BANDS.items()},
                "models": per_model, "profile_points": points,
                "definition": "rel_l2 = ||model - data||_2 / ||data||_2 over valid pairs (mask, finite, r >= one pixel), "
                              "RGB summed; noise_floor = sqrt(sum variance)/||data||_2"}
