@@ -203,9 +203,12 @@ def fit(
 
     An interrupted fit resumes from OUT.partial.npz when run again with the same arguments.
     """
-    from ..fit.planar import fit_planar
+    from ..fit.planar import check_fit_options, fit_planar
+    from ..io.dataset import open_dataset
     from ..io.model_file import save_model
 
+    check_fit_options(model, terms, directions, colour)
+    ds = open_dataset(data)
     ckpt = out.with_name(out.name + ".partial.npz")
     with progress() as bar:
         task = bar.add_task(f"fit {model}", total=None, item="")
@@ -213,7 +216,7 @@ def fit(
         def report(done, total, message):
             bar.update(task, completed=done, total=total or None, item=message)
 
-        result = fit_planar(data, model, n_terms=terms, n_directions=directions, colour=colour,
+        result = fit_planar(ds, model, n_terms=terms, n_directions=directions, colour=colour,
                             exclusion_mm=exclusion, max_rounds=rounds, chunk_points=chunk, checkpoint=ckpt,
                             progress=report)
     meta = {"dataset": str(data), "fit": result.options, "objective_per_round": result.history,

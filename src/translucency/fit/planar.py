@@ -152,6 +152,21 @@ class _State:
         return True
 
 
+def check_fit_options(model: str, n_terms: int = 3, n_directions: int = 8, colour: str = "per-channel",
+                      rel_sigma: float = 0.05) -> None:
+    """Refuse bad fit options with one line naming the option (before any work)."""
+    if model not in KINDS:
+        raise TranslucencyError(f"model: expected one of {', '.join(KINDS)}, got {model!r}")
+    if not 1 <= int(n_terms) <= 4:
+        raise TranslucencyError(f"terms: n must be between 1 and 4, got {n_terms}")
+    if model == "aniso" and int(n_directions) < 2:
+        raise TranslucencyError(f"directions: the anisotropic model needs m >= 2, got {n_directions}")
+    if colour not in ("shared", "per-channel"):
+        raise TranslucencyError(f"colour: expected 'shared' or 'per-channel', got {colour!r}")
+    if not (rel_sigma > 0 and np.isfinite(rel_sigma)):
+        raise TranslucencyError(f"rel_sigma: must be > 0, got {rel_sigma}")
+
+
 def fit_planar(dataset, model: str = "iso", *, n_terms: int = 3, n_directions: int = 8,
                colour: str = "per-channel", exclusion_mm: float | None = None, rel_sigma: float = 0.05,
                max_rounds: int = 6, tol: float = 1e-3, radius_step: float | None | str = "auto",
@@ -199,20 +214,11 @@ def fit_planar(dataset, model: str = "iso", *, n_terms: int = 3, n_directions: i
     >>> from translucency.data import default_dataset_path
     >>> fit = fit_planar(default_dataset_path(), "iso", max_rounds=1)   # doctest: +SKIP
     """
-    ds = dataset if isinstance(dataset, PlanarDataset) else open_dataset(dataset)
     t0 = time.perf_counter()
-    if model not in KINDS:
-        raise TranslucencyError(f"model: expected one of {', '.join(KINDS)}, got {model!r}")
-    if not 1 <= int(n_terms) <= 4:
-        raise TranslucencyError(f"terms: n must be between 1 and 4, got {n_terms}")
-    if model == "aniso" and int(n_directions) < 2:
-        raise TranslucencyError(f"directions: the anisotropic model needs m >= 2, got {n_directions}")
-    if colour not in ("shared", "per-channel"):
-        raise TranslucencyError(f"colour: expected 'shared' or 'per-channel', got {colour!r}")
+    check_fit_options(model, n_terms, n_directions, colour, rel_sigma)
+    ds = dataset if isinstance(dataset, PlanarDataset) else open_dataset(dataset)
     if not ds.complete():
         raise TranslucencyError(f"{ds.path}: the acquisition is unfinished; resume it before fitting")
-    if not (rel_sigma > 0 and np.isfinite(rel_sigma)):
-        raise TranslucencyError(f"rel_sigma: must be > 0, got {rel_sigma}")
     pitch = ds.pitch
     exclusion = pitch if exclusion_mm is None else float(exclusion_mm)
     if exclusion < 0 or not np.isfinite(exclusion):
