@@ -51,7 +51,10 @@ from __future__ import annotations
 
 import hashlib
 import json
+import os
+import threading
 import time
+from concurrent.futures import ThreadPoolExecutor, as_completed
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -116,16 +119,31 @@ def _burley_profile(r, p):
 class _State:
     """Everything a fit carries between chunks and rounds (and saves in a checkpoint)."""
 
-    def __init__(self, kind, P, C, m, n, grid_shape):
+    PER_POINT = ("c", "a", "p", "s", "ready", "flagged")
+
+    def __init__(self, kind, P, C, m, n, grid_shape, n_chunks=1):
         self.arrays = {
             "c": np.zeros((P, C, m, n)), "a": np.ones((P, C, m, n)),  # exponential families
             "p": np.ones((P, 3, 2)),  # dipole (σ_a, σ_s') or Burley (A, s)
             "s": np.ones((P, 3)),  # colour scale (1, s_g, s_b) of the shared-colour model
             "alpha": np.ones(grid_shape),
-            "num": np.zeros(grid_shape), "den": np.zeros(grid_shape),
+            # per chunk of this round: α statistics Σ w²Py, Σ w²P², objective Φ, finished?
+            "num": np.zeros((n_chunks,) + tuple(grid_shape)), "den": np.zeros((n_chunks,) + tuple(grid_shape)),
+            "phi": np.zeros(n_chunks), "done": np.zeros(n_chunks, dtype=bool),
             "ready": np.zeros(P, dtype=bool), "flagged": np.zeros(P, dtype=bool),
-            "history": np.zeros(0), "phi": np.zeros(1), "cursor": np.zeros(2, dtype=np.int64),
+            "history": np.zeros(0), "round": np.zeros(1, dtype=np.int64),
         }
+
+    def points(self, s: int, e: int) -> "_State":
+        """A private copy of points s..e (α shared, read-only during a round)."""
+        sub = _State.__new__(_State)
+        sub.arrays = {k: self.arrays[k][s:e].copy() for k in self.PER_POINT}
+        sub.arrays["alpha"] = self.arrays["alpha"]
+        return sub
+
+    def commit(self, sub: "_State", s: int, e: int) -> None:
+        for k in self.PER_POINT:
+            self.arrays[k][s:e] = sub.arrays[k]
 
     def __getattr__(self, name):
         try:
@@ -169,8 +187,10 @@ def check_fit_options(model: str, n_terms: int = 3, n_directions: int = 8, colou
 
 def fit_planar(dataset, model: str = "iso", *, n_terms: int = 3, n_directions: int = 8,
                colour: str = "per-channel", exclusion_mm: float | None = None, rel_sigma: float = 0.05,
-               max_rounds: int = 6, tol: float = 1e-3, radius_step: float | None | str = "auto",
-               sweeps: int = 2, balance: bool = True, chunk_points: int = 512, checkpoint=None,
+               max_rounds: int = 3, tol: float = 1e-3, radius_step: float | None | str = "auto",
+               sweeps: int = 1, balance: bool = True, chunk_points: int = 256, workers: int | None = None,
+               cache_mb: float = 512,
+               checkpoint=None,
                progress: Callable[[int, int, str], None] | None = None) -> PlanarFit:
     """Fit a model family to every incident point of a planar data set, with α.
 
@@ -200,6 +220,11 @@ def fit_planar(dataset, model: str = "iso", *, n_terms: int = 3, n_directions: i
         Block-coordinate sweeps over the directions per round (aniso).
     chunk_points : int
         Incident points read and fitted together.
+    workers : int, optional
+        Chunks fitted in parallel threads (default: the number of CPUs).
+    cache_mb : float
+        Memory for keeping the decoded data between rounds (float32); chunks
+        beyond it are read again from the store each round.
     checkpoint : path, optional
         Save the state after each chunk and resume from it.
     progress : callable, optional
@@ -241,30 +266,42 @@ def fit_planar(dataset, model: str = "iso", *, n_terms: int = 3, n_directions: i
         json.dumps(ds.header, sort_keys=True).encode()).hexdigest(), "chunk": chunk_points, **options},
         sort_keys=True)
 
-    state = _State(model, P, C, m, n, grid.shape)
+    chunks = [(s, min(s + chunk_points, P)) for s in range(0, P, chunk_points)]
+    state = _State(model, P, C, m, n, grid.shape, len(chunks))
     ckpt = Path(checkpoint) if checkpoint else None
     if ckpt is not None and ckpt.exists() and state.load(ckpt, request) and progress:
-        progress(0, 0, f"resuming from {ckpt.name}: round {int(state.cursor[0]) + 1}")
-    ctx = _Context(ds, model, n, m, C, exclusion, rel_sigma, poisson, eta, step, sweeps, balance, grid, x_i, origin)
-    chunks = [(s, min(s + chunk_points, P)) for s in range(0, P, chunk_points)]
+        progress(0, 0, f"resuming from {ckpt.name}: round {int(state.round[0]) + 1}")
+    ctx = _Context(ds, model, n, m, C, exclusion, rel_sigma, poisson, eta, step, sweeps, balance, grid, x_i, origin,
+                   cache_left=cache_mb * 2**20)
     total = max_rounds * len(chunks)
-    while state.cursor[0] < max_rounds:
-        rnd, first = int(state.cursor[0]), int(state.cursor[1])
-        for ci in range(first, len(chunks)):
-            if progress:
-                progress(rnd * len(chunks) + ci, total, f"round {rnd + 1}: points {chunks[ci][0]}–{chunks[ci][1] - 1}")
-            _fit_chunk(ctx, state, *chunks[ci])
-            state.cursor[1] = ci + 1
-            if ckpt is not None:
-                state.save(ckpt, request)
+    lock = threading.Lock()
+    workers = max(1, min(int(workers or os.cpu_count() or 1), len(chunks)))
+    while state.round[0] < max_rounds:
+        rnd = int(state.round[0])
+        todo = [ci for ci in range(len(chunks)) if not state.done[ci]]
+        # chunks in parallel threads (NumPy releases the GIL); each works on a private copy
+        # of its points and hands back its α statistics, so results do not depend on timing
+        with ThreadPoolExecutor(workers) as pool:
+            futures = {pool.submit(_fit_chunk, ctx, state, *chunks[ci]): ci for ci in todo}
+            for fut in as_completed(futures):
+                ci = futures[fut]
+                sub, phi, num, den = fut.result()
+                with lock:
+                    state.commit(sub, *chunks[ci])
+                    state.num[ci], state.den[ci], state.phi[ci], state.done[ci] = num, den, phi, True
+                    if ckpt is not None:
+                        state.save(ckpt, request)
+                if progress:
+                    progress(rnd * len(chunks) + int(state.done.sum()), total, f"round {rnd + 1}")
         # α in closed form, then the scale fixed by mean α = 1
         _update_alpha(state, model)
-        state.arrays["history"] = np.append(state.history, state.phi[0])
-        state.phi[0] = 0.0
-        state.cursor[:] = (rnd + 1, 0)
+        state.arrays["history"] = np.append(state.history, state.phi.sum())
+        state.phi[:] = 0.0
+        state.done[:] = False
+        state.round[0] = rnd + 1
         h = state.history
         if len(h) >= 3 and (h[-2] - h[-1]) <= tol * h[-2]:  # round 1 used data-based weights
-            state.cursor[0] = max_rounds
+            state.round[0] = max_rounds
         if ckpt is not None:
             state.save(ckpt, request)
     if progress:
@@ -293,6 +330,8 @@ class _Context:
     grid: SampleGrid
     x_i: np.ndarray
     origin: np.ndarray
+    cache_left: float = 0.0  # bytes the data may still occupy in memory between rounds
+    cache: dict = field(default_factory=dict)
 
 
 @dataclass
@@ -311,16 +350,24 @@ class _Chunk:
 
 
 def _load_chunk(ctx: _Context, state: _State, s: int, e: int) -> _Chunk:
-    ds = ctx.ds
-    k = e - s
-    y = np.asarray(ds.group["R_d"][s:e], dtype=np.float64).reshape(k, -1, 3)
-    var = np.asarray(ds.group["variance"][s:e], dtype=np.float64).reshape(k, -1, 3)
-    mask = np.asarray(ds.group["mask"][s:e]).reshape(k, -1)
-    geom = window_geometry(ctx.x_i[s:e], ctx.origin[s:e], ctx.grid, ds.window)
-    valid = mask & np.isfinite(y).all(axis=2) & np.isfinite(var).all(axis=2) & (geom.r >= ctx.exclusion)
-    y = np.where(valid[..., None], y, 0.0)
-    var = np.where(valid[..., None], np.maximum(var, 0.0), 0.0)
-    gid, r_g = radius_groups(geom.r, ctx.grid.pitch, r_exact=1.0, radius_step=ctx.radius_step)
+    """Read points s..e (or take them from the in-memory cache of earlier rounds)."""
+    if (s, e) in ctx.cache:
+        y, var, valid, geom, gid, r_g = ctx.cache[(s, e)]
+    else:
+        ds = ctx.ds
+        k = e - s
+        y = np.asarray(ds.group["R_d"][s:e], dtype=np.float32).reshape(k, -1, 3)
+        var = np.asarray(ds.group["variance"][s:e], dtype=np.float32).reshape(k, -1, 3)
+        mask = np.asarray(ds.group["mask"][s:e]).reshape(k, -1)
+        geom = window_geometry(ctx.x_i[s:e], ctx.origin[s:e], ctx.grid, ds.window)
+        valid = mask & np.isfinite(y).all(axis=2) & np.isfinite(var).all(axis=2) & (geom.r >= ctx.exclusion)
+        y = np.where(valid[..., None], y, np.float32(0.0))
+        # with a photon count the weights use the model's Poisson variance, not the data's
+        var = None if ctx.poisson > 0 else np.where(valid[..., None], np.maximum(var, 0.0), np.float32(0.0))
+        gid, r_g = radius_groups(geom.r, ctx.grid.pitch, r_exact=1.0, radius_step=ctx.radius_step)
+        if ctx.cache_left >= y.nbytes:
+            ctx.cache_left -= y.nbytes + (0 if var is None else var.nbytes)
+            ctx.cache[(s, e)] = (y, var, valid, geom, gid, r_g)
     alpha = state.alpha.ravel()[geom.pixel]
     return _Chunk(y, var, valid, geom.r, geom.theta, geom.pixel, gid, r_g, alpha)
 
@@ -385,18 +432,22 @@ def _weights(ctx: _Context, ch: _Chunk, f: np.ndarray | None) -> np.ndarray:
     model = ch.alpha[..., None] * f
     floor = 1e-6 * np.max(np.where(ch.valid[..., None], model, 0.0), axis=1, keepdims=True)
     model = np.maximum(model, np.maximum(floor, 1e-30))
-    var = model * ctx.poisson if ctx.poisson > 0 else ring_mean(ch.var, ch.valid[..., None] & np.ones_like(ok))
+    var = model * ctx.poisson if ch.var is None else ring_mean(ch.var, ch.valid[..., None] & np.ones_like(ok))
     w2 = 1.0 / ((ctx.rel_sigma * model) ** 2 + var)
     if ctx.balance:  # each mm of distance counts alike: rings beyond 1 mm weighted by 1 mm / r
         w2 = w2 * np.minimum(1.0, 1.0 / np.maximum(ch.r, 1e-9))[..., None]
     return np.where(ch.valid[..., None], w2, 0.0)
 
 
-def _fit_chunk(ctx: _Context, state: _State, s: int, e: int) -> None:
-    """One round's work on points s..e: parameters, colour scale, α statistics, Φ."""
-    sl = slice(s, e)
+def _fit_chunk(ctx: _Context, glob: _State, s: int, e: int):
+    """One round's work on points s..e: parameters, colour scale, α statistics, Φ.
+
+    Returns the points' new state and their Φ, Σ w²Py and Σ w²P² (per sample pixel).
+    """
+    state = glob.points(s, e)
     ch = _load_chunk(ctx, state, s, e)
     k = e - s
+    sl = slice(0, k)
     usable = (ch.valid.sum(axis=1) >= 2 * ctx.n + 2) & ((ch.y * ch.valid[..., None]).sum(axis=(1, 2)) > 0)
     state.flagged[sl] = ~usable
     if k and not state.ready[sl].all() and ctx.C == 1:  # colour scale from the window sums
@@ -412,7 +463,7 @@ def _fit_chunk(ctx: _Context, state: _State, s: int, e: int) -> None:
         if ctx.C == 1:
             _fit_colour(ctx, state, sl, ch, w2)
     # inert parameters where a point has no data
-    bad = np.flatnonzero(~usable) + s
+    bad = np.flatnonzero(~usable)
     state.c[bad] = 0.0
     state.a[bad] = 1.0
     if ctx.kind == "burley":
@@ -421,10 +472,11 @@ def _fit_chunk(ctx: _Context, state: _State, s: int, e: int) -> None:
     # Φ and the α statistics with the new parameters
     f = _predict(ctx, state, sl, ch)
     w2 = np.where(usable[:, None, None], w2, 0.0)
-    state.phi[0] += float(np.sum(w2 * (ch.alpha[..., None] * f - ch.y) ** 2))
-    n_px = state.num.size
-    state.num.ravel()[:] += group_sums(ch.pixel[..., None], w2 * f * ch.y, n_px)
-    state.den.ravel()[:] += group_sums(ch.pixel[..., None], w2 * f * f, n_px)
+    phi = float(np.sum(w2 * (ch.alpha[..., None] * f - ch.y) ** 2))
+    n_px = glob.alpha.size
+    num = group_sums(ch.pixel[..., None], w2 * f * ch.y, n_px).reshape(glob.alpha.shape)
+    den = group_sums(ch.pixel[..., None], w2 * f * f, n_px).reshape(glob.alpha.shape)
+    return state, phi, num, den
 
 
 def _grouped(ch: _Chunk, w2, kappa, target, bins_per_point: int, sub: np.ndarray | None, n_sub: int):
@@ -450,7 +502,7 @@ def _solve_exponentials(ctx, state, sl, r_g, W, Y, index):
             continue
         rows = index[sel]
         cc, aa, _ = fit_exponentials_batched(r_g, W[sel], Y[sel], ctx.n, rates0=a[rows] if warm else None,
-                                             n_starts=3, max_iter=20 if warm else 50)
+                                             n_starts=3, pooled=True, max_iter=15 if warm else 25, tol=1e-5)
         c[rows], a[rows] = cc, aa
     state.c[sl] = c.reshape(state.c[sl].shape)
     state.a[sl] = a.reshape(state.a[sl].shape)
@@ -467,7 +519,7 @@ def _fit_exponential(ctx: _Context, state: _State, sl: slice, ch: _Chunk, w2) ->
         return
     if not state.ready[sl].all():  # start every direction from the isotropic fit
         W, Y = _grouped(ch, w2, kappa, ch.y, C, chan[None, None, :], C)
-        cc, aa, _ = fit_exponentials_batched(ch.r_g, W, Y, ctx.n, n_starts=3)
+        cc, aa, _ = fit_exponentials_batched(ch.r_g, W, Y, ctx.n, n_starts=3, pooled=True, max_iter=25, tol=1e-5)
         state.c[sl] = np.repeat(cc.reshape(k, C, 1, ctx.n), m, axis=2)
         state.a[sl] = np.repeat(aa.reshape(k, C, 1, ctx.n), m, axis=2)
         state.ready[sl] = True
@@ -528,8 +580,9 @@ def _warm_params(profile, r, W, Y, p0):
 
 
 def _update_alpha(state: _State, kind: str) -> None:
-    seen = state.den > 0
-    alpha = np.where(seen, state.num / np.where(seen, state.den, 1.0), 1.0)
+    num, den = state.num.sum(axis=0), state.den.sum(axis=0)  # in chunk order: deterministic
+    seen = den > 0
+    alpha = np.where(seen, num / np.where(seen, den, 1.0), 1.0)
     alpha = np.maximum(alpha, 0.0)
     if kind != "dipole" and seen.any():
         mean = float(alpha[seen].mean())
