@@ -198,7 +198,7 @@ def test_interrupted_fit_resumes_identically(tmp_path):
         pass
 
     def interrupt(done, total, message):
-        if done == 7:
+        if done == 3:
             raise Stop
 
     with pytest.raises(Stop):
