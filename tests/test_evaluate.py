@@ -119,3 +119,33 @@ def test_cli_bad_input_is_one_line(marble, tmp_path):
     assert fit.exit_code == 0, fit.output
     res = runner.invoke(app, ["evaluate", str(tmp_path / "o.model.zip"), str(marble.path)])
     assert res.exit_code == 2 and "incident points are not the data set's" in res.output
+
+
+def test_relighting_matches_photon_transport(marble):
+    """Superposing the fitted R_d over lit cells predicts what photon transport gives under that light."""
+    from translucency.acquire.pattern import acquire_pattern
+    from translucency.acquire.samples import sample_of_dataset
+    from translucency.evaluate.relight import pattern_irradiance, relight
+
+    model = fit_planar(marble, "iso", max_rounds=3).model
+    x_i = marble["x_i"].astype(float)
+    spacing = 1.5
+    E = pattern_irradiance("edge", x_i)
+    assert E[:, 0].sum() == 3  # the left column of the 3 x 3 grid
+    origin, pitch, shape = x_i.min(0) - 3.0, 0.25, (36, 36)
+    ref = acquire_pattern(sample_of_dataset(marble.header), x_i, spacing, E, origin, pitch, shape,
+                          photons=20_000, jitter=8, seed=2)
+    pred = relight(model, E, spacing**2, origin, pitch, shape, radius=3.0)
+    # compare where the model is defined: within 2 mm of the lit cells (the fit saw r < 3 mm), once the
+    # model's point sources (all light of a cell enters at x_i) are spread over their 1.5 mm cells
+    from scipy.ndimage import uniform_filter
+
+    spread = uniform_filter(pred, size=(6, 6, 1), mode="constant")
+    yy, xx = (origin[::-1, None, None] + pitch * (np.mgrid[0:36, 0:36] + 0.5))
+    lit_x = x_i[E[:, 0] > 0, 0][0]
+    near = (np.abs(xx - lit_x) < 0.75 + 2.0) & (yy > x_i[:, 1].min() - 0.75) & (yy < x_i[:, 1].max() + 0.75)
+    a, b = spread[near], ref[near]
+    assert 0.85 < a.sum() / b.sum() < 1.05
+    # light carried across the shadow edge: right of the lit column, the model follows the photons
+    dark = near & (xx > lit_x + 0.75)
+    assert 0.7 < spread[dark].sum() / ref[dark].sum() < 1.3

@@ -19,11 +19,37 @@ import numpy as np
 from .data import default_dataset_path
 from .evaluate.baselines import material_profiles, plot_profiles
 from .evaluate.report import write_report
+from .acquire.pattern import acquire_pattern
+from .acquire.samples import sample_of_dataset
+from .evaluate.relight import pattern_irradiance, plot_relighting, relight
 from .fit.planar import fit_planar
 from .io.dataset import open_dataset
 from .io.atomic import atomic_path, write_json
 from .io.model_file import save_model
 from .model import MATERIALS, ExponentialModel, PlanarAlpha
+
+
+def relight_check(ds, models: dict, figure, *, pattern: str = "stripe", photons: int = 1000, seed: int = 5) -> dict:
+    """Relight the data set's sample with each model and with photon transport; plot and compare.
+
+    The light falls on the cells of the incident grid (side = grid spacing);
+    the exitance is compared on the data set's pixel grid over the scanned area
+    plus a margin of half a window.
+    """
+    x_i = ds["x_i"].astype(np.float64)
+    spacing = float(np.min(np.diff(np.unique(x_i[:, 0]))))
+    E = pattern_irradiance(pattern, x_i)
+    margin = ds.pitch * (ds.window[1] // 2)
+    origin = x_i.min(axis=0) - margin
+    shape = tuple(int(round((np.ptp(x_i[:, k]) + 2 * margin) / ds.pitch)) for k in (1, 0))
+    reference = acquire_pattern(sample_of_dataset(ds.header), x_i, spacing, E, origin, ds.pitch, shape,
+                                photons=photons, seed=seed)
+    preds = {name: relight(m, E, spacing**2, origin, ds.pitch, shape, radius=margin) for name, m in models.items()}
+    extent = [origin[0], origin[0] + shape[1] * ds.pitch, origin[1], origin[1] + shape[0] * ds.pitch]
+    errors = plot_relighting(reference, preds, extent, figure)
+    total = float(reference.sum())
+    return {"pattern": pattern, "photons_per_entry": photons, "rel_l2": errors,
+            "total_ratio": {n: float(B.sum() / total) for n, B in preds.items()}}
 
 
 #: the planar fits of the main job: label -> fit_planar arguments
@@ -95,8 +121,15 @@ def run_demo(out_dir, *, n_terms: int = 3, step: Callable[[str], None] | None = 
                    meta={"dataset": str(ds.path), "fit": fit.options, "objective_per_round": fit.history,
                          "seconds": round(fit.seconds, 2), "flagged_points": np.flatnonzero(fit.flagged).tolist()})
         models[label], flagged[label] = fit.model, fit.flagged
+    # -- relighting: a stripe of light, models against photon transport ------------------
+    if step:
+        step("relighting")
+    relit = relight_check(ds, {k: models[k] for k in ("iso", "dipole")}, out_dir / "report" / "relight.png")
+    write_json(out_dir / "report" / "relight.json", relit)
     if step:
         step("report")
-    write_report(models, ds, out_dir / "report", flagged=flagged)
+    write_report(models, ds, out_dir / "report", flagged=flagged, extra=[(
+        "relight.png", "Relighting: the sample under a 2 mm stripe of light, photon transport (reference) against "
+        "the fitted models (superposition of R_d over the incident cells); green channel.")])
     return {"figure": png, "summary": js, "model": mpath, "fits": out_dir / "fits",
             "report": out_dir / "report" / "index.html"}

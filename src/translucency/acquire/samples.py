@@ -204,3 +204,17 @@ def make_sample(name: str, size_mm, voxel_mm: float, *, g: float = 0.0, seed: in
     if name not in table:
         raise TranslucencyError(f"material: unknown sample {name!r}; choose one of {', '.join(GENERATORS)}")
     return table[name](size_mm, voxel_mm, g, seed)
+
+
+def sample_of_dataset(header: dict) -> Volume:
+    """Rebuild the generated sample a data set was acquired from (its header's ``sample``).
+
+    Only generated samples can be rebuilt (their generator, seed, size and voxel
+    are recorded); a user's volume cannot.
+    """
+    s = header.get("sample", {})
+    d = s.get("description", {})
+    if "generator" not in d or "size_mm" not in s:
+        raise TranslucencyError("data set: its sample was not made by a generator here (a user's volume or "
+                                "data); pass the volume itself")
+    return make_sample(d["generator"], s["size_mm"], s["voxel_mm"], g=s.get("g", 0.0), seed=d.get("seed", 0))

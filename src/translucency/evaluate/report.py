@@ -160,7 +160,7 @@ def plot_parameters(model, path) -> None:
     _save(fig, Path(path))
 
 
-def write_report(models, dataset, out_dir, *, points=None, flagged=None, json_path=None) -> dict:
+def write_report(models, dataset, out_dir, *, points=None, flagged=None, json_path=None, extra=None) -> dict:
     """Evaluate models on a planar data set and write the figures, JSON and HTML report.
 
     Parameters
@@ -176,6 +176,8 @@ def write_report(models, dataset, out_dir, *, points=None, flagged=None, json_pa
         Points each fit flagged (left out of its errors and listed).
     json_path : path, optional
         Also write the JSON summary here.
+    extra : list of (file name, caption), optional
+        Further figures already in ``out_dir`` to show in the HTML page.
 
     Returns
     -------
@@ -208,11 +210,11 @@ def write_report(models, dataset, out_dir, *, points=None, flagged=None, json_pa
     write_json(out_dir / "report.json", summary)
     if json_path is not None:
         write_json(json_path, summary)
-    _write_html(out_dir / "index.html", ds, summary)
+    _write_html(out_dir / "index.html", ds, summary, extra or [])
     return summary
 
 
-def _write_html(path: Path, ds: PlanarDataset, summary: dict) -> None:
+def _write_html(path: Path, ds: PlanarDataset, summary: dict, extra: list) -> None:
     rows = []
     for name, s in summary["models"].items():
         cells = "".join(f"<td>{100 * s[k]:.2f} %</td>" for k in ("rel_l2", "rel_l2_near", "rel_l2_mid", "rel_l2_far"))
@@ -234,6 +236,7 @@ windows {ds.window[0]}×{ds.window[1]} px at {ds.pitch} mm.</p>
 and per incident point.</figcaption></figure></div>
 <figure><img src="alpha.png"><figcaption>Modulation texture α.</figcaption></figure>
 <figure><img src="params.png"><figcaption>Parameters of the first model over the incident points.</figcaption></figure>
+{''.join(f'<figure><img src="{html.escape(f)}"><figcaption>{html.escape(c)}</figcaption></figure>' for f, c in extra)}
 </body></html>
 """
     with atomic_path(path) as tmp:
