@@ -196,7 +196,7 @@ def fit(
                                help="shared: the paper's (1, s_g, s_b) scale of one fall-off; per-channel: one fall-off per channel."),
     exclusion: float = typer.Option(None, "--exclusion", help="Ignore pixels closer than this to x_i, mm (default one pixel)."),
     rounds: int = typer.Option(3, "--rounds", help="Most alternation rounds (parameters, then alpha)."),
-    chunk: int = typer.Option(512, "--chunk", help="Incident points read and fitted together."),
+    chunk: int = typer.Option(128, "--chunk", help="Incident points read and fitted together."),
     float16: bool = typer.Option(False, "--float16", help="Store parameters as float16 (smaller file)."),
 ):
     """Fit a model per incident point, with the modulation texture alpha, to a planar data set.

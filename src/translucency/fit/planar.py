@@ -188,7 +188,7 @@ def check_fit_options(model: str, n_terms: int = 3, n_directions: int = 8, colou
 def fit_planar(dataset, model: str = "iso", *, n_terms: int = 3, n_directions: int = 8,
                colour: str = "per-channel", exclusion_mm: float | None = None, rel_sigma: float = 0.05,
                max_rounds: int = 3, tol: float = 1e-3, radius_step: float | None | str = "auto",
-               sweeps: int = 1, balance: bool = True, chunk_points: int = 256, workers: int | None = None,
+               sweeps: int = 1, balance: bool = True, chunk_points: int = 128, workers: int | None = None,
                cache_mb: float = 512,
                checkpoint=None,
                progress: Callable[[int, int, str], None] | None = None) -> PlanarFit:
