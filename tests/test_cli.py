@@ -13,7 +13,8 @@ from translucency.cli.app import app
 runner = CliRunner()
 
 
-@pytest.mark.parametrize("args", [["--help"], ["demo", "--help"], ["info", "--help"], ["materials", "--help"]])
+@pytest.mark.parametrize("args", [["--help"], ["demo", "--help"], ["info", "--help"], ["materials", "--help"],
+                                  ["fit", "--help"], ["evaluate", "--help"], ["acquire", "planar", "--help"]])
 def test_help(args):
     res = runner.invoke(app, args)
     assert res.exit_code == 0
@@ -22,7 +23,7 @@ def test_help(args):
 
 def test_help_lists_commands():
     out = runner.invoke(app, ["--help"]).output
-    for cmd in ("demo", "info", "materials"):
+    for cmd in ("demo", "info", "materials", "acquire", "fit", "evaluate"):
         assert cmd in out
 
 
@@ -44,9 +45,17 @@ def test_info_on_garbage_is_one_line(tmp_path):
     assert "Traceback" not in res.output
 
 
-def test_demo_writes_real_outputs(tmp_path):
-    res = runner.invoke(app, ["demo", "--out", str(tmp_path)])
+@pytest.fixture(scope="module")
+def demo_out(tmp_path_factory):
+    """The main job, run once for the tests that read its outputs."""
+    out = tmp_path_factory.mktemp("demo")
+    res = runner.invoke(app, ["demo", "--out", str(out)])
     assert res.exit_code == 0, res.output
+    return out
+
+
+def test_demo_writes_real_outputs(demo_out):
+    tmp_path = demo_out
     png = (tmp_path / "baselines.png").read_bytes()
     assert png[:8] == b"\x89PNG\r\n\x1a\n" and len(png) > 50_000
     summary = json.loads((tmp_path / "baselines.json").read_text())["materials"]
@@ -60,9 +69,8 @@ def test_demo_writes_real_outputs(tmp_path):
     assert not [p for p in tmp_path.iterdir() if ".tmp-" in p.name]
 
 
-def test_demo_fits_the_embedded_measurement(tmp_path):
-    res = runner.invoke(app, ["demo", "--out", str(tmp_path)])
-    assert res.exit_code == 0, res.output
+def test_demo_fits_the_embedded_measurement(demo_out):
+    tmp_path = demo_out
     rep = json.loads((tmp_path / "report" / "report.json").read_text())
     iso, aniso, dip = (rep["models"][k] for k in ("iso", "aniso", "dipole"))
     noise = rep["noise_floor"]

@@ -19,20 +19,22 @@ from translucency.model import DipoleModel, PlanarAlpha
 runner = CliRunner()
 
 
+def _scan(tmp_path_factory, sample, side, span, seed):
+    """A small virtual-DISCO scan: side × side points over span mm, 100 k photons, 6 mm windows."""
+    vol = make_sample(sample, (12.0, 12.0, 6.0), 0.25, seed=seed)
+    setup = PlanarSetup(grid=(side, side), span=(span, span), pitch=0.25, window=6.0, photons=100_000, seed=seed,
+                        chunk_points=side * side)
+    return acquire_planar(vol, setup, tmp_path_factory.mktemp(sample) / f"{sample}.zarr")
+
+
 @pytest.fixture(scope="module")
 def marble(tmp_path_factory):
-    vol = make_sample("marble", (12.0, 12.0, 6.0), 0.25, seed=3)
-    setup = PlanarSetup(grid=(3, 3), span=(3.0, 3.0), pitch=0.25, window=6.0, photons=100_000, seed=3,
-                        chunk_points=9)
-    return acquire_planar(vol, setup, tmp_path_factory.mktemp("m") / "marble.zarr")
+    return _scan(tmp_path_factory, "marble", 3, 3.0, 3)
 
 
 @pytest.fixture(scope="module")
 def fibers(tmp_path_factory):
-    vol = make_sample("fibers", (12.0, 12.0, 6.0), 0.25, seed=4)
-    setup = PlanarSetup(grid=(2, 2), span=(2.0, 2.0), pitch=0.25, window=6.0, photons=100_000, seed=4,
-                        chunk_points=4)
-    return acquire_planar(vol, setup, tmp_path_factory.mktemp("f") / "fibers.zarr")
+    return _scan(tmp_path_factory, "fibers", 2, 2.0, 4)
 
 
 def test_errors_match_a_plain_loop(tmp_path):

@@ -167,12 +167,17 @@ def test_baseline_recovery(tmp_path, kind, cls):
     np.testing.assert_allclose(got[1], p2, rtol=2e-3)
 
 
-def test_masked_and_nan_windows_are_flagged(tmp_path):
-    rng = np.random.default_rng(15)
-    x_i = _grid_points(side=3)
+def _iso_truth(seed, side):
+    """A random per-channel isotropic model on a side × side grid, α = 1, and its windows."""
+    rng = np.random.default_rng(seed)
+    x_i = _grid_points(side=side)
     c, d = _random_exponential(rng, len(x_i))
     truth = ExponentialModel(x_i, c, d, PlanarAlpha.uniform((60, 60), (0.0, 0.0), PITCH))
-    origin, R = _windows(truth, x_i)
+    return rng, x_i, truth, *_windows(truth, x_i)
+
+
+def test_masked_and_nan_windows_are_flagged(tmp_path):
+    _, x_i, truth, origin, R = _iso_truth(15, 3)
     mask = np.ones(R.shape[:3], bool)
     mask[2] = False
     R[5] = np.nan
@@ -185,11 +190,7 @@ def test_masked_and_nan_windows_are_flagged(tmp_path):
 
 
 def test_interrupted_fit_resumes_identically(tmp_path):
-    rng = np.random.default_rng(16)
-    x_i = _grid_points(side=4)
-    c, d = _random_exponential(rng, len(x_i))
-    truth = ExponentialModel(x_i, c, d, PlanarAlpha.uniform((60, 60), (0.0, 0.0), PITCH))
-    origin, R = _windows(truth, x_i)
+    rng, x_i, truth, origin, R = _iso_truth(16, 4)
     ds = write_dataset(tmp_path / "d.zarr", x_i, origin, R * (1 + 0.05 * rng.normal(size=R.shape)), PITCH)
     full = fit_planar(ds, "iso", max_rounds=3, chunk_points=4)
     ckpt = tmp_path / "fit.partial.npz"
