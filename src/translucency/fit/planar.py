@@ -347,13 +347,12 @@ class _Chunk:
     gid: np.ndarray  # (k, J) radius group
     r_g: np.ndarray  # (G,)
     alpha: np.ndarray  # (k, J) current α at each pixel
+    static: np.ndarray  # (k, J) float32: valid × distance balance (0 for invalid pixels)
 
 
 def _load_chunk(ctx: _Context, state: _State, s: int, e: int) -> _Chunk:
     """Read points s..e (or take them from the in-memory cache of earlier rounds)."""
-    if (s, e) in ctx.cache:
-        y, var, valid, geom, gid, r_g = ctx.cache[(s, e)]
-    else:
+    if (s, e) not in ctx.cache:
         ds = ctx.ds
         k = e - s
         y = np.asarray(ds.group["R_d"][s:e], dtype=np.float32).reshape(k, -1, 3)
@@ -365,11 +364,16 @@ def _load_chunk(ctx: _Context, state: _State, s: int, e: int) -> _Chunk:
         # with a photon count the weights use the model's Poisson variance, not the data's
         var = None if ctx.poisson > 0 else np.where(valid[..., None], np.maximum(var, 0.0), np.float32(0.0))
         gid, r_g = radius_groups(geom.r, ctx.grid.pitch, r_exact=1.0, radius_step=ctx.radius_step)
+        # each mm of distance counts alike: rings beyond 1 mm weighted by 1 mm / r
+        balance = np.minimum(1.0, 1.0 / np.maximum(geom.r, 1e-9)) if ctx.balance else 1.0
+        static = (valid * balance).astype(np.float32)
         if ctx.cache_left >= y.nbytes:
-            ctx.cache_left -= y.nbytes + (0 if var is None else var.nbytes)
-            ctx.cache[(s, e)] = (y, var, valid, geom, gid, r_g)
+            ctx.cache_left -= y.nbytes + static.nbytes + (0 if var is None else var.nbytes)
+            ctx.cache[(s, e)] = (y, var, valid, geom, gid, r_g, static)
+    else:
+        y, var, valid, geom, gid, r_g, static = ctx.cache[(s, e)]
     alpha = state.alpha.ravel()[geom.pixel]
-    return _Chunk(y, var, valid, geom.r, geom.theta, geom.pixel, gid, r_g, alpha)
+    return _Chunk(y, var, valid, geom.r, geom.theta, geom.pixel, gid, r_g, alpha, static)
 
 
 def _group_profiles(ctx: _Context, state: _State, sl: slice, r_g: np.ndarray) -> np.ndarray:
@@ -418,25 +422,25 @@ def _weights(ctx: _Context, ch: _Chunk, f: np.ndarray | None) -> np.ndarray:
     :math:`\alpha P/(N p^2)`; otherwise the ring mean of the data's variance.
     """
     k, G = ch.y.shape[0], ch.r_g.size
-    idx = (np.arange(k)[:, None] * G + ch.gid)[..., None] * 3 + np.arange(3)
-    b = np.arange(k)[:, None]
 
-    def ring_mean(v, ok):
-        num = group_sums(idx, np.where(ok, v, 0.0), k * G * 3)
-        cnt = group_sums(idx, ok.astype(float), k * G * 3)
-        return (num / np.maximum(cnt, 1)).reshape(k, G, 3)[b, ch.gid]
+    def ring_mean(v):  # mean over the valid pixels of each (point, radius group, channel)
+        idx = (np.arange(k)[:, None] * G + ch.gid)[..., None] * 3 + np.arange(3)
+        num = group_sums(idx, np.where(ch.valid[..., None], v, 0.0), k * G * 3)
+        cnt = group_sums(idx, np.broadcast_to(ch.valid[..., None], v.shape).astype(np.float64), k * G * 3)
+        return (num / np.maximum(cnt, 1)).reshape(k, G, 3)[np.arange(k)[:, None], ch.gid]
 
-    ok = ch.valid[..., None] & (ch.alpha[..., None] > 0)
     if f is None:  # first round: ring means of y/α stand in for the model
-        f = ring_mean(ch.y / np.where(ch.alpha > 0, ch.alpha, 1.0)[..., None], ok)
-    model = ch.alpha[..., None] * f
-    floor = 1e-6 * np.max(np.where(ch.valid[..., None], model, 0.0), axis=1, keepdims=True)
-    model = np.maximum(model, np.maximum(floor, 1e-30))
-    var = model * ctx.poisson if ch.var is None else ring_mean(ch.var, ch.valid[..., None] & np.ones_like(ok))
-    w2 = 1.0 / ((ctx.rel_sigma * model) ** 2 + var)
-    if ctx.balance:  # each mm of distance counts alike: rings beyond 1 mm weighted by 1 mm / r
-        w2 = w2 * np.minimum(1.0, 1.0 / np.maximum(ch.r, 1e-9))[..., None]
-    return np.where(ch.valid[..., None], w2, 0.0)
+        f = ring_mean(ch.y / np.where(ch.alpha > 0, ch.alpha, 1.0)[..., None])
+    model = (ch.alpha[..., None] * f).astype(np.float32)
+    floor = np.maximum(1e-6 * model.max(axis=1, keepdims=True), np.float32(1e-15))
+    np.maximum(model, floor, out=model)
+    # w² = static / (αP (ρ² αP + v0)) with v0 = 1/(N p²), or ρ²(αP)² + σ̄² without a photon count
+    if ch.var is None:
+        den = model * (np.float32(ctx.rel_sigma**2) * model + np.float32(ctx.poisson))
+    else:
+        den = np.float32(ctx.rel_sigma**2) * model * model + ring_mean(ch.var).astype(np.float32)
+    static = np.broadcast_to(ch.static[..., None], den.shape)
+    return np.divide(static, den, out=np.zeros_like(den), where=static > 0)
 
 
 def _fit_chunk(ctx: _Context, glob: _State, s: int, e: int):
@@ -485,8 +489,10 @@ def _grouped(ch: _Chunk, w2, kappa, target, bins_per_point: int, sub: np.ndarray
     idx = np.arange(k)[:, None, None] * (n_sub * G) + ch.gid[..., None]
     if sub is not None:
         idx = idx + sub * G
-    A = group_sums(idx, w2 * kappa * kappa, k * n_sub * G).reshape(k * n_sub, G)
-    B = group_sums(idx, w2 * kappa * target, k * n_sub * G).reshape(k * n_sub, G)
+    wk = w2 * kappa
+    idx = np.broadcast_to(idx, wk.shape).ravel()
+    A = np.bincount(idx, (wk * kappa).ravel(), minlength=k * n_sub * G).reshape(k * n_sub, G)
+    B = np.bincount(idx, (wk * target).ravel(), minlength=k * n_sub * G).reshape(k * n_sub, G)
     W = np.sqrt(A)
     return W, np.divide(B, A, out=np.zeros_like(B), where=A > 0)
 
