@@ -58,6 +58,29 @@ from .volume import Volume
 
 CAMERA_HEIGHT_MM = 10.0  # orthographic camera plane above the slab (any height > 0 would do)
 NO_ROULETTE = 1 << 30  # an rr_depth that volpath never reaches
+WALK_BATCH = 8_000_000  # photons per wavefront (about 1 GB of walk state and entry points)
+
+
+def _point(name: str, value) -> tuple[float, float]:
+    """Two finite coordinates in mm, or a one-line error."""
+    try:
+        c = np.asarray(value, dtype=np.float64).ravel()
+    except (TypeError, ValueError):
+        c = np.array([])
+    if c.size != 2 or not np.isfinite(c).all():
+        raise TranslucencyError(f"{name}: expected two finite coordinates in mm, got {value!r}")
+    return float(c[0]), float(c[1])
+
+
+def _positive(name: str, value, unit: str = "mm") -> float:
+    """A finite number > 0, or a one-line error."""
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        v = float("nan")
+    if not (np.isfinite(v) and v > 0):
+        raise TranslucencyError(f"{name}: must be a positive number ({unit}), got {value!r}")
+    return v
 
 
 # ------------------------------------------------------------------------------------------------
@@ -72,18 +95,13 @@ class SpotBeam:
     """
 
     centre_xy: tuple[float, float]
-    radius_mm: float = 0.4
+    radius_mm: float = 0.5
     distance_mm: float = 100.0
 
     def __post_init__(self):
-        c = tuple(float(v) for v in np.asarray(self.centre_xy, dtype=float).ravel())
-        if len(c) != 2 or not np.isfinite(c).all():
-            raise TranslucencyError(f"beam centre: expected two finite coordinates in mm, got {self.centre_xy!r}")
-        object.__setattr__(self, "centre_xy", c)
-        if not (np.isfinite(self.distance_mm) and self.distance_mm > 0):
-            raise TranslucencyError(f"beam distance: must be a positive length in mm, got {self.distance_mm}")
-        if not (np.isfinite(self.radius_mm) and self.radius_mm > 0):
-            raise TranslucencyError(f"beam radius: must be a positive length in mm, got {self.radius_mm}")
+        object.__setattr__(self, "centre_xy", _point("beam centre", self.centre_xy))
+        object.__setattr__(self, "radius_mm", _positive("beam radius", self.radius_mm))
+        object.__setattr__(self, "distance_mm", _positive("beam distance", self.distance_mm))
         # float32 resolves cos θ only to ~6e-8, i.e. θ to ~3.5e-4 rad: keep the cutoff well above
         if self.cutoff_deg < 0.2 or self.cutoff_deg > 30.0:
             raise TranslucencyError(f"beam radius: {self.radius_mm} mm at {self.distance_mm} mm gives a cutoff of "
@@ -118,15 +136,12 @@ class PixelWindow:
     pitch_mm: float = 0.25
 
     def __post_init__(self):
-        c = tuple(float(v) for v in np.asarray(self.centre_xy, dtype=float).ravel())
-        if len(c) != 2 or not np.isfinite(c).all():
-            raise TranslucencyError(f"window centre: expected two finite coordinates in mm, got {self.centre_xy!r}")
-        object.__setattr__(self, "centre_xy", c)
-        if int(self.n_pixels) != self.n_pixels or self.n_pixels < 1:
+        object.__setattr__(self, "centre_xy", _point("window centre", self.centre_xy))
+        n = _positive("window pixels", self.n_pixels, "pixels")
+        if n != int(n):
             raise TranslucencyError(f"window pixels: must be a positive integer, got {self.n_pixels!r}")
-        object.__setattr__(self, "n_pixels", int(self.n_pixels))
-        if not (np.isfinite(self.pitch_mm) and self.pitch_mm > 0):
-            raise TranslucencyError(f"pitch: must be a positive length in mm, got {self.pitch_mm}")
+        object.__setattr__(self, "n_pixels", int(n))
+        object.__setattr__(self, "pitch_mm", _positive("pitch", self.pitch_mm))
 
     @property
     def side_mm(self) -> float:
@@ -215,7 +230,7 @@ def spot_profile(beam: SpotBeam, n_radii: int = 8193) -> tuple[np.ndarray, np.nd
     it = dr.zeros(mi.Interaction3f, len(rho))
     it.p = mi.Point3f(mi.Float((cx + rho).astype(np.float32)), mi.Float(np.full(len(rho), cy, np.float32)),
                       mi.Float(np.zeros(len(rho), np.float32)))
-    ds, value = emitter.sample_direction(it, mi.Point2f(0.5, 0.5))
+    _, value = emitter.sample_direction(it, mi.Point2f(0.5, 0.5))
     # distances and cosines in float64 from the points actually queried
     x = np.asarray(it.p.x, dtype=np.float64) - cx
     r = np.hypot(x, beam.distance_mm)
@@ -236,6 +251,8 @@ def sample_spot_entries(beam: SpotBeam, n: int, seed: int, profile=None) -> np.n
     """
     rho, E = profile if profile is not None else spot_profile(beam)
     dens = 2.0 * np.pi * rho * E
+    end = int(np.flatnonzero(dens > 0).max()) + 2  # up to the first zero past the cutoff: a strictly rising CDF
+    rho, dens = rho[:end], dens[:end]
     cdf = np.concatenate([[0.0], np.cumsum(0.5 * (dens[1:] + dens[:-1]) * np.diff(rho))])
     cdf /= cdf[-1]
     # the inverse CDF on a fine uniform grid of u, then O(1) linear interpolation per sample
@@ -321,7 +338,10 @@ def volpath_scene(volume: Volume, channel: int, beam: SpotBeam, window: PixelWin
 
 
 def _check_channels(channels) -> tuple[int, ...]:
-    ch = tuple(int(c) for c in channels)
+    try:
+        ch = tuple(int(c) for c in channels)
+    except (TypeError, ValueError):
+        ch = ()
     if not ch or any(c not in (0, 1, 2) for c in ch):
         raise TranslucencyError(f"channels: expected a non-empty subset of (0, 1, 2), got {channels!r}")
     return ch
@@ -352,8 +372,8 @@ def render_volpath_spot(volume: Volume, beam: SpotBeam, window: PixelWindow, spp
     mi = mitsuba()
     _check_fits(volume, beam, window)
     channels = _check_channels(channels)
-    if int(spp) < 2:
-        raise TranslucencyError(f"spp: need at least 2 samples per pixel for a variance, got {spp}")
+    if _positive("spp", spp, "samples per pixel") < 2 or spp != int(spp):
+        raise TranslucencyError(f"spp: need an integer of at least 2 samples per pixel (for a variance), got {spp!r}")
     n = window.n_pixels
     L = np.zeros((n, n, len(channels)))
     var = np.zeros_like(L)
@@ -395,24 +415,36 @@ def walk_spot(volume: Volume, beam: SpotBeam, channel: int, n_photons: int, *, s
     """Trace ``n_photons`` photons of ``channel`` entering as the spot's irradiance, index-matched.
 
     Entry points follow :func:`sample_spot_entries` (seed ``seed``); photons
-    go straight down (the beam's tilt ≤ θ_c is ignored) and walk with
-    PCG32 streams seeded by ``seed``.  The time includes sampling the entries.
+    go straight down (the beam's tilt ≤ θ_c is ignored) and walk in
+    wavefronts of at most ``WALK_BATCH`` photons, each batch passing its
+    offset as ``first_point`` so that all photons draw from distinct PCG32
+    streams.  (Dr.Jit's PCG32 adds the lane index to the seed and sequence
+    passed by the walk, so the streams, though distinct, change with the
+    batch size: results are the same only statistically.)  The time includes
+    sampling the entries.
     """
-    if int(n_photons) < 1:
-        raise TranslucencyError(f"photons: must be >= 1, got {n_photons}")
+    n = _positive("photons", n_photons, "photons")
+    if n != int(n):
+        raise TranslucencyError(f"photons: must be a positive integer, got {n_photons!r}")
+    n = int(n)
     t0 = time.perf_counter()
     profile = profile if profile is not None else spot_profile(beam)
-    entries = sample_spot_entries(beam, int(n_photons), seed, profile)
-    res = random_walk(volume, channel, entries, 1, seed=seed, index_matched=True)
-    top = res.code == TOP
+    entries = sample_spot_entries(beam, n, seed, profile)
+    xs, ys, cs = [], [], []
+    for b0 in range(0, n, WALK_BATCH):
+        res = random_walk(volume, channel, entries[b0:b0 + WALK_BATCH], 1, seed=seed, first_point=b0,
+                          index_matched=True)
+        top = res.code == TOP
+        xs.append(res.x[top].astype(np.float64))
+        ys.append(res.y[top].astype(np.float64))
+        cs.append(res.cos_exit[top])
     seconds = time.perf_counter() - t0
-    return TopExits(res.x[top].astype(np.float64), res.y[top].astype(np.float64), res.cos_exit[top],
-                    int(n_photons), spot_power(*profile), seconds)
+    return TopExits(np.concatenate(xs), np.concatenate(ys), np.concatenate(cs), n, spot_power(*profile), seconds)
 
 
-def _pixel_index(coord: np.ndarray, centres: np.ndarray) -> np.ndarray:
-    """Pixel index along one axis from regularly spaced (possibly decreasing) pixel centres; -1 outside."""
-    step = centres[1] - centres[0] if len(centres) > 1 else 1.0
+def _pixel_index(coord: np.ndarray, centres: np.ndarray, pitch_mm: float) -> np.ndarray:
+    """Pixel index along one axis from pixel centres ``pitch_mm`` apart (rising or falling); -1 outside."""
+    step = pitch_mm if len(centres) < 2 or centres[1] > centres[0] else -pitch_mm
     idx = np.floor((coord - (centres[0] - 0.5 * step)) / step).astype(np.int64)
     return np.where((idx >= 0) & (idx < len(centres)), idx, -1)
 
@@ -423,12 +455,12 @@ def radiance_from_exits(exits: TopExits, x: np.ndarray, y: np.ndarray, pitch_mm:
 
     ``x``, ``y``: pixel centres (n, n) indexed [row, column], as from :func:`pixel_centres`.
     """
-    if not 0.0 < cone_deg <= 90.0:
-        raise TranslucencyError(f"cone: must lie in (0, 90] degrees, got {cone_deg}")
+    if not 0.0 < _positive("cone", cone_deg, "degrees") <= 90.0:
+        raise TranslucencyError(f"cone: must lie in (0, 90] degrees, got {cone_deg!r}")
     n = x.shape[0]
     keep = exits.cos_exit > np.cos(np.radians(cone_deg))
-    col = _pixel_index(exits.x[keep], x[0, :])
-    row = _pixel_index(exits.y[keep], y[:, 0])
+    col = _pixel_index(exits.x[keep], x[0, :], pitch_mm)
+    row = _pixel_index(exits.y[keep], y[:, 0], pitch_mm)
     ok = (col >= 0) & (row >= 0)
     counts = np.bincount(row[ok] * n + col[ok], minlength=n * n).reshape(n, n).astype(np.float64)
     N = exits.n_photons
@@ -506,7 +538,10 @@ class Agreement:
 
     @property
     def ring_z(self) -> np.ndarray:
-        return (self.ring_ours - self.ring_ref) / np.sqrt(self.ring_ours_var + self.ring_ref_var)
+        """(ours − ref)/σ per ring and channel; NaN for empty rings or zero variance."""
+        s = np.sqrt(self.ring_ours_var + self.ring_ref_var)
+        ok = np.isfinite(s) & (s > 0)
+        return np.divide(self.ring_ours - self.ring_ref, s, out=np.full(s.shape, np.nan), where=ok)
 
     def summary(self) -> dict:
         """Mean and standard deviation of the pixel z-scores, fraction with |z| > 3, and ring χ²/dof."""
@@ -534,7 +569,7 @@ def window_sum_ratio(exits: TopExits, x: np.ndarray, y: np.ndarray, pitch_mm: fl
     binomial with p = n_n/n_w, whence the standard error.  Returns (ratio, standard error).
     """
     n_pix = x.shape[0]
-    inside = (_pixel_index(exits.x, x[0, :]) >= 0) & (_pixel_index(exits.y, y[:, 0]) >= 0)
+    inside = (_pixel_index(exits.x, x[0, :], pitch_mm) >= 0) & (_pixel_index(exits.y, y[:, 0], pitch_mm) >= 0)
     narrow, wide = sorted((cone_deg, ref_cone_deg))
     n_n = np.count_nonzero(inside & (exits.cos_exit > np.cos(np.radians(narrow))))
     n_w = np.count_nonzero(inside & (exits.cos_exit > np.cos(np.radians(wide))))
