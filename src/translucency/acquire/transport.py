@@ -24,7 +24,11 @@ N photons per incident point, the count :math:`n_{px}` in a pixel of area
 per unit incident power, with binomial variance
 :math:`\hat R_d (1/(p^2) - \hat R_d)/N`.  Photons are numbered globally
 (point index × N + photon), and each draws from its own PCG32 stream seeded
-by that number, so results do not depend on how the work is batched.
+by that number, so the streams never repeat across batches.  They are not
+independent of the batching bit for bit: Dr.Jit's ``PCG32(size, initstate,
+initseq)`` also adds the lane index, so the same photon traced in another
+batch layout draws another (equally valid) stream.  Planar acquisitions use
+fixed chunks, so a resumed run is identical to an uninterrupted one.
 """
 
 from __future__ import annotations
