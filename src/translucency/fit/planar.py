@@ -360,7 +360,8 @@ def _load_chunk(ctx: _Context, state: _State, s: int, e: int) -> _Chunk:
         mask = np.asarray(ds.group["mask"][s:e]).reshape(k, -1)
         geom = window_geometry(ctx.x_i[s:e], ctx.origin[s:e], ctx.grid, ds.window)
         valid = mask & np.isfinite(y).all(axis=2) & np.isfinite(var).all(axis=2) & (geom.r >= ctx.exclusion)
-        y = np.where(valid[..., None], y, np.float32(0.0))
+        # kept in the store's precision (float16 data stay float16 in the cache)
+        y = np.where(valid[..., None], y, np.float32(0.0)).astype(np.dtype(ds.header.get("dtype", "float32")))
         # with a photon count the weights use the model's Poisson variance, not the data's
         var = None if ctx.poisson > 0 else np.where(valid[..., None], np.maximum(var, 0.0), np.float32(0.0))
         gid, r_g = radius_groups(geom.r, ctx.grid.pitch, r_exact=1.0, radius_step=ctx.radius_step)
