@@ -110,3 +110,37 @@ def test_mesh_walk_conserves_energy_in_a_non_absorbing_sphere():
     # exits lie on the sphere
     out = r.position[r.code == EXIT]
     assert np.abs(np.linalg.norm(out, axis=1) - 3.0).max() < 0.02
+
+
+def test_acquire_mesh_cli_on_the_pig_and_a_users_mesh(tmp_path):
+    import zarr
+    from typer.testing import CliRunner
+
+    from translucency.cli.app import app
+
+    runner = CliRunner()
+    out = tmp_path / "pig.zarr"
+    args = ["acquire", "mesh", "--out", str(out), "--material", "homogeneous:skimmilk", "--voxel", "2",
+            "--points", "4", "--photons", "2000", "--chunk", "2"]
+    res = runner.invoke(app, args)
+    assert res.exit_code == 0, res.output
+    g = zarr.open_group(str(out), mode="r")
+    R, A = g["R_d"][...], g["vertex_area"][...]
+    total = (R * A[None, :, None]).sum(axis=1) + g["specular"][...]
+    assert R.shape[0] == 4 and g["chunk_done"][...].all()
+    assert ((total > 0.3) & (total <= 1.0 + 1e-6)).all()  # light leaves, none is created
+    # the light comes out near where it went in
+    v, inc = g["vertices"][...], g["incident"][...]
+    r = np.linalg.norm(v[None] - v[inc][:, None], axis=2)
+    assert ((R[..., 1] * A * (r < 10)).sum(1) > 0.5 * (R[..., 1] * A).sum(1)).all()
+    # the same arguments resume (nothing to do), other arguments are refused
+    assert runner.invoke(app, args).exit_code == 0
+    res = runner.invoke(app, args[:-4] + ["--chunk", "4", "--photons", "2000"])
+    assert res.exit_code == 2 and "other arguments" in res.output
+    ball = tmp_path / "ball.obj"
+    trimesh.creation.icosphere(2, radius=0.5).export(ball)
+    res = runner.invoke(app, ["acquire", "mesh", "--out", str(tmp_path / "b.zarr"), "--mesh", str(ball),
+                              "--scale", "10", "--voxel", "1", "--points", "2", "--photons", "500"])
+    assert res.exit_code == 0, res.output
+    res = runner.invoke(app, ["acquire", "mesh", "--out", str(tmp_path / "c.zarr"), "--mesh", str(tmp_path / "no.obj")])
+    assert res.exit_code == 2 and "no such mesh file" in res.output
