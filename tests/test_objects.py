@@ -144,3 +144,30 @@ def test_acquire_mesh_cli_on_the_pig_and_a_users_mesh(tmp_path):
     assert res.exit_code == 0, res.output
     res = runner.invoke(app, ["acquire", "mesh", "--out", str(tmp_path / "c.zarr"), "--mesh", str(tmp_path / "no.obj")])
     assert res.exit_code == 2 and "no such mesh file" in res.output
+
+
+def test_fit_mesh_per_vertex(tmp_path):
+    """Per-vertex isotropic fit of a photon-transport scan of an object, beside the dipole."""
+    from translucency.acquire.mesh import acquire_mesh, object_volume
+    from translucency.fit.mesh import fit_mesh
+    from translucency.model import VertexAlpha
+
+    ball = trimesh.creation.icosphere(4, radius=8.0)
+    vol = object_volume("homogeneous:marble", ball, 1.0)
+    out = acquire_mesh(ball, vol, tmp_path / "ball.zarr", n_points=6, photons=40_000, chunk_points=6)
+    g = __import__("zarr").open_group(str(out), mode="r")
+    R, V, inc = g["R_d"][...], g["vertices"][...], g["incident"][...]
+    r = np.linalg.norm(V[None] - V[inc][:, None], axis=2)
+    errs = {}
+    for kind in ("iso", "dipole"):
+        fit = fit_mesh(out, kind)
+        m = fit.model
+        assert m.geometry == "mesh" and isinstance(m.alpha, VertexAlpha) and not fit.flagged.any()
+        pred = np.stack([m.R_d(np.full(len(V), i), V) for i in range(len(inc))])
+        sel = (r > 0.5) & (r < 6.0)
+        errs[kind] = np.linalg.norm(pred[sel] - R[sel]) / np.linalg.norm(R[sel])
+    assert errs["iso"] < 0.15 and errs["iso"] < errs["dipole"]
+    with pytest.raises(TranslucencyError, match="isotropic"):
+        fit_mesh(out, "aniso")
+    with pytest.raises(TranslucencyError, match="no such mesh data set"):
+        fit_mesh(tmp_path / "none.zarr")

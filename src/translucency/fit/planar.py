@@ -257,7 +257,6 @@ def fit_planar(dataset, model: str = "iso", *, n_terms: int = 3, n_directions: i
     origin = ds["window_origin"].astype(np.float64)
     grid = SampleGrid.covering(origin, pitch, ds.window)
     photons = ds.header.get("acquisition", {}).get("photons")
-    poisson = 1.0 / (float(photons) * pitch * pitch) if photons else 0.0
     eta = float(ds.header.get("sample", {}).get("eta", 1.3))
     options = {"model": model, "n_terms": n, "n_directions": m, "colour": colour if C == 1 or model in
                ("iso", "aniso") else "per-channel", "exclusion_mm": exclusion, "rel_sigma": rel_sigma,
@@ -266,13 +265,22 @@ def fit_planar(dataset, model: str = "iso", *, n_terms: int = 3, n_directions: i
         json.dumps(ds.header, sort_keys=True).encode()).hexdigest(), "chunk": chunk_points, **options},
         sort_keys=True)
 
+    source = _PlanarSource(ds, grid, origin, photons and 1.0 / (float(photons) * pitch * pitch))
+    ctx = _Context(source, model, n, m, C, exclusion, rel_sigma, eta, step, sweeps, balance, x_i,
+                   cache_left=cache_mb * 2**20)
+    return _alternate(ctx, options, request, max_rounds=max_rounds, tol=tol, chunk_points=chunk_points,
+                      workers=workers, checkpoint=checkpoint, progress=progress, t0=t0)
+
+
+def _alternate(ctx, options, request, *, max_rounds, tol, chunk_points, workers, checkpoint, progress, t0):
+    """The rounds of the alternation over all chunks of points (shared by planar and mesh fits)."""
+    P = len(ctx.x_i)
     chunks = [(s, min(s + chunk_points, P)) for s in range(0, P, chunk_points)]
-    state = _State(model, P, C, m, n, grid.shape, len(chunks))
+    model = ctx.kind
+    state = _State(model, P, ctx.C, ctx.m, ctx.n, ctx.source.alpha_shape, len(chunks))
     ckpt = Path(checkpoint) if checkpoint else None
     if ckpt is not None and ckpt.exists() and state.load(ckpt, request) and progress:
         progress(0, 0, f"resuming from {ckpt.name}: round {int(state.round[0]) + 1}")
-    ctx = _Context(ds, model, n, m, C, exclusion, rel_sigma, poisson, eta, step, sweeps, balance, grid, x_i, origin,
-                   cache_left=cache_mb * 2**20)
     total = max_rounds * len(chunks)
     lock = threading.Lock()
     workers = max(1, min(int(workers or os.cpu_count() or 1), len(chunks)))
@@ -315,21 +323,18 @@ def fit_planar(dataset, model: str = "iso", *, n_terms: int = 3, n_directions: i
 
 @dataclass
 class _Context:
-    ds: PlanarDataset
+    source: object  # where the chunks come from: _PlanarSource or a mesh source
     kind: str
     n: int
     m: int
     C: int
     exclusion: float
     rel_sigma: float
-    poisson: float
     eta: float
     radius_step: float | None
     sweeps: int
     balance: bool
-    grid: SampleGrid
     x_i: np.ndarray
-    origin: np.ndarray
     cache_left: float = 0.0  # bytes the data may still occupy in memory between rounds
     cache: dict = field(default_factory=dict)
 
@@ -348,33 +353,52 @@ class _Chunk:
     r_g: np.ndarray  # (G,)
     alpha: np.ndarray  # (k, J) current α at each pixel
     static: np.ndarray  # (k, J) float32: valid × distance balance (0 for invalid pixels)
+    poisson: object = 0.0  # 1/(N × pixel area): scalar, or (k, J, 1) float32 (mesh vertices)
 
 
-def _load_chunk(ctx: _Context, state: _State, s: int, e: int) -> _Chunk:
-    """Read points s..e (or take them from the in-memory cache of earlier rounds)."""
-    if (s, e) not in ctx.cache:
-        ds = ctx.ds
-        k = e - s
+class _PlanarSource:
+    """Windows of a planar data set: pixels on the sample grid, α on that grid."""
+
+    def __init__(self, ds: PlanarDataset, grid: SampleGrid, origin: np.ndarray, poisson: float | None):
+        self.ds, self.grid, self.origin, self.poisson = ds, grid, origin, poisson or 0.0
+        self.alpha_shape = grid.shape
+        self.pitch = grid.pitch
+
+    def read(self, ctx: _Context, s: int, e: int):
+        """y (k, J, 3), var or None, valid, r, θ, pixel (k, J), and the Poisson factor of points s..e."""
+        ds, k = self.ds, e - s
         y = np.asarray(ds.group["R_d"][s:e], dtype=np.float32).reshape(k, -1, 3)
         var = np.asarray(ds.group["variance"][s:e], dtype=np.float32).reshape(k, -1, 3)
         mask = np.asarray(ds.group["mask"][s:e]).reshape(k, -1)
-        geom = window_geometry(ctx.x_i[s:e], ctx.origin[s:e], ctx.grid, ds.window)
+        geom = window_geometry(ctx.x_i[s:e], self.origin[s:e], self.grid, ds.window)
         valid = mask & np.isfinite(y).all(axis=2) & np.isfinite(var).all(axis=2) & (geom.r >= ctx.exclusion)
-        # kept in the store's precision (float16 data stay float16 in the cache)
-        y = np.where(valid[..., None], y, np.float32(0.0)).astype(np.dtype(ds.header.get("dtype", "float32")))
         # with a photon count the weights use the model's Poisson variance, not the data's
-        var = None if ctx.poisson > 0 else np.where(valid[..., None], np.maximum(var, 0.0), np.float32(0.0))
-        gid, r_g = radius_groups(geom.r, ctx.grid.pitch, r_exact=1.0, radius_step=ctx.radius_step)
+        var = None if self.poisson > 0 else np.where(valid[..., None], np.maximum(var, 0.0), np.float32(0.0))
+        dtype = np.dtype(ds.header.get("dtype", "float32"))  # float16 data stay float16 in the cache
+        return y, var, valid, geom.r, geom.theta, geom.pixel, self.poisson, dtype
+
+    def make_alpha(self, values: np.ndarray):
+        return PlanarAlpha(values.copy(), self.grid.origin, self.grid.pitch)
+
+
+def _load_chunk(ctx: _Context, state: _State, s: int, e: int) -> _Chunk:
+    """Read points s..e from the source (or take them from the cache of earlier rounds)."""
+    if (s, e) not in ctx.cache:
+        y, var, valid, r, theta, pixel, poisson, dtype = ctx.source.read(ctx, s, e)
+        y = np.where(valid[..., None], y, np.float32(0.0)).astype(dtype)
+        gid, r_g = radius_groups(r, ctx.source.pitch, r_exact=1.0, radius_step=ctx.radius_step)
         # each mm of distance counts alike: rings beyond 1 mm weighted by 1 mm / r
-        balance = np.minimum(1.0, 1.0 / np.maximum(geom.r, 1e-9)) if ctx.balance else 1.0
+        balance = np.minimum(1.0, 1.0 / np.maximum(r, 1e-9)) if ctx.balance else 1.0
         static = (valid * balance).astype(np.float32)
+        entry = (y, var, valid, r, theta, pixel, gid, r_g, static, poisson)
         if ctx.cache_left >= y.nbytes:
             ctx.cache_left -= y.nbytes + static.nbytes + (0 if var is None else var.nbytes)
-            ctx.cache[(s, e)] = (y, var, valid, geom, gid, r_g, static)
+            ctx.cache[(s, e)] = entry
     else:
-        y, var, valid, geom, gid, r_g, static = ctx.cache[(s, e)]
-    alpha = state.alpha.ravel()[geom.pixel]
-    return _Chunk(y, var, valid, geom.r, geom.theta, geom.pixel, gid, r_g, alpha, static)
+        entry = ctx.cache[(s, e)]
+    y, var, valid, r, theta, pixel, gid, r_g, static, poisson = entry
+    alpha = state.alpha.ravel()[pixel]
+    return _Chunk(y, var, valid, r, theta, pixel, gid, r_g, alpha, static, poisson)
 
 
 def _group_profiles(ctx: _Context, state: _State, sl: slice, r_g: np.ndarray) -> np.ndarray:
@@ -437,7 +461,7 @@ def _weights(ctx: _Context, ch: _Chunk, f: np.ndarray | None) -> np.ndarray:
     np.maximum(model, floor, out=model)
     # w² = static / (αP (ρ² αP + v0)) with v0 = 1/(N p²), or ρ²(αP)² + σ̄² without a photon count
     if ch.var is None:
-        den = model * (np.float32(ctx.rel_sigma**2) * model + np.float32(ctx.poisson))
+        den = model * (np.float32(ctx.rel_sigma**2) * model + np.float32(ch.poisson))
     else:
         den = np.float32(ctx.rel_sigma**2) * model * model + ring_mean(ch.var).astype(np.float32)
     static = np.broadcast_to(ch.static[..., None], den.shape)
@@ -605,12 +629,13 @@ def _update_alpha(state: _State, kind: str) -> None:
 
 
 def _build_model(ctx: _Context, state: _State):
-    alpha = PlanarAlpha(state.alpha.copy(), ctx.grid.origin, ctx.grid.pitch)
+    alpha = ctx.source.make_alpha(state.alpha)
+    frame = getattr(ctx.source, "frame", None)
     if ctx.kind == "dipole":
-        return DipoleModel(ctx.x_i, state.p[:, :, 0], state.p[:, :, 1], ctx.eta, alpha)
+        return DipoleModel(ctx.x_i, state.p[:, :, 0], state.p[:, :, 1], ctx.eta, alpha, frame=frame)
     if ctx.kind == "burley":
-        return BurleyModel(ctx.x_i, state.p[:, :, 0], state.p[:, :, 1], alpha)
+        return BurleyModel(ctx.x_i, state.p[:, :, 0], state.p[:, :, 1], alpha, frame=frame)
     d = -state.a
     if ctx.C == 1:
-        return ExponentialModel(ctx.x_i, state.c, d, alpha, s_g=state.s[:, 1], s_b=state.s[:, 2])
-    return ExponentialModel(ctx.x_i, state.c, d, alpha)
+        return ExponentialModel(ctx.x_i, state.c, d, alpha, s_g=state.s[:, 1], s_b=state.s[:, 2], frame=frame)
+    return ExponentialModel(ctx.x_i, state.c, d, alpha, frame=frame)

@@ -1,0 +1,116 @@
+r"""Per-vertex fit of a 3D object's measurement (the paper's section on real objects).
+
+The data are :math:`R_d(x_i, v)` per incident vertex :math:`x_i` and every
+vertex v (:mod:`translucency.acquire.mesh`).  As in the paper, the isotropic
+model is fitted with the Euclidean distance :math:`r = |v - x_i|`, and α and
+the colour per vertex; the alternation, the weights and the batched solvers are
+those of the planar fit (:mod:`translucency.fit.planar`), with vertices in the
+place of pixels: the Poisson variance of a vertex is :math:`\alpha P/(N A_v)`
+for its area :math:`A_v`.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import time
+from pathlib import Path
+
+import numpy as np
+
+from .._validate import TranslucencyError
+from ..model import VertexAlpha
+from .planar import PlanarFit, _alternate, _Context, check_fit_options
+
+
+def tangent_frames(normals: np.ndarray) -> np.ndarray:
+    """Orthonormal frames (t, b, n) as rows, shape (N, 3, 3), around unit normals (N, 3)."""
+    n = normals / np.linalg.norm(normals, axis=1, keepdims=True)
+    helper = np.where(np.abs(n[:, :1]) < 0.9, [[1.0, 0.0, 0.0]], [[0.0, 1.0, 0.0]])
+    t = np.cross(helper, n)
+    t /= np.linalg.norm(t, axis=1, keepdims=True)
+    return np.stack([t, np.cross(n, t), n], axis=1)
+
+
+class _MeshSource:
+    """Rows of a mesh data set: 'pixels' are vertices, α lives on the vertices."""
+
+    def __init__(self, group, header):
+        self.group = group
+        self.vertices = np.asarray(group["vertices"][...], dtype=np.float64)
+        self.area = np.asarray(group["vertex_area"][...], dtype=np.float64)
+        self.incident = np.asarray(group["incident"][...])
+        self.frame = tangent_frames(np.asarray(group["normals"][...], dtype=np.float64)[self.incident])
+        self.alpha_shape = (len(self.vertices),)
+        edges = np.asarray(group["faces"][...])
+        v = self.vertices
+        self.pitch = float(np.mean(np.linalg.norm(v[edges[:, 0]] - v[edges[:, 1]], axis=1)))  # mean edge, mm
+        photons = float(header["photons"])
+        self.poisson = (1.0 / (photons * np.maximum(self.area, 1e-12)))[None, :, None].astype(np.float32)
+
+    def read(self, ctx, s: int, e: int):
+        y = np.asarray(self.group["R_d"][s:e], dtype=np.float32)
+        r = np.linalg.norm(self.vertices[None] - ctx.x_i[s:e, None], axis=2)
+        valid = np.isfinite(y).all(axis=2) & (r >= ctx.exclusion)
+        pixel = np.broadcast_to(np.arange(len(self.vertices)), r.shape)
+        return y, None, valid, r, np.zeros_like(r), pixel, self.poisson, np.dtype("float32")
+
+    def make_alpha(self, values: np.ndarray):
+        return VertexAlpha(values.copy(), self.vertices)
+
+
+def fit_mesh(path, model: str = "iso", *, n_terms: int = 3, colour: str = "per-channel",
+             exclusion_mm: float | None = None, rel_sigma: float = 0.05, max_rounds: int = 3, tol: float = 1e-3,
+             chunk_points: int = 32, workers: int | None = None, progress=None) -> PlanarFit:
+    """Fit the isotropic model (or a baseline) per incident vertex of a mesh data set, with α per vertex.
+
+    Parameters
+    ----------
+    path : path
+        A mesh data set (:func:`translucency.acquire.mesh.acquire_mesh`).
+    model : {"iso", "dipole", "burley"}
+        The paper fits the isotropic model on objects (no tangent directions).
+    exclusion_mm : float, optional
+        Vertices closer than this to x_i are left out; default half the mean edge length.
+
+    Returns
+    -------
+    PlanarFit
+        ``model`` is a mesh model: x_i (N, 3), tangent frames, :class:`VertexAlpha`.
+    """
+    import zarr
+
+    from ..acquire.mesh import FORMAT, HEADER_KEY, VERSION
+
+    t0 = time.perf_counter()
+    if model == "aniso":
+        raise TranslucencyError("model: on meshes the isotropic model is fitted (r = |x_o - x_i|, as in the paper)")
+    check_fit_options(model, n_terms, 1, colour, rel_sigma)
+    path = Path(path)
+    if not path.exists():
+        raise TranslucencyError(f"{path}: no such mesh data set")
+    try:
+        group = zarr.open_group(str(path), mode="r")
+        header = dict(group.attrs).get(HEADER_KEY)
+    except Exception as exc:  # noqa: BLE001
+        raise TranslucencyError(f"{path}: not a readable Zarr data set ({type(exc).__name__})") from None
+    if not isinstance(header, dict) or header.get("format") != FORMAT or header.get("version") != VERSION:
+        raise TranslucencyError(f"{path}: not a translucency mesh data set (v{VERSION})")
+    for name in ("vertices", "faces", "normals", "vertex_area", "incident", "R_d", "chunk_done"):
+        if name not in group:
+            raise TranslucencyError(f"{path}: missing array {name!r}")
+    if not np.all(group["chunk_done"][...]):
+        raise TranslucencyError(f"{path}: the acquisition is unfinished; resume it before fitting")
+    source = _MeshSource(group, header)
+    exclusion = source.pitch / 2 if exclusion_mm is None else float(exclusion_mm)
+    x_i = source.vertices[source.incident]
+    C = 1 if colour == "shared" and model == "iso" else 3
+    options = {"model": model, "n_terms": int(n_terms), "n_directions": 1, "colour": colour, "exclusion_mm": exclusion,
+               "rel_sigma": rel_sigma, "max_rounds": max_rounds, "tol": tol, "radius_step": source.pitch / 2,
+               "geometry": "mesh"}
+    request = json.dumps({"dataset": str(path.resolve()), "header": hashlib.sha256(
+        json.dumps(header, sort_keys=True).encode()).hexdigest(), **options}, sort_keys=True)
+    ctx = _Context(source, model, int(n_terms), 1, C, exclusion, rel_sigma, float(header.get("eta", 1.3)),
+                   source.pitch / 2, 1, True, x_i, cache_left=512 * 2**20)
+    return _alternate(ctx, options, request, max_rounds=max_rounds, tol=tol, chunk_points=chunk_points,
+                      workers=workers, checkpoint=None, progress=progress, t0=t0)
