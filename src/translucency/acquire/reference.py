@@ -306,11 +306,16 @@ def _grid_dict(data_zyx: np.ndarray, to_world) -> dict:
     return {"type": "gridvolume", "data": mi.TensorXf(grid), "filter_type": "nearest", "to_world": to_world}
 
 
-def slab_medium_dict(volume: Volume, channel: int) -> dict:
-    """Mitsuba ``heterogeneous`` medium equal to one channel of ``volume`` (grey, unscaled, mm⁻¹)."""
+def slab_medium_dict(volume: Volume, channel: int, top_corner=(0.0, 0.0, 0.0)) -> dict:
+    """Mitsuba ``heterogeneous`` medium equal to one channel of ``volume`` (grey, unscaled, mm⁻¹).
+
+    The volume's box spans x from ``top_corner[0]``, y from ``top_corner[1]`` and
+    z downwards from ``top_corner[2]`` (slabs: the origin; objects: (lo.x, lo.y, hi.z)).
+    """
     mi = mitsuba()
     W, H, T = volume.size_mm
-    box = mi.ScalarTransform4f().translate([0.0, 0.0, -T]) @ mi.ScalarTransform4f().scale([W, H, T])
+    x0, y0, z_top = (float(v) for v in top_corner)
+    box = mi.ScalarTransform4f().translate([x0, y0, z_top - T]) @ mi.ScalarTransform4f().scale([W, H, T])
     sigma_t = volume.sigma_t[..., channel].astype(np.float64)
     albedo = np.divide(volume.sigma_s[..., channel], sigma_t, out=np.zeros_like(sigma_t), where=sigma_t > 0)
     return {"type": "heterogeneous", "sigma_t": _grid_dict(sigma_t, box), "albedo": _grid_dict(albedo, box),

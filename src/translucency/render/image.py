@@ -1,0 +1,162 @@
+r"""Pictures of an object: ours (per-vertex radiance drawn by Mitsuba) and the path-traced reference.
+
+* **ours**: the mesh carries the radiance per vertex (:mod:`.transport`) as an
+  attribute; Mitsuba draws it as an area emitter with a ``mesh_attribute``
+  radiance (linearly interpolated over each triangle) through the camera —
+  so the picture costs one rasterising pass, not a light-transport simulation.
+* **reference**: the same object, volume, light and camera rendered by Mitsuba's
+  ``volpath`` (index-matched boundary, heterogeneous medium over the bounding
+  box, one grey channel at a time as in :mod:`translucency.acquire.reference`).
+* **comparison**: relative RMSE over the pixels the object covers, and FLIP
+  (NVIDIA's perceptual difference, PyPI ``flip-evaluator``) on tone-mapped images.
+
+Units: radiance in W/(mm² sr) for the lights' W/sr (point) or W/mm² (directional).
+"""
+
+from __future__ import annotations
+
+import tempfile
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .._validate import TranslucencyError
+from ..acquire._engine import mitsuba
+from .transport import DirectionalLight, PointLight
+
+
+@dataclass(frozen=True)
+class Camera:
+    """A perspective camera (mm, degrees); ``looking_at`` frames an object."""
+
+    origin: tuple
+    target: tuple
+    up: tuple = (0.0, 0.0, 1.0)
+    fov: float = 35.0
+    width: int = 320
+    height: int = 240
+
+    @classmethod
+    def looking_at(cls, mesh, direction=(1.0, -1.6, 0.7), width: int = 320, height: int = 240) -> "Camera":
+        centre = mesh.bounds.mean(axis=0)
+        d = np.asarray(direction, dtype=float) / np.linalg.norm(direction)
+        dist = 1.9 * float(np.linalg.norm(mesh.extents))
+        return cls(tuple(centre + dist * d), tuple(centre), (0.0, 0.0, 1.0), 35.0, width, height)
+
+    def sensor_dict(self, spp: int) -> dict:
+        mi = mitsuba()
+        return {"type": "perspective", "fov": self.fov,
+                "to_world": mi.ScalarTransform4f().look_at(origin=list(self.origin), target=list(self.target),
+                                                           up=list(self.up)),
+                "film": {"type": "hdrfilm", "width": self.width, "height": self.height, "rfilter": {"type": "box"},
+                         "pixel_format": "rgb"},
+                "sampler": {"type": "independent", "sample_count": int(spp)}}
+
+
+def _write_ply(path: Path, vertices: np.ndarray, faces: np.ndarray, colour: np.ndarray | None = None) -> None:
+    """A binary PLY with float positions and (optionally) float r, g, b per vertex (Mitsuba's vertex_color)."""
+    props = "property float x\nproperty float y\nproperty float z\n"
+    cols = [vertices]
+    if colour is not None:
+        props += "property float r\nproperty float g\nproperty float b\n"
+        cols.append(colour)
+    head = (f"ply\nformat binary_little_endian 1.0\nelement vertex {len(vertices)}\n{props}"
+            f"element face {len(faces)}\nproperty list uchar int vertex_indices\nend_header\n")
+    face = np.zeros(len(faces), dtype=[("n", "u1"), ("i", "<i4", 3)])
+    face["n"], face["i"] = 3, faces
+    with open(path, "wb") as f:
+        f.write(head.encode())
+        f.write(np.concatenate(cols, axis=1).astype("<f4").tobytes())
+        f.write(face.tobytes())
+
+
+def render_vertex_radiance(mesh, L: np.ndarray, camera: Camera, *, spp: int = 4) -> np.ndarray:
+    """Draw the mesh with radiance L (V, 3) per vertex through the camera; returns (H, W, 3).
+
+    Raises a one-line error when the camera sees nothing of the object.
+    """
+    mi = mitsuba()
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "object.ply"
+        _write_ply(path, np.asarray(mesh.vertices), np.asarray(mesh.faces), np.maximum(L, 0.0))
+        scene = mi.load_dict({
+            "type": "scene", "integrator": {"type": "direct"},
+            "object": {"type": "ply", "filename": str(path), "bsdf": {"type": "diffuse", "reflectance": 0.0},
+                       "emitter": {"type": "area", "radiance": {"type": "mesh_attribute", "name": "vertex_color"}}},
+            "camera": camera.sensor_dict(spp)})
+        img = np.asarray(mi.render(scene), dtype=np.float64)
+    return img
+
+
+def coverage(mesh, camera: Camera) -> np.ndarray:
+    """(H, W) bool: pixels whose centre ray hits the object."""
+    ones = np.ones((len(mesh.vertices), 3))
+    cov = render_vertex_radiance(mesh, ones, camera, spp=1)[..., 0] > 0.5
+    if not cov.any():
+        raise TranslucencyError("camera: sees nothing of the object; move it or point it at the object")
+    return cov
+
+
+def render_reference(mesh, volume, light, camera: Camera, *, spp: int = 256, seed: int = 0) -> tuple[np.ndarray, float]:
+    """The same object path-traced by Mitsuba's ``volpath``; returns (image (H, W, 3), seconds)."""
+    from ..acquire.reference import slab_medium_dict
+
+    mi = mitsuba()
+    lo, hi = mesh.bounds
+    if isinstance(light, PointLight):
+        emitter = {"type": "point", "position": list(map(float, light.position)), "intensity": float(light.intensity)}
+    elif isinstance(light, DirectionalLight):
+        emitter = {"type": "directional", "direction": list(map(float, light.direction)),
+                   "irradiance": float(light.irradiance)}
+    else:
+        raise TranslucencyError(f"light: the reference supports point and directional lights, got {light!r}")
+    t = time.perf_counter()
+    channels = []
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "object.ply"
+        _write_ply(path, np.asarray(mesh.vertices), np.asarray(mesh.faces))
+        for ch in range(3):
+            scene = mi.load_dict({
+                "type": "scene", "integrator": {"type": "volpath", "max_depth": -1, "rr_depth": 100_000},
+                "object": {"type": "ply", "filename": str(path), "bsdf": {"type": "null"},
+                           "interior": slab_medium_dict(volume, ch, (lo[0], lo[1], hi[2]))},
+                "light": emitter, "camera": camera.sensor_dict(spp)})
+            channels.append(np.asarray(mi.render(scene, seed=3 * seed + ch), dtype=np.float64)[..., ch])
+    return np.stack(channels, axis=2), time.perf_counter() - t
+
+
+def tonemap(img: np.ndarray, exposure: float) -> np.ndarray:
+    """Linear RGB × exposure → sRGB in [0, 1] (clipped)."""
+    x = np.clip(img * exposure, 0.0, 1.0)
+    return np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(x, 1 / 2.4) - 0.055)
+
+
+def compare(reference: np.ndarray, ours: np.ndarray, mask: np.ndarray) -> dict:
+    """Relative RMSE over the object's pixels and mean FLIP of the tone-mapped pair."""
+    import flip_evaluator
+
+    diff = (ours - reference)[mask]
+    rel_rmse = float(np.sqrt(np.mean(diff**2)) / np.sqrt(np.mean(reference[mask] ** 2)))
+    exposure = 0.8 / max(float(np.quantile(reference[mask], 0.99)), 1e-30)
+    ref_ldr, our_ldr = tonemap(reference, exposure), tonemap(ours, exposure)
+    flip_map, mean_flip, _ = flip_evaluator.evaluate(ref_ldr.astype(np.float32), our_ldr.astype(np.float32), "LDR")
+    return {"rel_rmse": rel_rmse, "flip_mean_object": float(np.asarray(flip_map)[mask].mean()),
+            "flip_mean_image": float(mean_flip), "exposure": exposure, "flip_map": np.asarray(flip_map)}
+
+
+def save_images(img: np.ndarray, stem: Path, exposure: float) -> tuple[Path, Path]:
+    """``stem.exr`` (linear HDR, via Mitsuba's Bitmap/OpenEXR) and ``stem.png`` (tone-mapped), atomically."""
+    from ..io.atomic import atomic_path
+
+    mi = mitsuba()
+    stem = Path(stem)
+    exr, png = stem.with_suffix(".exr"), stem.with_suffix(".png")
+    with atomic_path(exr) as tmp:
+        mi.Bitmap(img.astype(np.float32)).write(str(tmp))
+    import matplotlib.image as mpimg
+
+    with atomic_path(png) as tmp:
+        mpimg.imsave(tmp, tonemap(img, exposure))
+    return exr, png
