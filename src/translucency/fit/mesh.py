@@ -35,7 +35,7 @@ def tangent_frames(normals: np.ndarray) -> np.ndarray:
 class _MeshSource:
     """Rows of a mesh data set: 'pixels' are vertices, α lives on the vertices."""
 
-    def __init__(self, group, header):
+    def __init__(self, group, header, alpha_radius: float | None = None):
         self.group = group
         self.vertices = np.asarray(group["vertices"][...], dtype=np.float64)
         self.area = np.asarray(group["vertex_area"][...], dtype=np.float64)
@@ -45,6 +45,16 @@ class _MeshSource:
         edges = np.asarray(group["faces"][...])
         v = self.vertices
         self.pitch = float(np.mean(np.linalg.norm(v[edges[:, 0]] - v[edges[:, 1]], axis=1)))  # mean edge, mm
+        # α's statistics pooled over a disc of alpha_radius (default 3 edge lengths): a vertex is
+        # lit by few incident points, and α from its own pairs alone is mostly photon noise
+        import scipy.sparse as sp
+        from scipy.spatial import cKDTree
+
+        rad = 3 * self.pitch if alpha_radius is None else float(alpha_radius)
+        pairs = cKDTree(v).query_pairs(rad, output_type="ndarray") if rad > 0 else np.zeros((0, 2), int)
+        n = len(v)
+        ij = np.concatenate([pairs, pairs[:, ::-1], np.repeat(np.arange(n)[:, None], 2, 1)])
+        self._pool = sp.csr_matrix((np.ones(len(ij)), (ij[:, 0], ij[:, 1])), shape=(n, n))
         photons = float(header["photons"])
         self.poisson = (1.0 / (photons * np.maximum(self.area, 1e-12)))[None, :, None].astype(np.float32)
 
@@ -55,13 +65,17 @@ class _MeshSource:
         pixel = np.broadcast_to(np.arange(len(self.vertices)), r.shape)
         return y, None, valid, r, np.zeros_like(r), pixel, self.poisson, np.dtype("float32")
 
+    def smooth_alpha(self, stat: np.ndarray) -> np.ndarray:
+        return self._pool @ stat
+
     def make_alpha(self, values: np.ndarray):
         return VertexAlpha(values.copy(), self.vertices)
 
 
 def fit_mesh(path, model: str = "iso", *, n_terms: int = 3, colour: str = "per-channel",
              exclusion_mm: float | None = None, rel_sigma: float = 0.05, max_rounds: int = 3, tol: float = 1e-3,
-             chunk_points: int = 32, workers: int | None = None, progress=None) -> PlanarFit:
+             alpha_radius: float | None = None, chunk_points: int = 32, workers: int | None = None,
+             progress=None) -> PlanarFit:
     """Fit the isotropic model (or a baseline) per incident vertex of a mesh data set, with α per vertex.
 
     Parameters
@@ -72,6 +86,9 @@ def fit_mesh(path, model: str = "iso", *, n_terms: int = 3, colour: str = "per-c
         The paper fits the isotropic model on objects (no tangent directions).
     exclusion_mm : float, optional
         Vertices closer than this to x_i are left out; default half the mean edge length.
+    alpha_radius : float, optional
+        α at a vertex pools the statistics of the vertices within this distance
+        (mm; default three mean edge lengths; 0: per vertex alone).
 
     Returns
     -------
@@ -101,12 +118,13 @@ def fit_mesh(path, model: str = "iso", *, n_terms: int = 3, colour: str = "per-c
             raise TranslucencyError(f"{path}: missing array {name!r}")
     if not np.all(group["chunk_done"][...]):
         raise TranslucencyError(f"{path}: the acquisition is unfinished; resume it before fitting")
-    source = _MeshSource(group, header)
+    source = _MeshSource(group, header, alpha_radius)
     exclusion = source.pitch / 2 if exclusion_mm is None else float(exclusion_mm)
     x_i = source.vertices[source.incident]
     C = 1 if colour == "shared" and model == "iso" else 3
     options = {"model": model, "n_terms": int(n_terms), "n_directions": 1, "colour": colour, "exclusion_mm": exclusion,
                "rel_sigma": rel_sigma, "max_rounds": max_rounds, "tol": tol, "radius_step": source.pitch / 2,
+               "alpha_radius": alpha_radius,
                "geometry": "mesh"}
     request = json.dumps({"dataset": str(path.resolve()), "header": hashlib.sha256(
         json.dumps(header, sort_keys=True).encode()).hexdigest(), **options}, sort_keys=True)

@@ -302,7 +302,7 @@ def _alternate(ctx, options, request, *, max_rounds, tol, chunk_points, workers,
                 if progress:
                     progress(rnd * len(chunks) + int(state.done.sum()), total, f"round {rnd + 1}")
         # α in closed form, then the scale fixed by mean α = 1
-        _update_alpha(state, model)
+        _update_alpha(state, model, getattr(ctx.source, "smooth_alpha", None))
         state.arrays["history"] = np.append(state.history, state.phi.sum())
         state.phi[:] = 0.0
         state.done[:] = False
@@ -610,8 +610,10 @@ def _warm_params(profile, r, W, Y, p0):
     return np.exp(x)
 
 
-def _update_alpha(state: _State, kind: str) -> None:
+def _update_alpha(state: _State, kind: str, smooth=None) -> None:
     num, den = state.num.sum(axis=0), state.den.sum(axis=0)  # in chunk order: deterministic
+    if smooth is not None:  # pool the statistics of neighbouring outgoing points (meshes)
+        num, den = smooth(num), smooth(den)
     seen = den > 0
     alpha = np.where(seen, num / np.where(seen, den, 1.0), 1.0)
     alpha = np.maximum(alpha, 0.0)

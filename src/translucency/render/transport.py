@@ -153,19 +153,15 @@ def transport_matrices(model, mesh, *, radius: float | None = None, r_min: float
         r_min = 0.5 * float(e.mean())
     r = np.maximum(r, r_min)
     alpha = model.alpha.values if len(model.alpha.values) == V else model.alpha.at(v)
-    # the light a vertex sends into its own area: the profile's energy within the disc of
-    # that area, 2π Σ c (1 − e^{−aR}(1 + aR))/a² (its value at r = 0 times A would count the
-    # steep near-field term, fitted only from one edge length out, as if it filled the disc)
-    R_own = np.sqrt(area / np.pi)
     mats = []
     for ch in range(3):
         cc = c[:, min(ch, c.shape[1] - 1)]
         dd = d[:, min(ch, d.shape[1] - 1)]
         prof = np.einsum("pn,pn->p", cc[i], np.exp(dd[i] * r[:, None])) * s[i, ch]
         vals = area[i] / np.pi * alpha[o] * prof
-        aR = -dd * R_own[:, None]
-        own = 2 * np.pi * (cc * -np.expm1(-aR) - cc * aR * np.exp(-aR)) / dd**2
-        diag = alpha / np.pi * own.sum(1) * s[:, ch]
+        # the light a vertex sends into its own area, at the profile's value at r_min like the
+        # closest pairs (the integral from r = 0 would extrapolate the steepest fitted term)
+        diag = area / np.pi * alpha * np.einsum("vn,vn->v", cc, np.exp(dd * r_min)) * s[:, ch]
         mats.append(sp.csr_matrix((np.concatenate([vals, diag]).astype(np.float32),
                                    (np.concatenate([o, np.arange(V)]), np.concatenate([i, np.arange(V)]))),
                                   shape=(V, V)))
