@@ -99,7 +99,8 @@ def acquire_mesh(mesh, volume: Volume, out, *, n_points: int = 64, photons: int 
     P = len(incident)
     request = {"n_points": P, "photons": int(photons), "seed": int(seed), "chunk": int(chunk_points),
                "index_matched": bool(index_matched), "vertices": V, "faces": len(mesh.faces),
-               "volume": volume.description, "bounds": np.round(mesh.bounds, 6).tolist()}
+               "volume": volume.description, "bounds": np.round(mesh.bounds, 6).tolist(),
+               "volume_grid": {"voxel_mm": volume.voxel_mm, "size_mm": list(volume.size_mm)}}
     request = json.loads(json.dumps(request))
     out = Path(out)
     root = None

@@ -198,6 +198,7 @@ def acquire_mesh_cmd(
     seed: int = typer.Option(0, "--seed", help="Random seed."),
     g: float = typer.Option(0.0, "--g", help="Henyey-Greenstein anisotropy."),
     chunk: int = typer.Option(8, "--chunk", help="Incident points per chunk (unit of resuming)."),
+    index_matched: bool = typer.Option(False, "--index-matched", help="No Fresnel reflection at the surface."),
     overwrite: bool = typer.Option(False, "--overwrite", help="Replace a data set made with other arguments."),
 ):
     """Pencil beams at surface points of a 3D object; exits tallied per vertex (R_d in mm^-2)."""
@@ -212,7 +213,7 @@ def acquire_mesh_cmd(
     with progress() as bar:
         task = bar.add_task("acquire", total=points, item="")
         acquire_mesh(obj, vol, out, n_points=points, photons=photons, seed=seed, chunk_points=chunk,
-                     overwrite=overwrite, progress=lambda done, total: bar.update(task, completed=done, item="points"))
+                     index_matched=index_matched, overwrite=overwrite, progress=lambda done, total: bar.update(task, completed=done, item="points"))
     console.print(f"mesh data set: {out}")
 
 
@@ -224,8 +225,9 @@ def fit(
     model: str = typer.Option("iso", "--model", help="iso | aniso | dipole | burley."),
     terms: int = typer.Option(3, "--terms", "-n", help="Exponential terms n per profile (1-4)."),
     directions: int = typer.Option(8, "--directions", "-m", help="Directions m of the anisotropic model."),
-    colour: str = typer.Option("per-channel", "--colour",
-                               help="shared: the paper's (1, s_g, s_b) scale of one fall-off; per-channel: one fall-off per channel."),
+    colour: str = typer.Option(None, "--colour",
+                               help="shared: the paper's (1, s_g, s_b) scale of one fall-off; per-channel: one fall-off "
+                                    "per channel. Default: per-channel on planar data, shared on meshes."),
     exclusion: float = typer.Option(None, "--exclusion", help="Ignore pixels closer than this to x_i, mm (default one pixel)."),
     rounds: int = typer.Option(3, "--rounds", help="Most alternation rounds (parameters, then alpha)."),
     chunk: int = typer.Option(128, "--chunk", help="Incident points read and fitted together."),
@@ -239,6 +241,10 @@ def fit(
     from ..io.dataset import open_dataset
     from ..io.model_file import save_model
 
+    if _is_mesh_dataset(data):
+        check_fit_options(model, terms, 1, colour or "shared")
+        return _fit_mesh_cmd(data, out, model, terms, colour or "shared", exclusion, rounds, float16)
+    colour = colour or "per-channel"
     check_fit_options(model, terms, directions, colour)
     ds = open_dataset(data)
     ckpt = out.with_name(out.name + ".partial.npz")
@@ -259,6 +265,74 @@ def fit(
                           f"(all masked, NaN or zero) and are flagged in the model: "
                           f"{np.flatnonzero(result.flagged)[:10].tolist()}…")
     console.print(f"model: {path} ({result.seconds:.1f} s, {len(result.history)} rounds)")
+
+
+def _is_mesh_dataset(path: Path) -> bool:
+    from ..acquire.mesh import HEADER_KEY
+
+    meta = path / "zarr.json"
+    return meta.exists() and HEADER_KEY in meta.read_text()[:100_000]
+
+
+def _fit_mesh_cmd(data, out, model, terms, colour, exclusion, rounds, float16):
+    from ..fit.mesh import fit_mesh
+    from ..io.model_file import save_model
+
+    with progress() as bar:
+        task = bar.add_task(f"fit {model} per vertex", total=None, item="")
+        result = fit_mesh(data, model, n_terms=terms, colour=colour, exclusion_mm=exclusion, max_rounds=rounds,
+                          progress=lambda done, total, msg: bar.update(task, completed=done, total=total or None,
+                                                                       item=msg))
+    meta = {"dataset": str(Path(data).resolve()), "fit": result.options, "objective_per_round": result.history,
+            "seconds": round(result.seconds, 2), "flagged_points": np.flatnonzero(result.flagged).tolist()}
+    path = save_model(result.model, out, dtype="float16" if float16 else "float32", meta=meta)
+    console.print(f"model: {path} ({result.seconds:.1f} s, {len(result.history)} rounds, mesh of "
+                  f"{len(result.model.alpha.values):,} vertices)")
+
+
+@app.command()
+@user_errors
+def render(
+    model: Path = typer.Argument(..., help="A per-vertex model file (translucency fit on a mesh data set)."),
+    out: Path = typer.Option(Path("render"), "--out", "-o", help="Directory for ours.exr/.png (and the reference)."),
+    light: list[str] = typer.Option(None, "--light",
+                                    help="point:x,y,z[,I] or directional:dx,dy,dz[,E] (repeatable; mm, W/sr, W/mm^2)."),
+    view: str = typer.Option("1,-1.6,0.7", "--view", help="Camera direction from the object's centre, x,y,z."),
+    size: tuple[int, int] = typer.Option((320, 240), "--size", help="Image width and height in pixels."),
+    reference: bool = typer.Option(False, "--reference", help="Also path-trace the reference (Mitsuba volpath) and compare."),
+    spp: int = typer.Option(32, "--spp", help="Samples per pixel of the reference."),
+    radius: float = typer.Option(None, "--radius", help="Transport truncation radius, mm (default: 99% energy)."),
+):
+    """Relight a fitted object: irradiance per vertex, sparse transport, a picture through Mitsuba (EXR + PNG)."""
+    from ..io.model_file import ModelFileError, load_model, read_header
+    from ..render.figure import figure2, object_from_dataset, volume_of_dataset
+    from ..render.image import Camera
+    from ..render.transport import parse_light
+
+    try:
+        m = load_model(model)
+        header = read_header(model)
+    except ModelFileError as exc:
+        raise TranslucencyError(str(exc)) from None
+    if m.geometry != "mesh":
+        raise TranslucencyError(f"{model}: a planar model; render needs a per-vertex model of a mesh data set")
+    mesh, dheader = object_from_dataset(header.get("meta", {}).get("dataset", ""))
+    try:
+        direction = [float(v) for v in view.split(",")]
+        assert len(direction) == 3 and np.linalg.norm(direction) > 0
+    except (ValueError, AssertionError):
+        raise TranslucencyError(f"--view: expected three numbers x,y,z not all zero, got {view!r}") from None
+    lights = [parse_light(t) for t in (light or ["point:60,-80,120,2e4"])]
+    if len(lights) > 1:
+        raise TranslucencyError("--light: one light per render for now (run once per light)")
+    cam = Camera.looking_at(mesh, direction, *size)
+    vol = volume_of_dataset(mesh, dheader) if reference else None
+    res = figure2(m, mesh, lights[0], out, volume=vol, camera=cam, spp_reference=spp, radius=radius)
+    table = Table(title=f"render of {model.name}", show_header=False)
+    for k, v in res.items():
+        table.add_row(k, f"{v:.4g}" if isinstance(v, float) else str(v))
+    console.print(table)
+    console.print(f"images: {out}")
 
 
 @app.command()

@@ -72,7 +72,7 @@ class _MeshSource:
         return VertexAlpha(values.copy(), self.vertices)
 
 
-def fit_mesh(path, model: str = "iso", *, n_terms: int = 3, colour: str = "per-channel",
+def fit_mesh(path, model: str = "iso", *, n_terms: int = 3, colour: str = "shared",
              exclusion_mm: float | None = None, rel_sigma: float = 0.05, max_rounds: int = 3, tol: float = 1e-3,
              alpha_radius: float | None = None, chunk_points: int = 32, workers: int | None = None,
              progress=None) -> PlanarFit:
@@ -84,6 +84,10 @@ def fit_mesh(path, model: str = "iso", *, n_terms: int = 3, colour: str = "per-c
         A mesh data set (:func:`translucency.acquire.mesh.acquire_mesh`).
     model : {"iso", "dipole", "burley"}
         The paper fits the isotropic model on objects (no tangent directions).
+    colour : {"shared", "per-channel"}
+        Default: the paper's colour scale — per-channel fall-offs fitted from a
+        few thousand photons per vertex neighbourhood disagree between channels
+        and show as coloured patches in renderings.
     exclusion_mm : float, optional
         Vertices closer than this to x_i are left out; default half the mean edge length.
     alpha_radius : float, optional

@@ -142,8 +142,10 @@ def compare(reference: np.ndarray, ours: np.ndarray, mask: np.ndarray) -> dict:
     exposure = 0.8 / max(float(np.quantile(reference[mask], 0.99)), 1e-30)
     ref_ldr, our_ldr = tonemap(reference, exposure), tonemap(ours, exposure)
     flip_map, mean_flip, _ = flip_evaluator.evaluate(ref_ldr.astype(np.float32), our_ldr.astype(np.float32), "LDR")
-    return {"rel_rmse": rel_rmse, "flip_mean_object": float(np.asarray(flip_map)[mask].mean()),
-            "flip_mean_image": float(mean_flip), "exposure": exposure, "flip_map": np.asarray(flip_map)}
+    fm = np.asarray(flip_map, dtype=np.float64)
+    fm = fm[..., 0] if fm.ndim == 3 else fm  # the per-pixel error (a grey image)
+    return {"rel_rmse": rel_rmse, "flip_mean_object": float(fm[mask].mean()),
+            "flip_mean_image": float(mean_flip), "exposure": exposure, "flip_map": fm}
 
 
 def save_images(img: np.ndarray, stem: Path, exposure: float) -> tuple[Path, Path]:

@@ -102,8 +102,14 @@ def vertex_irradiance(mesh, scene, light) -> np.ndarray:
 
 
 def vertex_parameters(model, vertices: np.ndarray, k: int = 4):
-    """c, d (V, C, n) and the colour scale (V, 3) at every vertex: inverse-distance weights of the
-    k nearest incident points (exact at the incident points themselves)."""
+    """Each vertex's profile as a blend of the k nearest incident points' profiles.
+
+    Inverse-square-distance weights :math:`w_j` (exact at an incident point):
+    :math:`P_v(r) = \sum_j w_j P_j(r)`, itself a sum of k·n exponentials —
+    so c, d of shape (V, C, k·n) are returned (with the colour scale (V, 3)).
+    Blending the profiles, not their parameters: the average of two exponentials'
+    rates and amplitudes is a third exponential unlike either.
+    """
     from scipy.spatial import cKDTree
 
     if model.kind != "exponential" or model.n_directions != 1:
@@ -116,14 +122,19 @@ def vertex_parameters(model, vertices: np.ndarray, k: int = 4):
     w[exact] = 0.0
     w[exact, 0] = 1.0
     w /= w.sum(1, keepdims=True)
-    c = np.einsum("vk,vkcn->vcn", w, model.c[idx][:, :, :, 0])
-    d = np.einsum("vk,vkcn->vcn", w, model.d[idx][:, :, :, 0])
-    s = np.einsum("vk,vkc->vc", w, model.colour_scale[idx])
+    V, C, n = len(vertices), model.c.shape[1], model.n_terms
+    cs = model.c[idx][:, :, :, 0] * model.colour_scale[idx][:, :, :C, None] if C == 3 else model.c[idx][:, :, :, 0]
+    c = (w[:, :, None, None] * cs).transpose(0, 2, 1, 3).reshape(V, C, k * n)
+    d = model.d[idx][:, :, :, 0].transpose(0, 2, 1, 3).reshape(V, C, k * n)
+    if C == 1:  # shared colour: blend the scales with the same weights (exact where one point dominates)
+        s = np.einsum("vk,vkc->vc", w, model.colour_scale[idx])
+    else:
+        s = np.ones((V, 3))
     return c, d, s
 
 
 def transport_matrices(model, mesh, *, radius: float | None = None, r_min: float | None = None,
-                       max_pairs: float = 6e7):
+                       max_pairs: float = 2.5e7):
     """The sparse matrices T (one per channel, V × V) of the module docstring.
 
     ``radius`` defaults to the model's 99 % energy radius (largest over points and channels).
@@ -140,7 +151,13 @@ def transport_matrices(model, mesh, *, radius: float | None = None, r_min: float
 
     area = vertex_areas(mesh)
     c, d, s = vertex_parameters(model, v)
-    rad = float(np.max(model.energy_radius(0.99))) if radius is None else float(radius)
+    if radius is None:
+        # the 99 % energy radius, or less where the pairs would not fit in memory:
+        # pairs ≈ V² π r² / (surface area)
+        fit_pairs = np.sqrt(0.5 * max_pairs * mesh.area / (np.pi * V**2))
+        rad = float(min(np.max(model.energy_radius(0.99)), fit_pairs))
+    else:
+        rad = float(radius)
     pairs = cKDTree(v).query_pairs(rad, output_type="ndarray")
     if 2 * len(pairs) + V > max_pairs:
         raise TranslucencyError(f"radius: {rad:.2f} mm gives {2 * len(pairs) + V:,} vertex pairs; lower --radius")
