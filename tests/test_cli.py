@@ -84,6 +84,14 @@ def test_demo_fits_the_embedded_measurement(demo_out):
         assert load_model(tmp_path / "fits" / f"{label}.model.zip").n_points == 1024
 
 
+def test_demo_makes_figure_2(demo_out):
+    fig = json.loads((demo_out / "report" / "figure2.json").read_text())
+    # the fitted pig beside its volpath reference: close, not equal (measured 0.53 / 0.46)
+    assert fig["rel_rmse"] < 0.8 and fig["flip_mean_object"] < 0.6
+    assert load_model(demo_out / "fits" / "pig_iso.model.zip").geometry == "mesh"
+    assert (demo_out / "report" / "figure2.png").stat().st_size > 10_000
+
+
 def test_acquire_planar_cli(tmp_path):
     out = tmp_path / "m.zarr"
     args = ["acquire", "planar", "--material", "marble", "--out", str(out), "--grid", "2", "--photons", "500",

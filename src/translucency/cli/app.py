@@ -62,7 +62,7 @@ def demo(
     from ..pipeline import DEMO_FITS, run_demo
 
     with progress() as bar:
-        task = bar.add_task("demo", total=len(MATERIALS) + len(DEMO_FITS) + 2, item="")
+        task = bar.add_task("demo", total=len(MATERIALS) + len(DEMO_FITS) + 3, item="")
 
         def step(name):
             bar.update(task, advance=1, item=name)

@@ -80,7 +80,9 @@ def vertex_irradiance(mesh, scene, light) -> np.ndarray:
     n = np.asarray(mesh.vertex_normals, dtype=np.float64)
     if isinstance(light, PointLight):
         p = np.asarray(light.position, dtype=np.float64)
-        if mesh.contains(p[None])[0]:
+        # inside a closed, outward-oriented surface a ray first meets a face from its back
+        probe = scene.ray_intersect(mi.Ray3f(mi.Point3f(*map(float, p)), mi.Vector3f(0.5773, 0.5774, 0.5773)))
+        if bool(probe.is_valid()[0]) and float(np.asarray(probe.n.x)[0] * 0.5773 + np.asarray(probe.n.y)[0] * 0.5774 + np.asarray(probe.n.z)[0] * 0.5773) > 0:
             raise TranslucencyError(f"light: the point light at {tuple(p)} mm is inside the object")
         to = p - v
         dist = np.linalg.norm(to, axis=1)
@@ -102,7 +104,7 @@ def vertex_irradiance(mesh, scene, light) -> np.ndarray:
 
 
 def vertex_parameters(model, vertices: np.ndarray, k: int = 4):
-    """Each vertex's profile as a blend of the k nearest incident points' profiles.
+    r"""Each vertex's profile as a blend of the k nearest incident points' profiles.
 
     Inverse-square-distance weights :math:`w_j` (exact at an incident point):
     :math:`P_v(r) = \sum_j w_j P_j(r)`, itself a sum of k·n exponentials —

@@ -1,0 +1,133 @@
+"""Rendering fitted objects: the sparse transport against a plain double loop, irradiance and shadows,
+bad lights and cameras, and the Mitsuba picture of per-vertex radiance."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import trimesh
+
+from translucency._validate import TranslucencyError
+from translucency.acquire.mesh import vertex_areas
+from translucency.acquire.mesh_walk import mesh_scene
+from translucency.fit.mesh import tangent_frames
+from translucency.model import ExponentialModel, VertexAlpha
+from translucency.render import (Camera, DirectionalLight, PointLight, parse_light, relight_vertices,
+                                 render_vertex_radiance, transport_matrices, vertex_irradiance)
+from translucency.render.image import coverage
+
+
+@pytest.fixture(scope="module")
+def ball():
+    return trimesh.creation.icosphere(2, radius=5.0)
+
+
+def _model_on(mesh, rng, points):
+    x_i = mesh.vertices[points]
+    c = np.stack([rng.uniform(0.2, 0.5, len(points)), rng.uniform(0.01, 0.05, len(points))], 1)[:, None, None, :]
+    d = -np.stack([rng.uniform(2, 3, len(points)), rng.uniform(0.3, 0.6, len(points))], 1)[:, None, None, :]
+    alpha = VertexAlpha(rng.uniform(0.8, 1.2, len(mesh.vertices)), mesh.vertices)
+    return ExponentialModel(x_i, c, d, alpha, s_g=rng.uniform(0.5, 1, len(points)), s_b=rng.uniform(0.2, 0.5, len(points)),
+                            frame=tangent_frames(mesh.vertex_normals[points]))
+
+
+def test_transport_equals_a_plain_double_loop(ball):
+    """T E against Σ_i A_i E_i R_d(x_i, x_o)/π evaluated pair by pair with every vertex an incident point."""
+    rng = np.random.default_rng(1)
+    V = len(ball.vertices)
+    model = _model_on(ball, rng, np.arange(V))
+    r_min = 0.3
+    mats = transport_matrices(model, ball, radius=4.0, r_min=r_min)
+    E = rng.uniform(0, 1, V)
+    L = relight_vertices(mats, E)
+    area = vertex_areas(ball)
+    ref = np.zeros((V, 3))
+    for o in range(V):
+        for i in range(V):
+            r = np.linalg.norm(ball.vertices[o] - ball.vertices[i])
+            if r > 4.0:
+                continue
+            prof = (model.c[i, 0, 0] * np.exp(model.d[i, 0, 0] * max(r, r_min))).sum() * model.colour_scale[i]
+            ref[o] += area[i] * E[i] * model.alpha.values[o] * prof / np.pi
+    np.testing.assert_allclose(L, ref, rtol=2e-5)
+
+
+def test_profiles_are_blended_not_parameters(ball):
+    """Between incident points the profile is the weighted mean of their profiles (no new exponential)."""
+    from translucency.render.transport import vertex_parameters
+
+    rng = np.random.default_rng(2)
+    model = _model_on(ball, rng, np.array([0, 5, 9, 40]))
+    c, d, s = vertex_parameters(model, ball.vertices)
+    r = np.linspace(0.5, 8, 20)
+    for v in (0, 77, 120):
+        blend = (c[v, 0][None] * np.exp(d[v, 0][None] * r[:, None])).sum(1)
+        own = [(model.c[j, 0, 0] * np.exp(model.d[j, 0, 0] * r[:, None])).sum(1) for j in range(4)]
+        assert blend.min() >= min(o.min() for o in own) * 0.999 and (blend <= np.max(own, axis=0) * 1.001).all()
+    assert np.allclose((c[0, 0][None] * np.exp(d[0, 0][None] * r[:, None])).sum(1),
+                       (model.c[0, 0, 0] * np.exp(model.d[0, 0, 0] * r[:, None])).sum(1))
+
+
+def test_irradiance_cosine_and_shadows():
+    box = trimesh.creation.box(extents=(10, 10, 10))
+    scene = mesh_scene(box)
+    E = vertex_irradiance(box, scene, DirectionalLight((0.0, 0.0, -1.0), 2.0))
+    n = box.vertex_normals
+    np.testing.assert_allclose(E, 2.0 * np.maximum(n[:, 2], 0), rtol=1e-6)
+    # a second box between the light and the first one casts a shadow
+    two = trimesh.util.concatenate([box, trimesh.creation.box(extents=(30, 30, 1)).apply_translation((0, 0, 20))])
+    shadowed = vertex_irradiance(box, mesh_scene(two), DirectionalLight((0.0, 0.0, -1.0), 2.0))
+    assert shadowed.max() == 0
+    p = vertex_irradiance(box, scene, PointLight((0.0, 0.0, 50.0), 100.0))
+    top = np.argmax(box.vertices[:, 2] + 0 * box.vertices[:, 0])
+    d = np.array([0, 0, 50.0]) - box.vertices[top]
+    assert p[top] == pytest.approx(100.0 * (d / np.linalg.norm(d)) @ n[top] / (d @ d), rel=1e-6)
+
+
+def test_bad_lights_and_cameras(ball):
+    with pytest.raises(TranslucencyError, match="inside the object"):
+        vertex_irradiance(ball, mesh_scene(ball), PointLight((0.0, 0.0, 0.0)))
+    with pytest.raises(TranslucencyError, match="light:"):
+        parse_light("laser:1,2")
+    away = Camera(origin=(0.0, 0.0, 100.0), target=(0.0, 0.0, 200.0), up=(0, 1, 0), width=32, height=24)
+    with pytest.raises(TranslucencyError, match="sees nothing"):
+        coverage(ball, away)
+
+
+def test_vertex_radiance_picture(ball):
+    """A uniform radiance per vertex draws as that radiance wherever the object is seen."""
+    cam = Camera.looking_at(ball, width=48, height=36)
+    img = render_vertex_radiance(ball, np.tile([0.2, 0.4, 0.8], (len(ball.vertices), 1)), cam, spp=4)
+    seen = coverage(ball, cam)
+    assert 0.05 < seen.mean() < 0.9
+    inner = img[seen & np.roll(seen, 1, 0) & np.roll(seen, -1, 0) & np.roll(seen, 1, 1) & np.roll(seen, -1, 1)]
+    np.testing.assert_allclose(inner, np.tile([0.2, 0.4, 0.8], (len(inner), 1)), rtol=1e-4)
+    assert img[~seen].max() < 0.8
+
+
+def test_fit_and_render_cli_on_a_mesh(tmp_path):
+    from typer.testing import CliRunner
+
+    from translucency.cli.app import app
+
+    runner = CliRunner()
+    mesh = tmp_path / "ball.ply"
+    trimesh.creation.icosphere(3, radius=6.0).export(mesh)
+    data, model = tmp_path / "ball.zarr", tmp_path / "ball.model.zip"
+    res = runner.invoke(app, ["acquire", "mesh", "--out", str(data), "--mesh", str(mesh), "--material",
+                              "homogeneous:marble", "--voxel", "1", "--points", "12", "--photons", "4000",
+                              "--index-matched"])
+    assert res.exit_code == 0, res.output
+    res = runner.invoke(app, ["fit", str(data), "--out", str(model)])
+    assert res.exit_code == 0, res.output
+    res = runner.invoke(app, ["render", str(model), "--out", str(tmp_path / "r"), "--size", "64", "48",
+                              "--reference", "--spp", "8"])
+    assert res.exit_code == 0, res.output
+    import json
+
+    fig = json.loads((tmp_path / "r" / "figure2.json").read_text())
+    assert fig["rel_rmse"] < 1.0 and 0 <= fig["flip_mean_object"] < 0.8
+    for name in ("ours.exr", "ours.png", "reference.exr", "figure2.png"):
+        assert (tmp_path / "r" / name).stat().st_size > 500
+    bad = runner.invoke(app, ["render", str(model), "--light", "point:0,0,0"])
+    assert bad.exit_code == 2 and "inside the object" in bad.output
