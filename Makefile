@@ -29,6 +29,10 @@ test-all: $(STAMP)
 
 bench: $(STAMP)
 	$(PY) benchmarks/model_size.py
+	$(PY) benchmarks/photon_transport.py
+	$(PY) benchmarks/tally_vs_volpath.py
+	$(PY) benchmarks/fit_speed.py
+	$(PY) benchmarks/render_speed.py
 
 clean:
 	rm -rf $(VENV) $(OUT) .pytest_cache .hypothesis
