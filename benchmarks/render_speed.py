@@ -50,7 +50,7 @@ def main() -> None:
         times = []
         for k, pos in enumerate([(60, -80, 120), (-90, 40, 80), (10, 120, 60), (0, 0, 150)]):
             t = time.perf_counter()
-            L = relight_vertices(mats, vertex_irradiance(big, scene, PointLight(pos, 2e4)))
+            relight_vertices(mats, vertex_irradiance(big, scene, PointLight(pos, 2e4)))
             times.append(time.perf_counter() - t)
         print(f"relight: {len(big.vertices):,} vertices, {mats[0].nnz:,} nonzeros per channel; prepare {prep:.1f} s "
               f"(once); per light {1000 * np.median(times[1:]):.0f} ms median (first {1000 * times[0]:.0f} ms; "

@@ -6,7 +6,7 @@ import pytest
 
 from translucency import TranslucencyError
 from translucency.acquire import PlanarSetup, Volume, acquire_planar, load_volume, make_sample
-from translucency.acquire.transport import OTHER_FACE, TOP, random_walk
+from translucency.acquire.transport import TOP, random_walk
 from translucency.io.dataset import open_dataset
 from translucency.model import dipole_R_d, material
 

@@ -26,7 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from ._engine import mitsuba
-from .transport import ABSORBED, ACTIVE, KILLED, _hg_sample
+from .transport import ABSORBED, ACTIVE, KILLED, _hg_sample, _walk_setup
 from .volume import Volume
 
 EXIT = 1  # left through the surface
@@ -86,15 +86,7 @@ def mesh_random_walk(scene, bounds: np.ndarray, volume: Volume, channel: int, en
     eta = 1.0 if index_matched else volume.eta
     eps = 1e-4 * max(h - l for h, l in zip(hi, lo))  # ray offset off the surface, mm
 
-    sigma_s = Float(np.ascontiguousarray(volume.sigma_s[..., channel]).ravel())
-    sigma_t = Float(np.ascontiguousarray(volume.sigma_t[..., channel]).ravel())
-    majorant = float(volume.majorant()[channel])
-
-    idx = dr.arange(UInt32, total)
-    point = idx // n_photons
-    global_id = mi.UInt64(idx) + mi.UInt64(first_point * n_photons)
-    initstate = (int(seed) * 0x9E3779B97F4A7C15 + 0x853C49E6748FEA9B) % 2**64
-    rng = mi.PCG32(size=total, initstate=mi.UInt64(initstate), initseq=global_id)
+    sigma_s, sigma_t, majorant, point, rng = _walk_setup(mi, dr, volume, channel, total, n_photons, seed, first_point)
 
     # -- entry: Fresnel at normal incidence, then straight in along −n --------------------
     F_in = float(mi.fresnel(Float(1.0), Float(eta))[0][0]) if eta != 1.0 else 0.0

@@ -71,6 +71,21 @@ def _hg_sample(mi, dr, d, g: float, u1, u2):
     return mi.Frame3f(d).to_world(local)
 
 
+def _walk_setup(mi, dr, volume: Volume, channel: int, total: int, n_photons: int, seed: int, first_point: int):
+    """What every walk starts from: the channel's per-voxel σ_s and σ_t (flattened z, y, x), the
+    majorant, each lane's entry point, and one PCG32 stream per global photon number."""
+    Float = mi.Float
+    sigma_s = Float(np.ascontiguousarray(volume.sigma_s[..., channel]).ravel())
+    sigma_t = Float(np.ascontiguousarray(volume.sigma_t[..., channel]).ravel())
+    majorant = float(volume.majorant()[channel])
+    idx = dr.arange(mi.UInt32, total)
+    point = idx // n_photons
+    global_id = mi.UInt64(idx) + mi.UInt64(first_point * n_photons)
+    initstate = (int(seed) * 0x9E3779B97F4A7C15 + 0x853C49E6748FEA9B) % 2**64
+    rng = mi.PCG32(size=total, initstate=mi.UInt64(initstate), initseq=global_id)
+    return sigma_s, sigma_t, majorant, point, rng
+
+
 def random_walk(volume: Volume, channel: int, entry_xy: np.ndarray, n_photons: int, *, seed: int = 0,
                 first_point: int = 0, theta_inc_deg: float = 0.0, index_matched: bool = False,
                 max_steps: int = 200_000) -> WalkResult:
@@ -105,7 +120,7 @@ def random_walk(volume: Volume, channel: int, entry_xy: np.ndarray, n_photons: i
     mi = mitsuba()
     import drjit as dr
 
-    Float, UInt32, Bool = mi.Float, mi.UInt32, mi.Bool
+    Float, UInt32 = mi.Float, mi.UInt32
     n_pts = len(entry_xy)
     total = n_pts * n_photons
     W, H, T = volume.size_mm
@@ -113,16 +128,7 @@ def random_walk(volume: Volume, channel: int, entry_xy: np.ndarray, n_photons: i
     vox = volume.voxel_mm
     eta = 1.0 if index_matched else volume.eta
 
-    # per-voxel coefficients of this channel, flattened (z, y, x)
-    sigma_s = Float(np.ascontiguousarray(volume.sigma_s[..., channel]).ravel())
-    sigma_t = Float(np.ascontiguousarray(volume.sigma_t[..., channel]).ravel())
-    majorant = float(volume.majorant()[channel])
-
-    idx = dr.arange(UInt32, total)
-    point = idx // n_photons
-    global_id = mi.UInt64(idx) + mi.UInt64(first_point * n_photons)
-    initstate = (int(seed) * 0x9E3779B97F4A7C15 + 0x853C49E6748FEA9B) % 2**64
-    rng = mi.PCG32(size=total, initstate=mi.UInt64(initstate), initseq=global_id)
+    sigma_s, sigma_t, majorant, point, rng = _walk_setup(mi, dr, volume, channel, total, n_photons, seed, first_point)
 
     # -- entry: Fresnel at the top face, then refraction (Snell) -----------------------
     th = np.radians(theta_inc_deg)

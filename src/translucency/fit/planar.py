@@ -252,7 +252,6 @@ def fit_planar(dataset, model: str = "iso", *, n_terms: int = 3, n_directions: i
     m = int(n_directions) if model == "aniso" else 1
     n = int(n_terms)
     C = 1 if (colour == "shared" and model in ("iso", "aniso")) else 3
-    P = ds.n_points
     x_i = ds["x_i"].astype(np.float64)
     origin = ds["window_origin"].astype(np.float64)
     grid = SampleGrid.covering(origin, pitch, ds.window)
