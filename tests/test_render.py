@@ -131,3 +131,26 @@ def test_fit_and_render_cli_on_a_mesh(tmp_path):
         assert (tmp_path / "r" / name).stat().st_size > 500
     bad = runner.invoke(app, ["render", str(model), "--light", "point:0,0,0"])
     assert bad.exit_code == 2 and "inside the object" in bad.output
+
+
+def test_spot_and_environment_irradiance(ball):
+    from translucency.render import EnvironmentLight, SpotLight
+
+    scene = mesh_scene(ball)
+    pos = (0.0, 0.0, 40.0)
+    point = vertex_irradiance(ball, scene, PointLight(pos, 100.0))
+    spot = vertex_irradiance(ball, scene, SpotLight(pos, (0.0, 0.0, 0.0), 6.0, 100.0))
+    theta = np.degrees(np.arccos((np.array(pos) - ball.vertices)[:, 2] / np.linalg.norm(np.array(pos) - ball.vertices, axis=1)))
+    inner, outer = theta < 0.75 * 6.0 - 0.01, theta > 6.0
+    np.testing.assert_allclose(spot[inner], point[inner], rtol=1e-9)
+    assert (spot[outer] == 0).all() and inner.any() and outer.any() and (spot <= point + 1e-12).all()
+    # a convex object sees the whole sky from every vertex: E = π L exactly
+    env = vertex_irradiance(ball, scene, EnvironmentLight(0.3, samples=16))
+    np.testing.assert_allclose(env, np.pi * 0.3, rtol=1e-12)
+    # under a plate, the box's top sees no sky straight up: less than π L
+    box = trimesh.creation.box(extents=(10, 10, 10))
+    two = trimesh.util.concatenate([box, trimesh.creation.box(extents=(200, 200, 1)).apply_translation((0, 0, 7))])
+    shaded = vertex_irradiance(box, mesh_scene(two), EnvironmentLight(0.3, samples=256))
+    top = box.vertex_normals[:, 2] > 0.5
+    assert (shaded[top] < 0.5 * np.pi * 0.3).all()
+    assert isinstance(parse_light("spot:0,0,40,0,0,0,10"), SpotLight) and isinstance(parse_light("env:0.2"), EnvironmentLight)

@@ -296,7 +296,7 @@ def render(
     model: Path = typer.Argument(..., help="A per-vertex model file (translucency fit on a mesh data set)."),
     out: Path = typer.Option(Path("render"), "--out", "-o", help="Directory for ours.exr/.png (and the reference)."),
     light: list[str] = typer.Option(None, "--light",
-                                    help="point:x,y,z[,I] or directional:dx,dy,dz[,E] (repeatable; mm, W/sr, W/mm^2)."),
+                                    help="point:x,y,z[,I] | directional:dx,dy,dz[,E] | spot:x,y,z,tx,ty,tz,cutoff_deg[,I] | env:L (mm, W/sr, W/mm^2, W/(mm^2 sr))."),
     view: str = typer.Option("1,-1.6,0.7", "--view", help="Camera direction from the object's centre, x,y,z."),
     size: tuple[int, int] = typer.Option((320, 240), "--size", help="Image width and height in pixels."),
     reference: bool = typer.Option(False, "--reference", help="Also path-trace the reference (Mitsuba volpath) and compare."),

@@ -1,7 +1,8 @@
 """Rendering fitted objects: irradiance per vertex, sparse transport, Mitsuba pictures, the volpath reference."""
 
 from .image import Camera, compare, render_reference, render_vertex_radiance, save_images
-from .transport import DirectionalLight, PointLight, parse_light, relight_vertices, transport_matrices, vertex_irradiance
+from .transport import (DirectionalLight, EnvironmentLight, PointLight, SpotLight, parse_light, relight_vertices,
+                        transport_matrices, vertex_irradiance)
 
 __all__ = ["Camera", "compare", "render_reference", "render_vertex_radiance", "save_images", "DirectionalLight",
-           "PointLight", "parse_light", "relight_vertices", "transport_matrices", "vertex_irradiance"]
+           "EnvironmentLight", "SpotLight", "PointLight", "parse_light", "relight_vertices", "transport_matrices", "vertex_irradiance"]

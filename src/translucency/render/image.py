@@ -24,7 +24,14 @@ import numpy as np
 
 from .._validate import TranslucencyError
 from ..acquire._engine import mitsuba
-from .transport import DirectionalLight, PointLight
+from .transport import DirectionalLight, EnvironmentLight, PointLight, SpotLight
+
+
+def _up_for(origin, target) -> list:
+    """An up vector not parallel to the viewing axis."""
+    axis = np.asarray(target, float) - np.asarray(origin, float)
+    up = np.array([0.0, 0.0, 1.0]) if abs(axis[2]) < 0.99 * np.linalg.norm(axis) else np.array([0.0, 1.0, 0.0])
+    return up.tolist()
 
 
 @dataclass(frozen=True)
@@ -110,8 +117,16 @@ def render_reference(mesh, volume, light, camera: Camera, *, spp: int = 256, see
     elif isinstance(light, DirectionalLight):
         emitter = {"type": "directional", "direction": list(map(float, light.direction)),
                    "irradiance": float(light.irradiance)}
+    elif isinstance(light, SpotLight):
+        emitter = {"type": "spot", "intensity": float(light.intensity), "cutoff_angle": float(light.cutoff_deg),
+                   "beam_width": 0.75 * float(light.cutoff_deg),
+                   "to_world": mi.ScalarTransform4f().look_at(origin=list(map(float, light.position)),
+                                                              target=list(map(float, light.target)),
+                                                              up=_up_for(light.position, light.target))}
+    elif isinstance(light, EnvironmentLight):
+        emitter = {"type": "constant", "radiance": float(light.radiance)}
     else:
-        raise TranslucencyError(f"light: the reference supports point and directional lights, got {light!r}")
+        raise TranslucencyError(f"light: no reference for {light!r}")
     t = time.perf_counter()
     channels = []
     with tempfile.TemporaryDirectory() as tmp:

@@ -45,8 +45,36 @@ class DirectionalLight:
     irradiance: float = 1.0
 
 
+@dataclass(frozen=True)
+class SpotLight:
+    """A point light at ``position`` aimed at ``target`` (mm), intensity I (W/sr) inside a cone.
+
+    Mitsuba's falloff: full intensity within ``0.75 cutoff``, falling linearly in angle to 0 at ``cutoff``.
+    """
+
+    position: tuple
+    target: tuple
+    cutoff_deg: float = 20.0
+    intensity: float = 1.0e4
+
+    def falloff(self, w_from_light: np.ndarray) -> np.ndarray:
+        axis = np.asarray(self.target, float) - np.asarray(self.position, float)
+        axis /= np.linalg.norm(axis)
+        theta = np.degrees(np.arccos(np.clip(w_from_light @ axis, -1.0, 1.0)))
+        inner = 0.75 * self.cutoff_deg
+        return np.clip((self.cutoff_deg - theta) / (self.cutoff_deg - inner), 0.0, 1.0)
+
+
+@dataclass(frozen=True)
+class EnvironmentLight:
+    """Uniform radiance L (W/(mm² sr)) from every direction (a constant environment)."""
+
+    radiance: float = 0.1
+    samples: int = 64  # cosine-weighted visibility rays per vertex
+
+
 def parse_light(text: str):
-    """``point:x,y,z[,I]`` or ``directional:dx,dy,dz[,E]`` → a light.
+    """``point:x,y,z[,I]``, ``directional:dx,dy,dz[,E]``, ``spot:x,y,z,tx,ty,tz,cutoff_deg[,I]`` or ``env:L``.
 
     Examples
     --------
@@ -65,7 +93,12 @@ def parse_light(text: str):
         if not np.linalg.norm(d) > 0:
             raise TranslucencyError("light: a directional light needs a non-zero direction")
         return DirectionalLight(tuple(d / np.linalg.norm(d)), *(v[3:] or []))
-    raise TranslucencyError(f"light: expected point:x,y,z[,I] or directional:dx,dy,dz[,E], got {text!r}")
+    if kind == "spot" and len(v) in (7, 8) and 0 < v[6] < 90:
+        return SpotLight(tuple(v[:3]), tuple(v[3:6]), *v[6:])
+    if kind == "env" and len(v) == 1 and v[0] >= 0:
+        return EnvironmentLight(v[0])
+    raise TranslucencyError("light: expected point:x,y,z[,I], directional:dx,dy,dz[,E], "
+                            f"spot:x,y,z,tx,ty,tz,cutoff_deg[,I] or env:L, got {text!r}")
 
 
 def vertex_irradiance(mesh, scene, light) -> np.ndarray:
@@ -78,7 +111,9 @@ def vertex_irradiance(mesh, scene, light) -> np.ndarray:
     mi = mitsuba()
     v = np.asarray(mesh.vertices, dtype=np.float64)
     n = np.asarray(mesh.vertex_normals, dtype=np.float64)
-    if isinstance(light, PointLight):
+    if isinstance(light, EnvironmentLight):
+        return _environment_irradiance(mi, mesh, scene, light)
+    if isinstance(light, (PointLight, SpotLight)):
         p = np.asarray(light.position, dtype=np.float64)
         # inside a closed, outward-oriented surface a ray first meets a face from its back
         probe = scene.ray_intersect(mi.Ray3f(mi.Point3f(*map(float, p)), mi.Vector3f(0.5773, 0.5774, 0.5773)))
@@ -88,6 +123,8 @@ def vertex_irradiance(mesh, scene, light) -> np.ndarray:
         dist = np.linalg.norm(to, axis=1)
         w = to / dist[:, None]
         E = light.intensity * np.maximum((w * n).sum(1), 0.0) / dist**2
+        if isinstance(light, SpotLight):
+            E = E * light.falloff(-w)
         t_max = dist
     else:
         w = -np.asarray(light.direction, dtype=np.float64)
@@ -101,6 +138,26 @@ def vertex_irradiance(mesh, scene, light) -> np.ndarray:
     ray.maxt = mi.Float((t_max - 10 * eps).astype(np.float32))
     blocked = np.asarray(scene.ray_test(ray))
     return np.where(blocked | (E <= 0), 0.0, E)
+
+
+def _environment_irradiance(mi, mesh, scene, light: EnvironmentLight) -> np.ndarray:
+    """E = ∫ L V(ω) cos θ dω by cosine-weighted sampling: π L × (fraction of unoccluded rays)."""
+    v = np.asarray(mesh.vertices, dtype=np.float64)
+    n = np.asarray(mesh.vertex_normals, dtype=np.float64)
+    K = int(light.samples)
+    rng = np.random.default_rng(0)
+    u1, u2 = rng.random((2, len(v), K))
+    r, phi = np.sqrt(u1), 2 * np.pi * u2
+    local = np.stack([r * np.cos(phi), r * np.sin(phi), np.sqrt(1 - u1)], axis=-1)  # cosine-weighted
+    from ..fit.mesh import tangent_frames
+
+    frame = tangent_frames(n)  # rows t, b, n
+    w = np.einsum("vkj,vji->vki", local, frame).reshape(-1, 3)
+    o = np.repeat(v + n * 5e-4 * float(np.max(mesh.extents)), K, axis=0)
+    ray = mi.Ray3f(mi.Point3f(*(o[:, j].astype(np.float32) for j in range(3))),
+                   mi.Vector3f(*(np.ascontiguousarray(w[:, j]).astype(np.float32) for j in range(3))))
+    open_sky = ~np.asarray(scene.ray_test(ray)).reshape(len(v), K)
+    return np.pi * light.radiance * open_sky.mean(axis=1)
 
 
 def vertex_parameters(model, vertices: np.ndarray, k: int = 4):
