@@ -396,7 +396,7 @@ def _load_chunk(ctx: _Context, state: _State, s: int, e: int) -> _Chunk:
     else:
         entry = ctx.cache[(s, e)]
     y, var, valid, r, theta, pixel, gid, r_g, static, poisson = entry
-    alpha = state.alpha.ravel()[pixel]
+    alpha = state.alpha.astype(np.float32).ravel()[pixel]
     return _Chunk(y, var, valid, r, theta, pixel, gid, r_g, alpha, static, poisson)
 
 
@@ -425,8 +425,9 @@ def _at_pixels(F: np.ndarray, ch: _Chunk, m: int, direction=None) -> np.ndarray:
 
 def _predict(ctx: _Context, state: _State, sl: slice, ch: _Chunk) -> np.ndarray:
     """Current P_i at every pixel of the chunk, (k, J, 3), without α."""
-    f = _at_pixels(_group_profiles(ctx, state, sl, ch.r_g), ch, ctx.m)
-    return f * state.s[sl][:, None, :] if ctx.C == 1 else f
+    # float32 at the pixels: these arrays only weight, accumulate and report (sums are in float64)
+    f = _at_pixels(_group_profiles(ctx, state, sl, ch.r_g).astype(np.float32), ch, ctx.m)
+    return f * state.s[sl][:, None, :].astype(np.float32) if ctx.C == 1 else f
 
 
 def _hat(theta, m):
@@ -476,7 +477,7 @@ def _fit_chunk(ctx: _Context, glob: _State, s: int, e: int):
     ch = _load_chunk(ctx, state, s, e)
     k = e - s
     sl = slice(0, k)
-    usable = (ch.valid.sum(axis=1) >= 2 * ctx.n + 2) & ((ch.y * ch.valid[..., None]).sum(axis=(1, 2)) > 0)
+    usable = (ch.valid.sum(axis=1) >= 2 * ctx.n + 2) & (ch.y.sum(axis=(1, 2), dtype=np.float64) > 0)  # y is 0 off valid
     state.flagged[sl] = ~usable
     if k and not state.ready[sl].all() and ctx.C == 1:  # colour scale from the window sums
         tot = ch.y.sum(axis=1)
@@ -500,7 +501,7 @@ def _fit_chunk(ctx: _Context, glob: _State, s: int, e: int):
     # Φ and the α statistics with the new parameters
     f = _predict(ctx, state, sl, ch)
     w2 = np.where(usable[:, None, None], w2, 0.0)
-    phi = float(np.sum(w2 * (ch.alpha[..., None] * f - ch.y) ** 2))
+    phi = float(np.sum(w2 * (ch.alpha[..., None] * f - ch.y) ** 2, dtype=np.float64))
     n_px = glob.alpha.size
     num = group_sums(ch.pixel[..., None], w2 * f * ch.y, n_px).reshape(glob.alpha.shape)
     den = group_sums(ch.pixel[..., None], w2 * f * f, n_px).reshape(glob.alpha.shape)
