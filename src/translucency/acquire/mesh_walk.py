@@ -26,7 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from ._engine import mitsuba
-from .transport import ABSORBED, ACTIVE, KILLED, _hg_sample, _walk_setup
+from .transport import ABSORBED, ACTIVE, KILLED, _medium_event, _walk_setup
 from .volume import Volume
 
 EXIT = 1  # left through the surface
@@ -80,8 +80,6 @@ def mesh_random_walk(scene, bounds: np.ndarray, volume: Volume, channel: int, en
 
     Float, UInt32 = mi.Float, mi.UInt32
     total = len(entry) * n_photons
-    Z, Y, X = volume.shape
-    vox = volume.voxel_mm
     lo, hi = ([float(v) for v in b] for b in np.asarray(bounds, dtype=np.float64))  # Python floats: no NumPy
     eta = 1.0 if index_matched else volume.eta
     eps = 1e-4 * max(h - l for h, l in zip(hi, lo))  # ray offset off the surface, mm
@@ -114,16 +112,8 @@ def mesh_random_walk(scene, bounds: np.ndarray, volume: Volume, channel: int, en
 
         # -- inside: real or null collision (voxel of the object-space volume) ---------------
         p_c = pos + direction * t
-        ix = dr.clip(mi.Int32(dr.floor((p_c.x - lo[0]) / vox)), 0, X - 1)
-        iy = dr.clip(mi.Int32(dr.floor((p_c.y - lo[1]) / vox)), 0, Y - 1)
-        iz = dr.clip(mi.Int32(dr.floor((hi[2] - p_c.z) / vox)), 0, Z - 1)
-        flat = UInt32((iz * Y + iy) * X + ix)
-        s_s = dr.gather(Float, sigma_s, flat, collide)
-        s_t = dr.gather(Float, sigma_t, flat, collide)
-        xi = rng.next_float32() * majorant
-        scatter = collide & (xi < s_s)
-        absorb = collide & (xi >= s_s) & (xi < s_t)
-        new_dir = _hg_sample(mi, dr, direction, volume.g, rng.next_float32(), rng.next_float32())
+        scatter, absorb, new_dir = _medium_event(mi, dr, volume, sigma_s, sigma_t, majorant, p_c.x - lo[0],
+                                                 p_c.y - lo[1], hi[2] - p_c.z, collide, rng, direction)
 
         # -- surface: Fresnel reflection (TIR included) or exit -------------------------------
         hit = active & si.is_valid() & ~collide

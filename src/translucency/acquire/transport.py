@@ -86,6 +86,28 @@ def _walk_setup(mi, dr, volume: Volume, channel: int, total: int, n_photons: int
     return sigma_s, sigma_t, majorant, point, rng
 
 
+def _medium_event(mi, dr, volume: Volume, sigma_s, sigma_t, majorant: float, gx, gy, depth, collide, rng,
+                  direction):
+    """At a tentative collision: real scattering (prob. σ_s/σ̄), absorption (σ_a/σ̄) or a null event.
+
+    ``gx, gy`` are the position from the volume's corner and ``depth`` below its top (mm); returns
+    the scatter and absorb masks and the Henyey–Greenstein direction for scattering photons.
+    """
+    Z, Y, X = volume.shape
+    vox = volume.voxel_mm
+    ix = dr.clip(mi.Int32(dr.floor(gx / vox)), 0, X - 1)
+    iy = dr.clip(mi.Int32(dr.floor(gy / vox)), 0, Y - 1)
+    iz = dr.clip(mi.Int32(dr.floor(depth / vox)), 0, Z - 1)
+    flat = mi.UInt32((iz * Y + iy) * X + ix)
+    s_s = dr.gather(mi.Float, sigma_s, flat, collide)
+    s_t = dr.gather(mi.Float, sigma_t, flat, collide)
+    xi = rng.next_float32() * majorant
+    scatter = collide & (xi < s_s)
+    absorb = collide & (xi >= s_s) & (xi < s_t)
+    new_dir = _hg_sample(mi, dr, direction, volume.g, rng.next_float32(), rng.next_float32())
+    return scatter, absorb, new_dir
+
+
 def random_walk(volume: Volume, channel: int, entry_xy: np.ndarray, n_photons: int, *, seed: int = 0,
                 first_point: int = 0, theta_inc_deg: float = 0.0, index_matched: bool = False,
                 max_steps: int = 200_000) -> WalkResult:
@@ -124,8 +146,6 @@ def random_walk(volume: Volume, channel: int, entry_xy: np.ndarray, n_photons: i
     n_pts = len(entry_xy)
     total = n_pts * n_photons
     W, H, T = volume.size_mm
-    Z, Y, X = volume.shape
-    vox = volume.voxel_mm
     eta = 1.0 if index_matched else volume.eta
 
     sigma_s, sigma_t, majorant, point, rng = _walk_setup(mi, dr, volume, channel, total, n_photons, seed, first_point)
@@ -160,16 +180,8 @@ def random_walk(volume: Volume, channel: int, entry_xy: np.ndarray, n_photons: i
 
         # -- inside: real or null collision at pos + t d ------------------------------------
         p_c = pos + direction * t
-        ix = dr.clip(UInt32(dr.floor(p_c.x / vox)), 0, X - 1)
-        iy = dr.clip(UInt32(dr.floor(p_c.y / vox)), 0, Y - 1)
-        iz = dr.clip(UInt32(dr.floor(-p_c.z / vox)), 0, Z - 1)
-        flat = (iz * Y + iy) * X + ix
-        s_s = dr.gather(Float, sigma_s, flat, collide)
-        s_t = dr.gather(Float, sigma_t, flat, collide)
-        xi = rng.next_float32() * majorant
-        scatter = collide & (xi < s_s)
-        absorb = collide & (xi >= s_s) & (xi < s_t)
-        new_dir = _hg_sample(mi, dr, direction, volume.g, rng.next_float32(), rng.next_float32())
+        scatter, absorb, new_dir = _medium_event(mi, dr, volume, sigma_s, sigma_t, majorant, p_c.x, p_c.y, -p_c.z,
+                                                 collide, rng, direction)
 
         # -- boundary: Fresnel reflection or exit at the nearest face --------------------
         hit = ~collide
