@@ -86,7 +86,7 @@ def solver_vs_scipy(path: Path, n_sample: int) -> dict:
     t = time.perf_counter()
     ours = []
     for ch, w in zip(chunks, w2):
-        W, Y = _grouped(ch, w, np.ones_like(ch.y), ch.y, 3, np.arange(3)[None, None, :], 3)
+        W, Y = _grouped(ch, w, np.ones_like(ch.y), ch.y, np.arange(3)[None, None, :], 3)
         ours.append((ch.r_g, W, Y))
     # one batched call over every sampled (point, channel), as in the fitter (same radii for all windows)
     r_g = ours[0][0]

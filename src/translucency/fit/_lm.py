@@ -28,8 +28,9 @@ def fit_params_batched(profile: Callable[[np.ndarray, np.ndarray], np.ndarray], 
     r : ndarray, shape (G,)
     W, Y : ndarray, shape (B, G)
         Weights and targets.
-    starts : sequence of parameter vectors (each of length P, > 0)
-        Starting points shared by all problems.
+    starts : sequence of starting points (> 0)
+        Each a vector of length P shared by all problems, or an array (B, P)
+        with one start per problem (a warm start from earlier parameters).
 
     Returns
     -------
@@ -50,12 +51,14 @@ def fit_params_batched(profile: Callable[[np.ndarray, np.ndarray], np.ndarray], 
     W = np.asarray(W, dtype=np.float64)
     Y = np.asarray(Y, dtype=np.float64)
     B = Y.shape[0]
-    P = len(starts[0])
+    P = np.asarray(starts[0]).shape[-1]
     p_out, cost_out = np.empty((B, P)), np.full(B, np.inf)
     for s in range(0, B, block):
         sl = slice(s, s + block)
         for start in starts:
-            x0 = np.broadcast_to(np.log(np.asarray(start, dtype=np.float64)), (Y[sl].shape[0], P)).copy()
+            start = np.asarray(start, dtype=np.float64)
+            start = start[sl] if start.ndim == 2 else start
+            x0 = np.broadcast_to(np.log(np.maximum(start, 1e-300)), (Y[sl].shape[0], P)).copy()
             x, cost = _lm(profile, r, W[sl], Y[sl], x0, max_iter, tol)
             better = cost < cost_out[sl]
             p_out[sl][better] = np.exp(x[better])

@@ -67,7 +67,7 @@ from ..io.dataset import PlanarDataset, open_dataset
 from ..model import BurleyModel, DipoleModel, ExponentialModel, PlanarAlpha
 from ..model.burley import burley_R
 from ..model.dipole import dipole_R_d
-from ._lm import _lm, fit_params_batched
+from ._lm import fit_params_batched
 from ._varpro import fit_exponentials_batched
 from ._windows import SampleGrid, group_sums, radius_groups, window_geometry
 
@@ -257,8 +257,8 @@ def fit_planar(dataset, model: str = "iso", *, n_terms: int = 3, n_directions: i
     grid = SampleGrid.covering(origin, pitch, ds.window)
     photons = ds.header.get("acquisition", {}).get("photons")
     eta = float(ds.header.get("sample", {}).get("eta", 1.3))
-    options = {"model": model, "n_terms": n, "n_directions": m, "colour": colour if C == 1 or model in
-               ("iso", "aniso") else "per-channel", "exclusion_mm": exclusion, "rel_sigma": rel_sigma,
+    options = {"model": model, "n_terms": n, "n_directions": m, "colour": colour if model in ("iso", "aniso")
+               else "per-channel", "exclusion_mm": exclusion, "rel_sigma": rel_sigma,
                "max_rounds": max_rounds, "tol": tol, "radius_step": step, "sweeps": sweeps, "balance": balance}
     request = json.dumps({"dataset": str(Path(ds.path).resolve()), "header": hashlib.sha256(
         json.dumps(ds.header, sort_keys=True).encode()).hexdigest(), "chunk": chunk_points, **options},
@@ -508,7 +508,7 @@ def _fit_chunk(ctx: _Context, glob: _State, s: int, e: int):
     return state, phi, num, den
 
 
-def _grouped(ch: _Chunk, w2, kappa, target, bins_per_point: int, sub: np.ndarray | None, n_sub: int):
+def _grouped(ch: _Chunk, w2, kappa, target, sub: np.ndarray | None, n_sub: int):
     """Sums A = Σ w² κ² and B = Σ w² κ y per (point, sub-problem, radius group) → W, Y (k·n_sub, G)."""
     k, G = ch.y.shape[0], ch.r_g.size
     idx = np.arange(k)[:, None, None] * (n_sub * G) + ch.gid[..., None]
@@ -545,11 +545,11 @@ def _fit_exponential(ctx: _Context, state: _State, sl: slice, ch: _Chunk, w2) ->
     kappa = ch.alpha[..., None] * s_col  # (k, J, 3)
     chan = np.zeros(3, dtype=np.int64) if C == 1 else np.arange(3)  # which colour row each channel feeds
     if m == 1:
-        W, Y = _grouped(ch, w2, kappa, ch.y, C, chan[None, None, :], C)
+        W, Y = _grouped(ch, w2, kappa, ch.y, chan[None, None, :], C)
         _solve_exponentials(ctx, state, sl, ch.r_g, W, Y, np.arange(k * C))
         return
     if not state.ready[sl].all():  # start every direction from the isotropic fit
-        W, Y = _grouped(ch, w2, kappa, ch.y, C, chan[None, None, :], C)
+        W, Y = _grouped(ch, w2, kappa, ch.y, chan[None, None, :], C)
         cc, aa, _ = fit_exponentials_batched(ch.r_g, W, Y, ctx.n, n_starts=3, pooled=True, max_iter=25, tol=1e-5)
         state.c[sl] = np.repeat(cc.reshape(k, C, 1, ctx.n), m, axis=2)
         state.a[sl] = np.repeat(aa.reshape(k, C, 1, ctx.n), m, axis=2)
@@ -569,7 +569,7 @@ def _fit_exponential(ctx: _Context, state: _State, sl: slice, ch: _Chunk, w2) ->
             other = np.where(in0, t, 1 - t)[..., None] * ch.alpha[..., None] * f_other
             w_cls = np.where((in0 | in1)[..., None], w2, 0.0)
             sub = (chan[None, None, :] * m + L[..., None])
-            W, Y = _grouped(ch, w_cls, kappa * u[..., None], ch.y - other, C * m, sub, C * m)
+            W, Y = _grouped(ch, w_cls, kappa * u[..., None], ch.y - other, sub, C * m)
             rows = (np.arange(k)[:, None, None] * C + np.arange(C)[None, :, None]) * m + cls[None, None, :]
             rows = rows.ravel()
             _solve_exponentials(ctx, state, sl, ch.r_g, W[rows], Y[rows], rows)
@@ -590,24 +590,19 @@ def _fit_colour(ctx: _Context, state: _State, sl: slice, ch: _Chunk, w2) -> None
 def _fit_baseline(ctx: _Context, state: _State, sl: slice, ch: _Chunk, w2) -> None:
     """Dipole or Burley: two positive parameters per point and channel."""
     k = ch.y.shape[0]
-    W, Y = _grouped(ch, w2, np.broadcast_to(ch.alpha[..., None], ch.y.shape), ch.y, 3,
+    W, Y = _grouped(ch, w2, np.broadcast_to(ch.alpha[..., None], ch.y.shape), ch.y,
                     np.arange(3)[None, None, :], 3)
     profile = _dipole_profile(ctx.eta) if ctx.kind == "dipole" else _burley_profile
     starts = _DIPOLE_STARTS if ctx.kind == "dipole" else _BURLEY_STARTS
     p = state.p[sl].reshape(-1, 2)
     ready = np.repeat(state.ready[sl], 3)
     if ready.any():  # warm: the previous round's parameters, kept unless the refit is better
-        p[ready] = _warm_params(profile, ch.r_g, W[ready], Y[ready], p[ready])
+        p[ready] = fit_params_batched(profile, ch.r_g, W[ready], Y[ready], [p[ready]])[0]
     if (~ready).any():
         pc, _ = fit_params_batched(profile, ch.r_g, W[~ready], Y[~ready], starts)
         p[~ready] = pc
     state.p[sl] = p.reshape(k, 3, 2)
 
-
-def _warm_params(profile, r, W, Y, p0):
-    """One LM run from each problem's own previous parameters."""
-    x, _ = _lm(profile, r, W, Y, np.log(np.maximum(p0, 1e-12)), 40, 1e-10)
-    return np.exp(x)
 
 
 def _update_alpha(state: _State, kind: str, smooth=None) -> None:

@@ -182,8 +182,7 @@ def vertex_parameters(model, vertices: np.ndarray, k: int = 4):
     w[exact, 0] = 1.0
     w /= w.sum(1, keepdims=True)
     V, C, n = len(vertices), model.c.shape[1], model.n_terms
-    cs = model.c[idx][:, :, :, 0] * model.colour_scale[idx][:, :, :C, None] if C == 3 else model.c[idx][:, :, :, 0]
-    c = (w[:, :, None, None] * cs).transpose(0, 2, 1, 3).reshape(V, C, k * n)
+    c = (w[:, :, None, None] * model.c[idx][:, :, :, 0]).transpose(0, 2, 1, 3).reshape(V, C, k * n)
     d = model.d[idx][:, :, :, 0].transpose(0, 2, 1, 3).reshape(V, C, k * n)
     if C == 1:  # shared colour: blend the scales with the same weights (exact where one point dominates)
         s = np.einsum("vk,vkc->vc", w, model.colour_scale[idx])
