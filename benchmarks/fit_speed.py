@@ -61,8 +61,8 @@ def solver_vs_scipy(path: Path, n_sample: int) -> dict:
     from scipy.optimize import least_squares
 
     from translucency.fit._varpro import fit_exponentials_batched
-    from translucency.fit.planar import _Context, _State, _grouped, _load_chunk, _weights
     from translucency.fit._windows import SampleGrid
+    from translucency.fit.planar import _Context, _grouped, _load_chunk, _PlanarSource, _State, _weights
     from translucency.io.dataset import open_dataset
 
     ds = open_dataset(path)
@@ -71,10 +71,10 @@ def solver_vs_scipy(path: Path, n_sample: int) -> dict:
     x_i, origin = ds["x_i"].astype(float), ds["window_origin"].astype(float)
     grid = SampleGrid.covering(origin, ds.pitch, ds.window)
     photons = ds.header["acquisition"]["photons"]
-    ctx = _Context(ds, "iso", 3, 1, 3, ds.pitch, 0.05, 1 / (photons * ds.pitch**2), 1.3, ds.pitch / 4, 2, True,
-                   grid, x_i, origin)
+    source = _PlanarSource(ds, grid, origin, 1 / (photons * ds.pitch**2))
+    ctx = _Context(source, "iso", 3, 1, 3, ds.pitch, 0.05, 1.3, ds.pitch / 4, 1, True, x_i)
     state = _State("iso", ds.n_points, 3, 1, 3, grid.shape)
-    # the chunk of sampled points, through the fitter's own loading and weighting
+    # the sampled points, through the fitter's own loading and weighting (first round, α = 1)
     chunks = [_load_chunk(ctx, state, p, p + 1) for p in pts]
     w2 = [_weights(ctx, ch, None) for ch in chunks]
 
@@ -86,7 +86,7 @@ def solver_vs_scipy(path: Path, n_sample: int) -> dict:
     t = time.perf_counter()
     ours = []
     for ch, w in zip(chunks, w2):
-        W, Y = _grouped(ch, w, np.ones_like(ch.y), ch.y, np.arange(3)[None, None, :], 3)
+        W, Y = _grouped(ch.rings, ch.r_g.size, 3, w, np.float32(1.0), ch.y)
         ours.append((ch.r_g, W, Y))
     # one batched call over every sampled (point, channel), as in the fitter (same radii for all windows)
     r_g = ours[0][0]
@@ -101,9 +101,9 @@ def solver_vs_scipy(path: Path, n_sample: int) -> dict:
     t = time.perf_counter()
     cost_scipy = []
     for ch, w in zip(chunks, w2):
-        r = ch.r[0]
+        r = ch.r[0].astype(np.float64)
         for lam in range(3):
-            y, sw = ch.y[0, :, lam], np.sqrt(w[0, :, lam])
+            y, sw = ch.y[0, :, lam].astype(np.float64), np.sqrt(w[0, :, lam].astype(np.float64))
 
             def res(p):
                 return sw * (np.exp(-np.exp(p[3:])[None] * r[:, None]) @ p[:3] - y)
@@ -128,7 +128,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--data", type=Path, default=Path("bench_data/fit64.zarr"))
     ap.add_argument("--sample", type=int, default=48, help="incident points for the scipy comparison")
-    ap.add_argument("--skip-whole", action="store_true")
+    ap.add_argument("--kinds", default="iso,aniso", help="whole fits to time (comma-separated; empty: none)")
     args = ap.parse_args()
     if not args.data.exists():
         make_data(args.data)
@@ -139,12 +139,11 @@ def main() -> None:
     size_mb = P * H * W * (3 * 4 * 2 + 1) / 2**20  # R_d and variance as float32, mask
     print(f"data set: {P} incident points, {H}x{W}-pixel windows; in memory as float32 {size_mb:.0f} MiB")
     result = {"data": str(args.data), "points": P, "window": [H, W], "in_memory_mib": size_mb}
-    if not args.skip_whole:
-        for kind in ("iso", "aniso"):
-            r = whole_fit(args.data, kind)
-            result[kind] = r
-            print(f"fit {kind:5s}: {r['seconds']:6.1f} s  ({r['rounds']} rounds)  peak memory {r['peak_mb']:.0f} MiB "
-                  f"= {r['peak_mb'] / size_mb:.2f} x the data set")
+    for kind in filter(None, args.kinds.split(",")):
+        r = whole_fit(args.data, kind)
+        result[kind] = r
+        print(f"fit {kind:5s}: {r['seconds']:6.1f} s  ({r['rounds']} rounds)  peak memory {r['peak_mb']:.0f} MiB "
+              f"= {r['peak_mb'] / size_mb:.2f} x the data set")
     if args.sample <= 0:
         print(json.dumps(result, indent=1))
         return

@@ -93,21 +93,22 @@ def planar_errors(model, dataset, *, exclusion_mm: float | None = None, chunk_po
         v = np.asarray(ds.group["variance"][s:e], dtype=np.float64).reshape(k, -1, 3)
         mask = np.asarray(ds.group["mask"][s:e]).reshape(k, -1)
         geom = window_geometry(x_i[s:e], origin[s:e], grid, ds.window)
+        r = np.broadcast_to(geom.r, mask.shape)
         pred = model.R_d_window(np.arange(s, e), origin[s:e], ds.pitch, ds.window).reshape(k, -1, 3)
-        ok = (mask & np.isfinite(y).all(2) & np.isfinite(v).all(2) & (geom.r >= exclusion)
+        ok = (mask & np.isfinite(y).all(2) & np.isfinite(v).all(2) & (r >= exclusion)
               & ~flagged[s:e, None])
         d2 = np.where(ok, ((pred - y) ** 2).sum(2), 0.0)
         y2 = np.where(ok, (y**2).sum(2), 0.0)
         v2 = np.where(ok, v.sum(2), 0.0)
         for b, (lo, hi) in BANDS.items():
-            sel = (geom.r >= lo) & (geom.r < hi)
+            sel = (r >= lo) & (r < hi)
             err2[b] += float(d2[sel].sum())
             ref2[b] += float(y2[sel].sum())
             var[b] += float(v2[sel].sum())
         den = y2.sum(1)
         per_point[s:e] = np.where(den > 0, np.sqrt(d2.sum(1) / np.where(den > 0, den, 1.0)), np.nan)
         n_px = pix_err.size
-        near = geom.r < map_radius
+        near = r < map_radius
         pix_err += np.bincount(geom.pixel[near], d2[near], minlength=n_px)
         pix_ref += np.bincount(geom.pixel[near], y2[near], minlength=n_px)
 

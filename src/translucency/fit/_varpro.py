@@ -79,11 +79,22 @@ def nnls_small(K: np.ndarray, k: np.ndarray, YY: np.ndarray) -> tuple[np.ndarray
     (array([[1.5, 0. ]]), array([0.5]))
     """
     B, n, _ = K.shape
+    ridge = 1e-12 * np.maximum(np.einsum("bkk->b", K), 1e-300)
+    # where the unconstrained optimum is non-negative it is the NNLS optimum (convex problem)
+    c = np.linalg.solve(K + ridge[:, None, None] * np.eye(n), k[..., None])[..., 0]
+    feasible = (c >= 0).all(axis=1)
+    if feasible.all():
+        return c, np.maximum(YY - np.einsum("bk,bk->b", c, k), 0.0)
+    if feasible.any():
+        rest = ~feasible
+        c_rest, cost_rest = nnls_small(K[rest], k[rest], YY[rest])
+        cost = np.maximum(YY - np.einsum("bk,bk->b", c, k), 0.0)
+        c[rest], cost[rest] = c_rest, cost_rest
+        return c, cost
     # every non-empty support S as a mask; on S solve K_SS c_S = k_S, elsewhere c = 0
     # (identity rows/columns off S), all supports in one batched solve
     supports = np.array([[(mask >> j) & 1 for j in range(n)] for mask in range(1, 2**n)], dtype=bool)
     on = supports[:, None, :, None] & supports[:, None, None, :]  # (S, 1, n, n)
-    ridge = 1e-12 * np.maximum(np.einsum("bkk->b", K), 1e-300)
     KS = np.where(on, K[None] + ridge[None, :, None, None] * np.eye(n), np.eye(n))
     kS = np.where(supports[:, None, :], k[None], 0.0)
     cS = np.linalg.solve(KS, kS[..., None])[..., 0]  # (S, B, n)
@@ -188,6 +199,9 @@ def fit_exponentials_batched(r, W, Y, n_terms: int, *, rates0=None, n_starts: in
     return tuple(out)
 
 
+_PROBE_ITER = 6  # iterations from every start before the best start per problem is kept
+
+
 def _fit_block(r, W2, Y, n, rates0, n_starts, max_iter, tol, bounds):
     B = Y.shape[0]
     lo, hi = bounds
@@ -198,14 +212,18 @@ def _fit_block(r, W2, Y, n, rates0, n_starts, max_iter, tol, bounds):
     else:
         starts = [np.broadcast_to(np.log(_initial_rates(lo, hi, n, s, n_starts)), (B, n)).copy()
                   for s in range(n_starts)]
+    # several starts: a few iterations from each, then only the best one per problem goes on
+    probe = max_iter if len(starts) == 1 else min(max_iter, _PROBE_ITER)
     best = None
     for theta in starts:
-        sol = _lm(r, Wr, Wy, YY, theta, lo, hi, max_iter, tol)
+        sol = _lm(r, Wr, Wy, YY, theta, lo, hi, probe, tol)
         if best is None:
             best = sol
         else:
             better = sol[2] < best[2]
             best = tuple(np.where(better[:, None] if x.ndim == 2 else better, x, y) for x, y in zip(sol, best))
+    if probe < max_iter:
+        best = _lm(r, Wr, Wy, YY, np.log(best[1]), lo, hi, max_iter - probe, tol)
     c, a, cost = best
     order = np.argsort(-a, axis=1)
     return np.take_along_axis(c, order, 1), np.take_along_axis(a, order, 1), cost

@@ -54,19 +54,26 @@ class SampleGrid:
 class WindowGeometry:
     """Per-pixel geometry of a chunk of k windows of H × W pixels (J = H·W)."""
 
-    r: np.ndarray  # (k, J) mm
-    theta: np.ndarray  # (k, J) rad
+    r: np.ndarray  # (k or 1, J) mm
+    theta: np.ndarray  # (k or 1, J) rad
     pixel: np.ndarray  # (k, J) flat index on the sample grid
 
 
 def window_geometry(x_i: np.ndarray, window_origin: np.ndarray, grid: SampleGrid,
                     window: tuple[int, int]) -> WindowGeometry:
-    """Distances, angles and sample-grid pixels of every window pixel."""
+    """Distances, angles and sample-grid pixels of every window pixel.
+
+    When every window lies alike around its point (offsets x_i − origin equal
+    to 10⁻⁵ pixel: points snapped to pixel centres), r and θ are one row (1, J).
+    """
     h, w = window
     col, row = np.meshgrid(np.arange(w), np.arange(h))
     col, row = col.ravel(), row.ravel()
-    dx = window_origin[:, :1] + grid.pitch * (col + 0.5) - x_i[:, :1]
-    dy = window_origin[:, 1:] + grid.pitch * (row + 0.5) - x_i[:, 1:]
+    rel = window_origin - x_i
+    if len(rel) > 1 and np.ptp(rel, axis=0).max() <= grid.pitch * 1e-5:
+        rel = rel[:1]
+    dx = rel[:, :1] + grid.pitch * (col + 0.5)
+    dy = rel[:, 1:] + grid.pitch * (row + 0.5)
     off = grid.offsets(window_origin)
     pixel = (off[:, :1] + row) * grid.shape[1] + (off[:, 1:] + col)
     return WindowGeometry(np.hypot(dx, dy), np.arctan2(dy, dx), pixel)
@@ -85,10 +92,6 @@ def radius_groups(r: np.ndarray, pitch: float, *, r_exact: float | None = None,
     >>> gid.tolist(), rg.tolist()
     ([[0, 1, 1, 2]], [0.0, 1.0, 1.5])
     """
-    if r.ndim == 2 and r.shape[0] > 1 and np.allclose(r, r[:1], rtol=0, atol=pitch * 1e-5):
-        # windows placed alike around their points (the usual case): group one, share it
-        gid, r_g = radius_groups(r[:1], pitch, r_exact=r_exact, radius_step=radius_step)
-        return np.broadcast_to(gid, r.shape), r_g
     key = np.round(r / (pitch * 1e-4)).astype(np.int64)
     if radius_step is not None and r_exact is not None:
         far = r > r_exact
@@ -99,7 +102,72 @@ def radius_groups(r: np.ndarray, pitch: float, *, r_exact: float | None = None,
     return gid, r_g
 
 
-def group_sums(index: np.ndarray, values: np.ndarray, n_bins: int) -> np.ndarray:
-    """``bincount`` of values at flat bin indices (both broadcast together)."""
-    index, values = np.broadcast_arrays(index, values)
-    return np.bincount(index.ravel(), values.ravel(), minlength=n_bins)
+@dataclass
+class Segments:
+    r"""Sums over the pixels of each (incident point, key) as contiguous segment sums.
+
+    Every row (incident point) of a chunk has J pixels, each with an integer
+    key (its radius group, or direction and radius group); the objective needs
+    :math:`\sum_{j:\,\mathrm{key}_j = g} x_{ij}` for every row i and key g.
+    Putting each row's pixels in key order (``perm``) makes these sums
+    contiguous runs of the flattened (row, pixel) axis, summed by
+    ``np.add.reduceat`` — several times faster than a scatter (``bincount``)
+    and without a (k, J, 3) index array.
+
+    Examples
+    --------
+    >>> seg = Segments.of(np.array([[1, 0, 1, 2]]), k=2, n_keys=3)
+    >>> seg.sums(np.arange(8.0).reshape(2, 4)).tolist()
+    [[1.0, 2.0, 3.0], [5.0, 10.0, 7.0]]
+    """
+
+    perm: np.ndarray | None  # (1 or k, J) pixel order within each row; None: already in order
+    starts: np.ndarray  # (S,) first flat position (row·J + j, in order) of each non-empty segment
+    keys: np.ndarray  # (S,) row·n_keys + key of each segment
+    lengths: np.ndarray  # (S,) pixels in each segment
+    k: int
+    J: int
+    n_keys: int
+
+    @classmethod
+    def of(cls, key: np.ndarray, k: int, n_keys: int) -> "Segments":
+        """Segments of keys (1 or k, J) in [0, n_keys); a single row is shared by all k rows."""
+        key = np.asarray(key)
+        J = key.shape[1]
+        perm = None if (np.diff(key, axis=1) >= 0).all() else np.argsort(key, axis=1, kind="stable")
+        ks = key if perm is None else np.take_along_axis(key, perm, axis=1)
+        if ks.shape[0] == 1:  # one row for all: its runs, repeated
+            first = np.flatnonzero(np.r_[True, ks[0, 1:] != ks[0, :-1]])
+            starts = (np.arange(k)[:, None] * J + first).ravel()
+            keys = (np.arange(k)[:, None] * n_keys + ks[0, first]).ravel()
+        else:
+            flat = (np.arange(k)[:, None] * n_keys + ks).ravel()
+            starts = np.flatnonzero(np.r_[True, flat[1:] != flat[:-1]])
+            keys = flat[starts]
+        lengths = np.diff(np.r_[starts, k * J])
+        return cls(perm, starts, keys, lengths, k, J, n_keys)
+
+    def order(self, x: np.ndarray) -> np.ndarray:
+        """x (k or 1, J, ...) with each row's pixels in key order."""
+        if self.perm is None:
+            return x
+        if self.perm.shape[0] == 1:
+            return np.take(x, self.perm[0], axis=1)
+        p = self.perm.reshape(self.perm.shape + (1,) * (x.ndim - 2))
+        return np.take_along_axis(x, np.broadcast_to(p, x.shape[:2] + p.shape[2:]), axis=1)
+
+    def in_order(self) -> "Segments":
+        """The same segments for arrays already put in key order by :meth:`order`."""
+        return Segments(None, self.starts, self.keys, self.lengths, self.k, self.J, self.n_keys)
+
+    def sums(self, x: np.ndarray) -> np.ndarray:
+        """Σ of x (k, J) or (k, J, c) over each (row, key): (k, n_keys) or (k, n_keys, c)."""
+        flat = self.order(x).reshape(self.k * self.J, -1)
+        out = np.zeros((self.k * self.n_keys, flat.shape[1]), dtype=flat.dtype)
+        out[self.keys] = np.add.reduceat(flat, self.starts, axis=0)
+        return out.reshape((self.k, self.n_keys) + x.shape[2:])
+
+    def spread(self, v: np.ndarray) -> np.ndarray:
+        """Values per (row, key) v (k, n_keys, ...) at every pixel, in key order (k, J, ...)."""
+        flat = v.reshape(self.k * self.n_keys, -1)[self.keys]
+        return np.repeat(flat, self.lengths, axis=0).reshape((self.k, self.J) + v.shape[2:])

@@ -63,7 +63,7 @@ class _MeshSource:
         r = np.linalg.norm(self.vertices[None] - ctx.x_i[s:e, None], axis=2)
         valid = np.isfinite(y).all(axis=2) & (r >= ctx.exclusion)
         pixel = np.broadcast_to(np.arange(len(self.vertices)), r.shape)
-        return y, None, valid, r, np.zeros_like(r), pixel, self.poisson, np.dtype("float32")
+        return y, None, valid, r, np.zeros_like(r), pixel, self.poisson
 
     def smooth_alpha(self, stat: np.ndarray) -> np.ndarray:
         return self._pool @ stat

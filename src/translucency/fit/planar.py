@@ -56,7 +56,7 @@ import threading
 import time
 from concurrent.futures import ThreadPoolExecutor, as_completed
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -69,7 +69,7 @@ from ..model.burley import burley_R
 from ..model.dipole import dipole_R_d
 from ._lm import fit_params_batched
 from ._varpro import fit_exponentials_batched
-from ._windows import SampleGrid, group_sums, radius_groups, window_geometry
+from ._windows import SampleGrid, Segments, radius_groups, window_geometry
 
 KINDS = ("iso", "aniso", "dipole", "burley")
 _DIPOLE_STARTS = [(0.01, 1.0), (0.002, 3.0), (0.05, 0.3)]
@@ -340,19 +340,38 @@ class _Context:
 
 @dataclass
 class _Chunk:
-    """The data of k incident points, flattened to (k, J, 3), and their geometry."""
+    """The data of k incident points, flattened to (k, J, 3), each row's pixels in radius-group order.
 
-    y: np.ndarray
-    var: np.ndarray
-    valid: np.ndarray  # (k, J) bool
-    r: np.ndarray
-    theta: np.ndarray
-    pixel: np.ndarray
-    gid: np.ndarray  # (k, J) radius group
-    r_g: np.ndarray  # (G,)
-    alpha: np.ndarray  # (k, J) current α at each pixel
-    static: np.ndarray  # (k, J) float32: valid × distance balance (0 for invalid pixels)
+    Geometry is (1, J) when every window lies alike around its point (the
+    usual case: points snapped to pixel centres) and (k, J) otherwise.
+    """
+
+    y: np.ndarray  # (k, J, 3) data, 0 off the valid pixels
+    static: np.ndarray  # (k, J) float32: valid × distance balance (0: pixel not used)
+    var_ring: np.ndarray | None  # (k, G, 3) ring means of the data's variance; None: Poisson model
+    r: np.ndarray  # (1|k, J) mm
+    theta: np.ndarray  # (1|k, J) rad, in the sample's frame
+    gid: np.ndarray  # (1|k, J) radius group of each pixel
+    r_g: np.ndarray  # (G,) radius of each group, mm
+    rings: Segments  # sums over each (point, radius group)
+    base: np.ndarray  # (k, 1) and ...
+    local: np.ndarray  # ... (1|k, J): α's sample of each pixel is base + local
+    usable: np.ndarray | None = None  # (k,) enough valid pixels and some signal
     poisson: object = 0.0  # 1/(N × pixel area): scalar, or (k, J, 1) float32 (mesh vertices)
+    alpha: np.ndarray | None = None  # (k, J, 3) float32 current α at each pixel (set per round)
+    plans: dict = field(default_factory=dict)  # Segments of the anisotropic direction classes
+
+    @property
+    def valid(self) -> np.ndarray:
+        return self.static > 0
+
+    @property
+    def pixel(self) -> np.ndarray:
+        return self.base + self.local
+
+    def per_channel(self, x: np.ndarray) -> np.ndarray:
+        """(k, J) → contiguous (k, J, 3): elementwise work on like-shaped arrays is several times faster."""
+        return np.repeat(x, 3).reshape(x.shape + (3,))
 
 
 class _PlanarSource:
@@ -364,40 +383,69 @@ class _PlanarSource:
         self.pitch = grid.pitch
 
     def read(self, ctx: _Context, s: int, e: int):
-        """y (k, J, 3), var or None, valid, r, θ, pixel (k, J), and the Poisson factor of points s..e."""
+        """y (k, J, 3), var or None, valid (k, J), r, θ (1|k, J), pixel (k, J), and the Poisson factor
+        of points s..e."""
         ds, k = self.ds, e - s
+        ones = np.ones(3, np.float32)  # finite(y @ 1): all three channels finite
         y = np.asarray(ds.group["R_d"][s:e], dtype=np.float32).reshape(k, -1, 3)
-        var = np.asarray(ds.group["variance"][s:e], dtype=np.float32).reshape(k, -1, 3)
         mask = np.asarray(ds.group["mask"][s:e]).reshape(k, -1)
         geom = window_geometry(ctx.x_i[s:e], self.origin[s:e], self.grid, ds.window)
-        valid = mask & np.isfinite(y).all(axis=2) & np.isfinite(var).all(axis=2) & (geom.r >= ctx.exclusion)
-        # with a photon count the weights use the model's Poisson variance, not the data's
-        var = None if self.poisson > 0 else np.where(valid[..., None], np.maximum(var, 0.0), np.float32(0.0))
-        dtype = np.dtype(ds.header.get("dtype", "float32"))  # float16 data stay float16 in the cache
-        return y, var, valid, geom.r, geom.theta, geom.pixel, self.poisson, dtype
+        valid = mask & np.isfinite(y @ ones) & (geom.r >= ctx.exclusion)
+        var = None
+        if not self.poisson > 0:  # with a photon count the weights use the model's Poisson variance
+            var = np.asarray(ds.group["variance"][s:e], dtype=np.float32).reshape(k, -1, 3)
+            valid &= np.isfinite(var @ ones)
+            var = np.where(valid[..., None], np.maximum(var, 0.0), np.float32(0.0))
+        return y, var, valid, geom.r, geom.theta, geom.pixel, self.poisson
 
     def make_alpha(self, values: np.ndarray):
         return PlanarAlpha(values.copy(), self.grid.origin, self.grid.pitch)
 
 
+def _ring_means(rings: Segments, valid: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Mean of v (k, J, 3) over the valid pixels of each (point, radius group): (k, G, 3)."""
+    num = rings.sums(np.where(valid[..., None], v, np.float32(0.0)))
+    cnt = rings.sums(valid.astype(np.float32))
+    return num / np.maximum(cnt, 1.0)[..., None]
+
+
+def _prepare_chunk(ctx: _Context, s: int, e: int) -> _Chunk:
+    """Read points s..e and put each window's pixels in radius-group order (done once per chunk)."""
+    y, var, valid, r, theta, pixel, poisson = ctx.source.read(ctx, s, e)
+    k = e - s
+    pixel = np.broadcast_to(pixel, valid.shape)
+    base = pixel[:, :1].astype(np.int64)
+    local = (pixel - base).astype(np.int32)
+    if r.shape[0] == 1:  # windows placed alike around their points: one geometry row serves all
+        local = local[:1]
+    gid, r_g = radius_groups(r, ctx.source.pitch, r_exact=1.0, radius_step=ctx.radius_step)
+    rings = Segments.of(gid, k, r_g.size)
+    valid, y, r, theta, gid, local = (rings.order(a) for a in (valid, y, r, theta, gid, local))
+    if var is not None:
+        var = rings.order(var)
+    if np.ndim(poisson):  # per-vertex Poisson factors follow their vertices
+        poisson = rings.order(np.broadcast_to(poisson, (k,) + np.shape(poisson)[1:]))
+    rings = rings.in_order()
+    y = np.where(valid[..., None], y, np.float32(0.0))
+    # each mm of distance counts alike: rings beyond 1 mm weighted by 1 mm / r
+    balance = np.minimum(1.0, 1.0 / np.maximum(r, 1e-9)) if ctx.balance else 1.0
+    static = (valid * balance).astype(np.float32)
+    var_ring = None if var is None else _ring_means(rings, valid, var).astype(np.float32)
+    usable = (valid.sum(axis=1) >= 2 * ctx.n + 2) & (y.sum(axis=(1, 2), dtype=np.float64) > 0)
+    return _Chunk(y, static, var_ring, r.astype(np.float32), theta, gid.astype(np.int32), r_g, rings,
+                  base, local, usable, poisson)
+
+
 def _load_chunk(ctx: _Context, state: _State, s: int, e: int) -> _Chunk:
-    """Read points s..e from the source (or take them from the cache of earlier rounds)."""
-    if (s, e) not in ctx.cache:
-        y, var, valid, r, theta, pixel, poisson, dtype = ctx.source.read(ctx, s, e)
-        y = np.where(valid[..., None], y, np.float32(0.0)).astype(dtype)
-        gid, r_g = radius_groups(r, ctx.source.pitch, r_exact=1.0, radius_step=ctx.radius_step)
-        # each mm of distance counts alike: rings beyond 1 mm weighted by 1 mm / r
-        balance = np.minimum(1.0, 1.0 / np.maximum(r, 1e-9)) if ctx.balance else 1.0
-        static = (valid * balance).astype(np.float32)
-        entry = (y, var, valid, r, theta, pixel, gid, r_g, static, poisson)
-        if ctx.cache_left >= y.nbytes:
-            ctx.cache_left -= y.nbytes + static.nbytes + (0 if var is None else var.nbytes)
-            ctx.cache[(s, e)] = entry
-    else:
-        entry = ctx.cache[(s, e)]
-    y, var, valid, r, theta, pixel, gid, r_g, static, poisson = entry
-    alpha = state.alpha.astype(np.float32).ravel()[pixel]
-    return _Chunk(y, var, valid, r, theta, pixel, gid, r_g, alpha, static, poisson)
+    """Points s..e from the cache of earlier rounds (or the source), with the current α."""
+    ch = ctx.cache.get((s, e))
+    if ch is None:
+        ch = _prepare_chunk(ctx, s, e)
+        nbytes = sum(np.asarray(a).nbytes for a in (ch.y, ch.static, ch.local, ch.r, ch.theta, ch.gid, ch.poisson))
+        if ctx.cache_left >= nbytes:
+            ctx.cache_left -= nbytes
+            ctx.cache[(s, e)] = ch
+    return replace(ch, alpha=ch.per_channel(state.alpha.astype(np.float32).ravel()[ch.pixel]))
 
 
 def _group_profiles(ctx: _Context, state: _State, sl: slice, r_g: np.ndarray) -> np.ndarray:
@@ -413,19 +461,19 @@ def _group_profiles(ctx: _Context, state: _State, sl: slice, r_g: np.ndarray) ->
 
 def _at_pixels(F: np.ndarray, ch: _Chunk, m: int, direction=None) -> np.ndarray:
     """Gather group profiles F (k, G, C, m) at the pixels: blended by the hat weights,
-    or of one ``direction`` (k, J) per pixel; returns (k, J, C)."""
+    or of one ``direction`` (1|k, J) per pixel; returns (k, J, C)."""
+    if m == 1 and direction is None:
+        return ch.rings.spread(F[..., 0])
     b = np.arange(F.shape[0])[:, None]
     if direction is not None:
         return F[b, ch.gid, :, direction]
-    if m == 1:
-        return F[b, ch.gid, :, 0]
     l0, t = _hat(ch.theta, m)
     return (1 - t)[..., None] * F[b, ch.gid, :, l0] + t[..., None] * F[b, ch.gid, :, (l0 + 1) % m]
 
 
 def _predict(ctx: _Context, state: _State, sl: slice, ch: _Chunk) -> np.ndarray:
     """Current P_i at every pixel of the chunk, (k, J, 3), without α."""
-    # float32 at the pixels: these arrays only weight, accumulate and report (sums are in float64)
+    # float32 at the pixels: these arrays only weight, accumulate and report
     f = _at_pixels(_group_profiles(ctx, state, sl, ch.r_g).astype(np.float32), ch, ctx.m)
     return f * state.s[sl][:, None, :].astype(np.float32) if ctx.C == 1 else f
 
@@ -438,7 +486,7 @@ def _hat(theta, m):
 
 
 def _weights(ctx: _Context, ch: _Chunk, f: np.ndarray | None) -> np.ndarray:
-    """w² per pixel and channel (module docstring); f is P_i without α, (k, J, 3).
+    r"""w² per pixel and channel (module docstring); f is P_i without α, (k, J, 3).
 
     The variance is taken from the model, never from the pixel's own value: a
     pixel-wise estimate is proportional to the noisy count (Poisson), and
@@ -446,26 +494,19 @@ def _weights(ctx: _Context, ch: _Chunk, f: np.ndarray | None) -> np.ndarray:
     With the data set's photon count it is the Poisson variance of the model,
     :math:`\alpha P/(N p^2)`; otherwise the ring mean of the data's variance.
     """
-    k, G = ch.y.shape[0], ch.r_g.size
-
-    def ring_mean(v):  # mean over the valid pixels of each (point, radius group, channel)
-        idx = (np.arange(k)[:, None] * G + ch.gid)[..., None] * 3 + np.arange(3)
-        num = group_sums(idx, np.where(ch.valid[..., None], v, 0.0), k * G * 3)
-        cnt = group_sums(idx, np.broadcast_to(ch.valid[..., None], v.shape).astype(np.float64), k * G * 3)
-        return (num / np.maximum(cnt, 1)).reshape(k, G, 3)[np.arange(k)[:, None], ch.gid]
-
     if f is None:  # first round: ring means of y/α stand in for the model
-        f = ring_mean(ch.y / np.where(ch.alpha > 0, ch.alpha, 1.0)[..., None])
-    model = (ch.alpha[..., None] * f).astype(np.float32)
-    floor = np.maximum(1e-6 * model.max(axis=1, keepdims=True), np.float32(1e-15))
-    np.maximum(model, floor, out=model)
+        safe = np.where(ch.alpha > 0, ch.alpha, np.float32(1.0))
+        f = ch.rings.spread(_ring_means(ch.rings, ch.valid, ch.y / safe).astype(np.float32))
+    model = ch.alpha * f
+    k = model.shape[0]  # floor: 10⁻⁶ of each window's peak (keeps the weights finite)
+    floor = np.maximum(1e-6 * model.reshape(k, -1).max(axis=1), np.float32(1e-15))
+    np.maximum(model, floor[:, None, None], out=model)
     # w² = static / (αP (ρ² αP + v0)) with v0 = 1/(N p²), or ρ²(αP)² + σ̄² without a photon count
-    if ch.var is None:
-        den = model * (np.float32(ctx.rel_sigma**2) * model + np.float32(ch.poisson))
+    if ch.var_ring is None:
+        den = model * (np.float32(ctx.rel_sigma**2) * model + np.float32(1.0) * ch.poisson)
     else:
-        den = np.float32(ctx.rel_sigma**2) * model * model + ring_mean(ch.var).astype(np.float32)
-    static = np.broadcast_to(ch.static[..., None], den.shape)
-    return np.divide(static, den, out=np.zeros_like(den), where=static > 0)
+        den = np.float32(ctx.rel_sigma**2) * model * model + ch.rings.spread(ch.var_ring)
+    return ch.per_channel(ch.static) / den  # den > 0: the model is floored
 
 
 def _fit_chunk(ctx: _Context, glob: _State, s: int, e: int):
@@ -477,10 +518,10 @@ def _fit_chunk(ctx: _Context, glob: _State, s: int, e: int):
     ch = _load_chunk(ctx, state, s, e)
     k = e - s
     sl = slice(0, k)
-    usable = (ch.valid.sum(axis=1) >= 2 * ctx.n + 2) & (ch.y.sum(axis=(1, 2), dtype=np.float64) > 0)  # y is 0 off valid
+    usable = ch.usable
     state.flagged[sl] = ~usable
     if k and not state.ready[sl].all() and ctx.C == 1:  # colour scale from the window sums
-        tot = ch.y.sum(axis=1)
+        tot = ch.y.sum(axis=1, dtype=np.float64)
         state.s[sl] = np.where(state.ready[sl, None], state.s[sl],
                                tot / np.maximum(tot[:, :1], 1e-300) * (tot[:, :1] > 0) + (tot[:, :1] <= 0))
     f_prev = _predict(ctx, state, sl, ch) if state.ready[sl].all() else None
@@ -498,28 +539,29 @@ def _fit_chunk(ctx: _Context, glob: _State, s: int, e: int):
     if ctx.kind == "burley":
         state.p[bad, :, 0] = 0.0
     state.ready[sl] = True
-    # Φ and the α statistics with the new parameters
+    # Φ and the α statistics (summed over channels, then per sample pixel) with the new parameters
     f = _predict(ctx, state, sl, ch)
-    w2 = np.where(usable[:, None, None], w2, 0.0)
-    phi = float(np.sum(w2 * (ch.alpha[..., None] * f - ch.y) ** 2, dtype=np.float64))
-    n_px = glob.alpha.size
-    num = group_sums(ch.pixel[..., None], w2 * f * ch.y, n_px).reshape(glob.alpha.shape)
-    den = group_sums(ch.pixel[..., None], w2 * f * f, n_px).reshape(glob.alpha.shape)
+    w2 *= usable[:, None, None]
+    res = ch.alpha * f - ch.y
+    phi = float(np.sum(w2 * res * res, dtype=np.float64))
+    wf = w2 * f
+    n_px, pixel, ones = glob.alpha.size, ch.pixel.ravel(), np.ones(3, np.float32)
+    num = np.bincount(pixel, ((wf * ch.y) @ ones).ravel(), n_px).reshape(glob.alpha.shape)
+    den = np.bincount(pixel, ((wf * f) @ ones).ravel(), n_px).reshape(glob.alpha.shape)
     return state, phi, num, den
 
 
-def _grouped(ch: _Chunk, w2, kappa, target, sub: np.ndarray | None, n_sub: int):
-    """Sums A = Σ w² κ² and B = Σ w² κ y per (point, sub-problem, radius group) → W, Y (k·n_sub, G)."""
-    k, G = ch.y.shape[0], ch.r_g.size
-    idx = np.arange(k)[:, None, None] * (n_sub * G) + ch.gid[..., None]
-    if sub is not None:
-        idx = idx + sub * G
+def _grouped(seg: Segments, G: int, C: int, w2, kappa, target):
+    r"""Sums :math:`A = \sum w^2\kappa^2` and :math:`B = \sum w^2 \kappa y` over each
+    (point, key) of ``seg`` (keys: sub-problem · G + radius group), channels summed
+    when C = 1; returns W = √A and Y = B/A as rows (point, colour row, sub-problem), (·, G)."""
     wk = w2 * kappa
-    idx = np.broadcast_to(idx, wk.shape).ravel()
-    A = np.bincount(idx, (wk * kappa).ravel(), minlength=k * n_sub * G).reshape(k * n_sub, G)
-    B = np.bincount(idx, (wk * target).ravel(), minlength=k * n_sub * G).reshape(k * n_sub, G)
-    W = np.sqrt(A)
-    return W, np.divide(B, A, out=np.zeros_like(B), where=A > 0)
+    A, B = seg.sums(wk * kappa), seg.sums(wk * target)  # (k, n_sub·G, 3)
+    if C == 1:
+        A, B = A.sum(axis=2, keepdims=True), B.sum(axis=2, keepdims=True)
+    k = A.shape[0]
+    A, B = (x.reshape(k, -1, G, C).transpose(0, 3, 1, 2).reshape(-1, G).astype(np.float64) for x in (A, B))
+    return np.sqrt(A), np.divide(B, A, out=np.zeros_like(B), where=A > 0)
 
 
 def _solve_exponentials(ctx, state, sl, r_g, W, Y, index):
@@ -540,16 +582,14 @@ def _solve_exponentials(ctx, state, sl, r_g, W, Y, index):
 
 
 def _fit_exponential(ctx: _Context, state: _State, sl: slice, ch: _Chunk, w2) -> None:
-    k, C, m = ch.y.shape[0], ctx.C, ctx.m
-    s_col = state.s[sl][:, None, :] if C == 1 else np.ones((k, 1, 3))
-    kappa = ch.alpha[..., None] * s_col  # (k, J, 3)
-    chan = np.zeros(3, dtype=np.int64) if C == 1 else np.arange(3)  # which colour row each channel feeds
+    k, C, m, G = ch.y.shape[0], ctx.C, ctx.m, ch.r_g.size
+    kappa = ch.alpha * state.s[sl][:, None, :].astype(np.float32) if C == 1 else ch.alpha  # (k, J, 3)
     if m == 1:
-        W, Y = _grouped(ch, w2, kappa, ch.y, chan[None, None, :], C)
+        W, Y = _grouped(ch.rings, G, C, w2, kappa, ch.y)
         _solve_exponentials(ctx, state, sl, ch.r_g, W, Y, np.arange(k * C))
         return
     if not state.ready[sl].all():  # start every direction from the isotropic fit
-        W, Y = _grouped(ch, w2, kappa, ch.y, chan[None, None, :], C)
+        W, Y = _grouped(ch.rings, G, C, w2, kappa, ch.y)
         cc, aa, _ = fit_exponentials_batched(ch.r_g, W, Y, ctx.n, n_starts=3, pooled=True, max_iter=25, tol=1e-5)
         state.c[sl] = np.repeat(cc.reshape(k, C, 1, ctx.n), m, axis=2)
         state.a[sl] = np.repeat(aa.reshape(k, C, 1, ctx.n), m, axis=2)
@@ -558,18 +598,17 @@ def _fit_exponential(ctx: _Context, state: _State, sl: slice, ch: _Chunk, w2) ->
     l1 = (l0 + 1) % m
     classes = [np.arange(0, m, 2), np.arange(1, m, 2)] if m % 2 == 0 else [np.array([l]) for l in range(m)]
     for _ in range(ctx.sweeps):
-        for cls in classes:
+        for ci, cls in enumerate(classes):
             in0, in1 = np.isin(l0, cls), np.isin(l1, cls)
             L = np.where(in0, l0, l1)  # the direction being fitted
             O = np.where(in0, l1, l0)  # its neighbour, held fixed
-            u = np.where(in0, 1 - t, np.where(in1, t, 0.0))
-            f_other = _at_pixels(_group_profiles(ctx, state, sl, ch.r_g), ch, m, O)  # (k, J, C)
-            if C == 1:
-                f_other = f_other * s_col
-            other = np.where(in0, t, 1 - t)[..., None] * ch.alpha[..., None] * f_other
-            w_cls = np.where((in0 | in1)[..., None], w2, 0.0)
-            sub = (chan[None, None, :] * m + L[..., None])
-            W, Y = _grouped(ch, w_cls, kappa * u[..., None], ch.y - other, sub, C * m)
+            u = np.where(in0, 1 - t, np.where(in1, t, 0.0)).astype(np.float32)
+            f_other = _at_pixels(_group_profiles(ctx, state, sl, ch.r_g).astype(np.float32), ch, m, O)
+            other = ch.per_channel(np.where(in0, t, 1 - t).astype(np.float32)) * kappa * f_other
+            w_cls = w2 * (in0 | in1)[..., None]
+            if ci not in ch.plans:  # pixels grouped by (direction, radius group), made once per chunk
+                ch.plans[ci] = Segments.of(L * G + ch.gid, k, m * G)
+            W, Y = _grouped(ch.plans[ci], G, C, w_cls, kappa * ch.per_channel(u), ch.y - other)
             rows = (np.arange(k)[:, None, None] * C + np.arange(C)[None, :, None]) * m + cls[None, None, :]
             rows = rows.ravel()
             _solve_exponentials(ctx, state, sl, ch.r_g, W[rows], Y[rows], rows)
@@ -578,7 +617,7 @@ def _fit_exponential(ctx: _Context, state: _State, sl: slice, ch: _Chunk, w2) ->
 def _fit_colour(ctx: _Context, state: _State, sl: slice, ch: _Chunk, w2) -> None:
     """Closed-form s_λ = Σ w² α P y / Σ w² (α P)², then (1, s_g, s_b) with the red scale moved into c."""
     state.s[sl] = 1.0
-    f = ch.alpha[..., None] * _predict(ctx, state, sl, ch)  # s = 1 here
+    f = ch.alpha * _predict(ctx, state, sl, ch)  # s = 1 here
     num = np.einsum("kjc,kjc->kc", w2 * f, ch.y)
     den = np.einsum("kjc,kjc->kc", w2 * f, f)
     s = np.divide(num, den, out=np.ones_like(num), where=den > 0)
@@ -590,8 +629,7 @@ def _fit_colour(ctx: _Context, state: _State, sl: slice, ch: _Chunk, w2) -> None
 def _fit_baseline(ctx: _Context, state: _State, sl: slice, ch: _Chunk, w2) -> None:
     """Dipole or Burley: two positive parameters per point and channel."""
     k = ch.y.shape[0]
-    W, Y = _grouped(ch, w2, np.broadcast_to(ch.alpha[..., None], ch.y.shape), ch.y,
-                    np.arange(3)[None, None, :], 3)
+    W, Y = _grouped(ch.rings, ch.r_g.size, 3, w2, ch.alpha, ch.y)
     profile = _dipole_profile(ctx.eta) if ctx.kind == "dipole" else _burley_profile
     starts = _DIPOLE_STARTS if ctx.kind == "dipole" else _BURLEY_STARTS
     p = state.p[sl].reshape(-1, 2)
