@@ -230,7 +230,8 @@ def fit(
                                     "per channel. Default: per-channel on planar data, shared on meshes."),
     exclusion: float = typer.Option(None, "--exclusion", help="Ignore pixels closer than this to x_i, mm (default one pixel)."),
     rounds: int = typer.Option(3, "--rounds", help="Most alternation rounds (parameters, then alpha)."),
-    chunk: int = typer.Option(128, "--chunk", help="Incident points read and fitted together."),
+    chunk: int = typer.Option(None, "--chunk", help="Incident points read and fitted together "
+                                        "(default 128, in whole chunks of the store)."),
     float16: bool = typer.Option(False, "--float16", help="Store parameters as float16 (smaller file)."),
 ):
     """Fit a model per incident point, with the modulation texture alpha, to a planar data set.

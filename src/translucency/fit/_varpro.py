@@ -199,7 +199,7 @@ def fit_exponentials_batched(r, W, Y, n_terms: int, *, rates0=None, n_starts: in
     return tuple(out)
 
 
-_PROBE_ITER = 6  # iterations from every start before the best start per problem is kept
+_PROBE_ITER = 4  # iterations from every start before the best start per problem is kept
 
 
 def _fit_block(r, W2, Y, n, rates0, n_starts, max_iter, tol, bounds):

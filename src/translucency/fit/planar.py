@@ -188,7 +188,7 @@ def check_fit_options(model: str, n_terms: int = 3, n_directions: int = 8, colou
 def fit_planar(dataset, model: str = "iso", *, n_terms: int = 3, n_directions: int = 8,
                colour: str = "per-channel", exclusion_mm: float | None = None, rel_sigma: float = 0.05,
                max_rounds: int = 3, tol: float = 1e-3, radius_step: float | None | str = "auto",
-               sweeps: int = 1, balance: bool = True, chunk_points: int = 128, workers: int | None = None,
+               sweeps: int = 1, balance: bool = True, chunk_points: int | None = None, workers: int | None = None,
                cache_mb: float = 512,
                checkpoint=None,
                progress: Callable[[int, int, str], None] | None = None) -> PlanarFit:
@@ -218,8 +218,10 @@ def fit_planar(dataset, model: str = "iso", *, n_terms: int = 3, n_directions: i
         exactly equal radii only; ``"auto"`` is a quarter pixel.
     sweeps : int
         Block-coordinate sweeps over the directions per round (aniso).
-    chunk_points : int
-        Incident points read and fitted together.
+    chunk_points : int, optional
+        Incident points read and fitted together; default 128, rounded up to
+        whole chunks of the store (up to 512) so that no stored chunk is
+        decoded twice.
     workers : int, optional
         Chunks fitted in parallel threads (default: the number of CPUs).
     cache_mb : float
@@ -249,6 +251,12 @@ def fit_planar(dataset, model: str = "iso", *, n_terms: int = 3, n_directions: i
     if exclusion < 0 or not np.isfinite(exclusion):
         raise TranslucencyError(f"exclusion: must be >= 0 mm, got {exclusion_mm}")
     step = pitch / 4 if radius_step == "auto" else radius_step
+    if chunk_points is None:
+        stored = int(ds.group["R_d"].chunks[0])
+        chunk_points = stored * -(-128 // stored) if stored <= 512 else 128
+    elif int(chunk_points) < 1:
+        raise TranslucencyError(f"chunk: must be >= 1 point, got {chunk_points}")
+    chunk_points = int(chunk_points)
     m = int(n_directions) if model == "aniso" else 1
     n = int(n_terms)
     C = 1 if (colour == "shared" and model in ("iso", "aniso")) else 3
@@ -371,7 +379,7 @@ class _Chunk:
 
     def per_channel(self, x: np.ndarray) -> np.ndarray:
         """(k, J) → contiguous (k, J, 3): elementwise work on like-shaped arrays is several times faster."""
-        return np.repeat(x, 3).reshape(x.shape + (3,))
+        return np.stack([x, x, x], axis=-1)
 
 
 class _PlanarSource:
@@ -575,7 +583,7 @@ def _solve_exponentials(ctx, state, sl, r_g, W, Y, index):
             continue
         rows = index[sel]
         cc, aa, _ = fit_exponentials_batched(r_g, W[sel], Y[sel], ctx.n, rates0=a[rows] if warm else None,
-                                             n_starts=3, pooled=True, max_iter=15 if warm else 25, tol=1e-5)
+                                             n_starts=3, pooled=True, max_iter=15 if warm else 12, tol=1e-5)
         c[rows], a[rows] = cc, aa
     state.c[sl] = c.reshape(state.c[sl].shape)
     state.a[sl] = a.reshape(state.a[sl].shape)
