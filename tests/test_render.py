@@ -154,3 +154,85 @@ def test_spot_and_environment_irradiance(ball):
     top = box.vertex_normals[:, 2] > 0.5
     assert (shaded[top] < 0.5 * np.pi * 0.3).all()
     assert isinstance(parse_light("spot:0,0,40,0,0,0,10"), SpotLight) and isinstance(parse_light("env:0.2"), EnvironmentLight)
+
+
+def _sky_map(path, sun=True):
+    """A latitude–longitude map (rows from the map's +Y pole down): a blue-grey sky and an optional sun."""
+    from translucency.acquire._engine import mitsuba
+
+    H, W = 32, 64
+    theta = (np.arange(H) + 0.5) / H * np.pi
+    img = np.zeros((H, W, 3), np.float32)
+    img[:] = (0.05 + 0.2 * np.clip(np.cos(theta), 0, None))[:, None, None] * np.array([0.6, 0.8, 1.0])
+    if sun:
+        img[5:8, 40:44] = [60.0, 50.0, 40.0]
+    mitsuba().Bitmap(img).write(str(path))
+    return path
+
+
+def test_environment_map_irradiance_matches_mitsuba_direct_lighting(ball, tmp_path):
+    """A white diffuse ball under a sky with a sun: ρE/π per vertex, drawn, against Mitsuba's own path tracer."""
+    from translucency.acquire._engine import mitsuba
+    from translucency.render import EnvironmentLight
+    from translucency.render.image import _write_ply
+
+    mi = mitsuba()
+    light = parse_light(f"env:{_sky_map(tmp_path / 'sky.exr')},2")
+    assert isinstance(light, EnvironmentLight) and light.radiance == 2.0
+    light = EnvironmentLight(2.0, samples=256, filename=light.filename)
+    E = vertex_irradiance(ball, mesh_scene(ball), light)
+    assert E.shape == (len(ball.vertices), 3) and np.isfinite(E).all()
+    rho = 0.8
+    cam = Camera.looking_at(ball, direction=(0.3, -1.0, 0.2), width=64, height=48)
+    ours = render_vertex_radiance(ball, rho * E / np.pi, cam, spp=4, light=light)
+    _write_ply(tmp_path / "ball.ply", np.asarray(ball.vertices), np.asarray(ball.faces))
+    ref = np.asarray(mi.render(mi.load_dict({
+        "type": "scene", "integrator": {"type": "path", "max_depth": 2},
+        "ball": {"type": "ply", "filename": str(tmp_path / "ball.ply"), "bsdf": {"type": "diffuse", "reflectance": rho}},
+        "sky": light.emitter_dict(), "camera": cam.sensor_dict(512)}), seed=1), dtype=np.float64)
+    seen = coverage(ball, cam)
+    inner = seen & np.roll(seen, 1, 0) & np.roll(seen, -1, 0) & np.roll(seen, 1, 1) & np.roll(seen, -1, 1)
+    ratio = ours[inner].mean(axis=0) / ref[inner].mean(axis=0)
+    np.testing.assert_allclose(ratio, 1.0, atol=0.04)
+    # the sun's side is the bright side in both (the map's orientation is the same)
+    lum_o, lum_r = ours[inner].sum(1), ref[inner].sum(1)
+    assert np.corrcoef(lum_o, lum_r)[0, 1] > 0.95
+    # behind the object both show the same sky
+    np.testing.assert_allclose(ours[~seen].mean(0), ref[~seen].mean(0), rtol=0.05)
+
+
+def test_uniform_map_is_the_constant_sky(ball, tmp_path):
+    from translucency.acquire._engine import mitsuba
+    from translucency.render import EnvironmentLight
+
+    mitsuba().Bitmap(np.full((16, 32, 3), 0.25, np.float32)).write(str(tmp_path / "flat.exr"))
+    E = vertex_irradiance(ball, mesh_scene(ball), EnvironmentLight(1.0, 128, str(tmp_path / "flat.exr")))
+    np.testing.assert_allclose(E.mean(axis=0), np.pi * 0.25, rtol=0.015)
+    np.testing.assert_allclose(E, np.pi * 0.25, rtol=0.4)
+
+
+def test_fresnel_factors_against_closed_forms():
+    from translucency.model import fresnel_diffuse_reflectance
+    from translucency.render.transport import diffuse_transmittance, fresnel_transmittance
+
+    eta = 1.3
+    # normal incidence: 1 − ((η − 1)/(η + 1))²
+    np.testing.assert_allclose(fresnel_transmittance(1.0, eta), 1 - ((eta - 1) / (eta + 1)) ** 2, rtol=1e-6)
+    assert fresnel_transmittance(0.0, eta) < 1e-6 and fresnel_transmittance(0.7, 1.0) == 1.0
+    # cosine-weighted transmittance from outside = η² (1 − F_dr) with Jensen's internal F_dr (reciprocity)
+    np.testing.assert_allclose(diffuse_transmittance(eta), eta**2 * (1 - fresnel_diffuse_reflectance(eta)), rtol=0.015)
+
+
+def test_bad_environment_maps_and_dielectric_references(ball, tmp_path):
+    from translucency.render.image import render_reference
+
+    with pytest.raises(TranslucencyError, match="does not exist"):
+        parse_light(f"env:{tmp_path / 'none.exr'}")
+    (tmp_path / "junk.exr").write_text("not an image")
+    with pytest.raises(TranslucencyError, match="not a readable environment map"):
+        parse_light(f"env:{tmp_path / 'junk.exr'}")
+    with pytest.raises(TranslucencyError, match="scale"):
+        parse_light(f"env:{_sky_map(tmp_path / 'sky.exr')},x")
+    cam = Camera.looking_at(ball, width=16, height=12)
+    with pytest.raises(TranslucencyError, match="dielectric object"):
+        render_reference(ball, None, PointLight((0.0, 0.0, 40.0)), cam, eta=1.3)

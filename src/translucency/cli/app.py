@@ -297,7 +297,7 @@ def render(
     model: Path = typer.Argument(..., help="A per-vertex model file (translucency fit on a mesh data set)."),
     out: Path = typer.Option(Path("render"), "--out", "-o", help="Directory for ours.exr/.png (and the reference)."),
     light: list[str] = typer.Option(None, "--light",
-                                    help="point:x,y,z[,I] | directional:dx,dy,dz[,E] | spot:x,y,z,tx,ty,tz,cutoff_deg[,I] | env:L (mm, W/sr, W/mm^2, W/(mm^2 sr))."),
+                                    help="point:x,y,z[,I] | directional:dx,dy,dz[,E] | spot:x,y,z,tx,ty,tz,cutoff_deg[,I] | env:L | env:MAP.exr[,scale] (mm, W/sr, W/mm^2, W/(mm^2 sr))."),
     view: str = typer.Option("1,-1.6,0.7", "--view", help="Camera direction from the object's centre, x,y,z."),
     size: tuple[int, int] = typer.Option((320, 240), "--size", help="Image width and height in pixels."),
     reference: bool = typer.Option(False, "--reference", help="Also path-trace the reference (Mitsuba volpath) and compare."),
@@ -306,7 +306,7 @@ def render(
 ):
     """Relight a fitted object: irradiance per vertex, sparse transport, a picture through Mitsuba (EXR + PNG)."""
     from ..io.model_file import ModelFileError, load_model, read_header
-    from ..render.figure import figure2, object_from_dataset, volume_of_dataset
+    from ..render.figure import boundary_eta, figure2, object_from_dataset, volume_of_dataset
     from ..render.image import Camera
     from ..render.transport import parse_light
 
@@ -328,7 +328,8 @@ def render(
         raise TranslucencyError("--light: one light per render for now (run once per light)")
     cam = Camera.looking_at(mesh, direction, *size)
     vol = volume_of_dataset(mesh, dheader) if reference else None
-    res = figure2(m, mesh, lights[0], out, volume=vol, camera=cam, spp_reference=spp, radius=radius)
+    res = figure2(m, mesh, lights[0], out, volume=vol, camera=cam, spp_reference=spp, radius=radius,
+                  eta=boundary_eta(dheader))
     table = Table(title=f"render of {model.name}", show_header=False)
     for k, v in res.items():
         table.add_row(k, f"{v:.4g}" if isinstance(v, float) else str(v))

@@ -490,7 +490,7 @@ def _hat(theta, m):
     """Lower direction l0 and the fraction t towards l0 + 1 of each angle (hat weights)."""
     u = np.mod(theta / (2 * np.pi / m), m)
     l0 = np.floor(u)
-    return l0.astype(np.int64) % m, u - l0
+    return l0.astype(np.int64) % m, (u - l0).astype(np.float32)
 
 
 def _weights(ctx: _Context, ch: _Chunk, f: np.ndarray | None) -> np.ndarray:

@@ -16,7 +16,7 @@ import numpy as np
 from .._validate import TranslucencyError
 from ..io.atomic import atomic_path, write_json
 from .image import Camera, compare, coverage, render_reference, render_vertex_radiance, save_images
-from .transport import relight_vertices, transport_matrices, vertex_irradiance
+from .transport import exit_fresnel, relight_vertices, transport_matrices, vertex_irradiance
 
 
 def object_from_dataset(path):
@@ -50,9 +50,17 @@ def volume_of_dataset(mesh, header):
     return object_volume(d["generator"], mesh, grid["voxel_mm"], g=header.get("g", 0.0), seed=d.get("seed", 0))
 
 
+def boundary_eta(header) -> float:
+    """η of a mesh data set's boundary: 1 when it was acquired index-matched."""
+    return 1.0 if header.get("request", {}).get("index_matched", False) else float(header.get("eta", 1.0))
+
+
 def figure2(model, mesh, light, out_dir, *, volume=None, camera: Camera | None = None, spp_reference: int = 32,
-            radius: float | None = None) -> dict:
+            radius: float | None = None, eta: float = 1.0) -> dict:
     """Render ``model`` on ``mesh`` under ``light``; with ``volume`` also the reference and the comparison.
+
+    ``eta``: the boundary the data set was acquired with (:func:`boundary_eta`);
+    ≠ 1 adds the Fresnel factors, the surface reflection and a dielectric reference.
 
     Writes ``ours.exr/.png`` (and ``reference.exr/.png``, ``figure2.png``,
     ``figure2.json``) into ``out_dir``; returns the numbers.
@@ -67,20 +75,20 @@ def figure2(model, mesh, light, out_dir, *, volume=None, camera: Camera | None =
     mats = transport_matrices(model, mesh, radius=radius)
     t_prepare = time.perf_counter() - t
     t = time.perf_counter()
-    E = vertex_irradiance(mesh, mesh_scene(mesh), light)
-    L = relight_vertices(mats, E)
+    E = vertex_irradiance(mesh, mesh_scene(mesh), light, eta)
+    L = relight_vertices(mats, E) * exit_fresnel(mesh, camera.origin, eta)[:, None]
     t_relight = time.perf_counter() - t
     t = time.perf_counter()
-    ours = render_vertex_radiance(mesh, L, camera)
+    ours = render_vertex_radiance(mesh, L, camera, eta=eta, light=light)
     t_draw = time.perf_counter() - t
     out = {"vertices": len(mesh.vertices), "transport_nonzeros": int(mats[0].nnz), "prepare_s": t_prepare,
-           "relight_s": t_relight, "draw_s": t_draw, "light": repr(light)}
+           "relight_s": t_relight, "draw_s": t_draw, "light": repr(light), "eta": eta}
     if volume is None:
         exposure = 0.8 / max(float(np.quantile(ours[mask], 0.99)), 1e-30)
         save_images(ours, out_dir / "ours", exposure)
         write_json(out_dir / "figure2.json", out)
         return out
-    reference, t_ref = render_reference(mesh, volume, light, camera, spp=spp_reference)
+    reference, t_ref = render_reference(mesh, volume, light, camera, spp=spp_reference, eta=eta)
     cmp = compare(reference, ours, mask)
     flip_map = cmp.pop("flip_map")
     out.update(cmp)

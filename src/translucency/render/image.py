@@ -4,9 +4,17 @@ r"""Pictures of an object: ours (per-vertex radiance drawn by Mitsuba) and the p
   attribute; Mitsuba draws it as an area emitter with a ``mesh_attribute``
   radiance (linearly interpolated over each triangle) through the camera —
   so the picture costs one rasterising pass, not a light-transport simulation.
+  A dielectric object (η ≠ 1) also gets its smooth surface reflection: a
+  ``plastic`` BSDF with no diffuse part is Fresnel reflection off a smooth
+  dielectric, and an environment light is in the scene (seen behind the object
+  and in its reflection).
 * **reference**: the same object, volume, light and camera rendered by Mitsuba's
-  ``volpath`` (index-matched boundary, heterogeneous medium over the bounding
-  box, one grey channel at a time as in :mod:`translucency.acquire.reference`).
+  ``volpath`` (heterogeneous medium over the bounding box, one grey channel at
+  a time as in :mod:`translucency.acquire.reference`), behind a ``null``
+  boundary (index-matched) or a smooth ``dielectric`` one.  A dielectric object
+  can only be path-traced under an environment light: point, spot and
+  directional lights reach its inside through a delta refraction, a path
+  ``volpath`` cannot sample.
 * **comparison**: relative RMSE over the pixels the object covers, and FLIP
   (NVIDIA's perceptual difference, PyPI ``flip-evaluator``) on tone-mapped images.
 
@@ -79,21 +87,28 @@ def _write_ply(path: Path, vertices: np.ndarray, faces: np.ndarray, colour: np.n
         f.write(face.tobytes())
 
 
-def render_vertex_radiance(mesh, L: np.ndarray, camera: Camera, *, spp: int = 4) -> np.ndarray:
+def render_vertex_radiance(mesh, L: np.ndarray, camera: Camera, *, spp: int = 4, eta: float = 1.0,
+                           light=None) -> np.ndarray:
     """Draw the mesh with radiance L (V, 3) per vertex through the camera; returns (H, W, 3).
 
-    Raises a one-line error when the camera sees nothing of the object.
+    With ``eta`` ≠ 1 the surface also reflects (smooth dielectric, Fresnel); an
+    :class:`EnvironmentLight` passed as ``light`` is drawn behind the object and
+    reflected (the reflection of a point, spot or directional light in a smooth
+    surface covers no area and is not drawn).
     """
     mi = mitsuba()
+    bsdf = ({"type": "diffuse", "reflectance": 0.0} if eta == 1.0 else
+            {"type": "plastic", "diffuse_reflectance": 0.0, "int_ior": float(eta), "ext_ior": 1.0})
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / "object.ply"
         _write_ply(path, np.asarray(mesh.vertices), np.asarray(mesh.faces), np.maximum(L, 0.0))
-        scene = mi.load_dict({
-            "type": "scene", "integrator": {"type": "direct"},
-            "object": {"type": "ply", "filename": str(path), "bsdf": {"type": "diffuse", "reflectance": 0.0},
-                       "emitter": {"type": "area", "radiance": {"type": "mesh_attribute", "name": "vertex_color"}}},
-            "camera": camera.sensor_dict(spp)})
-        img = np.asarray(mi.render(scene), dtype=np.float64)
+        scene = {"type": "scene", "integrator": {"type": "direct"},
+                 "object": {"type": "ply", "filename": str(path), "bsdf": bsdf,
+                            "emitter": {"type": "area", "radiance": {"type": "mesh_attribute", "name": "vertex_color"}}},
+                 "camera": camera.sensor_dict(spp)}
+        if isinstance(light, EnvironmentLight):
+            scene["sky"] = light.emitter_dict()
+        img = np.asarray(mi.render(mi.load_dict(scene)), dtype=np.float64)
     return img
 
 
@@ -106,11 +121,20 @@ def coverage(mesh, camera: Camera) -> np.ndarray:
     return cov
 
 
-def render_reference(mesh, volume, light, camera: Camera, *, spp: int = 256, seed: int = 0) -> tuple[np.ndarray, float]:
-    """The same object path-traced by Mitsuba's ``volpath``; returns (image (H, W, 3), seconds)."""
+def render_reference(mesh, volume, light, camera: Camera, *, spp: int = 256, seed: int = 0,
+                     eta: float = 1.0) -> tuple[np.ndarray, float]:
+    """The same object path-traced by Mitsuba's ``volpath``; returns (image (H, W, 3), seconds).
+
+    ``eta`` ≠ 1: a smooth dielectric boundary (environment lights only, see the module docstring).
+    """
     from ..acquire.reference import slab_medium_dict
 
     mi = mitsuba()
+    if eta != 1.0 and not isinstance(light, EnvironmentLight):
+        raise TranslucencyError("reference: volpath cannot light a dielectric object with a point, spot or "
+                                "directional light (a delta refraction); use an env light or an index-matched "
+                                "data set")
+    boundary = {"type": "null"} if eta == 1.0 else {"type": "dielectric", "int_ior": float(eta), "ext_ior": 1.0}
     lo, hi = mesh.bounds
     if isinstance(light, PointLight):
         emitter = {"type": "point", "position": list(map(float, light.position)), "intensity": float(light.intensity)}
@@ -124,7 +148,7 @@ def render_reference(mesh, volume, light, camera: Camera, *, spp: int = 256, see
                                                               target=list(map(float, light.target)),
                                                               up=_up_for(light.position, light.target))}
     elif isinstance(light, EnvironmentLight):
-        emitter = {"type": "constant", "radiance": float(light.radiance)}
+        emitter = light.emitter_dict()
     else:
         raise TranslucencyError(f"light: no reference for {light!r}")
     t = time.perf_counter()
@@ -135,7 +159,7 @@ def render_reference(mesh, volume, light, camera: Camera, *, spp: int = 256, see
         for ch in range(3):
             scene = mi.load_dict({
                 "type": "scene", "integrator": {"type": "volpath", "max_depth": -1, "rr_depth": 100_000},
-                "object": {"type": "ply", "filename": str(path), "bsdf": {"type": "null"},
+                "object": {"type": "ply", "filename": str(path), "bsdf": boundary,
                            "interior": slab_medium_dict(volume, ch, (lo[0], lo[1], hi[2]))},
                 "light": emitter, "camera": camera.sensor_dict(spp)})
             channels.append(np.asarray(mi.render(scene, seed=3 * seed + ch), dtype=np.float64)[..., ch])

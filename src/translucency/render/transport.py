@@ -16,13 +16,25 @@ sparse matrix–vector product per channel.
 Every vertex needs parameters, not only the fitted incident points: they are
 interpolated by inverse-distance weighting of the k nearest incident points
 (:func:`vertex_parameters`).  Irradiance (:func:`vertex_irradiance`) comes from
-point or directional lights with shadow rays traced by Mitsuba; the boundary is
-index-matched here (no Fresnel factor), as in the acquisitions it is compared with.
+point, spot, directional or environment lights (a constant sky or an
+environment map, importance-sampled by Mitsuba's ``envmap`` emitter) with
+shadow rays traced by Mitsuba.
+
+**Boundary.**  For an object acquired behind a dielectric boundary (index η)
+the measured R_d already holds the transmission of the normally incident
+calibration beam, :math:`F_t(0)`, and all light that left; a light arriving at
+:math:`\theta_i` is therefore scaled by :math:`F_t(\theta_i)/F_t(0)`
+(:func:`vertex_irradiance` with ``eta``), and the exitance leaves with the
+angular shape of the transmission,
+:math:`L(\theta_o) = M\, F_t(\theta_o) / (\pi (1 - F_{dr,e}))`, normalised so
+that it integrates to M (:func:`exit_fresnel`).  Index-matched objects (η = 1)
+get neither factor.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
@@ -67,14 +79,31 @@ class SpotLight:
 
 @dataclass(frozen=True)
 class EnvironmentLight:
-    """Uniform radiance L (W/(mm² sr)) from every direction (a constant environment)."""
+    """Light from every direction: a constant radiance L (W/(mm² sr)), or an environment map.
+
+    With ``filename`` a latitude–longitude image (EXR, HDR, PNG; linear RGB) read by
+    Mitsuba's ``envmap`` emitter, scaled by ``radiance``; the map's up axis (+Y)
+    is turned to the scene's +Z, the same for the irradiance, our picture and
+    the reference.
+    """
 
     radiance: float = 0.1
-    samples: int = 64  # cosine-weighted visibility rays per vertex
+    samples: int = 64  # visibility rays per vertex (cosine-weighted, or by the map's importance)
+    filename: str | None = None
+
+    def emitter_dict(self) -> dict:
+        """The Mitsuba emitter of this light."""
+        if self.filename is None:
+            return {"type": "constant", "radiance": float(self.radiance)}
+        from ..acquire._engine import mitsuba
+
+        return {"type": "envmap", "filename": str(self.filename), "scale": float(self.radiance),
+                "to_world": mitsuba().ScalarTransform4f().rotate([1.0, 0.0, 0.0], 90.0)}
 
 
 def parse_light(text: str):
-    """``point:x,y,z[,I]``, ``directional:dx,dy,dz[,E]``, ``spot:x,y,z,tx,ty,tz,cutoff_deg[,I]`` or ``env:L``.
+    """``point:x,y,z[,I]``, ``directional:dx,dy,dz[,E]``, ``spot:x,y,z,tx,ty,tz,cutoff_deg[,I]``,
+    ``env:L`` (constant) or ``env:MAP.exr[,scale]`` (environment map).
 
     Examples
     --------
@@ -82,6 +111,11 @@ def parse_light(text: str):
     PointLight(position=(0.0, 0.0, 100.0), intensity=5000.0)
     """
     kind, _, rest = text.partition(":")
+    if kind == "env" and rest:
+        try:
+            float(rest.split(",")[0])
+        except ValueError:  # not a number: the name of an environment map
+            return _environment_map(rest)
     try:
         v = [float(x) for x in rest.split(",")]
     except ValueError:
@@ -101,9 +135,63 @@ def parse_light(text: str):
                             f"spot:x,y,z,tx,ty,tz,cutoff_deg[,I] or env:L, got {text!r}")
 
 
-def vertex_irradiance(mesh, scene, light) -> np.ndarray:
-    """Irradiance E (W/mm²) at every vertex, with shadows (Mitsuba ``ray_test``).
+def _environment_map(rest: str) -> EnvironmentLight:
+    """``MAP[,scale]`` of ``env:``: the file must exist and Mitsuba must read it."""
+    name, _, scale = rest.partition(",")
+    path = Path(name.strip())
+    if not path.is_file():
+        raise TranslucencyError(f"light: environment map {path} does not exist")
+    try:
+        s = float(scale) if scale.strip() else 1.0
+    except ValueError:
+        raise TranslucencyError(f"light: cannot read the scale {scale!r} of env:{rest}") from None
+    if not (s >= 0 and np.isfinite(s)):
+        raise TranslucencyError(f"light: the scale of env:{rest} must be >= 0")
+    light = EnvironmentLight(s, filename=str(path.resolve()))
+    from ..acquire._engine import mitsuba
 
+    try:
+        mitsuba().load_dict(light.emitter_dict())
+    except Exception as exc:  # noqa: BLE001 — Mitsuba's message is long; one line names the file
+        raise TranslucencyError(f"light: {path} is not a readable environment map "
+                                f"({str(exc).splitlines()[0][:120]})") from None
+    return light
+
+
+def fresnel_transmittance(cos_theta, eta: float) -> np.ndarray:
+    r"""Unpolarised Fresnel transmittance :math:`1 - F(\cos\theta, \eta)` from outside (Mitsuba's term)."""
+    cos_theta = np.asarray(cos_theta, dtype=np.float64)
+    if eta == 1.0:
+        return np.ones_like(cos_theta)
+    from ..acquire._engine import mitsuba
+
+    mi = mitsuba()
+    c = np.clip(cos_theta, 0.0, 1.0).ravel()
+    F = np.asarray(mi.fresnel(mi.Float(c.astype(np.float32)), mi.Float(float(eta)))[0], dtype=np.float64)
+    return (1.0 - F).reshape(cos_theta.shape)
+
+
+def diffuse_transmittance(eta: float, n: int = 512) -> float:
+    r""":math:`1 - F_{dr,e} = 2\int_0^1 F_t(\mu)\, \mu\, d\mu`: the cosine-weighted transmittance
+    from outside (midpoint rule)."""
+    mu = (np.arange(n) + 0.5) / n
+    return float(2.0 * np.mean(fresnel_transmittance(mu, eta) * mu))
+
+
+def exit_fresnel(mesh, viewpoint, eta: float) -> np.ndarray:
+    r"""Per-vertex factor :math:`F_t(\theta_o)/(1 - F_{dr,e})` toward ``viewpoint`` (1 where η = 1)."""
+    if eta == 1.0:
+        return np.ones(len(mesh.vertices))
+    to = np.asarray(viewpoint, dtype=np.float64) - np.asarray(mesh.vertices, dtype=np.float64)
+    cos_o = np.einsum("vk,vk->v", to, np.asarray(mesh.vertex_normals)) / np.linalg.norm(to, axis=1)
+    return fresnel_transmittance(cos_o, eta) / diffuse_transmittance(eta)
+
+
+def vertex_irradiance(mesh, scene, light, eta: float = 1.0) -> np.ndarray:
+    r"""Irradiance E (W/mm²) at every vertex, with shadows (Mitsuba ``ray_test``).
+
+    (V,) for the grey lights, (V, 3) for an environment map.  With ``eta`` ≠ 1
+    each arriving direction is weighted by :math:`F_t(\theta_i)/F_t(0)` (module docstring).
     Raises a one-line error for a point light inside the object.
     """
     from ..acquire._engine import mitsuba
@@ -112,7 +200,7 @@ def vertex_irradiance(mesh, scene, light) -> np.ndarray:
     v = np.asarray(mesh.vertices, dtype=np.float64)
     n = np.asarray(mesh.vertex_normals, dtype=np.float64)
     if isinstance(light, EnvironmentLight):
-        return _environment_irradiance(mi, mesh, scene, light)
+        return _environment_irradiance(mi, mesh, scene, light, eta)
     if isinstance(light, (PointLight, SpotLight)):
         p = np.asarray(light.position, dtype=np.float64)
         # inside a closed, outward-oriented surface a ray first meets a face from its back
@@ -137,27 +225,49 @@ def vertex_irradiance(mesh, scene, light) -> np.ndarray:
                    mi.Vector3f(*(np.ascontiguousarray(w[:, k]).astype(np.float32) for k in range(3))))
     ray.maxt = mi.Float((t_max - 10 * eps).astype(np.float32))
     blocked = np.asarray(scene.ray_test(ray))
+    E = E * fresnel_transmittance(np.einsum("vk,vk->v", w, n), eta) / fresnel_transmittance(1.0, eta)
     return np.where(blocked | (E <= 0), 0.0, E)
 
 
-def _environment_irradiance(mi, mesh, scene, light: EnvironmentLight) -> np.ndarray:
-    """E = ∫ L V(ω) cos θ dω by cosine-weighted sampling: π L × (fraction of unoccluded rays)."""
+def _environment_irradiance(mi, mesh, scene, light: EnvironmentLight, eta: float) -> np.ndarray:
+    r"""Estimate :math:`E = \int L(\omega) V(\omega) \cos\theta\, d\omega` with K rays per vertex.
+
+    Constant sky: cosine-weighted directions, :math:`E \approx \pi L \langle V \rangle`.
+    Map: directions drawn by the ``envmap`` emitter in proportion to its luminance,
+    :math:`E \approx \langle (L/p)\, V \cos^+\theta \rangle` (RGB).
+    """
+    import drjit as dr
+
     v = np.asarray(mesh.vertices, dtype=np.float64)
     n = np.asarray(mesh.vertex_normals, dtype=np.float64)
     K = int(light.samples)
     rng = np.random.default_rng(0)
     u1, u2 = rng.random((2, len(v), K))
-    r, phi = np.sqrt(u1), 2 * np.pi * u2
-    local = np.stack([r * np.cos(phi), r * np.sin(phi), np.sqrt(1 - u1)], axis=-1)  # cosine-weighted
-    from ..fit.mesh import tangent_frames
-
-    frame = tangent_frames(n)  # rows t, b, n
-    w = np.einsum("vkj,vji->vki", local, frame).reshape(-1, 3)
     o = np.repeat(v + n * 5e-4 * float(np.max(mesh.extents)), K, axis=0)
+    if light.filename is None:
+        r, phi = np.sqrt(u1), 2 * np.pi * u2
+        local = np.stack([r * np.cos(phi), r * np.sin(phi), np.sqrt(1 - u1)], axis=-1)  # cosine-weighted
+        from ..fit.mesh import tangent_frames
+
+        frame = tangent_frames(n)  # rows t, b, n
+        w = np.einsum("vkj,vji->vki", local, frame).reshape(-1, 3)
+        weight = np.full((len(w), 1), np.pi * light.radiance)  # L cos / p with p = cos/π
+    else:
+        emitter = mi.load_dict(light.emitter_dict())
+        it = dr.zeros(mi.Interaction3f, len(o))
+        it.p = mi.Point3f(*(o[:, j].astype(np.float32) for j in range(3)))
+        ds, spec = emitter.sample_direction(it, mi.Point2f(u1.ravel().astype(np.float32),
+                                                           u2.ravel().astype(np.float32)))
+        w = np.stack([np.asarray(ds.d.x), np.asarray(ds.d.y), np.asarray(ds.d.z)], axis=1).astype(np.float64)
+        cos = np.einsum("vkj,vj->vk", w.reshape(len(v), K, 3), n).reshape(-1)
+        weight = np.stack([np.asarray(spec[j]) for j in range(3)], axis=1) * np.maximum(cos, 0.0)[:, None]
     ray = mi.Ray3f(mi.Point3f(*(o[:, j].astype(np.float32) for j in range(3))),
                    mi.Vector3f(*(np.ascontiguousarray(w[:, j]).astype(np.float32) for j in range(3))))
-    open_sky = ~np.asarray(scene.ray_test(ray)).reshape(len(v), K)
-    return np.pi * light.radiance * open_sky.mean(axis=1)
+    open_sky = ~np.asarray(scene.ray_test(ray))
+    cos_i = np.einsum("vkj,vj->vk", w.reshape(len(v), K, 3), n).reshape(-1)
+    weight = weight * (open_sky * fresnel_transmittance(cos_i, eta) / fresnel_transmittance(1.0, eta))[:, None]
+    E = weight.reshape(len(v), K, -1).mean(axis=1)
+    return E[:, 0] if light.filename is None else E
 
 
 def vertex_parameters(model, vertices: np.ndarray, k: int = 4):
