@@ -80,15 +80,18 @@ def window_geometry(x_i: np.ndarray, window_origin: np.ndarray, grid: SampleGrid
 
 
 def radius_groups(r: np.ndarray, pitch: float, *, r_exact: float | None = None,
-                  radius_step: float | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """Group ids (same shape as r) and the radius of each group (mm).
+                  radius_step: float | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Group ids (same shape as r), the mean radius of each group and its base radius (mm).
 
     Radii equal to 1e-4 pixel are one group; beyond ``r_exact`` (default: all
-    exact) radii within rings of ``radius_step`` mm are merged.
+    exact) radii within rings of ``radius_step`` mm are merged.  The base
+    radius is the ring's centre (the group's radius where it is exact): equally
+    spaced, so the solver can step :math:`e^{-a r}` from ring to ring by a
+    product and correct to the mean radius by a short series.
 
     Examples
     --------
-    >>> gid, rg = radius_groups(np.array([[0.0, 1.0, 1.0, 1.5]]), 0.5)
+    >>> gid, rg, _ = radius_groups(np.array([[0.0, 1.0, 1.0, 1.5]]), 0.5)
     >>> gid.tolist(), rg.tolist()
     ([[0, 1, 1, 2]], [0.0, 1.0, 1.5])
     """
@@ -99,7 +102,12 @@ def radius_groups(r: np.ndarray, pitch: float, *, r_exact: float | None = None,
     uniq, gid = np.unique(key, return_inverse=True)
     gid = gid.reshape(r.shape)
     r_g = np.bincount(gid.ravel(), r.ravel(), minlength=uniq.size) / np.bincount(gid.ravel(), minlength=uniq.size)
-    return gid, r_g
+    r_base = r_g.copy()
+    if radius_step is not None and r_exact is not None:
+        # ring centres: equally spaced, on which the solver steps e^{−a r} by one product a ring
+        ring = uniq >= 2**52
+        r_base[ring] = (uniq[ring] - 2**52 + 0.5) * radius_step
+    return gid, r_g, r_base
 
 
 @dataclass

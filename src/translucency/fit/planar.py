@@ -361,6 +361,7 @@ class _Chunk:
     theta: np.ndarray  # (1|k, J) rad, in the sample's frame
     gid: np.ndarray  # (1|k, J) radius group of each pixel
     r_g: np.ndarray  # (G,) radius of each group, mm
+    r_base: np.ndarray  # (G,) ring centres (= r_g for exact radii): equally spaced for the solver
     rings: Segments  # sums over each (point, radius group)
     base: np.ndarray  # (k, 1) and ...
     local: np.ndarray  # ... (1|k, J): α's sample of each pixel is base + local
@@ -426,7 +427,7 @@ def _prepare_chunk(ctx: _Context, s: int, e: int) -> _Chunk:
     local = (pixel - base).astype(np.int32)
     if r.shape[0] == 1:  # windows placed alike around their points: one geometry row serves all
         local = local[:1]
-    gid, r_g = radius_groups(r, ctx.source.pitch, r_exact=1.0, radius_step=ctx.radius_step)
+    gid, r_g, r_base = radius_groups(r, ctx.source.pitch, r_exact=1.0, radius_step=ctx.radius_step)
     rings = Segments.of(gid, k, r_g.size)
     valid, y, r, theta, gid, local = (rings.order(a) for a in (valid, y, r, theta, gid, local))
     if var is not None:
@@ -440,7 +441,7 @@ def _prepare_chunk(ctx: _Context, s: int, e: int) -> _Chunk:
     static = (valid * balance).astype(np.float32)
     var_ring = None if var is None else _ring_means(rings, valid, var).astype(np.float32)
     usable = (valid.sum(axis=1) >= 2 * ctx.n + 2) & (y.sum(axis=(1, 2), dtype=np.float64) > 0)
-    return _Chunk(y, static, var_ring, r.astype(np.float32), theta, gid.astype(np.int32), r_g, rings,
+    return _Chunk(y, static, var_ring, r.astype(np.float32), theta, gid.astype(np.int32), r_g, r_base, rings,
                   base, local, usable, poisson)
 
 
@@ -472,11 +473,20 @@ def _at_pixels(F: np.ndarray, ch: _Chunk, m: int, direction=None) -> np.ndarray:
     or of one ``direction`` (1|k, J) per pixel; returns (k, J, C)."""
     if m == 1 and direction is None:
         return ch.rings.spread(F[..., 0])
-    b = np.arange(F.shape[0])[:, None]
+    k, G, C, _ = F.shape
+    rows = F.transpose(0, 1, 3, 2).reshape(k, G * m, C)  # row g·m + l: group g, direction l
+
+    def at(l):  # the profile of direction l (1|k, J) at each pixel's radius group
+        idx = ch.gid * m + l
+        if idx.shape[0] == 1:
+            return np.take(rows, idx[0], axis=1)
+        return np.take_along_axis(rows, idx[..., None], axis=1)
+
     if direction is not None:
-        return F[b, ch.gid, :, direction]
+        return at(direction)
     l0, t = _hat(ch.theta, m)
-    return (1 - t)[..., None] * F[b, ch.gid, :, l0] + t[..., None] * F[b, ch.gid, :, (l0 + 1) % m]
+    t = np.repeat(t[..., None], C, axis=2)  # (1|k, J, C): like-shaped operands are fast
+    return (1 - t) * at(l0) + t * at((l0 + 1) % m)
 
 
 def _predict(ctx: _Context, state: _State, sl: slice, ch: _Chunk) -> np.ndarray:
@@ -572,7 +582,7 @@ def _grouped(seg: Segments, G: int, C: int, w2, kappa, target):
     return np.sqrt(A), np.divide(B, A, out=np.zeros_like(B), where=A > 0)
 
 
-def _solve_exponentials(ctx, state, sl, r_g, W, Y, index):
+def _solve_exponentials(ctx, state, sl, ch, W, Y, index):
     """Fit the sub-problems at ``index`` (into c/a viewed as (k·C·m, n)); warm where ready."""
     c = state.c[sl].reshape(-1, ctx.n)
     a = state.a[sl].reshape(-1, ctx.n)
@@ -582,8 +592,9 @@ def _solve_exponentials(ctx, state, sl, r_g, W, Y, index):
         if not sel.any():
             continue
         rows = index[sel]
-        cc, aa, _ = fit_exponentials_batched(r_g, W[sel], Y[sel], ctx.n, rates0=a[rows] if warm else None,
-                                             n_starts=3, pooled=True, max_iter=15 if warm else 12, tol=1e-5)
+        cc, aa, _ = fit_exponentials_batched(ch.r_g, W[sel], Y[sel], ctx.n, rates0=a[rows] if warm else None,
+                                             r_base=ch.r_base,
+                                             n_starts=3, pooled=True, max_iter=15 if warm else 12, tol=1e-4)
         c[rows], a[rows] = cc, aa
     state.c[sl] = c.reshape(state.c[sl].shape)
     state.a[sl] = a.reshape(state.a[sl].shape)
@@ -594,11 +605,12 @@ def _fit_exponential(ctx: _Context, state: _State, sl: slice, ch: _Chunk, w2) ->
     kappa = ch.alpha * state.s[sl][:, None, :].astype(np.float32) if C == 1 else ch.alpha  # (k, J, 3)
     if m == 1:
         W, Y = _grouped(ch.rings, G, C, w2, kappa, ch.y)
-        _solve_exponentials(ctx, state, sl, ch.r_g, W, Y, np.arange(k * C))
+        _solve_exponentials(ctx, state, sl, ch, W, Y, np.arange(k * C))
         return
     if not state.ready[sl].all():  # start every direction from the isotropic fit
         W, Y = _grouped(ch.rings, G, C, w2, kappa, ch.y)
-        cc, aa, _ = fit_exponentials_batched(ch.r_g, W, Y, ctx.n, n_starts=3, pooled=True, max_iter=25, tol=1e-5)
+        cc, aa, _ = fit_exponentials_batched(ch.r_g, W, Y, ctx.n, n_starts=3, pooled=True, max_iter=25, tol=1e-5,
+                                             r_base=ch.r_base)
         state.c[sl] = np.repeat(cc.reshape(k, C, 1, ctx.n), m, axis=2)
         state.a[sl] = np.repeat(aa.reshape(k, C, 1, ctx.n), m, axis=2)
         state.ready[sl] = True
@@ -613,13 +625,14 @@ def _fit_exponential(ctx: _Context, state: _State, sl: slice, ch: _Chunk, w2) ->
             u = np.where(in0, 1 - t, np.where(in1, t, 0.0)).astype(np.float32)
             f_other = _at_pixels(_group_profiles(ctx, state, sl, ch.r_g).astype(np.float32), ch, m, O)
             other = ch.per_channel(np.where(in0, t, 1 - t).astype(np.float32)) * kappa * f_other
-            w_cls = w2 * (in0 | in1)[..., None]
+            both = in0 | in1  # (m even: every pixel borders one direction of each class)
+            w_cls = w2 if both.all() else w2 * ch.per_channel(both.astype(np.float32))
             if ci not in ch.plans:  # pixels grouped by (direction, radius group), made once per chunk
                 ch.plans[ci] = Segments.of(L * G + ch.gid, k, m * G)
             W, Y = _grouped(ch.plans[ci], G, C, w_cls, kappa * ch.per_channel(u), ch.y - other)
             rows = (np.arange(k)[:, None, None] * C + np.arange(C)[None, :, None]) * m + cls[None, None, :]
             rows = rows.ravel()
-            _solve_exponentials(ctx, state, sl, ch.r_g, W[rows], Y[rows], rows)
+            _solve_exponentials(ctx, state, sl, ch, W[rows], Y[rows], rows)
 
 
 def _fit_colour(ctx: _Context, state: _State, sl: slice, ch: _Chunk, w2) -> None:
