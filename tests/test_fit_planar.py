@@ -71,6 +71,21 @@ def test_batched_varpro_equals_scipy_per_profile():
         assert cost[b] <= ref_cost * (1 + 1e-4), b
 
 
+def test_ring_recurrence_exponentials_equal_numpy_exp():
+    """The solver's e^{-a r} (ring-to-ring products and a series to the mean radius) against np.exp."""
+    from translucency.fit._varpro import _exponentials
+    from translucency.fit._windows import radius_groups
+
+    r_px = np.hypot(*np.mgrid[-40:41, -40:41]).ravel()[None] * PITCH
+    gid, r_g, r_base = radius_groups(r_px, PITCH, r_exact=1.0, radius_step=PITCH / 4)
+    steps = np.diff(r_base[r_base > 1.1])
+    assert np.mean(np.abs(steps - PITCH / 4) < 1e-9) > 0.7  # mostly consecutive rings: products, not exps
+    for a in ([40.0, 3.0, 0.05], [8.0, 1.2, 0.3]):
+        E = np.empty((3, r_g.size))
+        _exponentials(r_g, r_base, np.array(a), E)
+        np.testing.assert_allclose(E, np.exp(-np.array(a)[:, None] * r_g), rtol=1e-9, atol=1e-300)
+
+
 def test_batched_lm_recovers_dipole_and_burley():
     r = np.linspace(0.25, 6, 60)
     sa, sp = np.array([0.003, 0.02, 0.1]), np.array([2.5, 1.0, 0.6])

@@ -69,7 +69,7 @@ def _exponentials(r, base, a, E):
 
     :math:`e^{-a r_g} = e^{-a b_g} e^{-a (r_g - b_g)}`: on equally spaced base radii
     :math:`b_g` the first factor follows from the last by one product, the
-    second is a short series in the small offset (to x⁷ for |a (r − b)| ≤ 0.5,
+    second is a short series in the small offset (to x⁷ for |a (r − b)| ≤ 1/4,
     relative error < 1e-9; beyond, the exponential is taken exactly).
     """
     n, G = E.shape
@@ -79,7 +79,7 @@ def _exponentials(r, base, a, E):
         for g in range(G):
             bg = base[g]
             d = bg - base[g - 1] if g > 0 else -1.0
-            if g > 0 and abs(d - step) <= 1e-9 * bg:
+            if g > 0 and abs(d - step) <= 1e-12 * bg:
                 eb *= q
             else:
                 eb = np.exp(-ak * bg)
@@ -89,7 +89,7 @@ def _exponentials(r, base, a, E):
             x = -ak * (r[g] - bg)
             if x == 0.0:
                 E[k, g] = eb
-            elif abs(x) <= 0.5:
+            elif abs(x) <= 0.25:
                 E[k, g] = eb * (1.0 + x * (1.0 + x * (0.5 + x * (1.0 / 6.0 + x * (1.0 / 24.0 + x * (
                     1.0 / 120.0 + x * (1.0 / 720.0 + x * (1.0 / 5040.0))))))))
             else:  # a steep term far off its base: exactly
@@ -372,7 +372,7 @@ def fit_exponentials_batched(r, W, Y, n_terms: int, *, rates0=None, n_starts: in
     return tuple(out)
 
 
-_PROBE_ITER = 4  # iterations from every start before the best start per problem is kept
+_PROBE_ITER = 10  # iterations from every start before the best start per problem is kept
 
 
 def _fit_block(r, base, W2, Y, n, rates0, n_starts, max_iter, tol, bounds):

@@ -569,12 +569,20 @@ def _fit_chunk(ctx: _Context, glob: _State, s: int, e: int):
     return state, phi, num, den
 
 
-def _grouped(seg: Segments, G: int, C: int, w2, kappa, target):
+def _grouped(seg: Segments, G: int, C: int, w2, kappa, target, overwrite: bool = False):
     r"""Sums :math:`A = \sum w^2\kappa^2` and :math:`B = \sum w^2 \kappa y` over each
     (point, key) of ``seg`` (keys: sub-problem · G + radius group), channels summed
-    when C = 1; returns W = √A and Y = B/A as rows (point, colour row, sub-problem), (·, G)."""
+    when C = 1; returns W = √A and Y = B/A as rows (point, colour row, sub-problem), (·, G).
+
+    ``overwrite``: kappa and target are scratch and may hold the integrands (saves memory).
+    """
     wk = w2 * kappa
-    A, B = seg.sums(wk * kappa), seg.sums(wk * target)  # (k, n_sub·G, 3)
+    if overwrite:
+        a_int, b_int = np.multiply(kappa, wk, out=kappa), np.multiply(target, wk, out=target)
+    else:
+        a_int, b_int = wk * kappa, wk * target
+    del wk
+    A, B = seg.sums(a_int), seg.sums(b_int)  # (k, n_sub·G, 3)
     if C == 1:
         A, B = A.sum(axis=2, keepdims=True), B.sum(axis=2, keepdims=True)
     k = A.shape[0]
@@ -624,12 +632,15 @@ def _fit_exponential(ctx: _Context, state: _State, sl: slice, ch: _Chunk, w2) ->
             O = np.where(in0, l1, l0)  # its neighbour, held fixed
             u = np.where(in0, 1 - t, np.where(in1, t, 0.0)).astype(np.float32)
             f_other = _at_pixels(_group_profiles(ctx, state, sl, ch.r_g).astype(np.float32), ch, m, O)
-            other = ch.per_channel(np.where(in0, t, 1 - t).astype(np.float32)) * kappa * f_other
+            f_other *= kappa
+            f_other *= ch.per_channel(np.where(in0, t, 1 - t).astype(np.float32))  # the neighbour's part
+            target = np.subtract(ch.y, f_other, out=f_other)
             both = in0 | in1  # (m even: every pixel borders one direction of each class)
             w_cls = w2 if both.all() else w2 * ch.per_channel(both.astype(np.float32))
             if ci not in ch.plans:  # pixels grouped by (direction, radius group), made once per chunk
                 ch.plans[ci] = Segments.of(L * G + ch.gid, k, m * G)
-            W, Y = _grouped(ch.plans[ci], G, C, w_cls, kappa * ch.per_channel(u), ch.y - other)
+            W, Y = _grouped(ch.plans[ci], G, C, w_cls, kappa * ch.per_channel(u), target, overwrite=True)
+            del target
             rows = (np.arange(k)[:, None, None] * C + np.arange(C)[None, :, None]) * m + cls[None, None, :]
             rows = rows.ravel()
             _solve_exponentials(ctx, state, sl, ch, W[rows], Y[rows], rows)
