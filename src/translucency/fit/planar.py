@@ -355,7 +355,8 @@ class _Chunk:
     """
 
     y: np.ndarray  # (k, J, 3) data, 0 off the valid pixels
-    static: np.ndarray  # (k, J) float32: valid × distance balance (0: pixel not used)
+    valid: np.ndarray  # (k, J) bool: the pixel is used
+    balance: np.ndarray  # (1|k, J) float32: the distance balance of each pixel's weight
     var_ring: np.ndarray | None  # (k, G, 3) ring means of the data's variance; None: Poisson model
     r: np.ndarray  # (1|k, J) mm
     theta: np.ndarray  # (1|k, J) rad, in the sample's frame
@@ -371,8 +372,9 @@ class _Chunk:
     plans: dict = field(default_factory=dict)  # Segments of the anisotropic direction classes
 
     @property
-    def valid(self) -> np.ndarray:
-        return self.static > 0
+    def static(self) -> np.ndarray:
+        """(k, J) float32: valid × distance balance (0: pixel not used)."""
+        return self.valid * self.balance
 
     @property
     def pixel(self) -> np.ndarray:
@@ -437,11 +439,10 @@ def _prepare_chunk(ctx: _Context, s: int, e: int) -> _Chunk:
     rings = rings.in_order()
     y = np.where(valid[..., None], y, np.float32(0.0))
     # each mm of distance counts alike: rings beyond 1 mm weighted by 1 mm / r
-    balance = np.minimum(1.0, 1.0 / np.maximum(r, 1e-9)) if ctx.balance else 1.0
-    static = (valid * balance).astype(np.float32)
+    balance = (np.minimum(1.0, 1.0 / np.maximum(r, 1e-9)) if ctx.balance else np.ones_like(r)).astype(np.float32)
     var_ring = None if var is None else _ring_means(rings, valid, var).astype(np.float32)
     usable = (valid.sum(axis=1) >= 2 * ctx.n + 2) & (y.sum(axis=(1, 2), dtype=np.float64) > 0)
-    return _Chunk(y, static, var_ring, r.astype(np.float32), theta, gid.astype(np.int32), r_g, r_base, rings,
+    return _Chunk(y, valid, balance, var_ring, r.astype(np.float32), theta, gid.astype(np.int32), r_g, r_base, rings,
                   base, local, usable, poisson)
 
 
@@ -450,7 +451,7 @@ def _load_chunk(ctx: _Context, state: _State, s: int, e: int) -> _Chunk:
     ch = ctx.cache.get((s, e))
     if ch is None:
         ch = _prepare_chunk(ctx, s, e)
-        nbytes = sum(np.asarray(a).nbytes for a in (ch.y, ch.static, ch.local, ch.r, ch.theta, ch.gid, ch.poisson))
+        nbytes = sum(np.asarray(a).nbytes for a in (ch.y, ch.valid, ch.balance, ch.local, ch.r, ch.theta, ch.gid, ch.poisson))
         if ctx.cache_left >= nbytes:
             ctx.cache_left -= nbytes
             ctx.cache[(s, e)] = ch
@@ -486,7 +487,12 @@ def _at_pixels(F: np.ndarray, ch: _Chunk, m: int, direction=None) -> np.ndarray:
         return at(direction)
     l0, t = _hat(ch.theta, m)
     t = np.repeat(t[..., None], C, axis=2)  # (1|k, J, C): like-shaped operands are fast
-    return (1 - t) * at(l0) + t * at((l0 + 1) % m)
+    f = at(l0)
+    f *= 1 - t
+    f1 = at((l0 + 1) % m)
+    f1 *= t
+    f += f1
+    return f
 
 
 def _predict(ctx: _Context, state: _State, sl: slice, ch: _Chunk) -> np.ndarray:
@@ -516,15 +522,23 @@ def _weights(ctx: _Context, ch: _Chunk, f: np.ndarray | None) -> np.ndarray:
         safe = np.where(ch.alpha > 0, ch.alpha, np.float32(1.0))
         f = ch.rings.spread(_ring_means(ch.rings, ch.valid, ch.y / safe).astype(np.float32))
     model = ch.alpha * f
+    del f
     k = model.shape[0]  # floor: 10⁻⁶ of each window's peak (keeps the weights finite)
     floor = np.maximum(1e-6 * model.reshape(k, -1).max(axis=1), np.float32(1e-15))
     np.maximum(model, floor[:, None, None], out=model)
     # w² = static / (αP (ρ² αP + v0)) with v0 = 1/(N p²), or ρ²(αP)² + σ̄² without a photon count
+    # (in place: these are the largest arrays of a chunk)
+    den = np.multiply(model, np.float32(ctx.rel_sigma**2))
     if ch.var_ring is None:
-        den = model * (np.float32(ctx.rel_sigma**2) * model + np.float32(1.0) * ch.poisson)
+        den += ch.poisson
+        den *= model
     else:
-        den = np.float32(ctx.rel_sigma**2) * model * model + ch.rings.spread(ch.var_ring)
-    return ch.per_channel(ch.static) / den  # den > 0: the model is floored
+        den *= model
+        den += ch.rings.spread(ch.var_ring)
+    del model
+    w2 = ch.per_channel(ch.static)
+    w2 /= den  # den > 0: the model is floored
+    return w2
 
 
 def _fit_chunk(ctx: _Context, glob: _State, s: int, e: int):
@@ -542,8 +556,7 @@ def _fit_chunk(ctx: _Context, glob: _State, s: int, e: int):
         tot = ch.y.sum(axis=1, dtype=np.float64)
         state.s[sl] = np.where(state.ready[sl, None], state.s[sl],
                                tot / np.maximum(tot[:, :1], 1e-300) * (tot[:, :1] > 0) + (tot[:, :1] <= 0))
-    f_prev = _predict(ctx, state, sl, ch) if state.ready[sl].all() else None
-    w2 = _weights(ctx, ch, f_prev)
+    w2 = _weights(ctx, ch, _predict(ctx, state, sl, ch) if state.ready[sl].all() else None)
     if ctx.kind in ("dipole", "burley"):
         _fit_baseline(ctx, state, sl, ch, w2)
     else:
@@ -560,8 +573,12 @@ def _fit_chunk(ctx: _Context, glob: _State, s: int, e: int):
     # Φ and the α statistics (summed over channels, then per sample pixel) with the new parameters
     f = _predict(ctx, state, sl, ch)
     w2 *= usable[:, None, None]
-    res = ch.alpha * f - ch.y
-    phi = float(np.sum(w2 * res * res, dtype=np.float64))
+    res = ch.alpha * f
+    res -= ch.y
+    res *= res
+    res *= w2
+    phi = float(np.sum(res, dtype=np.float64))
+    del res
     wf = w2 * f
     n_px, pixel, ones = glob.alpha.size, ch.pixel.ravel(), np.ones(3, np.float32)
     num = np.bincount(pixel, ((wf * ch.y) @ ones).ravel(), n_px).reshape(glob.alpha.shape)
