@@ -87,29 +87,71 @@ def _write_ply(path: Path, vertices: np.ndarray, faces: np.ndarray, colour: np.n
         f.write(face.tobytes())
 
 
+class VertexPicture:
+    """A picture of the mesh through the camera, prepared once; :meth:`draw` paints radiance per vertex.
+
+    The Mitsuba scene (mesh, BSDF, emitters, camera) is built once; a new
+    radiance only replaces the mesh's ``vertex_color`` attribute — as the
+    transport is prepared once and a light costs one sparse product.
+
+    Parameters
+    ----------
+    mesh : trimesh.Trimesh
+    camera : Camera
+    spp : int
+        Samples per pixel (anti-aliasing; the picture has no noise otherwise).
+    eta : float
+        ≠ 1: the surface also reflects (smooth dielectric, Fresnel).
+    light : optional
+        An :class:`EnvironmentLight` is drawn behind the object and reflected
+        (the reflection of a point, spot or directional light in a smooth
+        surface covers no area and is not drawn).
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> ball = trimesh.creation.icosphere(1, radius=5.0)
+    >>> pic = VertexPicture(ball, Camera.looking_at(ball, width=8, height=6), spp=1)
+    >>> pic.draw(np.ones((len(ball.vertices), 3))).shape
+    (6, 8, 3)
+    """
+
+    def __init__(self, mesh, camera: Camera, *, spp: int = 4, eta: float = 1.0, light=None):
+        mi = mitsuba()
+        bsdf = ({"type": "diffuse", "reflectance": 0.0} if eta == 1.0 else
+                {"type": "plastic", "diffuse_reflectance": 0.0, "int_ior": float(eta), "ext_ior": 1.0})
+        self.n_vertices = len(mesh.vertices)
+        with tempfile.TemporaryDirectory() as tmp:
+            path = Path(tmp) / "object.ply"
+            _write_ply(path, np.asarray(mesh.vertices), np.asarray(mesh.faces), np.zeros((self.n_vertices, 3)))
+            scene = {"type": "scene", "integrator": {"type": "direct"},
+                     "object": {"type": "ply", "filename": str(path), "bsdf": bsdf,
+                                "emitter": {"type": "area",
+                                            "radiance": {"type": "mesh_attribute", "name": "vertex_color"}}},
+                     "camera": camera.sensor_dict(spp)}
+            if isinstance(light, EnvironmentLight):
+                scene["sky"] = light.emitter_dict()
+            self.scene = mi.load_dict(scene)
+        self.params = mi.traverse(self.scene)
+
+    def draw(self, L: np.ndarray, seed: int = 0) -> np.ndarray:
+        """(H, W, 3) picture of radiance L (V, 3) per vertex."""
+        mi = mitsuba()
+        L = np.asarray(L, dtype=np.float32)
+        if L.shape != (self.n_vertices, 3):
+            raise TranslucencyError(f"radiance: expected ({self.n_vertices}, 3) values per vertex, got {L.shape}")
+        self.params["object.vertex_color"] = mi.Float(np.maximum(L, 0.0).ravel())
+        self.params.update()
+        return np.asarray(mi.render(self.scene, seed=seed), dtype=np.float64)
+
+
 def render_vertex_radiance(mesh, L: np.ndarray, camera: Camera, *, spp: int = 4, eta: float = 1.0,
                            light=None) -> np.ndarray:
     """Draw the mesh with radiance L (V, 3) per vertex through the camera; returns (H, W, 3).
 
-    With ``eta`` ≠ 1 the surface also reflects (smooth dielectric, Fresnel); an
-    :class:`EnvironmentLight` passed as ``light`` is drawn behind the object and
-    reflected (the reflection of a point, spot or directional light in a smooth
-    surface covers no area and is not drawn).
+    One-off :class:`VertexPicture` (see there for ``eta`` and ``light``).
     """
-    mi = mitsuba()
-    bsdf = ({"type": "diffuse", "reflectance": 0.0} if eta == 1.0 else
-            {"type": "plastic", "diffuse_reflectance": 0.0, "int_ior": float(eta), "ext_ior": 1.0})
-    with tempfile.TemporaryDirectory() as tmp:
-        path = Path(tmp) / "object.ply"
-        _write_ply(path, np.asarray(mesh.vertices), np.asarray(mesh.faces), np.maximum(L, 0.0))
-        scene = {"type": "scene", "integrator": {"type": "direct"},
-                 "object": {"type": "ply", "filename": str(path), "bsdf": bsdf,
-                            "emitter": {"type": "area", "radiance": {"type": "mesh_attribute", "name": "vertex_color"}}},
-                 "camera": camera.sensor_dict(spp)}
-        if isinstance(light, EnvironmentLight):
-            scene["sky"] = light.emitter_dict()
-        img = np.asarray(mi.render(mi.load_dict(scene)), dtype=np.float64)
-    return img
+    return VertexPicture(mesh, camera, spp=spp, eta=eta, light=light).draw(L)
 
 
 def coverage(mesh, camera: Camera) -> np.ndarray:
@@ -124,6 +166,8 @@ def coverage(mesh, camera: Camera) -> np.ndarray:
 def render_reference(mesh, volume, light, camera: Camera, *, spp: int = 256, seed: int = 0,
                      eta: float = 1.0) -> tuple[np.ndarray, float]:
     """The same object path-traced by Mitsuba's ``volpath``; returns (image (H, W, 3), seconds).
+
+    The seconds are the path tracing alone (three grey renders; building the scenes is not counted).
 
     ``eta`` ≠ 1: a smooth dielectric boundary (environment lights only, see the module docstring).
     """
@@ -151,7 +195,7 @@ def render_reference(mesh, volume, light, camera: Camera, *, spp: int = 256, see
         emitter = light.emitter_dict()
     else:
         raise TranslucencyError(f"light: no reference for {light!r}")
-    t = time.perf_counter()
+    seconds = 0.0
     channels = []
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / "object.ply"
@@ -162,8 +206,10 @@ def render_reference(mesh, volume, light, camera: Camera, *, spp: int = 256, see
                 "object": {"type": "ply", "filename": str(path), "bsdf": boundary,
                            "interior": slab_medium_dict(volume, ch, (lo[0], lo[1], hi[2]))},
                 "light": emitter, "camera": camera.sensor_dict(spp)})
+            t = time.perf_counter()
             channels.append(np.asarray(mi.render(scene, seed=3 * seed + ch), dtype=np.float64)[..., ch])
-    return np.stack(channels, axis=2), time.perf_counter() - t
+            seconds += time.perf_counter() - t
+    return np.stack(channels, axis=2), seconds
 
 
 def tonemap(img: np.ndarray, exposure: float) -> np.ndarray:

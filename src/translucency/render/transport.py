@@ -14,8 +14,8 @@ with a k-d tree — no O(V²) loop — so once it is built a new light costs one
 sparse matrix–vector product per channel.
 
 Every vertex needs parameters, not only the fitted incident points: they are
-interpolated by inverse-distance weighting of the k nearest incident points
-(:func:`vertex_parameters`).  Irradiance (:func:`vertex_irradiance`) comes from
+interpolated by inverse-distance weighting of the k incident points nearest
+along the surface (:func:`vertex_parameters`, :func:`geodesic_neighbours`).  Irradiance (:func:`vertex_irradiance`) comes from
 point, spot, directional or environment lights (a constant sky or an
 environment map, importance-sampled by Mitsuba's ``envmap`` emitter) with
 shadow rays traced by Mitsuba.
@@ -270,7 +270,38 @@ def _environment_irradiance(mi, mesh, scene, light: EnvironmentLight, eta: float
     return E[:, 0] if light.filename is None else E
 
 
-def vertex_parameters(model, vertices: np.ndarray, k: int = 4):
+def geodesic_neighbours(mesh, sources: np.ndarray, k: int, limit: float | None = None):
+    """The k incident vertices nearest to every vertex along the surface.
+
+    Distances are shortest paths over the mesh's edges (Dijkstra, from all
+    sources in chunks, up to ``limit`` mm — default three spacings of the
+    sources); a vertex reaches fewer than k sources where the others are
+    farther or on another piece of the mesh (their distance is inf).
+
+    Returns
+    -------
+    dist, idx : ndarray, shape (V, k)
+        Graph distances (mm, ascending) and indices into ``sources``.
+    """
+    import scipy.sparse as sp
+    from scipy.sparse.csgraph import dijkstra
+
+    V, P = len(mesh.vertices), len(sources)
+    e = np.asarray(mesh.edges_unique)
+    graph = sp.csr_matrix((np.asarray(mesh.edges_unique_length, dtype=np.float64), (e[:, 0], e[:, 1])), shape=(V, V))
+    if limit is None:
+        limit = 3.0 * np.sqrt(float(mesh.area) / max(P, 1))
+    best_d, best_i = np.full((V, k), np.inf), np.zeros((V, k), dtype=np.int64)
+    for s in range(0, P, 64):
+        D = dijkstra(graph, directed=False, indices=sources[s:s + 64], limit=limit)  # (chunk, V)
+        cand_d = np.concatenate([best_d, D.T], axis=1)
+        cand_i = np.concatenate([best_i, np.broadcast_to(np.arange(s, s + len(D)), (V, len(D)))], axis=1)
+        keep = np.argsort(cand_d, axis=1, kind="stable")[:, :k]
+        best_d, best_i = np.take_along_axis(cand_d, keep, 1), np.take_along_axis(cand_i, keep, 1)
+    return best_d, best_i
+
+
+def vertex_parameters(model, vertices, k: int = 4):
     r"""Each vertex's profile as a blend of the k nearest incident points' profiles.
 
     Inverse-square-distance weights :math:`w_j` (exact at an incident point):
@@ -278,14 +309,28 @@ def vertex_parameters(model, vertices: np.ndarray, k: int = 4):
     so c, d of shape (V, C, k·n) are returned (with the colour scale (V, 3)).
     Blending the profiles, not their parameters: the average of two exponentials'
     rates and amplitudes is a third exponential unlike either.
+
+    ``vertices``: positions (V, 3) — nearest in a straight line — or a mesh
+    whose vertices the incident points are — nearest along the surface
+    (:func:`geodesic_neighbours`), so parameters do not leak across a thin gap
+    between two parts of an object; vertices that reach no incident point that
+    way fall back to straight-line distances.
     """
     from scipy.spatial import cKDTree
 
     if model.kind != "exponential" or model.n_directions != 1:
         raise TranslucencyError("model: rendering needs an isotropic exponential model (fit with --model iso)")
     k = min(k, model.n_points)
+    mesh = vertices if hasattr(vertices, "edges_unique") else None
+    vertices = np.asarray(mesh.vertices if mesh is not None else vertices, dtype=np.float64)
     dist, idx = cKDTree(model.x_i).query(vertices, k=k)
     dist, idx = dist.reshape(len(vertices), k), idx.reshape(len(vertices), k)
+    if mesh is not None:
+        gap, src = cKDTree(np.asarray(mesh.vertices)).query(model.x_i)
+        if np.all(gap <= 1e-6 * float(np.max(mesh.extents))):  # the incident points are vertices
+            g_dist, g_idx = geodesic_neighbours(mesh, src, k)
+            reached = np.isfinite(g_dist[:, 0])
+            dist[reached], idx[reached] = g_dist[reached], g_idx[reached]
     w = 1.0 / np.maximum(dist, 1e-9) ** 2
     exact = dist[:, 0] < 1e-9
     w[exact] = 0.0
@@ -318,7 +363,7 @@ def transport_matrices(model, mesh, *, radius: float | None = None, r_min: float
     from ..acquire.mesh import vertex_areas
 
     area = vertex_areas(mesh)
-    c, d, s = vertex_parameters(model, v)
+    c, d, s = vertex_parameters(model, mesh)
     if radius is None:
         # the 99 % energy radius, or less where the pairs would not fit in memory:
         # pairs ≈ V² π r² / (surface area)
