@@ -54,7 +54,7 @@ def main() -> None:
             t = time.perf_counter()
             relight_vertices(mats, vertex_irradiance(big, scene, PointLight(pos, 2e4)))
             times.append(time.perf_counter() - t)
-        print(f"relight: {len(big.vertices):,} vertices, {mats[0].nnz:,} nonzeros per channel; prepare {prep:.1f} s "
+        print(f"relight: {len(big.vertices):,} vertices, {mats.nnz:,} nonzeros per channel; prepare {prep:.1f} s "
               f"(once); per light {1000 * np.median(times[1:]):.0f} ms median (first {1000 * times[0]:.0f} ms; "
               f"target <= 100 ms: {'met' if np.median(times[1:]) <= 0.1 else 'not met'})")
 

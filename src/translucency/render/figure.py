@@ -82,7 +82,7 @@ def figure2(model, mesh, light, out_dir, *, volume=None, camera: Camera | None =
     t = time.perf_counter()
     ours = picture.draw(L)
     t_draw = time.perf_counter() - t
-    out = {"vertices": len(mesh.vertices), "transport_nonzeros": int(mats[0].nnz), "prepare_s": t_prepare,
+    out = {"vertices": len(mesh.vertices), "transport_nonzeros": mats.nnz, "prepare_s": t_prepare,
            "relight_s": t_relight, "draw_s": t_draw, "light": repr(light), "eta": eta}
     if volume is None:
         exposure = 0.8 / max(float(np.quantile(ours[mask], 0.99)), 1e-30)

@@ -37,6 +37,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+from numba import njit, prange
 
 from .._validate import TranslucencyError
 
@@ -348,7 +349,8 @@ def vertex_parameters(model, vertices, k: int = 4):
 
 def transport_matrices(model, mesh, *, radius: float | None = None, r_min: float | None = None,
                        max_pairs: float = 2.5e7):
-    """The sparse matrices T (one per channel, V × V) of the module docstring.
+    """The sparse transport T of the module docstring, as a :class:`Transport` (one matrix per
+    channel, or one matrix and the colour scale for the shared-colour model).
 
     ``radius`` defaults to the model's 99 % energy radius (largest over points and channels).
     Distances below ``r_min`` (default: half the mean edge length, the fit's exclusion radius)
@@ -383,23 +385,63 @@ def transport_matrices(model, mesh, *, radius: float | None = None, r_min: float
         r_min = 0.5 * float(e.mean())
     r = np.maximum(r, r_min)
     alpha = model.alpha.values if len(model.alpha.values) == V else model.alpha.at(v)
+    # shared colour (one fall-off, C = 1): T_λ = T · diag(s_λ) — one matrix, the scale goes with E
+    shared = c.shape[1] == 1
     mats = []
-    for ch in range(3):
-        cc = c[:, min(ch, c.shape[1] - 1)]
-        dd = d[:, min(ch, d.shape[1] - 1)]
-        prof = np.einsum("pn,pn->p", cc[i], np.exp(dd[i] * r[:, None])) * s[i, ch]
+    for ch in range(1 if shared else 3):
+        cc, dd = c[:, ch], d[:, ch]
+        scale = 1.0 if shared else s[:, ch]
+        prof = np.einsum("pn,pn->p", cc[i], np.exp(dd[i] * r[:, None])) * (scale if shared else scale[i])
         vals = area[i] / np.pi * alpha[o] * prof
         # the light a vertex sends into its own area, at the profile's value at r_min like the
         # closest pairs (the integral from r = 0 would extrapolate the steepest fitted term)
-        diag = area / np.pi * alpha * np.einsum("vn,vn->v", cc, np.exp(dd * r_min)) * s[:, ch]
+        diag = area / np.pi * alpha * np.einsum("vn,vn->v", cc, np.exp(dd * r_min)) * scale
         mats.append(sp.csr_matrix((np.concatenate([vals, diag]).astype(np.float32),
                                    (np.concatenate([o, np.arange(V)]), np.concatenate([i, np.arange(V)]))),
                                   shape=(V, V)))
-    return mats
+    return Transport(mats, s.astype(np.float32) if shared else None)
 
 
-def relight_vertices(mats, E: np.ndarray) -> np.ndarray:
-    """Radiance per vertex (V, 3) for irradiance E (V,) or (V, 3): one sparse product per channel."""
+@dataclass
+class Transport:
+    r"""The prepared transport: L_λ = T_λ E per channel (:func:`transport_matrices`).
+
+    Either three matrices (one fall-off per channel) or one matrix T with the
+    incident vertices' colour scale, :math:`T_\lambda = T\,\mathrm{diag}(s_\lambda)`.
+    """
+
+    matrices: list  # CSR (V × V), float32: one or three
+    scale: np.ndarray | None = None  # (V, 3) colour scale of the incident vertex (one matrix)
+
+    @property
+    def nnz(self) -> int:
+        """Stored pairs per channel."""
+        return int(self.matrices[0].nnz)
+
+
+@njit(parallel=True, cache=True)
+def _csr_times_rgb(indptr, indices, data, X, out):
+    """out = T X for a CSR matrix T and three columns X (V, 3): each row's pairs read once, rows on all cores."""
+    for o in prange(indptr.shape[0] - 1):
+        a0 = a1 = a2 = np.float32(0.0)
+        for j in range(indptr[o], indptr[o + 1]):
+            w, col = data[j], indices[j]
+            a0 += w * X[col, 0]
+            a1 += w * X[col, 1]
+            a2 += w * X[col, 2]
+        out[o, 0], out[o, 1], out[o, 2] = a0, a1, a2
+
+
+def relight_vertices(transport: Transport, E: np.ndarray) -> np.ndarray:
+    """Radiance per vertex (V, 3) for irradiance E (V,) or (V, 3): one sparse product.
+
+    With one shared matrix the three channels go through it together (the matrix is read once,
+    rows on all cores, Numba); otherwise one SciPy product per channel.
+    """
     E = np.asarray(E, dtype=np.float32)
     E = np.repeat(E[:, None], 3, axis=1) if E.ndim == 1 else E
-    return np.stack([mats[ch] @ E[:, ch] for ch in range(3)], axis=1)
+    if transport.scale is None:  # one matrix per channel
+        return np.stack([T @ E[:, ch] for ch, T in enumerate(transport.matrices)], axis=1)
+    T, out = transport.matrices[0], np.empty(E.shape, dtype=np.float32)
+    _csr_times_rgb(T.indptr, T.indices, T.data, np.ascontiguousarray(E * transport.scale), out)
+    return out
