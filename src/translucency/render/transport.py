@@ -260,12 +260,13 @@ def _environment_irradiance(mi, mesh, scene, light: EnvironmentLight, eta: float
         ds, spec = emitter.sample_direction(it, mi.Point2f(u1.ravel().astype(np.float32),
                                                            u2.ravel().astype(np.float32)))
         w = np.stack([np.asarray(ds.d.x), np.asarray(ds.d.y), np.asarray(ds.d.z)], axis=1).astype(np.float64)
-        cos = np.einsum("vkj,vj->vk", w.reshape(len(v), K, 3), n).reshape(-1)
-        weight = np.stack([np.asarray(spec[j]) for j in range(3)], axis=1) * np.maximum(cos, 0.0)[:, None]
+        weight = np.stack([np.asarray(spec[j]) for j in range(3)], axis=1)  # L / p, times cos⁺ below
+    cos_i = np.einsum("vkj,vj->vk", w.reshape(len(v), K, 3), n).reshape(-1)
+    if light.filename is not None:
+        weight = weight * np.maximum(cos_i, 0.0)[:, None]
     ray = mi.Ray3f(mi.Point3f(*(o[:, j].astype(np.float32) for j in range(3))),
                    mi.Vector3f(*(np.ascontiguousarray(w[:, j]).astype(np.float32) for j in range(3))))
     open_sky = ~np.asarray(scene.ray_test(ray))
-    cos_i = np.einsum("vkj,vj->vk", w.reshape(len(v), K, 3), n).reshape(-1)
     weight = weight * (open_sky * fresnel_transmittance(cos_i, eta) / fresnel_transmittance(1.0, eta))[:, None]
     E = weight.reshape(len(v), K, -1).mean(axis=1)
     return E[:, 0] if light.filename is None else E
