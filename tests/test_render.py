@@ -276,3 +276,25 @@ def test_parameters_follow_the_surface_not_the_gap():
     far = arc > 2.0
     chord = np.linalg.norm(ball.vertices - ball.vertices[0], axis=1)
     assert np.all(d[far, 0] >= chord[far]) and np.all(d[far, 0] <= arc[far] * 1.25) and np.all(i == 0)
+
+
+def test_thickness_and_region_errors():
+    """Thickness along −n of a box is its extent across that face; region errors are relative RMSEs."""
+    from translucency.render.figure import region_errors, vertex_thickness
+
+    box = trimesh.creation.box(extents=(8.0, 20.0, 30.0)).subdivide().subdivide()
+    scene = mesh_scene(box)
+    t = vertex_thickness(box, scene)
+    n = np.asarray(box.vertex_normals)
+    for axis, extent in enumerate((8.0, 20.0, 30.0)):
+        face = np.abs(n[:, axis]) > 0.999  # vertices inside a face (not on its edges)
+        np.testing.assert_allclose(t[face], extent, rtol=1e-3)
+    cam = Camera.looking_at(box, width=48, height=36)
+    seen = coverage(box, cam)
+    E = vertex_irradiance(box, scene, DirectionalLight((0.0, 0.0, -1.0)))  # from above: only the top is lit
+    ref = np.where(seen[..., None], 2.0, 0.0) * np.ones(3)
+    regions = region_errors(box, scene, cam, E, ref, 1.1 * ref, seen)
+    assert regions["all"]["pixels"] == seen.sum() and regions["thin"]["pixels"] > 0  # the 8 mm sides
+    assert regions["thick"]["pixels"] > 0 and regions["shadow edge"]["pixels"] > 0 and regions["unlit"]["pixels"] > 0
+    for r in regions.values():
+        assert r["rel_rmse"] == pytest.approx(0.1, rel=1e-9)

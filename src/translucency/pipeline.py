@@ -156,6 +156,8 @@ def run_demo(out_dir, *, n_terms: int = 3, step: Callable[[str], None] | None = 
         "the fitted models (superposition of R_d over the incident cells); green channel."), (
         "figure2.png", f"Figure 2: the procedural alabaster pig (generated marble filling, index-matched), path-traced "
         f"by Mitsuba volpath (left) and rendered from the per-vertex model fitted to its virtual acquisition "
-        f"(middle); FLIP {fig2['flip_mean_object']:.3f}, relative RMSE {fig2['rel_rmse']:.2f} over the object.")])
+        f"(middle); FLIP {fig2['flip_mean_object']:.3f}, relative RMSE {fig2['rel_rmse']:.2f} over the object; "
+        "by region (relative RMSE, pixels): " + ", ".join(
+            f"{k} {v['rel_rmse']:.2f} ({v['pixels']})" for k, v in fig2["regions"].items() if k != "all") + ".")])
     return {"figure": png, "summary": js, "model": mpath, "fits": out_dir / "fits", "pig": out_dir / "pig.zarr",
             "report": out_dir / "report" / "index.html"}
