@@ -26,7 +26,7 @@ from translucency.acquire.mesh_walk import mesh_scene
 from translucency.acquire.objects import make_pig
 from translucency.fit.mesh import fit_mesh
 from translucency.render import Camera, PointLight, relight_vertices, transport_matrices, vertex_irradiance
-from translucency.render.image import VertexPicture, coverage, render_reference
+from translucency.render.image import VertexPicture, coverage, rel_rmse, render_reference
 
 
 def fitted(pig, tmp, points, photons, index_matched=True):
@@ -34,10 +34,6 @@ def fitted(pig, tmp, points, photons, index_matched=True):
     data = Path(tmp) / f"pig_{len(pig.vertices)}.zarr"
     acquire_mesh(pig, vol, data, n_points=points, photons=photons, chunk_points=16, index_matched=index_matched)
     return fit_mesh(data, "iso").model, vol
-
-
-def rel_rmse(a, b, mask):
-    return float(np.sqrt(np.mean((a - b)[mask] ** 2)) / np.sqrt(np.mean(b[mask] ** 2)))
 
 
 def main() -> None:

@@ -691,7 +691,6 @@ def _fit_baseline(ctx: _Context, state: _State, sl: slice, ch: _Chunk, w2) -> No
     state.p[sl] = p.reshape(k, 3, 2)
 
 
-
 def _update_alpha(state: _State, kind: str, smooth=None) -> None:
     num, den = state.num.sum(axis=0), state.den.sum(axis=0)  # in chunk order: deterministic
     if smooth is not None:  # pool the statistics of neighbouring outgoing points (meshes)

@@ -15,8 +15,8 @@ import numpy as np
 
 from .._validate import TranslucencyError
 from ..io.atomic import atomic_path, write_json
-from .image import Camera, VertexPicture, compare, coverage, render_reference, save_images
-from .transport import exit_fresnel, relight_vertices, transport_matrices, vertex_irradiance
+from .image import Camera, VertexPicture, compare, coverage, rel_rmse, render_reference, save_images
+from .transport import exit_fresnel, rays, relight_vertices, transport_matrices, vertex_irradiance
 
 
 def object_from_dataset(path):
@@ -106,15 +106,9 @@ def figure2(model, mesh, light, out_dir, *, volume=None, camera: Camera | None =
 
 def vertex_thickness(mesh, scene) -> np.ndarray:
     """Distance (mm) from each vertex straight inwards (along −n) to the other side of the object."""
-    from ..acquire._engine import mitsuba
-
-    mi = mitsuba()
     v = np.asarray(mesh.vertices, dtype=np.float64)
     n = np.asarray(mesh.vertex_normals, dtype=np.float64)
-    o = v - n * 1e-4 * float(np.max(mesh.extents))
-    ray = mi.Ray3f(mi.Point3f(*(o[:, j].astype(np.float32) for j in range(3))),
-                   mi.Vector3f(*(np.ascontiguousarray(-n[:, j]).astype(np.float32) for j in range(3))))
-    si = scene.ray_intersect(ray)
+    si = scene.ray_intersect(rays(v - n * 1e-4 * float(np.max(mesh.extents)), -n))
     return np.where(np.asarray(si.is_valid()), np.asarray(si.t, dtype=np.float64), np.inf)
 
 
@@ -145,12 +139,8 @@ def region_errors(mesh, scene, camera: Camera, E: np.ndarray, reference: np.ndar
     regions = {"all": mask, "thin": drawn[..., 0] & mask, "thick": drawn[..., 1] & mask,
                "shadow edge": drawn[..., 2] & mask, "unlit": unlit & mask,
                "silhouette": mask & ~binary_erosion(mask)}
-    out = {}
-    for name, sel in regions.items():
-        ref2 = float(np.mean(reference[sel] ** 2)) if sel.any() else 0.0
-        err = float(np.sqrt(np.mean((ours[sel] - reference[sel]) ** 2) / ref2)) if ref2 > 0 else float("nan")
-        out[name] = {"rel_rmse": err, "pixels": int(sel.sum())}
-    return out
+    return {name: {"rel_rmse": rel_rmse(ours, reference, sel), "pixels": int(sel.sum())}
+            for name, sel in regions.items()}
 
 
 def _plot(reference, ours, flip_map, mask, cmp, path) -> None:

@@ -218,18 +218,22 @@ def tonemap(img: np.ndarray, exposure: float) -> np.ndarray:
     return np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(x, 1 / 2.4) - 0.055)
 
 
+def rel_rmse(image: np.ndarray, reference: np.ndarray, mask: np.ndarray) -> float:
+    """‖image − reference‖ / ‖reference‖ over the pixels of ``mask`` (NaN where there are none)."""
+    ref2 = float(np.mean(reference[mask] ** 2)) if mask.any() else 0.0
+    return float(np.sqrt(np.mean((image[mask] - reference[mask]) ** 2) / ref2)) if ref2 > 0 else float("nan")
+
+
 def compare(reference: np.ndarray, ours: np.ndarray, mask: np.ndarray) -> dict:
     """Relative RMSE over the object's pixels and mean FLIP of the tone-mapped pair."""
     import flip_evaluator
 
-    diff = (ours - reference)[mask]
-    rel_rmse = float(np.sqrt(np.mean(diff**2)) / np.sqrt(np.mean(reference[mask] ** 2)))
     exposure = 0.8 / max(float(np.quantile(reference[mask], 0.99)), 1e-30)
     ref_ldr, our_ldr = tonemap(reference, exposure), tonemap(ours, exposure)
     flip_map, mean_flip, _ = flip_evaluator.evaluate(ref_ldr.astype(np.float32), our_ldr.astype(np.float32), "LDR")
     fm = np.asarray(flip_map, dtype=np.float64)
     fm = fm[..., 0] if fm.ndim == 3 else fm  # the per-pixel error (a grey image)
-    return {"rel_rmse": rel_rmse, "flip_mean_object": float(fm[mask].mean()),
+    return {"rel_rmse": rel_rmse(ours, reference, mask), "flip_mean_object": float(fm[mask].mean()),
             "flip_mean_image": float(mean_flip), "exposure": exposure, "flip_map": fm}
 
 

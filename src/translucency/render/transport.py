@@ -188,6 +188,18 @@ def exit_fresnel(mesh, viewpoint, eta: float) -> np.ndarray:
     return fresnel_transmittance(cos_o, eta) / diffuse_transmittance(eta)
 
 
+def rays(origins: np.ndarray, directions: np.ndarray, maxt: np.ndarray | None = None):
+    """A Mitsuba ``Ray3f`` wavefront from (N, 3) origins and directions (mm), optionally ending at ``maxt``."""
+    from ..acquire._engine import mitsuba
+
+    mi = mitsuba()
+    ray = mi.Ray3f(mi.Point3f(*(np.ascontiguousarray(origins[:, j]).astype(np.float32) for j in range(3))),
+                   mi.Vector3f(*(np.ascontiguousarray(directions[:, j]).astype(np.float32) for j in range(3))))
+    if maxt is not None:
+        ray.maxt = mi.Float(np.asarray(maxt, dtype=np.float32))
+    return ray
+
+
 def vertex_irradiance(mesh, scene, light, eta: float = 1.0) -> np.ndarray:
     r"""Irradiance E (W/mm²) at every vertex, with shadows (Mitsuba ``ray_test``).
 
@@ -222,10 +234,7 @@ def vertex_irradiance(mesh, scene, light, eta: float = 1.0) -> np.ndarray:
         t_max = np.full(len(v), 1e7)
     eps = 1e-4 * float(np.max(mesh.extents))
     o = v + n * eps * 5
-    ray = mi.Ray3f(mi.Point3f(*(o[:, k].astype(np.float32) for k in range(3))),
-                   mi.Vector3f(*(np.ascontiguousarray(w[:, k]).astype(np.float32) for k in range(3))))
-    ray.maxt = mi.Float((t_max - 10 * eps).astype(np.float32))
-    blocked = np.asarray(scene.ray_test(ray))
+    blocked = np.asarray(scene.ray_test(rays(o, w, t_max - 10 * eps)))
     E = E * fresnel_transmittance(np.einsum("vk,vk->v", w, n), eta) / fresnel_transmittance(1.0, eta)
     return np.where(blocked | (E <= 0), 0.0, E)
 
@@ -264,9 +273,7 @@ def _environment_irradiance(mi, mesh, scene, light: EnvironmentLight, eta: float
     cos_i = np.einsum("vkj,vj->vk", w.reshape(len(v), K, 3), n).reshape(-1)
     if light.filename is not None:
         weight = weight * np.maximum(cos_i, 0.0)[:, None]
-    ray = mi.Ray3f(mi.Point3f(*(o[:, j].astype(np.float32) for j in range(3))),
-                   mi.Vector3f(*(np.ascontiguousarray(w[:, j]).astype(np.float32) for j in range(3))))
-    open_sky = ~np.asarray(scene.ray_test(ray))
+    open_sky = ~np.asarray(scene.ray_test(rays(o, w)))
     weight = weight * (open_sky * fresnel_transmittance(cos_i, eta) / fresnel_transmittance(1.0, eta))[:, None]
     E = weight.reshape(len(v), K, -1).mean(axis=1)
     return E[:, 0] if light.filename is None else E
