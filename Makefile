@@ -16,7 +16,7 @@ $(STAMP): pyproject.toml
 	touch $(STAMP)
 
 demo: $(STAMP)
-	$(VENV)/bin/translucency demo --out $(OUT)
+	$(VENV)/bin/translucency demo --out $(OUT) --overwrite
 
 test: $(STAMP)
 	$(PY) -m pytest -q -m "not slow"

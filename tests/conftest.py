@@ -28,3 +28,9 @@ def random_exponential_model(rng, n_points=4, m=1, n=3, colour="shared", geometr
 @pytest.fixture
 def rng():
     return np.random.default_rng(12345)
+
+
+@pytest.fixture(autouse=True)
+def _in_a_scratch_folder(tmp_path, monkeypatch):
+    """Every test runs in its own empty folder: default outputs (``render/``, ``report/``) never land in the checkout."""
+    monkeypatch.chdir(tmp_path)

@@ -77,7 +77,7 @@ def test_failed_write_keeps_the_old_file(tmp_path, rng, monkeypatch):
 
     monkeypatch.setattr(zarr, "create_group", boom)
     with pytest.raises(OSError):
-        save_model(random_exponential_model(rng), path)
+        save_model(random_exponential_model(rng), path, overwrite=True)
     assert path.read_bytes() == before
     assert sorted(p.name for p in tmp_path.iterdir()) == ["m.model.zip"]
 

@@ -7,6 +7,7 @@ Pipeline: :mod:`translucency.model` → acquire → :mod:`translucency.fit` →
 """
 
 from ._validate import TranslucencyError
+from ._version import __version__
 from .io.model_file import ModelFileError, load_model, save_model
 from .model import (
     MATERIALS,
@@ -18,7 +19,6 @@ from .model import (
     material,
 )
 
-__version__ = "0.1.0"
 
 __all__ = [
     "TranslucencyError",

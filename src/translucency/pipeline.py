@@ -26,6 +26,7 @@ from .fit.planar import fit_planar
 from .io.dataset import open_dataset
 from .io.atomic import atomic_path, write_json
 from .io.model_file import save_model
+from .io.outputs import claim_folder
 from .model import MATERIALS, ExponentialModel, PlanarAlpha
 
 
@@ -65,7 +66,7 @@ def run_figure2(out_dir, *, points: int = 96, photons: int = 8000, spp: int = 16
     data = Path(out_dir).parent / "pig.zarr"
     acquire_mesh(pig, volume, data, n_points=points, photons=photons, chunk_points=16, index_matched=True)
     fit = fit_mesh(data, "iso")
-    save_model(fit.model, Path(out_dir).parent / "fits" / "pig_iso.model.zip", dtype="float16",
+    save_model(fit.model, Path(out_dir).parent / "fits" / "pig_iso.model.zip", dtype="float16", overwrite=True,
                meta={"dataset": str(Path(data).resolve()), "fit": fit.options})
     return figure2(fit.model, pig, PointLight((60.0, -80.0, 120.0), 2.0e4), out_dir, volume=volume,
                    camera=Camera.looking_at(pig, width=size[0], height=size[1]), spp_reference=spp)
@@ -81,7 +82,7 @@ DEMO_FITS = {
 
 
 def run_demo(out_dir, *, n_terms: int = 3, step: Callable[[str], None] | None = None, dataset=None,
-             max_rounds: int = 3) -> dict:
+             max_rounds: int = 3, overwrite: bool = False) -> dict:
     """Run the main job and write its outputs under ``out_dir``.
 
     Outputs
@@ -101,13 +102,15 @@ def run_demo(out_dir, *, n_terms: int = 3, step: Callable[[str], None] | None = 
         Figure 1's profiles and error maps, α, parameters, ``report.json``
         and ``index.html``.
 
+    ``out_dir`` must be new, empty, or an earlier output folder of the tool
+    (then only with ``overwrite``): :func:`translucency.io.outputs.claim_folder`.
+
     Returns
     -------
     dict
         Paths of the outputs.
     """
-    out_dir = Path(out_dir)
-    out_dir.mkdir(parents=True, exist_ok=True)
+    out_dir = claim_folder(out_dir, overwrite=overwrite, inputs=[dataset])
     profiles = []
     for name, mat in MATERIALS.items():
         if step:
@@ -126,7 +129,7 @@ def run_demo(out_dir, *, n_terms: int = 3, step: Callable[[str], None] | None = 
     d = np.array([[[f.d] for f in p.fits] for p in profiles])
     x_i = np.stack([np.arange(n, dtype=float), np.zeros(n)], axis=1)
     model = ExponentialModel(x_i, c, d, PlanarAlpha.uniform((1, n), origin=(-0.5, -0.5), pitch=1.0))
-    mpath = save_model(model, out_dir / "dipole_fits.model.zip",
+    mpath = save_model(model, out_dir / "dipole_fits.model.zip", overwrite=True,
                        meta={"materials": list(MATERIALS), "source": "3-term fits of the Jensen 2001 dipole"})
 
     # -- the embedded measurement: planar fits and Figure 1 -------------------------
@@ -136,7 +139,7 @@ def run_demo(out_dir, *, n_terms: int = 3, step: Callable[[str], None] | None = 
         if step:
             step(f"fit {label}")
         fit = fit_planar(ds, n_terms=n_terms, max_rounds=max_rounds, **kw)
-        save_model(fit.model, out_dir / "fits" / f"{label}.model.zip",
+        save_model(fit.model, out_dir / "fits" / f"{label}.model.zip", overwrite=True,
                    meta={"dataset": str(ds.path), "fit": fit.options, "objective_per_round": fit.history,
                          "seconds": round(fit.seconds, 2), "flagged_points": np.flatnonzero(fit.flagged).tolist()})
         models[label], flagged[label] = fit.model, fit.flagged

@@ -21,13 +21,14 @@ are refused unless ``overwrite``.
 from __future__ import annotations
 
 import json
-import shutil
 from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 
 from .._validate import TranslucencyError
+from .._version import __version__
+from ..io.outputs import claim_output, remove_dataset
 from .mesh_walk import EXIT, mesh_random_walk, mesh_scene
 from .volume import Volume
 
@@ -63,7 +64,7 @@ def vertex_areas(mesh) -> np.ndarray:
 
 
 def acquire_mesh(mesh, volume: Volume, out, *, n_points: int = 64, photons: int = 20_000, seed: int = 0,
-                 chunk_points: int = 8, index_matched: bool = False, overwrite: bool = False,
+                 chunk_points: int = 8, index_matched: bool = False, overwrite: bool = False, inputs=(),
                  progress: Callable[[int, int], None] | None = None):
     """Scan pencil beams over a closed mesh filled with ``volume``; write a mesh data set.
 
@@ -86,7 +87,6 @@ def acquire_mesh(mesh, volume: Volume, out, *, n_points: int = 64, photons: int 
     from scipy.spatial import cKDTree
     from zarr.codecs import BloscCodec
 
-    from .. import __version__
 
     if photons < 1:
         raise TranslucencyError(f"photons: must be >= 1, got {photons}")
@@ -104,7 +104,7 @@ def acquire_mesh(mesh, volume: Volume, out, *, n_points: int = 64, photons: int 
     request = json.loads(json.dumps(request))
     out = Path(out)
     root = None
-    if out.exists():
+    if claim_output(out, "mesh data set", overwrite=overwrite, inputs=inputs, reuse=True):
         try:
             old = zarr.open_group(str(out), mode="r+")
             same = dict(old.attrs).get(HEADER_KEY, {}).get("request") == request
@@ -113,10 +113,10 @@ def acquire_mesh(mesh, volume: Volume, out, *, n_points: int = 64, photons: int 
         if same and not overwrite:
             root = old
         elif not overwrite:
-            raise TranslucencyError(f"{out}: exists and was made with other arguments; choose another --out "
-                                    "or pass --overwrite")
+            raise TranslucencyError(f"--out {out}: a mesh data set made with other arguments is already there; "
+                                    "choose another path or pass --overwrite to replace it")
         else:
-            shutil.rmtree(out) if out.is_dir() else out.unlink()
+            remove_dataset(out)
     n_chunks = -(-P // chunk_points)
     area = vertex_areas(mesh)
     if root is None:
@@ -124,7 +124,7 @@ def acquire_mesh(mesh, volume: Volume, out, *, n_points: int = 64, photons: int 
                   "n_points": P, "n_vertices": V, "photons": int(photons), "seed": int(seed),
                   "eta": volume.eta, "g": volume.g, "sample": volume.description,
                   "software": {"translucency": __version__}, "request": request}
-        root = zarr.open_group(str(out), mode="w", attributes={HEADER_KEY: header})
+        root = zarr.create_group(str(out), attributes={HEADER_KEY: header}, overwrite=False)  # never clears a folder
         comp = BloscCodec(cname="zstd", clevel=5, shuffle="shuffle")
         for name, data in (("vertices", mesh.vertices.astype(np.float32)), ("faces", mesh.faces.astype(np.int32)),
                            ("normals", mesh.vertex_normals.astype(np.float32)),

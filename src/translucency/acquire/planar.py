@@ -23,6 +23,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from .._validate import TranslucencyError
+from .._version import __version__
 from ..io.dataset import FORMAT, VERSION, PlanarDataset, create_dataset
 from .transport import TOP, check_memory, random_walk
 from .volume import Volume
@@ -101,7 +102,7 @@ def estimate_seconds(volume: Volume, setup: PlanarSetup, steps_per_second: float
     return float(n * steps.sum() / steps_per_second)
 
 
-def acquire_planar(volume: Volume, setup: PlanarSetup, out, *, overwrite: bool = False,
+def acquire_planar(volume: Volume, setup: PlanarSetup, out, *, overwrite: bool = False, inputs=(),
                    progress: Callable[[int, int], None] | None = None, batch_photons: int = 4_000_000,
                    memory_limit: float = 8 * 2**30) -> PlanarDataset:
     """Run a virtual DISCO acquisition of ``volume`` and write the data set to ``out``.
@@ -115,7 +116,9 @@ def acquire_planar(volume: Volume, setup: PlanarSetup, out, *, overwrite: bool =
     out : path
         Zarr directory; an unfinished data set with the same arguments is resumed.
     overwrite : bool
-        Replace a data set made with other arguments.
+        Replace a data set made with other arguments (never anything else).
+    inputs : iterable of path
+        Files the command reads (a volume): never written over.
     progress : callable(done_points, total_points), optional
         Called after each chunk.
     batch_photons : int
@@ -125,7 +128,6 @@ def acquire_planar(volume: Volume, setup: PlanarSetup, out, *, overwrite: bool =
     -------
     PlanarDataset
     """
-    from .. import __version__
 
     setup.check(volume)
     check_memory(min(batch_photons, setup.photons * setup.chunk_points), volume, memory_limit)
@@ -148,7 +150,7 @@ def acquire_planar(volume: Volume, setup: PlanarSetup, out, *, overwrite: bool =
         "software": {"translucency": __version__, **mi_versions},
         "request": request,
     }
-    ds = create_dataset(out, header, overwrite=overwrite)
+    ds = create_dataset(out, header, overwrite=overwrite, inputs=inputs)
     g = ds.group
     g["x_i"][...] = x_i.astype(np.float32)
     g["window_origin"][...] = origin.astype(np.float32)

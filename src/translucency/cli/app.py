@@ -18,6 +18,7 @@ from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
 from .._validate import TranslucencyError
+from ..io.outputs import claim_folder, claim_output
 
 app = typer.Typer(
     help="Measure, fit, evaluate and render heterogeneous translucent materials "
@@ -55,6 +56,8 @@ def progress() -> Progress:
 def demo(
     out: Path = typer.Option(Path("results"), "--out", "-o", help="Directory for the figures and files."),
     terms: int = typer.Option(3, "--terms", "-n", min=1, max=8, help="Exponential terms n of the fits."),
+    overwrite: bool = typer.Option(False, "--overwrite", help="Replace an earlier output of translucency at --out "
+                                   "(never anything else)."),
 ):
     """The main job on the embedded default data: baselines per material, then planar fits
     (iso, aniso, dipole, Burley) with alpha and the Figure 1 report."""
@@ -67,7 +70,7 @@ def demo(
         def step(name):
             bar.update(task, advance=1, item=name)
 
-        outputs = run_demo(out, n_terms=terms, step=step)
+        outputs = run_demo(out, n_terms=terms, step=step, overwrite=overwrite)
     for what, path in outputs.items():
         console.print(f"{what:>8}: {path}")
 
@@ -163,13 +166,15 @@ def acquire_planar_cmd(
     index_matched: bool = typer.Option(False, "--index-matched", help="No Fresnel reflection at the boundary."),
     chunk: int = typer.Option(16, "--chunk", help="Incident points per chunk (unit of resuming)."),
     dtype: str = typer.Option("float32", "--dtype", help="Storage of R_d and variance: float32 or float16."),
-    overwrite: bool = typer.Option(False, "--overwrite", help="Replace a data set made with other arguments."),
+    overwrite: bool = typer.Option(False, "--overwrite", help="Replace a data set of translucency made with other "
+                                   "arguments (never anything else)."),
 ):
     """Scan a pencil beam over a planar sample and record R_d around each incident point."""
     from ..acquire import PlanarSetup, acquire_planar, estimate_seconds, load_volume, make_sample
 
     if (material is None) == (volume is None):
         raise TranslucencyError("give exactly one of --material NAME or --volume FILE.npz")
+    claim_output(out, "planar data set", overwrite=overwrite, inputs=[volume], reuse=True)
     vol = load_volume(volume) if volume is not None else make_sample(material, size, voxel, g=g, seed=seed)
     setup = PlanarSetup(grid=(grid, grid), span=(span, span), pitch=pitch, window=window, photons=photons,
                         seed=seed, theta_inc_deg=angle, index_matched=index_matched, chunk_points=chunk, dtype=dtype)
@@ -179,7 +184,7 @@ def acquire_planar_cmd(
                       f"{' x '.join(f'{v:g}' for v in vol.size_mm)} mm slab; estimated time ~{est:.0f} s")
     with progress() as bar:
         task = bar.add_task("acquire", total=grid * grid, item="")
-        acquire_planar(vol, setup, out, overwrite=overwrite,
+        acquire_planar(vol, setup, out, overwrite=overwrite, inputs=[volume],
                        progress=lambda done, total: bar.update(task, completed=done, item="points"))
     console.print(f"data set: {out}")
 
@@ -199,13 +204,15 @@ def acquire_mesh_cmd(
     g: float = typer.Option(0.0, "--g", help="Henyey-Greenstein anisotropy."),
     chunk: int = typer.Option(8, "--chunk", help="Incident points per chunk (unit of resuming)."),
     index_matched: bool = typer.Option(False, "--index-matched", help="No Fresnel reflection at the surface."),
-    overwrite: bool = typer.Option(False, "--overwrite", help="Replace a data set made with other arguments."),
+    overwrite: bool = typer.Option(False, "--overwrite", help="Replace a data set of translucency made with other "
+                                   "arguments (never anything else)."),
 ):
     """Pencil beams at surface points of a 3D object; exits tallied per vertex (R_d in mm^-2)."""
     from ..acquire.mesh import acquire_mesh, object_volume
     from ..acquire.objects import make_pig
     from ..io.mesh import load_mesh
 
+    claim_output(out, "mesh data set", overwrite=overwrite, inputs=[mesh], reuse=True)
     obj = load_mesh(mesh, scale_mm=scale) if mesh is not None else make_pig()
     vol = object_volume(material, obj, voxel, g=g, seed=seed)
     err_console.print(f"{points} incident points x {photons:,} photons x 3 channels on a mesh of "
@@ -213,7 +220,7 @@ def acquire_mesh_cmd(
     with progress() as bar:
         task = bar.add_task("acquire", total=points, item="")
         acquire_mesh(obj, vol, out, n_points=points, photons=photons, seed=seed, chunk_points=chunk,
-                     index_matched=index_matched, overwrite=overwrite, progress=lambda done, total: bar.update(task, completed=done, item="points"))
+                     index_matched=index_matched, overwrite=overwrite, inputs=[mesh], progress=lambda done, total: bar.update(task, completed=done, item="points"))
     console.print(f"mesh data set: {out}")
 
 
@@ -233,6 +240,8 @@ def fit(
     chunk: int = typer.Option(None, "--chunk", help="Incident points read and fitted together "
                                         "(default 128, in whole chunks of the store)."),
     float16: bool = typer.Option(False, "--float16", help="Store parameters as float16 (smaller file)."),
+    overwrite: bool = typer.Option(False, "--overwrite", help="Replace an earlier output of translucency at --out "
+                                   "(never anything else)."),
 ):
     """Fit a model per incident point, with the modulation texture alpha, to a planar data set.
 
@@ -242,9 +251,10 @@ def fit(
     from ..io.dataset import open_dataset
     from ..io.model_file import save_model
 
+    claim_output(out, "model file", overwrite=overwrite, inputs=[data], option="--out")
     if _is_mesh_dataset(data):
         check_fit_options(model, terms, 1, colour or "shared")
-        return _fit_mesh_cmd(data, out, model, terms, colour or "shared", exclusion, rounds, float16)
+        return _fit_mesh_cmd(data, out, model, terms, colour or "shared", exclusion, rounds, float16, overwrite)
     colour = colour or "per-channel"
     check_fit_options(model, terms, directions, colour)
     ds = open_dataset(data)
@@ -260,7 +270,7 @@ def fit(
                             progress=report)
     meta = {"dataset": str(data), "fit": result.options, "objective_per_round": result.history,
             "seconds": round(result.seconds, 2), "flagged_points": np.flatnonzero(result.flagged).tolist()}
-    path = save_model(result.model, out, dtype="float16" if float16 else "float32", meta=meta)
+    path = save_model(result.model, out, dtype="float16" if float16 else "float32", meta=meta, overwrite=overwrite)
     if result.flagged.any():
         err_console.print(f"[yellow]warning:[/] {int(result.flagged.sum())} incident points have no usable data "
                           f"(all masked, NaN or zero) and are flagged in the model: "
@@ -275,7 +285,7 @@ def _is_mesh_dataset(path: Path) -> bool:
     return meta.exists() and HEADER_KEY in meta.read_text()[:100_000]
 
 
-def _fit_mesh_cmd(data, out, model, terms, colour, exclusion, rounds, float16):
+def _fit_mesh_cmd(data, out, model, terms, colour, exclusion, rounds, float16, overwrite):
     from ..fit.mesh import fit_mesh
     from ..io.model_file import save_model
 
@@ -286,7 +296,7 @@ def _fit_mesh_cmd(data, out, model, terms, colour, exclusion, rounds, float16):
                                                                        item=msg))
     meta = {"dataset": str(Path(data).resolve()), "fit": result.options, "objective_per_round": result.history,
             "seconds": round(result.seconds, 2), "flagged_points": np.flatnonzero(result.flagged).tolist()}
-    path = save_model(result.model, out, dtype="float16" if float16 else "float32", meta=meta)
+    path = save_model(result.model, out, dtype="float16" if float16 else "float32", meta=meta, overwrite=overwrite)
     console.print(f"model: {path} ({result.seconds:.1f} s, {len(result.history)} rounds, mesh of "
                   f"{len(result.model.alpha.values):,} vertices)")
 
@@ -303,6 +313,8 @@ def render(
     reference: bool = typer.Option(False, "--reference", help="Also path-trace the reference (Mitsuba volpath) and compare."),
     spp: int = typer.Option(32, "--spp", help="Samples per pixel of the reference."),
     radius: float = typer.Option(None, "--radius", help="Transport truncation radius, mm (default: 99% energy)."),
+    overwrite: bool = typer.Option(False, "--overwrite", help="Replace an earlier output of translucency at --out "
+                                   "(never anything else)."),
 ):
     """Relight a fitted object: irradiance per vertex, sparse transport, a picture through Mitsuba (EXR + PNG)."""
     from ..io.model_file import ModelFileError, load_model, read_header
@@ -317,7 +329,8 @@ def render(
         raise TranslucencyError(str(exc)) from None
     if m.geometry != "mesh":
         raise TranslucencyError(f"{model}: a planar model; render needs a per-vertex model of a mesh data set")
-    mesh, dheader = object_from_dataset(header.get("meta", {}).get("dataset", ""))
+    dataset = header.get("meta", {}).get("dataset", "")
+    mesh, dheader = object_from_dataset(dataset)
     try:
         direction = [float(v) for v in view.split(",")]
         assert len(direction) == 3 and np.linalg.norm(direction) > 0
@@ -326,6 +339,7 @@ def render(
     lights = [parse_light(t) for t in (light or ["point:60,-80,120,2e4"])]
     if len(lights) > 1:
         raise TranslucencyError("--light: one light per render for now (run once per light)")
+    claim_folder(out, overwrite=overwrite, inputs=[model, dataset])
     cam = Camera.looking_at(mesh, direction, *size)
     vol = volume_of_dataset(mesh, dheader) if reference else None
     res = figure2(m, mesh, lights[0], out, volume=vol, camera=cam, spp_reference=spp, radius=radius,
@@ -346,6 +360,8 @@ def evaluate(
     json_out: Path = typer.Option(None, "--json", help="Write the error summary (rel_l2, rel_l2_near/mid/far) here."),
     compare: list[Path] = typer.Option(None, "--compare", help="Other model files of the same data (repeatable)."),
     points: str = typer.Option(None, "--points", help="Incident points for the profiles, e.g. '0,17,40'."),
+    overwrite: bool = typer.Option(False, "--overwrite", help="Replace an earlier output of translucency at --out "
+                                   "(never anything else)."),
 ):
     """Relative L2 errors (overall and per distance band), error maps, profiles and an HTML report."""
     from ..evaluate.report import model_label, write_report
@@ -368,6 +384,10 @@ def evaluate(
         picks = None if points is None else [int(v) for v in points.split(",") if v.strip()]
     except ValueError:
         raise TranslucencyError(f"--points: expected comma-separated integers, got {points!r}") from None
+    inputs = [model, data, *(compare or [])]
+    if json_out is not None:
+        claim_output(json_out, "json summary", overwrite=overwrite, inputs=inputs, option="--json")
+    claim_folder(report, overwrite=overwrite, inputs=inputs, option="--report")
     summary = write_report(models, data, report, points=picks, flagged=flagged, json_path=json_out)
     table = Table(title=f"relative L2 error on {data}")
     for col in ("model", "all", "near <1 mm", "mid 1-4 mm", "far >4 mm"):

@@ -21,6 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._version import __version__
 from ..io.atomic import atomic_path, write_json
 from ..io.dataset import PlanarDataset, open_dataset
 from .errors import BANDS, PlanarErrors, planar_errors
@@ -203,7 +204,7 @@ def write_report(models, dataset, out_dir, *, points=None, flagged=None, json_pa
         per_model[name] = e.summary()
         fl = flagged.get(name)
         per_model[name]["flagged_points"] = [] if fl is None else np.flatnonzero(fl).tolist()
-    summary = {"dataset": str(ds.path), "model": first, **per_model[first], "bands_mm": {k: [lo, hi if np.isfinite(hi) else None] for k, (lo, hi) in BANDS.items()},
+    summary = {"written_by": f"translucency {__version__}", "dataset": str(ds.path), "model": first, **per_model[first], "bands_mm": {k: [lo, hi if np.isfinite(hi) else None] for k, (lo, hi) in BANDS.items()},
                "models": per_model, "profile_points": points,
                "definition": "rel_l2 = ||model - data||_2 / ||data||_2 over valid pairs (mask, finite, r >= one pixel), "
                              "RGB summed; noise_floor = sqrt(sum variance)/||data||_2"}

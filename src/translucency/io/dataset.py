@@ -28,13 +28,14 @@ and ``request``: the arguments that define the data, compared on resume.
 from __future__ import annotations
 
 import json
-import shutil
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from .._validate import TranslucencyError
+from .._version import __version__
+from .outputs import claim_output, remove_dataset
 
 FORMAT = "translucency-dataset"
 VERSION = 1
@@ -71,18 +72,20 @@ class PlanarDataset:
         return bool(np.all(self["chunk_done"]))
 
 
-def create_dataset(path, header: dict, *, overwrite: bool = False):
+def create_dataset(path, header: dict, *, overwrite: bool = False, inputs=()):
     """Create (or reopen for resuming) a data set at ``path``.
 
     If ``path`` holds a data set with the same ``request``, it is reopened so
     that finished chunks are kept; a data set made with other arguments is
-    refused unless ``overwrite``.
+    replaced only with ``overwrite``; anything that is not a translucency data
+    set, and the command's ``inputs``, are never replaced
+    (:func:`translucency.io.outputs.claim_output`).
     """
     import zarr
     from zarr.codecs import BloscCodec
 
     path = Path(path)
-    if path.exists():
+    if claim_output(path, "planar data set", overwrite=overwrite, inputs=inputs, reuse=True):
         try:
             old = open_dataset(path, writable=True)
         except TranslucencyError:
@@ -90,15 +93,15 @@ def create_dataset(path, header: dict, *, overwrite: bool = False):
         if old is not None and old.header.get("request") == header["request"] and not overwrite:
             return old
         if not overwrite:
-            why = "was made with other arguments" if old is not None else "is not a translucency data set"
-            raise TranslucencyError(f"{path}: exists and {why}; choose another --out or pass --overwrite")
-        shutil.rmtree(path) if path.is_dir() else path.unlink()
+            raise TranslucencyError(f"--out {path}: a data set made with other arguments is already there; "
+                                    "choose another path or pass --overwrite to replace it")
+        remove_dataset(path)
     P = header["n_points"]
     H, W = header["window"]
     k = header["chunk_points"]
     n_chunks = -(-P // k)
     dtype = header["dtype"]
-    root = zarr.open_group(str(path), mode="w", attributes={HEADER_KEY: header})
+    root = zarr.create_group(str(path), attributes={HEADER_KEY: header}, overwrite=False)  # never clears a folder
     comp = BloscCodec(cname="zstd", clevel=5, shuffle="shuffle")
     specs = {
         "x_i": ((P, 2), "float32", (P, 2)),
@@ -154,7 +157,6 @@ def write_dataset(path, x_i, window_origin, R_d, pitch: float, *, variance=None,
     >>> ds.n_points, ds.window, ds.complete()
     (1, (8, 8), True)
     """
-    from .. import __version__
     from .._validate import as_float_array
 
     R_d = np.asarray(R_d, dtype=np.float64)  # NaN allowed: unmeasured pixels, flagged by the fitter
@@ -180,8 +182,7 @@ def write_dataset(path, x_i, window_origin, R_d, pitch: float, *, variance=None,
         "acquisition": {"photons": photons}, "software": {"translucency": __version__},
         "request": {"written_by": "write_dataset"},
     }
-    if path is not None and Path(path).exists() and not overwrite:
-        raise TranslucencyError(f"{path}: exists; choose another path or pass overwrite=True")
+    claim_output(path, "planar data set", overwrite=overwrite)
     ds = create_dataset(path, header, overwrite=True)
     g = ds.group
     g["x_i"][...] = x_i.astype(np.float32)

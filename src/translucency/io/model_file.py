@@ -39,9 +39,11 @@ from pathlib import Path
 import numpy as np
 
 from .._validate import TranslucencyError
+from .._version import __version__
 from ..model import BurleyModel, DipoleModel, ExponentialModel, PlanarAlpha, VertexAlpha
 from ..model._base import ReflectanceModel
 from .atomic import atomic_path
+from .outputs import claim_output
 
 FORMAT = "translucency-model"
 VERSION = 1
@@ -89,7 +91,8 @@ def _checksum(arrays: dict[str, np.ndarray]) -> str:
     return h.hexdigest()
 
 
-def save_model(model: ReflectanceModel, path, *, dtype: str = "float32", meta: dict | None = None) -> Path:
+def save_model(model: ReflectanceModel, path, *, dtype: str = "float32", meta: dict | None = None,
+               overwrite: bool = False) -> Path:
     """Write ``model`` to ``path`` atomically.
 
     Parameters
@@ -97,14 +100,17 @@ def save_model(model: ReflectanceModel, path, *, dtype: str = "float32", meta: d
     model : ExponentialModel, DipoleModel or BurleyModel
         The model to store.
     path : str or Path
-        Destination; an existing file is replaced only once the new one is
-        complete.
+        Destination; an existing model file is replaced (with ``overwrite``)
+        only once the new one is complete; any other existing file is refused
+        (:func:`translucency.io.outputs.claim_output`).
     dtype : {"float32", "float16"}
         Storage precision of parameters and α (positions and frames stay
         float32).  float16 halves the size; a value that would not survive the
         cast (overflow, or a d that rounds to 0 and breaks eq. (2)) is refused.
     meta : dict, optional
         JSON-serialisable provenance stored in the header.
+    overwrite : bool
+        Replace a model file already at ``path``.
 
     Returns
     -------
@@ -125,6 +131,7 @@ def save_model(model: ReflectanceModel, path, *, dtype: str = "float32", meta: d
         raise TranslucencyError(f"dtype: expected 'float32' or 'float16', got {dtype!r}")
     if not isinstance(model, (ExponentialModel, DipoleModel, BurleyModel)):
         raise TranslucencyError(f"model: cannot store a {type(model).__name__}")
+    claim_output(path, "model file", overwrite=overwrite)
     arrays = _model_arrays(model, dtype)
     # the stored (cast) values must still form a valid model
     for key, a in arrays.items():
@@ -159,7 +166,6 @@ def _write_store(path: Path, header: dict, arrays: dict[str, np.ndarray]) -> Non
 
 
 def _header(model: ReflectanceModel, dtype: str, meta: dict | None, checksum: str) -> dict:
-    from .. import __version__
 
     header = {
         "format": FORMAT,

@@ -1,0 +1,221 @@
+"""Outputs a command may write, replace or remove — and the ones it must never touch.
+
+The rule, for every command that writes (acquire, fit, evaluate, render, demo):
+
+* an output that does not exist is created;
+* an output that exists is replaced only with ``overwrite`` **and** only when it
+  is recognisably the tool's own, of the kind the command writes (a planar or
+  mesh data set, a model file, an output folder carrying the marker file
+  :data:`MARKER`, a JSON summary that names the tool);
+* the current folder, any folder above it, an input of the same command, a
+  folder holding an input, and anything inside an input are refused whatever
+  the flags;
+* removing an old data set removes only the Zarr nodes the tool wrote (the
+  ``zarr.json`` files and array folders); anything else found inside is kept.
+
+Every refusal is a :class:`~translucency._validate.TranslucencyError` naming the
+path, and a message recommends ``--overwrite`` only for the tool's own outputs.
+
+Examples
+--------
+>>> import tempfile
+>>> folder = Path(tempfile.mkdtemp())
+>>> (folder / "thesis.tex").write_text("my thesis")
+9
+>>> try:
+...     claim_output(folder / "thesis.tex", "model file", overwrite=True)
+... except TranslucencyError as exc:
+...     print(str(exc).split(";")[0])  # doctest: +ELLIPSIS
+--out /.../thesis.tex: exists and is not a translucency model file
+>>> (folder / "thesis.tex").read_text()
+'my thesis'
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import warnings
+import zipfile
+from pathlib import Path
+
+from .._validate import TranslucencyError
+from .._version import __version__
+
+#: the marker file of an output folder (render, report, demo); JSON with the tool's name
+MARKER = ".translucency-output.json"
+
+#: what each kind of output is called in messages
+KINDS = ("planar data set", "mesh data set", "model file", "output folder", "json summary")
+
+# header keys of the stores (kept here so that this module imports no stage)
+_DATASET_KEYS = {"planar data set": "translucency_dataset", "mesh data set": "translucency_mesh_dataset"}
+_MODEL_KEY = "translucency_model"
+_FOLDER_KINDS = ("planar data set", "mesh data set", "output folder")
+
+
+# -- recognising the tool's own outputs -------------------------------------------------------
+def _zarr_attributes(meta: bytes) -> dict:
+    try:
+        node = json.loads(meta)
+    except (ValueError, UnicodeDecodeError):
+        return {}
+    attrs = node.get("attributes") if isinstance(node, dict) else None
+    return attrs if isinstance(attrs, dict) else {}
+
+
+def kind_of(path) -> str | None:
+    """Which of the tool's outputs ``path`` is (one of :data:`KINDS`), or None for anything else.
+
+    Reads only metadata: a data set's root ``zarr.json``, a model file's
+    ``zarr.json`` inside its zip, an output folder's marker, a JSON file's
+    ``written_by`` field.
+    """
+    path = Path(path)
+    try:
+        if path.is_dir():
+            meta = path / "zarr.json"
+            if meta.is_file():
+                attrs = _zarr_attributes(meta.read_bytes())
+                for kind, key in _DATASET_KEYS.items():
+                    if isinstance(attrs.get(key), dict):
+                        return kind
+            marker = path / MARKER
+            if marker.is_file() and json.loads(marker.read_text()).get("written_by") == "translucency":
+                return "output folder"
+            return None
+        if path.is_file():
+            if zipfile.is_zipfile(path):
+                with zipfile.ZipFile(path) as zf:
+                    if "zarr.json" in zf.namelist() and _MODEL_KEY in _zarr_attributes(zf.read("zarr.json")):
+                        return "model file"
+                return None
+            if path.suffix == ".json" and path.stat().st_size < 50_000_000:
+                obj = json.loads(path.read_text())
+                if isinstance(obj, dict) and str(obj.get("written_by", "")).startswith("translucency"):
+                    return "json summary"
+    except (OSError, ValueError, zipfile.BadZipFile):
+        return None
+    return None
+
+
+# -- the guards -------------------------------------------------------------------------------
+def _within(inner: Path, outer: Path) -> bool:
+    """``inner`` is ``outer`` or lies inside it (both resolved)."""
+    return inner == outer or outer in inner.parents
+
+
+def claim_output(path, kind: str, *, overwrite: bool, inputs=(), option: str = "--out",
+                 reuse: bool = False) -> bool:
+    """Check that ``path`` may be written as a ``kind``; return whether an old one of that kind is there.
+
+    Parameters
+    ----------
+    path : path
+        The output.
+    kind : str
+        One of :data:`KINDS`; for data sets the other data-set kind is refused.
+    overwrite : bool
+        The user's ``--overwrite``: an existing output of this kind may be replaced.
+    inputs : iterable of path
+        The command's inputs: never the output, never inside it, never holding it.
+    option : str
+        The option named in messages.
+    reuse : bool
+        The caller reopens an existing output of this kind (an acquisition that
+        resumes): it is not refused without ``overwrite``.
+
+    Returns
+    -------
+    bool
+        True when ``path`` exists and is the tool's own ``kind``.
+
+    Raises
+    ------
+    TranslucencyError
+        One line naming ``path``: the current folder or one above it, an input,
+        a foreign file or folder, or an own output without ``overwrite``.
+    """
+    if kind not in KINDS:
+        raise ValueError(f"kind must be one of {KINDS}, got {kind!r}")
+    path = Path(path)
+    target = path.resolve()
+    cwd = Path.cwd().resolve()
+    if _within(cwd, target):
+        raise TranslucencyError(f"{option} {path}: is the current folder or a folder above it; "
+                                "give a new path for the output")
+    if target.parent == target or target == Path.home().resolve():
+        raise TranslucencyError(f"{option} {path}: refusing the root or home folder; give a new path for the output")
+    for inp in inputs:
+        if inp is None:
+            continue
+        src = Path(inp).resolve()
+        if _within(src, target) or _within(target, src):
+            raise TranslucencyError(f"{option} {path}: is, holds or lies inside the input {inp}; "
+                                    "give another path for the output")
+    if not (path.exists() or path.is_symlink()):
+        return False
+    if kind in _FOLDER_KINDS and path.is_dir() and not path.is_symlink() and \
+            {p.name for p in path.iterdir()} <= {MARKER}:
+        return False  # an empty folder (or one a failed command only marked) is as good as a new one
+    if path.is_symlink():
+        raise TranslucencyError(f"{option} {path}: is a symbolic link; give a new path for the output")
+    found = kind_of(path)
+    if found != kind:
+        what = "a translucency " + found if found else "not a translucency " + kind
+        if found:
+            what += f", not a {kind}"
+        raise TranslucencyError(f"{option} {path}: exists and is {what}; refusing to replace it — "
+                                "give a new path for the output")
+    if not overwrite and not reuse:
+        raise TranslucencyError(f"{option} {path}: a {kind} written by translucency is already there; "
+                                "choose another path or pass --overwrite to replace it")
+    return True
+
+
+def remove_dataset(path) -> None:
+    """Remove a data set the tool wrote: its Zarr nodes only, then the folder if nothing else is left.
+
+    Only child folders that are Zarr nodes (hold a ``zarr.json``), the root
+    ``zarr.json`` and the tool's lock file are removed; anything else inside
+    stays, with a warning, and so does the folder that holds it.
+    """
+    path = Path(path)
+    if kind_of(path) not in _DATASET_KEYS:
+        raise TranslucencyError(f"{path}: not a translucency data set; nothing removed")
+    for child in path.iterdir():
+        if child.is_dir() and not child.is_symlink() and (child / "zarr.json").is_file():
+            shutil.rmtree(child)
+    for name in ("zarr.json", ".translucency.lock"):
+        (path / name).unlink(missing_ok=True)
+    left = sorted(p.name for p in path.iterdir())
+    if left:
+        warnings.warn(f"{path}: kept {len(left)} entries translucency did not write: {left[:5]}", stacklevel=2)
+    else:
+        path.rmdir()
+
+
+def claim_folder(path, *, overwrite: bool, inputs=(), option: str = "--out") -> Path:
+    """Make ``path`` an output folder of the tool (created, or empty, or one it wrote before).
+
+    A new or empty folder gets the marker file :data:`MARKER`; a folder with
+    the marker is reused only with ``overwrite`` (files written there again
+    replace their old versions, nothing else is removed); any other folder
+    that holds files is refused.
+
+    Returns
+    -------
+    Path
+        ``path``, existing and marked.
+    """
+
+    path = Path(path)
+    claim_output(path, "output folder", overwrite=overwrite, inputs=inputs, option=option)
+    path.mkdir(parents=True, exist_ok=True)
+    marker = path / MARKER
+    if not marker.exists():
+        tmp = marker.with_name(marker.name + f".tmp-{os.getpid()}")
+        tmp.write_text(json.dumps({"written_by": "translucency", "version": __version__}) + "\n")
+        os.replace(tmp, marker)
+    return path
