@@ -60,9 +60,10 @@ def whole_fit(path: Path, kind: str) -> dict:
 def solver_vs_scipy(path: Path, n_sample: int) -> dict:
     from scipy.optimize import least_squares
 
+    from translucency.fit._alternation import FitContext, FitState, _grouped, _load_chunk, _weights
     from translucency.fit._varpro import fit_exponentials_batched
-    from translucency.fit._windows import SampleGrid
-    from translucency.fit.planar import _Context, _grouped, _load_chunk, _PlanarSource, _State, _weights
+    from translucency.fit.planar import _PlanarSource
+    from translucency.geometry import SampleGrid
     from translucency.io.dataset import open_dataset
 
     ds = open_dataset(path)
@@ -72,8 +73,9 @@ def solver_vs_scipy(path: Path, n_sample: int) -> dict:
     grid = SampleGrid.covering(origin, ds.pitch, ds.window)
     photons = ds.header["acquisition"]["photons"]
     source = _PlanarSource(ds, grid, origin, 1 / (photons * ds.pitch**2))
-    ctx = _Context(source, "iso", 3, 1, 3, ds.pitch, 0.05, 1.3, ds.pitch / 4, 1, True, x_i)
-    state = _State("iso", ds.n_points, 3, 1, 3, grid.shape)
+    ctx = FitContext(source=source, kind="iso", n=3, m=1, C=3, exclusion=ds.pitch, rel_sigma=0.05, eta=1.3,
+                     radius_step=ds.pitch / 4, sweeps=1, balance=True, x_i=x_i)
+    state = FitState(ds.n_points, 3, 1, 3, grid.shape)
     # the sampled points, through the fitter's own loading and weighting (first round, α = 1)
     chunks = [_load_chunk(ctx, state, p, p + 1) for p in pts]
     w2 = [_weights(ctx, ch, None) for ch in chunks]

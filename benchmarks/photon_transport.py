@@ -19,8 +19,8 @@ import time
 import numpy as np
 
 from translucency.acquire import PlanarSetup, acquire_planar, make_sample
-from translucency.acquire._engine import mitsuba
 from translucency.acquire.transport import random_walk
+from translucency.mitsuba import mitsuba
 
 
 def numpy_walk(volume, channel, x0, y0, n, seed=0, max_steps=100_000):

@@ -22,9 +22,9 @@ from pathlib import Path
 import numpy as np
 
 from translucency.acquire.mesh import acquire_mesh, object_volume
-from translucency.acquire.mesh_walk import mesh_scene
 from translucency.acquire.objects import make_pig
 from translucency.fit.mesh import fit_mesh
+from translucency.mitsuba import mesh_scene
 from translucency.render import Camera, PointLight, relight_vertices, transport_matrices, vertex_irradiance
 from translucency.render.image import VertexPicture, coverage, rel_rmse, render_reference
 

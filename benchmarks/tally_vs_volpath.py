@@ -2,7 +2,7 @@
 
 Both estimate the same image — the radiance leaving the top face of a
 heterogeneous slab along +z, per pixel of a window around a narrow spot beam
-(:mod:`translucency.acquire.reference`) — side by side in one run:
+(:mod:`translucency.validate.volpath`) — side by side in one run:
 
 1. *agreement*: two independent runs of each method are averaged; per-pixel
    z-scores (tally − volpath)/σ, ring profiles around the beam, and the cone
@@ -35,11 +35,21 @@ import time
 
 import numpy as np
 
+from translucency import TranslucencyError
 from translucency.acquire import make_sample
-from translucency.acquire._engine import mitsuba
-from translucency.acquire.reference import (NO_ROULETTE, PixelWindow, RadianceImage, SpotBeam, compare,
-                                            radiance_from_exits, relative_variance, render_volpath_spot,
-                                            tally_radiance, window_sum_ratio)
+from translucency.mitsuba import mitsuba
+from translucency.validate import (
+    NO_ROULETTE,
+    PixelWindow,
+    RadianceImage,
+    SpotBeam,
+    TopExits,
+    compare,
+    pixel_index,
+    radiance_from_exits,
+    render_volpath_spot,
+    tally_radiance,
+)
 
 
 def parse(argv=None):
@@ -61,6 +71,35 @@ def parse(argv=None):
     p.add_argument("--radius", type=float, default=1.5, help="pixels within this distance of the beam, mm")
     p.add_argument("--figure", default=None, help="write the profile figure here (PNG)")
     return p.parse_args(argv)
+
+
+def window_sum_ratio(exits: TopExits, x: np.ndarray, y: np.ndarray, pitch_mm: float, cone_deg: float,
+                     ref_cone_deg: float) -> tuple[float, float]:
+    """Ratio of the window's summed radiance estimated with ``cone_deg`` to that with ``ref_cone_deg``.
+
+    Measures the cone bias: photons in the narrower cone are a subset of those
+    in the wider one, so given the wider count n_w the narrower count is
+    binomial with p = n_n/n_w, whence the standard error.  Returns (ratio, standard error).
+    """
+    n_pix = x.shape[0]
+    inside = (pixel_index(exits.x, x[0, :], pitch_mm) >= 0) & (pixel_index(exits.y, y[:, 0], pitch_mm) >= 0)
+    narrow, wide = sorted((cone_deg, ref_cone_deg))
+    n_n = np.count_nonzero(inside & (exits.cos_exit > np.cos(np.radians(narrow))))
+    n_w = np.count_nonzero(inside & (exits.cos_exit > np.cos(np.radians(wide))))
+    if n_w == 0 or n_n == 0:
+        raise TranslucencyError(f"cone: no photons left the {n_pix}x{n_pix} window within {narrow} deg")
+    s = (np.sin(np.radians(wide)) / np.sin(np.radians(narrow))) ** 2  # solid-angle weights of the two cones
+    p = n_n / n_w
+    ratio, se = p * s, s * np.sqrt(p * (1.0 - p) / n_w)  # L_narrow / L_wide
+    if cone_deg == narrow:
+        return float(ratio), float(se)
+    return float(1.0 / ratio), float(se / ratio**2)
+
+
+def relative_variance(image: RadianceImage, mask: np.ndarray) -> np.ndarray:
+    """Var/L² of the pixels in ``mask`` (n, n) with L > 0, per channel: (pixels, C)."""
+    L, V = image.radiance[mask], image.variance[mask]
+    return np.where(L > 0, V / np.where(L > 0, L, 1.0) ** 2, np.nan)
 
 
 def mean_of_runs(a: RadianceImage, b: RadianceImage) -> RadianceImage:
@@ -86,7 +125,7 @@ def timed(fn, *args, **kw):
 
 
 def figure(path, agreement, z, channels, title):
-    import matplotlib
+    import matplotlib  # here: only a run with --figure needs matplotlib (and its Agg backend)
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt

@@ -70,9 +70,10 @@ def test_radial_profile_against_dipole_beyond_two_mfp():
 def test_hg_mean_cosine_is_g():
     # one scattering event in an infinite-like medium: check via a thin, purely scattering slab is
     # indirect; instead sample the phase function through the walk's helper directly
-    from translucency.acquire._engine import mitsuba
-    from translucency.acquire.transport import _hg_sample
     import drjit as dr
+
+    from translucency.acquire.transport import _hg_sample
+    from translucency.mitsuba import mitsuba
 
     mi = mitsuba()
     n = 200_000

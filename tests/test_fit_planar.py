@@ -9,7 +9,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from translucency._validate import TranslucencyError
+from conftest import exponential_terms
+from translucency import TranslucencyError
 from translucency.fit._lm import fit_params_batched
 from translucency.fit._varpro import fit_exponentials_batched, nnls_small
 from translucency.fit.planar import fit_planar
@@ -33,15 +34,6 @@ def _windows(model, x_i, half=16):
     return origin, model.R_d_window(np.arange(len(x_i)), origin, PITCH, (n, n))
 
 
-def _random_exponential(rng, P, m=1, colour="per-channel"):
-    C = 3 if colour == "per-channel" else 1
-    a = np.sort(np.stack([rng.uniform(5, 8, (P, C, m)), rng.uniform(1.2, 2.0, (P, C, m)),
-                          rng.uniform(0.3, 0.6, (P, C, m))], axis=-1), axis=-1)[..., ::-1]
-    c = np.stack([rng.uniform(0.5, 1.0, (P, C, m)), rng.uniform(0.05, 0.1, (P, C, m)),
-                  rng.uniform(0.005, 0.01, (P, C, m))], axis=-1)
-    return c, -a
-
-
 def test_nnls_small_matches_scipy_nnls():
     from scipy.optimize import nnls
 
@@ -61,7 +53,7 @@ def test_batched_varpro_equals_scipy_per_profile():
     """The batched solver reaches the same optimum as scipy's least_squares profile by profile."""
     rng = np.random.default_rng(5)
     r = np.unique(np.hypot(*np.mgrid[-16:17, -16:17]).ravel() * PITCH)[1:]
-    c, d = _random_exponential(rng, 24)
+    c, d = exponential_terms(rng, 24)
     Y = np.einsum("bk,bgk->bg", c[:, 0, 0], np.exp(d[:, 0, 0][:, None, :] * r[None, :, None]))
     Y = Y * (1 + 0.03 * rng.normal(size=Y.shape))  # noisy: the optimum is not the truth
     cb, ab, cost = fit_exponentials_batched(r, 1 / Y, Y, 3)
@@ -104,7 +96,7 @@ def test_iso_parameter_recovery(tmp_path, colour):
     rng = np.random.default_rng(11)
     x_i = _grid_points()
     P = len(x_i)
-    c, d = _random_exponential(rng, P, colour=colour)
+    c, d = exponential_terms(rng, P, C=3 if colour == "per-channel" else 1)
     alpha = PlanarAlpha.uniform((60, 60), (0.0, 0.0), PITCH)
     kw = {} if colour == "per-channel" else {"s_g": rng.uniform(0.6, 0.9, P), "s_b": rng.uniform(0.3, 0.6, P)}
     truth = ExponentialModel(x_i, c, d, alpha, **kw)
@@ -127,7 +119,7 @@ def test_alpha_recovery_with_modulation(tmp_path):
     rng = np.random.default_rng(12)
     x_i = _grid_points(side=5, spacing=1.0)
     P = len(x_i)
-    c, d = _random_exponential(rng, P)
+    c, d = exponential_terms(rng, P)
     yy, xx = np.mgrid[0:40, 0:40] * PITCH
     values = 1.0 + 0.3 * np.sin(xx * 1.3) * np.cos(yy * 0.9)
     truth = ExponentialModel(x_i, c, d, PlanarAlpha(values, (0.0, 0.0), PITCH))
@@ -150,7 +142,7 @@ def test_aniso_recovers_directional_profiles(tmp_path):
     rng = np.random.default_rng(13)
     x_i = _grid_points(side=3)
     P, m = len(x_i), 8
-    c, d = _random_exponential(rng, P, m=m)
+    c, d = exponential_terms(rng, P, m=m)
     truth = ExponentialModel(x_i, c, d, PlanarAlpha.uniform((60, 60), (0.0, 0.0), PITCH))
     origin, R = _windows(truth, x_i)
     ds = write_dataset(tmp_path / "d.zarr", x_i, origin, R, PITCH)
@@ -186,7 +178,7 @@ def _iso_truth(seed, side):
     """A random per-channel isotropic model on a side × side grid, α = 1, and its windows."""
     rng = np.random.default_rng(seed)
     x_i = _grid_points(side=side)
-    c, d = _random_exponential(rng, len(x_i))
+    c, d = exponential_terms(rng, len(x_i))
     truth = ExponentialModel(x_i, c, d, PlanarAlpha.uniform((60, 60), (0.0, 0.0), PITCH))
     return rng, x_i, truth, *_windows(truth, x_i)
 

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 import trimesh
 
-from translucency._validate import TranslucencyError
+from translucency import TranslucencyError
 from translucency.acquire.objects import make_pig, pig_sdf
 from translucency.io.mesh import load_mesh
 
@@ -73,9 +73,10 @@ def _fraction_z(a, b, n):
 @pytest.mark.parametrize("index_matched", [False, True])
 def test_mesh_walk_in_a_box_matches_the_slab_walk(index_matched):
     """The same slab as a triangle mesh traced by Mitsuba and as the analytic box: same transport."""
-    from translucency.acquire.mesh_walk import EXIT, mesh_random_walk, mesh_scene
+    from translucency.acquire.mesh_walk import EXIT, mesh_random_walk
     from translucency.acquire.samples import make_sample
     from translucency.acquire.transport import OTHER_FACE, TOP, random_walk
+    from translucency.mitsuba import mesh_scene
 
     vol = make_sample("marble", (8.0, 8.0, 4.0), 0.25, seed=2)
     W, H, T = vol.size_mm
@@ -96,8 +97,9 @@ def test_mesh_walk_in_a_box_matches_the_slab_walk(index_matched):
 
 
 def test_mesh_walk_conserves_energy_in_a_non_absorbing_sphere():
-    from translucency.acquire.mesh_walk import EXIT, mesh_random_walk, mesh_scene
+    from translucency.acquire.mesh_walk import EXIT, mesh_random_walk
     from translucency.acquire.volume import Volume
+    from translucency.mitsuba import mesh_scene
 
     sphere = trimesh.creation.icosphere(4, radius=3.0)
     vol = Volume.homogeneous((24, 24, 24), 0.25, [2.0] * 3, [0.0] * 3, 0.0, 1.4)

@@ -7,13 +7,21 @@ import numpy as np
 import pytest
 import trimesh
 
-from translucency._validate import TranslucencyError
-from translucency.acquire.mesh import vertex_areas
-from translucency.acquire.mesh_walk import mesh_scene
-from translucency.fit.mesh import tangent_frames
+from conftest import random_exponential_model
+from translucency import TranslucencyError
+from translucency.geometry import tangent_frames, vertex_areas
+from translucency.mitsuba import mesh_scene
 from translucency.model import ExponentialModel, VertexAlpha
-from translucency.render import (Camera, DirectionalLight, PointLight, parse_light, relight_vertices,
-                                 render_vertex_radiance, transport_matrices, vertex_irradiance)
+from translucency.render import (
+    Camera,
+    DirectionalLight,
+    PointLight,
+    parse_light,
+    relight_vertices,
+    render_vertex_radiance,
+    transport_matrices,
+    vertex_irradiance,
+)
 from translucency.render.image import coverage
 
 
@@ -22,13 +30,12 @@ def ball():
     return trimesh.creation.icosphere(2, radius=5.0)
 
 
+#: the profiles of the rendering tests: a steep and a shallow term
+TWO_TERMS = (((2.0, 3.0), (0.2, 0.5)), ((0.3, 0.6), (0.01, 0.05)))
+
+
 def _model_on(mesh, rng, points):
-    x_i = mesh.vertices[points]
-    c = np.stack([rng.uniform(0.2, 0.5, len(points)), rng.uniform(0.01, 0.05, len(points))], 1)[:, None, None, :]
-    d = -np.stack([rng.uniform(2, 3, len(points)), rng.uniform(0.3, 0.6, len(points))], 1)[:, None, None, :]
-    alpha = VertexAlpha(rng.uniform(0.8, 1.2, len(mesh.vertices)), mesh.vertices)
-    return ExponentialModel(x_i, c, d, alpha, s_g=rng.uniform(0.5, 1, len(points)), s_b=rng.uniform(0.2, 0.5, len(points)),
-                            frame=tangent_frames(mesh.vertex_normals[points]))
+    return random_exponential_model(rng, geometry="mesh", mesh=mesh, points=points, terms=TWO_TERMS)
 
 
 def test_transport_equals_a_plain_double_loop(ball):
@@ -166,7 +173,7 @@ def test_spot_and_environment_irradiance(ball):
 
 def _sky_map(path, sun=True):
     """A latitude–longitude map (rows from the map's +Y pole down): a blue-grey sky and an optional sun."""
-    from translucency.acquire._engine import mitsuba
+    from translucency.mitsuba import mitsuba
 
     H, W = 32, 64
     theta = (np.arange(H) + 0.5) / H * np.pi
@@ -180,9 +187,8 @@ def _sky_map(path, sun=True):
 
 def test_environment_map_irradiance_matches_mitsuba_direct_lighting(ball, tmp_path):
     """A white diffuse ball under a sky with a sun: ρE/π per vertex, drawn, against Mitsuba's own path tracer."""
-    from translucency.acquire._engine import mitsuba
+    from translucency.mitsuba import mitsuba, write_ply
     from translucency.render import EnvironmentLight
-    from translucency.render.image import _write_ply
 
     mi = mitsuba()
     light = parse_light(f"env:{_sky_map(tmp_path / 'sky.exr')},2")
@@ -193,7 +199,7 @@ def test_environment_map_irradiance_matches_mitsuba_direct_lighting(ball, tmp_pa
     rho = 0.8
     cam = Camera.looking_at(ball, direction=(0.3, -1.0, 0.2), width=64, height=48)
     ours = render_vertex_radiance(ball, rho * E / np.pi, cam, spp=4, light=light)
-    _write_ply(tmp_path / "ball.ply", np.asarray(ball.vertices), np.asarray(ball.faces))
+    write_ply(tmp_path / "ball.ply", np.asarray(ball.vertices), np.asarray(ball.faces))
     ref = np.asarray(mi.render(mi.load_dict({
         "type": "scene", "integrator": {"type": "path", "max_depth": 2},
         "ball": {"type": "ply", "filename": str(tmp_path / "ball.ply"), "bsdf": {"type": "diffuse", "reflectance": rho}},
@@ -210,7 +216,7 @@ def test_environment_map_irradiance_matches_mitsuba_direct_lighting(ball, tmp_pa
 
 
 def test_uniform_map_is_the_constant_sky(ball, tmp_path):
-    from translucency.acquire._engine import mitsuba
+    from translucency.mitsuba import mitsuba
     from translucency.render import EnvironmentLight
 
     mitsuba().Bitmap(np.full((16, 32, 3), 0.25, np.float32)).write(str(tmp_path / "flat.exr"))

@@ -1,4 +1,4 @@
-"""The photon tally against Mitsuba 3's own ``volpath`` (translucency.acquire.reference).
+"""The photon tally against Mitsuba 3's own ``volpath`` (translucency.validate.volpath).
 
 Fast tests pin down the set-up that the comparison rests on — which image
 pixel sees which point of the slab, that Mitsuba's grid holds our voxels the
@@ -11,11 +11,20 @@ import pytest
 
 from translucency import TranslucencyError
 from translucency.acquire import Volume, make_sample
-from translucency.acquire._engine import mitsuba
-from translucency.acquire.reference import (PixelWindow, SpotBeam, compare, pixel_centres, render_volpath_spot,
-                                            sample_spot_entries, slab_medium_dict, spot_irradiance, spot_power,
-                                            spot_profile, tally_radiance)
 from translucency.acquire.transport import TOP, random_walk
+from translucency.mitsuba import mitsuba, slab_medium_dict
+from translucency.validate import (
+    PixelWindow,
+    SpotBeam,
+    compare,
+    pixel_centres,
+    render_volpath_spot,
+    sample_spot_entries,
+    spot_irradiance,
+    spot_power,
+    spot_profile,
+    tally_radiance,
+)
 
 
 def test_pixel_centres_follow_the_window_and_the_rendered_image():
@@ -45,7 +54,7 @@ def test_mitsuba_medium_holds_our_voxels_the_right_way_round():
     """Mitsuba's heterogeneous medium, built from an asymmetric volume, returns at random points
     the σ_s and σ_t of the voxel [iz, iy, ix] that our walk looks up there (z index 0 on top)."""
     mi = mitsuba()
-    import drjit as dr
+    import drjit as dr  # after mitsuba(): Dr.Jit must load with the libLLVM chosen there
 
     rng = np.random.default_rng(4)
     shape = (3, 4, 5)  # Z, Y, X all different

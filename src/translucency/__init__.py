@@ -19,7 +19,6 @@ from .model import (
     material,
 )
 
-
 __all__ = [
     "TranslucencyError",
     "ModelFileError",

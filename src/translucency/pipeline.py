@@ -16,18 +16,23 @@ from pathlib import Path
 
 import numpy as np
 
-from .data import default_dataset_path
-from .evaluate.baselines import material_profiles, plot_profiles
-from .evaluate.report import write_report
+from .acquire.mesh import acquire_mesh, object_volume
+from .acquire.objects import make_pig
 from .acquire.pattern import acquire_pattern
 from .acquire.samples import sample_of_dataset
+from .data import default_dataset_path
+from .evaluate.baselines import material_profiles, plot_profiles
 from .evaluate.relight import pattern_irradiance, plot_relighting, relight
+from .evaluate.report import write_report
+from .fit.mesh import fit_mesh
 from .fit.planar import fit_planar
-from .io.dataset import open_dataset
 from .io.atomic import atomic_path, write_json
+from .io.dataset import open_dataset
 from .io.model_file import save_model
 from .io.outputs import claim_folder
 from .model import MATERIALS, ExponentialModel, PlanarAlpha
+from .render import Camera, PointLight
+from .render.figure import figure2
 
 
 def relight_check(ds, models: dict, figure, *, pattern: str = "stripe", photons: int = 1000, seed: int = 5) -> dict:
@@ -53,22 +58,21 @@ def relight_check(ds, models: dict, figure, *, pattern: str = "stripe", photons:
             "total_ratio": {n: float(B.sum() / total) for n, B in preds.items()}}
 
 
-def run_figure2(out_dir, *, points: int = 96, photons: int = 8000, spp: int = 16, size=(160, 120)) -> dict:
-    """Acquire the pig per vertex (index-matched, so that volpath can light it), fit, render, compare."""
-    from .acquire.mesh import acquire_mesh, object_volume
-    from .acquire.objects import make_pig
-    from .fit.mesh import fit_mesh
-    from .render import Camera, PointLight
-    from .render.figure import figure2
+def run_figure2(report_dir, data_path, model_path, *, points: int = 96, photons: int = 8000, spp: int = 16,
+                size=(160, 120), overwrite: bool = False) -> dict:
+    """Acquire the pig per vertex (index-matched, so that volpath can light it), fit, render, compare.
 
+    Writes the mesh data set to ``data_path`` (resumed, or reused, if it holds the same acquisition), the
+    per-vertex model to ``model_path`` (replacing an earlier one with ``overwrite``) and Figure 2 into
+    ``report_dir``.
+    """
     pig = make_pig()
     volume = object_volume("marble", pig, 1.0, seed=1)
-    data = Path(out_dir).parent / "pig.zarr"
-    acquire_mesh(pig, volume, data, n_points=points, photons=photons, chunk_points=16, index_matched=True)
-    fit = fit_mesh(data, "iso")
-    save_model(fit.model, Path(out_dir).parent / "fits" / "pig_iso.model.zip", dtype="float16", overwrite=True,
-               meta={"dataset": str(Path(data).resolve()), "fit": fit.options})
-    return figure2(fit.model, pig, PointLight((60.0, -80.0, 120.0), 2.0e4), out_dir, volume=volume,
+    acquire_mesh(pig, volume, data_path, n_points=points, photons=photons, chunk_points=16, index_matched=True)
+    fit = fit_mesh(data_path, "iso")
+    save_model(fit.model, model_path, dtype="float16", overwrite=overwrite,
+               meta=fit.metadata(Path(data_path).resolve()))
+    return figure2(fit.model, pig, PointLight((60.0, -80.0, 120.0), 2.0e4), report_dir, volume=volume,
                    camera=Camera.looking_at(pig, width=size[0], height=size[1]), spp_reference=spp)
 
 
@@ -139,9 +143,7 @@ def run_demo(out_dir, *, n_terms: int = 3, step: Callable[[str], None] | None = 
         if step:
             step(f"fit {label}")
         fit = fit_planar(ds, n_terms=n_terms, max_rounds=max_rounds, **kw)
-        save_model(fit.model, out_dir / "fits" / f"{label}.model.zip", overwrite=True,
-                   meta={"dataset": str(ds.path), "fit": fit.options, "objective_per_round": fit.history,
-                         "seconds": round(fit.seconds, 2), "flagged_points": np.flatnonzero(fit.flagged).tolist()})
+        save_model(fit.model, out_dir / "fits" / f"{label}.model.zip", overwrite=True, meta=fit.metadata(ds.path))
         models[label], flagged[label] = fit.model, fit.flagged
     # -- relighting: a stripe of light, models against photon transport ------------------
     if step:
@@ -153,7 +155,8 @@ def run_demo(out_dir, *, n_terms: int = 3, step: Callable[[str], None] | None = 
     # -- Figure 2: the pig, acquired per vertex, fitted, rendered beside volpath ------------
     if step:
         step("figure 2")
-    fig2 = run_figure2(out_dir / "report")
+    fig2 = run_figure2(out_dir / "report", out_dir / "pig.zarr", out_dir / "fits" / "pig_iso.model.zip",
+                       overwrite=True)
     write_report(models, ds, out_dir / "report", flagged=flagged, extra=[(
         "relight.png", "Relighting: the sample under a 2 mm stripe of light, photon transport (reference) against "
         "the fitted models (superposition of R_d over the incident cells); green channel."), (

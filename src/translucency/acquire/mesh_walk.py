@@ -19,13 +19,11 @@ reported as ``KILLED`` (none in a watertight mesh; the tests count them).
 
 from __future__ import annotations
 
-import tempfile
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 
-from ._engine import mitsuba
+from ..mitsuba import drjit, mitsuba
 from .transport import ABSORBED, ACTIVE, KILLED, _medium_event, _walk_setup
 from .volume import Volume
 
@@ -39,16 +37,6 @@ class MeshWalkResult:
     code: np.ndarray  # EXIT, ABSORBED, KILLED, or -1 for specular reflection at entry
     position: np.ndarray  # (n, 3) exit point for EXIT, mm
     steps: int
-
-
-def mesh_scene(mesh):
-    """A Mitsuba scene holding the mesh (for ray tests), built through a temporary PLY file."""
-    mi = mitsuba()
-    with tempfile.TemporaryDirectory() as tmp:
-        path = Path(tmp) / "object.ply"
-        mesh.export(path)
-        return mi.load_dict({"type": "scene", "object": {"type": "ply", "filename": str(path),
-                                                         "face_normals": True}})
 
 
 def mesh_random_walk(scene, bounds: np.ndarray, volume: Volume, channel: int, entry: np.ndarray,
@@ -75,8 +63,7 @@ def mesh_random_walk(scene, bounds: np.ndarray, volume: Volume, channel: int, en
     -------
     MeshWalkResult
     """
-    mi = mitsuba()
-    import drjit as dr
+    mi, dr = mitsuba(), drjit()
 
     Float, UInt32 = mi.Float, mi.UInt32
     total = len(entry) * n_photons

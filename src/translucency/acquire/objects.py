@@ -16,6 +16,8 @@ has a margin of empty space).
 from __future__ import annotations
 
 import numpy as np
+import trimesh
+from skimage.measure import marching_cubes
 
 from .._validate import TranslucencyError
 
@@ -69,8 +71,6 @@ def make_pig(voxel_mm: float = 0.65):
     >>> bool(pig.is_watertight), pig.bounds.round(0).tolist()[0][2] >= -1
     (True, True)
     """
-    import trimesh
-    from skimage.measure import marching_cubes
 
     if not (np.isfinite(voxel_mm) and 0.2 <= voxel_mm <= 10.0):
         raise TranslucencyError(f"voxel: the pig's grid spacing must lie in [0.2, 10] mm, got {voxel_mm}")

@@ -16,6 +16,7 @@ flagged in the data set, and a re-run with the same arguments resumes.
 
 from __future__ import annotations
 
+import hashlib
 import json
 from collections.abc import Callable
 from dataclasses import asdict, dataclass
@@ -25,6 +26,7 @@ import numpy as np
 from .._validate import TranslucencyError
 from .._version import __version__
 from ..io.dataset import FORMAT, VERSION, PlanarDataset, create_dataset
+from ..mitsuba import engine_versions
 from .transport import TOP, check_memory, random_walk
 from .volume import Volume
 
@@ -131,7 +133,7 @@ def acquire_planar(volume: Volume, setup: PlanarSetup, out, *, overwrite: bool =
 
     setup.check(volume)
     check_memory(min(batch_photons, setup.photons * setup.chunk_points), volume, memory_limit)
-    mi_versions = _engine_versions()
+    mi_versions = engine_versions()
     x_i = setup.incident_points(volume)
     n = setup.window_pixels()
     P = len(x_i)
@@ -206,23 +208,10 @@ def acquire_planar(volume: Volume, setup: PlanarSetup, out, *, overwrite: bool =
 
 
 def _volume_fingerprint(volume: Volume) -> dict:
-    import hashlib
 
     h = hashlib.sha256()
     for a in (volume.sigma_s, volume.sigma_a):
         h.update(np.ascontiguousarray(a).tobytes())
     return {"sha256": h.hexdigest(), "shape": list(volume.shape), "voxel_mm": volume.voxel_mm,
             "g": volume.g, "eta": volume.eta}
-
-
-def _engine_versions() -> dict:
-    from importlib.metadata import version
-
-    out = {}
-    for pkg in ("mitsuba", "drjit"):
-        try:
-            out[pkg] = version(pkg)
-        except Exception:  # noqa: BLE001
-            out[pkg] = "unknown"
-    return out
 

@@ -38,7 +38,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._validate import TranslucencyError
-from ._engine import mitsuba
+from ..mitsuba import drjit, mitsuba
 from .volume import Volume
 
 # exit codes of a photon
@@ -139,8 +139,7 @@ def random_walk(volume: Volume, channel: int, entry_xy: np.ndarray, n_photons: i
     -------
     WalkResult
     """
-    mi = mitsuba()
-    import drjit as dr
+    mi, dr = mitsuba(), drjit()
 
     Float, UInt32 = mi.Float, mi.UInt32
     n_pts = len(entry_xy)

@@ -18,7 +18,22 @@ from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
 from .._validate import TranslucencyError
+from .._version import __version__
+from ..acquire import PlanarSetup, acquire_planar, estimate_seconds, load_volume, make_sample
+from ..acquire.mesh import acquire_mesh, object_volume
+from ..acquire.objects import make_pig
+from ..evaluate.report import model_label, write_report
+from ..fit import check_fit_options, fit_mesh, fit_planar
+from ..io.dataset import describe, open_dataset
+from ..io.mesh import load_mesh
+from ..io.mesh_dataset import describe_mesh, is_mesh_dataset, open_mesh_dataset
+from ..io.model_file import ModelFileError, load_model, read_header, save_model
 from ..io.outputs import claim_folder, claim_output
+from ..model import MATERIALS, check_physics, dipole_total_reflectance
+from ..pipeline import DEMO_FITS, run_demo
+from ..render.figure import boundary_eta, figure2, object_from_dataset, volume_of_dataset
+from ..render.image import Camera
+from ..render.lights import parse_light
 
 app = typer.Typer(
     help="Measure, fit, evaluate and render heterogeneous translucent materials "
@@ -29,6 +44,18 @@ app = typer.Typer(
 )
 console = Console()
 err_console = Console(stderr=True)
+
+
+def _version(value: bool) -> None:
+    if value:
+        console.print(f"translucency {__version__}")
+        raise typer.Exit()
+
+
+@app.callback()
+def _main(version: bool = typer.Option(False, "--version", callback=_version, is_eager=True,
+                                       help="Print the version and exit.")) -> None:
+    """Measure, fit, evaluate and render heterogeneous translucent materials."""
 
 
 def user_errors(func):
@@ -61,8 +88,6 @@ def demo(
 ):
     """The main job on the embedded default data: baselines per material, then planar fits
     (iso, aniso, dipole, Burley) with alpha and the Figure 1 report."""
-    from ..model import MATERIALS
-    from ..pipeline import DEMO_FITS, run_demo
 
     with progress() as bar:
         task = bar.add_task("demo", total=len(MATERIALS) + len(DEMO_FITS) + 3, item="")
@@ -81,7 +106,6 @@ def materials(
     eta: float = typer.Option(1.3, help="Relative index of refraction for the dipole's total reflectance."),
 ):
     """Print Jensen et al. 2001's measured coefficients (mm^-1) and the dipole's R_d."""
-    from ..model import MATERIALS, dipole_total_reflectance
 
     table = Table(title=f"Jensen et al. 2001 measured materials (eta = {eta})")
     for col in ("name", "sigma_s' R G B [1/mm]", "sigma_a R G B [1/mm]", "R_d dipole", "R_d published"):
@@ -98,10 +122,9 @@ def materials(
 def info(path: Path = typer.Argument(..., help="A model file (.model.zip) or a data set (.zarr directory).")):
     """Describe a model file or a data set: what it holds, its size on disk, whether it is valid."""
     if path.is_dir():
-        from ..io.dataset import describe, open_dataset
-
         table = Table(title=str(path), show_header=False)
-        for key, value in describe(open_dataset(path)).items():
+        ds = open_mesh_dataset(path) if is_mesh_dataset(path) else open_dataset(path)
+        for key, value in (describe_mesh(ds) if is_mesh_dataset(path) else describe(ds)).items():
             table.add_row(f"[bold]{key}[/]", str(value))
         console.print(table)
         return
@@ -109,13 +132,8 @@ def info(path: Path = typer.Argument(..., help="A model file (.model.zip) or a d
 
 
 def _info_model(path: Path) -> None:
-    from ..io.model_file import ModelFileError, load_model, read_header
-
     size = path.stat().st_size if path.exists() else 0
-    try:
-        header = read_header(path)
-    except ModelFileError as exc:
-        raise TranslucencyError(str(exc)) from None
+    header = read_header(path)  # a ModelFileError is a TranslucencyError: one line, exit 2
     table = Table(title=str(path), show_header=False)
     table.add_column("field", style="bold")
     table.add_column("value")
@@ -131,13 +149,20 @@ def _info_model(path: Path) -> None:
         table.add_row("valid", f"[red]no[/] — {exc}")
         console.print(table)
         raise typer.Exit(1) from None
-    total = model.total_reflectance()
-    radius = model.energy_radius()
-    table.add_row("valid", "[green]yes[/] (shapes, dtypes, finiteness, eq. (2), checksum)")
+    physics = check_physics(model)
+    total, radius = physics.total, physics.radius
+    if physics.ok:
+        table.add_row("valid", "[green]yes[/] (shapes, dtypes, finiteness, eq. (2), checksum, physical bounds)")
+    else:
+        table.add_row("valid", "[red]no[/] — the file is intact, but the model is not physical")
+    table.add_row("physical", ("[green]" if physics.ok else "[red]") + physics.describe() + "[/]")
     table.add_row("alpha", f"shape {model.alpha.shape}, range [{model.alpha.values.min():.3g}, {model.alpha.values.max():.3g}]")
     table.add_row("total R_d (R,G,B)", "mean " + " ".join(f"{v:.4g}" for v in total.mean(axis=0)))
-    table.add_row("99.9% energy radius", f"{np.min(radius):.3g} … {np.max(radius):.3g} mm")
+    table.add_row("99.9% energy radius", f"{np.min(radius):.3g} … {np.max(radius):.3g} mm "
+                  f"(object {physics.size_mm:.3g} mm)")
     console.print(table)
+    if not physics.ok:
+        raise typer.Exit(1)
 
 
 acquire_app = typer.Typer(help="Virtual DISCO: simulate measurements by photon transport (Mitsuba 3 / Dr.Jit).",
@@ -170,7 +195,6 @@ def acquire_planar_cmd(
                                    "arguments (never anything else)."),
 ):
     """Scan a pencil beam over a planar sample and record R_d around each incident point."""
-    from ..acquire import PlanarSetup, acquire_planar, estimate_seconds, load_volume, make_sample
 
     if (material is None) == (volume is None):
         raise TranslucencyError("give exactly one of --material NAME or --volume FILE.npz")
@@ -208,9 +232,6 @@ def acquire_mesh_cmd(
                                    "arguments (never anything else)."),
 ):
     """Pencil beams at surface points of a 3D object; exits tallied per vertex (R_d in mm^-2)."""
-    from ..acquire.mesh import acquire_mesh, object_volume
-    from ..acquire.objects import make_pig
-    from ..io.mesh import load_mesh
 
     claim_output(out, "mesh data set", overwrite=overwrite, inputs=[mesh], reuse=True)
     obj = load_mesh(mesh, scale_mm=scale) if mesh is not None else make_pig()
@@ -247,12 +268,9 @@ def fit(
 
     An interrupted fit resumes from OUT.partial.npz when run again with the same arguments.
     """
-    from ..fit.planar import check_fit_options, fit_planar
-    from ..io.dataset import open_dataset
-    from ..io.model_file import save_model
 
     claim_output(out, "model file", overwrite=overwrite, inputs=[data], option="--out")
-    if _is_mesh_dataset(data):
+    if is_mesh_dataset(data):
         check_fit_options(model, terms, 1, colour or "shared")
         return _fit_mesh_cmd(data, out, model, terms, colour or "shared", exclusion, rounds, float16, overwrite)
     colour = colour or "per-channel"
@@ -268,35 +286,36 @@ def fit(
         result = fit_planar(ds, model, n_terms=terms, n_directions=directions, colour=colour,
                             exclusion_mm=exclusion, max_rounds=rounds, chunk_points=chunk, checkpoint=ckpt,
                             progress=report)
-    meta = {"dataset": str(data), "fit": result.options, "objective_per_round": result.history,
-            "seconds": round(result.seconds, 2), "flagged_points": np.flatnonzero(result.flagged).tolist()}
-    path = save_model(result.model, out, dtype="float16" if float16 else "float32", meta=meta, overwrite=overwrite)
+    path = save_model(result.model, out, dtype="float16" if float16 else "float32", meta=result.metadata(data),
+                      overwrite=overwrite)
     if result.flagged.any():
         err_console.print(f"[yellow]warning:[/] {int(result.flagged.sum())} incident points have no usable data "
                           f"(all masked, NaN or zero) and are flagged in the model: "
                           f"{np.flatnonzero(result.flagged)[:10].tolist()}…")
+    _warn_unphysical(path)
     console.print(f"model: {path} ({result.seconds:.1f} s, {len(result.history)} rounds)")
 
 
-def _is_mesh_dataset(path: Path) -> bool:
-    from ..acquire.mesh import HEADER_KEY
-
-    meta = path / "zarr.json"
-    return meta.exists() and HEADER_KEY in meta.read_text()[:100_000]
+def _warn_unphysical(path: Path) -> None:
+    """One warning line when the stored model breaks a physical bound (model/bounds.py)."""
+    physics = read_header(path)["physics"]
+    bad = sorted(set(physics["over_albedo"]) | set(physics["beyond_object"]))
+    if bad:
+        err_console.print(f"[yellow]warning:[/] {len(bad)} incident points are not physical (total reflectance up to "
+                          f"{physics['max_total_reflectance']:.3g}, energy radius up to "
+                          f"{physics['max_energy_radius_mm']:.3g} mm on a {physics['size_mm']:.3g} mm object): "
+                          f"{bad[:10]}{'…' if len(bad) > 10 else ''}; see `translucency info {path}`")
 
 
 def _fit_mesh_cmd(data, out, model, terms, colour, exclusion, rounds, float16, overwrite):
-    from ..fit.mesh import fit_mesh
-    from ..io.model_file import save_model
-
     with progress() as bar:
         task = bar.add_task(f"fit {model} per vertex", total=None, item="")
         result = fit_mesh(data, model, n_terms=terms, colour=colour, exclusion_mm=exclusion, max_rounds=rounds,
                           progress=lambda done, total, msg: bar.update(task, completed=done, total=total or None,
                                                                        item=msg))
-    meta = {"dataset": str(Path(data).resolve()), "fit": result.options, "objective_per_round": result.history,
-            "seconds": round(result.seconds, 2), "flagged_points": np.flatnonzero(result.flagged).tolist()}
-    path = save_model(result.model, out, dtype="float16" if float16 else "float32", meta=meta, overwrite=overwrite)
+    path = save_model(result.model, out, dtype="float16" if float16 else "float32",
+                      meta=result.metadata(Path(data).resolve()), overwrite=overwrite)
+    _warn_unphysical(path)
     console.print(f"model: {path} ({result.seconds:.1f} s, {len(result.history)} rounds, mesh of "
                   f"{len(result.model.alpha.values):,} vertices)")
 
@@ -317,25 +336,19 @@ def render(
                                    "(never anything else)."),
 ):
     """Relight a fitted object: irradiance per vertex, sparse transport, a picture through Mitsuba (EXR + PNG)."""
-    from ..io.model_file import ModelFileError, load_model, read_header
-    from ..render.figure import boundary_eta, figure2, object_from_dataset, volume_of_dataset
-    from ..render.image import Camera
-    from ..render.transport import parse_light
 
-    try:
-        m = load_model(model)
-        header = read_header(model)
-    except ModelFileError as exc:
-        raise TranslucencyError(str(exc)) from None
+    m = load_model(model)
+    header = read_header(model)
     if m.geometry != "mesh":
         raise TranslucencyError(f"{model}: a planar model; render needs a per-vertex model of a mesh data set")
     dataset = header.get("meta", {}).get("dataset", "")
     mesh, dheader = object_from_dataset(dataset)
     try:
         direction = [float(v) for v in view.split(",")]
-        assert len(direction) == 3 and np.linalg.norm(direction) > 0
-    except (ValueError, AssertionError):
-        raise TranslucencyError(f"--view: expected three numbers x,y,z not all zero, got {view!r}") from None
+    except ValueError:
+        direction = []
+    if len(direction) != 3 or not np.isfinite(direction).all() or not np.linalg.norm(direction) > 0:
+        raise TranslucencyError(f"--view: expected three finite numbers x,y,z not all zero, got {view!r}")
     lights = [parse_light(t) for t in (light or ["point:60,-80,120,2e4"])]
     if len(lights) > 1:
         raise TranslucencyError("--light: one light per render for now (run once per light)")
@@ -364,16 +377,11 @@ def evaluate(
                                    "(never anything else)."),
 ):
     """Relative L2 errors (overall and per distance band), error maps, profiles and an HTML report."""
-    from ..evaluate.report import model_label, write_report
-    from ..io.model_file import ModelFileError, load_model, read_header
 
     models, flagged = {}, {}
     for path in [model, *(compare or [])]:
-        try:
-            m = load_model(path)
-            fl = read_header(path).get("meta", {}).get("flagged_points", [])
-        except ModelFileError as exc:
-            raise TranslucencyError(str(exc)) from None
+        m = load_model(path)
+        fl = read_header(path).get("meta", {}).get("flagged_points", [])
         name = model_label(m)
         name = name if name not in models else f"{name} ({path.name})"
         models[name] = m

@@ -24,6 +24,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .._plotting import pyplot
 from ..fit.profile import ProfileFit, fit_burley_profile, fit_exponential_profile
 from ..model.burley import burley_energy_within, burley_R, burley_shape
 from ..model.dipole import dipole_R_d, dipole_total_reflectance
@@ -97,10 +98,7 @@ def material_profiles(mat: Material, r=None, n_terms: int = 3) -> MaterialProfil
 
 def plot_profiles(profiles: list[MaterialProfiles], path, channel: int = 1) -> None:
     """Write a PNG with one log-scale panel of R_d(r) per material."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = pyplot()
 
     n = len(profiles)
     cols = 4

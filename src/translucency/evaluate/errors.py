@@ -22,7 +22,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..fit._windows import SampleGrid, window_geometry
+from .._validate import TranslucencyError
+from ..geometry import SampleGrid, window_geometry
 from ..io.dataset import PlanarDataset, open_dataset
 
 BANDS = {"near": (0.0, 1.0), "mid": (1.0, 4.0), "far": (4.0, np.inf)}
@@ -69,7 +70,6 @@ def planar_errors(model, dataset, *, exclusion_mm: float | None = None, chunk_po
     -------
     PlanarErrors
     """
-    from .._validate import TranslucencyError
 
     ds = dataset if isinstance(dataset, PlanarDataset) else open_dataset(dataset)
     x_i = ds["x_i"].astype(np.float64)

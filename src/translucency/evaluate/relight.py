@@ -16,9 +16,12 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import matplotlib.image as mpimg
 import numpy as np
 
+from .._plotting import pyplot
 from .._validate import TranslucencyError
+from ..io.atomic import atomic_path
 
 PATTERNS = ("edge", "stripe", "spot")
 
@@ -49,8 +52,6 @@ def pattern_irradiance(pattern: str | Path, x_i: np.ndarray) -> np.ndarray:
     path = Path(pattern)
     if not path.exists():
         raise TranslucencyError(f"pattern: {pattern!r} is neither one of {', '.join(PATTERNS)} nor an image file")
-    import matplotlib.image as mpimg
-
     try:
         img = np.asarray(mpimg.imread(path), dtype=np.float64)
     except Exception as exc:  # noqa: BLE001
@@ -116,12 +117,8 @@ def plot_relighting(reference: np.ndarray, predictions: dict, extent, path, chan
 
     Returns the relative L2 error of each prediction (over the pixels where the reference is lit).
     """
-    import matplotlib
+    plt = pyplot()
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from ..io.atomic import atomic_path
 
     ref = reference[..., channel]
     n = len(predictions)

@@ -21,22 +21,13 @@ from pathlib import Path
 
 import numpy as np
 
+from .._plotting import pyplot
 from .._version import __version__
 from ..io.atomic import atomic_path, write_json
 from ..io.dataset import PlanarDataset, open_dataset
+from ..model.bounds import check_physics
 from .errors import BANDS, PlanarErrors, planar_errors
 from .measured import ring_profile
-
-_COLOURS = {"exponential": "tab:orange", "dipole": "tab:green", "burley": "tab:blue"}
-
-
-def _plt():
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
 
 
 def model_label(model) -> str:
@@ -57,12 +48,12 @@ def default_points(n_points: int) -> list[int]:
 def _save(fig, path: Path) -> None:
     with atomic_path(path) as tmp:
         fig.savefig(tmp, dpi=110)
-    _plt().close(fig)
+    pyplot().close(fig)
 
 
 def plot_profiles(models: dict, ds: PlanarDataset, points: list[int], path, channel: int = 1) -> None:
     """Figure 1 (left): ring means of measured and modelled R_d around each point, log scale."""
-    plt = _plt()
+    plt = pyplot()
     fig, axes = plt.subplots(1, len(points), figsize=(4.2 * len(points), 3.8), squeeze=False)
     origin = ds["window_origin"]
     for ax, p in zip(axes[0], points):
@@ -85,7 +76,7 @@ def plot_profiles(models: dict, ds: PlanarDataset, points: list[int], path, chan
 
 def plot_error_maps(errors: dict[str, PlanarErrors], x_i: np.ndarray, path) -> None:
     """Figure 1 (right): relative error per outgoing pixel and per incident point, shared colour scale."""
-    plt = _plt()
+    plt = pyplot()
     names = list(errors)
     vmax = max(max(np.nanquantile(e.per_pixel, 0.98), np.nanquantile(e.per_point, 0.98)) for e in errors.values())
     side = int(round(np.sqrt(len(x_i))))
@@ -121,7 +112,7 @@ def plot_error_maps(errors: dict[str, PlanarErrors], x_i: np.ndarray, path) -> N
 
 def plot_alpha(models: dict, path) -> None:
     """The modulation texture α of each model."""
-    plt = _plt()
+    plt = pyplot()
     fig, axes = plt.subplots(1, len(models), figsize=(4.0 * len(models), 3.6), squeeze=False)
     for ax, (name, m) in zip(axes[0], models.items()):
         a = m.alpha
@@ -137,7 +128,7 @@ def plot_alpha(models: dict, path) -> None:
 
 def plot_parameters(model, path) -> None:
     """Maps over the incident points: total R_d (G), and the exponential terms' rates and weights."""
-    plt = _plt()
+    plt = pyplot()
     x = model.x_i
     maps = {"total $R_d$ (G)": model.total_reflectance()[:, 1], "99.9 % energy radius [mm]": model.energy_radius()}
     if model.kind == "exponential":
@@ -204,6 +195,7 @@ def write_report(models, dataset, out_dir, *, points=None, flagged=None, json_pa
         per_model[name] = e.summary()
         fl = flagged.get(name)
         per_model[name]["flagged_points"] = [] if fl is None else np.flatnonzero(fl).tolist()
+        per_model[name]["physics"] = check_physics(models[name]).summary()
     summary = {"written_by": f"translucency {__version__}", "dataset": str(ds.path), "model": first, **per_model[first], "bands_mm": {k: [lo, hi if np.isfinite(hi) else None] for k, (lo, hi) in BANDS.items()},
                "models": per_model, "profile_points": points,
                "definition": "rel_l2 = ||model - data||_2 / ||data||_2 over valid pairs (mask, finite, r >= one pixel), "
@@ -219,7 +211,10 @@ def _write_html(path: Path, ds: PlanarDataset, summary: dict, extra: list) -> No
     rows = []
     for name, s in summary["models"].items():
         cells = "".join(f"<td>{100 * s[k]:.2f} %</td>" for k in ("rel_l2", "rel_l2_near", "rel_l2_mid", "rel_l2_far"))
-        rows.append(f"<tr><th>{html.escape(name)}</th>{cells}<td>{len(s['flagged_points'])}</td></tr>")
+        ph = s["physics"]
+        unphysical = len(set(ph["over_albedo"]) | set(ph["beyond_object"]))
+        rows.append(f"<tr><th>{html.escape(name)}</th>{cells}<td>{len(s['flagged_points'])}</td>"
+                    f"<td>{unphysical} (max ρ {ph['max_total_reflectance']:.3g})</td></tr>")
     nf = next(iter(summary["models"].values()))["noise_floor"]
     noise = "".join(f"<td>{100 * nf[k]:.2f} %</td>" for k in ("all", "near", "mid", "far"))
     page = f"""<!doctype html><html><head><meta charset="utf-8"><title>translucency report</title>
@@ -228,8 +223,9 @@ td,th{{border:1px solid #ccc;padding:4px 8px;text-align:right}} img{{max-width:1
 <h1>Planar fit report</h1><p>Data set: <code>{html.escape(str(ds.path))}</code> — {ds.n_points} incident points,
 windows {ds.window[0]}×{ds.window[1]} px at {ds.pitch} mm.</p>
 <h2>Relative L2 error</h2><table><tr><th>model</th><th>all</th><th>near &lt; 1 mm</th><th>mid 1–4 mm</th>
-<th>far &gt; 4 mm</th><th>flagged points</th></tr>{''.join(rows)}
-<tr><th>measurement noise alone</th>{noise}<td></td></tr></table>
+<th>far &gt; 4 mm</th><th>flagged points</th><th>unphysical points (ρ &gt; 1 or r<sub>99.9</sub> beyond
+the sample)</th></tr>{''.join(rows)}
+<tr><th>measurement noise alone</th>{noise}<td></td><td></td></tr></table>
 <p>{html.escape(summary['definition'])}</p>
 <div style="display:flex;gap:1em;flex-wrap:wrap"><figure style="flex:1 1 40%"><img src="profiles.png">
 <figcaption>Figure 1 (left): ring-averaged profiles around chosen incident points (green channel).</figcaption></figure>

@@ -1,10 +1,7 @@
-r"""Geometry and grouping of the measurement windows of a planar data set.
+r"""Grouping of window pixels by radius, for the fitter.
 
-Every window pixel is a pair :math:`(\vec x_i, \vec x_o)`: its distance
-:math:`r = |\vec x_o - \vec x_i|` (mm), its angle :math:`\theta` in the
-sample's frame, and its pixel on the sample-wide grid on which the modulation
-texture :math:`\alpha(\vec x_o)` lives.
-
+Every window pixel is a pair :math:`(\vec x_i, \vec x_o)` with distance
+:math:`r = |\vec x_o - \vec x_i|` (mm; :func:`translucency.geometry.window_geometry`).
 The isotropic objective depends on a pixel only through r, so pixels of equal
 r can be merged exactly: for weights :math:`w_j`, coefficients
 :math:`\kappa_j` and targets :math:`y_j`,
@@ -25,58 +22,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-
-
-@dataclass
-class SampleGrid:
-    """The pixel grid covering all windows: α's support.
-
-    Pixel ``[row, col]`` is centred at ``origin + pitch * (col + 1/2, row + 1/2)``.
-    """
-
-    origin: np.ndarray  # (2,) mm
-    pitch: float
-    shape: tuple[int, int]
-
-    @classmethod
-    def covering(cls, window_origin: np.ndarray, pitch: float, window: tuple[int, int]) -> "SampleGrid":
-        lo = window_origin.min(axis=0)
-        span = np.round((window_origin.max(axis=0) - lo) / pitch).astype(int)
-        return cls(lo.astype(np.float64), float(pitch), (int(span[1]) + window[0], int(span[0]) + window[1]))
-
-    def offsets(self, window_origin: np.ndarray) -> np.ndarray:
-        """(k, 2) integer (row, col) of each window's first pixel on this grid."""
-        o = np.round((window_origin - self.origin) / self.pitch).astype(np.int64)
-        return o[:, ::-1]
-
-
-@dataclass
-class WindowGeometry:
-    """Per-pixel geometry of a chunk of k windows of H × W pixels (J = H·W)."""
-
-    r: np.ndarray  # (k or 1, J) mm
-    theta: np.ndarray  # (k or 1, J) rad
-    pixel: np.ndarray  # (k, J) flat index on the sample grid
-
-
-def window_geometry(x_i: np.ndarray, window_origin: np.ndarray, grid: SampleGrid,
-                    window: tuple[int, int]) -> WindowGeometry:
-    """Distances, angles and sample-grid pixels of every window pixel.
-
-    When every window lies alike around its point (offsets x_i − origin equal
-    to 10⁻⁵ pixel: points snapped to pixel centres), r and θ are one row (1, J).
-    """
-    h, w = window
-    col, row = np.meshgrid(np.arange(w), np.arange(h))
-    col, row = col.ravel(), row.ravel()
-    rel = window_origin - x_i
-    if len(rel) > 1 and np.ptp(rel, axis=0).max() <= grid.pitch * 1e-5:
-        rel = rel[:1]
-    dx = rel[:, :1] + grid.pitch * (col + 0.5)
-    dy = rel[:, 1:] + grid.pitch * (row + 0.5)
-    off = grid.offsets(window_origin)
-    pixel = (off[:, :1] + row) * grid.shape[1] + (off[:, 1:] + col)
-    return WindowGeometry(np.hypot(dx, dy), np.arctan2(dy, dx), pixel)
 
 
 def radius_groups(r: np.ndarray, pitch: float, *, r_exact: float | None = None,

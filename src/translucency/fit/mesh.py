@@ -4,8 +4,8 @@ The data are :math:`R_d(x_i, v)` per incident vertex :math:`x_i` and every
 vertex v (:mod:`translucency.acquire.mesh`).  As in the paper, the isotropic
 model is fitted with the Euclidean distance :math:`r = |v - x_i|`, and α and
 the colour per vertex; the alternation, the weights and the batched solvers are
-those of the planar fit (:mod:`translucency.fit.planar`), with vertices in the
-place of pixels: the Poisson variance of a vertex is :math:`\alpha P/(N A_v)`
+shared with the planar fit (:mod:`translucency.fit._alternation`), with vertices
+in the place of pixels: the Poisson variance of a vertex is :math:`\alpha P/(N A_v)`
 for its area :math:`A_v`.
 """
 
@@ -14,22 +14,16 @@ from __future__ import annotations
 import hashlib
 import json
 import time
-from pathlib import Path
 
 import numpy as np
+import scipy.sparse as sp
+from scipy.spatial import cKDTree
 
 from .._validate import TranslucencyError
+from ..geometry import tangent_frames
+from ..io.mesh_dataset import open_mesh_dataset
 from ..model import VertexAlpha
-from .planar import PlanarFit, _alternate, _Context, check_fit_options
-
-
-def tangent_frames(normals: np.ndarray) -> np.ndarray:
-    """Orthonormal frames (t, b, n) as rows, shape (N, 3, 3), around unit normals (N, 3)."""
-    n = normals / np.linalg.norm(normals, axis=1, keepdims=True)
-    helper = np.where(np.abs(n[:, :1]) < 0.9, [[1.0, 0.0, 0.0]], [[0.0, 1.0, 0.0]])
-    t = np.cross(helper, n)
-    t /= np.linalg.norm(t, axis=1, keepdims=True)
-    return np.stack([t, np.cross(n, t), n], axis=1)
+from ._alternation import FitContext, FitResult, alternate, check_fit_options
 
 
 class _MeshSource:
@@ -47,9 +41,6 @@ class _MeshSource:
         self.pitch = float(np.mean(np.linalg.norm(v[edges[:, 0]] - v[edges[:, 1]], axis=1)))  # mean edge, mm
         # α's statistics pooled over a disc of alpha_radius (default 3 edge lengths): a vertex is
         # lit by few incident points, and α from its own pairs alone is mostly photon noise
-        import scipy.sparse as sp
-        from scipy.spatial import cKDTree
-
         rad = 3 * self.pitch if alpha_radius is None else float(alpha_radius)
         pairs = cKDTree(v).query_pairs(rad, output_type="ndarray") if rad > 0 else np.zeros((0, 2), int)
         n = len(v)
@@ -73,9 +64,9 @@ class _MeshSource:
 
 
 def fit_mesh(path, model: str = "iso", *, n_terms: int = 3, colour: str = "shared",
-             exclusion_mm: float | None = None, rel_sigma: float = 0.05, max_rounds: int = 3, tol: float = 1e-3,
-             alpha_radius: float | None = None, chunk_points: int = 32, workers: int | None = None,
-             progress=None) -> PlanarFit:
+             exclusion_mm: float | None = None, rel_sigma: float = 0.05, max_rounds: int = 3,
+             tol: float = 1e-3, alpha_radius: float | None = None, chunk_points: int = 32,
+             workers: int | None = None, progress=None) -> FitResult:
     """Fit the isotropic model (or a baseline) per incident vertex of a mesh data set, with α per vertex.
 
     Parameters
@@ -96,43 +87,29 @@ def fit_mesh(path, model: str = "iso", *, n_terms: int = 3, colour: str = "share
 
     Returns
     -------
-    PlanarFit
+    FitResult
         ``model`` is a mesh model: x_i (N, 3), tangent frames, :class:`VertexAlpha`.
     """
-    import zarr
-
-    from ..acquire.mesh import FORMAT, HEADER_KEY, VERSION
-
     t0 = time.perf_counter()
     if model == "aniso":
-        raise TranslucencyError("model: on meshes the isotropic model is fitted (r = |x_o - x_i|, as in the paper)")
+        raise TranslucencyError(
+            "model: on meshes the isotropic model is fitted (r = |x_o - x_i|, as in the paper)")
     check_fit_options(model, n_terms, 1, colour, rel_sigma)
-    path = Path(path)
-    if not path.exists():
-        raise TranslucencyError(f"{path}: no such mesh data set")
-    try:
-        group = zarr.open_group(str(path), mode="r")
-        header = dict(group.attrs).get(HEADER_KEY)
-    except Exception as exc:  # noqa: BLE001
-        raise TranslucencyError(f"{path}: not a readable Zarr data set ({type(exc).__name__})") from None
-    if not isinstance(header, dict) or header.get("format") != FORMAT or header.get("version") != VERSION:
-        raise TranslucencyError(f"{path}: not a translucency mesh data set (v{VERSION})")
-    for name in ("vertices", "faces", "normals", "vertex_area", "incident", "R_d", "chunk_done"):
-        if name not in group:
-            raise TranslucencyError(f"{path}: missing array {name!r}")
-    if not np.all(group["chunk_done"][...]):
-        raise TranslucencyError(f"{path}: the acquisition is unfinished; resume it before fitting")
+    ds = open_mesh_dataset(path)
+    if not ds.complete():
+        raise TranslucencyError(f"{ds.path}: the acquisition is unfinished; resume it before fitting")
+    group, header = ds.group, ds.header
     source = _MeshSource(group, header, alpha_radius)
     exclusion = source.pitch / 2 if exclusion_mm is None else float(exclusion_mm)
     x_i = source.vertices[source.incident]
     C = 1 if colour == "shared" and model == "iso" else 3
-    options = {"model": model, "n_terms": int(n_terms), "n_directions": 1, "colour": colour, "exclusion_mm": exclusion,
-               "rel_sigma": rel_sigma, "max_rounds": max_rounds, "tol": tol, "radius_step": source.pitch / 2,
-               "alpha_radius": alpha_radius,
-               "geometry": "mesh"}
-    request = json.dumps({"dataset": str(path.resolve()), "header": hashlib.sha256(
+    options = {"model": model, "n_terms": int(n_terms), "n_directions": 1, "colour": colour,
+               "exclusion_mm": exclusion, "rel_sigma": rel_sigma, "max_rounds": max_rounds, "tol": tol,
+               "radius_step": source.pitch / 2, "alpha_radius": alpha_radius, "geometry": "mesh"}
+    request = json.dumps({"dataset": str(ds.path.resolve()), "header": hashlib.sha256(
         json.dumps(header, sort_keys=True).encode()).hexdigest(), **options}, sort_keys=True)
-    ctx = _Context(source, model, int(n_terms), 1, C, exclusion, rel_sigma, float(header.get("eta", 1.3)),
-                   source.pitch / 2, 1, True, x_i, cache_left=512 * 2**20)
-    return _alternate(ctx, options, request, max_rounds=max_rounds, tol=tol, chunk_points=chunk_points,
-                      workers=workers, checkpoint=None, progress=progress, t0=t0)
+    ctx = FitContext(source=source, kind=model, n=int(n_terms), m=1, C=C, exclusion=exclusion,
+                     rel_sigma=rel_sigma, eta=float(header.get("eta", 1.3)), radius_step=source.pitch / 2,
+                     sweeps=1, balance=True, x_i=x_i, cache_left=512 * 2**20)
+    return alternate(ctx, options, request, max_rounds=max_rounds, tol=tol, chunk_points=chunk_points,
+                     workers=workers, checkpoint=None, progress=progress, t0=t0)

@@ -5,7 +5,8 @@ a planar data set (:mod:`translucency.io.dataset`).  The model is
 
 .. math:: R_d(\vec x_i, \vec x_o) = \alpha(\vec x_o)\, P_i(\vec x_o),
 
-with :math:`P_i` the per-incident-point profile of the chosen family:
+with α on the sample-wide pixel grid covering all windows and :math:`P_i` the
+per-incident-point profile of the chosen family:
 
 ``iso``     :math:`(1, s_g, s_b) \sum_k c_k e^{d_k r}` (the paper's isotropic model),
 ``aniso``   :math:`(1, s_g, s_b) \sum_l w_l(\theta) \sum_k c_{lk} e^{d_{lk} r}` (m directions),
@@ -13,34 +14,21 @@ with :math:`P_i` the per-incident-point profile of the chosen family:
 ``burley``  Christensen–Burley with per-point, per-channel A and s.
 
 (``colour="per-channel"`` gives the exponential families one fall-off per
-channel instead of the colour scale.)
+channel instead of the colour scale.)  r (mm) and θ (rad, in the sample's
+frame) of each window pixel come from :func:`translucency.geometry.window_geometry`.
 
-**Objective.**  Weighted least squares over every valid pair,
+**Objective and alternation** (:mod:`._alternation`, shared with the mesh fit).
+Weighted least squares over every valid pair,
 
 .. math:: \Phi = \sum_{i,j,\lambda} w_{ij\lambda}^2
           \bigl(\alpha_j P_{i\lambda}(\vec x_j) - y_{ij\lambda}\bigr)^2, \qquad
           w^{-2} = (\rho\, \alpha P)^2 + \sigma^2,
 
-a relative error of tolerance ρ (default 5 %) where the data are precise and
-the measurement variance σ² (the Poisson variance of the model for the data
-set's photon count, or the data's variance averaged over rings) where they are not —
-so values spread over orders of magnitude count alike and noise is honoured.
-Weights are refreshed from the current model each round (iteratively
-reweighted); the first round uses ring means of the data instead.  Masked,
+minimised by alternating between every point's parameters (α fixed) and α in
+closed form, :math:`\alpha_j = \sum w^2 P y / \sum w^2 P^2`.  Masked,
 non-finite and excluded pixels (r below ``exclusion_mm``, one pixel by
-default) have weight 0.
-
-**Alternation.**  Each round (1) fits every point's parameters with α fixed,
-batched over all points (:mod:`._varpro` for exponentials, :mod:`._lm` for
-the baselines; radii grouped exactly as in :mod:`._windows`); (2) for the
-shared-colour model solves :math:`s_\lambda` per point in closed form; (3)
-solves α per pixel in closed form,
-:math:`\alpha_j = \sum w^2 P y / \sum w^2 P^2`; and fixes the scale by mean
-α = 1 (for families with a free amplitude; the dipole's amplitude is tied to
-its shape, so α keeps the scale there).  Rounds stop when Φ falls by less
-than ``tol`` relatively.  The anisotropic model updates its directions by
-block coordinate descent: directions that share no pixel (even, then odd l)
-are fitted together, with the neighbours' contributions held fixed.
+default) have weight 0; σ² is the Poisson variance of the model for the data
+set's photon count, or else the data's stored variance averaged over rings.
 
 Work runs in chunks of incident points read from the Zarr store, so a data
 set larger than memory can be fitted; with ``checkpoint`` the state is saved
@@ -51,147 +39,30 @@ from __future__ import annotations
 
 import hashlib
 import json
-import os
-import threading
 import time
-from concurrent.futures import ThreadPoolExecutor, as_completed
 from collections.abc import Callable
-from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
 
 from .._validate import TranslucencyError
-from ..io.atomic import atomic_path
+from ..geometry import SampleGrid, window_geometry
 from ..io.dataset import PlanarDataset, open_dataset
-from ..model import BurleyModel, DipoleModel, ExponentialModel, PlanarAlpha
-from ..model.burley import burley_R
-from ..model.dipole import dipole_R_d
-from ._lm import fit_params_batched
-from ._varpro import fit_exponentials_batched
-from ._windows import SampleGrid, Segments, radius_groups, window_geometry
+from ..model import PlanarAlpha
+from ._alternation import FitContext, FitResult, alternate, check_fit_options
 
-KINDS = ("iso", "aniso", "dipole", "burley")
-_DIPOLE_STARTS = [(0.01, 1.0), (0.002, 3.0), (0.05, 0.3)]
-_BURLEY_STARTS = [(0.8, 1.0), (0.5, 0.3), (0.95, 4.0)]
+__all__ = ["FitResult", "PlanarFit", "check_fit_options", "fit_planar"]
 
-
-@dataclass
-class PlanarFit:
-    """Result of :func:`fit_planar`.
-
-    Attributes
-    ----------
-    model : ReflectanceModel
-        The fitted model (α included).
-    flagged : ndarray of bool, shape (P,)
-        Incident points without usable data (all masked, NaN or zero); their
-        parameters are inert (zero reflectance) and the report lists them.
-    history : list of float
-        Objective Φ after each round's parameter fit.
-    seconds : float
-        Wall time of the fit.
-    options : dict
-        The options used (stored in the model file).
-    """
-
-    model: object
-    flagged: np.ndarray
-    history: list
-    seconds: float
-    options: dict = field(default_factory=dict)
-
-
-# -- per-point profile families (without α) ---------------------------------------
-def _exp_sum(c, a, r):
-    """Σ_k c_k e^{−a_k r}: c, a (..., n) broadcast against r (...)."""
-    return np.einsum("...k,...k->...", c, np.exp(-a * r[..., None]))
-
-
-def _dipole_profile(eta):
-    return lambda r, p: dipole_R_d(r[None, :], p[:, :1], p[:, 1:2], eta)
-
-
-def _burley_profile(r, p):
-    return burley_R(r[None, :], p[:, :1], p[:, 1:2])
-
-
-class _State:
-    """Everything a fit carries between chunks and rounds (and saves in a checkpoint)."""
-
-    PER_POINT = ("c", "a", "p", "s", "ready", "flagged")
-
-    def __init__(self, kind, P, C, m, n, grid_shape, n_chunks=1):
-        self.arrays = {
-            "c": np.zeros((P, C, m, n)), "a": np.ones((P, C, m, n)),  # exponential families
-            "p": np.ones((P, 3, 2)),  # dipole (σ_a, σ_s') or Burley (A, s)
-            "s": np.ones((P, 3)),  # colour scale (1, s_g, s_b) of the shared-colour model
-            "alpha": np.ones(grid_shape),
-            # per chunk of this round: α statistics Σ w²Py, Σ w²P², objective Φ, finished?
-            "num": np.zeros((n_chunks,) + tuple(grid_shape)), "den": np.zeros((n_chunks,) + tuple(grid_shape)),
-            "phi": np.zeros(n_chunks), "done": np.zeros(n_chunks, dtype=bool),
-            "ready": np.zeros(P, dtype=bool), "flagged": np.zeros(P, dtype=bool),
-            "history": np.zeros(0), "round": np.zeros(1, dtype=np.int64),
-        }
-
-    def points(self, s: int, e: int) -> "_State":
-        """A private copy of points s..e (α shared, read-only during a round)."""
-        sub = _State.__new__(_State)
-        sub.arrays = {k: self.arrays[k][s:e].copy() for k in self.PER_POINT}
-        sub.arrays["alpha"] = self.arrays["alpha"]
-        return sub
-
-    def commit(self, sub: "_State", s: int, e: int) -> None:
-        for k in self.PER_POINT:
-            self.arrays[k][s:e] = sub.arrays[k]
-
-    def __getattr__(self, name):
-        try:
-            return self.__dict__["arrays"][name]
-        except KeyError:
-            raise AttributeError(name) from None
-
-    def save(self, path: Path, request: str) -> None:
-        with atomic_path(path) as tmp:
-            with open(tmp, "wb") as f:
-                np.savez(f, request=np.array(request), **self.arrays)
-
-    def load(self, path: Path, request: str) -> bool:
-        try:
-            with np.load(path) as z:
-                if str(z["request"]) != request:
-                    return False
-                loaded = {k: z[k] for k in self.arrays}
-        except Exception:  # noqa: BLE001 — an unreadable checkpoint is simply not used
-            return False
-        if any(loaded[k].shape != v.shape for k, v in self.arrays.items() if k not in ("history",)):
-            return False
-        self.arrays.update(loaded)
-        return True
-
-
-def check_fit_options(model: str, n_terms: int = 3, n_directions: int = 8, colour: str = "per-channel",
-                      rel_sigma: float = 0.05) -> None:
-    """Refuse bad fit options with one line naming the option (before any work)."""
-    if model not in KINDS:
-        raise TranslucencyError(f"model: expected one of {', '.join(KINDS)}, got {model!r}")
-    if not 1 <= int(n_terms) <= 4:
-        raise TranslucencyError(f"terms: n must be between 1 and 4, got {n_terms}")
-    if model == "aniso" and int(n_directions) < 2:
-        raise TranslucencyError(f"directions: the anisotropic model needs m >= 2, got {n_directions}")
-    if colour not in ("shared", "per-channel"):
-        raise TranslucencyError(f"colour: expected 'shared' or 'per-channel', got {colour!r}")
-    if not (rel_sigma > 0 and np.isfinite(rel_sigma)):
-        raise TranslucencyError(f"rel_sigma: must be > 0, got {rel_sigma}")
+#: the result of :func:`fit_planar` (the name before the alternation was shared with meshes)
+PlanarFit = FitResult
 
 
 def fit_planar(dataset, model: str = "iso", *, n_terms: int = 3, n_directions: int = 8,
                colour: str = "per-channel", exclusion_mm: float | None = None, rel_sigma: float = 0.05,
                max_rounds: int = 3, tol: float = 1e-3, radius_step: float | None | str = "auto",
-               sweeps: int = 1, balance: bool = True, chunk_points: int | None = None, workers: int | None = None,
-               cache_mb: float = 512,
-               checkpoint=None,
-               progress: Callable[[int, int, str], None] | None = None) -> PlanarFit:
+               sweeps: int = 1, balance: bool = True, chunk_points: int | None = None,
+               workers: int | None = None, cache_mb: float = 512, checkpoint=None,
+               progress: Callable[[int, int, str], None] | None = None) -> FitResult:
     """Fit a model family to every incident point of a planar data set, with α.
 
     Parameters
@@ -234,7 +105,7 @@ def fit_planar(dataset, model: str = "iso", *, n_terms: int = 3, n_directions: i
 
     Returns
     -------
-    PlanarFit
+    FitResult
 
     Examples
     --------
@@ -267,122 +138,18 @@ def fit_planar(dataset, model: str = "iso", *, n_terms: int = 3, n_directions: i
     eta = float(ds.header.get("sample", {}).get("eta", 1.3))
     options = {"model": model, "n_terms": n, "n_directions": m, "colour": colour if model in ("iso", "aniso")
                else "per-channel", "exclusion_mm": exclusion, "rel_sigma": rel_sigma,
-               "max_rounds": max_rounds, "tol": tol, "radius_step": step, "sweeps": sweeps, "balance": balance}
+               "max_rounds": max_rounds, "tol": tol, "radius_step": step, "sweeps": sweeps,
+               "balance": balance}
     request = json.dumps({"dataset": str(Path(ds.path).resolve()), "header": hashlib.sha256(
         json.dumps(ds.header, sort_keys=True).encode()).hexdigest(), "chunk": chunk_points, **options},
         sort_keys=True)
 
     source = _PlanarSource(ds, grid, origin, photons and 1.0 / (float(photons) * pitch * pitch))
-    ctx = _Context(source, model, n, m, C, exclusion, rel_sigma, eta, step, sweeps, balance, x_i,
-                   cache_left=cache_mb * 2**20)
-    return _alternate(ctx, options, request, max_rounds=max_rounds, tol=tol, chunk_points=chunk_points,
-                      workers=workers, checkpoint=checkpoint, progress=progress, t0=t0)
-
-
-def _alternate(ctx, options, request, *, max_rounds, tol, chunk_points, workers, checkpoint, progress, t0):
-    """The rounds of the alternation over all chunks of points (shared by planar and mesh fits)."""
-    P = len(ctx.x_i)
-    chunks = [(s, min(s + chunk_points, P)) for s in range(0, P, chunk_points)]
-    model = ctx.kind
-    state = _State(model, P, ctx.C, ctx.m, ctx.n, ctx.source.alpha_shape, len(chunks))
-    ckpt = Path(checkpoint) if checkpoint else None
-    if ckpt is not None and ckpt.exists() and state.load(ckpt, request) and progress:
-        progress(0, 0, f"resuming from {ckpt.name}: round {int(state.round[0]) + 1}")
-    total = max_rounds * len(chunks)
-    lock = threading.Lock()
-    workers = max(1, min(int(workers or os.cpu_count() or 1), len(chunks)))
-    while state.round[0] < max_rounds:
-        rnd = int(state.round[0])
-        todo = [ci for ci in range(len(chunks)) if not state.done[ci]]
-        # chunks in parallel threads (NumPy releases the GIL); each works on a private copy
-        # of its points and hands back its α statistics, so results do not depend on timing
-        with ThreadPoolExecutor(workers) as pool:
-            futures = {pool.submit(_fit_chunk, ctx, state, *chunks[ci]): ci for ci in todo}
-            for fut in as_completed(futures):
-                ci = futures[fut]
-                sub, phi, num, den = fut.result()
-                with lock:
-                    state.commit(sub, *chunks[ci])
-                    state.num[ci], state.den[ci], state.phi[ci], state.done[ci] = num, den, phi, True
-                    if ckpt is not None:
-                        state.save(ckpt, request)
-                if progress:
-                    progress(rnd * len(chunks) + int(state.done.sum()), total, f"round {rnd + 1}")
-        # α in closed form, then the scale fixed by mean α = 1
-        _update_alpha(state, model, getattr(ctx.source, "smooth_alpha", None))
-        state.arrays["history"] = np.append(state.history, state.phi.sum())
-        state.phi[:] = 0.0
-        state.done[:] = False
-        state.round[0] = rnd + 1
-        h = state.history
-        if len(h) >= 3 and (h[-2] - h[-1]) <= tol * h[-2]:  # round 1 used data-based weights
-            state.round[0] = max_rounds
-        if ckpt is not None:
-            state.save(ckpt, request)
-    if progress:
-        progress(total, total, "done")
-    fitted = _build_model(ctx, state)
-    if ckpt is not None and ckpt.exists():
-        ckpt.unlink()
-    return PlanarFit(fitted, state.flagged.copy(), [float(v) for v in state.history],
-                     time.perf_counter() - t0, options)
-
-
-@dataclass
-class _Context:
-    source: object  # where the chunks come from: _PlanarSource or a mesh source
-    kind: str
-    n: int
-    m: int
-    C: int
-    exclusion: float
-    rel_sigma: float
-    eta: float
-    radius_step: float | None
-    sweeps: int
-    balance: bool
-    x_i: np.ndarray
-    cache_left: float = 0.0  # bytes the data may still occupy in memory between rounds
-    cache: dict = field(default_factory=dict)
-
-
-@dataclass
-class _Chunk:
-    """The data of k incident points, flattened to (k, J, 3), each row's pixels in radius-group order.
-
-    Geometry is (1, J) when every window lies alike around its point (the
-    usual case: points snapped to pixel centres) and (k, J) otherwise.
-    """
-
-    y: np.ndarray  # (k, J, 3) data, 0 off the valid pixels
-    valid: np.ndarray  # (k, J) bool: the pixel is used
-    balance: np.ndarray  # (1|k, J) float32: the distance balance of each pixel's weight
-    var_ring: np.ndarray | None  # (k, G, 3) ring means of the data's variance; None: Poisson model
-    r: np.ndarray  # (1|k, J) mm
-    theta: np.ndarray  # (1|k, J) rad, in the sample's frame
-    gid: np.ndarray  # (1|k, J) radius group of each pixel
-    r_g: np.ndarray  # (G,) radius of each group, mm
-    r_base: np.ndarray  # (G,) ring centres (= r_g for exact radii): equally spaced for the solver
-    rings: Segments  # sums over each (point, radius group)
-    base: np.ndarray  # (k, 1) and ...
-    local: np.ndarray  # ... (1|k, J): α's sample of each pixel is base + local
-    usable: np.ndarray | None = None  # (k,) enough valid pixels and some signal
-    poisson: object = 0.0  # 1/(N × pixel area): scalar, or (k, J, 1) float32 (mesh vertices)
-    alpha: np.ndarray | None = None  # (k, J, 3) float32 current α at each pixel (set per round)
-    plans: dict = field(default_factory=dict)  # Segments of the anisotropic direction classes
-
-    @property
-    def static(self) -> np.ndarray:
-        """(k, J) float32: valid × distance balance (0: pixel not used)."""
-        return self.valid * self.balance
-
-    @property
-    def pixel(self) -> np.ndarray:
-        return self.base + self.local
-
-    def per_channel(self, x: np.ndarray) -> np.ndarray:
-        """(k, J) → contiguous (k, J, 3): elementwise work on like-shaped arrays is several times faster."""
-        return np.stack([x, x, x], axis=-1)
+    ctx = FitContext(source=source, kind=model, n=n, m=m, C=C, exclusion=exclusion, rel_sigma=rel_sigma,
+                     eta=eta, radius_step=step, sweeps=sweeps, balance=balance, x_i=x_i,
+                     cache_left=cache_mb * 2**20)
+    return alternate(ctx, options, request, max_rounds=max_rounds, tol=tol, chunk_points=chunk_points,
+                     workers=workers, checkpoint=checkpoint, progress=progress, t0=t0)
 
 
 class _PlanarSource:
@@ -393,7 +160,7 @@ class _PlanarSource:
         self.alpha_shape = grid.shape
         self.pitch = grid.pitch
 
-    def read(self, ctx: _Context, s: int, e: int):
+    def read(self, ctx: FitContext, s: int, e: int):
         """y (k, J, 3), var or None, valid (k, J), r, θ (1|k, J), pixel (k, J), and the Poisson factor
         of points s..e."""
         ds, k = self.ds, e - s
@@ -411,314 +178,3 @@ class _PlanarSource:
 
     def make_alpha(self, values: np.ndarray):
         return PlanarAlpha(values.copy(), self.grid.origin, self.grid.pitch)
-
-
-def _ring_means(rings: Segments, valid: np.ndarray, v: np.ndarray) -> np.ndarray:
-    """Mean of v (k, J, 3) over the valid pixels of each (point, radius group): (k, G, 3)."""
-    num = rings.sums(np.where(valid[..., None], v, np.float32(0.0)))
-    cnt = rings.sums(valid.astype(np.float32))
-    return num / np.maximum(cnt, 1.0)[..., None]
-
-
-def _prepare_chunk(ctx: _Context, s: int, e: int) -> _Chunk:
-    """Read points s..e and put each window's pixels in radius-group order (done once per chunk)."""
-    y, var, valid, r, theta, pixel, poisson = ctx.source.read(ctx, s, e)
-    k = e - s
-    pixel = np.broadcast_to(pixel, valid.shape)
-    base = pixel[:, :1].astype(np.int64)
-    local = (pixel - base).astype(np.int32)
-    if r.shape[0] == 1:  # windows placed alike around their points: one geometry row serves all
-        local = local[:1]
-    gid, r_g, r_base = radius_groups(r, ctx.source.pitch, r_exact=1.0, radius_step=ctx.radius_step)
-    rings = Segments.of(gid, k, r_g.size)
-    valid, y, r, theta, gid, local = (rings.order(a) for a in (valid, y, r, theta, gid, local))
-    if var is not None:
-        var = rings.order(var)
-    if np.ndim(poisson):  # per-vertex Poisson factors follow their vertices
-        poisson = rings.order(np.broadcast_to(poisson, (k,) + np.shape(poisson)[1:]))
-    rings = rings.in_order()
-    y = np.where(valid[..., None], y, np.float32(0.0))
-    # each mm of distance counts alike: rings beyond 1 mm weighted by 1 mm / r
-    balance = (np.minimum(1.0, 1.0 / np.maximum(r, 1e-9)) if ctx.balance else np.ones_like(r)).astype(np.float32)
-    var_ring = None if var is None else _ring_means(rings, valid, var).astype(np.float32)
-    usable = (valid.sum(axis=1) >= 2 * ctx.n + 2) & (y.sum(axis=(1, 2), dtype=np.float64) > 0)
-    return _Chunk(y, valid, balance, var_ring, r.astype(np.float32), theta, gid.astype(np.int32), r_g, r_base, rings,
-                  base, local, usable, poisson)
-
-
-def _load_chunk(ctx: _Context, state: _State, s: int, e: int) -> _Chunk:
-    """Points s..e from the cache of earlier rounds (or the source), with the current α."""
-    ch = ctx.cache.get((s, e))
-    if ch is None:
-        ch = _prepare_chunk(ctx, s, e)
-        nbytes = sum(np.asarray(a).nbytes for a in (ch.y, ch.valid, ch.balance, ch.local, ch.r, ch.theta, ch.gid, ch.poisson))
-        if ctx.cache_left >= nbytes:
-            ctx.cache_left -= nbytes
-            ctx.cache[(s, e)] = ch
-    return replace(ch, alpha=ch.per_channel(state.alpha.astype(np.float32).ravel()[ch.pixel]))
-
-
-def _group_profiles(ctx: _Context, state: _State, sl: slice, r_g: np.ndarray) -> np.ndarray:
-    """Each point's profile at the group radii, (k, G, C, m), without α or colour scale."""
-    if ctx.kind in ("dipole", "burley"):
-        p = state.p[sl][:, None]  # (k, 1, 3, 2)
-        r = r_g[None, :, None]
-        f = (dipole_R_d(r, p[..., 0], p[..., 1], ctx.eta) if ctx.kind == "dipole"
-             else burley_R(r, p[..., 0], p[..., 1]))
-        return f[..., None]
-    return _exp_sum(state.c[sl][:, None], state.a[sl][:, None], r_g[None, :, None, None])
-
-
-def _at_pixels(F: np.ndarray, ch: _Chunk, m: int, direction=None) -> np.ndarray:
-    """Gather group profiles F (k, G, C, m) at the pixels: blended by the hat weights,
-    or of one ``direction`` (1|k, J) per pixel; returns (k, J, C)."""
-    if m == 1 and direction is None:
-        return ch.rings.spread(F[..., 0])
-    k, G, C, _ = F.shape
-    rows = F.transpose(0, 1, 3, 2).reshape(k, G * m, C)  # row g·m + l: group g, direction l
-
-    def at(l):  # the profile of direction l (1|k, J) at each pixel's radius group
-        idx = ch.gid * m + l
-        if idx.shape[0] == 1:
-            return np.take(rows, idx[0], axis=1)
-        return np.take_along_axis(rows, idx[..., None], axis=1)
-
-    if direction is not None:
-        return at(direction)
-    l0, t = _hat(ch.theta, m)
-    t = np.repeat(t[..., None], C, axis=2)  # (1|k, J, C): like-shaped operands are fast
-    f = at(l0)
-    f *= 1 - t
-    f1 = at((l0 + 1) % m)
-    f1 *= t
-    f += f1
-    return f
-
-
-def _predict(ctx: _Context, state: _State, sl: slice, ch: _Chunk) -> np.ndarray:
-    """Current P_i at every pixel of the chunk, (k, J, 3), without α."""
-    # float32 at the pixels: these arrays only weight, accumulate and report
-    f = _at_pixels(_group_profiles(ctx, state, sl, ch.r_g).astype(np.float32), ch, ctx.m)
-    return f * state.s[sl][:, None, :].astype(np.float32) if ctx.C == 1 else f
-
-
-def _hat(theta, m):
-    """Lower direction l0 and the fraction t towards l0 + 1 of each angle (hat weights)."""
-    u = np.mod(theta / (2 * np.pi / m), m)
-    l0 = np.floor(u)
-    return l0.astype(np.int64) % m, (u - l0).astype(np.float32)
-
-
-def _weights(ctx: _Context, ch: _Chunk, f: np.ndarray | None) -> np.ndarray:
-    r"""w² per pixel and channel (module docstring); f is P_i without α, (k, J, 3).
-
-    The variance is taken from the model, never from the pixel's own value: a
-    pixel-wise estimate is proportional to the noisy count (Poisson), and
-    weighting by it would pull the fit below the data where counts are few.
-    With the data set's photon count it is the Poisson variance of the model,
-    :math:`\alpha P/(N p^2)`; otherwise the ring mean of the data's variance.
-    """
-    if f is None:  # first round: ring means of y/α stand in for the model
-        safe = np.where(ch.alpha > 0, ch.alpha, np.float32(1.0))
-        f = ch.rings.spread(_ring_means(ch.rings, ch.valid, ch.y / safe).astype(np.float32))
-    model = ch.alpha * f
-    del f
-    k = model.shape[0]  # floor: 10⁻⁶ of each window's peak (keeps the weights finite)
-    floor = np.maximum(1e-6 * model.reshape(k, -1).max(axis=1), np.float32(1e-15))
-    np.maximum(model, floor[:, None, None], out=model)
-    # w² = static / (αP (ρ² αP + v0)) with v0 = 1/(N p²), or ρ²(αP)² + σ̄² without a photon count
-    # (in place: these are the largest arrays of a chunk)
-    den = np.multiply(model, np.float32(ctx.rel_sigma**2))
-    if ch.var_ring is None:
-        den += ch.poisson
-        den *= model
-    else:
-        den *= model
-        den += ch.rings.spread(ch.var_ring)
-    del model
-    w2 = ch.per_channel(ch.static)
-    w2 /= den  # den > 0: the model is floored
-    return w2
-
-
-def _fit_chunk(ctx: _Context, glob: _State, s: int, e: int):
-    """One round's work on points s..e: parameters, colour scale, α statistics, Φ.
-
-    Returns the points' new state and their Φ, Σ w²Py and Σ w²P² (per sample pixel).
-    """
-    state = glob.points(s, e)
-    ch = _load_chunk(ctx, state, s, e)
-    k = e - s
-    sl = slice(0, k)
-    usable = ch.usable
-    state.flagged[sl] = ~usable
-    if k and not state.ready[sl].all() and ctx.C == 1:  # colour scale from the window sums
-        tot = ch.y.sum(axis=1, dtype=np.float64)
-        state.s[sl] = np.where(state.ready[sl, None], state.s[sl],
-                               tot / np.maximum(tot[:, :1], 1e-300) * (tot[:, :1] > 0) + (tot[:, :1] <= 0))
-    w2 = _weights(ctx, ch, _predict(ctx, state, sl, ch) if state.ready[sl].all() else None)
-    if ctx.kind in ("dipole", "burley"):
-        _fit_baseline(ctx, state, sl, ch, w2)
-    else:
-        _fit_exponential(ctx, state, sl, ch, w2)
-        if ctx.C == 1:
-            _fit_colour(ctx, state, sl, ch, w2)
-    # inert parameters where a point has no data
-    bad = np.flatnonzero(~usable)
-    state.c[bad] = 0.0
-    state.a[bad] = 1.0
-    if ctx.kind == "burley":
-        state.p[bad, :, 0] = 0.0
-    state.ready[sl] = True
-    # Φ and the α statistics (summed over channels, then per sample pixel) with the new parameters
-    f = _predict(ctx, state, sl, ch)
-    w2 *= usable[:, None, None]
-    res = ch.alpha * f
-    res -= ch.y
-    res *= res
-    res *= w2
-    phi = float(np.sum(res, dtype=np.float64))
-    del res
-    wf = w2 * f
-    n_px, pixel, ones = glob.alpha.size, ch.pixel.ravel(), np.ones(3, np.float32)
-    num = np.bincount(pixel, ((wf * ch.y) @ ones).ravel(), n_px).reshape(glob.alpha.shape)
-    den = np.bincount(pixel, ((wf * f) @ ones).ravel(), n_px).reshape(glob.alpha.shape)
-    return state, phi, num, den
-
-
-def _grouped(seg: Segments, G: int, C: int, w2, kappa, target, overwrite: bool = False):
-    r"""Sums :math:`A = \sum w^2\kappa^2` and :math:`B = \sum w^2 \kappa y` over each
-    (point, key) of ``seg`` (keys: sub-problem · G + radius group), channels summed
-    when C = 1; returns W = √A and Y = B/A as rows (point, colour row, sub-problem), (·, G).
-
-    ``overwrite``: kappa and target are scratch and may hold the integrands (saves memory).
-    """
-    wk = w2 * kappa
-    if overwrite:
-        a_int, b_int = np.multiply(kappa, wk, out=kappa), np.multiply(target, wk, out=target)
-    else:
-        a_int, b_int = wk * kappa, wk * target
-    del wk
-    A, B = seg.sums(a_int), seg.sums(b_int)  # (k, n_sub·G, 3)
-    if C == 1:
-        A, B = A.sum(axis=2, keepdims=True), B.sum(axis=2, keepdims=True)
-    k = A.shape[0]
-    A, B = (x.reshape(k, -1, G, C).transpose(0, 3, 1, 2).reshape(-1, G).astype(np.float64) for x in (A, B))
-    return np.sqrt(A), np.divide(B, A, out=np.zeros_like(B), where=A > 0)
-
-
-def _solve_exponentials(ctx, state, sl, ch, W, Y, index):
-    """Fit the sub-problems at ``index`` (into c/a viewed as (k·C·m, n)); warm where ready."""
-    c = state.c[sl].reshape(-1, ctx.n)
-    a = state.a[sl].reshape(-1, ctx.n)
-    ready = np.repeat(state.ready[sl], state.c.shape[1] * state.c.shape[2])[index]
-    for warm in (True, False):
-        sel = ready if warm else ~ready
-        if not sel.any():
-            continue
-        rows = index[sel]
-        cc, aa, _ = fit_exponentials_batched(ch.r_g, W[sel], Y[sel], ctx.n, rates0=a[rows] if warm else None,
-                                             r_base=ch.r_base,
-                                             n_starts=3, pooled=True, max_iter=15 if warm else 12, tol=1e-4)
-        c[rows], a[rows] = cc, aa
-    state.c[sl] = c.reshape(state.c[sl].shape)
-    state.a[sl] = a.reshape(state.a[sl].shape)
-
-
-def _fit_exponential(ctx: _Context, state: _State, sl: slice, ch: _Chunk, w2) -> None:
-    k, C, m, G = ch.y.shape[0], ctx.C, ctx.m, ch.r_g.size
-    kappa = ch.alpha * state.s[sl][:, None, :].astype(np.float32) if C == 1 else ch.alpha  # (k, J, 3)
-    if m == 1:
-        W, Y = _grouped(ch.rings, G, C, w2, kappa, ch.y)
-        _solve_exponentials(ctx, state, sl, ch, W, Y, np.arange(k * C))
-        return
-    if not state.ready[sl].all():  # start every direction from the isotropic fit
-        W, Y = _grouped(ch.rings, G, C, w2, kappa, ch.y)
-        cc, aa, _ = fit_exponentials_batched(ch.r_g, W, Y, ctx.n, n_starts=3, pooled=True, max_iter=25, tol=1e-5,
-                                             r_base=ch.r_base)
-        state.c[sl] = np.repeat(cc.reshape(k, C, 1, ctx.n), m, axis=2)
-        state.a[sl] = np.repeat(aa.reshape(k, C, 1, ctx.n), m, axis=2)
-        state.ready[sl] = True
-    l0, t = _hat(ch.theta, m)
-    l1 = (l0 + 1) % m
-    classes = [np.arange(0, m, 2), np.arange(1, m, 2)] if m % 2 == 0 else [np.array([l]) for l in range(m)]
-    for _ in range(ctx.sweeps):
-        for ci, cls in enumerate(classes):
-            in0, in1 = np.isin(l0, cls), np.isin(l1, cls)
-            L = np.where(in0, l0, l1)  # the direction being fitted
-            O = np.where(in0, l1, l0)  # its neighbour, held fixed
-            u = np.where(in0, 1 - t, np.where(in1, t, 0.0)).astype(np.float32)
-            f_other = _at_pixels(_group_profiles(ctx, state, sl, ch.r_g).astype(np.float32), ch, m, O)
-            f_other *= kappa
-            f_other *= ch.per_channel(np.where(in0, t, 1 - t).astype(np.float32))  # the neighbour's part
-            target = np.subtract(ch.y, f_other, out=f_other)
-            both = in0 | in1  # (m even: every pixel borders one direction of each class)
-            w_cls = w2 if both.all() else w2 * ch.per_channel(both.astype(np.float32))
-            if ci not in ch.plans:  # pixels grouped by (direction, radius group), made once per chunk
-                ch.plans[ci] = Segments.of(L * G + ch.gid, k, m * G)
-            W, Y = _grouped(ch.plans[ci], G, C, w_cls, kappa * ch.per_channel(u), target, overwrite=True)
-            del target
-            rows = (np.arange(k)[:, None, None] * C + np.arange(C)[None, :, None]) * m + cls[None, None, :]
-            rows = rows.ravel()
-            _solve_exponentials(ctx, state, sl, ch, W[rows], Y[rows], rows)
-
-
-def _fit_colour(ctx: _Context, state: _State, sl: slice, ch: _Chunk, w2) -> None:
-    """Closed-form s_λ = Σ w² α P y / Σ w² (α P)², then (1, s_g, s_b) with the red scale moved into c."""
-    state.s[sl] = 1.0
-    f = ch.alpha * _predict(ctx, state, sl, ch)  # s = 1 here
-    num = np.einsum("kjc,kjc->kc", w2 * f, ch.y)
-    den = np.einsum("kjc,kjc->kc", w2 * f, f)
-    s = np.divide(num, den, out=np.ones_like(num), where=den > 0)
-    red = np.where(s[:, :1] > 0, s[:, :1], 1.0)
-    state.s[sl] = s / red
-    state.c[sl] *= red[:, :, None, None]
-
-
-def _fit_baseline(ctx: _Context, state: _State, sl: slice, ch: _Chunk, w2) -> None:
-    """Dipole or Burley: two positive parameters per point and channel."""
-    k = ch.y.shape[0]
-    W, Y = _grouped(ch.rings, ch.r_g.size, 3, w2, ch.alpha, ch.y)
-    profile = _dipole_profile(ctx.eta) if ctx.kind == "dipole" else _burley_profile
-    starts = _DIPOLE_STARTS if ctx.kind == "dipole" else _BURLEY_STARTS
-    p = state.p[sl].reshape(-1, 2)
-    ready = np.repeat(state.ready[sl], 3)
-    if ready.any():  # warm: the previous round's parameters, kept unless the refit is better
-        p[ready] = fit_params_batched(profile, ch.r_g, W[ready], Y[ready], [p[ready]])[0]
-    if (~ready).any():
-        pc, _ = fit_params_batched(profile, ch.r_g, W[~ready], Y[~ready], starts)
-        p[~ready] = pc
-    state.p[sl] = p.reshape(k, 3, 2)
-
-
-def _update_alpha(state: _State, kind: str, smooth=None) -> None:
-    num, den = state.num.sum(axis=0), state.den.sum(axis=0)  # in chunk order: deterministic
-    if smooth is not None:  # pool the statistics of neighbouring outgoing points (meshes)
-        num, den = smooth(num), smooth(den)
-    seen = den > 0
-    alpha = np.where(seen, num / np.where(seen, den, 1.0), 1.0)
-    alpha = np.maximum(alpha, 0.0)
-    if kind != "dipole" and seen.any():
-        mean = float(alpha[seen].mean())
-        if mean > 0:
-            alpha = np.where(seen, alpha / mean, 1.0)
-            if kind == "burley":
-                state.p[:, :, 0] *= mean
-            else:
-                state.c[...] *= mean
-    state.alpha[...] = alpha
-    state.num[...] = 0.0
-    state.den[...] = 0.0
-
-
-def _build_model(ctx: _Context, state: _State):
-    alpha = ctx.source.make_alpha(state.alpha)
-    frame = getattr(ctx.source, "frame", None)
-    if ctx.kind == "dipole":
-        return DipoleModel(ctx.x_i, state.p[:, :, 0], state.p[:, :, 1], ctx.eta, alpha, frame=frame)
-    if ctx.kind == "burley":
-        return BurleyModel(ctx.x_i, state.p[:, :, 0], state.p[:, :, 1], alpha, frame=frame)
-    d = -state.a
-    if ctx.C == 1:
-        return ExponentialModel(ctx.x_i, state.c, d, alpha, s_g=state.s[:, 1], s_b=state.s[:, 2], frame=frame)
-    return ExponentialModel(ctx.x_i, state.c, d, alpha, frame=frame)

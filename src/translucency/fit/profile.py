@@ -22,6 +22,8 @@ import numpy as np
 from scipy.optimize import least_squares, nnls
 
 from .._validate import TranslucencyError, as_float_array
+from ..model.burley import burley_R
+from ..model.dipole import dipole_R_d
 
 
 @dataclass(frozen=True)
@@ -136,8 +138,6 @@ def fit_burley_profile(r, y, *, A0: float = 0.5, s0: float = 1.0) -> tuple[float
     >>> [round(v, 6) for v in fit_burley_profile(r, burley_R(r, 0.7, 1.5))[:2]]
     [0.7, 1.5]
     """
-    from ..model.burley import burley_R
-
     return _fit_positive_params(lambda r, p: burley_R(r, p[0], p[1]), r, y, (A0, s0))
 
 
@@ -158,8 +158,6 @@ def fit_dipole_profile(r, y, eta: float = 1.3, *, sigma_a0: float = 0.01, sigma_
     >>> [round(v, 5) for v in fit_dipole_profile(r, dipole_R_d(r, 0.004, 2.6, 1.3))[:2]]
     [0.004, 2.6]
     """
-    from ..model.dipole import dipole_R_d
-
     return _fit_positive_params(lambda r, p: dipole_R_d(r, p[0], p[1], eta), r, y, (sigma_a0, sigma_s_prime0))
 
 

@@ -32,8 +32,10 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+import zarr
+from zarr.codecs import BloscCodec
 
-from .._validate import TranslucencyError
+from .._validate import TranslucencyError, as_float_array
 from .._version import __version__
 from .outputs import claim_output, remove_dataset
 
@@ -81,8 +83,6 @@ def create_dataset(path, header: dict, *, overwrite: bool = False, inputs=()):
     set, and the command's ``inputs``, are never replaced
     (:func:`translucency.io.outputs.claim_output`).
     """
-    import zarr
-    from zarr.codecs import BloscCodec
 
     path = Path(path)
     if claim_output(path, "planar data set", overwrite=overwrite, inputs=inputs, reuse=True):
@@ -157,7 +157,6 @@ def write_dataset(path, x_i, window_origin, R_d, pitch: float, *, variance=None,
     >>> ds.n_points, ds.window, ds.complete()
     (1, (8, 8), True)
     """
-    from .._validate import as_float_array
 
     R_d = np.asarray(R_d, dtype=np.float64)  # NaN allowed: unmeasured pixels, flagged by the fitter
     if R_d.ndim != 4 or R_d.shape[3] != 3:
@@ -200,7 +199,6 @@ def open_dataset(path, *, writable: bool = False) -> PlanarDataset:
 
     Read-only unless ``writable`` (used when resuming an acquisition).
     """
-    import zarr
 
     path = Path(path)
     if not path.exists():

@@ -14,13 +14,13 @@ import warnings
 from pathlib import Path
 
 import numpy as np
+import trimesh
 
 from .._validate import TranslucencyError
 
 
 def check_mesh(mesh, name: str = "mesh"):
     """Repair what can be repaired (with a warning) and refuse the rest; returns the mesh."""
-    import trimesh
 
     if len(mesh.faces) == 0:
         raise TranslucencyError(f"{name}: no triangles")
@@ -66,7 +66,6 @@ def load_mesh(path, *, scale_mm: float = 1.0):
     >>> round(float(load_mesh(p, scale_mm=1000).extents[0]), 3)
     20.0
     """
-    import trimesh
 
     path = Path(path)
     if not path.exists():

@@ -18,7 +18,10 @@ Layout::
 Header (JSON): ``format`` = "translucency-model", ``version`` = 1, ``kind``
 ("exponential" | "dipole" | "burley"), ``geometry`` ("planar" | "mesh"),
 ``dtype`` ("float32" | "float16"), ``units``, ``alpha`` ({origin, pitch} for
-planar), ``eta`` (dipole), ``meta`` (free-form provenance), ``software`` and
+planar), ``eta`` (dipole), ``meta`` (free-form provenance), ``physics`` (the
+per-point bounds of :mod:`translucency.model.bounds`: the largest total
+reflectance and energy radius, the object's size and the indices of the points
+that break a bound), ``software`` and
 ``checksum``: the SHA-256 of every array's decoded bytes in a fixed order, so
 that corruption that survives decompression is still caught.
 
@@ -37,11 +40,13 @@ import zipfile
 from pathlib import Path
 
 import numpy as np
+import zarr
+from zarr.codecs import BloscCodec
 
 from .._validate import TranslucencyError
 from .._version import __version__
-from ..model import BurleyModel, DipoleModel, ExponentialModel, PlanarAlpha, VertexAlpha
-from ..model._base import ReflectanceModel
+from ..model import BurleyModel, DipoleModel, ExponentialModel, PlanarAlpha, ReflectanceModel, VertexAlpha
+from ..model.bounds import check_physics
 from .atomic import atomic_path
 from .outputs import claim_output
 
@@ -138,18 +143,17 @@ def save_model(model: ReflectanceModel, path, *, dtype: str = "float32", meta: d
         if not np.isfinite(a).all():
             raise TranslucencyError(f"{path}: {key} overflows {dtype}; store with dtype='float32'")
     try:
-        _from_arrays(arrays, _header(model, dtype, meta, ""))
+        stored = _from_arrays(arrays, _header(model, dtype, meta, ""))
     except TranslucencyError as exc:
         raise TranslucencyError(f"{path}: not representable in {dtype}: {exc}") from None
-
-    _write_store(path, _header(model, dtype, meta, _checksum(arrays)), arrays)
+    header = _header(model, dtype, meta, _checksum(arrays))
+    header["physics"] = check_physics(stored).summary()  # what the stored values promise (model/bounds.py)
+    _write_store(path, header, arrays)
     return path
 
 
 def _write_store(path: Path, header: dict, arrays: dict[str, np.ndarray]) -> None:
     """Pack a header and arrays into a zipped Zarr v3 store at ``path``, atomically."""
-    import zarr
-    from zarr.codecs import BloscCodec
 
     with atomic_path(path) as tmp:
         tmp.unlink()  # ZipStore creates the archive itself
@@ -226,7 +230,6 @@ def read_header(path) -> dict:
 
 
 def _open(path: Path):
-    import zarr
 
     if not path.exists():
         raise ModelFileError(f"{path}: no such file")

@@ -8,11 +8,13 @@
 :class:`VertexAlpha`        α per mesh vertex
 :func:`direction_weights`   w_l(θ), the anisotropic blend
 :data:`MATERIALS`           Jensen 2001 measured coefficients
+:func:`check_physics`       per-point bounds: total reflectance ≤ 1, energy radius within the object
 ==========================  =====================================================
 """
 
 from ._base import ReflectanceModel
 from .alpha import PlanarAlpha, VertexAlpha
+from .bounds import PhysicsCheck, check_physics, model_extent
 from .burley import BurleyModel, burley_energy_within, burley_R, burley_shape
 from .dipole import (
     DipoleModel,
@@ -46,4 +48,7 @@ __all__ = [
     "MATERIALS",
     "Material",
     "material",
+    "check_physics",
+    "model_extent",
+    "PhysicsCheck",
 ]

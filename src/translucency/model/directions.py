@@ -39,11 +39,6 @@ def direction_angles(m: int) -> np.ndarray:
     return TWO_PI * np.arange(m) / m
 
 
-def wrap_angle(theta: np.ndarray) -> np.ndarray:
-    """Wrap angles to ``(-pi, pi]``."""
-    return np.pi - np.mod(np.pi - np.asarray(theta, dtype=np.float64), TWO_PI)
-
-
 def direction_weights(theta, m: int) -> np.ndarray:
     """Blend weights :math:`w_l(\\theta)` for ``m`` directions.
 

@@ -12,37 +12,26 @@ import time
 from pathlib import Path
 
 import numpy as np
+from scipy.ndimage import binary_erosion
 
+from .._plotting import pyplot
 from .._validate import TranslucencyError
+from ..acquire.mesh import object_volume
 from ..io.atomic import atomic_path, write_json
-from .image import Camera, VertexPicture, compare, coverage, rel_rmse, render_reference, save_images
-from .transport import exit_fresnel, rays, relight_vertices, transport_matrices, vertex_irradiance
+from ..io.mesh_dataset import open_mesh_dataset
+from ..mitsuba import mesh_scene, rays
+from .image import Camera, VertexPicture, compare, coverage, rel_rmse, render_reference, save_images, tonemap
+from .transport import exit_fresnel, relight_vertices, transport_matrices, vertex_irradiance
 
 
 def object_from_dataset(path):
-    """(mesh, header) of a mesh data set (:mod:`translucency.acquire.mesh`)."""
-    import trimesh
-    import zarr
-
-    from ..acquire.mesh import HEADER_KEY
-
-    path = Path(path)
-    if not path.exists():
-        raise TranslucencyError(f"{path}: no such mesh data set")
-    try:
-        g = zarr.open_group(str(path), mode="r")
-        header = dict(g.attrs)[HEADER_KEY]
-        mesh = trimesh.Trimesh(np.asarray(g["vertices"][...], dtype=np.float64), np.asarray(g["faces"][...]),
-                               process=False)
-    except Exception as exc:  # noqa: BLE001
-        raise TranslucencyError(f"{path}: not a readable mesh data set ({type(exc).__name__})") from None
-    return mesh, header
+    """(mesh, header) of a mesh data set (:mod:`translucency.io.mesh_dataset`)."""
+    ds = open_mesh_dataset(path)
+    return ds.mesh(), ds.header
 
 
 def volume_of_dataset(mesh, header):
     """The generated filling of a mesh data set, rebuilt from its description."""
-    from ..acquire.mesh import object_volume
-
     d = header.get("sample", {})
     if "generator" not in d or "voxel_mm" not in header.get("request", {}).get("volume_grid", {}):
         raise TranslucencyError("data set: its filling cannot be rebuilt (not generated here); no reference")
@@ -65,8 +54,6 @@ def figure2(model, mesh, light, out_dir, *, volume=None, camera: Camera | None =
     Writes ``ours.exr/.png`` (and ``reference.exr/.png``, ``figure2.png``,
     ``figure2.json``) into ``out_dir``; returns the numbers.
     """
-    from ..acquire.mesh_walk import mesh_scene
-
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     camera = camera or Camera.looking_at(mesh)
@@ -121,8 +108,6 @@ def region_errors(mesh, scene, camera: Camera, E: np.ndarray, reference: np.ndar
     (vertices on either side of the lit/unlit boundary, one ring wide), ``unlit`` (no direct light),
     ``silhouette`` (the outermost pixel ring of the object). Returns {region: {rel_rmse, pixels}}.
     """
-    from scipy.ndimage import binary_erosion
-
     E = np.asarray(E, dtype=np.float64)
     lit = (E.sum(axis=1) if E.ndim == 2 else E) > 0
     edges = np.asarray(mesh.edges_unique)
@@ -144,12 +129,7 @@ def region_errors(mesh, scene, camera: Camera, E: np.ndarray, reference: np.ndar
 
 
 def _plot(reference, ours, flip_map, mask, cmp, path) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from .image import tonemap
+    plt = pyplot()
 
     fig, ax = plt.subplots(1, 3, figsize=(13, 3.8))
     ax[0].imshow(tonemap(reference, cmp["exposure"]))

@@ -10,7 +10,7 @@ r"""Pictures of an object: ours (per-vertex radiance drawn by Mitsuba) and the p
   and in its reflection).
 * **reference**: the same object, volume, light and camera rendered by Mitsuba's
   ``volpath`` (heterogeneous medium over the bounding box, one grey channel at
-  a time as in :mod:`translucency.acquire.reference`), behind a ``null``
+  a time as in :mod:`translucency.validate.volpath`), behind a ``null``
   boundary (index-matched) or a smooth ``dielectric`` one.  A dielectric object
   can only be path-traced under an environment light: point, spot and
   directional lights reach its inside through a delta refraction, a path
@@ -23,23 +23,18 @@ Units: radiance in W/(mm² sr) for the lights' W/sr (point) or W/mm² (direction
 
 from __future__ import annotations
 
-import tempfile
 import time
 from dataclasses import dataclass
 from pathlib import Path
 
+import flip_evaluator
+import matplotlib.image as mpimg
 import numpy as np
 
 from .._validate import TranslucencyError
-from ..acquire._engine import mitsuba
-from .transport import DirectionalLight, EnvironmentLight, PointLight, SpotLight
-
-
-def _up_for(origin, target) -> list:
-    """An up vector not parallel to the viewing axis."""
-    axis = np.asarray(target, float) - np.asarray(origin, float)
-    up = np.array([0.0, 0.0, 1.0]) if abs(axis[2]) < 0.99 * np.linalg.norm(axis) else np.array([0.0, 1.0, 0.0])
-    return up.tolist()
+from ..io.atomic import atomic_path
+from ..mitsuba import load_with_mesh, mitsuba, slab_medium_dict
+from .lights import EnvironmentLight
 
 
 @dataclass(frozen=True)
@@ -68,23 +63,6 @@ class Camera:
                 "film": {"type": "hdrfilm", "width": self.width, "height": self.height, "rfilter": {"type": "box"},
                          "pixel_format": "rgb"},
                 "sampler": {"type": "independent", "sample_count": int(spp)}}
-
-
-def _write_ply(path: Path, vertices: np.ndarray, faces: np.ndarray, colour: np.ndarray | None = None) -> None:
-    """A binary PLY with float positions and (optionally) float r, g, b per vertex (Mitsuba's vertex_color)."""
-    props = "property float x\nproperty float y\nproperty float z\n"
-    cols = [vertices]
-    if colour is not None:
-        props += "property float r\nproperty float g\nproperty float b\n"
-        cols.append(colour)
-    head = (f"ply\nformat binary_little_endian 1.0\nelement vertex {len(vertices)}\n{props}"
-            f"element face {len(faces)}\nproperty list uchar int vertex_indices\nend_header\n")
-    face = np.zeros(len(faces), dtype=[("n", "u1"), ("i", "<i4", 3)])
-    face["n"], face["i"] = 3, faces
-    with open(path, "wb") as f:
-        f.write(head.encode())
-        f.write(np.concatenate(cols, axis=1).astype("<f4").tobytes())
-        f.write(face.tobytes())
 
 
 class VertexPicture:
@@ -121,17 +99,13 @@ class VertexPicture:
         bsdf = ({"type": "diffuse", "reflectance": 0.0} if eta == 1.0 else
                 {"type": "plastic", "diffuse_reflectance": 0.0, "int_ior": float(eta), "ext_ior": 1.0})
         self.n_vertices = len(mesh.vertices)
-        with tempfile.TemporaryDirectory() as tmp:
-            path = Path(tmp) / "object.ply"
-            _write_ply(path, np.asarray(mesh.vertices), np.asarray(mesh.faces), np.zeros((self.n_vertices, 3)))
-            scene = {"type": "scene", "integrator": {"type": "direct"},
-                     "object": {"type": "ply", "filename": str(path), "bsdf": bsdf,
-                                "emitter": {"type": "area",
-                                            "radiance": {"type": "mesh_attribute", "name": "vertex_color"}}},
-                     "camera": camera.sensor_dict(spp)}
-            if isinstance(light, EnvironmentLight):
-                scene["sky"] = light.emitter_dict()
-            self.scene = mi.load_dict(scene)
+        scene = {"type": "scene", "integrator": {"type": "direct"},
+                 "object": {"bsdf": bsdf, "emitter": {"type": "area",
+                                                      "radiance": {"type": "mesh_attribute", "name": "vertex_color"}}},
+                 "camera": camera.sensor_dict(spp)}
+        if isinstance(light, EnvironmentLight):
+            scene["sky"] = light.emitter_dict()
+        self.scene = load_with_mesh(mesh, scene, colour=np.zeros((self.n_vertices, 3)))
         self.params = mi.traverse(self.scene)
 
     def draw(self, L: np.ndarray, seed: int = 0) -> np.ndarray:
@@ -171,8 +145,6 @@ def render_reference(mesh, volume, light, camera: Camera, *, spp: int = 256, see
 
     ``eta`` ≠ 1: a smooth dielectric boundary (environment lights only, see the module docstring).
     """
-    from ..acquire.reference import slab_medium_dict
-
     mi = mitsuba()
     if eta != 1.0 and not isinstance(light, EnvironmentLight):
         raise TranslucencyError("reference: volpath cannot light a dielectric object with a point, spot or "
@@ -180,35 +152,19 @@ def render_reference(mesh, volume, light, camera: Camera, *, spp: int = 256, see
                                 "data set")
     boundary = {"type": "null"} if eta == 1.0 else {"type": "dielectric", "int_ior": float(eta), "ext_ior": 1.0}
     lo, hi = mesh.bounds
-    if isinstance(light, PointLight):
-        emitter = {"type": "point", "position": list(map(float, light.position)), "intensity": float(light.intensity)}
-    elif isinstance(light, DirectionalLight):
-        emitter = {"type": "directional", "direction": list(map(float, light.direction)),
-                   "irradiance": float(light.irradiance)}
-    elif isinstance(light, SpotLight):
-        emitter = {"type": "spot", "intensity": float(light.intensity), "cutoff_angle": float(light.cutoff_deg),
-                   "beam_width": 0.75 * float(light.cutoff_deg),
-                   "to_world": mi.ScalarTransform4f().look_at(origin=list(map(float, light.position)),
-                                                              target=list(map(float, light.target)),
-                                                              up=_up_for(light.position, light.target))}
-    elif isinstance(light, EnvironmentLight):
-        emitter = light.emitter_dict()
-    else:
+    if not hasattr(light, "emitter_dict"):
         raise TranslucencyError(f"light: no reference for {light!r}")
+    emitter = light.emitter_dict()
     seconds = 0.0
     channels = []
-    with tempfile.TemporaryDirectory() as tmp:
-        path = Path(tmp) / "object.ply"
-        _write_ply(path, np.asarray(mesh.vertices), np.asarray(mesh.faces))
-        for ch in range(3):
-            scene = mi.load_dict({
-                "type": "scene", "integrator": {"type": "volpath", "max_depth": -1, "rr_depth": 100_000},
-                "object": {"type": "ply", "filename": str(path), "bsdf": boundary,
-                           "interior": slab_medium_dict(volume, ch, (lo[0], lo[1], hi[2]))},
-                "light": emitter, "camera": camera.sensor_dict(spp)})
-            t = time.perf_counter()
-            channels.append(np.asarray(mi.render(scene, seed=3 * seed + ch), dtype=np.float64)[..., ch])
-            seconds += time.perf_counter() - t
+    for ch in range(3):
+        scene = load_with_mesh(mesh, {
+            "type": "scene", "integrator": {"type": "volpath", "max_depth": -1, "rr_depth": 100_000},
+            "object": {"bsdf": boundary, "interior": slab_medium_dict(volume, ch, (lo[0], lo[1], hi[2]))},
+            "light": emitter, "camera": camera.sensor_dict(spp)})
+        t = time.perf_counter()
+        channels.append(np.asarray(mi.render(scene, seed=3 * seed + ch), dtype=np.float64)[..., ch])
+        seconds += time.perf_counter() - t
     return np.stack(channels, axis=2), seconds
 
 
@@ -226,8 +182,6 @@ def rel_rmse(image: np.ndarray, reference: np.ndarray, mask: np.ndarray) -> floa
 
 def compare(reference: np.ndarray, ours: np.ndarray, mask: np.ndarray) -> dict:
     """Relative RMSE over the object's pixels and mean FLIP of the tone-mapped pair."""
-    import flip_evaluator
-
     exposure = 0.8 / max(float(np.quantile(reference[mask], 0.99)), 1e-30)
     ref_ldr, our_ldr = tonemap(reference, exposure), tonemap(ours, exposure)
     flip_map, mean_flip, _ = flip_evaluator.evaluate(ref_ldr.astype(np.float32), our_ldr.astype(np.float32), "LDR")
@@ -239,15 +193,11 @@ def compare(reference: np.ndarray, ours: np.ndarray, mask: np.ndarray) -> dict:
 
 def save_images(img: np.ndarray, stem: Path, exposure: float) -> tuple[Path, Path]:
     """``stem.exr`` (linear HDR, via Mitsuba's Bitmap/OpenEXR) and ``stem.png`` (tone-mapped), atomically."""
-    from ..io.atomic import atomic_path
-
     mi = mitsuba()
     stem = Path(stem)
     exr, png = stem.with_suffix(".exr"), stem.with_suffix(".png")
     with atomic_path(exr) as tmp:
         mi.Bitmap(img.astype(np.float32)).write(str(tmp))
-    import matplotlib.image as mpimg
-
     with atomic_path(png) as tmp:
         mpimg.imsave(tmp, tonemap(img, exposure))
     return exr, png

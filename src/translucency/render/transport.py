@@ -34,129 +34,17 @@ get neither factor.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
+import scipy.sparse as sp
 from numba import njit, prange
+from scipy.sparse.csgraph import dijkstra
+from scipy.spatial import cKDTree
 
 from .._validate import TranslucencyError
-
-
-@dataclass(frozen=True)
-class PointLight:
-    """Isotropic point light: intensity I (W/sr) at ``position`` (mm)."""
-
-    position: tuple
-    intensity: float = 1.0e4
-
-
-@dataclass(frozen=True)
-class DirectionalLight:
-    """Distant light: irradiance E (W/mm²) on a surface facing it, travelling along ``direction``."""
-
-    direction: tuple
-    irradiance: float = 1.0
-
-
-@dataclass(frozen=True)
-class SpotLight:
-    """A point light at ``position`` aimed at ``target`` (mm), intensity I (W/sr) inside a cone.
-
-    Mitsuba's falloff: full intensity within ``0.75 cutoff``, falling linearly in angle to 0 at ``cutoff``.
-    """
-
-    position: tuple
-    target: tuple
-    cutoff_deg: float = 20.0
-    intensity: float = 1.0e4
-
-    def falloff(self, w_from_light: np.ndarray) -> np.ndarray:
-        axis = np.asarray(self.target, float) - np.asarray(self.position, float)
-        axis /= np.linalg.norm(axis)
-        theta = np.degrees(np.arccos(np.clip(w_from_light @ axis, -1.0, 1.0)))
-        inner = 0.75 * self.cutoff_deg
-        return np.clip((self.cutoff_deg - theta) / (self.cutoff_deg - inner), 0.0, 1.0)
-
-
-@dataclass(frozen=True)
-class EnvironmentLight:
-    """Light from every direction: a constant radiance L (W/(mm² sr)), or an environment map.
-
-    With ``filename`` a latitude–longitude image (EXR, HDR, PNG; linear RGB) read by
-    Mitsuba's ``envmap`` emitter, scaled by ``radiance``; the map's up axis (+Y)
-    is turned to the scene's +Z, the same for the irradiance, our picture and
-    the reference.
-    """
-
-    radiance: float = 0.1
-    samples: int = 64  # visibility rays per vertex (cosine-weighted, or by the map's importance)
-    filename: str | None = None
-
-    def emitter_dict(self) -> dict:
-        """The Mitsuba emitter of this light."""
-        if self.filename is None:
-            return {"type": "constant", "radiance": float(self.radiance)}
-        from ..acquire._engine import mitsuba
-
-        return {"type": "envmap", "filename": str(self.filename), "scale": float(self.radiance),
-                "to_world": mitsuba().ScalarTransform4f().rotate([1.0, 0.0, 0.0], 90.0)}
-
-
-def parse_light(text: str):
-    """``point:x,y,z[,I]``, ``directional:dx,dy,dz[,E]``, ``spot:x,y,z,tx,ty,tz,cutoff_deg[,I]``,
-    ``env:L`` (constant) or ``env:MAP.exr[,scale]`` (environment map).
-
-    Examples
-    --------
-    >>> parse_light("point:0,0,100,5e3")
-    PointLight(position=(0.0, 0.0, 100.0), intensity=5000.0)
-    """
-    kind, _, rest = text.partition(":")
-    if kind == "env" and rest:
-        try:
-            float(rest.split(",")[0])
-        except ValueError:  # not a number: the name of an environment map
-            return _environment_map(rest)
-    try:
-        v = [float(x) for x in rest.split(",")]
-    except ValueError:
-        raise TranslucencyError(f"light: cannot read numbers in {text!r}") from None
-    if kind == "point" and len(v) in (3, 4):
-        return PointLight(tuple(v[:3]), *(v[3:] or []))
-    if kind == "directional" and len(v) in (3, 4):
-        d = np.asarray(v[:3])
-        if not np.linalg.norm(d) > 0:
-            raise TranslucencyError("light: a directional light needs a non-zero direction")
-        return DirectionalLight(tuple(d / np.linalg.norm(d)), *(v[3:] or []))
-    if kind == "spot" and len(v) in (7, 8) and 0 < v[6] < 90:
-        return SpotLight(tuple(v[:3]), tuple(v[3:6]), *v[6:])
-    if kind == "env" and len(v) == 1 and v[0] >= 0:
-        return EnvironmentLight(v[0])
-    raise TranslucencyError("light: expected point:x,y,z[,I], directional:dx,dy,dz[,E], "
-                            f"spot:x,y,z,tx,ty,tz,cutoff_deg[,I] or env:L, got {text!r}")
-
-
-def _environment_map(rest: str) -> EnvironmentLight:
-    """``MAP[,scale]`` of ``env:``: the file must exist and Mitsuba must read it."""
-    name, _, scale = rest.partition(",")
-    path = Path(name.strip())
-    if not path.is_file():
-        raise TranslucencyError(f"light: environment map {path} does not exist")
-    try:
-        s = float(scale) if scale.strip() else 1.0
-    except ValueError:
-        raise TranslucencyError(f"light: cannot read the scale {scale!r} of env:{rest}") from None
-    if not (s >= 0 and np.isfinite(s)):
-        raise TranslucencyError(f"light: the scale of env:{rest} must be >= 0")
-    light = EnvironmentLight(s, filename=str(path.resolve()))
-    from ..acquire._engine import mitsuba
-
-    try:
-        mitsuba().load_dict(light.emitter_dict())
-    except Exception as exc:  # noqa: BLE001 — Mitsuba's message is long; one line names the file
-        raise TranslucencyError(f"light: {path} is not a readable environment map "
-                                f"({str(exc).splitlines()[0][:120]})") from None
-    return light
+from ..geometry import tangent_frames, vertex_areas
+from ..mitsuba import drjit, mitsuba, rays
+from .lights import EnvironmentLight, PointLight, SpotLight
 
 
 def fresnel_transmittance(cos_theta, eta: float) -> np.ndarray:
@@ -164,8 +52,6 @@ def fresnel_transmittance(cos_theta, eta: float) -> np.ndarray:
     cos_theta = np.asarray(cos_theta, dtype=np.float64)
     if eta == 1.0:
         return np.ones_like(cos_theta)
-    from ..acquire._engine import mitsuba
-
     mi = mitsuba()
     c = np.clip(cos_theta, 0.0, 1.0).ravel()
     F = np.asarray(mi.fresnel(mi.Float(c.astype(np.float32)), mi.Float(float(eta)))[0], dtype=np.float64)
@@ -188,18 +74,6 @@ def exit_fresnel(mesh, viewpoint, eta: float) -> np.ndarray:
     return fresnel_transmittance(cos_o, eta) / diffuse_transmittance(eta)
 
 
-def rays(origins: np.ndarray, directions: np.ndarray, maxt: np.ndarray | None = None):
-    """A Mitsuba ``Ray3f`` wavefront from (N, 3) origins and directions (mm), optionally ending at ``maxt``."""
-    from ..acquire._engine import mitsuba
-
-    mi = mitsuba()
-    ray = mi.Ray3f(mi.Point3f(*(np.ascontiguousarray(origins[:, j]).astype(np.float32) for j in range(3))),
-                   mi.Vector3f(*(np.ascontiguousarray(directions[:, j]).astype(np.float32) for j in range(3))))
-    if maxt is not None:
-        ray.maxt = mi.Float(np.asarray(maxt, dtype=np.float32))
-    return ray
-
-
 def vertex_irradiance(mesh, scene, light, eta: float = 1.0) -> np.ndarray:
     r"""Irradiance E (W/mm²) at every vertex, with shadows (Mitsuba ``ray_test``).
 
@@ -207,8 +81,6 @@ def vertex_irradiance(mesh, scene, light, eta: float = 1.0) -> np.ndarray:
     each arriving direction is weighted by :math:`F_t(\theta_i)/F_t(0)` (module docstring).
     Raises a one-line error for a point light inside the object.
     """
-    from ..acquire._engine import mitsuba
-
     mi = mitsuba()
     v = np.asarray(mesh.vertices, dtype=np.float64)
     n = np.asarray(mesh.vertex_normals, dtype=np.float64)
@@ -246,8 +118,6 @@ def _environment_irradiance(mi, mesh, scene, light: EnvironmentLight, eta: float
     Map: directions drawn by the ``envmap`` emitter in proportion to its luminance,
     :math:`E \approx \langle (L/p)\, V \cos^+\theta \rangle` (RGB).
     """
-    import drjit as dr
-
     v = np.asarray(mesh.vertices, dtype=np.float64)
     n = np.asarray(mesh.vertex_normals, dtype=np.float64)
     K = int(light.samples)
@@ -257,14 +127,12 @@ def _environment_irradiance(mi, mesh, scene, light: EnvironmentLight, eta: float
     if light.filename is None:
         r, phi = np.sqrt(u1), 2 * np.pi * u2
         local = np.stack([r * np.cos(phi), r * np.sin(phi), np.sqrt(1 - u1)], axis=-1)  # cosine-weighted
-        from ..fit.mesh import tangent_frames
-
         frame = tangent_frames(n)  # rows t, b, n
         w = np.einsum("vkj,vji->vki", local, frame).reshape(-1, 3)
         weight = np.full((len(w), 1), np.pi * light.radiance)  # L cos / p with p = cos/π
     else:
         emitter = mi.load_dict(light.emitter_dict())
-        it = dr.zeros(mi.Interaction3f, len(o))
+        it = drjit().zeros(mi.Interaction3f, len(o))
         it.p = mi.Point3f(*(o[:, j].astype(np.float32) for j in range(3)))
         ds, spec = emitter.sample_direction(it, mi.Point2f(u1.ravel().astype(np.float32),
                                                            u2.ravel().astype(np.float32)))
@@ -292,9 +160,6 @@ def geodesic_neighbours(mesh, sources: np.ndarray, k: int, limit: float | None =
     dist, idx : ndarray, shape (V, k)
         Graph distances (mm, ascending) and indices into ``sources``.
     """
-    import scipy.sparse as sp
-    from scipy.sparse.csgraph import dijkstra
-
     V, P = len(mesh.vertices), len(sources)
     e = np.asarray(mesh.edges_unique)
     graph = sp.csr_matrix((np.asarray(mesh.edges_unique_length, dtype=np.float64), (e[:, 0], e[:, 1])), shape=(V, V))
@@ -325,8 +190,6 @@ def vertex_parameters(model, vertices, k: int = 4):
     between two parts of an object; vertices that reach no incident point that
     way fall back to straight-line distances.
     """
-    from scipy.spatial import cKDTree
-
     if model.kind != "exponential" or model.n_directions != 1:
         raise TranslucencyError("model: rendering needs an isotropic exponential model (fit with --model iso)")
     k = min(k, model.n_points)
@@ -365,13 +228,8 @@ def transport_matrices(model, mesh, *, radius: float | None = None, r_min: float
     are evaluated at ``r_min``: the profiles were fitted from there out, and their steepest
     terms must not be extrapolated to two vertices that happen to lie very close.
     """
-    import scipy.sparse as sp
-    from scipy.spatial import cKDTree
-
     v = np.asarray(mesh.vertices, dtype=np.float64)
     V = len(v)
-    from ..acquire.mesh import vertex_areas
-
     area = vertex_areas(mesh)
     c, d, s = vertex_parameters(model, mesh)
     if radius is None:

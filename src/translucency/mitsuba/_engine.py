@@ -11,16 +11,13 @@ from __future__ import annotations
 
 import os
 from functools import lru_cache
+from importlib.metadata import PackageNotFoundError, distribution, version
 
 from .._validate import TranslucencyError
 
 
 def _find_libllvm() -> str | None:
     """Path of libLLVM.so shipped by the karellen-llvm-core wheel, if installed."""
-    try:
-        from importlib.metadata import PackageNotFoundError, distribution
-    except ImportError:  # pragma: no cover
-        return None
     try:
         dist = distribution("karellen-llvm-core")
     except PackageNotFoundError:
@@ -44,7 +41,7 @@ def mitsuba(variant: str | None = None):
         lib = _find_libllvm()
         if lib:
             os.environ["DRJIT_LIBLLVM_PATH"] = lib
-    try:
+    try:  # imported here: DRJIT_LIBLLVM_PATH must be set first, and loading Dr.Jit/Mitsuba takes seconds
         import drjit as dr
         import mitsuba as mi
     except ImportError as exc:  # pragma: no cover - dependency missing
@@ -60,3 +57,22 @@ def mitsuba(variant: str | None = None):
                                 "(install karellen-llvm-core or set DRJIT_LIBLLVM_PATH)")
     mi.set_variant(variant)
     return mi
+
+
+def engine_versions() -> dict:
+    """Versions of Mitsuba and Dr.Jit (for provenance in data sets)."""
+    out = {}
+    for pkg in ("mitsuba", "drjit"):
+        try:
+            out[pkg] = version(pkg)
+        except PackageNotFoundError:
+            out[pkg] = "unknown"
+    return out
+
+
+def drjit():
+    """The ``drjit`` module, loaded (with Mitsuba) by :func:`mitsuba` on the libLLVM chosen there."""
+    mitsuba()
+    import drjit as dr  # after mitsuba(): Dr.Jit must load with the libLLVM chosen there
+
+    return dr

@@ -51,10 +51,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._validate import TranslucencyError
-from ._engine import mitsuba
-from .transport import TOP, random_walk
-from .volume import Volume
+from .._validate import TranslucencyError, as_float_array
+from ..acquire.transport import TOP, random_walk
+from ..acquire.volume import Volume
+from ..mitsuba import SPOT_BEAM_FRACTION, mitsuba, slab_medium_dict, spot_dict
 
 CAMERA_HEIGHT_MM = 10.0  # orthographic camera plane above the slab (any height > 0 would do)
 NO_ROULETTE = 1 << 30  # an rr_depth that volpath never reaches
@@ -62,18 +62,16 @@ WALK_BATCH = 8_000_000  # photons per wavefront (about 1 GB of walk state and en
 
 
 def _point(name: str, value) -> tuple[float, float]:
-    """Two finite coordinates in mm, or a one-line error."""
-    try:
-        c = np.asarray(value, dtype=np.float64).ravel()
-    except (TypeError, ValueError):
-        c = np.array([])
-    if c.size != 2 or not np.isfinite(c).all():
-        raise TranslucencyError(f"{name}: expected two finite coordinates in mm, got {value!r}")
-    return float(c[0]), float(c[1])
+    """Two finite coordinates (x, y) in mm, or a one-line error."""
+    x, y = as_float_array(name, value, shape=(2,))
+    return float(x), float(y)
 
 
 def _positive(name: str, value, unit: str = "mm") -> float:
-    """A finite number > 0, or a one-line error."""
+    """A finite number > 0, or a one-line error naming ``unit``.
+
+    (``_validate.check_positive`` works on arrays and reports an index; this is its scalar form.)
+    """
     try:
         v = float(value)
     except (TypeError, ValueError):
@@ -114,17 +112,13 @@ class SpotBeam:
 
     @property
     def beam_width_deg(self) -> float:
-        """Angle up to which the intensity is full: Mitsuba's default, 3/4 of the cutoff."""
-        return 0.75 * self.cutoff_deg
+        """Angle up to which the intensity is full (Mitsuba's convention, :data:`SPOT_BEAM_FRACTION`)."""
+        return SPOT_BEAM_FRACTION * self.cutoff_deg
 
     def emitter_dict(self, intensity: float = 1.0) -> dict:
         """Mitsuba ``spot`` emitter description."""
-        mi = mitsuba()
         cx, cy = self.centre_xy
-        return {"type": "spot", "intensity": float(intensity), "cutoff_angle": self.cutoff_deg,
-                "beam_width": self.beam_width_deg,
-                "to_world": mi.ScalarTransform4f().look_at(origin=[cx, cy, self.distance_mm], target=[cx, cy, 0.0],
-                                                           up=[0.0, 1.0, 0.0])}
+        return spot_dict((cx, cy, self.distance_mm), (cx, cy, 0.0), self.cutoff_deg, intensity, up=(0.0, 1.0, 0.0))
 
 
 @dataclass(frozen=True)
@@ -222,7 +216,7 @@ def spot_profile(beam: SpotBeam, n_radii: int = 8193) -> tuple[np.ndarray, np.nd
     to just past the cutoff radius.  Returns (rho (mm), E (mm⁻², float64)).
     """
     mi = mitsuba()
-    import drjit as dr
+    import drjit as dr  # after mitsuba(): Dr.Jit must load with the libLLVM chosen there
 
     rho = np.linspace(0.0, beam.radius_mm * 1.02, int(n_radii))
     emitter = mi.load_dict(beam.emitter_dict())
@@ -293,33 +287,6 @@ class RadianceImage:
     channels: tuple[int, ...]
     seconds: float
     seconds_per_channel: tuple[float, ...] = ()
-
-
-def _grid_dict(data_zyx: np.ndarray, to_world) -> dict:
-    """A one-channel nearest-neighbour ``gridvolume`` over the slab from our (Z, Y, X) layout.
-
-    Mitsuba indexes the grid [z, y, x] from local z = 0, which ``to_world``
-    puts at the bottom of the slab (z = −T); our index 0 is the top layer, so z is flipped.
-    """
-    mi = mitsuba()
-    grid = np.ascontiguousarray(data_zyx[::-1, :, :, None], dtype=np.float32)
-    return {"type": "gridvolume", "data": mi.TensorXf(grid), "filter_type": "nearest", "to_world": to_world}
-
-
-def slab_medium_dict(volume: Volume, channel: int, top_corner=(0.0, 0.0, 0.0)) -> dict:
-    """Mitsuba ``heterogeneous`` medium equal to one channel of ``volume`` (grey, unscaled, mm⁻¹).
-
-    The volume's box spans x from ``top_corner[0]``, y from ``top_corner[1]`` and
-    z downwards from ``top_corner[2]`` (slabs: the origin; objects: (lo.x, lo.y, hi.z)).
-    """
-    mi = mitsuba()
-    W, H, T = volume.size_mm
-    x0, y0, z_top = (float(v) for v in top_corner)
-    box = mi.ScalarTransform4f().translate([x0, y0, z_top - T]) @ mi.ScalarTransform4f().scale([W, H, T])
-    sigma_t = volume.sigma_t[..., channel].astype(np.float64)
-    albedo = np.divide(volume.sigma_s[..., channel], sigma_t, out=np.zeros_like(sigma_t), where=sigma_t > 0)
-    return {"type": "heterogeneous", "sigma_t": _grid_dict(sigma_t, box), "albedo": _grid_dict(albedo, box),
-            "scale": 1.0, "has_spectral_extinction": False, "phase": {"type": "hg", "g": volume.g}}
 
 
 def volpath_scene(volume: Volume, channel: int, beam: SpotBeam, window: PixelWindow, *, spp: int = 1,
@@ -447,8 +414,11 @@ def walk_spot(volume: Volume, beam: SpotBeam, channel: int, n_photons: int, *, s
     return TopExits(np.concatenate(xs), np.concatenate(ys), np.concatenate(cs), n, spot_power(*profile), seconds)
 
 
-def _pixel_index(coord: np.ndarray, centres: np.ndarray, pitch_mm: float) -> np.ndarray:
-    """Pixel index along one axis from pixel centres ``pitch_mm`` apart (rising or falling); -1 outside."""
+def pixel_index(coord: np.ndarray, centres: np.ndarray, pitch_mm: float) -> np.ndarray:
+    """Pixel index along one axis from pixel centres ``pitch_mm`` apart (rising or falling); -1 outside.
+
+    The binning rule of :func:`radiance_from_exits`.
+    """
     step = pitch_mm if len(centres) < 2 or centres[1] > centres[0] else -pitch_mm
     idx = np.floor((coord - (centres[0] - 0.5 * step)) / step).astype(np.int64)
     return np.where((idx >= 0) & (idx < len(centres)), idx, -1)
@@ -464,8 +434,8 @@ def radiance_from_exits(exits: TopExits, x: np.ndarray, y: np.ndarray, pitch_mm:
         raise TranslucencyError(f"cone: must lie in (0, 90] degrees, got {cone_deg!r}")
     n = x.shape[0]
     keep = exits.cos_exit > np.cos(np.radians(cone_deg))
-    col = _pixel_index(exits.x[keep], x[0, :], pitch_mm)
-    row = _pixel_index(exits.y[keep], y[:, 0], pitch_mm)
+    col = pixel_index(exits.x[keep], x[0, :], pitch_mm)
+    row = pixel_index(exits.y[keep], y[:, 0], pitch_mm)
     ok = (col >= 0) & (row >= 0)
     counts = np.bincount(row[ok] * n + col[ok], minlength=n * n).reshape(n, n).astype(np.float64)
     N = exits.n_photons
@@ -564,31 +534,3 @@ def compare(ours: RadianceImage, ref: RadianceImage, centre_xy, ring_edges_mm) -
     _, m_r, v_r = ring_profile(ref, centre_xy, ring_edges_mm)
     return Agreement(z[np.isfinite(z)], r, m_o, v_o, m_r, v_r)
 
-
-def window_sum_ratio(exits: TopExits, x: np.ndarray, y: np.ndarray, pitch_mm: float, cone_deg: float,
-                     ref_cone_deg: float) -> tuple[float, float]:
-    """Ratio of the window's summed radiance estimated with ``cone_deg`` to that with ``ref_cone_deg``.
-
-    Measures the cone bias: photons in the narrower cone are a subset of those
-    in the wider one, so given the wider count n_w the narrower count is
-    binomial with p = n_n/n_w, whence the standard error.  Returns (ratio, standard error).
-    """
-    n_pix = x.shape[0]
-    inside = (_pixel_index(exits.x, x[0, :], pitch_mm) >= 0) & (_pixel_index(exits.y, y[:, 0], pitch_mm) >= 0)
-    narrow, wide = sorted((cone_deg, ref_cone_deg))
-    n_n = np.count_nonzero(inside & (exits.cos_exit > np.cos(np.radians(narrow))))
-    n_w = np.count_nonzero(inside & (exits.cos_exit > np.cos(np.radians(wide))))
-    if n_w == 0 or n_n == 0:
-        raise TranslucencyError(f"cone: no photons left the {n_pix}x{n_pix} window within {narrow} deg")
-    s = (np.sin(np.radians(wide)) / np.sin(np.radians(narrow))) ** 2  # solid-angle weights of the two cones
-    p = n_n / n_w
-    ratio, se = p * s, s * np.sqrt(p * (1.0 - p) / n_w)  # L_narrow / L_wide
-    if cone_deg == narrow:
-        return float(ratio), float(se)
-    return float(1.0 / ratio), float(se / ratio**2)
-
-
-def relative_variance(image: RadianceImage, mask: np.ndarray) -> np.ndarray:
-    """Var/L² of the pixels in ``mask`` (n, n) with L > 0, per channel: (pixels, C)."""
-    L, V = image.radiance[mask], image.variance[mask]
-    return np.where(L > 0, V / np.where(L > 0, L, 1.0) ** 2, np.nan)

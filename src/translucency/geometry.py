@@ -1,0 +1,109 @@
+r"""Geometry shared by the stages: sample grids and windows, tangent frames, vertex areas, incident points.
+
+* planar samples: the pixel grid :class:`SampleGrid` covering all windows (α's
+  support) and the per-pixel distance r, angle θ and grid pixel of each window
+  (:func:`window_geometry`), used by the fitter and the evaluation;
+* meshes: orthonormal tangent frames around normals (:func:`tangent_frames`),
+  the area :math:`A_v` each vertex stands for (:func:`vertex_areas`) and the
+  farthest-point choice of incident vertices (:func:`farthest_points`), used by
+  acquisition, fitting and rendering.
+
+Units: mm, mm², radians.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ._validate import TranslucencyError
+
+
+# -- planar samples -------------------------------------------------------------------------
+@dataclass
+class SampleGrid:
+    """The pixel grid covering all windows: α's support.
+
+    Pixel ``[row, col]`` is centred at ``origin + pitch * (col + 1/2, row + 1/2)``.
+    """
+
+    origin: np.ndarray  # (2,) mm
+    pitch: float
+    shape: tuple[int, int]
+
+    @classmethod
+    def covering(cls, window_origin: np.ndarray, pitch: float, window: tuple[int, int]) -> "SampleGrid":
+        lo = window_origin.min(axis=0)
+        span = np.round((window_origin.max(axis=0) - lo) / pitch).astype(int)
+        return cls(lo.astype(np.float64), float(pitch), (int(span[1]) + window[0], int(span[0]) + window[1]))
+
+    def offsets(self, window_origin: np.ndarray) -> np.ndarray:
+        """(k, 2) integer (row, col) of each window's first pixel on this grid."""
+        o = np.round((window_origin - self.origin) / self.pitch).astype(np.int64)
+        return o[:, ::-1]
+
+
+@dataclass
+class WindowGeometry:
+    """Per-pixel geometry of a chunk of k windows of H × W pixels (J = H·W)."""
+
+    r: np.ndarray  # (k or 1, J) mm
+    theta: np.ndarray  # (k or 1, J) rad
+    pixel: np.ndarray  # (k, J) flat index on the sample grid
+
+
+def window_geometry(x_i: np.ndarray, window_origin: np.ndarray, grid: SampleGrid,
+                    window: tuple[int, int]) -> WindowGeometry:
+    """Distances, angles and sample-grid pixels of every window pixel.
+
+    When every window lies alike around its point (offsets x_i − origin equal
+    to 10⁻⁵ pixel: points snapped to pixel centres), r and θ are one row (1, J).
+    """
+    h, w = window
+    col, row = np.meshgrid(np.arange(w), np.arange(h))
+    col, row = col.ravel(), row.ravel()
+    rel = window_origin - x_i
+    if len(rel) > 1 and np.ptp(rel, axis=0).max() <= grid.pitch * 1e-5:
+        rel = rel[:1]
+    dx = rel[:, :1] + grid.pitch * (col + 0.5)
+    dy = rel[:, 1:] + grid.pitch * (row + 0.5)
+    off = grid.offsets(window_origin)
+    pixel = (off[:, :1] + row) * grid.shape[1] + (off[:, 1:] + col)
+    return WindowGeometry(np.hypot(dx, dy), np.arctan2(dy, dx), pixel)
+
+
+# -- meshes ---------------------------------------------------------------------------------
+def tangent_frames(normals: np.ndarray) -> np.ndarray:
+    """Orthonormal frames (t, b, n) as rows, shape (N, 3, 3), around unit normals (N, 3)."""
+    n = normals / np.linalg.norm(normals, axis=1, keepdims=True)
+    helper = np.where(np.abs(n[:, :1]) < 0.9, [[1.0, 0.0, 0.0]], [[0.0, 1.0, 0.0]])
+    t = np.cross(helper, n)
+    t /= np.linalg.norm(t, axis=1, keepdims=True)
+    return np.stack([t, np.cross(n, t), n], axis=1)
+
+
+def farthest_points(vertices: np.ndarray, k: int, start: int = 0) -> np.ndarray:
+    """Indices of k vertices spread over the surface by farthest-point sampling (Euclidean).
+
+    Examples
+    --------
+    >>> v = np.array([[0.0, 0, 0], [1, 0, 0], [10, 0, 0], [5, 0, 0]])
+    >>> farthest_points(v, 3).tolist()
+    [0, 2, 3]
+    """
+    k = int(k)
+    if not 1 <= k <= len(vertices):
+        raise TranslucencyError(f"points: need 1 to {len(vertices)} incident points, got {k}")
+    chosen = [int(start)]
+    d = np.linalg.norm(vertices - vertices[start], axis=1)
+    for _ in range(k - 1):
+        nxt = int(np.argmax(d))
+        chosen.append(nxt)
+        d = np.minimum(d, np.linalg.norm(vertices - vertices[nxt], axis=1))
+    return np.array(chosen)
+
+
+def vertex_areas(mesh) -> np.ndarray:
+    """A third of the area of the triangles around each vertex, mm²."""
+    return np.bincount(mesh.faces.ravel(), np.repeat(mesh.area_faces / 3.0, 3), minlength=len(mesh.vertices))

@@ -1,0 +1,114 @@
+"""Mitsuba scene pieces built from our arrays: ray wavefronts, meshes, media from volumes.
+
+One home for handing our data to Mitsuba 3, used by the acquisition (photon
+walks in a mesh), the renderer (shadow rays, pictures, the ``volpath``
+reference) and the validation harness (the slab under ``volpath``).  Units: mm,
+coefficients in mm⁻¹.
+"""
+
+from __future__ import annotations
+
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from ._engine import mitsuba
+
+#: Mitsuba's ``spot`` emitter: full intensity up to this fraction of the cutoff angle (its default
+#: ``beam_width``), then falling linearly in angle to 0 at the cutoff
+SPOT_BEAM_FRACTION = 0.75
+
+
+def rays(origins: np.ndarray, directions: np.ndarray, maxt: np.ndarray | None = None):
+    """A Mitsuba ``Ray3f`` wavefront from (N, 3) origins and directions (mm), optionally ending at ``maxt``."""
+    mi = mitsuba()
+    ray = mi.Ray3f(mi.Point3f(*(np.ascontiguousarray(origins[:, j]).astype(np.float32) for j in range(3))),
+                   mi.Vector3f(*(np.ascontiguousarray(directions[:, j]).astype(np.float32) for j in range(3))))
+    if maxt is not None:
+        ray.maxt = mi.Float(np.asarray(maxt, dtype=np.float32))
+    return ray
+
+
+def write_ply(path: Path, vertices: np.ndarray, faces: np.ndarray, colour: np.ndarray | None = None) -> None:
+    """A binary PLY with float positions and (optionally) float r, g, b per vertex (Mitsuba's vertex_color)."""
+    props = "property float x\nproperty float y\nproperty float z\n"
+    cols = [np.asarray(vertices)]
+    if colour is not None:
+        props += "property float r\nproperty float g\nproperty float b\n"
+        cols.append(np.asarray(colour))
+    head = (f"ply\nformat binary_little_endian 1.0\nelement vertex {len(vertices)}\n{props}"
+            f"element face {len(faces)}\nproperty list uchar int vertex_indices\nend_header\n")
+    face = np.zeros(len(faces), dtype=[("n", "u1"), ("i", "<i4", 3)])
+    face["n"], face["i"] = 3, faces
+    with open(path, "wb") as f:
+        f.write(head.encode())
+        f.write(np.concatenate(cols, axis=1).astype("<f4").tobytes())
+        f.write(face.tobytes())
+
+
+def load_with_mesh(mesh, scene: dict, *, key: str = "object", colour: np.ndarray | None = None):
+    """``mi.load_dict(scene)`` with ``scene[key]`` completed as a ``ply`` shape holding ``mesh``.
+
+    The mesh travels through a temporary binary PLY (positions, optionally
+    ``vertex_color``); the entries already in ``scene[key]`` (BSDF, emitter,
+    interior medium, ``face_normals``) are kept.
+    """
+    mi = mitsuba()
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "object.ply"
+        write_ply(path, np.asarray(mesh.vertices), np.asarray(mesh.faces), colour)
+        scene = {**scene, key: {"type": "ply", "filename": str(path), **scene.get(key, {})}}
+        return mi.load_dict(scene)
+
+
+def mesh_scene(mesh):
+    """A Mitsuba scene holding only the mesh, with face normals (for ray tests and boundary hits)."""
+    return load_with_mesh(mesh, {"type": "scene", "object": {"face_normals": True}})
+
+
+def _grid_dict(data_zyx: np.ndarray, to_world) -> dict:
+    """A one-channel nearest-neighbour ``gridvolume`` over the box from our (Z, Y, X) layout.
+
+    Mitsuba indexes the grid [z, y, x] from local z = 0, which ``to_world``
+    puts at the bottom of the box; our index 0 is the top layer, so z is flipped.
+    """
+    mi = mitsuba()
+    grid = np.ascontiguousarray(data_zyx[::-1, :, :, None], dtype=np.float32)
+    return {"type": "gridvolume", "data": mi.TensorXf(grid), "filter_type": "nearest", "to_world": to_world}
+
+
+def slab_medium_dict(volume, channel: int, top_corner=(0.0, 0.0, 0.0)) -> dict:
+    """Mitsuba ``heterogeneous`` medium equal to one channel of ``volume`` (grey, unscaled, mm⁻¹).
+
+    σ_t = σ_s + σ_a and the albedo σ_s/σ_t are nearest-neighbour grids; the
+    phase function is Henyey–Greenstein with the volume's g.  The volume's box
+    spans x from ``top_corner[0]``, y from ``top_corner[1]`` and z downwards
+    from ``top_corner[2]`` (slabs: the origin; objects: (lo.x, lo.y, hi.z)).
+    """
+    mi = mitsuba()
+    W, H, T = volume.size_mm
+    x0, y0, z_top = (float(v) for v in top_corner)
+    box = mi.ScalarTransform4f().translate([x0, y0, z_top - T]) @ mi.ScalarTransform4f().scale([W, H, T])
+    sigma_t = volume.sigma_t[..., channel].astype(np.float64)
+    albedo = np.divide(volume.sigma_s[..., channel], sigma_t, out=np.zeros_like(sigma_t), where=sigma_t > 0)
+    return {"type": "heterogeneous", "sigma_t": _grid_dict(sigma_t, box), "albedo": _grid_dict(albedo, box),
+            "scale": 1.0, "has_spectral_extinction": False, "phase": {"type": "hg", "g": volume.g}}
+
+
+def look_at(origin, target, up=None):
+    """Mitsuba's ``to_world`` looking from ``origin`` at ``target`` (mm); ``up`` chosen off the axis if not given."""
+    if up is None:
+        axis = np.asarray(target, float) - np.asarray(origin, float)
+        up = [0.0, 0.0, 1.0] if abs(axis[2]) < 0.99 * np.linalg.norm(axis) else [0.0, 1.0, 0.0]
+    return mitsuba().ScalarTransform4f().look_at(origin=[float(v) for v in origin],
+                                                 target=[float(v) for v in target], up=[float(v) for v in up])
+
+
+def spot_dict(position, target, cutoff_deg: float, intensity: float = 1.0, up=None) -> dict:
+    """Mitsuba ``spot`` emitter at ``position`` aimed at ``target`` (mm); intensity in W/sr.
+
+    The beam width is :data:`SPOT_BEAM_FRACTION` of the cutoff, stated here for every spot of the package.
+    """
+    return {"type": "spot", "intensity": float(intensity), "cutoff_angle": float(cutoff_deg),
+            "beam_width": SPOT_BEAM_FRACTION * float(cutoff_deg), "to_world": look_at(position, target, up)}

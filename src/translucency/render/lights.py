@@ -1,0 +1,152 @@
+"""Lights of a rendering: point, spot, directional and environment (constant sky or map).
+
+Each light is a small frozen dataclass in mm and W: it knows its own Mitsuba
+emitter (:meth:`emitter_dict`), used alike for the irradiance at the vertices,
+for our picture and for the ``volpath`` reference, so the conventions live in
+one place.  The spot's falloff is Mitsuba's (:data:`translucency.mitsuba.SPOT_BEAM_FRACTION`).
+
+Units: point and spot intensity I in W/sr, directional irradiance E in W/mm²,
+environment radiance L in W/(mm² sr).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .._validate import TranslucencyError
+from ..mitsuba import SPOT_BEAM_FRACTION, mitsuba, spot_dict
+
+
+@dataclass(frozen=True)
+class PointLight:
+    """Isotropic point light: intensity I (W/sr) at ``position`` (mm)."""
+
+    position: tuple
+    intensity: float = 1.0e4
+
+    def emitter_dict(self) -> dict:
+        """The Mitsuba emitter of this light."""
+        return {"type": "point", "position": [float(v) for v in self.position], "intensity": float(self.intensity)}
+
+
+@dataclass(frozen=True)
+class DirectionalLight:
+    """Distant light: irradiance E (W/mm²) on a surface facing it, travelling along ``direction``."""
+
+    direction: tuple
+    irradiance: float = 1.0
+
+    def emitter_dict(self) -> dict:
+        """The Mitsuba emitter of this light."""
+        return {"type": "directional", "direction": [float(v) for v in self.direction],
+                "irradiance": float(self.irradiance)}
+
+
+@dataclass(frozen=True)
+class SpotLight:
+    """A point light at ``position`` aimed at ``target`` (mm), intensity I (W/sr) inside a cone.
+
+    Mitsuba's falloff: full intensity within ``SPOT_BEAM_FRACTION × cutoff``, falling linearly in
+    angle to 0 at ``cutoff``.
+    """
+
+    position: tuple
+    target: tuple
+    cutoff_deg: float = 20.0
+    intensity: float = 1.0e4
+
+    @property
+    def beam_width_deg(self) -> float:
+        """Angle up to which the intensity is full."""
+        return SPOT_BEAM_FRACTION * self.cutoff_deg
+
+    def falloff(self, w_from_light: np.ndarray) -> np.ndarray:
+        """The fraction of I sent along unit directions (N, 3) leaving the light."""
+        axis = np.asarray(self.target, float) - np.asarray(self.position, float)
+        axis /= np.linalg.norm(axis)
+        theta = np.degrees(np.arccos(np.clip(w_from_light @ axis, -1.0, 1.0)))
+        return np.clip((self.cutoff_deg - theta) / (self.cutoff_deg - self.beam_width_deg), 0.0, 1.0)
+
+    def emitter_dict(self) -> dict:
+        """The Mitsuba emitter of this light."""
+        return spot_dict(self.position, self.target, self.cutoff_deg, self.intensity)
+
+
+@dataclass(frozen=True)
+class EnvironmentLight:
+    """Light from every direction: a constant radiance L (W/(mm² sr)), or an environment map.
+
+    With ``filename`` a latitude–longitude image (EXR, HDR, PNG; linear RGB) read by
+    Mitsuba's ``envmap`` emitter, scaled by ``radiance``; the map's up axis (+Y)
+    is turned to the scene's +Z, the same for the irradiance, our picture and
+    the reference.
+    """
+
+    radiance: float = 0.1
+    samples: int = 64  # visibility rays per vertex (cosine-weighted, or by the map's importance)
+    filename: str | None = None
+
+    def emitter_dict(self) -> dict:
+        """The Mitsuba emitter of this light."""
+        if self.filename is None:
+            return {"type": "constant", "radiance": float(self.radiance)}
+        return {"type": "envmap", "filename": str(self.filename), "scale": float(self.radiance),
+                "to_world": mitsuba().ScalarTransform4f().rotate([1.0, 0.0, 0.0], 90.0)}
+
+
+def parse_light(text: str):
+    """``point:x,y,z[,I]``, ``directional:dx,dy,dz[,E]``, ``spot:x,y,z,tx,ty,tz,cutoff_deg[,I]``,
+    ``env:L`` (constant) or ``env:MAP.exr[,scale]`` (environment map).
+
+    Examples
+    --------
+    >>> parse_light("point:0,0,100,5e3")
+    PointLight(position=(0.0, 0.0, 100.0), intensity=5000.0)
+    """
+    kind, _, rest = text.partition(":")
+    if kind == "env" and rest:
+        try:
+            float(rest.split(",")[0])
+        except ValueError:  # not a number: the name of an environment map
+            return _environment_map(rest)
+    try:
+        v = [float(x) for x in rest.split(",")]
+    except ValueError:
+        raise TranslucencyError(f"light: cannot read numbers in {text!r}") from None
+    if kind == "point" and len(v) in (3, 4):
+        return PointLight(tuple(v[:3]), *(v[3:] or []))
+    if kind == "directional" and len(v) in (3, 4):
+        d = np.asarray(v[:3])
+        if not np.linalg.norm(d) > 0:
+            raise TranslucencyError("light: a directional light needs a non-zero direction")
+        return DirectionalLight(tuple(d / np.linalg.norm(d)), *(v[3:] or []))
+    if kind == "spot" and len(v) in (7, 8) and 0 < v[6] < 90:
+        return SpotLight(tuple(v[:3]), tuple(v[3:6]), *v[6:])
+    if kind == "env" and len(v) == 1 and v[0] >= 0:
+        return EnvironmentLight(v[0])
+    raise TranslucencyError("light: expected point:x,y,z[,I], directional:dx,dy,dz[,E], "
+                            f"spot:x,y,z,tx,ty,tz,cutoff_deg[,I] or env:L, got {text!r}")
+
+
+def _environment_map(rest: str) -> EnvironmentLight:
+    """``MAP[,scale]`` of ``env:``: the file must exist and Mitsuba must read it."""
+    name, _, scale = rest.partition(",")
+    path = Path(name.strip())
+    if not path.is_file():
+        raise TranslucencyError(f"light: environment map {path} does not exist")
+    try:
+        s = float(scale) if scale.strip() else 1.0
+    except ValueError:
+        raise TranslucencyError(f"light: cannot read the scale {scale!r} of env:{rest}") from None
+    if not (s >= 0 and np.isfinite(s)):
+        raise TranslucencyError(f"light: the scale of env:{rest} must be >= 0")
+    light = EnvironmentLight(s, filename=str(path.resolve()))
+    try:
+        mitsuba().load_dict(light.emitter_dict())
+    except Exception as exc:  # noqa: BLE001 — Mitsuba's message is long; one line names the file
+        raise TranslucencyError(f"light: {path} is not a readable environment map "
+                                f"({str(exc).splitlines()[0][:120]})") from None
+    return light
