@@ -29,9 +29,39 @@ import numpy as np
 
 
 def make_data(path: Path) -> None:
-    cmd = [sys.executable, "-m", "translucency", "acquire", "planar", "--material", "marble", "--size", "36", "36",
-           "8", "--voxel", "0.25", "--grid", "64", "--span", "15.75", "--pitch", "0.25", "--window", "16",
-           "--photons", "4000", "--seed", "7", "--dtype", "float16", "--chunk", "256", "--out", str(path)]
+    cmd = [
+        sys.executable,
+        "-m",
+        "translucency",
+        "acquire",
+        "planar",
+        "--material",
+        "marble",
+        "--size",
+        "36",
+        "36",
+        "8",
+        "--voxel",
+        "0.25",
+        "--grid",
+        "64",
+        "--span",
+        "15.75",
+        "--pitch",
+        "0.25",
+        "--window",
+        "16",
+        "--photons",
+        "4000",
+        "--seed",
+        "7",
+        "--dtype",
+        "float16",
+        "--chunk",
+        "256",
+        "--out",
+        str(path),
+    ]
     subprocess.run(cmd, check=True)
 
 
@@ -43,8 +73,15 @@ def _child(path, kind, queue):
     fit = fit_planar(path, kind, n_directions=8)
     sec = time.perf_counter() - t
     peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
-    queue.put({"kind": kind, "seconds": sec, "rounds": len(fit.history), "peak_mb": (peak - base) / 1024,
-               "flagged": int(fit.flagged.sum())})
+    queue.put(
+        {
+            "kind": kind,
+            "seconds": sec,
+            "rounds": len(fit.history),
+            "peak_mb": (peak - base) / 1024,
+            "flagged": int(fit.flagged.sum()),
+        }
+    )
 
 
 def whole_fit(path: Path, kind: str) -> dict:
@@ -73,8 +110,20 @@ def solver_vs_scipy(path: Path, n_sample: int) -> dict:
     grid = SampleGrid.covering(origin, ds.pitch, ds.window)
     photons = ds.header["acquisition"]["photons"]
     source = _PlanarSource(ds, grid, origin, 1 / (photons * ds.pitch**2))
-    ctx = FitContext(source=source, kind="iso", n=3, m=1, C=3, exclusion=ds.pitch, rel_sigma=0.05, eta=1.3,
-                     radius_step=ds.pitch / 4, sweeps=1, balance=True, x_i=x_i)
+    ctx = FitContext(
+        source=source,
+        kind="iso",
+        n=3,
+        m=1,
+        C=3,
+        exclusion=ds.pitch,
+        rel_sigma=0.05,
+        eta=1.3,
+        radius_step=ds.pitch / 4,
+        sweeps=1,
+        balance=True,
+        x_i=x_i,
+    )
     state = FitState(ds.n_points, 3, 1, 3, grid.shape)
     # the sampled points, through the fitter's own loading and weighting (first round, α = 1)
     chunks = [_load_chunk(ctx, state, p, p + 1) for p in pts]
@@ -96,8 +145,12 @@ def solver_vs_scipy(path: Path, n_sample: int) -> dict:
     Y = np.concatenate([o[2] for o in ours])
     c, a, _ = fit_exponentials_batched(r_g, W, Y, 3)
     t_ours = time.perf_counter() - t
-    cost_ours = np.concatenate([pixel_cost(ch, w, c[3 * i:3 * i + 3], a[3 * i:3 * i + 3])
-                                for i, (ch, w) in enumerate(zip(chunks, w2))])
+    cost_ours = np.concatenate(
+        [
+            pixel_cost(ch, w, c[3 * i : 3 * i + 3], a[3 * i : 3 * i + 3])
+            for i, (ch, w) in enumerate(zip(chunks, w2))
+        ]
+    )
 
     # (b) scipy point by point, channel by channel, on the pixels
     t = time.perf_counter()
@@ -107,23 +160,34 @@ def solver_vs_scipy(path: Path, n_sample: int) -> dict:
         for lam in range(3):
             y, sw = ch.y[0, :, lam].astype(np.float64), np.sqrt(w[0, :, lam].astype(np.float64))
 
-            def res(p):
+            def res(p, sw=sw, r=r, y=y):
                 return sw * (np.exp(-np.exp(p[3:])[None] * r[:, None]) @ p[:3] - y)
 
             best = None
             for start in range(3):
-                a0 = np.exp(np.log(0.1) + (np.log(32) - np.log(0.1)) * (np.arange(3) + 0.5 + 0.5 * (start - 1) / 3) / 3)
+                a0 = np.exp(
+                    np.log(0.1)
+                    + (np.log(32) - np.log(0.1)) * (np.arange(3) + 0.5 + 0.5 * (start - 1) / 3) / 3
+                )
                 x0 = np.concatenate([np.full(3, max(y.max(), 1e-6) / 3), np.log(a0)])
-                sol = least_squares(res, x0, bounds=([0, 0, 0, -5, -5, -5], [np.inf] * 3 + [6, 6, 6]), method="trf")
+                sol = least_squares(
+                    res, x0, bounds=([0, 0, 0, -5, -5, -5], [np.inf] * 3 + [6, 6, 6]), method="trf"
+                )
                 if best is None or sol.cost < best.cost:
                     best = sol
             cost_scipy.append(2 * best.cost)
     t_scipy = time.perf_counter() - t
     cost_scipy = np.array(cost_scipy)
-    return {"points": int(n_sample), "problems": int(3 * n_sample), "ours_s": t_ours, "scipy_s": t_scipy,
-            "speedup": t_scipy / t_ours, "cost_ratio_median": float(np.median(cost_ours / cost_scipy)),
-            "cost_ratio_max": float(np.max(cost_ours / cost_scipy)),
-            "ours_not_worse_fraction": float(np.mean(cost_ours <= cost_scipy * (1 + 1e-3)))}
+    return {
+        "points": int(n_sample),
+        "problems": int(3 * n_sample),
+        "ours_s": t_ours,
+        "scipy_s": t_scipy,
+        "speedup": t_scipy / t_ours,
+        "cost_ratio_median": float(np.median(cost_ours / cost_scipy)),
+        "cost_ratio_max": float(np.max(cost_ours / cost_scipy)),
+        "ours_not_worse_fraction": float(np.mean(cost_ours <= cost_scipy * (1 + 1e-3))),
+    }
 
 
 def main() -> None:
@@ -144,16 +208,25 @@ def main() -> None:
     for kind in filter(None, args.kinds.split(",")):
         r = whole_fit(args.data, kind)
         result[kind] = r
-        print(f"fit {kind:5s}: {r['seconds']:6.1f} s  ({r['rounds']} rounds)  peak memory {r['peak_mb']:.0f} MiB "
-              f"= {r['peak_mb'] / size_mb:.2f} x the data set")
+        print(
+            f"fit {kind:5s}: {r['seconds']:6.1f} s  ({r['rounds']} rounds)  "
+            f"peak memory {r['peak_mb']:.0f} MiB "
+            f"= {r['peak_mb'] / size_mb:.2f} x the data set"
+        )
     if args.sample <= 0:
         print(json.dumps(result, indent=1))
         return
     s = solver_vs_scipy(args.data, args.sample)
     result["solver_vs_scipy"] = s
-    print(f"solver vs scipy.optimize.least_squares per point ({s['problems']} profile problems, same objective):")
-    print(f"  ours {s['ours_s']:.2f} s, scipy {s['scipy_s']:.1f} s  -> {s['speedup']:.0f}x faster; "
-          f"cost ours/scipy median {s['cost_ratio_median']:.4f} (max {s['cost_ratio_max']:.4f}), ours not worse in {100 * s['ours_not_worse_fraction']:.0f} %")
+    print(
+        "solver vs scipy.optimize.least_squares per point "
+        f"({s['problems']} profile problems, same objective):"
+    )
+    print(
+        f"  ours {s['ours_s']:.2f} s, scipy {s['scipy_s']:.1f} s  -> {s['speedup']:.0f}x faster; "
+        f"cost ours/scipy median {s['cost_ratio_median']:.4f} (max {s['cost_ratio_max']:.4f}), "
+        f"ours not worse in {100 * s['ours_not_worse_fraction']:.0f} %"
+    )
     print(json.dumps(result, indent=1))
 
 

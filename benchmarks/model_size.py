@@ -29,7 +29,9 @@ from translucency.fit import fit_exponential_profile
 from translucency.model import dipole_R_d, material
 
 
-def realistic_model(n_side_x=316, n_side_y=317, pitch=0.25, levels=24, noise=0.01, seed=0) -> ExponentialModel:
+def realistic_model(
+    n_side_x=316, n_side_y=317, pitch=0.25, levels=24, noise=0.01, seed=0
+) -> ExponentialModel:
     rng = np.random.default_rng(seed)
     yy, xx = np.mgrid[0:n_side_y, 0:n_side_x] * pitch
     t = 0.5 + 0.25 * np.sin(xx / 7.0 + 2 * np.sin(yy / 11.0)) + 0.25 * np.cos(yy / 5.0) * np.sin(xx / 13.0)
@@ -67,13 +69,22 @@ def main() -> int:
     tmp = Path(tempfile.mkdtemp())
     base = tmp / "baseline.npz"
     t0 = time.perf_counter()
-    np.savez(base, x_i=model.x_i.astype(np.float32), c=model.c.astype(np.float32), d=model.d.astype(np.float32),
-             s_g=model.s_g.astype(np.float32), s_b=model.s_b.astype(np.float32),
-             alpha=model.alpha.values.astype(np.float32))
+    np.savez(
+        base,
+        x_i=model.x_i.astype(np.float32),
+        c=model.c.astype(np.float32),
+        d=model.d.astype(np.float32),
+        s_g=model.s_g.astype(np.float32),
+        s_b=model.s_b.astype(np.float32),
+        alpha=model.alpha.values.astype(np.float32),
+    )
     t_base = time.perf_counter() - t0
     base_size = os.path.getsize(base)
     print(f"{'file':<34}{'bytes':>12}{'MB':>8}{'vs baseline':>13}{'write s':>9}{'read s':>8}")
-    print(f"{'baseline: numpy.savez float32':<34}{base_size:>12,}{base_size / 1e6:>8.3f}{1.0:>13.3f}{t_base:>9.3f}{'':>8}")
+    print(
+        f"{'baseline: numpy.savez float32':<34}{base_size:>12,}{base_size / 1e6:>8.3f}"
+        f"{1.0:>13.3f}{t_base:>9.3f}{'':>8}"
+    )
     ok = True
     for dtype in ("float32", "float16"):
         path = tmp / f"m_{dtype}.model.zip"
@@ -85,8 +96,11 @@ def main() -> int:
         t_r = time.perf_counter() - t0
         size = os.path.getsize(path)
         err = np.max(np.abs(back.c - model.c) / model.c)
-        print(f"{'translucency ' + dtype:<34}{size:>12,}{size / 1e6:>8.3f}{size / base_size:>13.3f}{t_w:>9.3f}{t_r:>8.3f}"
-              f"   max rel. error of c: {err:.1e}")
+        print(
+            f"{'translucency ' + dtype:<34}{size:>12,}{size / 1e6:>8.3f}"
+            f"{size / base_size:>13.3f}{t_w:>9.3f}{t_r:>8.3f}"
+            f"   max rel. error of c: {err:.1e}"
+        )
         if dtype == "float16":
             ok = size <= 1_000_000
             print(f"target: float16 model <= 1 MB -> {'met' if ok else 'MISSED'} ({size / 1e6:.3f} MB)")

@@ -85,11 +85,21 @@ def main() -> int:
         print(f"{name:<32}{ours:>16.1f}{base:>17.2f}{ours / base:>8.1f}")
     if "--default" in sys.argv:
         vol = make_sample("marble", (32, 32, 10), 0.25, seed=1)
-        setup = PlanarSetup(grid=(32, 32), span=(16, 16), pitch=0.25, window=12, photons=20_000, seed=1,
-                            chunk_points=64, dtype="float16")
+        setup = PlanarSetup(
+            grid=(32, 32),
+            span=(16, 16),
+            pitch=0.25,
+            window=12,
+            photons=20_000,
+            seed=1,
+            chunk_points=64,
+            dtype="float16",
+        )
         t0 = time.perf_counter()
         acquire_planar(vol, setup, tempfile.mkdtemp() + "/d.zarr")
-        print(f"default data set (1024 points x 20,000 photons x 3 channels): {time.perf_counter() - t0:.1f} s")
+        print(
+            f"default data set (1024 points x 20,000 photons x 3 channels): {time.perf_counter() - t0:.1f} s"
+        )
     return 0
 
 

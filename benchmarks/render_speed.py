@@ -32,7 +32,9 @@ from translucency.render.image import VertexPicture, coverage, rel_rmse, render_
 def fitted(pig, tmp, points, photons, index_matched=True):
     vol = object_volume("marble", pig, 1.0, seed=1)
     data = Path(tmp) / f"pig_{len(pig.vertices)}.zarr"
-    acquire_mesh(pig, vol, data, n_points=points, photons=photons, chunk_points=16, index_matched=index_matched)
+    acquire_mesh(
+        pig, vol, data, n_points=points, photons=photons, chunk_points=16, index_matched=index_matched
+    )
     return fit_mesh(data, "iso").model, vol
 
 
@@ -46,13 +48,16 @@ def main() -> None:
         prep = time.perf_counter() - t
         scene = mesh_scene(big)
         times = []
-        for k, pos in enumerate([(60, -80, 120), (-90, 40, 80), (10, 120, 60), (0, 0, 150)]):
+        for pos in [(60, -80, 120), (-90, 40, 80), (10, 120, 60), (0, 0, 150)]:
             t = time.perf_counter()
             relight_vertices(mats, vertex_irradiance(big, scene, PointLight(pos, 2e4)))
             times.append(time.perf_counter() - t)
-        print(f"relight: {len(big.vertices):,} vertices, {mats.nnz:,} nonzeros per channel; prepare {prep:.1f} s "
-              f"(once); per light {1000 * np.median(times[1:]):.0f} ms median (first {1000 * times[0]:.0f} ms; "
-              f"target <= 100 ms: {'met' if np.median(times[1:]) <= 0.1 else 'not met'})")
+        print(
+            f"relight: {len(big.vertices):,} vertices, {mats.nnz:,} nonzeros per channel; "
+            f"prepare {prep:.1f} s "
+            f"(once); per light {1000 * np.median(times[1:]):.0f} ms median (first {1000 * times[0]:.0f} ms; "
+            f"target <= 100 ms: {'met' if np.median(times[1:]) <= 0.1 else 'not met'})"
+        )
 
         # -- 2. ours against volpath at equal error ----------------------------------------------
         pig = make_pig()
@@ -74,16 +79,21 @@ def main() -> None:
         print(f"ours: prepared in {t_prep:.1f} s (transport, scene: once per object and camera)")
         truth, t_truth = render_reference(pig, vol, light, cam, spp=256, seed=9)
         e_ours = rel_rmse(ours, truth, mask)
-        print(f"ours: {t_ours:.2f} s per light (relight + draw), rel. RMSE {e_ours:.3f} against volpath at 256 spp "
-              f"({t_truth:.0f} s)")
+        print(
+            f"ours: {t_ours:.2f} s per light (relight + draw), "
+            f"rel. RMSE {e_ours:.3f} against volpath at 256 spp "
+            f"({t_truth:.0f} s)"
+        )
         render_reference(pig, vol, light, cam, spp=1, seed=2)  # warm-up: volpath's kernels compiled
         for spp in (1, 2, 4, 8, 16):
             img, t_v = render_reference(pig, vol, light, cam, spp=spp, seed=1)
             e = rel_rmse(img, truth, mask)
             print(f"  volpath {spp:3d} spp: {t_v:6.1f} s, rel. RMSE {e:.3f}")
             if e <= e_ours:
-                print(f"volpath reaches our error at {spp} spp: {t_v:.1f} s vs ours {t_ours:.2f} s -> "
-                      f"{t_v / t_ours:.0f}x (target >= 100x)")
+                print(
+                    f"volpath reaches our error at {spp} spp: {t_v:.1f} s vs ours {t_ours:.2f} s -> "
+                    f"{t_v / t_ours:.0f}x (target >= 100x)"
+                )
                 break
         else:
             print("volpath at 16 spp is still above our error")

@@ -55,7 +55,9 @@ from translucency.validate import (
 def parse(argv=None):
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--sample", default="marble", help="make_sample generator (default marble)")
-    p.add_argument("--size", type=float, nargs=3, default=(8.0, 8.0, 4.0), metavar=("W", "H", "T"), help="slab, mm")
+    p.add_argument(
+        "--size", type=float, nargs=3, default=(8.0, 8.0, 4.0), metavar=("W", "H", "T"), help="slab, mm"
+    )
     p.add_argument("--voxel", type=float, default=0.25, help="voxel size, mm")
     p.add_argument("--g", type=float, default=0.0, help="Henyey-Greenstein g")
     p.add_argument("--seed", type=int, default=1, help="sample seed")
@@ -66,15 +68,20 @@ def parse(argv=None):
     p.add_argument("--spp", type=int, default=1024, help="volpath samples per pixel, per channel and run")
     p.add_argument("--cone", type=float, default=10.0, help="tally cone half-angle, degrees")
     p.add_argument("--channels", type=int, nargs="+", default=(0, 1, 2))
-    p.add_argument("--rr-depth", nargs="+", default=["none"],
-                   help="volpath Russian-roulette depths to time ('none' = off; Mitsuba's default is 5)")
+    p.add_argument(
+        "--rr-depth",
+        nargs="+",
+        default=["none"],
+        help="volpath Russian-roulette depths to time ('none' = off; Mitsuba's default is 5)",
+    )
     p.add_argument("--radius", type=float, default=1.5, help="pixels within this distance of the beam, mm")
     p.add_argument("--figure", default=None, help="write the profile figure here (PNG)")
     return p.parse_args(argv)
 
 
-def window_sum_ratio(exits: TopExits, x: np.ndarray, y: np.ndarray, pitch_mm: float, cone_deg: float,
-                     ref_cone_deg: float) -> tuple[float, float]:
+def window_sum_ratio(
+    exits: TopExits, x: np.ndarray, y: np.ndarray, pitch_mm: float, cone_deg: float, ref_cone_deg: float
+) -> tuple[float, float]:
     """Ratio of the window's summed radiance estimated with ``cone_deg`` to that with ``ref_cone_deg``.
 
     Measures the cone bias: photons in the narrower cone are a subset of those
@@ -104,8 +111,14 @@ def relative_variance(image: RadianceImage, mask: np.ndarray) -> np.ndarray:
 
 def mean_of_runs(a: RadianceImage, b: RadianceImage) -> RadianceImage:
     """Average of two independent runs, with the variance of the average."""
-    return RadianceImage(0.5 * (a.radiance + b.radiance), 0.25 * (a.variance + b.variance), a.x, a.y, a.channels,
-                         a.seconds + b.seconds)
+    return RadianceImage(
+        0.5 * (a.radiance + b.radiance),
+        0.25 * (a.variance + b.variance),
+        a.x,
+        a.y,
+        a.channels,
+        a.seconds + b.seconds,
+    )
 
 
 def noise(a: RadianceImage, b: RadianceImage, mask: np.ndarray) -> tuple[float, float]:
@@ -137,10 +150,25 @@ def figure(path, agreement, z, channels, title):
     r = agreement.ring_r
     for k, c in enumerate(channels):
         col = colours.get(c, "k")
-        ax.errorbar(r - 0.02, agreement.ring_ref[:, k], 2 * np.sqrt(agreement.ring_ref_var[:, k]), fmt="o", mfc="none",
-                    color=col, capsize=2, label=f"volpath, channel {c}")
-        ax.errorbar(r + 0.02, agreement.ring_ours[:, k], 2 * np.sqrt(agreement.ring_ours_var[:, k]), fmt="x",
-                    color=col, capsize=2, label=f"photon tally, channel {c}")
+        ax.errorbar(
+            r - 0.02,
+            agreement.ring_ref[:, k],
+            2 * np.sqrt(agreement.ring_ref_var[:, k]),
+            fmt="o",
+            mfc="none",
+            color=col,
+            capsize=2,
+            label=f"volpath, channel {c}",
+        )
+        ax.errorbar(
+            r + 0.02,
+            agreement.ring_ours[:, k],
+            2 * np.sqrt(agreement.ring_ours_var[:, k]),
+            fmt="x",
+            color=col,
+            capsize=2,
+            label=f"photon tally, channel {c}",
+        )
         rel = agreement.ring_ours[:, k] / agreement.ring_ref[:, k] - 1
         err = np.sqrt(agreement.ring_ours_var[:, k] + agreement.ring_ref_var[:, k]) / agreement.ring_ref[:, k]
         res.errorbar(r + 0.03 * (k - 1), 100 * rel, 200 * err, fmt="o", color=col, capsize=2, ms=4)
@@ -172,31 +200,53 @@ def main(argv=None) -> int:
     channels = tuple(args.channels)
     rr_depths = [NO_ROULETTE if d == "none" else int(d) for d in args.rr_depth]
     rr_name = {NO_ROULETTE: "off"}
-    print(f"backend {mi.variant()}; {args.sample} {W:g} x {H:g} x {T:g} mm, voxel {args.voxel} mm, g = {vol.g}; "
-          f"spot radius {beam.radius_mm} mm ({beam.cutoff_deg:.3f} deg); window {args.pixels} x {args.pixels} "
-          f"px of {args.pitch} mm; channels {channels}")
+    print(
+        f"backend {mi.variant()}; {args.sample} {W:g} x {H:g} x {T:g} mm, "
+        f"voxel {args.voxel} mm, g = {vol.g}; "
+        f"spot radius {beam.radius_mm} mm ({beam.cutoff_deg:.3f} deg); window {args.pixels} x {args.pixels} "
+        f"px of {args.pitch} mm; channels {channels}"
+    )
 
     # -- first calls: tracing + compilation (or Dr.Jit's disk cache) ----------------------------------
-    _, t_first_tally, _ = timed(tally_radiance, vol, beam, window, 20_000, seed=99, channels=channels,
-                                cone_deg=args.cone)
+    _, t_first_tally, _ = timed(
+        tally_radiance, vol, beam, window, 20_000, seed=99, channels=channels, cone_deg=args.cone
+    )
     t_first_vp = {}
     for d in rr_depths:
-        _, t_first_vp[d], _ = timed(render_volpath_spot, vol, beam, window, 4, seed=99, channels=channels, rr_depth=d)
+        _, t_first_vp[d], _ = timed(
+            render_volpath_spot, vol, beam, window, 4, seed=99, channels=channels, rr_depth=d
+        )
 
     # -- two independent warm runs of each ---------------------------------------------------------------
     # runs interleaved (tally, volpath..., tally, volpath...) so that changing load hits both
     runs = {"tally": [], **{d: [] for d in rr_depths}}
     for seed in (1, 2):
-        runs["tally"].append(timed(tally_radiance, vol, beam, window, args.photons, seed=seed, channels=channels,
-                                   cone_deg=args.cone))
+        runs["tally"].append(
+            timed(
+                tally_radiance,
+                vol,
+                beam,
+                window,
+                args.photons,
+                seed=seed,
+                channels=channels,
+                cone_deg=args.cone,
+            )
+        )
         for d in rr_depths:
-            runs[d].append(timed(render_volpath_spot, vol, beam, window, args.spp, seed=seed, channels=channels,
-                                 rr_depth=d))
+            runs[d].append(
+                timed(
+                    render_volpath_spot, vol, beam, window, args.spp, seed=seed, channels=channels, rr_depth=d
+                )
+            )
     (tally_a, exits_a), _, _ = runs["tally"][0]
     (tally_b, _), _, _ = runs["tally"][1]
     # a run's cost: the faster of the two, in wall and in CPU seconds
     t_tally = tuple(min(r[i] for r in runs["tally"]) for i in (1, 2))
-    vp = {d: (runs[d][0][0], runs[d][1][0], tuple(min(r[i] for r in runs[d]) for i in (1, 2))) for d in rr_depths}
+    vp = {
+        d: (runs[d][0][0], runs[d][1][0], tuple(min(r[i] for r in runs[d]) for i in (1, 2)))
+        for d in rr_depths
+    }
 
     # -- agreement (against the first volpath setting) ---------------------------------------------------
     d0 = rr_depths[0]
@@ -205,18 +255,32 @@ def main(argv=None) -> int:
     edges = np.arange(0.0, 0.5 * window.side_mm + 1e-9, args.pitch)
     agree = compare(tally, ref, beam.centre_xy, edges)
     s = agree.summary()
-    print(f"\nagreement ({2 * args.photons:,} photons vs {2 * args.spp} spp per channel, roulette {rr_name.get(d0, d0)}):")
-    print(f"  pixel z-scores: n = {s['pixels']}, mean {s['z_mean']:+.3f}, std {s['z_std']:.3f}, "
-          f"|z| > 3: {100 * s['frac_abs_z_gt_3']:.2f} % (normal: 0.27 %)")
-    print(f"  rings of {args.pitch} mm: chi2/dof = {s['ring_chi2_per_dof']:.2f} over {agree.ring_z.size} rings x channels")
+    print(
+        f"\nagreement ({2 * args.photons:,} photons vs {2 * args.spp} spp per channel, "
+        f"roulette {rr_name.get(d0, d0)}):"
+    )
+    print(
+        f"  pixel z-scores: n = {s['pixels']}, mean {s['z_mean']:+.3f}, std {s['z_std']:.3f}, "
+        f"|z| > 3: {100 * s['frac_abs_z_gt_3']:.2f} % (normal: 0.27 %)"
+    )
+    print(
+        f"  rings of {args.pitch} mm: chi2/dof = {s['ring_chi2_per_dof']:.2f} "
+        f"over {agree.ring_z.size} rings x channels"
+    )
     S_t, S_v = tally.radiance.sum(axis=(0, 1)), ref.radiance.sum(axis=(0, 1))
     err = np.sqrt(tally.variance.sum(axis=(0, 1)) + ref.variance.sum(axis=(0, 1))) / S_v
-    print("  whole window, tally/volpath - 1: "
-          + "   ".join(f"ch{c} {100 * (S_t[k] / S_v[k] - 1):+.2f} ± {100 * err[k]:.2f} %" for k, c in enumerate(channels)))
+    print(
+        "  whole window, tally/volpath - 1: "
+        + "   ".join(
+            f"ch{c} {100 * (S_t[k] / S_v[k] - 1):+.2f} ± {100 * err[k]:.2f} %" for k, c in enumerate(channels)
+        )
+    )
     print("  ring   r (mm)  " + "  ".join(f"tally/volpath-1 ch{c} (z)" for c in channels))
     for i, rm in enumerate(agree.ring_r):
-        cells = [f"{100 * (agree.ring_ours[i, k] / agree.ring_ref[i, k] - 1):+6.1f} % ({agree.ring_z[i, k]:+.1f})"
-                 for k in range(len(channels))]
+        cells = [
+            f"{100 * (agree.ring_ours[i, k] / agree.ring_ref[i, k] - 1):+6.1f} % ({agree.ring_z[i, k]:+.1f})"
+            for k in range(len(channels))
+        ]
         print(f"  {i:>4}  {rm:6.3f}   " + "   ".join(f"{c:>22}" for c in cells))
     print(f"  cone bias (window sums, tally run A; ratio to the {args.cone:g} deg cone, ± standard error):")
     for cone in (5.0, 20.0, 90.0):
@@ -228,15 +292,25 @@ def main(argv=None) -> int:
 
     # -- cost per unit noise -----------------------------------------------------------------------------
     mask = np.hypot(tally.x - beam.centre_xy[0], tally.y - beam.centre_xy[1]) <= args.radius
-    print(f"\ncost per unit noise over the {int(mask.sum())} pixels within {args.radius} mm of the beam, "
-          f"{len(channels)} channel(s); warm runs; relative variance = mean of Var/L^2 over pixels and channels;")
-    print("cost = CPU seconds (all threads) x relative variance (from the two runs); ratio = cost / tally's cost")
-    print(f"  first calls (trace + JIT or disk cache), wall: tally {t_first_tally:.1f} s; "
-          + "; ".join(f"volpath roulette {rr_name.get(d, d)} {t:.1f} s" for d, t in t_first_vp.items()))
+    print(
+        f"\ncost per unit noise over the {int(mask.sum())} pixels within {args.radius} mm of the beam, "
+        f"{len(channels)} channel(s); warm runs; "
+        "relative variance = mean of Var/L^2 over pixels and channels;"
+    )
+    print(
+        "cost = CPU seconds (all threads) x relative variance (from the two runs); "
+        "ratio = cost / tally's cost"
+    )
+    print(
+        f"  first calls (trace + JIT or disk cache), wall: tally {t_first_tally:.1f} s; "
+        + "; ".join(f"volpath roulette {rr_name.get(d, d)} {t:.1f} s" for d, t in t_first_vp.items())
+    )
     own_t, emp_t = noise(tally_a, tally_b, mask)
     cost_t = t_tally[1] * emp_t
-    print(f"  {'method':<36}{'wall (s)':>9}{'CPU (s)':>9}{'rel.sd own':>12}{'rel.sd runs':>13}{'cost':>10}"
-          f"{'ratio':>7}{'ratio(wall)':>12}")
+    print(
+        f"  {'method':<36}{'wall (s)':>9}{'CPU (s)':>9}{'rel.sd own':>12}{'rel.sd runs':>13}{'cost':>10}"
+        f"{'ratio':>7}{'ratio(wall)':>12}"
+    )
 
     def row(name, t, own, emp, ref_wall):
         rv = emp if emp is not None else own
@@ -253,16 +327,33 @@ def main(argv=None) -> int:
     # the tally's cone only changes its noise (its cost is the walk): same photons, other cones
     for cone in (5.0, 20.0):
         img = [radiance_from_exits(e, tally_a.x, tally_a.y, args.pitch, cone) for e in exits_a]
-        im = RadianceImage(np.stack([i[0] for i in img], -1), np.stack([i[1] for i in img], -1), tally_a.x,
-                           tally_a.y, channels, 0.0)
-        row(f"tally, same photons, {cone:g} deg cone", t_tally, float(np.nanmean(relative_variance(im, mask))),
-            None, wall_t)
-    print("  ratio > 1: the tally reaches the same noise for less (rows without 'rel.sd runs' use their own estimate)")
+        im = RadianceImage(
+            np.stack([i[0] for i in img], -1),
+            np.stack([i[1] for i in img], -1),
+            tally_a.x,
+            tally_a.y,
+            channels,
+            0.0,
+        )
+        row(
+            f"tally, same photons, {cone:g} deg cone",
+            t_tally,
+            float(np.nanmean(relative_variance(im, mask))),
+            None,
+            wall_t,
+        )
+    print(
+        "  ratio > 1: the tally reaches the same noise for less "
+        "(rows without 'rel.sd runs' use their own estimate)"
+    )
 
     if args.figure:
-        title = (f"{args.sample}, {W:g}×{H:g}×{T:g} mm, g = {vol.g:g}; spot radius {beam.radius_mm} mm; "
-                 f"{2 * args.photons:,} photons ({args.cone:g}° cone) vs {2 * args.spp} spp per channel\n"
-                 f"pixel z: mean {s['z_mean']:+.2f}, std {s['z_std']:.2f}; ring χ²/dof {s['ring_chi2_per_dof']:.2f}")
+        title = (
+            f"{args.sample}, {W:g}×{H:g}×{T:g} mm, g = {vol.g:g}; spot radius {beam.radius_mm} mm; "
+            f"{2 * args.photons:,} photons ({args.cone:g}° cone) vs {2 * args.spp} spp per channel\n"
+            f"pixel z: mean {s['z_mean']:+.2f}, std {s['z_std']:.2f}; "
+            f"ring χ²/dof {s['ring_chi2_per_dof']:.2f}"
+        )
         figure(args.figure, agree, agree.z, channels, title)
     return 0
 

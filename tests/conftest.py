@@ -15,14 +15,15 @@ def exponential_terms(rng, P, m=1, C=3, terms=SEPARATED_TERMS):
     return c, -a
 
 
-def random_exponential_model(rng, n_points=4, m=1, n=3, colour="shared", geometry="planar", *, terms=None,
-                             mesh=None, points=None):
+def random_exponential_model(
+    rng, n_points=4, m=1, n=3, colour="shared", geometry="planar", *, terms=None, mesh=None, points=None
+):
     """The test suite's one model factory: a valid random :class:`ExponentialModel`.
 
-    Without ``terms``: physical (each profile's total reflectance 2π Σ c/d² below 1: c_k ≤ d_k²/(2π n), times a
-    colour scale ≤ 1.2; its 99.9 % energy radius ≤ 9.3/|d| ≤ 6.2 mm, within the sample or object) and exactly
-    representable in float16, so file round trips are exact.  With ``terms`` (see :data:`SEPARATED_TERMS`):
-    the given rate and amplitude ranges per term (:func:`exponential_terms`).
+    Without ``terms``: physical (each profile's total reflectance 2π Σ c/d² below 1: c_k ≤ d_k²/(2π n),
+    times a colour scale ≤ 1.2; its 99.9 % energy radius ≤ 9.3/|d| ≤ 6.2 mm, within the sample or object)
+    and exactly representable in float16, so file round trips are exact.  With ``terms`` (see
+    :data:`SEPARATED_TERMS`): the given rate and amplitude ranges per term (:func:`exponential_terms`).
 
     ``geometry="mesh"``: on ``mesh`` (a trimesh) at vertex indices ``points`` with tangent frames and α per
     vertex, or, without a mesh, on 20 random vertices with random frames.
@@ -63,5 +64,6 @@ def rng():
 
 @pytest.fixture(autouse=True)
 def _in_a_scratch_folder(tmp_path, monkeypatch):
-    """Every test runs in its own empty folder: default outputs (``render/``, ``report/``) never land in the checkout."""
+    """Every test runs in its own empty folder: default outputs (``render/``, ``report/``) never land in
+    the checkout."""
     monkeypatch.chdir(tmp_path)

@@ -13,8 +13,9 @@ from translucency.model import dipole_R_d, material
 iad = pytest.importorskip("iadpython")
 
 
-@pytest.mark.parametrize("a,b,g,n", [(0.9, 2.0, 0.5, 1.3), (0.99, 8.0, 0.0, 1.4), (0.5, 1.0, 0.8, 1.0),
-                                     (0.95, 4.0, -0.3, 1.5)])
+@pytest.mark.parametrize(
+    "a,b,g,n", [(0.9, 2.0, 0.5, 1.3), (0.99, 8.0, 0.0, 1.4), (0.5, 1.0, 0.8, 1.0), (0.95, 4.0, -0.3, 1.5)]
+)
 def test_total_reflectance_matches_adding_doubling(a, b, g, n):
     """Slab of albedo a, optical thickness b, anisotropy g, index n: MC total reflectance
     (specular + diffuse) against iadpython's UR1 within 3 standard errors."""
@@ -57,9 +58,18 @@ def test_radial_profile_against_dipole_beyond_two_mfp():
     # ring average of the dipole (its curvature matters near x_i)
     fine = np.linspace(0, 4, 4001)
     dip_fine = dipole_R_d(fine, m.sigma_a[ch], m.sigma_s_prime[ch], 1.3)
-    dip = np.array([np.trapezoid(dip_fine[(fine >= a) & (fine <= b)] * fine[(fine >= a) & (fine <= b)],
-                                 fine[(fine >= a) & (fine <= b)]) * 2 * np.pi / ar
-                    for a, b, ar in zip(edges[:-1], edges[1:], ring_area)])
+    dip = np.array(
+        [
+            np.trapezoid(
+                dip_fine[(fine >= a) & (fine <= b)] * fine[(fine >= a) & (fine <= b)],
+                fine[(fine >= a) & (fine <= b)],
+            )
+            * 2
+            * np.pi
+            / ar
+            for a, b, ar in zip(edges[:-1], edges[1:], ring_area)
+        ]
+    )
     far = centre > 2 * mfp
     rel = mc[far] / dip[far] - 1
     assert np.max(np.abs(rel)) < 0.10, rel
@@ -175,9 +185,13 @@ def test_bad_volumes_are_named(tmp_path):
 
 def test_bad_setups_are_refused_before_work():
     vol = make_sample("homogeneous:marble", (10, 10, 2), 0.5)
-    for kwargs, needle in [({"window": 12.0}, "window: 12.0 mm is larger than the sample"),
-                           ({"pitch": -1.0}, "pitch"), ({"photons": 0}, "photons"),
-                           ({"span": (20.0, 4.0)}, "span"), ({"theta_inc_deg": 95.0}, "angle")]:
+    for kwargs, needle in [
+        ({"window": 12.0}, "window: 12.0 mm is larger than the sample"),
+        ({"pitch": -1.0}, "pitch"),
+        ({"photons": 0}, "photons"),
+        ({"span": (20.0, 4.0)}, "span"),
+        ({"theta_inc_deg": 95.0}, "angle"),
+    ]:
         with pytest.raises(TranslucencyError, match=needle):
             PlanarSetup(**{**SMALL.__dict__, **kwargs}).check(vol)
     from translucency.acquire.transport import check_memory

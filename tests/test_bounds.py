@@ -21,8 +21,10 @@ def test_bounds_against_a_plain_integral(rng):
     check = check_physics(model)
     for i in range(6):
         c, d = model.c[i, 0, 0], model.d[i, 0, 0]
+
         def profile(r, c=c, d=d):
             return 2 * np.pi * r * np.sum(c * np.exp(d * r))
+
         rho = quad(profile, 0, np.inf)[0]
         scale = np.array([1.0, model.s_g[i], model.s_b[i]])
         np.testing.assert_allclose(check.total[i], rho * scale, rtol=1e-6)

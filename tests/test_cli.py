@@ -13,8 +13,18 @@ from translucency.cli.app import app
 runner = CliRunner()
 
 
-@pytest.mark.parametrize("args", [["--help"], ["demo", "--help"], ["info", "--help"], ["materials", "--help"],
-                                  ["fit", "--help"], ["evaluate", "--help"], ["acquire", "planar", "--help"]])
+@pytest.mark.parametrize(
+    "args",
+    [
+        ["--help"],
+        ["demo", "--help"],
+        ["info", "--help"],
+        ["materials", "--help"],
+        ["fit", "--help"],
+        ["evaluate", "--help"],
+        ["acquire", "planar", "--help"],
+    ],
+)
 def test_help(args):
     res = runner.invoke(app, args)
     assert res.exit_code == 0
@@ -28,7 +38,9 @@ def test_help_lists_commands():
 
 
 def test_info_on_valid_model(tmp_path, rng):
-    path = save_model(random_exponential_model(rng, n_points=5, m=8), tmp_path / "m.model.zip", dtype="float16")
+    path = save_model(
+        random_exponential_model(rng, n_points=5, m=8), tmp_path / "m.model.zip", dtype="float16"
+    )
     res = runner.invoke(app, ["info", str(path)])
     assert res.exit_code == 0, res.output
     assert "exponential" in res.output and "float16" in res.output and "yes" in res.output
@@ -41,7 +53,9 @@ def test_info_on_garbage_is_one_line(tmp_path):
     res = runner.invoke(app, ["info", str(bad)])
     assert res.exit_code == 2
     lines = [ln for ln in res.output.strip().splitlines() if ln.strip()]
-    assert len(lines) == 1 and lines[0].startswith("error:") and "junk.model.zip" in res.output.replace("\n", "")
+    assert (
+        len(lines) == 1 and lines[0].startswith("error:") and "junk.model.zip" in res.output.replace("\n", "")
+    )
     assert "Traceback" not in res.output
 
 
@@ -88,15 +102,37 @@ def test_demo_makes_figure_2(demo_out):
     fig = json.loads((demo_out / "report" / "figure2.json").read_text())
     # the fitted pig beside its volpath reference: close, not equal (measured 0.54 / 0.45)
     assert fig["rel_rmse"] < 0.8 and fig["flip_mean_object"] < 0.6
-    assert all(fig["regions"][k]["pixels"] > 0 for k in ("thin", "thick", "shadow edge", "unlit", "silhouette"))
+    assert all(
+        fig["regions"][k]["pixels"] > 0 for k in ("thin", "thick", "shadow edge", "unlit", "silhouette")
+    )
     assert load_model(demo_out / "fits" / "pig_iso.model.zip").geometry == "mesh"
     assert (demo_out / "report" / "figure2.png").stat().st_size > 10_000
 
 
 def test_acquire_planar_cli(tmp_path):
     out = tmp_path / "m.zarr"
-    args = ["acquire", "planar", "--material", "marble", "--out", str(out), "--grid", "2", "--photons", "500",
-            "--size", "10", "10", "3", "--voxel", "0.5", "--window", "4", "--pitch", "0.5"]
+    args = [
+        "acquire",
+        "planar",
+        "--material",
+        "marble",
+        "--out",
+        str(out),
+        "--grid",
+        "2",
+        "--photons",
+        "500",
+        "--size",
+        "10",
+        "10",
+        "3",
+        "--voxel",
+        "0.5",
+        "--window",
+        "4",
+        "--pitch",
+        "0.5",
+    ]
     res = runner.invoke(app, args)
     assert res.exit_code == 0, res.output
     info = runner.invoke(app, ["info", str(out)])

@@ -14,7 +14,9 @@ from translucency.model import (
     fresnel_diffuse_reflectance,
 )
 
-CASES = [(name, ch) for name in ("marble", "skin1", "ketchup", "apple", "potato", "chicken1") for ch in range(3)]
+CASES = [
+    (name, ch) for name in ("marble", "skin1", "ketchup", "apple", "potato", "chicken1") for ch in range(3)
+]
 
 
 def jensen_total(sigma_a, sigma_s_prime, eta):
@@ -34,7 +36,9 @@ def test_plane_integral_equals_closed_form(name, ch):
     # split the range: the profile is sharply peaked within a few z_r
     z = 1 / (sa + sp)
     edges = [0, z, 10 * z, 100 * z, 1000 * z, np.inf]
-    numeric = sum(quad(f, a, b, limit=400, epsabs=1e-13, epsrel=1e-11)[0] for a, b in zip(edges[:-1], edges[1:]))
+    numeric = sum(
+        quad(f, a, b, limit=400, epsabs=1e-13, epsrel=1e-11)[0] for a, b in zip(edges[:-1], edges[1:])
+    )
     closed = jensen_total(sa, sp, 1.3)
     assert numeric == pytest.approx(closed, rel=1e-3)
     assert dipole_total_reflectance(sa, sp, 1.3) == pytest.approx(closed, rel=1e-12)
@@ -50,7 +54,9 @@ def test_energy_within_matches_quadrature(R):
 def test_energy_within_tends_to_total():
     m = MATERIALS["skin2"]
     total = dipole_total_reflectance(m.sigma_a, m.sigma_s_prime, 1.3)
-    np.testing.assert_allclose(dipole_energy_within(np.inf, m.sigma_a, m.sigma_s_prime, 1.3), total, rtol=1e-12)
+    np.testing.assert_allclose(
+        dipole_energy_within(np.inf, m.sigma_a, m.sigma_s_prime, 1.3), total, rtol=1e-12
+    )
 
 
 def test_diffuse_fresnel_fit_matches_hemispherical_average():
@@ -70,8 +76,10 @@ def test_diffuse_fresnel_fit_matches_hemispherical_average():
         return 0.5 * (rs**2 + rp**2)
 
     mu_c = np.sqrt(1 - 1 / eta**2)  # cosine of the critical angle
-    exact = 2 * (quad(lambda mu: fresnel_inside(mu) * mu, 0, mu_c)[0]
-                 + quad(lambda mu: fresnel_inside(mu) * mu, mu_c, 1)[0])
+    exact = 2 * (
+        quad(lambda mu: fresnel_inside(mu) * mu, 0, mu_c)[0]
+        + quad(lambda mu: fresnel_inside(mu) * mu, mu_c, 1)[0]
+    )
     assert fresnel_diffuse_reflectance(eta) == pytest.approx(exact, abs=0.01)
 
 
@@ -82,8 +90,12 @@ def test_reproduces_jensens_published_reflectance():
     differ by up to 0.05 in the original table itself, so the bound on the
     worst case is looser.
     """
-    diffs = np.array([np.abs(dipole_total_reflectance(m.sigma_a, m.sigma_s_prime, m.eta) - m.R_d_published)
-                      for m in MATERIALS.values()])
+    diffs = np.array(
+        [
+            np.abs(dipole_total_reflectance(m.sigma_a, m.sigma_s_prime, m.eta) - m.R_d_published)
+            for m in MATERIALS.values()
+        ]
+    )
     assert np.median(diffs) < 0.006
     assert (diffs.max(axis=1) < 0.012).sum() >= 10
     assert diffs.max() < 0.06
@@ -91,10 +103,16 @@ def test_reproduces_jensens_published_reflectance():
 
 def test_model_total_and_profile_are_per_point():
     mats = [MATERIALS["marble"], MATERIALS["skin1"]]
-    model = DipoleModel([[0.0, 0.0], [5.0, 0.0]], [m.sigma_a for m in mats], [m.sigma_s_prime for m in mats], 1.3,
-                        PlanarAlpha.uniform((10, 10), (-1, -1), 1.0))
-    np.testing.assert_allclose(model.total_reflectance()[1],
-                               dipole_total_reflectance(mats[1].sigma_a, mats[1].sigma_s_prime, 1.3))
+    model = DipoleModel(
+        [[0.0, 0.0], [5.0, 0.0]],
+        [m.sigma_a for m in mats],
+        [m.sigma_s_prime for m in mats],
+        1.3,
+        PlanarAlpha.uniform((10, 10), (-1, -1), 1.0),
+    )
+    np.testing.assert_allclose(
+        model.total_reflectance()[1], dipole_total_reflectance(mats[1].sigma_a, mats[1].sigma_s_prime, 1.3)
+    )
     out = model.R_d([1], [[6.0, 0.0]])
     np.testing.assert_allclose(out[0], dipole_R_d(1.0, mats[1].sigma_a, mats[1].sigma_s_prime, 1.3))
     # 99.9 % of the energy inside the energy radius, per channel maximum

@@ -35,8 +35,13 @@ def test_continuous_across_zero(m):
 @pytest.mark.parametrize("m", [1, 2, 8])
 def test_each_weight_integrates_to_two_pi_over_m(m):
     for l in range(m):
-        val = quad(lambda t: direction_weights(t, m)[l], 0, 2 * np.pi, points=np.linspace(0, 2 * np.pi, m + 1),
-                   limit=200)[0]
+        val = quad(
+            lambda t, l=l: direction_weights(t, m)[l],
+            0,
+            2 * np.pi,
+            points=np.linspace(0, 2 * np.pi, m + 1),
+            limit=200,
+        )[0]
         assert val == pytest.approx(2 * np.pi / m, rel=1e-9)
 
 

@@ -22,8 +22,15 @@ runner = CliRunner()
 def _scan(tmp_path_factory, sample, side, span, seed):
     """A small virtual-DISCO scan: side × side points over span mm, 100 k photons, 6 mm windows."""
     vol = make_sample(sample, (12.0, 12.0, 6.0), 0.25, seed=seed)
-    setup = PlanarSetup(grid=(side, side), span=(span, span), pitch=0.25, window=6.0, photons=100_000, seed=seed,
-                        chunk_points=side * side)
+    setup = PlanarSetup(
+        grid=(side, side),
+        span=(span, span),
+        pitch=0.25,
+        window=6.0,
+        photons=100_000,
+        seed=seed,
+        chunk_points=side * side,
+    )
     return acquire_planar(vol, setup, tmp_path_factory.mktemp(sample) / f"{sample}.zarr")
 
 
@@ -46,8 +53,13 @@ def test_errors_match_a_plain_loop(tmp_path):
     R = rng.uniform(0.001, 0.1, (2, n, n, 3))
     mask = rng.uniform(size=(2, n, n)) > 0.2
     ds = write_dataset(tmp_path / "d.zarr", x_i, origin, R, pitch, mask=mask, variance=R * 1e-3)
-    model = DipoleModel(x_i, [[0.01] * 3, [0.02] * 3], [[1.0] * 3, [2.0] * 3], 1.3,
-                        PlanarAlpha(rng.uniform(0.8, 1.2, (20, 20)), (0.0, 0.0), pitch))
+    model = DipoleModel(
+        x_i,
+        [[0.01] * 3, [0.02] * 3],
+        [[1.0] * 3, [2.0] * 3],
+        1.3,
+        PlanarAlpha(rng.uniform(0.8, 1.2, (20, 20)), (0.0, 0.0), pitch),
+    )
     e = planar_errors(model, ds)
     num = {b: 0.0 for b in BANDS}
     den = {b: 0.0 for b in BANDS}
@@ -77,7 +89,10 @@ def test_errors_match_a_plain_loop(tmp_path):
 
 def test_marble_exponential_beats_dipole_near_the_incident_point(marble):
     """The paper's claim on photon data: near x_i the exponential sum follows, the dipole does not."""
-    err = {kind: planar_errors(fit_planar(marble, kind, max_rounds=3).model, marble) for kind in ("iso", "dipole")}
+    err = {
+        kind: planar_errors(fit_planar(marble, kind, max_rounds=3).model, marble)
+        for kind in ("iso", "dipole")
+    }
     assert err["iso"].bands["near"] <= 0.5 * err["dipole"].bands["near"]
     assert err["iso"].rel_l2 < err["dipole"].rel_l2
     # and the exponential sum is within reach of the noise
@@ -95,23 +110,43 @@ def test_fit_and_evaluate_cli(marble, tmp_path):
     res = runner.invoke(app, ["fit", str(marble.path), "--out", str(out), "--rounds", "2"])
     assert res.exit_code == 0, res.output
     dip = tmp_path / "dip.model.zip"
-    assert runner.invoke(app, ["fit", str(marble.path), "--out", str(dip), "--model", "dipole",
-                               "--rounds", "2"]).exit_code == 0
+    assert (
+        runner.invoke(
+            app, ["fit", str(marble.path), "--out", str(dip), "--model", "dipole", "--rounds", "2"]
+        ).exit_code
+        == 0
+    )
     js = tmp_path / "e.json"
-    res = runner.invoke(app, ["evaluate", str(out), str(marble.path), "--compare", str(dip),
-                              "--report", str(tmp_path / "rep"), "--json", str(js), "--points", "0,4"])
+    res = runner.invoke(
+        app,
+        [
+            "evaluate",
+            str(out),
+            str(marble.path),
+            "--compare",
+            str(dip),
+            "--report",
+            str(tmp_path / "rep"),
+            "--json",
+            str(js),
+            "--points",
+            "0,4",
+        ],
+    )
     assert res.exit_code == 0, res.output
     summary = json.loads(js.read_text())
     for key in ("rel_l2", "rel_l2_near", "rel_l2_mid", "rel_l2_far"):
         assert 0 < summary[key] < 1
     assert summary["profile_points"] == [0, 4] and len(summary["models"]) == 2
-    assert "<img src=\"error_maps.png\">" in (tmp_path / "rep" / "index.html").read_text()
+    assert '<img src="error_maps.png">' in (tmp_path / "rep" / "index.html").read_text()
 
 
 def test_cli_bad_input_is_one_line(marble, tmp_path):
     res = runner.invoke(app, ["fit", str(tmp_path / "nothing.zarr"), "--out", str(tmp_path / "x.model.zip")])
     assert res.exit_code == 2 and res.output.strip().startswith("error:") and "no such data set" in res.output
-    res = runner.invoke(app, ["fit", str(marble.path), "--out", str(tmp_path / "x.model.zip"), "--model", "gauss"])
+    res = runner.invoke(
+        app, ["fit", str(marble.path), "--out", str(tmp_path / "x.model.zip"), "--model", "gauss"]
+    )
     assert res.exit_code == 2 and "model: expected one of" in res.output
     res = runner.invoke(app, ["evaluate", str(tmp_path / "none.model.zip"), str(marble.path)])
     assert res.exit_code == 2 and "error:" in res.output
@@ -135,15 +170,25 @@ def test_relighting_matches_photon_transport(marble):
     E = pattern_irradiance("edge", x_i)
     assert E[:, 0].sum() == 3  # the left column of the 3 x 3 grid
     origin, pitch, shape = x_i.min(0) - 3.0, 0.25, (36, 36)
-    ref = acquire_pattern(sample_of_dataset(marble.header), x_i, spacing, E, origin, pitch, shape,
-                          photons=20_000, jitter=8, seed=2)
+    ref = acquire_pattern(
+        sample_of_dataset(marble.header),
+        x_i,
+        spacing,
+        E,
+        origin,
+        pitch,
+        shape,
+        photons=20_000,
+        jitter=8,
+        seed=2,
+    )
     pred = relight(model, E, spacing**2, origin, pitch, shape, radius=3.0)
     # compare where the model is defined: within 2 mm of the lit cells (the fit saw r < 3 mm), once the
     # model's point sources (all light of a cell enters at x_i) are spread over their 1.5 mm cells
     from scipy.ndimage import uniform_filter
 
     spread = uniform_filter(pred, size=(6, 6, 1), mode="constant")
-    yy, xx = (origin[::-1, None, None] + pitch * (np.mgrid[0:36, 0:36] + 0.5))
+    yy, xx = origin[::-1, None, None] + pitch * (np.mgrid[0:36, 0:36] + 0.5)
     lit_x = x_i[E[:, 0] > 0, 0][0]
     near = (np.abs(xx - lit_x) < 0.75 + 2.0) & (yy > x_i[:, 1].min() - 0.75) & (yy < x_i[:, 1].max() + 0.75)
     a, b = spread[near], ref[near]

@@ -70,11 +70,13 @@ def test_isotropic_integral_is_two_pi_sum_c_over_d2(rng):
     model = random_exponential_model(rng, n_points=2, m=1)
     for i in range(2):
         c, d = model.c[i, 0, 0], model.d[i, 0, 0]
-        prof = lambda r: 2 * np.pi * r * np.sum(c * np.exp(d * r))  # noqa: E731
+        prof = lambda r, c=c, d=d: 2 * np.pi * r * np.sum(c * np.exp(d * r))  # noqa: E731
         numeric = quad(prof, 0, np.inf, limit=200)[0]
         assert numeric == pytest.approx(2 * np.pi * np.sum(c / d**2), rel=1e-9)
         assert model.total_reflectance()[i, 0] == pytest.approx(numeric, rel=1e-9)
-        np.testing.assert_allclose(model.total_reflectance()[i], numeric * np.array([1, model.s_g[i], model.s_b[i]]))
+        np.testing.assert_allclose(
+            model.total_reflectance()[i], numeric * np.array([1, model.s_g[i], model.s_b[i]])
+        )
 
 
 def test_anisotropic_integral_by_2d_quadrature(rng):
@@ -142,9 +144,14 @@ def _params(d_value=-1.0, c_value=1.0):
     return c, d
 
 
-@pytest.mark.parametrize("d_value,c_value,needle", [(0.0, 1.0, "incident point 2: d[channel block 0, direction 0, term 1] = 0"),
-                                                    (0.3, 1.0, "d[channel block 0, direction 0, term 1] = 0.3, must be < 0"),
-                                                    (-1.0, -0.1, "incident point 2: c[channel block 0, direction 0, term 1] = -0.1")])
+@pytest.mark.parametrize(
+    "d_value,c_value,needle",
+    [
+        (0.0, 1.0, "incident point 2: d[channel block 0, direction 0, term 1] = 0"),
+        (0.3, 1.0, "d[channel block 0, direction 0, term 1] = 0.3, must be < 0"),
+        (-1.0, -0.1, "incident point 2: c[channel block 0, direction 0, term 1] = -0.1"),
+    ],
+)
 def test_eq2_violation_names_point_and_parameter(d_value, c_value, needle):
     c, d = _params(d_value, c_value)
     with pytest.raises(TranslucencyError, match="eq. \\(2\\) violated") as exc:
@@ -178,5 +185,6 @@ def test_mesh_model_uses_tangent_frame(rng):
     r, theta = model.polar(np.array([0]), x_o[None])
     assert r[0] == pytest.approx(0.7)
     assert theta[0] == pytest.approx(0.3)
-    np.testing.assert_allclose(model.R_d([0], x_o[None], alpha_o=[1.0])[0],
-                               model.profile(np.array([0]), r, theta)[0])
+    np.testing.assert_allclose(
+        model.R_d([0], x_o[None], alpha_o=[1.0])[0], model.profile(np.array([0]), r, theta)[0]
+    )

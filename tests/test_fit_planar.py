@@ -86,7 +86,9 @@ def test_batched_lm_recovers_dipole_and_burley():
     p, _ = fit_params_batched(prof, r, 1 / Y, Y, [(0.01, 1.0), (0.002, 3.0)])
     np.testing.assert_allclose(p, np.stack([sa, sp], 1), rtol=1e-5)
     Yb = burley_R(r[None], np.array([[0.4], [0.9]]), np.array([[0.5], [3.0]]))
-    pb, _ = fit_params_batched(lambda r, p: burley_R(r[None], p[:, :1], p[:, 1:]), r, 1 / Yb, Yb, [(0.8, 1.0)])
+    pb, _ = fit_params_batched(
+        lambda r, p: burley_R(r[None], p[:, :1], p[:, 1:]), r, 1 / Yb, Yb, [(0.8, 1.0)]
+    )
     np.testing.assert_allclose(pb, [[0.4, 0.5], [0.9, 3.0]], rtol=1e-6)
 
 
@@ -128,7 +130,9 @@ def test_alpha_recovery_with_modulation(tmp_path):
     fit = fit_planar(ds, "iso", radius_step=None, max_rounds=40, tol=1e-9)
     # compare on the sample grid of the fit, up to the global scale that α = 1 on average fixes
     a_fit = fit.model.alpha
-    centres = a_fit.origin + PITCH * (np.stack(np.meshgrid(np.arange(a_fit.shape[1]), np.arange(a_fit.shape[0])), -1) + 0.5)
+    centres = a_fit.origin + PITCH * (
+        np.stack(np.meshgrid(np.arange(a_fit.shape[1]), np.arange(a_fit.shape[0])), -1) + 0.5
+    )
     a_true = truth.alpha.at(centres)
     scale = np.median(a_fit.values / a_true)
     err = np.abs(a_fit.values / (scale * a_true) - 1)
@@ -150,7 +154,9 @@ def test_aniso_recovers_directional_profiles(tmp_path):
     pred = fit.model.R_d_window(np.arange(P), origin, PITCH, R.shape[1:3])
     rel = np.linalg.norm(pred - R) / np.linalg.norm(R)
     iso = fit_planar(ds, "iso", radius_step=None, max_rounds=2).model
-    rel_iso = np.linalg.norm(iso.R_d_window(np.arange(P), origin, PITCH, R.shape[1:3]) - R) / np.linalg.norm(R)
+    rel_iso = np.linalg.norm(iso.R_d_window(np.arange(P), origin, PITCH, R.shape[1:3]) - R) / np.linalg.norm(
+        R
+    )
     assert rel < 0.01 and rel < 0.2 * rel_iso
 
 
@@ -167,8 +173,12 @@ def test_baseline_recovery(tmp_path, kind, cls):
         p1, p2 = rng.uniform(0.3, 0.9, (P, 3)), rng.uniform(0.5, 2.0, (P, 3))
         truth = BurleyModel(x_i, p1, p2, alpha)
     origin, R = _windows(truth, x_i)
-    fit = fit_planar(write_dataset(tmp_path / "d.zarr", x_i, origin, R, PITCH, eta=1.3), kind,
-                     radius_step=None, max_rounds=3)
+    fit = fit_planar(
+        write_dataset(tmp_path / "d.zarr", x_i, origin, R, PITCH, eta=1.3),
+        kind,
+        radius_step=None,
+        max_rounds=3,
+    )
     got = (fit.model.sigma_a, fit.model.sigma_s_prime) if kind == "dipole" else (fit.model.A, fit.model.s)
     np.testing.assert_allclose(got[0], p1, rtol=2e-3)
     np.testing.assert_allclose(got[1], p2, rtol=2e-3)
@@ -188,7 +198,9 @@ def test_masked_and_nan_windows_are_flagged(tmp_path):
     mask = np.ones(R.shape[:3], bool)
     mask[2] = False
     R[5] = np.nan
-    fit = fit_planar(write_dataset(tmp_path / "d.zarr", x_i, origin, R, PITCH, mask=mask), "iso", max_rounds=2)
+    fit = fit_planar(
+        write_dataset(tmp_path / "d.zarr", x_i, origin, R, PITCH, mask=mask), "iso", max_rounds=2
+    )
     assert fit.flagged.tolist() == [i in (2, 5) for i in range(len(x_i))]
     assert np.isfinite(fit.model.c).all() and np.isfinite(fit.model.alpha.values).all()
     assert (fit.model.c[[2, 5]] == 0).all()

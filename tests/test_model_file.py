@@ -27,8 +27,10 @@ def assert_same(a, b):
 
 
 @pytest.mark.parametrize("dtype", ["float32", "float16"])
-@pytest.mark.parametrize("m,colour,geometry", [(1, "shared", "planar"), (8, "shared", "planar"),
-                                               (8, "per-channel", "planar"), (1, "shared", "mesh")])
+@pytest.mark.parametrize(
+    "m,colour,geometry",
+    [(1, "shared", "planar"), (8, "shared", "planar"), (8, "per-channel", "planar"), (1, "shared", "mesh")],
+)
 def test_round_trip_is_exact(tmp_path, rng, dtype, m, colour, geometry):
     model = random_exponential_model(rng, n_points=6, m=m, colour=colour, geometry=geometry)
     path = save_model(model, tmp_path / "m.model.zip", dtype=dtype, meta={"sample": "test"})
@@ -55,7 +57,9 @@ def test_baseline_models_round_trip(tmp_path):
 def test_float16_refuses_values_it_cannot_hold(tmp_path, rng):
     model = random_exponential_model(rng, n_points=2)
     model.d[0, 0, 0, 0] = -1e-9  # rounds to -0.0 in float16: eq. (2) would break
-    with pytest.raises(TranslucencyError, match="not representable in float16: eq. \\(2\\) violated at incident point 0"):
+    with pytest.raises(
+        TranslucencyError, match="not representable in float16: eq. \\(2\\) violated at incident point 0"
+    ):
         save_model(model, tmp_path / "m.model.zip", dtype="float16")
     model.d[0, 0, 0, 0] = -1.0
     model.c[1, 0, 0, 2] = 1e6
@@ -150,8 +154,10 @@ def test_wrong_version_is_refused(tmp_path, good_file, version):
     _one_line(exc, bad)
 
 
-@pytest.mark.parametrize("key,index", [("params/c", (3, 0, 5, 1)), ("params/d", (0, 0, 0, 0)),
-                                       ("alpha/values", (2, 2)), ("x_i", (1, 0))])
+@pytest.mark.parametrize(
+    "key,index",
+    [("params/c", (3, 0, 5, 1)), ("params/d", (0, 0, 0, 0)), ("alpha/values", (2, 2)), ("x_i", (1, 0))],
+)
 def test_nan_is_refused(tmp_path, good_file, key, index):
     def poison(arrays):
         arrays[key] = arrays[key].copy()
@@ -169,8 +175,11 @@ def test_eq2_violation_is_refused(tmp_path, good_file):
         arrays["params/d"][5, 0, 2, 1] = 0.5
 
     bad = _rewrite(good_file[0], tmp_path / "eq2.model.zip", edit_arrays=flip)
-    with pytest.raises(ModelFileError, match=r"invalid model: eq. \(2\) violated at incident point 5: "
-                                             r"d\[channel block 0, direction 2, term 1\] = 0.5") as exc:
+    with pytest.raises(
+        ModelFileError,
+        match=r"invalid model: eq. \(2\) violated at incident point 5: "
+        r"d\[channel block 0, direction 2, term 1\] = 0.5",
+    ) as exc:
         load_model(bad)
     _one_line(exc, bad)
 

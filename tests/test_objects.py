@@ -83,8 +83,17 @@ def test_mesh_walk_in_a_box_matches_the_slab_walk(index_matched):
     box = trimesh.creation.box(extents=(W, H, T))
     box.apply_translation((W / 2, H / 2, -T / 2))
     N = 100_000
-    r = mesh_random_walk(mesh_scene(box), box.bounds, vol, 1, np.array([[W / 2, H / 2, 0.0]]),
-                         np.array([[0.0, 0.0, 1.0]]), N, seed=11, index_matched=index_matched)
+    r = mesh_random_walk(
+        mesh_scene(box),
+        box.bounds,
+        vol,
+        1,
+        np.array([[W / 2, H / 2, 0.0]]),
+        np.array([[0.0, 0.0, 1.0]]),
+        N,
+        seed=11,
+        index_matched=index_matched,
+    )
     s = random_walk(vol, 1, np.array([[W / 2, H / 2]]), N, seed=12, index_matched=index_matched)
     top_mesh = ((r.code == EXIT) & (np.abs(r.position[:, 2]) < 1e-3)).mean()
     assert abs(_fraction_z((r.code == EXIT).mean(), np.isin(s.code, [TOP, OTHER_FACE]).mean(), N)) < 4
@@ -104,8 +113,16 @@ def test_mesh_walk_conserves_energy_in_a_non_absorbing_sphere():
     sphere = trimesh.creation.icosphere(4, radius=3.0)
     vol = Volume.homogeneous((24, 24, 24), 0.25, [2.0] * 3, [0.0] * 3, 0.0, 1.4)
     top = int(np.argmax(sphere.vertices[:, 2]))
-    r = mesh_random_walk(mesh_scene(sphere), sphere.bounds, vol, 0, sphere.vertices[[top]],
-                         sphere.vertex_normals[[top]], 40_000, seed=3)
+    r = mesh_random_walk(
+        mesh_scene(sphere),
+        sphere.bounds,
+        vol,
+        0,
+        sphere.vertices[[top]],
+        sphere.vertex_normals[[top]],
+        40_000,
+        seed=3,
+    )
     # every photon leaves (diffusely or by Fresnel reflection at entry); cracks lose at most a few
     assert (r.code == 3).sum() == 0
     assert ((r.code == EXIT) | (r.code == -1)).mean() > 1 - 2e-4
@@ -122,8 +139,22 @@ def test_acquire_mesh_cli_on_the_pig_and_a_users_mesh(tmp_path):
 
     runner = CliRunner()
     out = tmp_path / "pig.zarr"
-    args = ["acquire", "mesh", "--out", str(out), "--material", "homogeneous:skimmilk", "--voxel", "2",
-            "--points", "4", "--photons", "2000", "--chunk", "2"]
+    args = [
+        "acquire",
+        "mesh",
+        "--out",
+        str(out),
+        "--material",
+        "homogeneous:skimmilk",
+        "--voxel",
+        "2",
+        "--points",
+        "4",
+        "--photons",
+        "2000",
+        "--chunk",
+        "2",
+    ]
     res = runner.invoke(app, args)
     assert res.exit_code == 0, res.output
     g = zarr.open_group(str(out), mode="r")
@@ -141,10 +172,29 @@ def test_acquire_mesh_cli_on_the_pig_and_a_users_mesh(tmp_path):
     assert res.exit_code == 2 and "other arguments" in res.output
     ball = tmp_path / "ball.obj"
     trimesh.creation.icosphere(2, radius=0.5).export(ball)
-    res = runner.invoke(app, ["acquire", "mesh", "--out", str(tmp_path / "b.zarr"), "--mesh", str(ball),
-                              "--scale", "10", "--voxel", "1", "--points", "2", "--photons", "500"])
+    res = runner.invoke(
+        app,
+        [
+            "acquire",
+            "mesh",
+            "--out",
+            str(tmp_path / "b.zarr"),
+            "--mesh",
+            str(ball),
+            "--scale",
+            "10",
+            "--voxel",
+            "1",
+            "--points",
+            "2",
+            "--photons",
+            "500",
+        ],
+    )
     assert res.exit_code == 0, res.output
-    res = runner.invoke(app, ["acquire", "mesh", "--out", str(tmp_path / "c.zarr"), "--mesh", str(tmp_path / "no.obj")])
+    res = runner.invoke(
+        app, ["acquire", "mesh", "--out", str(tmp_path / "c.zarr"), "--mesh", str(tmp_path / "no.obj")]
+    )
     assert res.exit_code == 2 and "no such mesh file" in res.output
 
 

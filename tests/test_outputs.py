@@ -25,8 +25,11 @@ runner = CliRunner()
 
 def snapshot(folder):
     """Every file below ``folder`` with the hash of its bytes."""
-    return {str(p.relative_to(folder)): hashlib.sha256(p.read_bytes()).hexdigest()
-            for p in sorted(folder.rglob("*")) if p.is_file()}
+    return {
+        str(p.relative_to(folder)): hashlib.sha256(p.read_bytes()).hexdigest()
+        for p in sorted(folder.rglob("*"))
+        if p.is_file()
+    }
 
 
 def refused(res, *, recommends_overwrite=False):
@@ -42,14 +45,33 @@ def inputs(tmp_path_factory):
     """A small planar data set, a planar model file and a per-vertex model of a ball (with its data set)."""
     root = tmp_path_factory.mktemp("inputs")
     rng = np.random.default_rng(3)
-    ds = write_dataset(root / "d.zarr", [[2.0, 2.0]], [[0.0, 0.0]], rng.uniform(0.01, 0.1, (1, 16, 16, 3)), 0.25)
+    ds = write_dataset(
+        root / "d.zarr", [[2.0, 2.0]], [[0.0, 0.0]], rng.uniform(0.01, 0.1, (1, 16, 16, 3)), 0.25
+    )
     model = save_model(random_exponential_model(rng, n_points=1), root / "m.model.zip")
     mesh = root / "ball.ply"
     trimesh.creation.icosphere(2, radius=4.0).export(mesh)
     mdata, mmodel = root / "ball.zarr", root / "ball.model.zip"
-    res = runner.invoke(app, ["acquire", "mesh", "--out", str(mdata), "--mesh", str(mesh), "--material",
-                              "homogeneous:marble", "--voxel", "1", "--points", "4", "--photons", "300",
-                              "--index-matched"])
+    res = runner.invoke(
+        app,
+        [
+            "acquire",
+            "mesh",
+            "--out",
+            str(mdata),
+            "--mesh",
+            str(mesh),
+            "--material",
+            "homogeneous:marble",
+            "--voxel",
+            "1",
+            "--points",
+            "4",
+            "--photons",
+            "300",
+            "--index-matched",
+        ],
+    )
     assert res.exit_code == 0, res.output
     res = runner.invoke(app, ["fit", str(mdata), "--out", str(mmodel), "--rounds", "1"])
     assert res.exit_code == 0, res.output
@@ -60,15 +82,58 @@ def writers(inp, out):
     """Every writing command, its output at ``out``."""
     acquire = ["--photons", "100", "--overwrite"]
     return {
-        "acquire planar": ["acquire", "planar", "--material", "marble", "--grid", "1", "--size", "6", "6", "2",
-                           "--voxel", "1", "--window", "2", "--out", str(out), *acquire],
-        "acquire mesh": ["acquire", "mesh", "--mesh", str(inp["mesh"]), "--voxel", "2", "--points", "2",
-                         "--out", str(out), *acquire],
+        "acquire planar": [
+            "acquire",
+            "planar",
+            "--material",
+            "marble",
+            "--grid",
+            "1",
+            "--size",
+            "6",
+            "6",
+            "2",
+            "--voxel",
+            "1",
+            "--window",
+            "2",
+            "--out",
+            str(out),
+            *acquire,
+        ],
+        "acquire mesh": [
+            "acquire",
+            "mesh",
+            "--mesh",
+            str(inp["mesh"]),
+            "--voxel",
+            "2",
+            "--points",
+            "2",
+            "--out",
+            str(out),
+            *acquire,
+        ],
         "fit": ["fit", str(inp["data"]), "--out", str(out), "--overwrite"],
         "render": ["render", str(inp["mesh_model"]), "--out", str(out), "--size", "16", "12", "--overwrite"],
-        "evaluate --report": ["evaluate", str(inp["model"]), str(inp["data"]), "--report", str(out), "--overwrite"],
-        "evaluate --json": ["evaluate", str(inp["model"]), str(inp["data"]), "--report", str(out) + ".report",
-                            "--json", str(out), "--overwrite"],
+        "evaluate --report": [
+            "evaluate",
+            str(inp["model"]),
+            str(inp["data"]),
+            "--report",
+            str(out),
+            "--overwrite",
+        ],
+        "evaluate --json": [
+            "evaluate",
+            str(inp["model"]),
+            str(inp["data"]),
+            "--report",
+            str(out) + ".report",
+            "--json",
+            str(out),
+            "--overwrite",
+        ],
         "demo": ["demo", "--out", str(out), "--overwrite"],
     }
 
@@ -108,10 +173,21 @@ def test_an_input_is_never_an_output(inputs):
     before = snapshot(inputs["data"])
     res = runner.invoke(app, ["fit", str(inputs["data"]), "--out", str(inputs["data"]), "--overwrite"])
     assert "input" in refused(res)
-    res = runner.invoke(app, ["evaluate", str(inputs["model"]), str(inputs["data"]), "--report",
-                              str(inputs["data"] / "report"), "--overwrite"])
+    res = runner.invoke(
+        app,
+        [
+            "evaluate",
+            str(inputs["model"]),
+            str(inputs["data"]),
+            "--report",
+            str(inputs["data"] / "report"),
+            "--overwrite",
+        ],
+    )
     assert "input" in refused(res)
-    res = runner.invoke(app, ["render", str(inputs["mesh_model"]), "--out", str(inputs["mesh_data"]), "--overwrite"])
+    res = runner.invoke(
+        app, ["render", str(inputs["mesh_model"]), "--out", str(inputs["mesh_data"]), "--overwrite"]
+    )
     refused(res)
     assert snapshot(inputs["data"]) == before
 
@@ -140,9 +216,13 @@ def test_replacing_a_data_set_keeps_what_the_tool_did_not_write(tmp_path):
     write_dataset(path, [[1.0, 1.0]], [[0.0, 0.0]], rng.uniform(0.01, 0.1, (1, 8, 8, 3)), 0.25)
     (path / "notes.txt").write_text("my notes about this scan")
     with pytest.warns(UserWarning, match="kept 1 entries"):
-        write_dataset(path, [[1.0, 1.0]], [[0.0, 0.0]], rng.uniform(0.01, 0.1, (1, 8, 8, 3)), 0.5, overwrite=True)
+        write_dataset(
+            path, [[1.0, 1.0]], [[0.0, 0.0]], rng.uniform(0.01, 0.1, (1, 8, 8, 3)), 0.5, overwrite=True
+        )
     assert (path / "notes.txt").read_text() == "my notes about this scan"
-    assert json.loads((path / "zarr.json").read_text())["attributes"]["translucency_dataset"]["pitch_mm"] == 0.5
+    assert (
+        json.loads((path / "zarr.json").read_text())["attributes"]["translucency_dataset"]["pitch_mm"] == 0.5
+    )
     with pytest.raises(TranslucencyError, match="not a translucency data set"):
         remove_dataset(tmp_path)
 

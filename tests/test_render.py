@@ -70,9 +70,13 @@ def test_profiles_are_blended_not_parameters(ball):
     for v in (0, 77, 120):
         blend = (c[v, 0][None] * np.exp(d[v, 0][None] * r[:, None])).sum(1)
         own = [(model.c[j, 0, 0] * np.exp(model.d[j, 0, 0] * r[:, None])).sum(1) for j in range(4)]
-        assert blend.min() >= min(o.min() for o in own) * 0.999 and (blend <= np.max(own, axis=0) * 1.001).all()
-    assert np.allclose((c[0, 0][None] * np.exp(d[0, 0][None] * r[:, None])).sum(1),
-                       (model.c[0, 0, 0] * np.exp(model.d[0, 0, 0] * r[:, None])).sum(1))
+        assert (
+            blend.min() >= min(o.min() for o in own) * 0.999 and (blend <= np.max(own, axis=0) * 1.001).all()
+        )
+    assert np.allclose(
+        (c[0, 0][None] * np.exp(d[0, 0][None] * r[:, None])).sum(1),
+        (model.c[0, 0, 0] * np.exp(model.d[0, 0, 0] * r[:, None])).sum(1),
+    )
 
 
 def test_irradiance_cosine_and_shadows():
@@ -82,7 +86,9 @@ def test_irradiance_cosine_and_shadows():
     n = box.vertex_normals
     np.testing.assert_allclose(E, 2.0 * np.maximum(n[:, 2], 0), rtol=1e-6)
     # a second box between the light and the first one casts a shadow
-    two = trimesh.util.concatenate([box, trimesh.creation.box(extents=(30, 30, 1)).apply_translation((0, 0, 20))])
+    two = trimesh.util.concatenate(
+        [box, trimesh.creation.box(extents=(30, 30, 1)).apply_translation((0, 0, 20))]
+    )
     shadowed = vertex_irradiance(box, mesh_scene(two), DirectionalLight((0.0, 0.0, -1.0), 2.0))
     assert shadowed.max() == 0
     p = vertex_irradiance(box, scene, PointLight((0.0, 0.0, 50.0), 100.0))
@@ -107,7 +113,9 @@ def test_vertex_radiance_picture(ball):
     img = render_vertex_radiance(ball, np.tile([0.2, 0.4, 0.8], (len(ball.vertices), 1)), cam, spp=4)
     seen = coverage(ball, cam)
     assert 0.05 < seen.mean() < 0.9
-    inner = img[seen & np.roll(seen, 1, 0) & np.roll(seen, -1, 0) & np.roll(seen, 1, 1) & np.roll(seen, -1, 1)]
+    inner = img[
+        seen & np.roll(seen, 1, 0) & np.roll(seen, -1, 0) & np.roll(seen, 1, 1) & np.roll(seen, -1, 1)
+    ]
     np.testing.assert_allclose(inner, np.tile([0.2, 0.4, 0.8], (len(inner), 1)), rtol=1e-4)
     assert img[~seen].max() < 0.8
     # a prepared picture repaints: a second radiance replaces the first, pixel for pixel
@@ -115,7 +123,9 @@ def test_vertex_radiance_picture(ball):
 
     pic = VertexPicture(ball, cam, spp=4)
     pic.draw(np.ones((len(ball.vertices), 3)))
-    np.testing.assert_allclose(pic.draw(np.tile([0.2, 0.4, 0.8], (len(ball.vertices), 1))), img, rtol=1e-5, atol=1e-7)
+    np.testing.assert_allclose(
+        pic.draw(np.tile([0.2, 0.4, 0.8], (len(ball.vertices), 1))), img, rtol=1e-5, atol=1e-7
+    )
     with pytest.raises(TranslucencyError, match="per vertex"):
         pic.draw(np.ones((3, 3)))
 
@@ -129,14 +139,44 @@ def test_fit_and_render_cli_on_a_mesh(tmp_path):
     mesh = tmp_path / "ball.ply"
     trimesh.creation.icosphere(3, radius=6.0).export(mesh)
     data, model = tmp_path / "ball.zarr", tmp_path / "ball.model.zip"
-    res = runner.invoke(app, ["acquire", "mesh", "--out", str(data), "--mesh", str(mesh), "--material",
-                              "homogeneous:marble", "--voxel", "1", "--points", "12", "--photons", "4000",
-                              "--index-matched"])
+    res = runner.invoke(
+        app,
+        [
+            "acquire",
+            "mesh",
+            "--out",
+            str(data),
+            "--mesh",
+            str(mesh),
+            "--material",
+            "homogeneous:marble",
+            "--voxel",
+            "1",
+            "--points",
+            "12",
+            "--photons",
+            "4000",
+            "--index-matched",
+        ],
+    )
     assert res.exit_code == 0, res.output
     res = runner.invoke(app, ["fit", str(data), "--out", str(model)])
     assert res.exit_code == 0, res.output
-    res = runner.invoke(app, ["render", str(model), "--out", str(tmp_path / "r"), "--size", "64", "48",
-                              "--reference", "--spp", "8"])
+    res = runner.invoke(
+        app,
+        [
+            "render",
+            str(model),
+            "--out",
+            str(tmp_path / "r"),
+            "--size",
+            "64",
+            "48",
+            "--reference",
+            "--spp",
+            "8",
+        ],
+    )
     assert res.exit_code == 0, res.output
     import json
 
@@ -155,7 +195,11 @@ def test_spot_and_environment_irradiance(ball):
     pos = (0.0, 0.0, 40.0)
     point = vertex_irradiance(ball, scene, PointLight(pos, 100.0))
     spot = vertex_irradiance(ball, scene, SpotLight(pos, (0.0, 0.0, 0.0), 6.0, 100.0))
-    theta = np.degrees(np.arccos((np.array(pos) - ball.vertices)[:, 2] / np.linalg.norm(np.array(pos) - ball.vertices, axis=1)))
+    theta = np.degrees(
+        np.arccos(
+            (np.array(pos) - ball.vertices)[:, 2] / np.linalg.norm(np.array(pos) - ball.vertices, axis=1)
+        )
+    )
     inner, outer = theta < 0.75 * 6.0 - 0.01, theta > 6.0
     np.testing.assert_allclose(spot[inner], point[inner], rtol=1e-9)
     assert (spot[outer] == 0).all() and inner.any() and outer.any() and (spot <= point + 1e-12).all()
@@ -164,11 +208,15 @@ def test_spot_and_environment_irradiance(ball):
     np.testing.assert_allclose(env, np.pi * 0.3, rtol=1e-12)
     # under a plate, the box's top sees no sky straight up: less than π L
     box = trimesh.creation.box(extents=(10, 10, 10))
-    two = trimesh.util.concatenate([box, trimesh.creation.box(extents=(200, 200, 1)).apply_translation((0, 0, 7))])
+    two = trimesh.util.concatenate(
+        [box, trimesh.creation.box(extents=(200, 200, 1)).apply_translation((0, 0, 7))]
+    )
     shaded = vertex_irradiance(box, mesh_scene(two), EnvironmentLight(0.3, samples=256))
     top = box.vertex_normals[:, 2] > 0.5
     assert (shaded[top] < 0.5 * np.pi * 0.3).all()
-    assert isinstance(parse_light("spot:0,0,40,0,0,0,10"), SpotLight) and isinstance(parse_light("env:0.2"), EnvironmentLight)
+    assert isinstance(parse_light("spot:0,0,40,0,0,0,10"), SpotLight) and isinstance(
+        parse_light("env:0.2"), EnvironmentLight
+    )
 
 
 def _sky_map(path, sun=True):
@@ -186,7 +234,8 @@ def _sky_map(path, sun=True):
 
 
 def test_environment_map_irradiance_matches_mitsuba_direct_lighting(ball, tmp_path):
-    """A white diffuse ball under a sky with a sun: ρE/π per vertex, drawn, against Mitsuba's own path tracer."""
+    """A white diffuse ball under a sky with a sun: ρE/π per vertex, drawn, against Mitsuba's own path
+    tracer."""
     from translucency.mitsuba import mitsuba, write_ply
     from translucency.render import EnvironmentLight
 
@@ -200,10 +249,25 @@ def test_environment_map_irradiance_matches_mitsuba_direct_lighting(ball, tmp_pa
     cam = Camera.looking_at(ball, direction=(0.3, -1.0, 0.2), width=64, height=48)
     ours = render_vertex_radiance(ball, rho * E / np.pi, cam, spp=4, light=light)
     write_ply(tmp_path / "ball.ply", np.asarray(ball.vertices), np.asarray(ball.faces))
-    ref = np.asarray(mi.render(mi.load_dict({
-        "type": "scene", "integrator": {"type": "path", "max_depth": 2},
-        "ball": {"type": "ply", "filename": str(tmp_path / "ball.ply"), "bsdf": {"type": "diffuse", "reflectance": rho}},
-        "sky": light.emitter_dict(), "camera": cam.sensor_dict(512)}), seed=1), dtype=np.float64)
+    ref = np.asarray(
+        mi.render(
+            mi.load_dict(
+                {
+                    "type": "scene",
+                    "integrator": {"type": "path", "max_depth": 2},
+                    "ball": {
+                        "type": "ply",
+                        "filename": str(tmp_path / "ball.ply"),
+                        "bsdf": {"type": "diffuse", "reflectance": rho},
+                    },
+                    "sky": light.emitter_dict(),
+                    "camera": cam.sensor_dict(512),
+                }
+            ),
+            seed=1,
+        ),
+        dtype=np.float64,
+    )
     seen = coverage(ball, cam)
     inner = seen & np.roll(seen, 1, 0) & np.roll(seen, -1, 0) & np.roll(seen, 1, 1) & np.roll(seen, -1, 1)
     ratio = ours[inner].mean(axis=0) / ref[inner].mean(axis=0)
@@ -234,7 +298,9 @@ def test_fresnel_factors_against_closed_forms():
     np.testing.assert_allclose(fresnel_transmittance(1.0, eta), 1 - ((eta - 1) / (eta + 1)) ** 2, rtol=1e-6)
     assert fresnel_transmittance(0.0, eta) < 1e-6 and fresnel_transmittance(0.7, 1.0) == 1.0
     # cosine-weighted transmittance from outside = η² (1 − F_dr) with Jensen's internal F_dr (reciprocity)
-    np.testing.assert_allclose(diffuse_transmittance(eta), eta**2 * (1 - fresnel_diffuse_reflectance(eta)), rtol=0.015)
+    np.testing.assert_allclose(
+        diffuse_transmittance(eta), eta**2 * (1 - fresnel_diffuse_reflectance(eta)), rtol=0.015
+    )
 
 
 def test_bad_environment_maps_and_dielectric_references(ball, tmp_path):
@@ -269,8 +335,15 @@ def test_parameters_follow_the_surface_not_the_gap():
     x_i = two.vertices[pts]
     c = np.zeros((len(pts), 1, 1, 1))
     c[:, 0, 0, 0] = [100.0, 1.0, 1.0, 1.0]  # only the point across the gap is bright
-    model = ExponentialModel(x_i, c, -np.ones_like(c), VertexAlpha(np.ones(len(two.vertices)), two.vertices),
-                             s_g=np.ones(len(pts)), s_b=np.ones(len(pts)), frame=tangent_frames(two.vertex_normals[pts]))
+    model = ExponentialModel(
+        x_i,
+        c,
+        -np.ones_like(c),
+        VertexAlpha(np.ones(len(two.vertices)), two.vertices),
+        s_g=np.ones(len(pts)),
+        s_b=np.ones(len(pts)),
+        frame=tangent_frames(two.vertex_normals[pts]),
+    )
     cg = vertex_parameters(model, two, k=2)[0][centre]
     ce = vertex_parameters(model, two.vertices, k=2)[0][centre]
     assert cg.sum() < 2.0 and ce.sum() > 10.0
@@ -301,6 +374,10 @@ def test_thickness_and_region_errors():
     ref = np.where(seen[..., None], 2.0, 0.0) * np.ones(3)
     regions = region_errors(box, scene, cam, E, ref, 1.1 * ref, seen)
     assert regions["all"]["pixels"] == seen.sum() and regions["thin"]["pixels"] > 0  # the 8 mm sides
-    assert regions["thick"]["pixels"] > 0 and regions["shadow edge"]["pixels"] > 0 and regions["unlit"]["pixels"] > 0
+    assert (
+        regions["thick"]["pixels"] > 0
+        and regions["shadow edge"]["pixels"] > 0
+        and regions["unlit"]["pixels"] > 0
+    )
     for r in regions.values():
         assert r["rel_rmse"] == pytest.approx(0.1, rel=1e-9)

@@ -34,16 +34,26 @@ def test_pixel_centres_follow_the_window_and_the_rendered_image():
     window = PixelWindow((3.0, 5.0), n_pixels=8, pitch_mm=0.25)
     x, y = pixel_centres(window)
     # a regular grid of the requested pitch, centred on the window (axes' signs are Mitsuba's business)
-    assert np.allclose(np.abs(np.diff(x, axis=1)), 0.25, atol=1e-5) and np.allclose(np.diff(x, axis=0), 0, atol=1e-5)
-    assert np.allclose(np.abs(np.diff(y, axis=0)), 0.25, atol=1e-5) and np.allclose(np.diff(y, axis=1), 0, atol=1e-5)
+    assert np.allclose(np.abs(np.diff(x, axis=1)), 0.25, atol=1e-5) and np.allclose(
+        np.diff(x, axis=0), 0, atol=1e-5
+    )
+    assert np.allclose(np.abs(np.diff(y, axis=0)), 0.25, atol=1e-5) and np.allclose(
+        np.diff(y, axis=1), 0, atol=1e-5
+    )
     assert np.allclose([x.mean(), y.mean()], window.centre_xy, atol=1e-5)
     # the rectangle covers 3 x 2 pixels, off-centre; its edges lie on pixel edges of the window
     x0, y0 = 3.0 - 1.0 + 0.25, 5.0 - 1.0 + 1.0  # window's lower-left corner + (1, 4) pixels
-    rect = (mi.ScalarTransform4f().translate([x0 + 0.375, y0 + 0.25, 0.0])
-            @ mi.ScalarTransform4f().scale([0.375, 0.25, 1.0]))
-    scene = mi.load_dict({"type": "scene", "integrator": {"type": "direct"}, "camera": window.sensor_dict(spp=4),
-                          "patch": {"type": "rectangle", "to_world": rect,
-                                    "emitter": {"type": "area", "radiance": 1.0}}})
+    rect = mi.ScalarTransform4f().translate([x0 + 0.375, y0 + 0.25, 0.0]) @ mi.ScalarTransform4f().scale(
+        [0.375, 0.25, 1.0]
+    )
+    scene = mi.load_dict(
+        {
+            "type": "scene",
+            "integrator": {"type": "direct"},
+            "camera": window.sensor_dict(spp=4),
+            "patch": {"type": "rectangle", "to_world": rect, "emitter": {"type": "area", "radiance": 1.0}},
+        }
+    )
     image = np.array(mi.render(scene, spp=4, seed=0))[..., 0]
     inside = (x > x0) & (x < x0 + 0.75) & (y > y0) & (y < y0 + 0.5)
     assert inside.sum() == 6
@@ -92,8 +102,16 @@ def test_spot_irradiance_as_mitsuba_renders_it():
     edges = np.linspace(0.0, 0.5, 11)
     counts = np.histogram(r, edges)[0]
     dens = 2 * np.pi * rho * E
-    expect = np.array([np.trapezoid(dens[(rho >= a) & (rho <= b)], rho[(rho >= a) & (rho <= b)])
-                       for a, b in zip(edges[:-1], edges[1:])]) / spot_power(rho, E) * n
+    expect = (
+        np.array(
+            [
+                np.trapezoid(dens[(rho >= a) & (rho <= b)], rho[(rho >= a) & (rho <= b)])
+                for a, b in zip(edges[:-1], edges[1:])
+            ]
+        )
+        / spot_power(rho, E)
+        * n
+    )
     assert np.all(np.abs(counts - expect) < 4 * np.sqrt(expect) + 0.002 * expect)
 
 

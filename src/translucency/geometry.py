@@ -33,7 +33,7 @@ class SampleGrid:
     shape: tuple[int, int]
 
     @classmethod
-    def covering(cls, window_origin: np.ndarray, pitch: float, window: tuple[int, int]) -> "SampleGrid":
+    def covering(cls, window_origin: np.ndarray, pitch: float, window: tuple[int, int]) -> SampleGrid:
         lo = window_origin.min(axis=0)
         span = np.round((window_origin.max(axis=0) - lo) / pitch).astype(int)
         return cls(lo.astype(np.float64), float(pitch), (int(span[1]) + window[0], int(span[0]) + window[1]))
@@ -53,8 +53,9 @@ class WindowGeometry:
     pixel: np.ndarray  # (k, J) flat index on the sample grid
 
 
-def window_geometry(x_i: np.ndarray, window_origin: np.ndarray, grid: SampleGrid,
-                    window: tuple[int, int]) -> WindowGeometry:
+def window_geometry(
+    x_i: np.ndarray, window_origin: np.ndarray, grid: SampleGrid, window: tuple[int, int]
+) -> WindowGeometry:
     """Distances, angles and sample-grid pixels of every window pixel.
 
     When every window lies alike around its point (offsets x_i − origin equal

@@ -35,7 +35,9 @@ from .render import Camera, PointLight
 from .render.figure import figure2
 
 
-def relight_check(ds, models: dict, figure, *, pattern: str = "stripe", photons: int = 1000, seed: int = 5) -> dict:
+def relight_check(
+    ds, models: dict, figure, *, pattern: str = "stripe", photons: int = 1000, seed: int = 5
+) -> dict:
     """Relight the data set's sample with each model and with photon transport; plot and compare.
 
     The light falls on the cells of the incident grid (side = grid spacing);
@@ -48,18 +50,34 @@ def relight_check(ds, models: dict, figure, *, pattern: str = "stripe", photons:
     margin = ds.pitch * (ds.window[1] // 2)
     origin = x_i.min(axis=0) - margin
     shape = tuple(int(round((np.ptp(x_i[:, k]) + 2 * margin) / ds.pitch)) for k in (1, 0))
-    reference = acquire_pattern(sample_of_dataset(ds.header), x_i, spacing, E, origin, ds.pitch, shape,
-                                photons=photons, seed=seed)
-    preds = {name: relight(m, E, spacing**2, origin, ds.pitch, shape, radius=margin) for name, m in models.items()}
+    reference = acquire_pattern(
+        sample_of_dataset(ds.header), x_i, spacing, E, origin, ds.pitch, shape, photons=photons, seed=seed
+    )
+    preds = {
+        name: relight(m, E, spacing**2, origin, ds.pitch, shape, radius=margin) for name, m in models.items()
+    }
     extent = [origin[0], origin[0] + shape[1] * ds.pitch, origin[1], origin[1] + shape[0] * ds.pitch]
     errors = plot_relighting(reference, preds, extent, figure)
     total = float(reference.sum())
-    return {"pattern": pattern, "photons_per_entry": photons, "rel_l2": errors,
-            "total_ratio": {n: float(B.sum() / total) for n, B in preds.items()}}
+    return {
+        "pattern": pattern,
+        "photons_per_entry": photons,
+        "rel_l2": errors,
+        "total_ratio": {n: float(B.sum() / total) for n, B in preds.items()},
+    }
 
 
-def run_figure2(report_dir, data_path, model_path, *, points: int = 96, photons: int = 8000, spp: int = 16,
-                size=(160, 120), overwrite: bool = False) -> dict:
+def run_figure2(
+    report_dir,
+    data_path,
+    model_path,
+    *,
+    points: int = 96,
+    photons: int = 8000,
+    spp: int = 16,
+    size=(160, 120),
+    overwrite: bool = False,
+) -> dict:
     """Acquire the pig per vertex (index-matched, so that volpath can light it), fit, render, compare.
 
     Writes the mesh data set to ``data_path`` (resumed, or reused, if it holds the same acquisition), the
@@ -68,12 +86,26 @@ def run_figure2(report_dir, data_path, model_path, *, points: int = 96, photons:
     """
     pig = make_pig()
     volume = object_volume("marble", pig, 1.0, seed=1)
-    acquire_mesh(pig, volume, data_path, n_points=points, photons=photons, chunk_points=16, index_matched=True)
+    acquire_mesh(
+        pig, volume, data_path, n_points=points, photons=photons, chunk_points=16, index_matched=True
+    )
     fit = fit_mesh(data_path, "iso")
-    save_model(fit.model, model_path, dtype="float16", overwrite=overwrite,
-               meta=fit.metadata(Path(data_path).resolve()))
-    return figure2(fit.model, pig, PointLight((60.0, -80.0, 120.0), 2.0e4), report_dir, volume=volume,
-                   camera=Camera.looking_at(pig, width=size[0], height=size[1]), spp_reference=spp)
+    save_model(
+        fit.model,
+        model_path,
+        dtype="float16",
+        overwrite=overwrite,
+        meta=fit.metadata(Path(data_path).resolve()),
+    )
+    return figure2(
+        fit.model,
+        pig,
+        PointLight((60.0, -80.0, 120.0), 2.0e4),
+        report_dir,
+        volume=volume,
+        camera=Camera.looking_at(pig, width=size[0], height=size[1]),
+        spp_reference=spp,
+    )
 
 
 #: the planar fits of the main job: label -> fit_planar arguments
@@ -85,8 +117,15 @@ DEMO_FITS = {
 }
 
 
-def run_demo(out_dir, *, n_terms: int = 3, step: Callable[[str], None] | None = None, dataset=None,
-             max_rounds: int = 3, overwrite: bool = False) -> dict:
+def run_demo(
+    out_dir,
+    *,
+    n_terms: int = 3,
+    step: Callable[[str], None] | None = None,
+    dataset=None,
+    max_rounds: int = 3,
+    overwrite: bool = False,
+) -> dict:
     """Run the main job and write its outputs under ``out_dir``.
 
     Outputs
@@ -133,8 +172,12 @@ def run_demo(out_dir, *, n_terms: int = 3, step: Callable[[str], None] | None = 
     d = np.array([[[f.d] for f in p.fits] for p in profiles])
     x_i = np.stack([np.arange(n, dtype=float), np.zeros(n)], axis=1)
     model = ExponentialModel(x_i, c, d, PlanarAlpha.uniform((1, n), origin=(-0.5, -0.5), pitch=1.0))
-    mpath = save_model(model, out_dir / "dipole_fits.model.zip", overwrite=True,
-                       meta={"materials": list(MATERIALS), "source": "3-term fits of the Jensen 2001 dipole"})
+    mpath = save_model(
+        model,
+        out_dir / "dipole_fits.model.zip",
+        overwrite=True,
+        meta={"materials": list(MATERIALS), "source": "3-term fits of the Jensen 2001 dipole"},
+    )
 
     # -- the embedded measurement: planar fits and Figure 1 -------------------------
     ds = open_dataset(dataset or default_dataset_path())
@@ -143,7 +186,9 @@ def run_demo(out_dir, *, n_terms: int = 3, step: Callable[[str], None] | None = 
         if step:
             step(f"fit {label}")
         fit = fit_planar(ds, n_terms=n_terms, max_rounds=max_rounds, **kw)
-        save_model(fit.model, out_dir / "fits" / f"{label}.model.zip", overwrite=True, meta=fit.metadata(ds.path))
+        save_model(
+            fit.model, out_dir / "fits" / f"{label}.model.zip", overwrite=True, meta=fit.metadata(ds.path)
+        )
         models[label], flagged[label] = fit.model, fit.flagged
     # -- relighting: a stripe of light, models against photon transport ------------------
     if step:
@@ -155,15 +200,41 @@ def run_demo(out_dir, *, n_terms: int = 3, step: Callable[[str], None] | None = 
     # -- Figure 2: the pig, acquired per vertex, fitted, rendered beside volpath ------------
     if step:
         step("figure 2")
-    fig2 = run_figure2(out_dir / "report", out_dir / "pig.zarr", out_dir / "fits" / "pig_iso.model.zip",
-                       overwrite=True)
-    write_report(models, ds, out_dir / "report", flagged=flagged, extra=[(
-        "relight.png", "Relighting: the sample under a 2 mm stripe of light, photon transport (reference) against "
-        "the fitted models (superposition of R_d over the incident cells); green channel."), (
-        "figure2.png", f"Figure 2: the procedural alabaster pig (generated marble filling, index-matched), path-traced "
-        f"by Mitsuba volpath (left) and rendered from the per-vertex model fitted to its virtual acquisition "
-        f"(middle); FLIP {fig2['flip_mean_object']:.3f}, relative RMSE {fig2['rel_rmse']:.2f} over the object; "
-        "by region (relative RMSE, pixels): " + ", ".join(
-            f"{k} {v['rel_rmse']:.2f} ({v['pixels']})" for k, v in fig2["regions"].items() if k != "all") + ".")])
-    return {"figure": png, "summary": js, "model": mpath, "fits": out_dir / "fits", "pig": out_dir / "pig.zarr",
-            "report": out_dir / "report" / "index.html"}
+    fig2 = run_figure2(
+        out_dir / "report", out_dir / "pig.zarr", out_dir / "fits" / "pig_iso.model.zip", overwrite=True
+    )
+    write_report(
+        models,
+        ds,
+        out_dir / "report",
+        flagged=flagged,
+        extra=[
+            (
+                "relight.png",
+                "Relighting: the sample under a 2 mm stripe of light, photon transport (reference) against "
+                "the fitted models (superposition of R_d over the incident cells); green channel.",
+            ),
+            (
+                "figure2.png",
+                "Figure 2: the procedural alabaster pig (generated marble filling, index-matched), "
+                "path-traced by Mitsuba volpath (left) and rendered from the per-vertex model fitted to its "
+                f"virtual acquisition (middle); FLIP {fig2['flip_mean_object']:.3f}, "
+                f"relative RMSE {fig2['rel_rmse']:.2f} over the object; "
+                "by region (relative RMSE, pixels): "
+                + ", ".join(
+                    f"{k} {v['rel_rmse']:.2f} ({v['pixels']})"
+                    for k, v in fig2["regions"].items()
+                    if k != "all"
+                )
+                + ".",
+            ),
+        ],
+    )
+    return {
+        "figure": png,
+        "summary": js,
+        "model": mpath,
+        "fits": out_dir / "fits",
+        "pig": out_dir / "pig.zarr",
+        "report": out_dir / "report" / "index.html",
+    }

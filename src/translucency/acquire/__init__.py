@@ -9,4 +9,12 @@ from .planar import PlanarSetup, acquire_planar, estimate_seconds
 from .samples import GENERATORS, make_sample
 from .volume import Volume, load_volume
 
-__all__ = ["PlanarSetup", "acquire_planar", "estimate_seconds", "GENERATORS", "make_sample", "Volume", "load_volume"]
+__all__ = [
+    "PlanarSetup",
+    "acquire_planar",
+    "estimate_seconds",
+    "GENERATORS",
+    "make_sample",
+    "Volume",
+    "load_volume",
+]

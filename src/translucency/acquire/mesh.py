@@ -34,9 +34,20 @@ from .samples import make_sample
 from .volume import Volume
 
 
-def acquire_mesh(mesh, volume: Volume, out, *, n_points: int = 64, photons: int = 20_000, seed: int = 0,
-                 chunk_points: int = 8, index_matched: bool = False, overwrite: bool = False, inputs=(),
-                 progress: Callable[[int, int], None] | None = None):
+def acquire_mesh(
+    mesh,
+    volume: Volume,
+    out,
+    *,
+    n_points: int = 64,
+    photons: int = 20_000,
+    seed: int = 0,
+    chunk_points: int = 8,
+    index_matched: bool = False,
+    overwrite: bool = False,
+    inputs=(),
+    progress: Callable[[int, int], None] | None = None,
+):
     """Scan pencil beams over a closed mesh filled with ``volume``; write a mesh data set.
 
     Parameters
@@ -58,23 +69,44 @@ def acquire_mesh(mesh, volume: Volume, out, *, n_points: int = 64, photons: int 
         raise TranslucencyError(f"photons: must be >= 1, got {photons}")
     need = np.asarray(mesh.extents) - np.asarray(volume.size_mm)
     if (need > 1e-6).any():
-        raise TranslucencyError(f"volume: {volume.size_mm} mm does not cover the mesh's bounding box "
-                                f"{tuple(np.round(mesh.extents, 2))} mm")
+        raise TranslucencyError(
+            f"volume: {volume.size_mm} mm does not cover the mesh's bounding box "
+            f"{tuple(np.round(mesh.extents, 2))} mm"
+        )
     V = len(mesh.vertices)
     incident = farthest_points(np.asarray(mesh.vertices), n_points)
     P = len(incident)
-    request = {"n_points": P, "photons": int(photons), "seed": int(seed), "chunk": int(chunk_points),
-               "index_matched": bool(index_matched), "vertices": V, "faces": len(mesh.faces),
-               "volume": volume.description, "bounds": np.round(mesh.bounds, 6).tolist(),
-               "volume_grid": {"voxel_mm": volume.voxel_mm, "size_mm": list(volume.size_mm)}}
+    request = {
+        "n_points": P,
+        "photons": int(photons),
+        "seed": int(seed),
+        "chunk": int(chunk_points),
+        "index_matched": bool(index_matched),
+        "vertices": V,
+        "faces": len(mesh.faces),
+        "volume": volume.description,
+        "bounds": np.round(mesh.bounds, 6).tolist(),
+        "volume_grid": {"voxel_mm": volume.voxel_mm, "size_mm": list(volume.size_mm)},
+    }
     request = json.loads(json.dumps(request))
     area = vertex_areas(mesh)
-    header = {"format": FORMAT, "version": VERSION, "units": {"length": "mm", "R_d": "mm^-2"},
-              "n_points": P, "n_vertices": V, "photons": int(photons), "seed": int(seed),
-              "eta": volume.eta, "g": volume.g, "sample": volume.description,
-              "software": {"translucency": __version__}, "request": request}
-    ds = create_mesh_dataset(out, header, mesh, area, incident, chunk_points=chunk_points, overwrite=overwrite,
-                             inputs=inputs)
+    header = {
+        "format": FORMAT,
+        "version": VERSION,
+        "units": {"length": "mm", "R_d": "mm^-2"},
+        "n_points": P,
+        "n_vertices": V,
+        "photons": int(photons),
+        "seed": int(seed),
+        "eta": volume.eta,
+        "g": volume.g,
+        "sample": volume.description,
+        "software": {"translucency": __version__},
+        "request": request,
+    }
+    ds = create_mesh_dataset(
+        out, header, mesh, area, incident, chunk_points=chunk_points, overwrite=overwrite, inputs=inputs
+    )
     root = ds.group
     n_chunks = root["chunk_done"].shape[0]
     scene = mesh_scene(mesh)
@@ -88,9 +120,18 @@ def acquire_mesh(mesh, volume: Volume, out, *, n_points: int = 64, photons: int 
         R = np.zeros((hi - lo, V, 3), np.float32)
         spec = np.zeros((hi - lo, 3), np.float32)
         for ch in range(3):
-            res = mesh_random_walk(scene, mesh.bounds, volume, ch, mesh.vertices[incident[lo:hi]],
-                                   normals[incident[lo:hi]], photons, seed=seed + 7919 * ch, first_point=lo,
-                                   index_matched=index_matched)
+            res = mesh_random_walk(
+                scene,
+                mesh.bounds,
+                volume,
+                ch,
+                mesh.vertices[incident[lo:hi]],
+                normals[incident[lo:hi]],
+                photons,
+                seed=seed + 7919 * ch,
+                first_point=lo,
+                index_matched=index_matched,
+            )
             point = np.repeat(np.arange(hi - lo), photons)
             ok = res.code == EXIT
             _, v = tree.query(res.position[ok])

@@ -39,9 +39,20 @@ class MeshWalkResult:
     steps: int
 
 
-def mesh_random_walk(scene, bounds: np.ndarray, volume: Volume, channel: int, entry: np.ndarray,
-                     normal: np.ndarray, n_photons: int, *, seed: int = 0, first_point: int = 0,
-                     index_matched: bool = False, max_steps: int = 200_000) -> MeshWalkResult:
+def mesh_random_walk(
+    scene,
+    bounds: np.ndarray,
+    volume: Volume,
+    channel: int,
+    entry: np.ndarray,
+    normal: np.ndarray,
+    n_photons: int,
+    *,
+    seed: int = 0,
+    first_point: int = 0,
+    index_matched: bool = False,
+    max_steps: int = 200_000,
+) -> MeshWalkResult:
     """Trace ``n_photons`` photons from each entry point into the mesh, in one wavefront.
 
     Parameters
@@ -71,7 +82,9 @@ def mesh_random_walk(scene, bounds: np.ndarray, volume: Volume, channel: int, en
     eta = 1.0 if index_matched else volume.eta
     eps = 1e-4 * max(h - l for h, l in zip(hi, lo))  # ray offset off the surface, mm
 
-    sigma_s, sigma_t, majorant, point, rng = _walk_setup(mi, dr, volume, channel, total, n_photons, seed, first_point)
+    sigma_s, sigma_t, majorant, point, rng = _walk_setup(
+        mi, dr, volume, channel, total, n_photons, seed, first_point
+    )
 
     # -- entry: Fresnel at normal incidence, then straight in along −n --------------------
     F_in = float(mi.fresnel(Float(1.0), Float(eta))[0][0]) if eta != 1.0 else 0.0
@@ -99,8 +112,20 @@ def mesh_random_walk(scene, bounds: np.ndarray, volume: Volume, channel: int, en
 
         # -- inside: real or null collision (voxel of the object-space volume) ---------------
         p_c = pos + direction * t
-        scatter, absorb, new_dir = _medium_event(mi, dr, volume, sigma_s, sigma_t, majorant, p_c.x - lo[0],
-                                                 p_c.y - lo[1], hi[2] - p_c.z, collide, rng, direction)
+        scatter, absorb, new_dir = _medium_event(
+            mi,
+            dr,
+            volume,
+            sigma_s,
+            sigma_t,
+            majorant,
+            p_c.x - lo[0],
+            p_c.y - lo[1],
+            hi[2] - p_c.z,
+            collide,
+            rng,
+            direction,
+        )
 
         # -- surface: Fresnel reflection (TIR included) or exit -------------------------------
         hit = active & si.is_valid() & ~collide
@@ -123,7 +148,8 @@ def mesh_random_walk(scene, bounds: np.ndarray, volume: Volume, channel: int, en
         return pos, direction, rng, code, steps
 
     pos, direction, rng, code, steps = dr.while_loop(
-        state=(pos, direction, rng, code, steps), cond=cond, body=body, label="mesh_photon_walk")
+        state=(pos, direction, rng, code, steps), cond=cond, body=body, label="mesh_photon_walk"
+    )
     dr.eval(pos, code, steps)
     code_np = np.asarray(code).astype(np.int64)
     code_np[code_np == EXIT + 100] = -1

@@ -24,8 +24,19 @@ from .transport import TOP, random_walk
 from .volume import Volume
 
 
-def acquire_pattern(volume: Volume, cells: np.ndarray, cell_size: float, E: np.ndarray, origin, pitch: float,
-                    shape: tuple[int, int], *, photons: int = 2000, jitter: int = 4, seed: int = 0) -> np.ndarray:
+def acquire_pattern(
+    volume: Volume,
+    cells: np.ndarray,
+    cell_size: float,
+    E: np.ndarray,
+    origin,
+    pitch: float,
+    shape: tuple[int, int],
+    *,
+    photons: int = 2000,
+    jitter: int = 4,
+    seed: int = 0,
+) -> np.ndarray:
     """Radiant exitance of the slab under a light pattern, by photon transport.
 
     Parameters
@@ -51,7 +62,9 @@ def acquire_pattern(volume: Volume, cells: np.ndarray, cell_size: float, E: np.n
     E = np.asarray(E, dtype=np.float64)
     cells = np.asarray(cells, dtype=np.float64)
     if E.shape != (len(cells), 3) or (E < 0).any() or not np.isfinite(E).all():
-        raise TranslucencyError(f"pattern: expected finite irradiance >= 0 of shape {(len(cells), 3)}, got {E.shape}")
+        raise TranslucencyError(
+            f"pattern: expected finite irradiance >= 0 of shape {(len(cells), 3)}, got {E.shape}"
+        )
     rng = np.random.default_rng(seed)
     h, w = shape
     B = np.zeros((h, w, 3))
@@ -59,14 +72,18 @@ def acquire_pattern(volume: Volume, cells: np.ndarray, cell_size: float, E: np.n
         lit = np.flatnonzero(E[:, ch] > 0)
         if lit.size == 0:
             continue
-        entry = (np.repeat(cells[lit], jitter, axis=0)
-                 + (rng.uniform(size=(lit.size * jitter, 2)) - 0.5) * cell_size)
+        entry = (
+            np.repeat(cells[lit], jitter, axis=0)
+            + (rng.uniform(size=(lit.size * jitter, 2)) - 0.5) * cell_size
+        )
         res = random_walk(volume, ch, entry, photons, seed=seed + 7919 * ch)
         weight = np.repeat(E[lit, ch] * cell_size**2 / (jitter * photons), jitter * photons)
         top = res.code == TOP
         col = np.floor((res.x[top] - origin[0]) / pitch).astype(np.int64)
         row = np.floor((res.y[top] - origin[1]) / pitch).astype(np.int64)
         inside = (col >= 0) & (col < w) & (row >= 0) & (row < h)
-        B[..., ch] = np.bincount(row[inside] * w + col[inside], weight[top][inside],
-                                 minlength=h * w).reshape(h, w) / pitch**2
+        B[..., ch] = (
+            np.bincount(row[inside] * w + col[inside], weight[top][inside], minlength=h * w).reshape(h, w)
+            / pitch**2
+        )
     return B

@@ -58,11 +58,15 @@ class PlanarSetup:
         if not (np.isfinite(self.pitch) and self.pitch > 0):
             raise TranslucencyError(f"pitch: must be a positive length in mm, got {self.pitch}")
         if not (np.isfinite(self.window) and self.window >= self.pitch):
-            raise TranslucencyError(f"window: must be at least one pixel ({self.pitch} mm), got {self.window}")
+            raise TranslucencyError(
+                f"window: must be at least one pixel ({self.pitch} mm), got {self.window}"
+            )
         if self.window > min(W, H):
             raise TranslucencyError(f"window: {self.window} mm is larger than the sample ({W:g} x {H:g} mm)")
         if any(not (0 <= s <= lim) for s, lim in zip(self.span, (W, H))):
-            raise TranslucencyError(f"span: incident grid {self.span} mm does not fit on the {W:g} x {H:g} mm sample")
+            raise TranslucencyError(
+                f"span: incident grid {self.span} mm does not fit on the {W:g} x {H:g} mm sample"
+            )
         if self.photons < 1:
             raise TranslucencyError(f"photons: must be >= 1, got {self.photons}")
         if not 0 <= self.theta_inc_deg < 90:
@@ -104,9 +108,17 @@ def estimate_seconds(volume: Volume, setup: PlanarSetup, steps_per_second: float
     return float(n * steps.sum() / steps_per_second)
 
 
-def acquire_planar(volume: Volume, setup: PlanarSetup, out, *, overwrite: bool = False, inputs=(),
-                   progress: Callable[[int, int], None] | None = None, batch_photons: int = 4_000_000,
-                   memory_limit: float = 8 * 2**30) -> PlanarDataset:
+def acquire_planar(
+    volume: Volume,
+    setup: PlanarSetup,
+    out,
+    *,
+    overwrite: bool = False,
+    inputs=(),
+    progress: Callable[[int, int], None] | None = None,
+    batch_photons: int = 4_000_000,
+    memory_limit: float = 8 * 2**30,
+) -> PlanarDataset:
     """Run a virtual DISCO acquisition of ``volume`` and write the data set to ``out``.
 
     Parameters
@@ -141,14 +153,28 @@ def acquire_planar(volume: Volume, setup: PlanarSetup, out, *, overwrite: bool =
     # as stored (JSON: tuples become lists), so that a resume compares like with like
     request = json.loads(json.dumps({"setup": asdict(setup), "volume": _volume_fingerprint(volume)}))
     header = {
-        "format": FORMAT, "version": VERSION,
+        "format": FORMAT,
+        "version": VERSION,
         "units": {"length": "mm", "R_d": "mm^-2", "variance": "mm^-4"},
-        "pitch_mm": setup.pitch, "window": [n, n], "n_points": P, "chunk_points": setup.chunk_points,
+        "pitch_mm": setup.pitch,
+        "window": [n, n],
+        "n_points": P,
+        "chunk_points": setup.chunk_points,
         "dtype": setup.dtype,
-        "sample": {"size_mm": list(volume.size_mm), "voxel_mm": volume.voxel_mm, "g": volume.g, "eta": volume.eta,
-                   "description": volume.description},
-        "acquisition": {"photons": setup.photons, "seed": setup.seed, "theta_inc_deg": setup.theta_inc_deg,
-                        "index_matched": setup.index_matched, "estimator": "analog photon tally, delta tracking"},
+        "sample": {
+            "size_mm": list(volume.size_mm),
+            "voxel_mm": volume.voxel_mm,
+            "g": volume.g,
+            "eta": volume.eta,
+            "description": volume.description,
+        },
+        "acquisition": {
+            "photons": setup.photons,
+            "seed": setup.seed,
+            "theta_inc_deg": setup.theta_inc_deg,
+            "index_matched": setup.index_matched,
+            "estimator": "analog photon tally, delta tracking",
+        },
         "software": {"translucency": __version__, **mi_versions},
         "request": request,
     }
@@ -173,15 +199,23 @@ def acquire_planar(volume: Volume, setup: PlanarSetup, out, *, overwrite: bool =
         for ch in range(3):
             for b0 in range(lo, hi, per_launch):
                 b1 = min(hi, b0 + per_launch)
-                res = random_walk(volume, ch, x_i[b0:b1], setup.photons, seed=setup.seed, first_point=b0,
-                                  theta_inc_deg=setup.theta_inc_deg, index_matched=setup.index_matched)
+                res = random_walk(
+                    volume,
+                    ch,
+                    x_i[b0:b1],
+                    setup.photons,
+                    seed=setup.seed,
+                    first_point=b0,
+                    theta_inc_deg=setup.theta_inc_deg,
+                    index_matched=setup.index_matched,
+                )
                 m = b1 - b0
                 off = b0 - lo  # first row of this launch within the chunk
                 local = np.arange(m).repeat(setup.photons)  # launch-local point of each photon
-                spec[off:off + m, ch] = np.bincount(local, weights=res.code == -1, minlength=m)
+                spec[off : off + m, ch] = np.bincount(local, weights=res.code == -1, minlength=m)
                 is_top = res.code == TOP
                 pt = local[is_top]
-                top[off:off + m, ch] = np.bincount(pt, minlength=m)
+                top[off : off + m, ch] = np.bincount(pt, minlength=m)
                 # pixel of each exit in its own window
                 col = np.floor((res.x[is_top] - origin[b0 + pt, 0]) / setup.pitch).astype(np.int64)
                 row = np.floor((res.y[is_top] - origin[b0 + pt, 1]) / setup.pitch).astype(np.int64)
@@ -212,6 +246,10 @@ def _volume_fingerprint(volume: Volume) -> dict:
     h = hashlib.sha256()
     for a in (volume.sigma_s, volume.sigma_a):
         h.update(np.ascontiguousarray(a).tobytes())
-    return {"sha256": h.hexdigest(), "shape": list(volume.shape), "voxel_mm": volume.voxel_mm,
-            "g": volume.g, "eta": volume.eta}
-
+    return {
+        "sha256": h.hexdigest(),
+        "shape": list(volume.shape),
+        "voxel_mm": volume.voxel_mm,
+        "g": volume.g,
+        "eta": volume.eta,
+    }

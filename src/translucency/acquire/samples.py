@@ -104,7 +104,7 @@ def apple_slice(size_mm, voxel_mm, g=0.0, seed=0) -> Volume:
     radius = 0.5 * min(w, h)
     r = np.hypot(x - cx, y - cy) / radius
     flesh_ss, flesh_sa = _coeffs("apple", g)
-    ring = np.exp(-((r - 0.4) / 0.03) ** 2)
+    ring = np.exp(-(((r - 0.4) / 0.03) ** 2))
     texture = 1.0 + 0.15 * _noise(z.shape, max(0.3 / voxel_mm, 0.5), rng)
     scale = (texture * (1.0 - 0.3 * ring))[..., None]
     s = (flesh_ss * scale).astype(np.float32)
@@ -187,7 +187,9 @@ def make_sample(name: str, size_mm, voxel_mm: float, *, g: float = 0.0, seed: in
     """
     size_mm = tuple(float(v) for v in size_mm)
     if len(size_mm) != 3 or min(size_mm) <= 0 or not np.isfinite(size_mm).all():
-        raise TranslucencyError(f"size: expected three positive lengths (width, height, thickness) in mm, got {size_mm}")
+        raise TranslucencyError(
+            f"size: expected three positive lengths (width, height, thickness) in mm, got {size_mm}"
+        )
     if not (np.isfinite(voxel_mm) and voxel_mm > 0):
         raise TranslucencyError(f"voxel: must be a positive length in mm, got {voxel_mm}")
     if not -1.0 < g < 1.0:
@@ -215,6 +217,8 @@ def sample_of_dataset(header: dict) -> Volume:
     s = header.get("sample", {})
     d = s.get("description", {})
     if "generator" not in d or "size_mm" not in s:
-        raise TranslucencyError("data set: its sample was not made by a generator here (a user's volume or "
-                                "data); pass the volume itself")
+        raise TranslucencyError(
+            "data set: its sample was not made by a generator here (a user's volume or "
+            "data); pass the volume itself"
+        )
     return make_sample(d["generator"], s["size_mm"], s["voxel_mm"], g=s.get("g", 0.0), seed=d.get("seed", 0))

@@ -53,7 +53,9 @@ class WalkResult:
     x: np.ndarray  # exit position (mm) for TOP exits
     y: np.ndarray
     steps: int  # loop iterations summed over photons (free-flight events incl. null collisions)
-    cos_exit: np.ndarray | None = None  # cosine of the exit direction to the top normal (+z) for TOP exits, else 0
+    cos_exit: np.ndarray | None = (
+        None  # cosine of the exit direction to the top normal (+z) for TOP exits, else 0
+    )
 
 
 def _hg_sample(mi, dr, d, g: float, u1, u2):
@@ -71,7 +73,9 @@ def _hg_sample(mi, dr, d, g: float, u1, u2):
     return mi.Frame3f(d).to_world(local)
 
 
-def _walk_setup(mi, dr, volume: Volume, channel: int, total: int, n_photons: int, seed: int, first_point: int):
+def _walk_setup(
+    mi, dr, volume: Volume, channel: int, total: int, n_photons: int, seed: int, first_point: int
+):
     """What every walk starts from: the channel's per-voxel σ_s and σ_t (flattened z, y, x), the
     majorant, each lane's entry point, and one PCG32 stream per global photon number."""
     Float = mi.Float
@@ -86,8 +90,9 @@ def _walk_setup(mi, dr, volume: Volume, channel: int, total: int, n_photons: int
     return sigma_s, sigma_t, majorant, point, rng
 
 
-def _medium_event(mi, dr, volume: Volume, sigma_s, sigma_t, majorant: float, gx, gy, depth, collide, rng,
-                  direction):
+def _medium_event(
+    mi, dr, volume: Volume, sigma_s, sigma_t, majorant: float, gx, gy, depth, collide, rng, direction
+):
     """At a tentative collision: real scattering (prob. σ_s/σ̄), absorption (σ_a/σ̄) or a null event.
 
     ``gx, gy`` are the position from the volume's corner and ``depth`` below its top (mm); returns
@@ -108,9 +113,18 @@ def _medium_event(mi, dr, volume: Volume, sigma_s, sigma_t, majorant: float, gx,
     return scatter, absorb, new_dir
 
 
-def random_walk(volume: Volume, channel: int, entry_xy: np.ndarray, n_photons: int, *, seed: int = 0,
-                first_point: int = 0, theta_inc_deg: float = 0.0, index_matched: bool = False,
-                max_steps: int = 200_000) -> WalkResult:
+def random_walk(
+    volume: Volume,
+    channel: int,
+    entry_xy: np.ndarray,
+    n_photons: int,
+    *,
+    seed: int = 0,
+    first_point: int = 0,
+    theta_inc_deg: float = 0.0,
+    index_matched: bool = False,
+    max_steps: int = 200_000,
+) -> WalkResult:
     """Trace ``n_photons`` photons from each entry point through the slab, in one wavefront.
 
     Parameters
@@ -147,7 +161,9 @@ def random_walk(volume: Volume, channel: int, entry_xy: np.ndarray, n_photons: i
     W, H, T = volume.size_mm
     eta = 1.0 if index_matched else volume.eta
 
-    sigma_s, sigma_t, majorant, point, rng = _walk_setup(mi, dr, volume, channel, total, n_photons, seed, first_point)
+    sigma_s, sigma_t, majorant, point, rng = _walk_setup(
+        mi, dr, volume, channel, total, n_photons, seed, first_point
+    )
 
     # -- entry: Fresnel at the top face, then refraction (Snell) -----------------------
     th = np.radians(theta_inc_deg)
@@ -171,16 +187,23 @@ def random_walk(volume: Volume, channel: int, entry_xy: np.ndarray, n_photons: i
         # tentative free-flight distance against the majorant (mm)
         t = -dr.log(1.0 - rng.next_float32()) / majorant
         # distance to the box faces along the direction
-        tx = dr.select(direction.x > 0, (W - pos.x) / direction.x, dr.select(direction.x < 0, -pos.x / direction.x, inf))
-        ty = dr.select(direction.y > 0, (H - pos.y) / direction.y, dr.select(direction.y < 0, -pos.y / direction.y, inf))
-        tz = dr.select(direction.z > 0, -pos.z / direction.z, dr.select(direction.z < 0, (-T - pos.z) / direction.z, inf))
+        tx = dr.select(
+            direction.x > 0, (W - pos.x) / direction.x, dr.select(direction.x < 0, -pos.x / direction.x, inf)
+        )
+        ty = dr.select(
+            direction.y > 0, (H - pos.y) / direction.y, dr.select(direction.y < 0, -pos.y / direction.y, inf)
+        )
+        tz = dr.select(
+            direction.z > 0, -pos.z / direction.z, dr.select(direction.z < 0, (-T - pos.z) / direction.z, inf)
+        )
         t_face = dr.maximum(dr.minimum(dr.minimum(tx, ty), tz), 0.0)
         collide = t < t_face
 
         # -- inside: real or null collision at pos + t d ------------------------------------
         p_c = pos + direction * t
-        scatter, absorb, new_dir = _medium_event(mi, dr, volume, sigma_s, sigma_t, majorant, p_c.x, p_c.y, -p_c.z,
-                                                 collide, rng, direction)
+        scatter, absorb, new_dir = _medium_event(
+            mi, dr, volume, sigma_s, sigma_t, majorant, p_c.x, p_c.y, -p_c.z, collide, rng, direction
+        )
 
         # -- boundary: Fresnel reflection or exit at the nearest face --------------------
         hit = ~collide
@@ -195,9 +218,11 @@ def random_walk(volume: Volume, channel: int, entry_xy: np.ndarray, n_photons: i
         reflect = hit & (rng.next_float32() < F)
         leave = hit & ~reflect
         p_b = pos + direction * t_face
-        refl_dir = mi.Vector3f(dr.select(on_x, -direction.x, direction.x),
-                               dr.select(on_y, -direction.y, direction.y),
-                               dr.select(on_z, -direction.z, direction.z))
+        refl_dir = mi.Vector3f(
+            dr.select(on_x, -direction.x, direction.x),
+            dr.select(on_y, -direction.y, direction.y),
+            dr.select(on_z, -direction.z, direction.z),
+        )
 
         pos = dr.select(collide, p_c, p_b)
         pos = mi.Vector3f(dr.clip(pos.x, 0.0, W), dr.clip(pos.y, 0.0, H), dr.clip(pos.z, -T, 0.0))
@@ -210,7 +235,8 @@ def random_walk(volume: Volume, channel: int, entry_xy: np.ndarray, n_photons: i
         return pos, direction, rng, code, steps
 
     pos, direction, rng, code, steps = dr.while_loop(
-        state=(pos, direction, rng, code, steps), cond=cond, body=body, label="photon_walk")
+        state=(pos, direction, rng, code, steps), cond=cond, body=body, label="photon_walk"
+    )
     dr.eval(pos, direction, code, steps)
     code_np = np.asarray(code).astype(np.int64)
     code_np[code_np == TOP + 100] = -1
@@ -218,13 +244,16 @@ def random_walk(volume: Volume, channel: int, entry_xy: np.ndarray, n_photons: i
     # Snell's law refracts the inside cosine c to sqrt(1 - η²(1 - c²)) outside
     c_in = np.where(code_np == TOP, np.asarray(direction.z, dtype=np.float64), 0.0)
     cos_exit = np.where(code_np == TOP, np.sqrt(np.clip(1.0 - eta**2 * (1.0 - c_in**2), 0.0, 1.0)), 0.0)
-    return WalkResult(code=code_np, x=np.asarray(pos.x), y=np.asarray(pos.y), steps=int(dr.sum(steps)[0]),
-                      cos_exit=cos_exit)
+    return WalkResult(
+        code=code_np, x=np.asarray(pos.x), y=np.asarray(pos.y), steps=int(dr.sum(steps)[0]), cos_exit=cos_exit
+    )
 
 
 def check_memory(n_photons_batch: int, volume: Volume, limit_bytes: float) -> None:
     """Refuse a batch whose estimated memory exceeds ``limit_bytes``."""
     need = n_photons_batch * 96 + volume.nbytes() * 2
     if need > limit_bytes:
-        raise TranslucencyError(f"photons: a batch needs about {need / 2**30:.1f} GiB, more than the "
-                                f"{limit_bytes / 2**30:.1f} GiB allowed; lower --batch or the volume size")
+        raise TranslucencyError(
+            f"photons: a batch needs about {need / 2**30:.1f} GiB, more than the "
+            f"{limit_bytes / 2**30:.1f} GiB allowed; lower --batch or the volume size"
+        )

@@ -64,7 +64,9 @@ class Volume:
             check_nonnegative(name, a)
             object.__setattr__(self, name, a)
         if self.sigma_s.shape != self.sigma_a.shape:
-            raise TranslucencyError(f"sigma_a: shape {self.sigma_a.shape} differs from sigma_s {self.sigma_s.shape}")
+            raise TranslucencyError(
+                f"sigma_a: shape {self.sigma_a.shape} differs from sigma_s {self.sigma_s.shape}"
+            )
         if not (self.sigma_s + self.sigma_a > 0).any(axis=(0, 1, 2)).all():
             raise TranslucencyError("sigma_s, sigma_a: a channel is empty (all coefficients zero)")
         for name, lo, hi in (("voxel_mm", 0.0, np.inf), ("g", -1.0, 1.0), ("eta", 0.0, np.inf)):
@@ -74,12 +76,17 @@ class Volume:
             object.__setattr__(self, name, float(v))
 
     @classmethod
-    def homogeneous(cls, shape, voxel_mm, sigma_s, sigma_a, g=0.0, eta=1.3, description=None) -> "Volume":
+    def homogeneous(cls, shape, voxel_mm, sigma_s, sigma_a, g=0.0, eta=1.3, description=None) -> Volume:
         """A volume of ``shape`` (Z, Y, X) voxels with the same RGB coefficients everywhere."""
         shape = tuple(int(s) for s in shape) + (3,)
-        return cls(np.broadcast_to(np.asarray(sigma_s, np.float32), shape).copy(),
-                   np.broadcast_to(np.asarray(sigma_a, np.float32), shape).copy(),
-                   voxel_mm, g, eta, description or {"generator": "homogeneous"})
+        return cls(
+            np.broadcast_to(np.asarray(sigma_s, np.float32), shape).copy(),
+            np.broadcast_to(np.asarray(sigma_a, np.float32), shape).copy(),
+            voxel_mm,
+            g,
+            eta,
+            description or {"generator": "homogeneous"},
+        )
 
     @property
     def shape(self) -> tuple[int, int, int]:
@@ -132,7 +139,13 @@ def load_volume(path) -> Volume:
         else:
             scalars[key] = default
     try:
-        return Volume(data["sigma_s"], data["sigma_a"], scalars["voxel_mm"], scalars["g"], scalars["eta"],
-                      {"generator": "file", "path": str(path)})
+        return Volume(
+            data["sigma_s"],
+            data["sigma_a"],
+            scalars["voxel_mm"],
+            scalars["g"],
+            scalars["eta"],
+            {"generator": "file", "path": str(path)},
+        )
     except TranslucencyError as exc:
         raise TranslucencyError(f"{path}: {exc}") from None

@@ -53,8 +53,11 @@ def _version(value: bool) -> None:
 
 
 @app.callback()
-def _main(version: bool = typer.Option(False, "--version", callback=_version, is_eager=True,
-                                       help="Print the version and exit.")) -> None:
+def _main(
+    version: bool = typer.Option(
+        False, "--version", callback=_version, is_eager=True, help="Print the version and exit."
+    ),
+) -> None:
     """Measure, fit, evaluate and render heterogeneous translucent materials."""
 
 
@@ -74,8 +77,15 @@ def user_errors(func):
 
 def progress() -> Progress:
     """A Rich progress bar on stderr."""
-    return Progress(TextColumn("[bold]{task.description}"), BarColumn(), TextColumn("{task.completed}/{task.total}"),
-                    TextColumn("{task.fields[item]}"), TimeElapsedColumn(), console=err_console, transient=False)
+    return Progress(
+        TextColumn("[bold]{task.description}"),
+        BarColumn(),
+        TextColumn("{task.completed}/{task.total}"),
+        TextColumn("{task.fields[item]}"),
+        TimeElapsedColumn(),
+        console=err_console,
+        transient=False,
+    )
 
 
 @app.command()
@@ -83,8 +93,9 @@ def progress() -> Progress:
 def demo(
     out: Path = typer.Option(Path("results"), "--out", "-o", help="Directory for the figures and files."),
     terms: int = typer.Option(3, "--terms", "-n", min=1, max=8, help="Exponential terms n of the fits."),
-    overwrite: bool = typer.Option(False, "--overwrite", help="Replace an earlier output of translucency at --out "
-                                   "(never anything else)."),
+    overwrite: bool = typer.Option(
+        False, "--overwrite", help="Replace an earlier output of translucency at --out (never anything else)."
+    ),
 ):
     """The main job on the embedded default data: baselines per material, then planar fits
     (iso, aniso, dipole, Burley) with alpha and the Figure 1 report."""
@@ -138,7 +149,17 @@ def _info_model(path: Path) -> None:
     table.add_column("field", style="bold")
     table.add_column("value")
     table.add_row("size on disk", f"{size:,} bytes ({size / 1e6:.3f} MB)")
-    for key in ("format", "version", "kind", "geometry", "n_points", "n_terms", "n_directions", "colour", "dtype"):
+    for key in (
+        "format",
+        "version",
+        "kind",
+        "geometry",
+        "n_points",
+        "n_terms",
+        "n_directions",
+        "colour",
+        "dtype",
+    ):
         if key in header:
             table.add_row(key, str(header[key]))
     if header.get("meta"):
@@ -152,21 +173,30 @@ def _info_model(path: Path) -> None:
     physics = check_physics(model)
     total, radius = physics.total, physics.radius
     if physics.ok:
-        table.add_row("valid", "[green]yes[/] (shapes, dtypes, finiteness, eq. (2), checksum, physical bounds)")
+        table.add_row(
+            "valid", "[green]yes[/] (shapes, dtypes, finiteness, eq. (2), checksum, physical bounds)"
+        )
     else:
         table.add_row("valid", "[red]no[/] — the file is intact, but the model is not physical")
     table.add_row("physical", ("[green]" if physics.ok else "[red]") + physics.describe() + "[/]")
-    table.add_row("alpha", f"shape {model.alpha.shape}, range [{model.alpha.values.min():.3g}, {model.alpha.values.max():.3g}]")
+    table.add_row(
+        "alpha",
+        f"shape {model.alpha.shape}, range [{model.alpha.values.min():.3g}, {model.alpha.values.max():.3g}]",
+    )
     table.add_row("total R_d (R,G,B)", "mean " + " ".join(f"{v:.4g}" for v in total.mean(axis=0)))
-    table.add_row("99.9% energy radius", f"{np.min(radius):.3g} … {np.max(radius):.3g} mm "
-                  f"(object {physics.size_mm:.3g} mm)")
+    table.add_row(
+        "99.9% energy radius",
+        f"{np.min(radius):.3g} … {np.max(radius):.3g} mm (object {physics.size_mm:.3g} mm)",
+    )
     console.print(table)
     if not physics.ok:
         raise typer.Exit(1)
 
 
-acquire_app = typer.Typer(help="Virtual DISCO: simulate measurements by photon transport (Mitsuba 3 / Dr.Jit).",
-                          no_args_is_help=True)
+acquire_app = typer.Typer(
+    help="Virtual DISCO: simulate measurements by photon transport (Mitsuba 3 / Dr.Jit).",
+    no_args_is_help=True,
+)
 app.add_typer(acquire_app, name="acquire")
 
 
@@ -174,25 +204,37 @@ app.add_typer(acquire_app, name="acquire")
 @user_errors
 def acquire_planar_cmd(
     out: Path = typer.Option(..., "--out", "-o", help="Output data set (Zarr directory)."),
-    material: str = typer.Option(None, "--material", "-m",
-                                 help="Sample generator: homogeneous:<name>, marble, apple-slice, skin, fibers."),
-    volume: Path = typer.Option(None, "--volume", help="A user's volume: .npz with sigma_s, sigma_a (Z,Y,X,3) in 1/mm, voxel_mm."),
+    material: str = typer.Option(
+        None,
+        "--material",
+        "-m",
+        help="Sample generator: homogeneous:<name>, marble, apple-slice, skin, fibers.",
+    ),
+    volume: Path = typer.Option(
+        None, "--volume", help="A user's volume: .npz with sigma_s, sigma_a (Z,Y,X,3) in 1/mm, voxel_mm."
+    ),
     photons: int = typer.Option(10_000, "--photons", "-N", help="Photons per incident point and channel."),
     seed: int = typer.Option(0, "--seed", help="Random seed (results are deterministic for a seed)."),
     grid: int = typer.Option(8, "--grid", help="Incident points per axis (grid x grid)."),
     span: float = typer.Option(8.0, "--span", help="Side of the incident grid, mm (centred on the sample)."),
     pitch: float = typer.Option(0.25, "--pitch", help="Pixel size, mm."),
     window: float = typer.Option(8.0, "--window", help="Window side around each incident point, mm."),
-    size: tuple[float, float, float] = typer.Option((20.0, 20.0, 8.0), "--size",
-                                                    help="Generated slab: width height thickness, mm."),
+    size: tuple[float, float, float] = typer.Option(
+        (20.0, 20.0, 8.0), "--size", help="Generated slab: width height thickness, mm."
+    ),
     voxel: float = typer.Option(0.25, "--voxel", help="Voxel size of generated samples, mm."),
     g: float = typer.Option(0.0, "--g", help="Henyey-Greenstein anisotropy of generated samples."),
     angle: float = typer.Option(0.0, "--angle", help="Angle of incidence from the normal, degrees."),
-    index_matched: bool = typer.Option(False, "--index-matched", help="No Fresnel reflection at the boundary."),
+    index_matched: bool = typer.Option(
+        False, "--index-matched", help="No Fresnel reflection at the boundary."
+    ),
     chunk: int = typer.Option(16, "--chunk", help="Incident points per chunk (unit of resuming)."),
     dtype: str = typer.Option("float32", "--dtype", help="Storage of R_d and variance: float32 or float16."),
-    overwrite: bool = typer.Option(False, "--overwrite", help="Replace a data set of translucency made with other "
-                                   "arguments (never anything else)."),
+    overwrite: bool = typer.Option(
+        False,
+        "--overwrite",
+        help="Replace a data set of translucency made with other arguments (never anything else).",
+    ),
 ):
     """Scan a pencil beam over a planar sample and record R_d around each incident point."""
 
@@ -200,16 +242,34 @@ def acquire_planar_cmd(
         raise TranslucencyError("give exactly one of --material NAME or --volume FILE.npz")
     claim_output(out, "planar data set", overwrite=overwrite, inputs=[volume], reuse=True)
     vol = load_volume(volume) if volume is not None else make_sample(material, size, voxel, g=g, seed=seed)
-    setup = PlanarSetup(grid=(grid, grid), span=(span, span), pitch=pitch, window=window, photons=photons,
-                        seed=seed, theta_inc_deg=angle, index_matched=index_matched, chunk_points=chunk, dtype=dtype)
+    setup = PlanarSetup(
+        grid=(grid, grid),
+        span=(span, span),
+        pitch=pitch,
+        window=window,
+        photons=photons,
+        seed=seed,
+        theta_inc_deg=angle,
+        index_matched=index_matched,
+        chunk_points=chunk,
+        dtype=dtype,
+    )
     setup.check(vol)
     est = estimate_seconds(vol, setup)
-    err_console.print(f"{grid * grid} incident points x {photons:,} photons x 3 channels on a "
-                      f"{' x '.join(f'{v:g}' for v in vol.size_mm)} mm slab; estimated time ~{est:.0f} s")
+    err_console.print(
+        f"{grid * grid} incident points x {photons:,} photons x 3 channels on a "
+        f"{' x '.join(f'{v:g}' for v in vol.size_mm)} mm slab; estimated time ~{est:.0f} s"
+    )
     with progress() as bar:
         task = bar.add_task("acquire", total=grid * grid, item="")
-        acquire_planar(vol, setup, out, overwrite=overwrite, inputs=[volume],
-                       progress=lambda done, total: bar.update(task, completed=done, item="points"))
+        acquire_planar(
+            vol,
+            setup,
+            out,
+            overwrite=overwrite,
+            inputs=[volume],
+            progress=lambda done, total: bar.update(task, completed=done, item="points"),
+        )
     console.print(f"data set: {out}")
 
 
@@ -217,31 +277,57 @@ def acquire_planar_cmd(
 @user_errors
 def acquire_mesh_cmd(
     out: Path = typer.Option(..., "--out", "-o", help="Output mesh data set (Zarr directory)."),
-    mesh: Path = typer.Option(None, "--mesh", help="A closed mesh (OBJ/PLY/STL); default: the procedural pig."),
+    mesh: Path = typer.Option(
+        None, "--mesh", help="A closed mesh (OBJ/PLY/STL); default: the procedural pig."
+    ),
     scale: float = typer.Option(1.0, "--scale", help="Millimetres per mesh unit."),
-    material: str = typer.Option("marble", "--material", "-m",
-                                 help="Filling: homogeneous:<name>, marble, apple-slice, skin, fibers (object space)."),
+    material: str = typer.Option(
+        "marble",
+        "--material",
+        "-m",
+        help="Filling: homogeneous:<name>, marble, apple-slice, skin, fibers (object space).",
+    ),
     voxel: float = typer.Option(0.5, "--voxel", help="Voxel size of the filling, mm."),
-    points: int = typer.Option(64, "--points", help="Incident points (farthest-point sample of the vertices)."),
+    points: int = typer.Option(
+        64, "--points", help="Incident points (farthest-point sample of the vertices)."
+    ),
     photons: int = typer.Option(20_000, "--photons", "-N", help="Photons per incident point and channel."),
     seed: int = typer.Option(0, "--seed", help="Random seed."),
     g: float = typer.Option(0.0, "--g", help="Henyey-Greenstein anisotropy."),
     chunk: int = typer.Option(8, "--chunk", help="Incident points per chunk (unit of resuming)."),
-    index_matched: bool = typer.Option(False, "--index-matched", help="No Fresnel reflection at the surface."),
-    overwrite: bool = typer.Option(False, "--overwrite", help="Replace a data set of translucency made with other "
-                                   "arguments (never anything else)."),
+    index_matched: bool = typer.Option(
+        False, "--index-matched", help="No Fresnel reflection at the surface."
+    ),
+    overwrite: bool = typer.Option(
+        False,
+        "--overwrite",
+        help="Replace a data set of translucency made with other arguments (never anything else).",
+    ),
 ):
     """Pencil beams at surface points of a 3D object; exits tallied per vertex (R_d in mm^-2)."""
 
     claim_output(out, "mesh data set", overwrite=overwrite, inputs=[mesh], reuse=True)
     obj = load_mesh(mesh, scale_mm=scale) if mesh is not None else make_pig()
     vol = object_volume(material, obj, voxel, g=g, seed=seed)
-    err_console.print(f"{points} incident points x {photons:,} photons x 3 channels on a mesh of "
-                      f"{len(obj.vertices):,} vertices, {' x '.join(f'{v:.1f}' for v in obj.extents)} mm")
+    err_console.print(
+        f"{points} incident points x {photons:,} photons x 3 channels on a mesh of "
+        f"{len(obj.vertices):,} vertices, {' x '.join(f'{v:.1f}' for v in obj.extents)} mm"
+    )
     with progress() as bar:
         task = bar.add_task("acquire", total=points, item="")
-        acquire_mesh(obj, vol, out, n_points=points, photons=photons, seed=seed, chunk_points=chunk,
-                     index_matched=index_matched, overwrite=overwrite, inputs=[mesh], progress=lambda done, total: bar.update(task, completed=done, item="points"))
+        acquire_mesh(
+            obj,
+            vol,
+            out,
+            n_points=points,
+            photons=photons,
+            seed=seed,
+            chunk_points=chunk,
+            index_matched=index_matched,
+            overwrite=overwrite,
+            inputs=[mesh],
+            progress=lambda done, total: bar.update(task, completed=done, item="points"),
+        )
     console.print(f"mesh data set: {out}")
 
 
@@ -253,16 +339,25 @@ def fit(
     model: str = typer.Option("iso", "--model", help="iso | aniso | dipole | burley."),
     terms: int = typer.Option(3, "--terms", "-n", help="Exponential terms n per profile (1-4)."),
     directions: int = typer.Option(8, "--directions", "-m", help="Directions m of the anisotropic model."),
-    colour: str = typer.Option(None, "--colour",
-                               help="shared: the paper's (1, s_g, s_b) scale of one fall-off; per-channel: one fall-off "
-                                    "per channel. Default: per-channel on planar data, shared on meshes."),
-    exclusion: float = typer.Option(None, "--exclusion", help="Ignore pixels closer than this to x_i, mm (default one pixel)."),
+    colour: str = typer.Option(
+        None,
+        "--colour",
+        help="shared: the paper's (1, s_g, s_b) scale of one fall-off; per-channel: one fall-off "
+        "per channel. Default: per-channel on planar data, shared on meshes.",
+    ),
+    exclusion: float = typer.Option(
+        None, "--exclusion", help="Ignore pixels closer than this to x_i, mm (default one pixel)."
+    ),
     rounds: int = typer.Option(3, "--rounds", help="Most alternation rounds (parameters, then alpha)."),
-    chunk: int = typer.Option(None, "--chunk", help="Incident points read and fitted together "
-                                        "(default 128, in whole chunks of the store)."),
+    chunk: int = typer.Option(
+        None,
+        "--chunk",
+        help="Incident points read and fitted together (default 128, in whole chunks of the store).",
+    ),
     float16: bool = typer.Option(False, "--float16", help="Store parameters as float16 (smaller file)."),
-    overwrite: bool = typer.Option(False, "--overwrite", help="Replace an earlier output of translucency at --out "
-                                   "(never anything else)."),
+    overwrite: bool = typer.Option(
+        False, "--overwrite", help="Replace an earlier output of translucency at --out (never anything else)."
+    ),
 ):
     """Fit a model per incident point, with the modulation texture alpha, to a planar data set.
 
@@ -272,7 +367,9 @@ def fit(
     claim_output(out, "model file", overwrite=overwrite, inputs=[data], option="--out")
     if is_mesh_dataset(data):
         check_fit_options(model, terms, 1, colour or "shared")
-        return _fit_mesh_cmd(data, out, model, terms, colour or "shared", exclusion, rounds, float16, overwrite)
+        return _fit_mesh_cmd(
+            data, out, model, terms, colour or "shared", exclusion, rounds, float16, overwrite
+        )
     colour = colour or "per-channel"
     check_fit_options(model, terms, directions, colour)
     ds = open_dataset(data)
@@ -283,15 +380,31 @@ def fit(
         def report(done, total, message):
             bar.update(task, completed=done, total=total or None, item=message)
 
-        result = fit_planar(ds, model, n_terms=terms, n_directions=directions, colour=colour,
-                            exclusion_mm=exclusion, max_rounds=rounds, chunk_points=chunk, checkpoint=ckpt,
-                            progress=report)
-    path = save_model(result.model, out, dtype="float16" if float16 else "float32", meta=result.metadata(data),
-                      overwrite=overwrite)
+        result = fit_planar(
+            ds,
+            model,
+            n_terms=terms,
+            n_directions=directions,
+            colour=colour,
+            exclusion_mm=exclusion,
+            max_rounds=rounds,
+            chunk_points=chunk,
+            checkpoint=ckpt,
+            progress=report,
+        )
+    path = save_model(
+        result.model,
+        out,
+        dtype="float16" if float16 else "float32",
+        meta=result.metadata(data),
+        overwrite=overwrite,
+    )
     if result.flagged.any():
-        err_console.print(f"[yellow]warning:[/] {int(result.flagged.sum())} incident points have no usable data "
-                          f"(all masked, NaN or zero) and are flagged in the model: "
-                          f"{np.flatnonzero(result.flagged)[:10].tolist()}…")
+        err_console.print(
+            f"[yellow]warning:[/] {int(result.flagged.sum())} incident points have no usable data "
+            f"(all masked, NaN or zero) and are flagged in the model: "
+            f"{np.flatnonzero(result.flagged)[:10].tolist()}…"
+        )
     _warn_unphysical(path)
     console.print(f"model: {path} ({result.seconds:.1f} s, {len(result.history)} rounds)")
 
@@ -301,46 +414,76 @@ def _warn_unphysical(path: Path) -> None:
     physics = read_header(path)["physics"]
     bad = sorted(set(physics["over_albedo"]) | set(physics["beyond_object"]))
     if bad:
-        err_console.print(f"[yellow]warning:[/] {len(bad)} incident points are not physical (total reflectance up to "
-                          f"{physics['max_total_reflectance']:.3g}, energy radius up to "
-                          f"{physics['max_energy_radius_mm']:.3g} mm on a {physics['size_mm']:.3g} mm object): "
-                          f"{bad[:10]}{'…' if len(bad) > 10 else ''}; see `translucency info {path}`")
+        err_console.print(
+            f"[yellow]warning:[/] {len(bad)} incident points are not physical (total reflectance up to "
+            f"{physics['max_total_reflectance']:.3g}, energy radius up to "
+            f"{physics['max_energy_radius_mm']:.3g} mm on a {physics['size_mm']:.3g} mm object): "
+            f"{bad[:10]}{'…' if len(bad) > 10 else ''}; see `translucency info {path}`"
+        )
 
 
 def _fit_mesh_cmd(data, out, model, terms, colour, exclusion, rounds, float16, overwrite):
     with progress() as bar:
         task = bar.add_task(f"fit {model} per vertex", total=None, item="")
-        result = fit_mesh(data, model, n_terms=terms, colour=colour, exclusion_mm=exclusion, max_rounds=rounds,
-                          progress=lambda done, total, msg: bar.update(task, completed=done, total=total or None,
-                                                                       item=msg))
-    path = save_model(result.model, out, dtype="float16" if float16 else "float32",
-                      meta=result.metadata(Path(data).resolve()), overwrite=overwrite)
+        result = fit_mesh(
+            data,
+            model,
+            n_terms=terms,
+            colour=colour,
+            exclusion_mm=exclusion,
+            max_rounds=rounds,
+            progress=lambda done, total, msg: bar.update(task, completed=done, total=total or None, item=msg),
+        )
+    path = save_model(
+        result.model,
+        out,
+        dtype="float16" if float16 else "float32",
+        meta=result.metadata(Path(data).resolve()),
+        overwrite=overwrite,
+    )
     _warn_unphysical(path)
-    console.print(f"model: {path} ({result.seconds:.1f} s, {len(result.history)} rounds, mesh of "
-                  f"{len(result.model.alpha.values):,} vertices)")
+    console.print(
+        f"model: {path} ({result.seconds:.1f} s, {len(result.history)} rounds, mesh of "
+        f"{len(result.model.alpha.values):,} vertices)"
+    )
 
 
 @app.command()
 @user_errors
 def render(
     model: Path = typer.Argument(..., help="A per-vertex model file (translucency fit on a mesh data set)."),
-    out: Path = typer.Option(Path("render"), "--out", "-o", help="Directory for ours.exr/.png (and the reference)."),
-    light: list[str] = typer.Option(None, "--light",
-                                    help="point:x,y,z[,I] | directional:dx,dy,dz[,E] | spot:x,y,z,tx,ty,tz,cutoff_deg[,I] | env:L | env:MAP.exr[,scale] (mm, W/sr, W/mm^2, W/(mm^2 sr))."),
-    view: str = typer.Option("1,-1.6,0.7", "--view", help="Camera direction from the object's centre, x,y,z."),
+    out: Path = typer.Option(
+        Path("render"), "--out", "-o", help="Directory for ours.exr/.png (and the reference)."
+    ),
+    light: list[str] = typer.Option(
+        None,
+        "--light",
+        help="point:x,y,z[,I] | directional:dx,dy,dz[,E] | spot:x,y,z,tx,ty,tz,cutoff_deg[,I] | env:L | "
+        "env:MAP.exr[,scale] (mm, W/sr, W/mm^2, W/(mm^2 sr)).",
+    ),
+    view: str = typer.Option(
+        "1,-1.6,0.7", "--view", help="Camera direction from the object's centre, x,y,z."
+    ),
     size: tuple[int, int] = typer.Option((320, 240), "--size", help="Image width and height in pixels."),
-    reference: bool = typer.Option(False, "--reference", help="Also path-trace the reference (Mitsuba volpath) and compare."),
+    reference: bool = typer.Option(
+        False, "--reference", help="Also path-trace the reference (Mitsuba volpath) and compare."
+    ),
     spp: int = typer.Option(32, "--spp", help="Samples per pixel of the reference."),
-    radius: float = typer.Option(None, "--radius", help="Transport truncation radius, mm (default: 99% energy)."),
-    overwrite: bool = typer.Option(False, "--overwrite", help="Replace an earlier output of translucency at --out "
-                                   "(never anything else)."),
+    radius: float = typer.Option(
+        None, "--radius", help="Transport truncation radius, mm (default: 99% energy)."
+    ),
+    overwrite: bool = typer.Option(
+        False, "--overwrite", help="Replace an earlier output of translucency at --out (never anything else)."
+    ),
 ):
-    """Relight a fitted object: irradiance per vertex, sparse transport, a picture through Mitsuba (EXR + PNG)."""
+    """Relight a fitted object: irradiance per vertex, sparse transport, a picture through Mitsuba (EXR + PNG)."""  # noqa: E501 — Typer lists the docstring verbatim as the command's one-line help; a line break would show in `translucency --help`
 
     m = load_model(model)
     header = read_header(model)
     if m.geometry != "mesh":
-        raise TranslucencyError(f"{model}: a planar model; render needs a per-vertex model of a mesh data set")
+        raise TranslucencyError(
+            f"{model}: a planar model; render needs a per-vertex model of a mesh data set"
+        )
     dataset = header.get("meta", {}).get("dataset", "")
     mesh, dheader = object_from_dataset(dataset)
     try:
@@ -355,8 +498,17 @@ def render(
     claim_folder(out, overwrite=overwrite, inputs=[model, dataset])
     cam = Camera.looking_at(mesh, direction, *size)
     vol = volume_of_dataset(mesh, dheader) if reference else None
-    res = figure2(m, mesh, lights[0], out, volume=vol, camera=cam, spp_reference=spp, radius=radius,
-                  eta=boundary_eta(dheader))
+    res = figure2(
+        m,
+        mesh,
+        lights[0],
+        out,
+        volume=vol,
+        camera=cam,
+        spp_reference=spp,
+        radius=radius,
+        eta=boundary_eta(dheader),
+    )
     table = Table(title=f"render of {model.name}", show_header=False)
     for k, v in res.items():
         table.add_row(k, f"{v:.4g}" if isinstance(v, float) else str(v))
@@ -370,11 +522,16 @@ def evaluate(
     model: Path = typer.Argument(..., help="The model file to evaluate (.model.zip)."),
     data: Path = typer.Argument(..., help="The planar data set it was fitted to (.zarr directory)."),
     report: Path = typer.Option(Path("report"), "--report", help="Directory for the figures and index.html."),
-    json_out: Path = typer.Option(None, "--json", help="Write the error summary (rel_l2, rel_l2_near/mid/far) here."),
-    compare: list[Path] = typer.Option(None, "--compare", help="Other model files of the same data (repeatable)."),
+    json_out: Path = typer.Option(
+        None, "--json", help="Write the error summary (rel_l2, rel_l2_near/mid/far) here."
+    ),
+    compare: list[Path] = typer.Option(
+        None, "--compare", help="Other model files of the same data (repeatable)."
+    ),
     points: str = typer.Option(None, "--points", help="Incident points for the profiles, e.g. '0,17,40'."),
-    overwrite: bool = typer.Option(False, "--overwrite", help="Replace an earlier output of translucency at --out "
-                                   "(never anything else)."),
+    overwrite: bool = typer.Option(
+        False, "--overwrite", help="Replace an earlier output of translucency at --out (never anything else)."
+    ),
 ):
     """Relative L2 errors (overall and per distance band), error maps, profiles and an HTML report."""
 
@@ -401,9 +558,13 @@ def evaluate(
     for col in ("model", "all", "near <1 mm", "mid 1-4 mm", "far >4 mm"):
         table.add_column(col)
     for name, s in summary["models"].items():
-        table.add_row(name, *(f"{100 * s[k]:.2f} %" for k in ("rel_l2", "rel_l2_near", "rel_l2_mid", "rel_l2_far")))
+        table.add_row(
+            name, *(f"{100 * s[k]:.2f} %" for k in ("rel_l2", "rel_l2_near", "rel_l2_mid", "rel_l2_far"))
+        )
     nf = summary["noise_floor"]
-    table.add_row("[dim]noise alone[/]", *(f"[dim]{100 * nf[k]:.2f} %[/]" for k in ("all", "near", "mid", "far")))
+    table.add_row(
+        "[dim]noise alone[/]", *(f"[dim]{100 * nf[k]:.2f} %[/]" for k in ("all", "near", "mid", "far"))
+    )
     console.print(table)
     console.print(f"report: {report / 'index.html'}")
 

@@ -106,8 +106,14 @@ def plot_profiles(profiles: list[MaterialProfiles], path, channel: int = 1) -> N
     fig, axes = plt.subplots(rows, cols, figsize=(4 * cols, 3.2 * rows), squeeze=False)
     for ax, p in zip(axes.ravel(), profiles):
         ax.semilogy(p.r, p.dipole[:, channel], "k-", lw=2, label="dipole (Jensen 2001)")
-        ax.semilogy(p.r, p.exponential[:, channel], "--", color="tab:orange", lw=1.5,
-                    label=f"{len(p.fits[channel].c)} exponentials (fit)")
+        ax.semilogy(
+            p.r,
+            p.exponential[:, channel],
+            "--",
+            color="tab:orange",
+            lw=1.5,
+            label=f"{len(p.fits[channel].c)} exponentials (fit)",
+        )
         ax.semilogy(p.r, p.burley[:, channel], ":", color="tab:blue", lw=1.5, label="Burley (fit)")
         e = p.rel_l2("exponential")[channel]
         b = p.rel_l2("burley")[channel]
@@ -120,8 +126,11 @@ def plot_profiles(profiles: list[MaterialProfiles], path, channel: int = 1) -> N
     for ax in axes.ravel()[n:]:
         ax.axis("off")
     axes.ravel()[0].legend(fontsize=8, loc="upper right")
-    fig.suptitle("Radial profiles of the Jensen 2001 materials: dipole, its 3-term exponential fit, "
-                 "and Christensen–Burley fitted to it (rms relative difference in the titles)", fontsize=11)
+    fig.suptitle(
+        "Radial profiles of the Jensen 2001 materials: dipole, its 3-term exponential fit, "
+        "and Christensen–Burley fitted to it (rms relative difference in the titles)",
+        fontsize=11,
+    )
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)

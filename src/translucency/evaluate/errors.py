@@ -47,13 +47,22 @@ class PlanarErrors:
         out.update({f"rel_l2_{b}": v for b, v in self.bands.items()})
         out["noise_floor"] = self.noise
         pp = self.per_point[np.isfinite(self.per_point)]
-        out["per_point"] = {"median": float(np.median(pp)) if pp.size else None,
-                            "p95": float(np.quantile(pp, 0.95)) if pp.size else None}
+        out["per_point"] = {
+            "median": float(np.median(pp)) if pp.size else None,
+            "p95": float(np.quantile(pp, 0.95)) if pp.size else None,
+        }
         return out
 
 
-def planar_errors(model, dataset, *, exclusion_mm: float | None = None, chunk_points: int = 256,
-                  flagged=None, map_radius: float = 4.0) -> PlanarErrors:
+def planar_errors(
+    model,
+    dataset,
+    *,
+    exclusion_mm: float | None = None,
+    chunk_points: int = 256,
+    flagged=None,
+    map_radius: float = 4.0,
+) -> PlanarErrors:
     """Relative L2 errors of ``model`` on a planar data set, overall, per band and as maps.
 
     Parameters
@@ -74,8 +83,10 @@ def planar_errors(model, dataset, *, exclusion_mm: float | None = None, chunk_po
     ds = dataset if isinstance(dataset, PlanarDataset) else open_dataset(dataset)
     x_i = ds["x_i"].astype(np.float64)
     if model.n_points != ds.n_points or not np.allclose(model.x_i[:, :2], x_i, atol=1e-4):
-        raise TranslucencyError(f"{ds.path}: the model's {model.n_points} incident points are not the data set's "
-                                f"{ds.n_points}; evaluate a model on the data set it was fitted to")
+        raise TranslucencyError(
+            f"{ds.path}: the model's {model.n_points} incident points are not the data set's "
+            f"{ds.n_points}; evaluate a model on the data set it was fitted to"
+        )
     exclusion = ds.pitch if exclusion_mm is None else float(exclusion_mm)
     origin = ds["window_origin"].astype(np.float64)
     grid = SampleGrid.covering(origin, ds.pitch, ds.window)
@@ -95,8 +106,7 @@ def planar_errors(model, dataset, *, exclusion_mm: float | None = None, chunk_po
         geom = window_geometry(x_i[s:e], origin[s:e], grid, ds.window)
         r = np.broadcast_to(geom.r, mask.shape)
         pred = model.R_d_window(np.arange(s, e), origin[s:e], ds.pitch, ds.window).reshape(k, -1, 3)
-        ok = (mask & np.isfinite(y).all(2) & np.isfinite(v).all(2) & (r >= exclusion)
-              & ~flagged[s:e, None])
+        ok = mask & np.isfinite(y).all(2) & np.isfinite(v).all(2) & (r >= exclusion) & ~flagged[s:e, None]
         d2 = np.where(ok, ((pred - y) ** 2).sum(2), 0.0)
         y2 = np.where(ok, (y**2).sum(2), 0.0)
         v2 = np.where(ok, v.sum(2), 0.0)
@@ -121,4 +131,8 @@ def planar_errors(model, dataset, *, exclusion_mm: float | None = None, chunk_po
         rel_l2=ratio(tot_e, tot_r),
         bands={b: ratio(err2[b], ref2[b]) for b in BANDS},
         noise={"all": ratio(tot_v, tot_r), **{b: ratio(var[b], ref2[b]) for b in BANDS}},
-        per_point=per_point, per_pixel=per_pixel.reshape(grid.shape), grid=grid, map_radius=map_radius)
+        per_point=per_point,
+        per_pixel=per_pixel.reshape(grid.shape),
+        grid=grid,
+        map_radius=map_radius,
+    )

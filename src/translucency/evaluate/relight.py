@@ -51,7 +51,9 @@ def pattern_irradiance(pattern: str | Path, x_i: np.ndarray) -> np.ndarray:
         return np.repeat(lit.astype(float)[:, None], 3, axis=1)
     path = Path(pattern)
     if not path.exists():
-        raise TranslucencyError(f"pattern: {pattern!r} is neither one of {', '.join(PATTERNS)} nor an image file")
+        raise TranslucencyError(
+            f"pattern: {pattern!r} is neither one of {', '.join(PATTERNS)} nor an image file"
+        )
     try:
         img = np.asarray(mpimg.imread(path), dtype=np.float64)
     except Exception as exc:  # noqa: BLE001
@@ -67,8 +69,17 @@ def pattern_irradiance(pattern: str | Path, x_i: np.ndarray) -> np.ndarray:
     return lin[row, col]
 
 
-def relight(model, E: np.ndarray, cell_area: float, origin, pitch: float, shape: tuple[int, int], *,
-            radius: float | None = None, chunk: int = 64) -> np.ndarray:
+def relight(
+    model,
+    E: np.ndarray,
+    cell_area: float,
+    origin,
+    pitch: float,
+    shape: tuple[int, int],
+    *,
+    radius: float | None = None,
+    chunk: int = 64,
+) -> np.ndarray:
     """Predict the diffuse radiant exitance of a planar model under irradiance E.
 
     Parameters
@@ -95,7 +106,7 @@ def relight(model, E: np.ndarray, cell_area: float, origin, pitch: float, shape:
     lit = np.flatnonzero((np.asarray(E) > 0).any(axis=1))
     origin = np.asarray(origin, dtype=np.float64)
     for s in range(0, lit.size, chunk):
-        idx = lit[s:s + chunk]
+        idx = lit[s : s + chunk]
         # a (2 half + 1)² window of output pixels around each incident point
         c0 = np.floor((model.x_i[idx, 0] - origin[0]) / pitch).astype(int) - half
         r0 = np.floor((model.x_i[idx, 1] - origin[1]) / pitch).astype(int) - half
@@ -119,7 +130,6 @@ def plot_relighting(reference: np.ndarray, predictions: dict, extent, path, chan
     """
     plt = pyplot()
 
-
     ref = reference[..., channel]
     n = len(predictions)
     fig, axes = plt.subplots(2, n + 1, figsize=(3.8 * (n + 1), 7.0), squeeze=False)
@@ -129,7 +139,10 @@ def plot_relighting(reference: np.ndarray, predictions: dict, extent, path, chan
     errors = {}
     mid = ref.shape[0] // 2
     band = slice(max(mid - 2, 0), mid + 3)
-    xs = np.linspace(extent[0], extent[1], ref.shape[1], endpoint=False) + (extent[1] - extent[0]) / ref.shape[1] / 2
+    xs = (
+        np.linspace(extent[0], extent[1], ref.shape[1], endpoint=False)
+        + (extent[1] - extent[0]) / ref.shape[1] / 2
+    )
     axes[1][0].semilogy(xs, ref[band].mean(0), "k.", ms=3, label="reference")
     for j, (name, B) in enumerate(predictions.items(), start=1):
         pred = B[..., channel]

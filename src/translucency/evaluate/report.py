@@ -41,7 +41,12 @@ def model_label(model) -> str:
 def default_points(n_points: int) -> list[int]:
     """Four incident points spread over a square grid: centre, two off-centre, a corner."""
     side = int(round(np.sqrt(n_points)))
-    picks = [side // 2 * side + side // 2, side // 4 * side + 3 * side // 4, 3 * side // 4 * side + side // 4, 0]
+    picks = [
+        side // 2 * side + side // 2,
+        side // 4 * side + 3 * side // 4,
+        3 * side // 4 * side + side // 4,
+        0,
+    ]
     return sorted({min(p, n_points - 1) for p in picks})
 
 
@@ -61,7 +66,7 @@ def plot_profiles(models: dict, ds: PlanarDataset, points: list[int], path, chan
         r, ym = ring_profile(y, ds.pitch)
         ax.semilogy(r, np.where(ym > 0, ym, np.nan), "ko", ms=3, label="measured (virtual DISCO)")
         for name, m in models.items():
-            pred = m.R_d_window([p], origin[p:p + 1], ds.pitch, ds.window)[0, :, :, channel]
+            pred = m.R_d_window([p], origin[p : p + 1], ds.pitch, ds.window)[0, :, :, channel]
             _, pm = ring_profile(pred, ds.pitch)
             style = "-" if m.kind == "exponential" else "--"
             ax.semilogy(r, pm, style, lw=1.6, label=name)
@@ -78,14 +83,21 @@ def plot_error_maps(errors: dict[str, PlanarErrors], x_i: np.ndarray, path) -> N
     """Figure 1 (right): relative error per outgoing pixel and per incident point, shared colour scale."""
     plt = pyplot()
     names = list(errors)
-    vmax = max(max(np.nanquantile(e.per_pixel, 0.98), np.nanquantile(e.per_point, 0.98)) for e in errors.values())
+    vmax = max(
+        max(np.nanquantile(e.per_pixel, 0.98), np.nanquantile(e.per_point, 0.98)) for e in errors.values()
+    )
     side = int(round(np.sqrt(len(x_i))))
     on_grid = side * side == len(x_i) and side > 1
     fig, axes = plt.subplots(2, len(names), figsize=(4.0 * len(names), 7.2), squeeze=False)
     for j, name in enumerate(names):
         e = errors[name]
         h, w = e.grid.shape
-        ext = [e.grid.origin[0], e.grid.origin[0] + w * e.grid.pitch, e.grid.origin[1], e.grid.origin[1] + h * e.grid.pitch]
+        ext = [
+            e.grid.origin[0],
+            e.grid.origin[0] + w * e.grid.pitch,
+            e.grid.origin[1],
+            e.grid.origin[1] + h * e.grid.pitch,
+        ]
         im = axes[0][j].imshow(e.per_pixel, origin="lower", extent=ext, cmap="magma", vmin=0, vmax=vmax)
         axes[0][j].set_title(f"{name}\nper outgoing pixel, pairs r < {e.map_radius:g} mm", fontsize=9)
         lo, hi = x_i.min(axis=0) - 1.0, x_i.max(axis=0) + 1.0  # the scanned area
@@ -94,12 +106,23 @@ def plot_error_maps(errors: dict[str, PlanarErrors], x_i: np.ndarray, path) -> N
         if on_grid:  # a scan grid (rows of constant y): one pixel per incident point
             order = np.lexsort((x_i[:, 0], x_i[:, 1]))
             half = (x_i[:, 0].max() - x_i[:, 0].min()) / (side - 1) / 2
-            sc = axes[1][j].imshow(e.per_point[order].reshape(side, side), origin="lower", cmap="magma", vmin=0,
-                                   vmax=vmax, extent=[x_i[:, 0].min() - half, x_i[:, 0].max() + half,
-                                                      x_i[:, 1].min() - half, x_i[:, 1].max() + half])
+            sc = axes[1][j].imshow(
+                e.per_point[order].reshape(side, side),
+                origin="lower",
+                cmap="magma",
+                vmin=0,
+                vmax=vmax,
+                extent=[
+                    x_i[:, 0].min() - half,
+                    x_i[:, 0].max() + half,
+                    x_i[:, 1].min() - half,
+                    x_i[:, 1].max() + half,
+                ],
+            )
         else:
-            sc = axes[1][j].scatter(x_i[:, 0], x_i[:, 1], c=e.per_point, cmap="magma", vmin=0, vmax=vmax, s=12,
-                                    marker="s")
+            sc = axes[1][j].scatter(
+                x_i[:, 0], x_i[:, 1], c=e.per_point, cmap="magma", vmin=0, vmax=vmax, s=12, marker="s"
+            )
         axes[1][j].set_aspect("equal")
         axes[1][j].set_title(f"per incident point (rel_l2 {100 * e.rel_l2:.1f} %)", fontsize=9)
         for ax in axes[:, j]:
@@ -118,8 +141,9 @@ def plot_alpha(models: dict, path) -> None:
         a = m.alpha
         h, w = a.shape
         ext = [a.origin[0], a.origin[0] + w * a.pitch, a.origin[1], a.origin[1] + h * a.pitch]
-        im = ax.imshow(a.values, origin="lower", extent=ext, cmap="gray", vmin=0,
-                       vmax=float(np.quantile(a.values, 0.99)))
+        im = ax.imshow(
+            a.values, origin="lower", extent=ext, cmap="gray", vmin=0, vmax=float(np.quantile(a.values, 0.99))
+        )
         ax.set_title(f"α — {name}", fontsize=9)
         fig.colorbar(im, ax=ax, shrink=0.8)
     fig.tight_layout()
@@ -130,7 +154,10 @@ def plot_parameters(model, path) -> None:
     """Maps over the incident points: total R_d (G), and the exponential terms' rates and weights."""
     plt = pyplot()
     x = model.x_i
-    maps = {"total $R_d$ (G)": model.total_reflectance()[:, 1], "99.9 % energy radius [mm]": model.energy_radius()}
+    maps = {
+        "total $R_d$ (G)": model.total_reflectance()[:, 1],
+        "99.9 % energy radius [mm]": model.energy_radius(),
+    }
     if model.kind == "exponential":
         a = -model.d[:, -1 if model.c.shape[1] == 1 else 1].mean(axis=1)  # (N, n): mean over directions
         for k in range(model.n_terms):
@@ -196,10 +223,18 @@ def write_report(models, dataset, out_dir, *, points=None, flagged=None, json_pa
         fl = flagged.get(name)
         per_model[name]["flagged_points"] = [] if fl is None else np.flatnonzero(fl).tolist()
         per_model[name]["physics"] = check_physics(models[name]).summary()
-    summary = {"written_by": f"translucency {__version__}", "dataset": str(ds.path), "model": first, **per_model[first], "bands_mm": {k: [lo, hi if np.isfinite(hi) else None] for k, (lo, hi) in BANDS.items()},
-               "models": per_model, "profile_points": points,
-               "definition": "rel_l2 = ||model - data||_2 / ||data||_2 over valid pairs (mask, finite, r >= one pixel), "
-                             "RGB summed; noise_floor = sqrt(sum variance)/||data||_2"}
+    summary = {
+        "written_by": f"translucency {__version__}",
+        "dataset": str(ds.path),
+        "model": first,
+        **per_model[first],
+        "bands_mm": {k: [lo, hi if np.isfinite(hi) else None] for k, (lo, hi) in BANDS.items()},
+        "models": per_model,
+        "profile_points": points,
+        "definition": "rel_l2 = ||model - data||_2 / ||data||_2 "
+        "over valid pairs (mask, finite, r >= one pixel), "
+        "RGB summed; noise_floor = sqrt(sum variance)/||data||_2",
+    }
     write_json(out_dir / "report.json", summary)
     if json_path is not None:
         write_json(json_path, summary)
@@ -210,30 +245,42 @@ def write_report(models, dataset, out_dir, *, points=None, flagged=None, json_pa
 def _write_html(path: Path, ds: PlanarDataset, summary: dict, extra: list) -> None:
     rows = []
     for name, s in summary["models"].items():
-        cells = "".join(f"<td>{100 * s[k]:.2f} %</td>" for k in ("rel_l2", "rel_l2_near", "rel_l2_mid", "rel_l2_far"))
+        cells = "".join(
+            f"<td>{100 * s[k]:.2f} %</td>" for k in ("rel_l2", "rel_l2_near", "rel_l2_mid", "rel_l2_far")
+        )
         ph = s["physics"]
         unphysical = len(set(ph["over_albedo"]) | set(ph["beyond_object"]))
-        rows.append(f"<tr><th>{html.escape(name)}</th>{cells}<td>{len(s['flagged_points'])}</td>"
-                    f"<td>{unphysical} (max ρ {ph['max_total_reflectance']:.3g})</td></tr>")
+        rows.append(
+            f"<tr><th>{html.escape(name)}</th>{cells}<td>{len(s['flagged_points'])}</td>"
+            f"<td>{unphysical} (max ρ {ph['max_total_reflectance']:.3g})</td></tr>"
+        )
     nf = next(iter(summary["models"].values()))["noise_floor"]
     noise = "".join(f"<td>{100 * nf[k]:.2f} %</td>" for k in ("all", "near", "mid", "far"))
+    figures = "".join(
+        f'<figure><img src="{html.escape(f)}"><figcaption>{html.escape(c)}</figcaption></figure>'
+        for f, c in extra
+    )
     page = f"""<!doctype html><html><head><meta charset="utf-8"><title>translucency report</title>
 <style>body{{font-family:sans-serif;max-width:1400px;margin:auto}} table{{border-collapse:collapse}}
 td,th{{border:1px solid #ccc;padding:4px 8px;text-align:right}} img{{max-width:100%}}</style></head><body>
-<h1>Planar fit report</h1><p>Data set: <code>{html.escape(str(ds.path))}</code> — {ds.n_points} incident points,
+<h1>Planar fit report</h1>\
+<p>Data set: <code>{html.escape(str(ds.path))}</code> — {ds.n_points} incident points,
 windows {ds.window[0]}×{ds.window[1]} px at {ds.pitch} mm.</p>
 <h2>Relative L2 error</h2><table><tr><th>model</th><th>all</th><th>near &lt; 1 mm</th><th>mid 1–4 mm</th>
 <th>far &gt; 4 mm</th><th>flagged points</th><th>unphysical points (ρ &gt; 1 or r<sub>99.9</sub> beyond
-the sample)</th></tr>{''.join(rows)}
+the sample)</th></tr>{"".join(rows)}
 <tr><th>measurement noise alone</th>{noise}<td></td><td></td></tr></table>
-<p>{html.escape(summary['definition'])}</p>
+<p>{html.escape(summary["definition"])}</p>
 <div style="display:flex;gap:1em;flex-wrap:wrap"><figure style="flex:1 1 40%"><img src="profiles.png">
-<figcaption>Figure 1 (left): ring-averaged profiles around chosen incident points (green channel).</figcaption></figure>
-<figure style="flex:1 1 55%"><img src="error_maps.png"><figcaption>Figure 1 (right): relative error per outgoing pixel
+<figcaption>Figure 1 (left): ring-averaged profiles around chosen incident points \
+(green channel).</figcaption></figure>
+<figure style="flex:1 1 55%"><img src="error_maps.png">\
+<figcaption>Figure 1 (right): relative error per outgoing pixel
 and per incident point.</figcaption></figure></div>
 <figure><img src="alpha.png"><figcaption>Modulation texture α.</figcaption></figure>
-<figure><img src="params.png"><figcaption>Parameters of the first model over the incident points.</figcaption></figure>
-{''.join(f'<figure><img src="{html.escape(f)}"><figcaption>{html.escape(c)}</figcaption></figure>' for f, c in extra)}
+<figure><img src="params.png">\
+<figcaption>Parameters of the first model over the incident points.</figcaption></figure>
+{figures}
 </body></html>
 """
     with atomic_path(path) as tmp:

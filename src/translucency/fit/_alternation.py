@@ -108,12 +108,18 @@ class FitResult:
             ``dataset``, ``fit`` (the options), ``objective_per_round``,
             ``seconds`` (rounded to 0.01 s) and ``flagged_points`` (indices).
         """
-        return {"dataset": str(dataset_path), "fit": self.options, "objective_per_round": self.history,
-                "seconds": round(self.seconds, 2), "flagged_points": np.flatnonzero(self.flagged).tolist()}
+        return {
+            "dataset": str(dataset_path),
+            "fit": self.options,
+            "objective_per_round": self.history,
+            "seconds": round(self.seconds, 2),
+            "flagged_points": np.flatnonzero(self.flagged).tolist(),
+        }
 
 
-def check_fit_options(model: str, n_terms: int = 3, n_directions: int = 8, colour: str = "per-channel",
-                      rel_sigma: float = 0.05) -> None:
+def check_fit_options(
+    model: str, n_terms: int = 3, n_directions: int = 8, colour: str = "per-channel", rel_sigma: float = 0.05
+) -> None:
     """Refuse bad fit options with one line naming the option (before any work)."""
     if model not in KINDS:
         raise TranslucencyError(f"model: expected one of {', '.join(KINDS)}, got {model!r}")
@@ -238,8 +244,19 @@ class FitContext:
     cache: dict = field(default_factory=dict)
 
 
-def alternate(ctx: FitContext, options: dict, request: str, *, max_rounds: int, tol: float, chunk_points: int,
-              workers: int | None, checkpoint, progress, t0: float) -> FitResult:
+def alternate(
+    ctx: FitContext,
+    options: dict,
+    request: str,
+    *,
+    max_rounds: int,
+    tol: float,
+    chunk_points: int,
+    workers: int | None,
+    checkpoint,
+    progress,
+    t0: float,
+) -> FitResult:
     """The rounds of the alternation over all chunks of points (shared by planar and mesh fits).
 
     ``request`` identifies the fit in a checkpoint; ``t0`` is the start time
@@ -288,8 +305,9 @@ def alternate(ctx: FitContext, options: dict, request: str, *, max_rounds: int, 
     fitted = _build_model(ctx, state)
     if ckpt is not None and ckpt.exists():
         ckpt.unlink()
-    return FitResult(fitted, state.flagged.copy(), [float(v) for v in state.history],
-                     time.perf_counter() - t0, options)
+    return FitResult(
+        fitted, state.flagged.copy(), [float(v) for v in state.history], time.perf_counter() - t0, options
+    )
 
 
 @dataclass
@@ -362,8 +380,22 @@ def _prepare_chunk(ctx: FitContext, s: int, e: int) -> _Chunk:
     balance = balance.astype(np.float32)
     var_ring = None if var is None else _ring_means(rings, valid, var).astype(np.float32)
     usable = (valid.sum(axis=1) >= 2 * ctx.n + 2) & (y.sum(axis=(1, 2), dtype=np.float64) > 0)
-    return _Chunk(y, valid, balance, var_ring, r.astype(np.float32), theta, gid.astype(np.int32), r_g, r_base,
-                  rings, base, local, usable, poisson)
+    return _Chunk(
+        y,
+        valid,
+        balance,
+        var_ring,
+        r.astype(np.float32),
+        theta,
+        gid.astype(np.int32),
+        r_g,
+        r_base,
+        rings,
+        base,
+        local,
+        usable,
+        poisson,
+    )
 
 
 def _load_chunk(ctx: FitContext, state: FitState, s: int, e: int) -> _Chunk:
@@ -371,8 +403,10 @@ def _load_chunk(ctx: FitContext, state: FitState, s: int, e: int) -> _Chunk:
     ch = ctx.cache.get((s, e))
     if ch is None:
         ch = _prepare_chunk(ctx, s, e)
-        nbytes = sum(np.asarray(a).nbytes
-                     for a in (ch.y, ch.valid, ch.balance, ch.local, ch.r, ch.theta, ch.gid, ch.poisson))
+        nbytes = sum(
+            np.asarray(a).nbytes
+            for a in (ch.y, ch.valid, ch.balance, ch.local, ch.r, ch.theta, ch.gid, ch.poisson)
+        )
         if ctx.cache_left >= nbytes:
             ctx.cache_left -= nbytes
             ctx.cache[(s, e)] = ch
@@ -384,8 +418,11 @@ def _group_profiles(ctx: FitContext, state: FitState, sl: slice, r_g: np.ndarray
     if ctx.kind in ("dipole", "burley"):
         p = state.p[sl][:, None]  # (k, 1, 3, 2)
         r = r_g[None, :, None]
-        f = (dipole_R_d(r, p[..., 0], p[..., 1], ctx.eta) if ctx.kind == "dipole"
-             else burley_R(r, p[..., 0], p[..., 1]))
+        f = (
+            dipole_R_d(r, p[..., 0], p[..., 1], ctx.eta)
+            if ctx.kind == "dipole"
+            else burley_R(r, p[..., 0], p[..., 1])
+        )
         return f[..., None]
     return _exp_sum(state.c[sl][:, None], state.a[sl][:, None], r_g[None, :, None, None])
 
@@ -468,8 +505,11 @@ def _fit_chunk(ctx: FitContext, glob: FitState, s: int, e: int):
     state.flagged[sl] = ~usable
     if k and not state.ready[sl].all() and ctx.C == 1:  # colour scale from the window sums
         tot = ch.y.sum(axis=1, dtype=np.float64)
-        state.s[sl] = np.where(state.ready[sl, None], state.s[sl],
-                               tot / np.maximum(tot[:, :1], 1e-300) * (tot[:, :1] > 0) + (tot[:, :1] <= 0))
+        state.s[sl] = np.where(
+            state.ready[sl, None],
+            state.s[sl],
+            tot / np.maximum(tot[:, :1], 1e-300) * (tot[:, :1] > 0) + (tot[:, :1] <= 0),
+        )
     w2 = _weights(ctx, ch, _predict(ctx, state, sl, ch) if state.ready[sl].all() else None)
     if ctx.kind in ("dipole", "burley"):
         _fit_baseline(ctx, state, sl, ch, w2)
@@ -531,9 +571,18 @@ def _solve_exponentials(ctx, state, sl, ch, W, Y, index):
         if not sel.any():
             continue
         rows = index[sel]
-        cc, aa, _ = fit_exponentials_batched(ch.r_g, W[sel], Y[sel], ctx.n, rates0=a[rows] if warm else None,
-                                             r_base=ch.r_base,
-                                             n_starts=3, pooled=True, max_iter=15 if warm else 12, tol=1e-4)
+        cc, aa, _ = fit_exponentials_batched(
+            ch.r_g,
+            W[sel],
+            Y[sel],
+            ctx.n,
+            rates0=a[rows] if warm else None,
+            r_base=ch.r_base,
+            n_starts=3,
+            pooled=True,
+            max_iter=15 if warm else 12,
+            tol=1e-4,
+        )
         c[rows], a[rows] = cc, aa
     state.c[sl] = c.reshape(state.c[sl].shape)
     state.a[sl] = a.reshape(state.a[sl].shape)
@@ -549,8 +598,9 @@ def _fit_exponential(ctx: FitContext, state: FitState, sl: slice, ch: _Chunk, w2
         return
     if not state.ready[sl].all():  # start every direction from the isotropic fit
         W, Y = _grouped(ch.rings, G, C, w2, kappa, ch.y)
-        cc, aa, _ = fit_exponentials_batched(ch.r_g, W, Y, ctx.n, n_starts=3, pooled=True, max_iter=25,
-                                             tol=1e-5, r_base=ch.r_base)
+        cc, aa, _ = fit_exponentials_batched(
+            ch.r_g, W, Y, ctx.n, n_starts=3, pooled=True, max_iter=25, tol=1e-5, r_base=ch.r_base
+        )
         state.c[sl] = np.repeat(cc.reshape(k, C, 1, ctx.n), m, axis=2)
         state.a[sl] = np.repeat(aa.reshape(k, C, 1, ctx.n), m, axis=2)
         state.ready[sl] = True

@@ -16,9 +16,17 @@ from collections.abc import Callable, Sequence
 import numpy as np
 
 
-def fit_params_batched(profile: Callable[[np.ndarray, np.ndarray], np.ndarray], r, W, Y,
-                       starts: Sequence[Sequence[float]], *, max_iter: int = 40, tol: float = 1e-10,
-                       block: int = 512) -> tuple[np.ndarray, np.ndarray]:
+def fit_params_batched(
+    profile: Callable[[np.ndarray, np.ndarray], np.ndarray],
+    r,
+    W,
+    Y,
+    starts: Sequence[Sequence[float]],
+    *,
+    max_iter: int = 40,
+    tol: float = 1e-10,
+    block: int = 512,
+) -> tuple[np.ndarray, np.ndarray]:
     """Fit ``profile(r, p)`` to B weighted profiles, trying every start and keeping the best.
 
     Parameters
@@ -83,11 +91,15 @@ def _lm(profile, r, W, Y, x, max_iter, tol):
         if not active.any():
             break
         # forward-difference Jacobian of the weighted residual w.r.t. log p
-        J = np.stack([(_residual(profile, r, W, Y, x + h * np.eye(P)[k]) - res) / h for k in range(P)], axis=2)
+        J = np.stack(
+            [(_residual(profile, r, W, Y, x + h * np.eye(P)[k]) - res) / h for k in range(P)], axis=2
+        )
         JTJ = np.einsum("bgk,bgl->bkl", J, J)
         g = np.einsum("bgk,bg->bk", J, res)
         diag = np.einsum("bii->bi", JTJ)
-        A = JTJ + (lam[:, None] * (diag + 1e-12 * diag.max(axis=1, keepdims=True)) + 1e-300)[:, :, None] * np.eye(P)
+        A = JTJ + (lam[:, None] * (diag + 1e-12 * diag.max(axis=1, keepdims=True)) + 1e-300)[
+            :, :, None
+        ] * np.eye(P)
         step = np.linalg.solve(A, -g[:, :, None])[:, :, 0]
         step = np.clip(step, -3.0, 3.0)
         trial = x + step

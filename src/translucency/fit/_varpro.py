@@ -90,8 +90,23 @@ def _exponentials(r, base, a, E):
             if x == 0.0:
                 E[k, g] = eb
             elif abs(x) <= 0.25:
-                E[k, g] = eb * (1.0 + x * (1.0 + x * (0.5 + x * (1.0 / 6.0 + x * (1.0 / 24.0 + x * (
-                    1.0 / 120.0 + x * (1.0 / 720.0 + x * (1.0 / 5040.0))))))))
+                E[k, g] = eb * (
+                    1.0
+                    + x
+                    * (
+                        1.0
+                        + x
+                        * (
+                            0.5
+                            + x
+                            * (
+                                1.0 / 6.0
+                                + x
+                                * (1.0 / 24.0 + x * (1.0 / 120.0 + x * (1.0 / 720.0 + x * (1.0 / 5040.0))))
+                            )
+                        )
+                    )
+                )
             else:  # a steep term far off its base: exactly
                 E[k, g] = np.exp(-ak * r[g])
 
@@ -125,7 +140,8 @@ def _moments(r, base, w2, y, a, E, K0, K1, K2, k0, k1):
 
 @njit(cache=True, nogil=True)
 def _nnls(K, k, YY, c):
-    """Exact NNLS of c^T K c − 2 c^T k + YY over c ≥ 0 (every support; the full one first); returns the cost."""
+    """Exact NNLS of c^T K c − 2 c^T k + YY over c ≥ 0 (every support; the full one first); returns the
+    cost."""
     n = k.shape[0]
     ridge = 0.0
     for i in range(n):
@@ -299,8 +315,20 @@ def rate_bounds(r: np.ndarray) -> tuple[float, float]:
     return float(np.log(0.5 / span)), float(np.log(8.0 / max(r_min, 1e-6)))
 
 
-def fit_exponentials_batched(r, W, Y, n_terms: int, *, rates0=None, n_starts: int = 3, pooled: bool = False,
-                             max_iter: int = 50, tol: float = 1e-7, bounds=None, r_base=None):
+def fit_exponentials_batched(
+    r,
+    W,
+    Y,
+    n_terms: int,
+    *,
+    rates0=None,
+    n_starts: int = 3,
+    pooled: bool = False,
+    max_iter: int = 50,
+    tol: float = 1e-7,
+    bounds=None,
+    r_base=None,
+):
     """Fit :math:`\\sum_k c_k e^{-a_k r}` to B weighted profiles at once.
 
     Parameters
@@ -358,15 +386,27 @@ def fit_exponentials_batched(r, W, Y, n_terms: int, *, rates0=None, n_starts: in
     if rates0 is None and pooled and todo.size > 1:
         w2 = W2[todo].sum(axis=0)
         y_pool = np.divide((W2[todo] * Y[todo]).sum(axis=0), w2, out=np.zeros_like(w2), where=w2 > 0)
-        _, a_pool, _ = _fit_block(r, base, w2[None], y_pool[None], n, None, n_starts, 2 * max_iter, tol, bounds)
+        _, a_pool, _ = _fit_block(
+            r, base, w2[None], y_pool[None], n, None, n_starts, 2 * max_iter, tol, bounds
+        )
         spread = np.exp(np.linspace(0.7, -0.7, n))  # steeper terms steeper, flatter flatter
         rates0 = np.stack([np.broadcast_to(a_pool, (B, n)), np.broadcast_to(a_pool * spread, (B, n))])
     if rates0 is not None:
         rates0 = np.asarray(rates0, dtype=np.float64)
         rates0 = rates0[None] if rates0.ndim == 2 else rates0
     if todo.size:
-        res = _fit_block(r, base, W2[todo], Y[todo], n, None if rates0 is None else rates0[:, todo],
-                         n_starts, max_iter, tol, bounds)
+        res = _fit_block(
+            r,
+            base,
+            W2[todo],
+            Y[todo],
+            n,
+            None if rates0 is None else rates0[:, todo],
+            n_starts,
+            max_iter,
+            tol,
+            bounds,
+        )
         for o, x in zip(out, res):
             o[todo] = x
     return tuple(out)
@@ -382,8 +422,10 @@ def _fit_block(r, base, W2, Y, n, rates0, n_starts, max_iter, tol, bounds):
     if rates0 is not None:
         starts = [np.log(np.clip(r0, np.exp(lo), np.exp(hi))) for r0 in rates0]
     else:
-        starts = [np.broadcast_to(np.log(_initial_rates(lo, hi, n, s, n_starts)), (B, n)).copy()
-                  for s in range(n_starts)]
+        starts = [
+            np.broadcast_to(np.log(_initial_rates(lo, hi, n, s, n_starts)), (B, n)).copy()
+            for s in range(n_starts)
+        ]
     # several starts: a few iterations from each, then only the best one per problem goes on
     probe = max_iter if len(starts) == 1 else min(max_iter, _PROBE_ITER)
     best = None
@@ -393,7 +435,9 @@ def _fit_block(r, base, W2, Y, n, rates0, n_starts, max_iter, tol, bounds):
             best = sol
         else:
             better = sol[2] < best[2]
-            best = tuple(np.where(better[:, None] if x.ndim == 2 else better, x, y) for x, y in zip(sol, best))
+            best = tuple(
+                np.where(better[:, None] if x.ndim == 2 else better, x, y) for x, y in zip(sol, best)
+            )
     if probe < max_iter:
         best = _lm_rates(r, base, W2, Y, YY, np.log(best[1]), lo, hi, max_iter - probe, tol)
     c, a, cost = best
@@ -404,6 +448,16 @@ def _fit_block(r, base, W2, Y, n, rates0, n_starts, max_iter, tol, bounds):
 def _lm_rates(r, base, W2, Y, YY, theta, lo, hi, max_iter, tol):
     """(c, a, cost) of every problem from log-rate starts θ (B, n), by the compiled LM."""
     theta = np.ascontiguousarray(theta, dtype=np.float64).copy()
-    c, cost = _lm(r, base, np.ascontiguousarray(W2), np.ascontiguousarray(Y), YY, theta, float(lo), float(hi),
-                  int(max_iter), float(tol))
+    c, cost = _lm(
+        r,
+        base,
+        np.ascontiguousarray(W2),
+        np.ascontiguousarray(Y),
+        YY,
+        theta,
+        float(lo),
+        float(hi),
+        int(max_iter),
+        float(tol),
+    )
     return c, np.exp(theta), cost

@@ -24,8 +24,9 @@ from dataclasses import dataclass
 import numpy as np
 
 
-def radius_groups(r: np.ndarray, pitch: float, *, r_exact: float | None = None,
-                  radius_step: float | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def radius_groups(
+    r: np.ndarray, pitch: float, *, r_exact: float | None = None, radius_step: float | None = None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Group ids (same shape as r), the mean radius of each group and its base radius (mm).
 
     Radii equal to 1e-4 pixel are one group; beyond ``r_exact`` (default: all
@@ -46,7 +47,9 @@ def radius_groups(r: np.ndarray, pitch: float, *, r_exact: float | None = None,
         key = np.where(far, np.int64(2**52) + np.floor(r / radius_step).astype(np.int64), key)
     uniq, gid = np.unique(key, return_inverse=True)
     gid = gid.reshape(r.shape)
-    r_g = np.bincount(gid.ravel(), r.ravel(), minlength=uniq.size) / np.bincount(gid.ravel(), minlength=uniq.size)
+    r_g = np.bincount(gid.ravel(), r.ravel(), minlength=uniq.size) / np.bincount(
+        gid.ravel(), minlength=uniq.size
+    )
     r_base = r_g.copy()
     if radius_step is not None and r_exact is not None:
         # ring centres: equally spaced, on which the solver steps e^{−a r} by one product a ring
@@ -83,7 +86,7 @@ class Segments:
     n_keys: int
 
     @classmethod
-    def of(cls, key: np.ndarray, k: int, n_keys: int) -> "Segments":
+    def of(cls, key: np.ndarray, k: int, n_keys: int) -> Segments:
         """Segments of keys (1 or k, J) in [0, n_keys); a single row is shared by all k rows."""
         key = np.asarray(key)
         J = key.shape[1]
@@ -109,7 +112,7 @@ class Segments:
         p = self.perm.reshape(self.perm.shape + (1,) * (x.ndim - 2))
         return np.take_along_axis(x, np.broadcast_to(p, x.shape[:2] + p.shape[2:]), axis=1)
 
-    def in_order(self) -> "Segments":
+    def in_order(self) -> Segments:
         """The same segments for arrays already put in key order by :meth:`order`."""
         return Segments(None, self.starts, self.keys, self.lengths, self.k, self.J, self.n_keys)
 

@@ -63,10 +63,21 @@ class _MeshSource:
         return VertexAlpha(values.copy(), self.vertices)
 
 
-def fit_mesh(path, model: str = "iso", *, n_terms: int = 3, colour: str = "shared",
-             exclusion_mm: float | None = None, rel_sigma: float = 0.05, max_rounds: int = 3,
-             tol: float = 1e-3, alpha_radius: float | None = None, chunk_points: int = 32,
-             workers: int | None = None, progress=None) -> FitResult:
+def fit_mesh(
+    path,
+    model: str = "iso",
+    *,
+    n_terms: int = 3,
+    colour: str = "shared",
+    exclusion_mm: float | None = None,
+    rel_sigma: float = 0.05,
+    max_rounds: int = 3,
+    tol: float = 1e-3,
+    alpha_radius: float | None = None,
+    chunk_points: int = 32,
+    workers: int | None = None,
+    progress=None,
+) -> FitResult:
     """Fit the isotropic model (or a baseline) per incident vertex of a mesh data set, with α per vertex.
 
     Parameters
@@ -93,7 +104,8 @@ def fit_mesh(path, model: str = "iso", *, n_terms: int = 3, colour: str = "share
     t0 = time.perf_counter()
     if model == "aniso":
         raise TranslucencyError(
-            "model: on meshes the isotropic model is fitted (r = |x_o - x_i|, as in the paper)")
+            "model: on meshes the isotropic model is fitted (r = |x_o - x_i|, as in the paper)"
+        )
     check_fit_options(model, n_terms, 1, colour, rel_sigma)
     ds = open_mesh_dataset(path)
     if not ds.complete():
@@ -103,13 +115,51 @@ def fit_mesh(path, model: str = "iso", *, n_terms: int = 3, colour: str = "share
     exclusion = source.pitch / 2 if exclusion_mm is None else float(exclusion_mm)
     x_i = source.vertices[source.incident]
     C = 1 if colour == "shared" and model == "iso" else 3
-    options = {"model": model, "n_terms": int(n_terms), "n_directions": 1, "colour": colour,
-               "exclusion_mm": exclusion, "rel_sigma": rel_sigma, "max_rounds": max_rounds, "tol": tol,
-               "radius_step": source.pitch / 2, "alpha_radius": alpha_radius, "geometry": "mesh"}
-    request = json.dumps({"dataset": str(ds.path.resolve()), "header": hashlib.sha256(
-        json.dumps(header, sort_keys=True).encode()).hexdigest(), **options}, sort_keys=True)
-    ctx = FitContext(source=source, kind=model, n=int(n_terms), m=1, C=C, exclusion=exclusion,
-                     rel_sigma=rel_sigma, eta=float(header.get("eta", 1.3)), radius_step=source.pitch / 2,
-                     sweeps=1, balance=True, x_i=x_i, cache_left=512 * 2**20)
-    return alternate(ctx, options, request, max_rounds=max_rounds, tol=tol, chunk_points=chunk_points,
-                     workers=workers, checkpoint=None, progress=progress, t0=t0)
+    options = {
+        "model": model,
+        "n_terms": int(n_terms),
+        "n_directions": 1,
+        "colour": colour,
+        "exclusion_mm": exclusion,
+        "rel_sigma": rel_sigma,
+        "max_rounds": max_rounds,
+        "tol": tol,
+        "radius_step": source.pitch / 2,
+        "alpha_radius": alpha_radius,
+        "geometry": "mesh",
+    }
+    request = json.dumps(
+        {
+            "dataset": str(ds.path.resolve()),
+            "header": hashlib.sha256(json.dumps(header, sort_keys=True).encode()).hexdigest(),
+            **options,
+        },
+        sort_keys=True,
+    )
+    ctx = FitContext(
+        source=source,
+        kind=model,
+        n=int(n_terms),
+        m=1,
+        C=C,
+        exclusion=exclusion,
+        rel_sigma=rel_sigma,
+        eta=float(header.get("eta", 1.3)),
+        radius_step=source.pitch / 2,
+        sweeps=1,
+        balance=True,
+        x_i=x_i,
+        cache_left=512 * 2**20,
+    )
+    return alternate(
+        ctx,
+        options,
+        request,
+        max_rounds=max_rounds,
+        tol=tol,
+        chunk_points=chunk_points,
+        workers=workers,
+        checkpoint=None,
+        progress=progress,
+        t0=t0,
+    )

@@ -57,12 +57,26 @@ __all__ = ["FitResult", "PlanarFit", "check_fit_options", "fit_planar"]
 PlanarFit = FitResult
 
 
-def fit_planar(dataset, model: str = "iso", *, n_terms: int = 3, n_directions: int = 8,
-               colour: str = "per-channel", exclusion_mm: float | None = None, rel_sigma: float = 0.05,
-               max_rounds: int = 3, tol: float = 1e-3, radius_step: float | None | str = "auto",
-               sweeps: int = 1, balance: bool = True, chunk_points: int | None = None,
-               workers: int | None = None, cache_mb: float = 512, checkpoint=None,
-               progress: Callable[[int, int, str], None] | None = None) -> FitResult:
+def fit_planar(
+    dataset,
+    model: str = "iso",
+    *,
+    n_terms: int = 3,
+    n_directions: int = 8,
+    colour: str = "per-channel",
+    exclusion_mm: float | None = None,
+    rel_sigma: float = 0.05,
+    max_rounds: int = 3,
+    tol: float = 1e-3,
+    radius_step: float | None | str = "auto",
+    sweeps: int = 1,
+    balance: bool = True,
+    chunk_points: int | None = None,
+    workers: int | None = None,
+    cache_mb: float = 512,
+    checkpoint=None,
+    progress: Callable[[int, int, str], None] | None = None,
+) -> FitResult:
     """Fit a model family to every incident point of a planar data set, with α.
 
     Parameters
@@ -136,20 +150,57 @@ def fit_planar(dataset, model: str = "iso", *, n_terms: int = 3, n_directions: i
     grid = SampleGrid.covering(origin, pitch, ds.window)
     photons = ds.header.get("acquisition", {}).get("photons")
     eta = float(ds.header.get("sample", {}).get("eta", 1.3))
-    options = {"model": model, "n_terms": n, "n_directions": m, "colour": colour if model in ("iso", "aniso")
-               else "per-channel", "exclusion_mm": exclusion, "rel_sigma": rel_sigma,
-               "max_rounds": max_rounds, "tol": tol, "radius_step": step, "sweeps": sweeps,
-               "balance": balance}
-    request = json.dumps({"dataset": str(Path(ds.path).resolve()), "header": hashlib.sha256(
-        json.dumps(ds.header, sort_keys=True).encode()).hexdigest(), "chunk": chunk_points, **options},
-        sort_keys=True)
+    options = {
+        "model": model,
+        "n_terms": n,
+        "n_directions": m,
+        "colour": colour if model in ("iso", "aniso") else "per-channel",
+        "exclusion_mm": exclusion,
+        "rel_sigma": rel_sigma,
+        "max_rounds": max_rounds,
+        "tol": tol,
+        "radius_step": step,
+        "sweeps": sweeps,
+        "balance": balance,
+    }
+    request = json.dumps(
+        {
+            "dataset": str(Path(ds.path).resolve()),
+            "header": hashlib.sha256(json.dumps(ds.header, sort_keys=True).encode()).hexdigest(),
+            "chunk": chunk_points,
+            **options,
+        },
+        sort_keys=True,
+    )
 
     source = _PlanarSource(ds, grid, origin, photons and 1.0 / (float(photons) * pitch * pitch))
-    ctx = FitContext(source=source, kind=model, n=n, m=m, C=C, exclusion=exclusion, rel_sigma=rel_sigma,
-                     eta=eta, radius_step=step, sweeps=sweeps, balance=balance, x_i=x_i,
-                     cache_left=cache_mb * 2**20)
-    return alternate(ctx, options, request, max_rounds=max_rounds, tol=tol, chunk_points=chunk_points,
-                     workers=workers, checkpoint=checkpoint, progress=progress, t0=t0)
+    ctx = FitContext(
+        source=source,
+        kind=model,
+        n=n,
+        m=m,
+        C=C,
+        exclusion=exclusion,
+        rel_sigma=rel_sigma,
+        eta=eta,
+        radius_step=step,
+        sweeps=sweeps,
+        balance=balance,
+        x_i=x_i,
+        cache_left=cache_mb * 2**20,
+    )
+    return alternate(
+        ctx,
+        options,
+        request,
+        max_rounds=max_rounds,
+        tol=tol,
+        chunk_points=chunk_points,
+        workers=workers,
+        checkpoint=checkpoint,
+        progress=progress,
+        t0=t0,
+    )
 
 
 class _PlanarSource:

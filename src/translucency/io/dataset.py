@@ -93,15 +93,19 @@ def create_dataset(path, header: dict, *, overwrite: bool = False, inputs=()):
         if old is not None and old.header.get("request") == header["request"] and not overwrite:
             return old
         if not overwrite:
-            raise TranslucencyError(f"--out {path}: a data set made with other arguments is already there; "
-                                    "choose another path or pass --overwrite to replace it")
+            raise TranslucencyError(
+                f"--out {path}: a data set made with other arguments is already there; "
+                "choose another path or pass --overwrite to replace it"
+            )
         remove_dataset(path)
     P = header["n_points"]
     H, W = header["window"]
     k = header["chunk_points"]
     n_chunks = -(-P // k)
     dtype = header["dtype"]
-    root = zarr.create_group(str(path), attributes={HEADER_KEY: header}, overwrite=False)  # never clears a folder
+    root = zarr.create_group(
+        str(path), attributes={HEADER_KEY: header}, overwrite=False
+    )  # never clears a folder
     comp = BloscCodec(cname="zstd", clevel=5, shuffle="shuffle")
     specs = {
         "x_i": ((P, 2), "float32", (P, 2)),
@@ -118,9 +122,22 @@ def create_dataset(path, header: dict, *, overwrite: bool = False, inputs=()):
     return PlanarDataset(path, header, root)
 
 
-def write_dataset(path, x_i, window_origin, R_d, pitch: float, *, variance=None, mask=None, eta: float = 1.3,
-                  photons: int | None = None, description: dict | None = None, dtype: str = "float32",
-                  chunk_points: int = 64, overwrite: bool = False) -> PlanarDataset:
+def write_dataset(
+    path,
+    x_i,
+    window_origin,
+    R_d,
+    pitch: float,
+    *,
+    variance=None,
+    mask=None,
+    eta: float = 1.3,
+    photons: int | None = None,
+    description: dict | None = None,
+    dtype: str = "float32",
+    chunk_points: int = 64,
+    overwrite: bool = False,
+) -> PlanarDataset:
     """Write measured windows (a real rig's, or any other) as a planar data set.
 
     Parameters
@@ -175,10 +192,17 @@ def write_dataset(path, x_i, window_origin, R_d, pitch: float, *, variance=None,
     if not pitch > 0:
         raise TranslucencyError(f"pitch: must be > 0 mm, got {pitch}")
     header = {
-        "format": FORMAT, "version": VERSION, "units": {"length": "mm", "R_d": "mm^-2", "variance": "mm^-4"},
-        "pitch_mm": float(pitch), "window": [H, W], "n_points": P, "chunk_points": int(chunk_points),
-        "dtype": dtype, "sample": {"eta": float(eta), "description": description or {"source": "user data"}},
-        "acquisition": {"photons": photons}, "software": {"translucency": __version__},
+        "format": FORMAT,
+        "version": VERSION,
+        "units": {"length": "mm", "R_d": "mm^-2", "variance": "mm^-4"},
+        "pitch_mm": float(pitch),
+        "window": [H, W],
+        "n_points": P,
+        "chunk_points": int(chunk_points),
+        "dtype": dtype,
+        "sample": {"eta": float(eta), "description": description or {"source": "user data"}},
+        "acquisition": {"photons": photons},
+        "software": {"translucency": __version__},
         "request": {"written_by": "write_dataset"},
     }
     claim_output(path, "planar data set", overwrite=overwrite)
@@ -211,19 +235,30 @@ def open_dataset(path, *, writable: bool = False) -> PlanarDataset:
     if not isinstance(header, dict) or header.get("format") != FORMAT:
         raise TranslucencyError(f"{path}: not a translucency data set (no '{HEADER_KEY}' header)")
     if header.get("version") != VERSION:
-        raise TranslucencyError(f"{path}: data set version {header.get('version')!r} is not supported "
-                                f"(this reader knows {VERSION})")
+        raise TranslucencyError(
+            f"{path}: data set version {header.get('version')!r} is not supported "
+            f"(this reader knows {VERSION})"
+        )
     units = header.get("units", {})
     if units.get("length") != "mm" or units.get("R_d") != "mm^-2":
         raise TranslucencyError(f"{path}: units {units} are not mm / mm^-2")
     P, (H, W) = header["n_points"], header["window"]
-    expect = {"x_i": (P, 2), "window_origin": (P, 2), "R_d": (P, H, W, 3), "variance": (P, H, W, 3),
-              "mask": (P, H, W), "specular": (P, 3), "total_diffuse": (P, 3)}
+    expect = {
+        "x_i": (P, 2),
+        "window_origin": (P, 2),
+        "R_d": (P, H, W, 3),
+        "variance": (P, H, W, 3),
+        "mask": (P, H, W),
+        "specular": (P, 3),
+        "total_diffuse": (P, 3),
+    }
     for name, shape in expect.items():
         if name not in root:
             raise TranslucencyError(f"{path}: missing array {name!r}")
         if tuple(root[name].shape) != shape:
-            raise TranslucencyError(f"{path}: array {name!r} has shape {tuple(root[name].shape)}, expected {shape}")
+            raise TranslucencyError(
+                f"{path}: array {name!r} has shape {tuple(root[name].shape)}, expected {shape}"
+            )
     return PlanarDataset(path, header, root)
 
 

@@ -38,8 +38,10 @@ def check_mesh(mesh, name: str = "mesh"):
             warnings.warn(f"{name}: the surface was open; small holes were filled", stacklevel=2)
         else:
             open_edges = len(trimesh.grouping.group_rows(mesh.edges_sorted, require_count=1))
-            raise TranslucencyError(f"{name}: the surface is not closed ({open_edges} open or non-manifold edges); "
-                                    "light transport inside an object needs a watertight mesh")
+            raise TranslucencyError(
+                f"{name}: the surface is not closed ({open_edges} open or non-manifold edges); "
+                "light transport inside an object needs a watertight mesh"
+            )
     if not mesh.is_winding_consistent:
         trimesh.repair.fix_winding(mesh)
         warnings.warn(f"{name}: inconsistent triangle winding was fixed", stacklevel=2)
@@ -75,7 +77,9 @@ def load_mesh(path, *, scale_mm: float = 1.0):
     try:
         mesh = trimesh.load(path, force="mesh", process=True)
     except Exception as exc:  # noqa: BLE001 — any parser failure is the file's fault
-        raise TranslucencyError(f"{path}: not a readable mesh ({type(exc).__name__}: {str(exc)[:80]})") from None
+        raise TranslucencyError(
+            f"{path}: not a readable mesh ({type(exc).__name__}: {str(exc)[:80]})"
+        ) from None
     if not isinstance(mesh, trimesh.Trimesh):
         raise TranslucencyError(f"{path}: holds no triangle mesh")
     mesh.apply_scale(scale_mm)

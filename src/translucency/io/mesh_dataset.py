@@ -69,7 +69,9 @@ def is_mesh_dataset(path) -> bool:
     """Whether ``path`` is a folder whose root Zarr metadata carries the mesh data set's header."""
     meta = Path(path) / "zarr.json"
     try:
-        return meta.is_file() and isinstance(json.loads(meta.read_text()).get("attributes", {}).get(HEADER_KEY), dict)
+        return meta.is_file() and isinstance(
+            json.loads(meta.read_text()).get("attributes", {}).get(HEADER_KEY), dict
+        )
     except (OSError, ValueError, AttributeError):
         return False
 
@@ -92,8 +94,17 @@ def open_mesh_dataset(path, *, writable: bool = False) -> MeshDataset:
     return MeshDataset(path, header, group)
 
 
-def create_mesh_dataset(path, header: dict, mesh, vertex_area: np.ndarray, incident: np.ndarray, *,
-                        chunk_points: int, overwrite: bool = False, inputs=()) -> MeshDataset:
+def create_mesh_dataset(
+    path,
+    header: dict,
+    mesh,
+    vertex_area: np.ndarray,
+    incident: np.ndarray,
+    *,
+    chunk_points: int,
+    overwrite: bool = False,
+    inputs=(),
+) -> MeshDataset:
     """Create (or reopen for resuming) a mesh data set at ``path``.
 
     A data set with the same ``header["request"]`` is reopened so that finished
@@ -110,19 +121,28 @@ def create_mesh_dataset(path, header: dict, mesh, vertex_area: np.ndarray, incid
         if old is not None and old.header.get("request") == header["request"] and not overwrite:
             return old
         if not overwrite:
-            raise TranslucencyError(f"--out {path}: a mesh data set made with other arguments is already there; "
-                                    "choose another path or pass --overwrite to replace it")
+            raise TranslucencyError(
+                f"--out {path}: a mesh data set made with other arguments is already there; "
+                "choose another path or pass --overwrite to replace it"
+            )
         remove_dataset(path)
     P, V = len(incident), len(mesh.vertices)
     n_chunks = -(-P // chunk_points)
-    root = zarr.create_group(str(path), attributes={HEADER_KEY: header}, overwrite=False)  # never clears a folder
+    root = zarr.create_group(
+        str(path), attributes={HEADER_KEY: header}, overwrite=False
+    )  # never clears a folder
     comp = BloscCodec(cname="zstd", clevel=5, shuffle="shuffle")
-    for name, data in (("vertices", mesh.vertices.astype(np.float32)), ("faces", mesh.faces.astype(np.int32)),
-                       ("normals", mesh.vertex_normals.astype(np.float32)),
-                       ("vertex_area", vertex_area.astype(np.float32)), ("incident", incident.astype(np.int32))):
+    for name, data in (
+        ("vertices", mesh.vertices.astype(np.float32)),
+        ("faces", mesh.faces.astype(np.int32)),
+        ("normals", mesh.vertex_normals.astype(np.float32)),
+        ("vertex_area", vertex_area.astype(np.float32)),
+        ("incident", incident.astype(np.int32)),
+    ):
         root.create_array(name, data=data, compressors=comp)
-    root.create_array("R_d", shape=(P, V, 3), dtype="float32", chunks=(chunk_points, V, 3),
-                      compressors=comp, fill_value=0)
+    root.create_array(
+        "R_d", shape=(P, V, 3), dtype="float32", chunks=(chunk_points, V, 3), compressors=comp, fill_value=0
+    )
     root.create_array("specular", shape=(P, 3), dtype="float32", chunks=(chunk_points, 3), fill_value=0)
     root.create_array("chunk_done", shape=(n_chunks,), dtype="bool", chunks=(1,), fill_value=False)
     return MeshDataset(path, header, root)

@@ -27,8 +27,8 @@ that corruption that survives decompression is still caught.
 
 Arrays are compressed with Blosc (zstd, byte shuffle), one chunk per field (all
 points of one parameter, term and direction), which keeps spatially coherent
-values together; parameter arrays may be stored as float16 to make models small.  Writes go to a temporary file in the
-target directory and are moved into place with an atomic rename.
+values together; parameter arrays may be stored as float16 to make models small.  Writes go to a
+temporary file in the target directory and are moved into place with an atomic rename.
 """
 
 from __future__ import annotations
@@ -96,8 +96,14 @@ def _checksum(arrays: dict[str, np.ndarray]) -> str:
     return h.hexdigest()
 
 
-def save_model(model: ReflectanceModel, path, *, dtype: str = "float32", meta: dict | None = None,
-               overwrite: bool = False) -> Path:
+def save_model(
+    model: ReflectanceModel,
+    path,
+    *,
+    dtype: str = "float32",
+    meta: dict | None = None,
+    overwrite: bool = False,
+) -> Path:
     """Write ``model`` to ``path`` atomically.
 
     Parameters
@@ -164,8 +170,9 @@ def _write_store(path: Path, header: dict, arrays: dict[str, np.ndarray]) -> Non
             # one chunk per field over all points (e.g. c of term k, direction l): neighbouring
             # points have similar values, which the bit-shuffle + zstd compressor exploits
             chunks = a.shape if key.startswith("alpha/") else (a.shape[0],) + (1,) * (a.ndim - 1)
-            root.create_array(key, shape=a.shape, dtype=a.dtype, chunks=chunks,
-                              compressors=compressor)[...] = a
+            root.create_array(key, shape=a.shape, dtype=a.dtype, chunks=chunks, compressors=compressor)[
+                ...
+            ] = a
         store.close()
 
 
@@ -234,7 +241,9 @@ def _open(path: Path):
     if not path.exists():
         raise ModelFileError(f"{path}: no such file")
     if not zipfile.is_zipfile(path):
-        raise ModelFileError(f"{path}: not a translucency model file (not a zip archive; truncated or corrupted?)")
+        raise ModelFileError(
+            f"{path}: not a translucency model file (not a zip archive; truncated or corrupted?)"
+        )
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
@@ -242,16 +251,25 @@ def _open(path: Path):
             root = zarr.open_group(store, mode="r")
             header = dict(root.attrs).get(HEADER_KEY)
     except Exception as exc:  # noqa: BLE001 — any failure of the container is the file's fault
-        raise ModelFileError(f"{path}: unreadable model file ({type(exc).__name__}: {_first_line(exc)})") from None
+        raise ModelFileError(
+            f"{path}: unreadable model file ({type(exc).__name__}: {_first_line(exc)})"
+        ) from None
     if not isinstance(header, dict) or header.get("format") != FORMAT:
         raise ModelFileError(f"{path}: not a translucency model file (no '{HEADER_KEY}' header)")
     version = header.get("version")
     if version != VERSION:
-        raise ModelFileError(f"{path}: format version {version!r} is not supported (this reader knows {VERSION})")
-    for key, allowed in (("kind", tuple(_PARAMS)), ("geometry", ("planar", "mesh")),
-                         ("dtype", ("float32", "float16"))):
+        raise ModelFileError(
+            f"{path}: format version {version!r} is not supported (this reader knows {VERSION})"
+        )
+    for key, allowed in (
+        ("kind", tuple(_PARAMS)),
+        ("geometry", ("planar", "mesh")),
+        ("dtype", ("float32", "float16")),
+    ):
         if header.get(key) not in allowed:
-            raise ModelFileError(f"{path}: header field {key!r} = {header.get(key)!r}, expected one of {allowed}")
+            raise ModelFileError(
+                f"{path}: header field {key!r} = {header.get(key)!r}, expected one of {allowed}"
+            )
     return root, header
 
 
@@ -296,7 +314,9 @@ def load_model(path) -> ReflectanceModel:
                 warnings.simplefilter("ignore")
                 a = np.asarray(arr[...])
         except Exception as exc:  # noqa: BLE001 — CRC or codec failures: corrupted data
-            raise ModelFileError(f"{path}: array {key!r} is corrupted ({type(exc).__name__}: {_first_line(exc)})") from None
+            raise ModelFileError(
+                f"{path}: array {key!r} is corrupted ({type(exc).__name__}: {_first_line(exc)})"
+            ) from None
         expect = np.float32 if key in ("x_i", "frame", "alpha/vertices") else want_dtype
         if a.dtype != expect:
             raise ModelFileError(f"{path}: array {key!r} has dtype {a.dtype}, expected {np.dtype(expect)}")

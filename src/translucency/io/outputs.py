@@ -106,8 +106,9 @@ def _within(inner: Path, outer: Path) -> bool:
     return inner == outer or outer in inner.parents
 
 
-def claim_output(path, kind: str, *, overwrite: bool, inputs=(), option: str = "--out",
-                 reuse: bool = False) -> bool:
+def claim_output(
+    path, kind: str, *, overwrite: bool, inputs=(), option: str = "--out", reuse: bool = False
+) -> bool:
     """Check that ``path`` may be written as a ``kind``; return whether an old one of that kind is there.
 
     Parameters
@@ -143,21 +144,29 @@ def claim_output(path, kind: str, *, overwrite: bool, inputs=(), option: str = "
     target = path.resolve()
     cwd = Path.cwd().resolve()
     if _within(cwd, target):
-        raise TranslucencyError(f"{option} {path}: is the current folder or a folder above it; "
-                                "give a new path for the output")
+        raise TranslucencyError(
+            f"{option} {path}: is the current folder or a folder above it; give a new path for the output"
+        )
     if target.parent == target or target == Path.home().resolve():
-        raise TranslucencyError(f"{option} {path}: refusing the root or home folder; give a new path for the output")
+        raise TranslucencyError(
+            f"{option} {path}: refusing the root or home folder; give a new path for the output"
+        )
     for inp in inputs:
         if inp is None:
             continue
         src = Path(inp).resolve()
         if _within(src, target) or _within(target, src):
-            raise TranslucencyError(f"{option} {path}: is, holds or lies inside the input {inp}; "
-                                    "give another path for the output")
+            raise TranslucencyError(
+                f"{option} {path}: is, holds or lies inside the input {inp}; give another path for the output"
+            )
     if not (path.exists() or path.is_symlink()):
         return False
-    if kind in _FOLDER_KINDS and path.is_dir() and not path.is_symlink() and \
-            {p.name for p in path.iterdir()} <= {MARKER}:
+    if (
+        kind in _FOLDER_KINDS
+        and path.is_dir()
+        and not path.is_symlink()
+        and {p.name for p in path.iterdir()} <= {MARKER}
+    ):
         return False  # an empty folder (or one a failed command only marked) is as good as a new one
     if path.is_symlink():
         raise TranslucencyError(f"{option} {path}: is a symbolic link; give a new path for the output")
@@ -166,11 +175,14 @@ def claim_output(path, kind: str, *, overwrite: bool, inputs=(), option: str = "
         what = "a translucency " + found if found else "not a translucency " + kind
         if found:
             what += f", not a {kind}"
-        raise TranslucencyError(f"{option} {path}: exists and is {what}; refusing to replace it — "
-                                "give a new path for the output")
+        raise TranslucencyError(
+            f"{option} {path}: exists and is {what}; refusing to replace it — give a new path for the output"
+        )
     if not overwrite and not reuse:
-        raise TranslucencyError(f"{option} {path}: a {kind} written by translucency is already there; "
-                                "choose another path or pass --overwrite to replace it")
+        raise TranslucencyError(
+            f"{option} {path}: a {kind} written by translucency is already there; "
+            "choose another path or pass --overwrite to replace it"
+        )
     return True
 
 
@@ -191,7 +203,9 @@ def remove_dataset(path) -> None:
         (path / name).unlink(missing_ok=True)
     left = sorted(p.name for p in path.iterdir())
     if left:
-        warnings.warn(f"{path}: kept {len(left)} entries translucency did not write: {left[:5]}", stacklevel=2)
+        warnings.warn(
+            f"{path}: kept {len(left)} entries translucency did not write: {left[:5]}", stacklevel=2
+        )
     else:
         path.rmdir()
 

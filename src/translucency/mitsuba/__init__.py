@@ -8,15 +8,26 @@ stage that talks to Mitsuba goes through here.
 
 from ._engine import drjit, engine_versions, mitsuba
 from .scenes import (
-           SPOT_BEAM_FRACTION,
-           load_with_mesh,
-           look_at,
-           mesh_scene,
-           rays,
-           slab_medium_dict,
-           spot_dict,
-           write_ply,
+    SPOT_BEAM_FRACTION,
+    load_with_mesh,
+    look_at,
+    mesh_scene,
+    rays,
+    slab_medium_dict,
+    spot_dict,
+    write_ply,
 )
 
-__all__ = ["mitsuba", "drjit", "engine_versions", "rays", "write_ply", "load_with_mesh", "mesh_scene", "slab_medium_dict",
-           "look_at", "spot_dict", "SPOT_BEAM_FRACTION"]
+__all__ = [
+    "mitsuba",
+    "drjit",
+    "engine_versions",
+    "rays",
+    "write_ply",
+    "load_with_mesh",
+    "mesh_scene",
+    "slab_medium_dict",
+    "look_at",
+    "spot_dict",
+    "SPOT_BEAM_FRACTION",
+]

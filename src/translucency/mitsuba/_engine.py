@@ -53,8 +53,10 @@ def mitsuba(variant: str | None = None):
             raise TranslucencyError("TRANSLUCENCY_BACKEND=cuda, but no CUDA device is available")
         variant = "cuda_ad_rgb" if cuda_ok else "llvm_ad_rgb"
     if variant.startswith("llvm") and not dr.has_backend(dr.JitBackend.LLVM):
-        raise TranslucencyError("Dr.Jit's LLVM backend is unavailable: libLLVM >= 16 not found "
-                                "(install karellen-llvm-core or set DRJIT_LIBLLVM_PATH)")
+        raise TranslucencyError(
+            "Dr.Jit's LLVM backend is unavailable: libLLVM >= 16 not found "
+            "(install karellen-llvm-core or set DRJIT_LIBLLVM_PATH)"
+        )
     mi.set_variant(variant)
     return mi
 

@@ -21,24 +21,30 @@ SPOT_BEAM_FRACTION = 0.75
 
 
 def rays(origins: np.ndarray, directions: np.ndarray, maxt: np.ndarray | None = None):
-    """A Mitsuba ``Ray3f`` wavefront from (N, 3) origins and directions (mm), optionally ending at ``maxt``."""
+    """A Mitsuba ``Ray3f`` wavefront from (N, 3) origins and directions (mm), optionally ending at
+    ``maxt``."""
     mi = mitsuba()
-    ray = mi.Ray3f(mi.Point3f(*(np.ascontiguousarray(origins[:, j]).astype(np.float32) for j in range(3))),
-                   mi.Vector3f(*(np.ascontiguousarray(directions[:, j]).astype(np.float32) for j in range(3))))
+    ray = mi.Ray3f(
+        mi.Point3f(*(np.ascontiguousarray(origins[:, j]).astype(np.float32) for j in range(3))),
+        mi.Vector3f(*(np.ascontiguousarray(directions[:, j]).astype(np.float32) for j in range(3))),
+    )
     if maxt is not None:
         ray.maxt = mi.Float(np.asarray(maxt, dtype=np.float32))
     return ray
 
 
 def write_ply(path: Path, vertices: np.ndarray, faces: np.ndarray, colour: np.ndarray | None = None) -> None:
-    """A binary PLY with float positions and (optionally) float r, g, b per vertex (Mitsuba's vertex_color)."""
+    """A binary PLY with float positions and (optionally) float r, g, b per vertex (Mitsuba's
+    vertex_color)."""
     props = "property float x\nproperty float y\nproperty float z\n"
     cols = [np.asarray(vertices)]
     if colour is not None:
         props += "property float r\nproperty float g\nproperty float b\n"
         cols.append(np.asarray(colour))
-    head = (f"ply\nformat binary_little_endian 1.0\nelement vertex {len(vertices)}\n{props}"
-            f"element face {len(faces)}\nproperty list uchar int vertex_indices\nend_header\n")
+    head = (
+        f"ply\nformat binary_little_endian 1.0\nelement vertex {len(vertices)}\n{props}"
+        f"element face {len(faces)}\nproperty list uchar int vertex_indices\nend_header\n"
+    )
     face = np.zeros(len(faces), dtype=[("n", "u1"), ("i", "<i4", 3)])
     face["n"], face["i"] = 3, faces
     with open(path, "wb") as f:
@@ -92,17 +98,29 @@ def slab_medium_dict(volume, channel: int, top_corner=(0.0, 0.0, 0.0)) -> dict:
     box = mi.ScalarTransform4f().translate([x0, y0, z_top - T]) @ mi.ScalarTransform4f().scale([W, H, T])
     sigma_t = volume.sigma_t[..., channel].astype(np.float64)
     albedo = np.divide(volume.sigma_s[..., channel], sigma_t, out=np.zeros_like(sigma_t), where=sigma_t > 0)
-    return {"type": "heterogeneous", "sigma_t": _grid_dict(sigma_t, box), "albedo": _grid_dict(albedo, box),
-            "scale": 1.0, "has_spectral_extinction": False, "phase": {"type": "hg", "g": volume.g}}
+    return {
+        "type": "heterogeneous",
+        "sigma_t": _grid_dict(sigma_t, box),
+        "albedo": _grid_dict(albedo, box),
+        "scale": 1.0,
+        "has_spectral_extinction": False,
+        "phase": {"type": "hg", "g": volume.g},
+    }
 
 
 def look_at(origin, target, up=None):
-    """Mitsuba's ``to_world`` looking from ``origin`` at ``target`` (mm); ``up`` chosen off the axis if not given."""
+    """Mitsuba's ``to_world`` looking from ``origin`` at ``target`` (mm); ``up`` chosen off the axis if not
+    given."""
     if up is None:
         axis = np.asarray(target, float) - np.asarray(origin, float)
         up = [0.0, 0.0, 1.0] if abs(axis[2]) < 0.99 * np.linalg.norm(axis) else [0.0, 1.0, 0.0]
-    return mitsuba().ScalarTransform4f().look_at(origin=[float(v) for v in origin],
-                                                 target=[float(v) for v in target], up=[float(v) for v in up])
+    return (
+        mitsuba()
+        .ScalarTransform4f()
+        .look_at(
+            origin=[float(v) for v in origin], target=[float(v) for v in target], up=[float(v) for v in up]
+        )
+    )
 
 
 def spot_dict(position, target, cutoff_deg: float, intensity: float = 1.0, up=None) -> dict:
@@ -110,5 +128,10 @@ def spot_dict(position, target, cutoff_deg: float, intensity: float = 1.0, up=No
 
     The beam width is :data:`SPOT_BEAM_FRACTION` of the cutoff, stated here for every spot of the package.
     """
-    return {"type": "spot", "intensity": float(intensity), "cutoff_angle": float(cutoff_deg),
-            "beam_width": SPOT_BEAM_FRACTION * float(cutoff_deg), "to_world": look_at(position, target, up)}
+    return {
+        "type": "spot",
+        "intensity": float(intensity),
+        "cutoff_angle": float(cutoff_deg),
+        "beam_width": SPOT_BEAM_FRACTION * float(cutoff_deg),
+        "to_world": look_at(position, target, up),
+    }

@@ -57,7 +57,9 @@ class ReflectanceModel(ABC):
             if not isinstance(alpha, VertexAlpha):
                 raise TranslucencyError("alpha: a mesh model (x_i of shape (N, 3)) needs a VertexAlpha")
             if frame is None:
-                raise TranslucencyError("frame: a mesh model needs a tangent frame (N, 3, 3) per incident point")
+                raise TranslucencyError(
+                    "frame: a mesh model needs a tangent frame (N, 3, 3) per incident point"
+                )
             frame = as_float_array("frame", frame, shape=(x_i.shape[0], 3, 3))
             gram = np.einsum("nij,nkj->nik", frame, frame)
             err = np.abs(gram - np.eye(3)).max(axis=(1, 2))
@@ -87,8 +89,9 @@ class ReflectanceModel(ABC):
             theta = np.arctan2(v[..., 1], v[..., 0])
         else:
             f = self.frame[i]
-            theta = np.arctan2(np.einsum("...j,...j->...", v, f[..., 1, :]),
-                               np.einsum("...j,...j->...", v, f[..., 0, :]))
+            theta = np.arctan2(
+                np.einsum("...j,...j->...", v, f[..., 1, :]), np.einsum("...j,...j->...", v, f[..., 0, :])
+            )
         return r, theta
 
     # -- evaluation ---------------------------------------------------------

@@ -58,7 +58,7 @@ class PlanarAlpha:
         object.__setattr__(self, "pitch", pitch)
 
     @classmethod
-    def uniform(cls, shape, origin=(0.0, 0.0), pitch=1.0) -> "PlanarAlpha":
+    def uniform(cls, shape, origin=(0.0, 0.0), pitch=1.0) -> PlanarAlpha:
         """A texture of ones: no modulation."""
         return cls(np.ones(shape), np.asarray(origin, dtype=float), pitch)
 
@@ -104,7 +104,7 @@ class VertexAlpha:
         object.__setattr__(self, "_tree", None)
 
     @classmethod
-    def uniform(cls, vertices) -> "VertexAlpha":
+    def uniform(cls, vertices) -> VertexAlpha:
         """A texture of ones: no modulation."""
         vertices = np.asarray(vertices, dtype=float)
         return cls(np.ones(len(vertices)), vertices)

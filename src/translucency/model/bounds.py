@@ -68,7 +68,8 @@ class PhysicsCheck:
     def summary(self) -> dict:
         """JSON-friendly: counts, extremes and the indices of flagged points (stored in model files)."""
         return {
-            "albedo_bound": 1.0, "size_mm": round(float(self.size_mm), 4),
+            "albedo_bound": 1.0,
+            "size_mm": round(float(self.size_mm), 4),
             "max_total_reflectance": float(np.max(self.total)) if self.total.size else 0.0,
             "max_energy_radius_mm": float(np.max(self.radius)) if self.radius.size else 0.0,
             "over_albedo": np.flatnonzero(self.over_albedo).tolist(),
@@ -79,15 +80,21 @@ class PhysicsCheck:
         """One line for a person: what breaks, how often, how badly."""
         n = len(self.radius)
         if self.ok:
-            return (f"yes: total reflectance <= 1 (max {np.max(self.total):.3g}) and 99.9% energy radius within "
-                    f"the object (max {np.max(self.radius):.3g} of {self.size_mm:.3g} mm) at all {n} points")
+            return (
+                f"yes: total reflectance <= 1 (max {np.max(self.total):.3g}) and 99.9% energy radius within "
+                f"the object (max {np.max(self.radius):.3g} of {self.size_mm:.3g} mm) at all {n} points"
+            )
         parts = []
         if self.over_albedo.any():
-            parts.append(f"{int(self.over_albedo.sum())} of {n} points reflect more than they receive "
-                         f"(total reflectance up to {np.max(self.total):.3g} > 1)")
+            parts.append(
+                f"{int(self.over_albedo.sum())} of {n} points reflect more than they receive "
+                f"(total reflectance up to {np.max(self.total):.3g} > 1)"
+            )
         if self.beyond_object.any():
-            parts.append(f"{int(self.beyond_object.sum())} of {n} points spread light beyond the object "
-                         f"(99.9% energy radius up to {np.max(self.radius):.3g} mm on a {self.size_mm:.3g} mm object)")
+            parts.append(
+                f"{int(self.beyond_object.sum())} of {n} points spread light beyond the object "
+                f"(99.9% energy radius up to {np.max(self.radius):.3g} mm on a {self.size_mm:.3g} mm object)"
+            )
         return "no: " + "; ".join(parts)
 
 

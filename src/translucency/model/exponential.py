@@ -44,7 +44,8 @@ def _check_eq2(c: np.ndarray, d: np.ndarray) -> None:
             need = "< 0" if name == "d" else ">= 0"
             raise TranslucencyError(
                 f"eq. (2) violated at incident point {p}: {name}[channel block {ch}, direction {l}, "
-                f"term {k}] = {val:g}, must be {need}")
+                f"term {k}] = {val:g}, must be {need}"
+            )
 
 
 class ExponentialModel(ReflectanceModel):
@@ -240,7 +241,9 @@ class ExponentialModel(ReflectanceModel):
         # Gamma(2, 1/a) = sum of two exponentials
         r = -(np.log1p(-u[:, 1]) + np.log1p(-u[:, 2])) / a[comp]
         direction = (comp // self.n_terms) % self.n_directions
-        theta = direction_angles(self.n_directions)[direction] + sample_direction_offset(u[:, 3], self.n_directions)
+        theta = direction_angles(self.n_directions)[direction] + sample_direction_offset(
+            u[:, 3], self.n_directions
+        )
         return r, np.mod(theta, TWO_PI)
 
     def pdf(self, i: int, r, theta, channel: int | None = None) -> np.ndarray:

@@ -36,7 +36,9 @@ def volume_of_dataset(mesh, header):
     if "generator" not in d or "voxel_mm" not in header.get("request", {}).get("volume_grid", {}):
         raise TranslucencyError("data set: its filling cannot be rebuilt (not generated here); no reference")
     grid = header["request"]["volume_grid"]
-    return object_volume(d["generator"], mesh, grid["voxel_mm"], g=header.get("g", 0.0), seed=d.get("seed", 0))
+    return object_volume(
+        d["generator"], mesh, grid["voxel_mm"], g=header.get("g", 0.0), seed=d.get("seed", 0)
+    )
 
 
 def boundary_eta(header) -> float:
@@ -44,8 +46,18 @@ def boundary_eta(header) -> float:
     return 1.0 if header.get("request", {}).get("index_matched", False) else float(header.get("eta", 1.0))
 
 
-def figure2(model, mesh, light, out_dir, *, volume=None, camera: Camera | None = None, spp_reference: int = 32,
-            radius: float | None = None, eta: float = 1.0) -> dict:
+def figure2(
+    model,
+    mesh,
+    light,
+    out_dir,
+    *,
+    volume=None,
+    camera: Camera | None = None,
+    spp_reference: int = 32,
+    radius: float | None = None,
+    eta: float = 1.0,
+) -> dict:
     """Render ``model`` on ``mesh`` under ``light``; with ``volume`` also the reference and the comparison.
 
     ``eta``: the boundary the data set was acquired with (:func:`boundary_eta`);
@@ -70,8 +82,15 @@ def figure2(model, mesh, light, out_dir, *, volume=None, camera: Camera | None =
     t = time.perf_counter()
     ours = picture.draw(L)
     t_draw = time.perf_counter() - t
-    out = {"vertices": len(mesh.vertices), "transport_nonzeros": mats.nnz, "prepare_s": t_prepare,
-           "relight_s": t_relight, "draw_s": t_draw, "light": repr(light), "eta": eta}
+    out = {
+        "vertices": len(mesh.vertices),
+        "transport_nonzeros": mats.nnz,
+        "prepare_s": t_prepare,
+        "relight_s": t_relight,
+        "draw_s": t_draw,
+        "light": repr(light),
+        "eta": eta,
+    }
     if volume is None:
         exposure = 0.8 / max(float(np.quantile(ours[mask], 0.99)), 1e-30)
         save_images(ours, out_dir / "ours", exposure)
@@ -82,8 +101,13 @@ def figure2(model, mesh, light, out_dir, *, volume=None, camera: Camera | None =
     flip_map = cmp.pop("flip_map")
     out.update(cmp)
     out["regions"] = region_errors(mesh, scene, camera, E, reference, ours, mask)
-    out.update({"reference_s": t_ref, "reference_spp": spp_reference,
-                "speedup_vs_reference": t_ref / (t_prepare + t_relight + t_draw)})
+    out.update(
+        {
+            "reference_s": t_ref,
+            "reference_spp": spp_reference,
+            "speedup_vs_reference": t_ref / (t_prepare + t_relight + t_draw),
+        }
+    )
     save_images(reference, out_dir / "reference", cmp["exposure"])
     save_images(ours, out_dir / "ours", cmp["exposure"])
     _plot(reference, ours, flip_map, mask, cmp, out_dir / "figure2.png")
@@ -99,8 +123,9 @@ def vertex_thickness(mesh, scene) -> np.ndarray:
     return np.where(np.asarray(si.is_valid()), np.asarray(si.t, dtype=np.float64), np.inf)
 
 
-def region_errors(mesh, scene, camera: Camera, E: np.ndarray, reference: np.ndarray, ours: np.ndarray,
-                  mask: np.ndarray) -> dict:
+def region_errors(
+    mesh, scene, camera: Camera, E: np.ndarray, reference: np.ndarray, ours: np.ndarray, mask: np.ndarray
+) -> dict:
     """Relative RMSE of ours against the reference in the regions where a local model is expected to err.
 
     Regions (pixels of the object; vertex properties drawn through the camera):
@@ -121,11 +146,18 @@ def region_errors(mesh, scene, camera: Camera, E: np.ndarray, reference: np.ndar
     picture = VertexPicture(mesh, camera, spp=1)
     drawn = picture.draw(flags) > 0.5
     unlit = picture.draw(np.repeat((~lit)[:, None], 3, axis=1).astype(np.float64))[..., 0] > 0.5
-    regions = {"all": mask, "thin": drawn[..., 0] & mask, "thick": drawn[..., 1] & mask,
-               "shadow edge": drawn[..., 2] & mask, "unlit": unlit & mask,
-               "silhouette": mask & ~binary_erosion(mask)}
-    return {name: {"rel_rmse": rel_rmse(ours, reference, sel), "pixels": int(sel.sum())}
-            for name, sel in regions.items()}
+    regions = {
+        "all": mask,
+        "thin": drawn[..., 0] & mask,
+        "thick": drawn[..., 1] & mask,
+        "shadow edge": drawn[..., 2] & mask,
+        "unlit": unlit & mask,
+        "silhouette": mask & ~binary_erosion(mask),
+    }
+    return {
+        name: {"rel_rmse": rel_rmse(ours, reference, sel), "pixels": int(sel.sum())}
+        for name, sel in regions.items()
+    }
 
 
 def _plot(reference, ours, flip_map, mask, cmp, path) -> None:
@@ -137,7 +169,9 @@ def _plot(reference, ours, flip_map, mask, cmp, path) -> None:
     ax[1].imshow(tonemap(ours, cmp["exposure"]))
     ax[1].set_title("ours: fitted per-vertex model, sparse transport", fontsize=9)
     im = ax[2].imshow(np.where(mask, flip_map, np.nan), cmap="magma", vmin=0, vmax=1)
-    ax[2].set_title(f"FLIP (object mean {cmp['flip_mean_object']:.3f}); rel. RMSE {cmp['rel_rmse']:.2f}", fontsize=9)
+    ax[2].set_title(
+        f"FLIP (object mean {cmp['flip_mean_object']:.3f}); rel. RMSE {cmp['rel_rmse']:.2f}", fontsize=9
+    )
     fig.colorbar(im, ax=ax[2], shrink=0.8)
     for a in ax:
         a.axis("off")

@@ -49,7 +49,7 @@ class Camera:
     height: int = 240
 
     @classmethod
-    def looking_at(cls, mesh, direction=(1.0, -1.6, 0.7), width: int = 320, height: int = 240) -> "Camera":
+    def looking_at(cls, mesh, direction=(1.0, -1.6, 0.7), width: int = 320, height: int = 240) -> Camera:
         centre = mesh.bounds.mean(axis=0)
         d = np.asarray(direction, dtype=float) / np.linalg.norm(direction)
         dist = 1.9 * float(np.linalg.norm(mesh.extents))
@@ -57,12 +57,21 @@ class Camera:
 
     def sensor_dict(self, spp: int) -> dict:
         mi = mitsuba()
-        return {"type": "perspective", "fov": self.fov,
-                "to_world": mi.ScalarTransform4f().look_at(origin=list(self.origin), target=list(self.target),
-                                                           up=list(self.up)),
-                "film": {"type": "hdrfilm", "width": self.width, "height": self.height, "rfilter": {"type": "box"},
-                         "pixel_format": "rgb"},
-                "sampler": {"type": "independent", "sample_count": int(spp)}}
+        return {
+            "type": "perspective",
+            "fov": self.fov,
+            "to_world": mi.ScalarTransform4f().look_at(
+                origin=list(self.origin), target=list(self.target), up=list(self.up)
+            ),
+            "film": {
+                "type": "hdrfilm",
+                "width": self.width,
+                "height": self.height,
+                "rfilter": {"type": "box"},
+                "pixel_format": "rgb",
+            },
+            "sampler": {"type": "independent", "sample_count": int(spp)},
+        }
 
 
 class VertexPicture:
@@ -96,13 +105,21 @@ class VertexPicture:
 
     def __init__(self, mesh, camera: Camera, *, spp: int = 4, eta: float = 1.0, light=None):
         mi = mitsuba()
-        bsdf = ({"type": "diffuse", "reflectance": 0.0} if eta == 1.0 else
-                {"type": "plastic", "diffuse_reflectance": 0.0, "int_ior": float(eta), "ext_ior": 1.0})
+        bsdf = (
+            {"type": "diffuse", "reflectance": 0.0}
+            if eta == 1.0
+            else {"type": "plastic", "diffuse_reflectance": 0.0, "int_ior": float(eta), "ext_ior": 1.0}
+        )
         self.n_vertices = len(mesh.vertices)
-        scene = {"type": "scene", "integrator": {"type": "direct"},
-                 "object": {"bsdf": bsdf, "emitter": {"type": "area",
-                                                      "radiance": {"type": "mesh_attribute", "name": "vertex_color"}}},
-                 "camera": camera.sensor_dict(spp)}
+        scene = {
+            "type": "scene",
+            "integrator": {"type": "direct"},
+            "object": {
+                "bsdf": bsdf,
+                "emitter": {"type": "area", "radiance": {"type": "mesh_attribute", "name": "vertex_color"}},
+            },
+            "camera": camera.sensor_dict(spp),
+        }
         if isinstance(light, EnvironmentLight):
             scene["sky"] = light.emitter_dict()
         self.scene = load_with_mesh(mesh, scene, colour=np.zeros((self.n_vertices, 3)))
@@ -113,14 +130,17 @@ class VertexPicture:
         mi = mitsuba()
         L = np.asarray(L, dtype=np.float32)
         if L.shape != (self.n_vertices, 3):
-            raise TranslucencyError(f"radiance: expected ({self.n_vertices}, 3) values per vertex, got {L.shape}")
+            raise TranslucencyError(
+                f"radiance: expected ({self.n_vertices}, 3) values per vertex, got {L.shape}"
+            )
         self.params["object.vertex_color"] = mi.Float(np.maximum(L, 0.0).ravel())
         self.params.update()
         return np.asarray(mi.render(self.scene, seed=seed), dtype=np.float64)
 
 
-def render_vertex_radiance(mesh, L: np.ndarray, camera: Camera, *, spp: int = 4, eta: float = 1.0,
-                           light=None) -> np.ndarray:
+def render_vertex_radiance(
+    mesh, L: np.ndarray, camera: Camera, *, spp: int = 4, eta: float = 1.0, light=None
+) -> np.ndarray:
     """Draw the mesh with radiance L (V, 3) per vertex through the camera; returns (H, W, 3).
 
     One-off :class:`VertexPicture` (see there for ``eta`` and ``light``).
@@ -137,8 +157,9 @@ def coverage(mesh, camera: Camera) -> np.ndarray:
     return cov
 
 
-def render_reference(mesh, volume, light, camera: Camera, *, spp: int = 256, seed: int = 0,
-                     eta: float = 1.0) -> tuple[np.ndarray, float]:
+def render_reference(
+    mesh, volume, light, camera: Camera, *, spp: int = 256, seed: int = 0, eta: float = 1.0
+) -> tuple[np.ndarray, float]:
     """The same object path-traced by Mitsuba's ``volpath``; returns (image (H, W, 3), seconds).
 
     The seconds are the path tracing alone (three grey renders; building the scenes is not counted).
@@ -147,10 +168,14 @@ def render_reference(mesh, volume, light, camera: Camera, *, spp: int = 256, see
     """
     mi = mitsuba()
     if eta != 1.0 and not isinstance(light, EnvironmentLight):
-        raise TranslucencyError("reference: volpath cannot light a dielectric object with a point, spot or "
-                                "directional light (a delta refraction); use an env light or an index-matched "
-                                "data set")
-    boundary = {"type": "null"} if eta == 1.0 else {"type": "dielectric", "int_ior": float(eta), "ext_ior": 1.0}
+        raise TranslucencyError(
+            "reference: volpath cannot light a dielectric object with a point, spot or "
+            "directional light (a delta refraction); use an env light or an index-matched "
+            "data set"
+        )
+    boundary = (
+        {"type": "null"} if eta == 1.0 else {"type": "dielectric", "int_ior": float(eta), "ext_ior": 1.0}
+    )
     lo, hi = mesh.bounds
     if not hasattr(light, "emitter_dict"):
         raise TranslucencyError(f"light: no reference for {light!r}")
@@ -158,10 +183,16 @@ def render_reference(mesh, volume, light, camera: Camera, *, spp: int = 256, see
     seconds = 0.0
     channels = []
     for ch in range(3):
-        scene = load_with_mesh(mesh, {
-            "type": "scene", "integrator": {"type": "volpath", "max_depth": -1, "rr_depth": 100_000},
-            "object": {"bsdf": boundary, "interior": slab_medium_dict(volume, ch, (lo[0], lo[1], hi[2]))},
-            "light": emitter, "camera": camera.sensor_dict(spp)})
+        scene = load_with_mesh(
+            mesh,
+            {
+                "type": "scene",
+                "integrator": {"type": "volpath", "max_depth": -1, "rr_depth": 100_000},
+                "object": {"bsdf": boundary, "interior": slab_medium_dict(volume, ch, (lo[0], lo[1], hi[2]))},
+                "light": emitter,
+                "camera": camera.sensor_dict(spp),
+            },
+        )
         t = time.perf_counter()
         channels.append(np.asarray(mi.render(scene, seed=3 * seed + ch), dtype=np.float64)[..., ch])
         seconds += time.perf_counter() - t
@@ -184,11 +215,18 @@ def compare(reference: np.ndarray, ours: np.ndarray, mask: np.ndarray) -> dict:
     """Relative RMSE over the object's pixels and mean FLIP of the tone-mapped pair."""
     exposure = 0.8 / max(float(np.quantile(reference[mask], 0.99)), 1e-30)
     ref_ldr, our_ldr = tonemap(reference, exposure), tonemap(ours, exposure)
-    flip_map, mean_flip, _ = flip_evaluator.evaluate(ref_ldr.astype(np.float32), our_ldr.astype(np.float32), "LDR")
+    flip_map, mean_flip, _ = flip_evaluator.evaluate(
+        ref_ldr.astype(np.float32), our_ldr.astype(np.float32), "LDR"
+    )
     fm = np.asarray(flip_map, dtype=np.float64)
     fm = fm[..., 0] if fm.ndim == 3 else fm  # the per-pixel error (a grey image)
-    return {"rel_rmse": rel_rmse(ours, reference, mask), "flip_mean_object": float(fm[mask].mean()),
-            "flip_mean_image": float(mean_flip), "exposure": exposure, "flip_map": fm}
+    return {
+        "rel_rmse": rel_rmse(ours, reference, mask),
+        "flip_mean_object": float(fm[mask].mean()),
+        "flip_mean_image": float(mean_flip),
+        "exposure": exposure,
+        "flip_map": fm,
+    }
 
 
 def save_images(img: np.ndarray, stem: Path, exposure: float) -> tuple[Path, Path]:

@@ -29,7 +29,11 @@ class PointLight:
 
     def emitter_dict(self) -> dict:
         """The Mitsuba emitter of this light."""
-        return {"type": "point", "position": [float(v) for v in self.position], "intensity": float(self.intensity)}
+        return {
+            "type": "point",
+            "position": [float(v) for v in self.position],
+            "intensity": float(self.intensity),
+        }
 
 
 @dataclass(frozen=True)
@@ -41,8 +45,11 @@ class DirectionalLight:
 
     def emitter_dict(self) -> dict:
         """The Mitsuba emitter of this light."""
-        return {"type": "directional", "direction": [float(v) for v in self.direction],
-                "irradiance": float(self.irradiance)}
+        return {
+            "type": "directional",
+            "direction": [float(v) for v in self.direction],
+            "irradiance": float(self.irradiance),
+        }
 
 
 @dataclass(frozen=True)
@@ -93,8 +100,12 @@ class EnvironmentLight:
         """The Mitsuba emitter of this light."""
         if self.filename is None:
             return {"type": "constant", "radiance": float(self.radiance)}
-        return {"type": "envmap", "filename": str(self.filename), "scale": float(self.radiance),
-                "to_world": mitsuba().ScalarTransform4f().rotate([1.0, 0.0, 0.0], 90.0)}
+        return {
+            "type": "envmap",
+            "filename": str(self.filename),
+            "scale": float(self.radiance),
+            "to_world": mitsuba().ScalarTransform4f().rotate([1.0, 0.0, 0.0], 90.0),
+        }
 
 
 def parse_light(text: str):
@@ -127,8 +138,10 @@ def parse_light(text: str):
         return SpotLight(tuple(v[:3]), tuple(v[3:6]), *v[6:])
     if kind == "env" and len(v) == 1 and v[0] >= 0:
         return EnvironmentLight(v[0])
-    raise TranslucencyError("light: expected point:x,y,z[,I], directional:dx,dy,dz[,E], "
-                            f"spot:x,y,z,tx,ty,tz,cutoff_deg[,I] or env:L, got {text!r}")
+    raise TranslucencyError(
+        "light: expected point:x,y,z[,I], directional:dx,dy,dz[,E], "
+        f"spot:x,y,z,tx,ty,tz,cutoff_deg[,I] or env:L, got {text!r}"
+    )
 
 
 def _environment_map(rest: str) -> EnvironmentLight:
@@ -147,6 +160,7 @@ def _environment_map(rest: str) -> EnvironmentLight:
     try:
         mitsuba().load_dict(light.emitter_dict())
     except Exception as exc:  # noqa: BLE001 — Mitsuba's message is long; one line names the file
-        raise TranslucencyError(f"light: {path} is not a readable environment map "
-                                f"({str(exc).splitlines()[0][:120]})") from None
+        raise TranslucencyError(
+            f"light: {path} is not a readable environment map ({str(exc).splitlines()[0][:120]})"
+        ) from None
     return light

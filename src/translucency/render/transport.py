@@ -15,8 +15,8 @@ sparse matrix–vector product per channel.
 
 Every vertex needs parameters, not only the fitted incident points: they are
 interpolated by inverse-distance weighting of the k incident points nearest
-along the surface (:func:`vertex_parameters`, :func:`geodesic_neighbours`).  Irradiance (:func:`vertex_irradiance`) comes from
-point, spot, directional or environment lights (a constant sky or an
+along the surface (:func:`vertex_parameters`, :func:`geodesic_neighbours`).  Irradiance
+(:func:`vertex_irradiance`) comes from point, spot, directional or environment lights (a constant sky or an
 environment map, importance-sampled by Mitsuba's ``envmap`` emitter) with
 shadow rays traced by Mitsuba.
 
@@ -90,7 +90,15 @@ def vertex_irradiance(mesh, scene, light, eta: float = 1.0) -> np.ndarray:
         p = np.asarray(light.position, dtype=np.float64)
         # inside a closed, outward-oriented surface a ray first meets a face from its back
         probe = scene.ray_intersect(mi.Ray3f(mi.Point3f(*map(float, p)), mi.Vector3f(0.5773, 0.5774, 0.5773)))
-        if bool(probe.is_valid()[0]) and float(np.asarray(probe.n.x)[0] * 0.5773 + np.asarray(probe.n.y)[0] * 0.5774 + np.asarray(probe.n.z)[0] * 0.5773) > 0:
+        if (
+            bool(probe.is_valid()[0])
+            and float(
+                np.asarray(probe.n.x)[0] * 0.5773
+                + np.asarray(probe.n.y)[0] * 0.5774
+                + np.asarray(probe.n.z)[0] * 0.5773
+            )
+            > 0
+        ):
             raise TranslucencyError(f"light: the point light at {tuple(p)} mm is inside the object")
         to = p - v
         dist = np.linalg.norm(to, axis=1)
@@ -134,15 +142,18 @@ def _environment_irradiance(mi, mesh, scene, light: EnvironmentLight, eta: float
         emitter = mi.load_dict(light.emitter_dict())
         it = drjit().zeros(mi.Interaction3f, len(o))
         it.p = mi.Point3f(*(o[:, j].astype(np.float32) for j in range(3)))
-        ds, spec = emitter.sample_direction(it, mi.Point2f(u1.ravel().astype(np.float32),
-                                                           u2.ravel().astype(np.float32)))
+        ds, spec = emitter.sample_direction(
+            it, mi.Point2f(u1.ravel().astype(np.float32), u2.ravel().astype(np.float32))
+        )
         w = np.stack([np.asarray(ds.d.x), np.asarray(ds.d.y), np.asarray(ds.d.z)], axis=1).astype(np.float64)
         weight = np.stack([np.asarray(spec[j]) for j in range(3)], axis=1)  # L / p, times cos⁺ below
     cos_i = np.einsum("vkj,vj->vk", w.reshape(len(v), K, 3), n).reshape(-1)
     if light.filename is not None:
         weight = weight * np.maximum(cos_i, 0.0)[:, None]
     open_sky = ~np.asarray(scene.ray_test(rays(o, w)))
-    weight = weight * (open_sky * fresnel_transmittance(cos_i, eta) / fresnel_transmittance(1.0, eta))[:, None]
+    weight = (
+        weight * (open_sky * fresnel_transmittance(cos_i, eta) / fresnel_transmittance(1.0, eta))[:, None]
+    )
     E = weight.reshape(len(v), K, -1).mean(axis=1)
     return E[:, 0] if light.filename is None else E
 
@@ -162,12 +173,14 @@ def geodesic_neighbours(mesh, sources: np.ndarray, k: int, limit: float | None =
     """
     V, P = len(mesh.vertices), len(sources)
     e = np.asarray(mesh.edges_unique)
-    graph = sp.csr_matrix((np.asarray(mesh.edges_unique_length, dtype=np.float64), (e[:, 0], e[:, 1])), shape=(V, V))
+    graph = sp.csr_matrix(
+        (np.asarray(mesh.edges_unique_length, dtype=np.float64), (e[:, 0], e[:, 1])), shape=(V, V)
+    )
     if limit is None:
         limit = 3.0 * np.sqrt(float(mesh.area) / max(P, 1))
     best_d, best_i = np.full((V, k), np.inf), np.zeros((V, k), dtype=np.int64)
     for s in range(0, P, 64):
-        D = dijkstra(graph, directed=False, indices=sources[s:s + 64], limit=limit)  # (chunk, V)
+        D = dijkstra(graph, directed=False, indices=sources[s : s + 64], limit=limit)  # (chunk, V)
         cand_d = np.concatenate([best_d, D.T], axis=1)
         cand_i = np.concatenate([best_i, np.broadcast_to(np.arange(s, s + len(D)), (V, len(D)))], axis=1)
         keep = np.argsort(cand_d, axis=1, kind="stable")[:, :k]
@@ -191,7 +204,9 @@ def vertex_parameters(model, vertices, k: int = 4):
     way fall back to straight-line distances.
     """
     if model.kind != "exponential" or model.n_directions != 1:
-        raise TranslucencyError("model: rendering needs an isotropic exponential model (fit with --model iso)")
+        raise TranslucencyError(
+            "model: rendering needs an isotropic exponential model (fit with --model iso)"
+        )
     k = min(k, model.n_points)
     mesh = vertices if hasattr(vertices, "edges_unique") else None
     vertices = np.asarray(mesh.vertices if mesh is not None else vertices, dtype=np.float64)
@@ -218,8 +233,9 @@ def vertex_parameters(model, vertices, k: int = 4):
     return c, d, s
 
 
-def transport_matrices(model, mesh, *, radius: float | None = None, r_min: float | None = None,
-                       max_pairs: float = 2.5e7):
+def transport_matrices(
+    model, mesh, *, radius: float | None = None, r_min: float | None = None, max_pairs: float = 2.5e7
+):
     """The sparse transport T of the module docstring, as a :class:`Transport` (one matrix per
     channel, or one matrix and the colour scale for the shared-colour model).
 
@@ -241,7 +257,9 @@ def transport_matrices(model, mesh, *, radius: float | None = None, r_min: float
         rad = float(radius)
     pairs = cKDTree(v).query_pairs(rad, output_type="ndarray")
     if 2 * len(pairs) + V > max_pairs:
-        raise TranslucencyError(f"radius: {rad:.2f} mm gives {2 * len(pairs) + V:,} vertex pairs; lower --radius")
+        raise TranslucencyError(
+            f"radius: {rad:.2f} mm gives {2 * len(pairs) + V:,} vertex pairs; lower --radius"
+        )
     # both directions of every pair; each vertex with itself below
     i = np.concatenate([pairs[:, 0], pairs[:, 1]])
     o = np.concatenate([pairs[:, 1], pairs[:, 0]])
@@ -262,9 +280,15 @@ def transport_matrices(model, mesh, *, radius: float | None = None, r_min: float
         # the light a vertex sends into its own area, at the profile's value at r_min like the
         # closest pairs (the integral from r = 0 would extrapolate the steepest fitted term)
         diag = area / np.pi * alpha * np.einsum("vn,vn->v", cc, np.exp(dd * r_min)) * scale
-        mats.append(sp.csr_matrix((np.concatenate([vals, diag]).astype(np.float32),
-                                   (np.concatenate([o, np.arange(V)]), np.concatenate([i, np.arange(V)]))),
-                                  shape=(V, V)))
+        mats.append(
+            sp.csr_matrix(
+                (
+                    np.concatenate([vals, diag]).astype(np.float32),
+                    (np.concatenate([o, np.arange(V)]), np.concatenate([i, np.arange(V)])),
+                ),
+                shape=(V, V),
+            )
+        )
     return Transport(mats, s.astype(np.float32) if shared else None)
 
 
@@ -287,7 +311,8 @@ class Transport:
 
 @njit(parallel=True, cache=True)
 def _csr_times_rgb(indptr, indices, data, X, out):
-    """out = T X for a CSR matrix T and three columns X (V, 3): each row's pairs read once, rows on all cores."""
+    """out = T X for a CSR matrix T and three columns X (V, 3): each row's pairs read once, rows on all
+    cores."""
     for o in prange(indptr.shape[0] - 1):
         a0 = a1 = a2 = np.float32(0.0)
         for j in range(indptr[o], indptr[o + 1]):

@@ -35,7 +35,8 @@ a pixel of area A through the top face within a cone :math:`\theta < \theta_{con
 around +z give
 
 .. math::  \hat L = \frac{P\,n}{N\,A\,\pi\sin^2\theta_{cone}},
-           \qquad \operatorname{Var}\hat L = \Bigl(\frac{P}{N\,A\,\pi\sin^2\theta_{cone}}\Bigr)^2 n\,(1 - n/N),
+           \qquad \operatorname{Var}\hat L
+           = \Bigl(\frac{P}{N\,A\,\pi\sin^2\theta_{cone}}\Bigr)^2 n\,(1 - n/N),
 
 since :math:`\int_{cone}\cos\theta\,d\omega = \pi\sin^2\theta_{cone}`.  The
 estimate is the cosine-weighted mean of L over the cone: its bias is second
@@ -85,6 +86,7 @@ def _positive(name: str, value, unit: str = "mm") -> float:
 # geometry: beam and pixel window
 # ------------------------------------------------------------------------------------------------
 
+
 @dataclass(frozen=True)
 class SpotBeam:
     """A spot light at height ``distance_mm`` above ``centre_xy`` (mm), pointing straight down.
@@ -102,8 +104,10 @@ class SpotBeam:
         object.__setattr__(self, "distance_mm", _positive("beam distance", self.distance_mm))
         # float32 resolves cos θ only to ~6e-8, i.e. θ to ~3.5e-4 rad: keep the cutoff well above
         if self.cutoff_deg < 0.2 or self.cutoff_deg > 30.0:
-            raise TranslucencyError(f"beam radius: {self.radius_mm} mm at {self.distance_mm} mm gives a cutoff of "
-                                    f"{self.cutoff_deg:.3g} deg; keep it within [0.2, 30] deg (float32 angles)")
+            raise TranslucencyError(
+                f"beam radius: {self.radius_mm} mm at {self.distance_mm} mm gives a cutoff of "
+                f"{self.cutoff_deg:.3g} deg; keep it within [0.2, 30] deg (float32 angles)"
+            )
 
     @property
     def cutoff_deg(self) -> float:
@@ -118,7 +122,9 @@ class SpotBeam:
     def emitter_dict(self, intensity: float = 1.0) -> dict:
         """Mitsuba ``spot`` emitter description."""
         cx, cy = self.centre_xy
-        return spot_dict((cx, cy, self.distance_mm), (cx, cy, 0.0), self.cutoff_deg, intensity, up=(0.0, 1.0, 0.0))
+        return spot_dict(
+            (cx, cy, self.distance_mm), (cx, cy, 0.0), self.cutoff_deg, intensity, up=(0.0, 1.0, 0.0)
+        )
 
 
 @dataclass(frozen=True)
@@ -146,13 +152,23 @@ class PixelWindow:
         mi = mitsuba()
         cx, cy = self.centre_xy
         half = 0.5 * self.side_mm  # the orthographic camera sees [-1, 1]² in its local frame
-        to_world = (mi.ScalarTransform4f().translate([cx, cy, CAMERA_HEIGHT_MM])
-                    @ mi.ScalarTransform4f().scale([half, half, 1.0])
-                    @ mi.ScalarTransform4f().look_at(origin=[0, 0, 0], target=[0, 0, -1], up=[0, 1, 0]))
-        return {"type": "orthographic", "to_world": to_world,
-                "film": {"type": "hdrfilm", "width": self.n_pixels, "height": self.n_pixels,
-                         "rfilter": {"type": "box"}, "pixel_format": "rgb"},
-                "sampler": {"type": "independent", "sample_count": int(spp)}}
+        to_world = (
+            mi.ScalarTransform4f().translate([cx, cy, CAMERA_HEIGHT_MM])
+            @ mi.ScalarTransform4f().scale([half, half, 1.0])
+            @ mi.ScalarTransform4f().look_at(origin=[0, 0, 0], target=[0, 0, -1], up=[0, 1, 0])
+        )
+        return {
+            "type": "orthographic",
+            "to_world": to_world,
+            "film": {
+                "type": "hdrfilm",
+                "width": self.n_pixels,
+                "height": self.n_pixels,
+                "rfilter": {"type": "box"},
+                "pixel_format": "rgb",
+            },
+            "sampler": {"type": "independent", "sample_count": int(spp)},
+        }
 
 
 def pixel_centres(window: PixelWindow) -> tuple[np.ndarray, np.ndarray]:
@@ -180,18 +196,23 @@ def _check_fits(volume: Volume, beam: SpotBeam, window: PixelWindow) -> None:
     bx, by = beam.centre_xy
     r = beam.radius_mm
     if not (r <= bx <= W - r and r <= by <= H - r):
-        raise TranslucencyError(f"beam: the lit disc at {beam.centre_xy} mm of radius {r:g} mm does not fit on the "
-                                f"{W:g} x {H:g} mm top face")
+        raise TranslucencyError(
+            f"beam: the lit disc at {beam.centre_xy} mm of radius {r:g} mm does not fit on the "
+            f"{W:g} x {H:g} mm top face"
+        )
     cx, cy = window.centre_xy
     h = 0.5 * window.side_mm
     if not (h <= cx <= W - h and h <= cy <= H - h):
-        raise TranslucencyError(f"window: {window.side_mm:g} mm around {window.centre_xy} mm does not fit on the "
-                                f"{W:g} x {H:g} mm top face")
+        raise TranslucencyError(
+            f"window: {window.side_mm:g} mm around {window.centre_xy} mm does not fit on the "
+            f"{W:g} x {H:g} mm top face"
+        )
 
 
 # ------------------------------------------------------------------------------------------------
 # the spot's irradiance on the plane z = 0
 # ------------------------------------------------------------------------------------------------
+
 
 def spot_irradiance(beam: SpotBeam, rho_mm) -> np.ndarray:
     """Irradiance E(ρ) of the plane z = 0 per unit intensity, mm⁻², in float64.
@@ -222,8 +243,11 @@ def spot_profile(beam: SpotBeam, n_radii: int = 8193) -> tuple[np.ndarray, np.nd
     emitter = mi.load_dict(beam.emitter_dict())
     cx, cy = beam.centre_xy
     it = dr.zeros(mi.Interaction3f, len(rho))
-    it.p = mi.Point3f(mi.Float((cx + rho).astype(np.float32)), mi.Float(np.full(len(rho), cy, np.float32)),
-                      mi.Float(np.zeros(len(rho), np.float32)))
+    it.p = mi.Point3f(
+        mi.Float((cx + rho).astype(np.float32)),
+        mi.Float(np.full(len(rho), cy, np.float32)),
+        mi.Float(np.zeros(len(rho), np.float32)),
+    )
     _, value = emitter.sample_direction(it, mi.Point2f(0.5, 0.5))
     # distances and cosines in float64 from the points actually queried
     x = np.asarray(it.p.x, dtype=np.float64) - cx
@@ -245,7 +269,9 @@ def sample_spot_entries(beam: SpotBeam, n: int, seed: int, profile=None) -> np.n
     """
     rho, E = profile if profile is not None else spot_profile(beam)
     dens = 2.0 * np.pi * rho * E
-    end = int(np.flatnonzero(dens > 0).max()) + 2  # up to the first zero past the cutoff: a strictly rising CDF
+    end = (
+        int(np.flatnonzero(dens > 0).max()) + 2
+    )  # up to the first zero past the cutoff: a strictly rising CDF
     rho, dens = rho[:end], dens[:end]
     cdf = np.concatenate([[0.0], np.cumsum(0.5 * (dens[1:] + dens[:-1]) * np.diff(rho))])
     cdf /= cdf[-1]
@@ -271,6 +297,7 @@ def sample_spot_entries(beam: SpotBeam, n: int, seed: int, profile=None) -> np.n
 # the two estimates of the same radiance image
 # ------------------------------------------------------------------------------------------------
 
+
 @dataclass
 class RadianceImage:
     """Radiance L(x_o, +z) leaving the top face, per pixel, per unit intensity of the spot.
@@ -289,8 +316,15 @@ class RadianceImage:
     seconds_per_channel: tuple[float, ...] = ()
 
 
-def volpath_scene(volume: Volume, channel: int, beam: SpotBeam, window: PixelWindow, *, spp: int = 1,
-                  rr_depth: int = NO_ROULETTE):
+def volpath_scene(
+    volume: Volume,
+    channel: int,
+    beam: SpotBeam,
+    window: PixelWindow,
+    *,
+    spp: int = 1,
+    rr_depth: int = NO_ROULETTE,
+):
     """The Mitsuba scene: index-matched slab of one channel, spot light, orthographic camera.
 
     The integrator is ``moment`` around ``volpath`` (unbounded depth); ``rr_depth``
@@ -298,15 +332,26 @@ def volpath_scene(volume: Volume, channel: int, beam: SpotBeam, window: PixelWin
     """
     mi = mitsuba()
     W, H, T = volume.size_mm
-    slab = mi.ScalarTransform4f().translate([W / 2, H / 2, -T / 2]) @ mi.ScalarTransform4f().scale([W / 2, H / 2, T / 2])
-    return mi.load_dict({
-        "type": "scene",
-        "integrator": {"type": "moment", "nested": {"type": "volpath", "max_depth": -1, "rr_depth": int(rr_depth)}},
-        "slab": {"type": "cube", "to_world": slab, "bsdf": {"type": "null"},
-                 "interior": slab_medium_dict(volume, channel)},
-        "spot": beam.emitter_dict(),
-        "camera": window.sensor_dict(spp),
-    })
+    slab = mi.ScalarTransform4f().translate([W / 2, H / 2, -T / 2]) @ mi.ScalarTransform4f().scale(
+        [W / 2, H / 2, T / 2]
+    )
+    return mi.load_dict(
+        {
+            "type": "scene",
+            "integrator": {
+                "type": "moment",
+                "nested": {"type": "volpath", "max_depth": -1, "rr_depth": int(rr_depth)},
+            },
+            "slab": {
+                "type": "cube",
+                "to_world": slab,
+                "bsdf": {"type": "null"},
+                "interior": slab_medium_dict(volume, channel),
+            },
+            "spot": beam.emitter_dict(),
+            "camera": window.sensor_dict(spp),
+        }
+    )
 
 
 def _check_channels(channels) -> tuple[int, ...]:
@@ -319,8 +364,16 @@ def _check_channels(channels) -> tuple[int, ...]:
     return ch
 
 
-def render_volpath_spot(volume: Volume, beam: SpotBeam, window: PixelWindow, spp: int, *, seed: int = 0,
-                        channels=(0, 1, 2), rr_depth: int = NO_ROULETTE) -> RadianceImage:
+def render_volpath_spot(
+    volume: Volume,
+    beam: SpotBeam,
+    window: PixelWindow,
+    spp: int,
+    *,
+    seed: int = 0,
+    channels=(0, 1, 2),
+    rr_depth: int = NO_ROULETTE,
+) -> RadianceImage:
     """Render the window with Mitsuba's ``volpath``, one grey channel at a time.
 
     Each pixel value is the mean over ``spp`` paths of the radiance along −z
@@ -345,7 +398,9 @@ def render_volpath_spot(volume: Volume, beam: SpotBeam, window: PixelWindow, spp
     _check_fits(volume, beam, window)
     channels = _check_channels(channels)
     if _positive("spp", spp, "samples per pixel") < 2 or spp != int(spp):
-        raise TranslucencyError(f"spp: need an integer of at least 2 samples per pixel (for a variance), got {spp!r}")
+        raise TranslucencyError(
+            f"spp: need an integer of at least 2 samples per pixel (for a variance), got {spp!r}"
+        )
     n = window.n_pixels
     L = np.zeros((n, n, len(channels)))
     var = np.zeros_like(L)
@@ -382,8 +437,9 @@ class TopExits:
     seconds: float
 
 
-def walk_spot(volume: Volume, beam: SpotBeam, channel: int, n_photons: int, *, seed: int = 0,
-              profile=None) -> TopExits:
+def walk_spot(
+    volume: Volume, beam: SpotBeam, channel: int, n_photons: int, *, seed: int = 0, profile=None
+) -> TopExits:
     """Trace ``n_photons`` photons of ``channel`` entering as the spot's irradiance, index-matched.
 
     Entry points follow :func:`sample_spot_entries` (seed ``seed``); photons
@@ -404,14 +460,17 @@ def walk_spot(volume: Volume, beam: SpotBeam, channel: int, n_photons: int, *, s
     entries = sample_spot_entries(beam, n, seed, profile)
     xs, ys, cs = [], [], []
     for b0 in range(0, n, WALK_BATCH):
-        res = random_walk(volume, channel, entries[b0:b0 + WALK_BATCH], 1, seed=seed, first_point=b0,
-                          index_matched=True)
+        res = random_walk(
+            volume, channel, entries[b0 : b0 + WALK_BATCH], 1, seed=seed, first_point=b0, index_matched=True
+        )
         top = res.code == TOP
         xs.append(res.x[top].astype(np.float64))
         ys.append(res.y[top].astype(np.float64))
         cs.append(res.cos_exit[top])
     seconds = time.perf_counter() - t0
-    return TopExits(np.concatenate(xs), np.concatenate(ys), np.concatenate(cs), n, spot_power(*profile), seconds)
+    return TopExits(
+        np.concatenate(xs), np.concatenate(ys), np.concatenate(cs), n, spot_power(*profile), seconds
+    )
 
 
 def pixel_index(coord: np.ndarray, centres: np.ndarray, pitch_mm: float) -> np.ndarray:
@@ -424,8 +483,9 @@ def pixel_index(coord: np.ndarray, centres: np.ndarray, pitch_mm: float) -> np.n
     return np.where((idx >= 0) & (idx < len(centres)), idx, -1)
 
 
-def radiance_from_exits(exits: TopExits, x: np.ndarray, y: np.ndarray, pitch_mm: float,
-                        cone_deg: float) -> tuple[np.ndarray, np.ndarray]:
+def radiance_from_exits(
+    exits: TopExits, x: np.ndarray, y: np.ndarray, pitch_mm: float, cone_deg: float
+) -> tuple[np.ndarray, np.ndarray]:
     """Radiance image and its variance from top exits within ``cone_deg`` of +z (see module notes).
 
     ``x``, ``y``: pixel centres (n, n) indexed [row, column], as from :func:`pixel_centres`.
@@ -443,8 +503,16 @@ def radiance_from_exits(exits: TopExits, x: np.ndarray, y: np.ndarray, pitch_mm:
     return scale * counts, scale**2 * counts * (1.0 - counts / N)
 
 
-def tally_radiance(volume: Volume, beam: SpotBeam, window: PixelWindow, n_photons: int, *, seed: int = 0,
-                   channels=(0, 1, 2), cone_deg: float = 10.0) -> tuple[RadianceImage, list[TopExits]]:
+def tally_radiance(
+    volume: Volume,
+    beam: SpotBeam,
+    window: PixelWindow,
+    n_photons: int,
+    *,
+    seed: int = 0,
+    channels=(0, 1, 2),
+    cone_deg: float = 10.0,
+) -> tuple[RadianceImage, list[TopExits]]:
     """The photon tally's estimate of the image that :func:`render_volpath_spot` renders.
 
     Per channel c, ``n_photons`` photons (seed ``3 seed + c``); the estimator
@@ -466,6 +534,7 @@ def tally_radiance(volume: Volume, beam: SpotBeam, window: PixelWindow, n_photon
 # ------------------------------------------------------------------------------------------------
 # comparison
 # ------------------------------------------------------------------------------------------------
+
 
 def z_scores(a: RadianceImage, b: RadianceImage) -> np.ndarray:
     """Per-pixel, per-channel z = (a − b)/sqrt(var_a + var_b); NaN where both variances are 0."""
@@ -522,9 +591,13 @@ class Agreement:
         """Mean and standard deviation of the pixel z-scores, fraction with |z| > 3, and ring χ²/dof."""
         z = self.z
         rz = self.ring_z[np.isfinite(self.ring_z)]
-        return {"pixels": int(z.size), "z_mean": float(z.mean()), "z_std": float(z.std()),
-                "frac_abs_z_gt_3": float(np.mean(np.abs(z) > 3)),
-                "ring_chi2_per_dof": float(np.mean(rz**2)) if rz.size else float("nan")}
+        return {
+            "pixels": int(z.size),
+            "z_mean": float(z.mean()),
+            "z_std": float(z.std()),
+            "frac_abs_z_gt_3": float(np.mean(np.abs(z) > 3)),
+            "ring_chi2_per_dof": float(np.mean(rz**2)) if rz.size else float("nan"),
+        }
 
 
 def compare(ours: RadianceImage, ref: RadianceImage, centre_xy, ring_edges_mm) -> Agreement:
@@ -533,4 +606,3 @@ def compare(ours: RadianceImage, ref: RadianceImage, centre_xy, ring_edges_mm) -
     r, m_o, v_o = ring_profile(ours, centre_xy, ring_edges_mm)
     _, m_r, v_r = ring_profile(ref, centre_xy, ring_edges_mm)
     return Agreement(z[np.isfinite(z)], r, m_o, v_o, m_r, v_r)
-
