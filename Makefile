@@ -7,7 +7,7 @@ PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 OUT    ?= results
 
-.PHONY: demo test test-slow test-all bench clean default-data
+.PHONY: demo test test-slow test-all bench clean default-data default-reference
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -42,3 +42,7 @@ default-data: $(STAMP)
 	$(VENV)/bin/translucency acquire planar --material marble --size 32 32 10 --voxel 0.25 \
 	  --grid 32 --span 16 --pitch 0.25 --window 12 --photons 20000 --seed 1 --dtype float16 \
 	  --chunk 64 --out src/translucency/data/marble_default.zarr --overwrite
+
+# the converged volpath reference of Figure 2 (2 x 256 samples per pixel, about 10 minutes on 2 cores)
+default-reference: $(STAMP)
+	$(PY) -c "from translucency.pipeline import write_figure2_reference as w; print(w())"

@@ -33,6 +33,9 @@ from .io.outputs import claim_folder
 from .model import MATERIALS, ExponentialModel, PlanarAlpha
 from .render import Camera, PointLight
 from .render.figure import figure2
+from .render.image import coverage
+from .render.reference import SHIPPED as SHIPPED_REFERENCES
+from .render.reference import converged_reference
 
 
 def relight_check(
@@ -67,6 +70,18 @@ def relight_check(
     }
 
 
+#: samples per pixel of each of the two reference renders of Figure 2 (its noise: figure2.json)
+FIGURE2_REFERENCE_SPP = 256
+
+
+def figure2_scene(size=(160, 120)):
+    """The main job's object: the pig filled with veined marble (1 mm voxels, seed 1), light, camera."""
+    pig = make_pig()
+    volume = object_volume("marble", pig, 1.0, seed=1)
+    light = PointLight((60.0, -80.0, 120.0), 2.0e4)
+    return pig, volume, light, Camera.looking_at(pig, width=size[0], height=size[1])
+
+
 def run_figure2(
     report_dir,
     data_path,
@@ -74,7 +89,7 @@ def run_figure2(
     *,
     points: int = 96,
     photons: int = 8000,
-    spp: int = 16,
+    spp: int = FIGURE2_REFERENCE_SPP,
     size=(160, 120),
     overwrite: bool = False,
 ) -> dict:
@@ -82,12 +97,19 @@ def run_figure2(
 
     Writes the mesh data set to ``data_path`` (resumed, or reused, if it holds the same acquisition), the
     per-vertex model to ``model_path`` (replacing an earlier one with ``overwrite``) and Figure 2 into
-    ``report_dir``.
+    ``report_dir``.  The reference is the mean of two ``spp``-sample volpath renders, shipped with the
+    package for the default arguments (``make default-reference`` makes it again).
     """
-    pig = make_pig()
-    volume = object_volume("marble", pig, 1.0, seed=1)
+    pig, volume, light, camera = figure2_scene(size)
     acquire_mesh(
-        pig, volume, data_path, n_points=points, photons=photons, chunk_points=16, index_matched=True
+        pig,
+        volume,
+        data_path,
+        n_points=points,
+        photons=photons,
+        chunk_points=16,
+        index_matched=True,
+        overwrite=overwrite,
     )
     fit = fit_mesh(data_path, "iso")
     save_model(
@@ -97,15 +119,16 @@ def run_figure2(
         overwrite=overwrite,
         meta=fit.metadata(Path(data_path).resolve()),
     )
-    return figure2(
-        fit.model,
-        pig,
-        PointLight((60.0, -80.0, 120.0), 2.0e4),
-        report_dir,
-        volume=volume,
-        camera=Camera.looking_at(pig, width=size[0], height=size[1]),
-        spp_reference=spp,
+    return figure2(fit.model, pig, light, report_dir, volume=volume, camera=camera, spp_reference=spp)
+
+
+def write_figure2_reference(folder=None, *, spp: int = FIGURE2_REFERENCE_SPP, size=(160, 120)) -> dict:
+    """Render the main job's converged reference into ``folder`` (default: the shipped references)."""
+    pig, volume, light, camera = figure2_scene(size)
+    _, info = converged_reference(
+        pig, volume, light, camera, coverage(pig, camera), spp=spp, cache=folder or SHIPPED_REFERENCES
     )
+    return info
 
 
 #: the planar fits of the main job: label -> fit_planar arguments

@@ -2,12 +2,14 @@ r"""Virtual DISCO on a 3D object: pencil beams at surface points, exits tallied 
 
 For each incident vertex :math:`x_i` (a farthest-point sample of the mesh's
 vertices) N photons per channel enter along the inward normal
-(:mod:`translucency.acquire.mesh_walk`); each photon leaving the surface is
-given to its nearest vertex v, and
+(:mod:`translucency.acquire.mesh_walk`); each photon leaving the surface through
+a triangle is shared among its three vertices by its barycentric coordinates
+:math:`\phi_v` (:func:`splat_exits`), and
 
-.. math:: R_d(x_i, v) = \frac{n_v}{N A_v}\quad[\mathrm{mm}^{-2}],
+.. math:: R_d(x_i, v) = \frac{\sum_{\text{exits}} \phi_v}{N A_v}\quad[\mathrm{mm}^{-2}],
 
-with :math:`A_v` the vertex's area (a third of its triangles').  Light
+with :math:`A_v = \int \phi_v\, dA` the vertex's area (a third of its
+triangles'): the count and the area it is divided by agree by construction.  Light
 reflected by Fresnel at the entry is recorded apart (``specular``).
 
 The result is a mesh data set (:mod:`translucency.io.mesh_dataset`), written
@@ -22,7 +24,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
-from scipy.spatial import cKDTree
+import trimesh
 
 from .._validate import TranslucencyError
 from .._version import __version__
@@ -87,6 +89,7 @@ def acquire_mesh(
         "volume": volume.description,
         "bounds": np.round(mesh.bounds, 6).tolist(),
         "volume_grid": {"voxel_mm": volume.voxel_mm, "size_mm": list(volume.size_mm)},
+        "tally": "barycentric",
     }
     request = json.loads(json.dumps(request))
     area = vertex_areas(mesh)
@@ -110,7 +113,6 @@ def acquire_mesh(
     root = ds.group
     n_chunks = root["chunk_done"].shape[0]
     scene = mesh_scene(mesh)
-    tree = cKDTree(mesh.vertices)
     done = np.asarray(root["chunk_done"][...])
     normals = np.asarray(mesh.vertex_normals)
     for c in range(n_chunks):
@@ -134,8 +136,7 @@ def acquire_mesh(
             )
             point = np.repeat(np.arange(hi - lo), photons)
             ok = res.code == EXIT
-            _, v = tree.query(res.position[ok])
-            counts = np.bincount(point[ok] * V + v, minlength=(hi - lo) * V).reshape(hi - lo, V)
+            counts = splat_exits(mesh, point[ok], res.face[ok], res.position[ok], hi - lo)
             R[..., ch] = counts / (photons * area)
             spec[:, ch] = np.bincount(point[res.code == -1], minlength=hi - lo) / photons
         root["R_d"][lo:hi] = R
@@ -144,6 +145,24 @@ def acquire_mesh(
         if progress:
             progress(hi, P)
     return Path(out)
+
+
+def splat_exits(mesh, point: np.ndarray, face: np.ndarray, position: np.ndarray, n_points: int) -> np.ndarray:
+    r"""Exits shared among the vertices of their triangle by barycentric weight: (n_points, V) counts.
+
+    An exit at y in triangle (a, b, c) adds its barycentric coordinates :math:`\phi_a(y), \phi_b(y),
+    \phi_c(y)` (summing to 1) to the three vertices.  Since :math:`\int \phi_v\, dA = A_v` (a third of
+    the adjacent triangles' area, :func:`translucency.geometry.vertex_areas`), dividing by N A_v gives
+    the :math:`\phi_v`-weighted mean of R_d around v — the count and the area agree by construction.
+    """
+    V = len(mesh.vertices)
+    tri = np.asarray(mesh.faces)[face]  # (n, 3) vertex indices
+    corners = np.asarray(mesh.vertices, dtype=np.float64)[tri]  # (n, 3, 3)
+    bary = trimesh.triangles.points_to_barycentric(corners, np.asarray(position, dtype=np.float64))
+    bary = np.clip(np.nan_to_num(bary, nan=1.0 / 3.0), 0.0, None)  # exits lie on the face up to round-off
+    bary /= np.maximum(bary.sum(axis=1, keepdims=True), 1e-12)
+    index = (np.asarray(point)[:, None] * V + tri).ravel()
+    return np.bincount(index, weights=bary.ravel(), minlength=n_points * V).reshape(n_points, V)
 
 
 def object_volume(name: str, mesh, voxel_mm: float, *, g: float = 0.0, seed: int = 0) -> Volume:

@@ -36,6 +36,7 @@ class MeshWalkResult:
 
     code: np.ndarray  # EXIT, ABSORBED, KILLED, or -1 for specular reflection at entry
     position: np.ndarray  # (n, 3) exit point for EXIT, mm
+    face: np.ndarray  # (n,) triangle the photon left through (EXIT only)
     steps: int
 
 
@@ -98,17 +99,21 @@ def mesh_random_walk(
     direction = -n_in
     code = dr.select(specular, UInt32(EXIT + 100), UInt32(ACTIVE))
     steps = UInt32(0)
+    face = UInt32(0)
 
-    def cond(pos, direction, rng, code, steps):
+    def cond(pos, direction, rng, code, steps, face):
         return code == ACTIVE
 
-    def body(pos, direction, rng, code, steps):
+    def body(pos, direction, rng, code, steps, face):
         active = code == ACTIVE
         # tentative free flight against the majorant, and the distance to the surface
         t = -dr.log(1.0 - rng.next_float32()) / majorant
         si = scene.ray_intersect(mi.Ray3f(pos, direction), active)
-        escaped = active & ~si.is_valid()  # no surface ahead from inside: a crack
-        collide = active & si.is_valid() & (t < si.t)
+        # a ray that misses (si.t = inf) still collides in the medium: a ray through a vertex or along an
+        # edge can slip between triangles (the first flight from an icosphere's pole is one); only a photon
+        # that would fly on without a surface ahead has escaped through a crack
+        collide = active & (t < si.t)
+        escaped = active & ~si.is_valid() & ~collide
 
         # -- inside: real or null collision (voxel of the object-space volume) ---------------
         p_c = pos + direction * t
@@ -139,19 +144,22 @@ def mesh_random_walk(
 
         pos = dr.select(collide, p_c, dr.select(hit, si.p - n * eps, pos))
         pos = dr.select(leave, si.p, pos)
+        face = dr.select(leave, si.prim_index, face)
         direction = dr.select(scatter, new_dir, dr.select(reflect, refl_dir, direction))
         code = dr.select(absorb, UInt32(ABSORBED), code)
         code = dr.select(leave, UInt32(EXIT), code)
         code = dr.select(escaped, UInt32(KILLED), code)
         steps = steps + dr.select(active, 1, 0)
         code = dr.select((code == ACTIVE) & (steps >= max_steps), UInt32(KILLED), code)
-        return pos, direction, rng, code, steps
+        return pos, direction, rng, code, steps, face
 
-    pos, direction, rng, code, steps = dr.while_loop(
-        state=(pos, direction, rng, code, steps), cond=cond, body=body, label="mesh_photon_walk"
+    pos, direction, rng, code, steps, face = dr.while_loop(
+        state=(pos, direction, rng, code, steps, face), cond=cond, body=body, label="mesh_photon_walk"
     )
-    dr.eval(pos, code, steps)
+    dr.eval(pos, code, steps, face)
     code_np = np.asarray(code).astype(np.int64)
     code_np[code_np == EXIT + 100] = -1
     position = np.stack([np.asarray(pos.x), np.asarray(pos.y), np.asarray(pos.z)], axis=1)
-    return MeshWalkResult(code=code_np, position=position, steps=int(dr.sum(steps)[0]))
+    return MeshWalkResult(
+        code=code_np, position=position, face=np.asarray(face).astype(np.int64), steps=int(dr.sum(steps)[0])
+    )

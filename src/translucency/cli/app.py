@@ -31,7 +31,7 @@ from ..io.model_file import ModelFileError, load_model, read_header, save_model
 from ..io.outputs import claim_folder, claim_output
 from ..model import MATERIALS, check_physics, dipole_total_reflectance
 from ..pipeline import DEMO_FITS, run_demo
-from ..render.figure import boundary_eta, figure2, object_from_dataset, volume_of_dataset
+from ..render.figure import boundary_eta, figure2, object_of_model, volume_of_dataset
 from ..render.image import Camera
 from ..render.lights import parse_light
 
@@ -484,8 +484,7 @@ def render(
         raise TranslucencyError(
             f"{model}: a planar model; render needs a per-vertex model of a mesh data set"
         )
-    dataset = header.get("meta", {}).get("dataset", "")
-    mesh, dheader = object_from_dataset(dataset)
+    mesh, dheader = object_of_model(m, header)
     try:
         direction = [float(v) for v in view.split(",")]
     except ValueError:
@@ -495,7 +494,7 @@ def render(
     lights = [parse_light(t) for t in (light or ["point:60,-80,120,2e4"])]
     if len(lights) > 1:
         raise TranslucencyError("--light: one light per render for now (run once per light)")
-    claim_folder(out, overwrite=overwrite, inputs=[model, dataset])
+    claim_folder(out, overwrite=overwrite, inputs=[model, header.get("meta", {}).get("dataset") or None])
     cam = Camera.looking_at(mesh, direction, *size)
     vol = volume_of_dataset(mesh, dheader) if reference else None
     res = figure2(

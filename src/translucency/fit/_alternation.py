@@ -86,6 +86,9 @@ class FitResult:
         Wall time of the fit.
     options : dict
         The options used (stored in the model file).
+    acquisition : dict, optional
+        The data set's header (mesh fits): what was acquired, so that a model
+        file can rebuild its reference without the data set.
     """
 
     model: object
@@ -93,6 +96,7 @@ class FitResult:
     history: list
     seconds: float
     options: dict = field(default_factory=dict)
+    acquisition: dict | None = None
 
     def metadata(self, dataset_path) -> dict:
         """The fit's record stored beside the model: data set, options, Φ per round, time, flagged points.
@@ -106,15 +110,19 @@ class FitResult:
         -------
         dict
             ``dataset``, ``fit`` (the options), ``objective_per_round``,
-            ``seconds`` (rounded to 0.01 s) and ``flagged_points`` (indices).
+            ``seconds`` (rounded to 0.01 s), ``flagged_points`` (indices) and, for
+            mesh fits, ``acquisition`` (the data set's header).
         """
-        return {
+        meta = {
             "dataset": str(dataset_path),
             "fit": self.options,
             "objective_per_round": self.history,
             "seconds": round(self.seconds, 2),
             "flagged_points": np.flatnonzero(self.flagged).tolist(),
         }
+        if self.acquisition is not None:
+            meta["acquisition"] = self.acquisition
+        return meta
 
 
 def check_fit_options(

@@ -7,6 +7,10 @@ the colour per vertex; the alternation, the weights and the batched solvers are
 shared with the planar fit (:mod:`translucency.fit._alternation`), with vertices
 in the place of pixels: the Poisson variance of a vertex is :math:`\alpha P/(N A_v)`
 for its area :math:`A_v`.
+
+The model keeps what the fit cannot represent but a renderer needs: the mesh's
+triangles (so the model renders on its own) and, per incident point, the
+measured own-area value and total exitance (:func:`measured_near_field`).
 """
 
 from __future__ import annotations
@@ -151,7 +155,7 @@ def fit_mesh(
         x_i=x_i,
         cache_left=512 * 2**20,
     )
-    return alternate(
+    result = alternate(
         ctx,
         options,
         request,
@@ -163,3 +167,27 @@ def fit_mesh(
         progress=progress,
         t0=t0,
     )
+    # the model carries its surface and what was measured where the fit does not look (module docstring)
+    result.model.faces = np.asarray(group["faces"][...], dtype=np.int64)
+    result.model.measured = measured_near_field(ds, chunk_points)
+    result.acquisition = header
+    return result
+
+
+def measured_near_field(ds, chunk_points: int = 32) -> dict:
+    r"""Per incident point i, what the acquisition measured: ``own`` and ``total``, (P, 3) each.
+
+    .. math:: \mathrm{own}_i = R_d(x_i, x_i), \qquad \mathrm{total}_i = \sum_v A_v\, R_d(x_i, v)
+
+    ``own`` is the tally of the incident vertex's own area (mm⁻²: light that re-emerges within A_i, which
+    the fit's exclusion radius leaves out); ``total`` the diffuse exitance per unit incident power.
+    """
+    area = ds["vertex_area"].astype(np.float64)
+    incident = ds["incident"]
+    P = len(incident)
+    own, total = np.zeros((P, 3)), np.zeros((P, 3))
+    for s in range(0, P, chunk_points):
+        R = np.asarray(ds.group["R_d"][s : s + chunk_points], dtype=np.float64)  # (k, V, 3)
+        own[s : s + len(R)] = R[np.arange(len(R)), incident[s : s + len(R)]]
+        total[s : s + len(R)] = np.einsum("kvc,v->kc", R, area)
+    return {"own": own, "total": total}

@@ -74,11 +74,12 @@ class PlanarDataset:
         return bool(np.all(self["chunk_done"]))
 
 
-def create_dataset(path, header: dict, *, overwrite: bool = False, inputs=()):
+def create_dataset(path, header: dict, *, overwrite: bool = False, inputs=(), resume: bool = True):
     """Create (or reopen for resuming) a data set at ``path``.
 
     If ``path`` holds a data set with the same ``request``, it is reopened so
-    that finished chunks are kept; a data set made with other arguments is
+    that finished chunks are kept (unless ``resume`` is False: data written
+    whole); a data set made with other arguments is
     replaced only with ``overwrite``; anything that is not a translucency data
     set, and the command's ``inputs``, are never replaced
     (:func:`translucency.io.outputs.claim_output`).
@@ -90,7 +91,8 @@ def create_dataset(path, header: dict, *, overwrite: bool = False, inputs=()):
             old = open_dataset(path, writable=True)
         except TranslucencyError:
             old = None
-        if old is not None and old.header.get("request") == header["request"] and not overwrite:
+        same = old is not None and old.header.get("request") == header["request"]
+        if same and resume:  # the same acquisition: resume
             return old
         if not overwrite:
             raise TranslucencyError(
@@ -206,7 +208,7 @@ def write_dataset(
         "request": {"written_by": "write_dataset"},
     }
     claim_output(path, "planar data set", overwrite=overwrite)
-    ds = create_dataset(path, header, overwrite=True)
+    ds = create_dataset(path, header, overwrite=True, resume=False)
     g = ds.group
     g["x_i"][...] = x_i.astype(np.float32)
     g["window_origin"][...] = window_origin.astype(np.float32)

@@ -118,7 +118,7 @@ def create_mesh_dataset(
             old = open_mesh_dataset(path, writable=True)
         except TranslucencyError:
             old = None
-        if old is not None and old.header.get("request") == header["request"] and not overwrite:
+        if old is not None and old.header.get("request") == header["request"]:  # the same acquisition: resume
             return old
         if not overwrite:
             raise TranslucencyError(

@@ -10,6 +10,9 @@ Layout::
     frame                 (N, 3, 3) float32  mesh only: rows tangent, bitangent, normal
     alpha/values          (H, W) planar or (V,) mesh; dtype = header["dtype"]
     alpha/vertices        (V, 3) float32   mesh only: vertex positions, mm
+    mesh/faces            (F, 3) int32     mesh only, optional: the triangles (the model renders on its own)
+    measured/own          (N, 3) float32   mesh only, optional: R_d over each incident vertex's own area, mm⁻²
+    measured/total        (N, 3) float32   mesh only, optional: measured diffuse exitance per unit power
     params/...            per kind, dtype = header["dtype"]:
         exponential:  c, d (N, C, m, n) in mm⁻² and mm⁻¹; s_g, s_b (N,) when C = 1
         dipole:       sigma_a, sigma_s_prime (N, 3) in mm⁻¹
@@ -84,6 +87,10 @@ def _cast_arrays(model: ReflectanceModel, params: dict, dtype: str) -> dict[str,
     for name, value in params.items():
         if value is not None:
             arrays[f"params/{name}"] = value.astype(dtype)
+    if model.faces is not None:
+        arrays["mesh/faces"] = np.asarray(model.faces).astype(np.int32)
+    for name, value in (model.measured or {}).items():
+        arrays[f"measured/{name}"] = np.asarray(value).astype(np.float32)
     return arrays
 
 
@@ -215,10 +222,38 @@ def _from_arrays(arrays: dict[str, np.ndarray], header: dict) -> ReflectanceMode
         alpha = VertexAlpha(arrays["alpha/values"], arrays["alpha/vertices"])
     p = {name: arrays.get(f"params/{name}") for name in _PARAMS[header["kind"]]}
     if header["kind"] == "exponential":
-        return ExponentialModel(x_i, p["c"], p["d"], alpha, s_g=p["s_g"], s_b=p["s_b"], frame=frame)
-    if header["kind"] == "dipole":
-        return DipoleModel(x_i, p["sigma_a"], p["sigma_s_prime"], header["eta"], alpha, frame=frame)
-    return BurleyModel(x_i, p["A"], p["s"], alpha, frame=frame)
+        model = ExponentialModel(x_i, p["c"], p["d"], alpha, s_g=p["s_g"], s_b=p["s_b"], frame=frame)
+    elif header["kind"] == "dipole":
+        model = DipoleModel(x_i, p["sigma_a"], p["sigma_s_prime"], header["eta"], alpha, frame=frame)
+    else:
+        model = BurleyModel(x_i, p["A"], p["s"], alpha, frame=frame)
+    _attach_surface(model, arrays)
+    return model
+
+
+def _attach_surface(model: ReflectanceModel, arrays: dict[str, np.ndarray]) -> None:
+    """The optional mesh and measured near field of a mesh model, checked (one-line errors)."""
+    faces = arrays.get("mesh/faces")
+    if faces is not None:
+        V = len(model.alpha.values)
+        if model.geometry != "mesh" or faces.ndim != 2 or faces.shape[1] != 3 or len(faces) == 0:
+            raise TranslucencyError(
+                f"mesh/faces: expected (F, 3) triangles of a mesh model, got {faces.shape}"
+            )
+        if faces.min() < 0 or faces.max() >= V:
+            raise TranslucencyError(f"mesh/faces: vertex indices outside 0..{V - 1}")
+        model.faces = faces.astype(np.int64)
+    measured = {k.split("/", 1)[1]: v for k, v in arrays.items() if k.startswith("measured/")}
+    if measured:
+        for name, value in measured.items():
+            if name not in ("own", "total") or value.shape != (model.n_points, 3):
+                raise TranslucencyError(
+                    f"measured/{name}: expected 'own' or 'total' of shape ({model.n_points}, 3), "
+                    f"got {value.shape}"
+                )
+            if not (np.isfinite(value).all() and (value >= 0).all()):
+                raise TranslucencyError(f"measured/{name}: values must be finite and >= 0")
+        model.measured = {k: v.astype(np.float64) for k, v in measured.items()}
 
 
 def _required(header: dict) -> list[str]:
@@ -300,6 +335,8 @@ def load_model(path) -> ReflectanceModel:
     arrays = {}
     required = _required(header)
     optional = [k for k in ("params/s_g", "params/s_b") if k not in required]
+    if header["geometry"] == "mesh":
+        optional += ["mesh/faces", "measured/own", "measured/total"]
     for key in required + optional:
         try:
             arr = root[key]
@@ -317,7 +354,13 @@ def load_model(path) -> ReflectanceModel:
             raise ModelFileError(
                 f"{path}: array {key!r} is corrupted ({type(exc).__name__}: {_first_line(exc)})"
             ) from None
-        expect = np.float32 if key in ("x_i", "frame", "alpha/vertices") else want_dtype
+        expect = (
+            np.int32
+            if key == "mesh/faces"
+            else np.float32
+            if key in ("x_i", "frame", "alpha/vertices") or key.startswith("measured/")
+            else want_dtype
+        )
         if a.dtype != expect:
             raise ModelFileError(f"{path}: array {key!r} has dtype {a.dtype}, expected {np.dtype(expect)}")
         if not np.isfinite(a).all():

@@ -44,6 +44,14 @@ class ReflectanceModel(ABC):
 
     kind: str = "abstract"
 
+    #: mesh models: the surface's triangles (F, 3) over ``alpha.vertices``, so that a model renders on its own
+    faces: np.ndarray | None = None
+    #: mesh models: what the acquisition measured per incident point, (N, 3) each — ``own``: R_d averaged
+    #: over the incident vertex's own area A_i (mm⁻², the pairs the fit excludes); ``total``: the diffuse
+    #: exitance Σ_v A_v R_d(x_i, v) per unit incident power.  The renderer takes the near field and each
+    #: kernel's total from them (:func:`translucency.render.transport.transport_matrices`).
+    measured: dict | None = None
+
     def __init__(self, x_i, alpha: Modulation, frame=None):
         x_i = as_float_array("x_i", x_i, ndim=2)
         if x_i.shape[1] not in (2, 3) or x_i.shape[0] == 0:

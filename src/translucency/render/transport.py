@@ -188,25 +188,15 @@ def geodesic_neighbours(mesh, sources: np.ndarray, k: int, limit: float | None =
     return best_d, best_i
 
 
-def vertex_parameters(model, vertices, k: int = 4):
-    r"""Each vertex's profile as a blend of the k nearest incident points' profiles.
+def neighbour_weights(model, vertices, k: int = 4):
+    r"""Blend weights of the k incident points nearest each vertex: (w, idx), each (V, k).
 
-    Inverse-square-distance weights :math:`w_j` (exact at an incident point):
-    :math:`P_v(r) = \sum_j w_j P_j(r)`, itself a sum of k·n exponentials —
-    so c, d of shape (V, C, k·n) are returned (with the colour scale (V, 3)).
-    Blending the profiles, not their parameters: the average of two exponentials'
-    rates and amplitudes is a third exponential unlike either.
-
-    ``vertices``: positions (V, 3) — nearest in a straight line — or a mesh
-    whose vertices the incident points are — nearest along the surface
-    (:func:`geodesic_neighbours`), so parameters do not leak across a thin gap
-    between two parts of an object; vertices that reach no incident point that
-    way fall back to straight-line distances.
+    Inverse-square-distance weights :math:`w_j`, normalised, exact (a single 1) at an incident point.
+    ``vertices``: positions (V, 3) — nearest in a straight line — or a mesh whose vertices the incident
+    points are — nearest along the surface (:func:`geodesic_neighbours`), so that nothing leaks across a
+    thin gap between two parts of an object; vertices that reach no incident point that way fall back to
+    straight-line distances.
     """
-    if model.kind != "exponential" or model.n_directions != 1:
-        raise TranslucencyError(
-            "model: rendering needs an isotropic exponential model (fit with --model iso)"
-        )
     k = min(k, model.n_points)
     mesh = vertices if hasattr(vertices, "edges_unique") else None
     vertices = np.asarray(mesh.vertices if mesh is not None else vertices, dtype=np.float64)
@@ -222,8 +212,25 @@ def vertex_parameters(model, vertices, k: int = 4):
     exact = dist[:, 0] < 1e-9
     w[exact] = 0.0
     w[exact, 0] = 1.0
-    w /= w.sum(1, keepdims=True)
-    V, C, n = len(vertices), model.c.shape[1], model.n_terms
+    return w / w.sum(1, keepdims=True), idx
+
+
+def vertex_parameters(model, vertices, k: int = 4, weights=None):
+    r"""Each vertex's profile as a blend of the k nearest incident points' profiles.
+
+    :math:`P_v(r) = \sum_j w_j P_j(r)` with the weights of :func:`neighbour_weights`
+    (or ``weights`` = (w, idx) computed before), itself a sum of k·n exponentials —
+    so c, d of shape (V, C, k·n) are returned (with the colour scale (V, 3)).
+    Blending the profiles, not their parameters: the average of two exponentials'
+    rates and amplitudes is a third exponential unlike either.
+    """
+    if model.kind != "exponential" or model.n_directions != 1:
+        raise TranslucencyError(
+            "model: rendering needs an isotropic exponential model (fit with --model iso)"
+        )
+    w, idx = neighbour_weights(model, vertices, k) if weights is None else weights
+    V, k = w.shape
+    C, n = model.c.shape[1], model.n_terms
     c = (w[:, :, None, None] * model.c[idx][:, :, :, 0]).transpose(0, 2, 1, 3).reshape(V, C, k * n)
     d = model.d[idx][:, :, :, 0].transpose(0, 2, 1, 3).reshape(V, C, k * n)
     if C == 1:  # shared colour: blend the scales with the same weights (exact where one point dominates)
@@ -236,18 +243,31 @@ def vertex_parameters(model, vertices, k: int = 4):
 def transport_matrices(
     model, mesh, *, radius: float | None = None, r_min: float | None = None, max_pairs: float = 2.5e7
 ):
-    """The sparse transport T of the module docstring, as a :class:`Transport` (one matrix per
+    r"""The sparse transport T of the module docstring, as a :class:`Transport` (one matrix per
     channel, or one matrix and the colour scale for the shared-colour model).
 
     ``radius`` defaults to the model's 99 % energy radius (largest over points and channels).
     Distances below ``r_min`` (default: half the mean edge length, the fit's exclusion radius)
     are evaluated at ``r_min``: the profiles were fitted from there out, and their steepest
     terms must not be extrapolated to two vertices that happen to lie very close.
+
+    **Near field.**  A model that carries what its acquisition measured (``model.measured``,
+    :func:`translucency.fit.mesh.measured_near_field`; blended to every vertex with the profile
+    weights) gets its diagonal and its totals from the data:
+
+    .. math:: T_{ii} = \frac{A_i}{\pi}\,\mathrm{own}_i, \qquad
+              \sum_{o \ne i} A_o T_{oi} = \frac{A_i}{\pi}\,(\mathrm{total}_i - A_i\,\mathrm{own}_i),
+
+    i.e. the light a vertex sends into its own area is the measured one (the fit never sees it),
+    and each column of the spread is scaled so that the kernel carries the measured total
+    exitance whatever the local vertex density and the truncation radius.  (Both already hold α.)
+    Without it the diagonal is the profile at ``r_min`` and columns are not rescaled.
     """
     v = np.asarray(mesh.vertices, dtype=np.float64)
     V = len(v)
     area = vertex_areas(mesh)
-    c, d, s = vertex_parameters(model, mesh)
+    weights = neighbour_weights(model, mesh)
+    c, d, s = vertex_parameters(model, mesh, weights=weights)
     if radius is None:
         # the 99 % energy radius, or less where the pairs would not fit in memory:
         # pairs ≈ V² π r² / (surface area)
@@ -271,15 +291,25 @@ def transport_matrices(
     alpha = model.alpha.values if len(model.alpha.values) == V else model.alpha.at(v)
     # shared colour (one fall-off, C = 1): T_λ = T · diag(s_λ) — one matrix, the scale goes with E
     shared = c.shape[1] == 1
+    own, total = _measured_per_vertex(model, weights)
     mats = []
     for ch in range(1 if shared else 3):
         cc, dd = c[:, ch], d[:, ch]
         scale = 1.0 if shared else s[:, ch]
         prof = np.einsum("pn,pn->p", cc[i], np.exp(dd[i] * r[:, None])) * (scale if shared else scale[i])
         vals = area[i] / np.pi * alpha[o] * prof
-        # the light a vertex sends into its own area, at the profile's value at r_min like the
-        # closest pairs (the integral from r = 0 would extrapolate the steepest fitted term)
-        diag = area / np.pi * alpha * np.einsum("vn,vn->v", cc, np.exp(dd * r_min)) * scale
+        if own is None:
+            # the light a vertex sends into its own area, at the profile's value at r_min like the
+            # closest pairs (the integral from r = 0 would extrapolate the steepest fitted term)
+            diag = area / np.pi * alpha * np.einsum("vn,vn->v", cc, np.exp(dd * r_min)) * scale
+        else:
+            # measured own area (kept apart, per channel); the spread of column i normalised to carry
+            # 1 (shared colour: the scale below carries each channel's total_i − A_i own_i) or
+            # total_i − A_i own_i itself (one matrix per channel)
+            spread = np.bincount(i, weights=area[o] * vals, minlength=V) * np.pi / area  # Σ_o A_o α_o P_i
+            target = np.ones(V) if shared else np.maximum(total[:, ch] - area * own[:, ch], 0.0)
+            vals = vals * np.divide(target, spread, out=np.zeros(V), where=spread > 0)[i]
+            diag = np.zeros(V)
         mats.append(
             sp.csr_matrix(
                 (
@@ -289,7 +319,25 @@ def transport_matrices(
                 shape=(V, V),
             )
         )
-    return Transport(mats, s.astype(np.float32) if shared else None)
+    if own is None:
+        return Transport(mats, s.astype(np.float32) if shared else None)
+    scale = np.maximum(total - area[:, None] * own, 0.0) if shared else None
+    return Transport(
+        mats,
+        None if scale is None else scale.astype(np.float32),
+        (area[:, None] / np.pi * own).astype(np.float32),
+    )
+
+
+def _measured_per_vertex(model, weights):
+    """``model.measured``'s own and total (V, 3), blended to every vertex with the profile weights;
+    (None, None) for a model without them."""
+    if not model.measured or not {"own", "total"} <= set(model.measured):
+        return None, None
+    w, idx = weights
+    own = np.einsum("vk,vkc->vc", w, model.measured["own"][idx])
+    total = np.einsum("vk,vkc->vc", w, model.measured["total"][idx])
+    return own, total
 
 
 @dataclass
@@ -297,11 +345,14 @@ class Transport:
     r"""The prepared transport: L_λ = T_λ E per channel (:func:`transport_matrices`).
 
     Either three matrices (one fall-off per channel) or one matrix T with the
-    incident vertices' colour scale, :math:`T_\lambda = T\,\mathrm{diag}(s_\lambda)`.
+    incident vertices' colour scale, :math:`T_\lambda = T\,\mathrm{diag}(s_\lambda)`; with a
+    measured near field the own-area term is kept apart per channel:
+    :math:`L_\lambda \mathrel{+}= \mathrm{own}_\lambda E`.
     """
 
     matrices: list  # CSR (V × V), float32: one or three
     scale: np.ndarray | None = None  # (V, 3) colour scale of the incident vertex (one matrix)
+    own: np.ndarray | None = None  # (V, 3) A_i own_i / π: each vertex's own area, per channel (measured)
 
     @property
     def nnz(self) -> int:
@@ -332,7 +383,10 @@ def relight_vertices(transport: Transport, E: np.ndarray) -> np.ndarray:
     E = np.asarray(E, dtype=np.float32)
     E = np.repeat(E[:, None], 3, axis=1) if E.ndim == 1 else E
     if transport.scale is None:  # one matrix per channel
-        return np.stack([T @ E[:, ch] for ch, T in enumerate(transport.matrices)], axis=1)
-    T, out = transport.matrices[0], np.empty(E.shape, dtype=np.float32)
-    _csr_times_rgb(T.indptr, T.indices, T.data, np.ascontiguousarray(E * transport.scale), out)
+        out = np.stack([T @ E[:, ch] for ch, T in enumerate(transport.matrices)], axis=1)
+    else:
+        T, out = transport.matrices[0], np.empty(E.shape, dtype=np.float32)
+        _csr_times_rgb(T.indptr, T.indices, T.data, np.ascontiguousarray(E * transport.scale), out)
+    if transport.own is not None:
+        out += transport.own * E
     return out

@@ -1,0 +1,128 @@
+r"""A converged path-traced reference whose own noise is measured, cached on disk.
+
+An object comparison is only as good as its reference: Mitsuba's ``volpath``
+at S samples per pixel carries Monte Carlo noise of relative size
+:math:`\propto 1/\sqrt S`.  :func:`converged_reference` renders the reference
+twice with independent seeds (A, B) and returns their mean with its measured
+noise,
+
+.. math:: \varepsilon_{ref} = \frac{\lVert A - B \rVert}{2\,\lVert (A + B)/2 \rVert}
+          \quad\text{(relative RMSE over the object's pixels)},
+
+since each render's error has RMS :math:`\lVert A - B\rVert/\sqrt 2` and the
+mean of two halves it again.  The result is cached under a key made of all
+that defines it — mesh, volume, light, camera, samples, boundary and the
+version of translucency (Mitsuba's is recorded beside it) — in ``$TRANSLUCENCY_CACHE`` (default
+``~/.cache/translucency``), and looked up first among the references shipped
+with the package (``translucency/data/references``: the main job's).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import time
+from pathlib import Path
+
+import numpy as np
+
+from .._version import __version__
+from ..io.atomic import atomic_path, write_json
+from ..mitsuba import engine_versions, mitsuba
+from .image import Camera, rel_rmse, render_reference
+
+#: references shipped with the package (the main job's), looked up before the user's cache
+SHIPPED = Path(__file__).resolve().parent.parent / "data" / "references"
+
+
+def cache_dir() -> Path:
+    """The reference cache: ``$TRANSLUCENCY_CACHE/references`` (default ``~/.cache/translucency``)."""
+    root = os.environ.get("TRANSLUCENCY_CACHE") or Path.home() / ".cache" / "translucency"
+    return Path(root) / "references"
+
+
+def reference_key(mesh, volume, light, camera: Camera, spp: int, eta: float) -> str:
+    """A SHA-256 over everything that defines a reference image (hex, 24 characters)."""
+    h = hashlib.sha256()
+    for a in (np.asarray(mesh.vertices, np.float32), np.asarray(mesh.faces, np.int32)):
+        h.update(np.ascontiguousarray(a).tobytes())
+    for a in (volume.sigma_s, volume.sigma_a):
+        h.update(np.ascontiguousarray(a, dtype=np.float32).tobytes())
+    spec = {
+        "volume": [list(volume.size_mm), volume.voxel_mm, volume.g, volume.eta],
+        "light": repr(light),
+        "camera": repr(camera),
+        "spp": int(spp),
+        "eta": float(eta),
+        "version": __version__,  # Mitsuba's version is recorded beside the image, not keyed: same physics
+    }
+    h.update(json.dumps(spec, sort_keys=True).encode())
+    return h.hexdigest()[:24]
+
+
+def _load(folder: Path, key: str):
+    exr, meta = folder / f"{key}.exr", folder / f"{key}.json"
+    if not (exr.is_file() and meta.is_file()):
+        return None
+    try:
+        image = np.asarray(mitsuba().Bitmap(str(exr)), dtype=np.float64)
+        info = json.loads(meta.read_text())
+    except (OSError, ValueError, RuntimeError):
+        return None  # an unreadable cache entry is simply rendered again
+    return image, info
+
+
+def converged_reference(
+    mesh, volume, light, camera: Camera, mask: np.ndarray, *, spp: int = 256, eta: float = 1.0, cache=True
+) -> tuple[np.ndarray, dict]:
+    """The mean of two independent ``volpath`` renders and its measured relative noise, cached.
+
+    Parameters
+    ----------
+    mesh, volume, light, camera
+        The scene (:func:`translucency.render.image.render_reference`).
+    mask : ndarray of bool, shape (H, W)
+        The object's pixels, over which the noise is measured.
+    spp : int
+        Samples per pixel of *each* of the two renders.
+    eta : float
+        The boundary (1: index-matched).
+    cache : bool or path
+        True: the shipped references, then the user's cache (written); a path: that folder; False: none.
+
+    Returns
+    -------
+    image : ndarray, shape (H, W, 3)
+    info : dict
+        ``noise`` (relative RMSE of the mean, formula in the module docstring), ``spp`` (of each render),
+        ``seconds`` (path tracing), ``key``, ``cached`` (where it came from, or None).
+    """
+    key = reference_key(mesh, volume, light, camera, spp, eta)
+    folders = [] if cache is False else ([Path(cache)] if cache is not True else [SHIPPED, cache_dir()])
+    for folder in folders:
+        hit = _load(folder, key)
+        if hit is not None and hit[0].shape[:2] == mask.shape:
+            return hit[0], {**hit[1], "cached": str(folder)}
+    t = time.perf_counter()
+    a, _ = render_reference(mesh, volume, light, camera, spp=spp, seed=0, eta=eta)
+    b, _ = render_reference(mesh, volume, light, camera, spp=spp, seed=1, eta=eta)
+    mean = 0.5 * (a + b)
+    info = {
+        "key": key,
+        "spp": int(spp),
+        "renders": 2,
+        "noise": 0.5
+        * rel_rmse(a, b, mask)
+        * float(np.sqrt(np.mean(b[mask] ** 2) / np.mean(mean[mask] ** 2))),
+        "seconds": time.perf_counter() - t,
+        "definition": "noise = ||A - B|| / (2 ||(A + B)/2||) over the object's pixels",
+        "engine": engine_versions(),
+    }
+    if folders:
+        folder = folders[-1]
+        folder.mkdir(parents=True, exist_ok=True)
+        with atomic_path(folder / f"{key}.exr") as tmp:
+            mitsuba().Bitmap(mean.astype(np.float32)).write(str(tmp))
+        write_json(folder / f"{key}.json", info)
+    return mean, {**info, "cached": None}
