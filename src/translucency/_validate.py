@@ -83,3 +83,33 @@ def as_index_array(name: str, value, n: int) -> np.ndarray:
         idx = tuple(int(i) for i in np.argwhere(bad)[0])
         raise TranslucencyError(f"{name}: index {arr[idx]} at {idx} out of range [0, {n})")
     return arr
+
+
+def check_option(name: str, value, *, lo=None, hi=None, open_lo: bool = False, open_hi: bool = False):
+    """A number given on the command line or to an API boundary: finite and within [lo, hi].
+
+    ``open_lo``/``open_hi`` exclude the bound itself.  Raises one line naming the option, e.g.
+    ``--spp: must be >= 1, got 0``.  Returns ``value`` unchanged (None passes: "not given").
+
+    Examples
+    --------
+    >>> check_option("--spp", 16, lo=1)
+    16
+    >>> check_option("--eta", 0.0, lo=0, open_lo=True)
+    Traceback (most recent call last):
+    ...
+    translucency._validate.TranslucencyError: --eta: must be > 0, got 0.0
+    """
+    if value is None:
+        return value
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise TranslucencyError(f"{name}: expected a number, got {value!r}") from None
+    if not np.isfinite(v):
+        raise TranslucencyError(f"{name}: must be a finite number, got {value!r}")
+    if lo is not None and (v <= lo if open_lo else v < lo):
+        raise TranslucencyError(f"{name}: must be {'>' if open_lo else '>='} {lo:g}, got {value!r}")
+    if hi is not None and (v >= hi if open_hi else v > hi):
+        raise TranslucencyError(f"{name}: must be {'<' if open_hi else '<='} {hi:g}, got {value!r}")
+    return value

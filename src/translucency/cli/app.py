@@ -17,7 +17,7 @@ from rich.console import Console
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
-from .._validate import TranslucencyError
+from .._validate import TranslucencyError, check_option
 from .._version import __version__
 from ..acquire import PlanarSetup, acquire_planar, estimate_seconds, load_volume, make_sample
 from ..acquire.mesh import acquire_mesh, object_volume
@@ -117,6 +117,7 @@ def materials(
     eta: float = typer.Option(1.3, help="Relative index of refraction for the dipole's total reflectance."),
 ):
     """Print Jensen et al. 2001's measured coefficients (mm^-1) and the dipole's R_d."""
+    check_option("--eta", eta, lo=0, open_lo=True)
 
     table = Table(title=f"Jensen et al. 2001 measured materials (eta = {eta})")
     for col in ("name", "sigma_s' R G B [1/mm]", "sigma_a R G B [1/mm]", "R_d dipole", "R_d published"):
@@ -237,6 +238,15 @@ def acquire_planar_cmd(
     ),
 ):
     """Scan a pencil beam over a planar sample and record R_d around each incident point."""
+    check_option("--photons", photons, lo=1)
+    check_option("--seed", seed, lo=0)
+    check_option("--grid", grid, lo=1, hi=4096)
+    check_option("--chunk", chunk, lo=1)
+    check_option("--g", g, lo=-1, hi=1, open_lo=True, open_hi=True)
+    for name, value in (("--span", span), ("--pitch", pitch), ("--window", window), ("--voxel", voxel)):
+        check_option(name, value, lo=0, open_lo=True)
+    for value in size:
+        check_option("--size", value, lo=0, open_lo=True)
 
     if (material is None) == (volume is None):
         raise TranslucencyError("give exactly one of --material NAME or --volume FILE.npz")
@@ -282,11 +292,18 @@ def acquire_mesh_cmd(
     ),
     scale: float = typer.Option(1.0, "--scale", help="Millimetres per mesh unit."),
     material: str = typer.Option(
-        "marble",
+        None,
         "--material",
         "-m",
-        help="Filling: homogeneous:<name>, marble, apple-slice, skin, fibers (object space).",
+        help="Filling: homogeneous:<name>, marble (default), apple-slice, skin, fibers (object space).",
     ),
+    volume: Path = typer.Option(
+        None,
+        "--volume",
+        help="A user's filling: .npz with sigma_s, sigma_a (Z,Y,X,3) in 1/mm, voxel_mm, over the mesh's "
+        "bounding box (z index 0 at the top).",
+    ),
+    up: str = typer.Option("z", "--up", help="The mesh file's up axis (z, y or x), turned to +z."),
     voxel: float = typer.Option(0.5, "--voxel", help="Voxel size of the filling, mm."),
     points: int = typer.Option(
         64, "--points", help="Incident points (farthest-point sample of the vertices)."
@@ -305,10 +322,22 @@ def acquire_mesh_cmd(
     ),
 ):
     """Pencil beams at surface points of a 3D object; exits tallied per vertex (R_d in mm^-2)."""
+    check_option("--photons", photons, lo=1)
+    check_option("--seed", seed, lo=0)
+    check_option("--points", points, lo=1)
+    check_option("--chunk", chunk, lo=1)
+    check_option("--g", g, lo=-1, hi=1, open_lo=True, open_hi=True)
+    check_option("--scale", scale, lo=0, open_lo=True)
+    check_option("--voxel", voxel, lo=0, open_lo=True)
 
-    claim_output(out, "mesh data set", overwrite=overwrite, inputs=[mesh], reuse=True)
-    obj = load_mesh(mesh, scale_mm=scale) if mesh is not None else make_pig()
-    vol = object_volume(material, obj, voxel, g=g, seed=seed)
+    if material is not None and volume is not None:
+        raise TranslucencyError("give one of --material NAME or --volume FILE.npz, not both")
+    claim_output(out, "mesh data set", overwrite=overwrite, inputs=[mesh, volume], reuse=True)
+    obj = load_mesh(mesh, scale_mm=scale, up=up) if mesh is not None else make_pig()
+    if volume is not None:
+        vol = load_volume(volume)
+    else:
+        vol = object_volume(material or "marble", obj, voxel, g=g, seed=seed)
     err_console.print(
         f"{points} incident points x {photons:,} photons x 3 channels on a mesh of "
         f"{len(obj.vertices):,} vertices, {' x '.join(f'{v:.1f}' for v in obj.extents)} mm"
@@ -325,7 +354,7 @@ def acquire_mesh_cmd(
             chunk_points=chunk,
             index_matched=index_matched,
             overwrite=overwrite,
-            inputs=[mesh],
+            inputs=[mesh, volume],
             progress=lambda done, total: bar.update(task, completed=done, item="points"),
         )
     console.print(f"mesh data set: {out}")
@@ -363,6 +392,9 @@ def fit(
 
     An interrupted fit resumes from OUT.partial.npz when run again with the same arguments.
     """
+    check_option("--rounds", rounds, lo=1)
+    check_option("--exclusion", exclusion, lo=0)
+    check_option("--chunk", chunk, lo=1)
 
     claim_output(out, "model file", overwrite=overwrite, inputs=[data], option="--out")
     if is_mesh_dataset(data):
@@ -477,6 +509,10 @@ def render(
     ),
 ):
     """Relight a fitted object: irradiance per vertex, sparse transport, a picture through Mitsuba (EXR + PNG)."""  # noqa: E501 — Typer lists the docstring verbatim as the command's one-line help; a line break would show in `translucency --help`
+    check_option("--spp", spp, lo=1)
+    check_option("--radius", radius, lo=0, open_lo=True)
+    for value in size:
+        check_option("--size", value, lo=1, hi=16384)
 
     m = load_model(model)
     header = read_header(model)

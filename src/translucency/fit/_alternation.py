@@ -248,6 +248,7 @@ class FitContext:
     sweeps: int  # block-coordinate sweeps over the directions per round
     balance: bool  # weight rings beyond 1 mm by 1 mm / r
     x_i: np.ndarray  # (P, 2|3) incident points, mm
+    rate_bounds: tuple | None = None  # (lo, hi) of log a (a in mm⁻¹); None: what the radii resolve
     cache_left: float = 0.0  # bytes the data may still occupy in memory between rounds
     cache: dict = field(default_factory=dict)
 
@@ -590,6 +591,7 @@ def _solve_exponentials(ctx, state, sl, ch, W, Y, index):
             pooled=True,
             max_iter=15 if warm else 12,
             tol=1e-4,
+            bounds=ctx.rate_bounds,
         )
         c[rows], a[rows] = cc, aa
     state.c[sl] = c.reshape(state.c[sl].shape)
@@ -607,7 +609,16 @@ def _fit_exponential(ctx: FitContext, state: FitState, sl: slice, ch: _Chunk, w2
     if not state.ready[sl].all():  # start every direction from the isotropic fit
         W, Y = _grouped(ch.rings, G, C, w2, kappa, ch.y)
         cc, aa, _ = fit_exponentials_batched(
-            ch.r_g, W, Y, ctx.n, n_starts=3, pooled=True, max_iter=25, tol=1e-5, r_base=ch.r_base
+            ch.r_g,
+            W,
+            Y,
+            ctx.n,
+            n_starts=3,
+            pooled=True,
+            max_iter=25,
+            tol=1e-5,
+            r_base=ch.r_base,
+            bounds=ctx.rate_bounds,
         )
         state.c[sl] = np.repeat(cc.reshape(k, C, 1, ctx.n), m, axis=2)
         state.a[sl] = np.repeat(aa.reshape(k, C, 1, ctx.n), m, axis=2)

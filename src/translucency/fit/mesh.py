@@ -78,6 +78,7 @@ def fit_mesh(
     max_rounds: int = 3,
     tol: float = 1e-3,
     alpha_radius: float | None = None,
+    max_rate: float | None = None,
     chunk_points: int = 32,
     workers: int | None = None,
     progress=None,
@@ -99,6 +100,10 @@ def fit_mesh(
     alpha_radius : float, optional
         α at a vertex pools the statistics of the vertices within this distance
         (mm; default three mean edge lengths; 0: per vertex alone).
+    max_rate : float, optional
+        Steepest fall-off |d| a term may take, mm⁻¹; default 3 / (mean edge length): a term must still
+        hold e⁻³ of its value at the nearest vertices, or the data cannot tell its amplitude (a steeper
+        term is unconstrained and blows the total 2π Σ c/d² up).  The slowest is 0.5 / (object's size).
 
     Returns
     -------
@@ -117,6 +122,11 @@ def fit_mesh(
     group, header = ds.group, ds.header
     source = _MeshSource(group, header, alpha_radius)
     exclusion = source.pitch / 2 if exclusion_mm is None else float(exclusion_mm)
+    diagonal = float(np.linalg.norm(np.ptp(source.vertices, axis=0)))
+    a_max = 3.0 / source.pitch if max_rate is None else float(max_rate)
+    if not (np.isfinite(a_max) and a_max > 0):
+        raise TranslucencyError(f"max_rate: must be a positive number of 1/mm, got {max_rate}")
+    rate_bounds = (float(np.log(0.5 / diagonal)), float(np.log(a_max)))
     x_i = source.vertices[source.incident]
     C = 1 if colour == "shared" and model == "iso" else 3
     options = {
@@ -130,6 +140,7 @@ def fit_mesh(
         "tol": tol,
         "radius_step": source.pitch / 2,
         "alpha_radius": alpha_radius,
+        "max_rate": a_max,
         "geometry": "mesh",
     }
     request = json.dumps(
@@ -141,6 +152,7 @@ def fit_mesh(
         sort_keys=True,
     )
     ctx = FitContext(
+        rate_bounds=rate_bounds,
         source=source,
         kind=model,
         n=int(n_terms),

@@ -19,9 +19,54 @@ import trimesh
 from .._validate import TranslucencyError
 
 
-def check_mesh(mesh, name: str = "mesh"):
-    """Repair what can be repaired (with a warning) and refuse the rest; returns the mesh."""
+def close_holes(mesh) -> list[float]:
+    """Close every hole (boundary loop) by a fan of triangles around the loop's centroid, oriented like
+    the surface around it; returns the loops' perimeters (mm).
 
+    Raises ``TranslucencyError`` where the boundary does not form simple loops (non-manifold edges).
+    """
+    edges = np.asarray(mesh.edges)  # directed, in each face's order
+    key = np.sort(edges, axis=1)
+    _, inverse, count = np.unique(key, axis=0, return_inverse=True, return_counts=True)
+    boundary = edges[count[inverse.ravel()] == 1]
+    if len(boundary) == 0:
+        return []
+    following = dict(zip(boundary[:, 0].tolist(), boundary[:, 1].tolist()))
+    if len(following) != len(boundary) or (count > 2).any():
+        raise TranslucencyError("mesh: its open edges do not form simple loops (non-manifold boundary)")
+    vertices, faces, perimeters, seen = list(np.asarray(mesh.vertices)), [], [], set()
+    v = np.asarray(mesh.vertices, dtype=np.float64)
+    for start in following:
+        if start in seen:
+            continue
+        loop, node = [start], following[start]
+        seen.add(start)
+        while node != start:
+            if node in seen or node not in following:
+                raise TranslucencyError(
+                    "mesh: its open edges do not form simple loops (non-manifold boundary)"
+                )
+            loop.append(node)
+            seen.add(node)
+            node = following[node]
+        ring = v[loop]
+        perimeters.append(float(np.linalg.norm(ring - np.roll(ring, -1, axis=0), axis=1).sum()))
+        centre = len(vertices)
+        vertices.append(ring.mean(axis=0))
+        # an open edge a→b belongs to a face that runs a→b; the patch runs b→a to match it
+        faces += [[b, a, centre] for a, b in zip(loop, loop[1:] + loop[:1])]
+    mesh.vertices = np.asarray(vertices)
+    mesh.faces = np.concatenate([np.asarray(mesh.faces), np.asarray(faces, dtype=np.int64)])
+    return perimeters
+
+
+def check_mesh(mesh, name: str = "mesh", *, max_hole: float = 0.5):
+    """Repair what can be repaired (with a warning) and refuse the rest; returns the mesh.
+
+    Duplicate vertices are merged whatever their texture coordinates or normals (a UV seam splits a
+    closed surface), degenerate triangles dropped, holes whose perimeter is at most ``max_hole`` times the
+    mesh's bounding-box diagonal closed (:func:`close_holes`), the winding made consistent and outward.
+    """
     if len(mesh.faces) == 0:
         raise TranslucencyError(f"{name}: no triangles")
     if not np.isfinite(mesh.vertices).all():
@@ -31,16 +76,25 @@ def check_mesh(mesh, name: str = "mesh"):
         warnings.warn(f"{name}: removed {int((~good).sum())} degenerate (zero-area) triangles", stacklevel=2)
         mesh.update_faces(good)
         mesh.remove_unreferenced_vertices()
-    mesh.merge_vertices()
+    mesh.merge_vertices(merge_tex=True, merge_norm=True)  # seams of a texture or normal map are one surface
     if not mesh.is_watertight:
-        trimesh.repair.fill_holes(mesh)
-        if mesh.is_watertight:
-            warnings.warn(f"{name}: the surface was open; small holes were filled", stacklevel=2)
+        diagonal = float(np.linalg.norm(mesh.extents))
+        try:
+            perimeters = close_holes(mesh)
+        except TranslucencyError:
+            perimeters = None
+        if perimeters is not None and mesh.is_watertight and max(perimeters) <= max_hole * diagonal:
+            warnings.warn(
+                f"{name}: the surface was open; {len(perimeters)} holes were filled (largest perimeter "
+                f"{max(perimeters):.3g} mm on a {diagonal:.3g} mm object)",
+                stacklevel=2,
+            )
         else:
             open_edges = len(trimesh.grouping.group_rows(mesh.edges_sorted, require_count=1))
             raise TranslucencyError(
-                f"{name}: the surface is not closed ({open_edges} open or non-manifold edges); "
-                "light transport inside an object needs a watertight mesh"
+                f"{name}: the surface is not closed ({open_edges} open or non-manifold edges"
+                + (f", holes up to {max(perimeters):.3g} mm around" if perimeters else "")
+                + "); light transport inside an object needs a watertight mesh"
             )
     if not mesh.is_winding_consistent:
         trimesh.repair.fix_winding(mesh)
@@ -50,7 +104,15 @@ def check_mesh(mesh, name: str = "mesh"):
     return mesh
 
 
-def load_mesh(path, *, scale_mm: float = 1.0):
+#: rotations turning a file's up axis into our +z
+_UP = {
+    "z": np.eye(3),
+    "y": np.array([[1.0, 0, 0], [0, 0, -1], [0, 1, 0]]),  # +y → +z (x stays, z → −y)
+    "x": np.array([[0, 0, -1.0], [0, 1, 0], [1, 0, 0]]),  # +x → +z
+}
+
+
+def load_mesh(path, *, scale_mm: float = 1.0, up: str = "z"):
     """Read a mesh file as a closed trimesh.Trimesh in mm.
 
     Parameters
@@ -59,6 +121,8 @@ def load_mesh(path, *, scale_mm: float = 1.0):
         OBJ, PLY, STL, GLB, ... (anything trimesh reads as one mesh).
     scale_mm : float
         Millimetres per file unit (e.g. 1000 for a file in metres).
+    up : {"z", "y", "x"}
+        The file's up axis, turned to +z (many OBJ files are y-up).
 
     Examples
     --------
@@ -83,4 +147,10 @@ def load_mesh(path, *, scale_mm: float = 1.0):
     if not isinstance(mesh, trimesh.Trimesh):
         raise TranslucencyError(f"{path}: holds no triangle mesh")
     mesh.apply_scale(scale_mm)
+    if up not in _UP:
+        raise TranslucencyError(f"up: expected one of {', '.join(_UP)}, got {up!r}")
+    if up != "z":
+        rotation = np.eye(4)
+        rotation[:3, :3] = _UP[up]
+        mesh.apply_transform(rotation)
     return check_mesh(mesh, str(path))

@@ -127,6 +127,13 @@ def parse_light(text: str):
         v = [float(x) for x in rest.split(",")]
     except ValueError:
         raise TranslucencyError(f"light: cannot read numbers in {text!r}") from None
+    if not np.isfinite(v).all():
+        raise TranslucencyError(f"light: every number must be finite, got {text!r}")
+    power = {"point": 3, "directional": 3, "spot": 7}.get(kind)
+    if power is not None and len(v) > power and v[power] < 0:
+        raise TranslucencyError(f"light: the intensity of {text!r} must be >= 0")
+    if kind == "spot" and len(v) >= 6 and np.allclose(v[:3], v[3:6]):
+        raise TranslucencyError(f"light: the spot in {text!r} is aimed at its own position")
     if kind == "point" and len(v) in (3, 4):
         return PointLight(tuple(v[:3]), *(v[3:] or []))
     if kind == "directional" and len(v) in (3, 4):
