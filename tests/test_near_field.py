@@ -116,3 +116,16 @@ def test_a_model_renders_after_its_data_set_is_deleted(ball_fit, tmp_path):
     assert res.exit_code == 0, res.output
     assert json.loads((tmp_path / "r" / "figure2.json").read_text())["vertices"] == len(ball.vertices)
     assert (tmp_path / "r" / "ours.exr").stat().st_size > 500
+
+
+def test_fits_of_noisy_mesh_data_stay_physical(tmp_path):
+    """500 photons per point: no profile reflects more than it receives or spreads beyond the object."""
+    from translucency.model import check_physics
+
+    ball = trimesh.creation.icosphere(3, radius=8.0)
+    vol = object_volume("skin", ball, 1.0, seed=2)
+    data = acquire_mesh(ball, vol, tmp_path / "n.zarr", n_points=24, photons=500, seed=5, index_matched=True)
+    fit = fit_mesh(data, "iso")
+    check = check_physics(fit.model)
+    assert check.ok, check.describe()
+    assert (check.radius <= np.linalg.norm(ball.extents)).all() and (check.total <= 1.0 + 1e-9).all()

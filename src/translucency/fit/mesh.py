@@ -29,6 +29,9 @@ from ..io.mesh_dataset import open_mesh_dataset
 from ..model import VertexAlpha
 from ._alternation import FitContext, FitResult, alternate, check_fit_options
 
+#: a·D for which a term (Gamma(2) in r: (1 + aD) e^{−aD}) holds 99.9 % of its energy within D
+ENERGY_RADIUS_RATE = 9.233
+
 
 class _MeshSource:
     """Rows of a mesh data set: 'pixels' are vertices, α lives on the vertices."""
@@ -103,7 +106,8 @@ def fit_mesh(
     max_rate : float, optional
         Steepest fall-off |d| a term may take, mm⁻¹; default 3 / (mean edge length): a term must still
         hold e⁻³ of its value at the nearest vertices, or the data cannot tell its amplitude (a steeper
-        term is unconstrained and blows the total 2π Σ c/d² up).  The slowest is 0.5 / (object's size).
+        term is unconstrained and blows the total 2π Σ c/d² up).  The slowest is 9.23 / (object's size D):
+        each term then holds 99.9 % of its energy, (1 + aD) e^{-aD} = 10⁻³, within the object.
 
     Returns
     -------
@@ -126,7 +130,12 @@ def fit_mesh(
     a_max = 3.0 / source.pitch if max_rate is None else float(max_rate)
     if not (np.isfinite(a_max) and a_max > 0):
         raise TranslucencyError(f"max_rate: must be a positive number of 1/mm, got {max_rate}")
-    rate_bounds = (float(np.log(0.5 / diagonal)), float(np.log(a_max)))
+    a_min = ENERGY_RADIUS_RATE / diagonal  # no term spreads its light beyond the object
+    if a_min >= a_max:
+        raise TranslucencyError(
+            f"max_rate: {a_max:.3g} 1/mm is below what the object's size allows ({a_min:.3g})"
+        )
+    rate_bounds = (float(np.log(a_min)), float(np.log(a_max)))
     x_i = source.vertices[source.incident]
     C = 1 if colour == "shared" and model == "iso" else 3
     options = {
@@ -179,11 +188,28 @@ def fit_mesh(
         progress=progress,
         t0=t0,
     )
+    if model == "iso":
+        result.options["scaled_to_albedo_bound"] = bound_albedo(result.model).tolist()
     # the model carries its surface and what was measured where the fit does not look (module docstring)
     result.model.faces = np.asarray(group["faces"][...], dtype=np.int64)
     result.model.measured = measured_near_field(ds, chunk_points)
     result.acquisition = header
     return result
+
+
+def bound_albedo(model) -> np.ndarray:
+    r"""Scale down, in place, every profile whose plane integral :math:`2\pi \sum_k c_k/d_k^2` exceeds 1
+    in some channel; returns the indices of the points scaled.
+
+    On a curved or thin body more surface lies within a distance r of x_i than the plane's
+    :math:`\pi r^2` (both sides of a leg, say), so a profile fitted there can integrate to more than the light
+    it received over the plane; the bound (energy conservation) is kept by construction, and the renderer
+    takes each kernel's total from the measurement anyway (:func:`measured_near_field`).
+    """
+    total = model.total_reflectance().max(axis=1)  # (N,) over channels
+    over = np.flatnonzero(total > 1.0)
+    model.c[over] /= total[over, None, None, None]
+    return over
 
 
 def measured_near_field(ds, chunk_points: int = 32) -> dict:
