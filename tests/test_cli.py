@@ -100,8 +100,10 @@ def test_demo_fits_the_embedded_measurement(demo_out):
 
 def test_demo_makes_figure_2(demo_out):
     fig = json.loads((demo_out / "report" / "figure2.json").read_text())
-    # the fitted pig beside its volpath reference: close, not equal (measured 0.54 / 0.45)
-    assert fig["rel_rmse"] < 0.8 and fig["flip_mean_object"] < 0.6
+    # the fitted pig beside its converged volpath reference (2 x 256 spp, its own noise 0.043): measured
+    # 0.083 / 0.114 with the measured near field (0.50 / 0.43 before it, 0.17 / 0.28 without it)
+    assert fig["reference_noise"] < 0.05
+    assert fig["rel_rmse"] < 0.12 and fig["flip_mean_object"] < 0.15
     assert all(
         fig["regions"][k]["pixels"] > 0 for k in ("thin", "thick", "shadow edge", "unlit", "silhouette")
     )
