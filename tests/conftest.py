@@ -64,6 +64,7 @@ def rng():
 
 @pytest.fixture(autouse=True)
 def _in_a_scratch_folder(tmp_path, monkeypatch):
-    """Every test runs in its own empty folder: default outputs (``render/``, ``report/``) never land in
+    """Every test runs in its own empty folder with its own reference cache: outputs never land in
     the checkout."""
     monkeypatch.chdir(tmp_path)
+    monkeypatch.setenv("TRANSLUCENCY_CACHE", str(tmp_path / "cache"))  # never the user's own cache

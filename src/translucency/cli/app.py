@@ -564,19 +564,27 @@ def evaluate(
         None, "--compare", help="Other model files of the same data (repeatable)."
     ),
     points: str = typer.Option(None, "--points", help="Incident points for the profiles, e.g. '0,17,40'."),
+    truth: Path = typer.Option(
+        None,
+        "--truth",
+        help="An independent acquisition of the same incident points (another seed, more photons): "
+        "errors against it, with the in-sample errors beside.",
+    ),
     overwrite: bool = typer.Option(
         False, "--overwrite", help="Replace an earlier output of translucency at --out (never anything else)."
     ),
 ):
-    """Relative L2 errors (overall and per distance band), error maps, profiles and an HTML report."""
+    """Relative L2 errors (overall, per distance band, energy-weighted), error maps, profiles, HTML report."""
 
-    models, flagged = {}, {}
+    models, flagged, exclusion = {}, {}, {}
     for path in [model, *(compare or [])]:
         m = load_model(path)
-        fl = read_header(path).get("meta", {}).get("flagged_points", [])
+        meta = read_header(path).get("meta", {})
+        fl = meta.get("flagged_points", [])
         name = model_label(m)
         name = name if name not in models else f"{name} ({path.name})"
         models[name] = m
+        exclusion[name] = meta.get("fit", {}).get("exclusion_mm")  # evaluate where the fit looked
         mask = np.zeros(m.n_points, bool)
         mask[np.asarray(fl, dtype=int)] = True
         flagged[name] = mask
@@ -584,21 +592,40 @@ def evaluate(
         picks = None if points is None else [int(v) for v in points.split(",") if v.strip()]
     except ValueError:
         raise TranslucencyError(f"--points: expected comma-separated integers, got {points!r}") from None
-    inputs = [model, data, *(compare or [])]
+    inputs = [model, data, *(compare or []), truth]
     if json_out is not None:
         claim_output(json_out, "json summary", overwrite=overwrite, inputs=inputs, option="--json")
     claim_folder(report, overwrite=overwrite, inputs=inputs, option="--report")
-    summary = write_report(models, data, report, points=picks, flagged=flagged, json_path=json_out)
-    table = Table(title=f"relative L2 error on {data}")
-    for col in ("model", "all", "near <1 mm", "mid 1-4 mm", "far >4 mm"):
+    summary = write_report(
+        models,
+        data,
+        report,
+        points=picks,
+        flagged=flagged,
+        json_path=json_out,
+        truth=truth,
+        exclusion=exclusion,
+    )
+    title = (
+        f"relative L2 error against the truth {truth}"
+        if truth
+        else f"relative L2 error on {data} (in-sample)"
+    )
+    table = Table(title=title)
+    columns = ["model", "all", "near <1 mm", "mid 1-4 mm", "far >4 mm", "total refl."]
+    table_columns = columns + (["in-sample all"] if truth else [])
+    for col in table_columns:
         table.add_column(col)
     for name, s in summary["models"].items():
-        table.add_row(
-            name, *(f"{100 * s[k]:.2f} %" for k in ("rel_l2", "rel_l2_near", "rel_l2_mid", "rel_l2_far"))
-        )
+        cells = [f"{100 * s[k]:.2f} %" for k in ("rel_l2", "rel_l2_near", "rel_l2_mid", "rel_l2_far")]
+        cells.append(f"{100 * s['energy_error']['total']:.2f} %")
+        if truth:
+            cells.append(f"{100 * s['in_sample']['rel_l2']:.2f} %")
+        table.add_row(name, *cells)
     nf = summary["noise_floor"]
     table.add_row(
-        "[dim]noise alone[/]", *(f"[dim]{100 * nf[k]:.2f} %[/]" for k in ("all", "near", "mid", "far"))
+        "[dim]the truth's noise[/]" if truth else "[dim]noise alone[/]",
+        *(f"[dim]{100 * nf[k]:.2f} %[/]" for k in ("all", "near", "mid", "far")),
     )
     console.print(table)
     console.print(f"report: {report / 'index.html'}")

@@ -10,6 +10,18 @@ and the same restricted to the distance bands near (r < 1 mm), mid
 measurement noise alone explains, :math:`\sqrt{\sum \sigma^2}/\lVert R_d\rVert`
 in each band — a perfect model would score about that.
 
+**Energy-weighted errors** — what a renderer sees: per incident point the
+energy of each band, :math:`E_{ib} = \sum_{o \in b} R_d(\vec x_i, \vec x_o)\, p^2`
+(p the pixel pitch), and of the whole window; ``energy[b]`` is
+:math:`\lVert \hat E_{\cdot b} - E_{\cdot b}\rVert / \lVert E_{\cdot b}\rVert` over the points,
+and ``energy["total"]`` the same for the total diffuse reflectance per point
+(the model's :math:`\int R_d\,dA` against the data set's ``total_diffuse``,
+which counts light leaving outside the window too).
+
+Evaluated against an independent acquisition of the same incident points
+(``translucency evaluate --truth``), these measure the model against the
+material rather than against the noise it was fitted to.
+
 Maps: the error per incident point, :math:`\lVert \hat R_{d,i} - R_{d,i}\rVert / \lVert R_{d,i}\rVert`
 over its window, and per outgoing pixel of the sample, the same over the pairs
 that end in that pixel with r < ``map_radius`` (4 mm: beyond, photon noise
@@ -36,6 +48,7 @@ class PlanarErrors:
     rel_l2: float
     bands: dict  # band -> rel_l2
     noise: dict  # "all" and band -> noise floor
+    energy: dict  # band, "window" and "total" -> relative error of the per-point energies
     per_point: np.ndarray  # (P,) relative error per incident point (NaN where flagged/no data)
     per_pixel: np.ndarray  # (H, W) relative error per outgoing pixel on the sample grid
     grid: SampleGrid
@@ -46,6 +59,7 @@ class PlanarErrors:
         out = {"rel_l2": self.rel_l2}
         out.update({f"rel_l2_{b}": v for b, v in self.bands.items()})
         out["noise_floor"] = self.noise
+        out["energy_error"] = self.energy
         pp = self.per_point[np.isfinite(self.per_point)]
         out["per_point"] = {
             "median": float(np.median(pp)) if pp.size else None,
@@ -95,6 +109,10 @@ def planar_errors(
     ref2 = {b: 0.0 for b in BANDS}
     var = {b: 0.0 for b in BANDS}
     per_point = np.full(ds.n_points, np.nan)
+    # per point and band: the energy Σ R_d p² of model and data (RGB summed), for the energy-weighted errors
+    e_model = {b: np.zeros(ds.n_points) for b in (*BANDS, "window")}
+    e_data = {b: np.zeros(ds.n_points) for b in (*BANDS, "window")}
+    area = ds.pitch**2
     pix_err = np.zeros(grid.shape[0] * grid.shape[1])
     pix_ref = np.zeros_like(pix_err)
     for s in range(0, ds.n_points, chunk_points):
@@ -110,11 +128,16 @@ def planar_errors(
         d2 = np.where(ok, ((pred - y) ** 2).sum(2), 0.0)
         y2 = np.where(ok, (y**2).sum(2), 0.0)
         v2 = np.where(ok, v.sum(2), 0.0)
+        p_sum = np.where(ok, pred.sum(2), 0.0) * area  # (k, J): energy per pixel, RGB summed
+        y_sum = np.where(ok, y.sum(2), 0.0) * area
         for b, (lo, hi) in BANDS.items():
             sel = (r >= lo) & (r < hi)
             err2[b] += float(d2[sel].sum())
             ref2[b] += float(y2[sel].sum())
             var[b] += float(v2[sel].sum())
+            e_model[b][s:e] = np.where(sel, p_sum, 0.0).sum(1)
+            e_data[b][s:e] = np.where(sel, y_sum, 0.0).sum(1)
+        e_model["window"][s:e], e_data["window"][s:e] = p_sum.sum(1), y_sum.sum(1)
         den = y2.sum(1)
         per_point[s:e] = np.where(den > 0, np.sqrt(d2.sum(1) / np.where(den > 0, den, 1.0)), np.nan)
         n_px = pix_err.size
@@ -126,11 +149,24 @@ def planar_errors(
         return float(np.sqrt(a / b)) if b > 0 else float("nan")
 
     tot_e, tot_r, tot_v = sum(err2.values()), sum(ref2.values()), sum(var.values())
+    keep = ~flagged
+    energy = {
+        b: ratio(float(((e_model[b] - e_data[b])[keep] ** 2).sum()), float((e_data[b][keep] ** 2).sum()))
+        for b in e_model
+    }
+    total_data = ds["total_diffuse"].astype(np.float64).sum(axis=1)  # (P,) RGB summed
+    with np.errstate(invalid="ignore", over="ignore"):
+        alpha_mean = float(np.mean(model.alpha.values))
+        total_model = model.total_reflectance().sum(axis=1) * alpha_mean
+    energy["total"] = ratio(
+        float(((total_model - total_data)[keep] ** 2).sum()), float((total_data[keep] ** 2).sum())
+    )
     per_pixel = np.where(pix_ref > 0, np.sqrt(pix_err / np.where(pix_ref > 0, pix_ref, 1.0)), np.nan)
     return PlanarErrors(
         rel_l2=ratio(tot_e, tot_r),
         bands={b: ratio(err2[b], ref2[b]) for b in BANDS},
         noise={"all": ratio(tot_v, tot_r), **{b: ratio(var[b], ref2[b]) for b in BANDS}},
+        energy=energy,
         per_point=per_point,
         per_pixel=per_pixel.reshape(grid.shape),
         grid=grid,

@@ -179,8 +179,23 @@ def plot_parameters(model, path) -> None:
     _save(fig, Path(path))
 
 
-def write_report(models, dataset, out_dir, *, points=None, flagged=None, json_path=None, extra=None) -> dict:
+def write_report(
+    models,
+    dataset,
+    out_dir,
+    *,
+    points=None,
+    flagged=None,
+    json_path=None,
+    extra=None,
+    truth=None,
+    exclusion=None,
+) -> dict:
     """Evaluate models on a planar data set and write the figures, JSON and HTML report.
+
+    With ``truth`` (an independent acquisition of the same incident points: another seed, usually
+    more photons) every figure and headline number is against the truth, and the in-sample errors
+    (against the data the models were fitted to) stand beside them under ``in_sample``.
 
     Parameters
     ----------
@@ -197,6 +212,10 @@ def write_report(models, dataset, out_dir, *, points=None, flagged=None, json_pa
         Also write the JSON summary here.
     extra : list of (file name, caption), optional
         Further figures already in ``out_dir`` to show in the HTML page.
+    truth : PlanarDataset or path, optional
+        The held-out truth.
+    exclusion : dict label -> float, optional
+        The exclusion radius (mm) each fit used; pairs closer are not evaluated (default one pixel).
 
     Returns
     -------
@@ -210,9 +229,22 @@ def write_report(models, dataset, out_dir, *, points=None, flagged=None, json_pa
     flagged = flagged or {}
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
-    errors = {name: planar_errors(m, ds, flagged=flagged.get(name)) for name, m in models.items()}
+    exclusion = exclusion or {}
+    in_sample = {
+        name: planar_errors(m, ds, flagged=flagged.get(name), exclusion_mm=exclusion.get(name))
+        for name, m in models.items()
+    }
+    held_out = None
+    if truth is not None:
+        truth = truth if isinstance(truth, PlanarDataset) else open_dataset(truth)
+        held_out = {
+            name: planar_errors(m, truth, flagged=flagged.get(name), exclusion_mm=exclusion.get(name))
+            for name, m in models.items()
+        }
+    errors = held_out or in_sample
+    shown = truth or ds
     points = default_points(ds.n_points) if points is None else list(points)
-    plot_profiles(models, ds, points, out_dir / "profiles.png")
+    plot_profiles(models, shown, points, out_dir / "profiles.png")
     plot_error_maps(errors, ds["x_i"], out_dir / "error_maps.png")
     plot_alpha(models, out_dir / "alpha.png")
     first = next(iter(models))
@@ -223,9 +255,13 @@ def write_report(models, dataset, out_dir, *, points=None, flagged=None, json_pa
         fl = flagged.get(name)
         per_model[name]["flagged_points"] = [] if fl is None else np.flatnonzero(fl).tolist()
         per_model[name]["physics"] = check_physics(models[name]).summary()
+        if held_out is not None:
+            per_model[name]["in_sample"] = in_sample[name].summary()
     summary = {
         "written_by": f"translucency {__version__}",
         "dataset": str(ds.path),
+        "truth": None if truth is None else str(truth.path),
+        "evaluated_against": "truth (independent acquisition)" if truth is not None else "the fitted data",
         "model": first,
         **per_model[first],
         "bands_mm": {k: [lo, hi if np.isfinite(hi) else None] for k, (lo, hi) in BANDS.items()},
@@ -250,10 +286,22 @@ def _write_html(path: Path, ds: PlanarDataset, summary: dict, extra: list) -> No
         )
         ph = s["physics"]
         unphysical = len(set(ph["over_albedo"]) | set(ph["beyond_object"]))
+        inside = s.get("in_sample")
+        beside = "" if inside is None else f"<td>{100 * inside['rel_l2']:.2f} %</td>"
         rows.append(
-            f"<tr><th>{html.escape(name)}</th>{cells}<td>{len(s['flagged_points'])}</td>"
+            f"<tr><th>{html.escape(name)}</th>{cells}{beside}"
+            f"<td>{100 * s['energy_error']['total']:.2f} %</td>"
+            f"<td>{len(s['flagged_points'])}</td>"
             f"<td>{unphysical} (max ρ {ph['max_total_reflectance']:.3g})</td></tr>"
         )
+    held_out = summary.get("truth") is not None
+    noise_label = "the truth's own noise" if held_out else "measurement noise alone"
+    pad = "<td></td>" * (4 if held_out else 3)
+    against = (
+        f"an independent acquisition of the same points (<code>{html.escape(summary['truth'])}</code>)"
+        if held_out
+        else "the data the models were fitted to (in-sample: a model that fits noise scores well here)"
+    )
     nf = next(iter(summary["models"].values()))["noise_floor"]
     noise = "".join(f"<td>{100 * nf[k]:.2f} %</td>" for k in ("all", "near", "mid", "far"))
     figures = "".join(
@@ -266,10 +314,12 @@ td,th{{border:1px solid #ccc;padding:4px 8px;text-align:right}} img{{max-width:1
 <h1>Planar fit report</h1>\
 <p>Data set: <code>{html.escape(str(ds.path))}</code> — {ds.n_points} incident points,
 windows {ds.window[0]}×{ds.window[1]} px at {ds.pitch} mm.</p>
-<h2>Relative L2 error</h2><table><tr><th>model</th><th>all</th><th>near &lt; 1 mm</th><th>mid 1–4 mm</th>
-<th>far &gt; 4 mm</th><th>flagged points</th><th>unphysical points (ρ &gt; 1 or r<sub>99.9</sub> beyond
+<h2>Relative L2 error</h2><p>Against {against}.</p>
+<table><tr><th>model</th><th>all</th><th>near &lt; 1 mm</th><th>mid 1–4 mm</th>
+<th>far &gt; 4 mm</th>{"<th>in-sample, all</th>" if held_out else ""}<th>total reflectance per point</th>
+<th>flagged points</th><th>unphysical points (ρ &gt; 1 or r<sub>99.9</sub> beyond
 the sample)</th></tr>{"".join(rows)}
-<tr><th>measurement noise alone</th>{noise}<td></td><td></td></tr></table>
+<tr><th>{noise_label}</th>{noise}{pad}</tr></table>
 <p>{html.escape(summary["definition"])}</p>
 <div style="display:flex;gap:1em;flex-wrap:wrap"><figure style="flex:1 1 40%"><img src="profiles.png">
 <figcaption>Figure 1 (left): ring-averaged profiles around chosen incident points \
