@@ -247,3 +247,13 @@ def test_bad_options_and_datasets(tmp_path):
     shutil.rmtree(tmp_path / "d.zarr" / "variance")
     with pytest.raises(TranslucencyError, match="missing array 'variance'"):
         fit_planar(tmp_path / "d.zarr")
+
+
+def test_the_fit_does_not_depend_on_the_chunking():
+    """The embedded data set (1,024 points) fitted in chunks of 32 and of 256: the same per-point totals."""
+    from translucency.data import default_dataset_path
+
+    fits = [fit_planar(default_dataset_path(), "iso", max_rounds=2, chunk_points=k) for k in (32, 256)]
+    totals = [f.model.total_reflectance() for f in fits]
+    np.testing.assert_allclose(totals[0], totals[1], rtol=1e-6)
+    np.testing.assert_allclose(fits[0].model.alpha.values, fits[1].model.alpha.values, rtol=1e-6, atol=1e-9)

@@ -34,7 +34,9 @@ solves α per pixel in closed form,
 :math:`\alpha_j = \sum w^2 P y / \sum w^2 P^2`; and fixes the scale by mean
 α = 1 (for families with a free amplitude; the dipole's amplitude is tied to
 its shape, so α keeps the scale there).  Rounds stop when Φ falls by less
-than ``tol`` relatively.  The anisotropic model updates its directions by
+than ``tol`` relatively.  Cold starts pool fixed blocks of 16 points by
+absolute index, so the result does not depend on the chunking.  The
+anisotropic model updates its directions by
 block coordinate descent: directions that share no pixel (even, then odd l)
 are fitted together, with the neighbours' contributions held fixed.
 
@@ -343,6 +345,7 @@ class _Chunk:
     poisson: object = 0.0  # 1/(N × pixel area): scalar, or (k, J, 1) float32 (mesh vertices)
     alpha: np.ndarray | None = None  # (k, J, 3) float32 current α at each pixel (set per round)
     plans: dict = field(default_factory=dict)  # Segments of the anisotropic direction classes
+    first: int = 0  # the chunk's first incident point (absolute index)
 
     @property
     def static(self) -> np.ndarray:
@@ -404,6 +407,7 @@ def _prepare_chunk(ctx: FitContext, s: int, e: int) -> _Chunk:
         local,
         usable,
         poisson,
+        first=s,
     )
 
 
@@ -570,29 +574,58 @@ def _grouped(seg: Segments, G: int, C: int, w2, kappa, target, overwrite: bool =
     return np.sqrt(A), np.divide(B, A, out=np.zeros_like(B), where=A > 0)
 
 
+#: incident points whose pooled profile seeds their cold starts together; blocks follow the points'
+#: absolute indices, so a fit does not depend on how its points are chunked (chunks hold whole blocks)
+POOL_POINTS = 16
+
+
+def _fit_cold(ctx: FitContext, ch: _Chunk, W, Y, point: np.ndarray, **options):
+    """``fit_exponentials_batched`` from pooled starts, pooled over fixed blocks of :data:`POOL_POINTS`
+    points (``point``: each row's point within the chunk); returns c, a of shape (rows, n)."""
+    block = (ch.first + np.asarray(point)) // POOL_POINTS
+    c, a = np.zeros((len(W), ctx.n)), np.ones((len(W), ctx.n))
+    for b in np.unique(block):
+        sel = block == b
+        c[sel], a[sel], _ = fit_exponentials_batched(
+            ch.r_g,
+            W[sel],
+            Y[sel],
+            ctx.n,
+            r_base=ch.r_base,
+            n_starts=3,
+            pooled=True,
+            bounds=ctx.rate_bounds,
+            **options,
+        )
+    return c, a
+
+
 def _solve_exponentials(ctx, state, sl, ch, W, Y, index):
     """Fit the sub-problems at ``index`` (into c/a viewed as (k·C·m, n)); warm where ready."""
     c = state.c[sl].reshape(-1, ctx.n)
     a = state.a[sl].reshape(-1, ctx.n)
     ready = np.repeat(state.ready[sl], state.c.shape[1] * state.c.shape[2])[index]
+    per_point = state.c.shape[1] * state.c.shape[2]  # rows (colour row, direction) of one point
     for warm in (True, False):
         sel = ready if warm else ~ready
         if not sel.any():
             continue
         rows = index[sel]
-        cc, aa, _ = fit_exponentials_batched(
-            ch.r_g,
-            W[sel],
-            Y[sel],
-            ctx.n,
-            rates0=a[rows] if warm else None,
-            r_base=ch.r_base,
-            n_starts=3,
-            pooled=True,
-            max_iter=15 if warm else 12,
-            tol=1e-4,
-            bounds=ctx.rate_bounds,
-        )
+        if warm:
+            cc, aa, _ = fit_exponentials_batched(
+                ch.r_g,
+                W[sel],
+                Y[sel],
+                ctx.n,
+                rates0=a[rows],
+                r_base=ch.r_base,
+                n_starts=3,
+                max_iter=15,
+                tol=1e-4,
+                bounds=ctx.rate_bounds,
+            )
+        else:
+            cc, aa = _fit_cold(ctx, ch, W[sel], Y[sel], rows // per_point, max_iter=12, tol=1e-4)
         c[rows], a[rows] = cc, aa
     state.c[sl] = c.reshape(state.c[sl].shape)
     state.a[sl] = a.reshape(state.a[sl].shape)
@@ -608,18 +641,7 @@ def _fit_exponential(ctx: FitContext, state: FitState, sl: slice, ch: _Chunk, w2
         return
     if not state.ready[sl].all():  # start every direction from the isotropic fit
         W, Y = _grouped(ch.rings, G, C, w2, kappa, ch.y)
-        cc, aa, _ = fit_exponentials_batched(
-            ch.r_g,
-            W,
-            Y,
-            ctx.n,
-            n_starts=3,
-            pooled=True,
-            max_iter=25,
-            tol=1e-5,
-            r_base=ch.r_base,
-            bounds=ctx.rate_bounds,
-        )
+        cc, aa = _fit_cold(ctx, ch, W, Y, np.arange(k * C) // C, max_iter=25, tol=1e-5)
         state.c[sl] = np.repeat(cc.reshape(k, C, 1, ctx.n), m, axis=2)
         state.a[sl] = np.repeat(aa.reshape(k, C, 1, ctx.n), m, axis=2)
         state.ready[sl] = True

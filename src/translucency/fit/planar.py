@@ -49,7 +49,7 @@ from .._validate import TranslucencyError
 from ..geometry import SampleGrid, window_geometry
 from ..io.dataset import PlanarDataset, open_dataset
 from ..model import PlanarAlpha
-from ._alternation import FitContext, FitResult, alternate, check_fit_options
+from ._alternation import POOL_POINTS, FitContext, FitResult, alternate, check_fit_options
 
 __all__ = ["FitResult", "PlanarFit", "check_fit_options", "fit_planar"]
 
@@ -106,7 +106,8 @@ def fit_planar(
     chunk_points : int, optional
         Incident points read and fitted together; default 128, rounded up to
         whole chunks of the store (up to 512) so that no stored chunk is
-        decoded twice.
+        decoded twice, and to whole blocks of 16 points (the pooled starts),
+        so that the result does not depend on it.
     workers : int, optional
         Chunks fitted in parallel threads (default: the number of CPUs).
     cache_mb : float
@@ -141,7 +142,8 @@ def fit_planar(
         chunk_points = stored * -(-128 // stored) if stored <= 512 else 128
     elif int(chunk_points) < 1:
         raise TranslucencyError(f"chunk: must be >= 1 point, got {chunk_points}")
-    chunk_points = int(chunk_points)
+    # whole blocks of the pooled cold starts, so that the fit does not depend on the chunking
+    chunk_points = POOL_POINTS * -(-int(chunk_points) // POOL_POINTS)
     m = int(n_directions) if model == "aniso" else 1
     n = int(n_terms)
     C = 1 if (colour == "shared" and model in ("iso", "aniso")) else 3
