@@ -30,6 +30,7 @@ from .._validate import TranslucencyError
 from .._version import __version__
 from ..geometry import farthest_points, vertex_areas
 from ..io.mesh_dataset import FORMAT, VERSION, create_mesh_dataset
+from ..io.outputs import output_lock
 from ..mitsuba import mesh_scene
 from .mesh_walk import EXIT, mesh_random_walk
 from .samples import make_sample
@@ -107,44 +108,45 @@ def acquire_mesh(
         "software": {"translucency": __version__},
         "request": request,
     }
-    ds = create_mesh_dataset(
-        out, header, mesh, area, incident, chunk_points=chunk_points, overwrite=overwrite, inputs=inputs
-    )
-    root = ds.group
-    n_chunks = root["chunk_done"].shape[0]
-    scene = mesh_scene(mesh)
-    done = np.asarray(root["chunk_done"][...])
-    normals = np.asarray(mesh.vertex_normals)
-    for c in range(n_chunks):
-        lo, hi = c * chunk_points, min(P, (c + 1) * chunk_points)
-        if done[c]:
-            continue
-        R = np.zeros((hi - lo, V, 3), np.float32)
-        spec = np.zeros((hi - lo, 3), np.float32)
-        for ch in range(3):
-            res = mesh_random_walk(
-                scene,
-                mesh.bounds,
-                volume,
-                ch,
-                mesh.vertices[incident[lo:hi]],
-                normals[incident[lo:hi]],
-                photons,
-                seed=seed + 7919 * ch,
-                first_point=lo,
-                index_matched=index_matched,
-            )
-            point = np.repeat(np.arange(hi - lo), photons)
-            ok = res.code == EXIT
-            counts = splat_exits(mesh, point[ok], res.face[ok], res.position[ok], hi - lo)
-            R[..., ch] = counts / (photons * area)
-            spec[:, ch] = np.bincount(point[res.code == -1], minlength=hi - lo) / photons
-        root["R_d"][lo:hi] = R
-        root["specular"][lo:hi] = spec
-        root["chunk_done"][c] = True  # last: the chunk is complete
-        if progress:
-            progress(hi, P)
-    return Path(out)
+    with output_lock(out):  # one writer at a time
+        ds = create_mesh_dataset(
+            out, header, mesh, area, incident, chunk_points=chunk_points, overwrite=overwrite, inputs=inputs
+        )
+        root = ds.group
+        n_chunks = root["chunk_done"].shape[0]
+        scene = mesh_scene(mesh)
+        done = np.asarray(root["chunk_done"][...])
+        normals = np.asarray(mesh.vertex_normals)
+        for c in range(n_chunks):
+            lo, hi = c * chunk_points, min(P, (c + 1) * chunk_points)
+            if done[c]:
+                continue
+            R = np.zeros((hi - lo, V, 3), np.float32)
+            spec = np.zeros((hi - lo, 3), np.float32)
+            for ch in range(3):
+                res = mesh_random_walk(
+                    scene,
+                    mesh.bounds,
+                    volume,
+                    ch,
+                    mesh.vertices[incident[lo:hi]],
+                    normals[incident[lo:hi]],
+                    photons,
+                    seed=seed + 7919 * ch,
+                    first_point=lo,
+                    index_matched=index_matched,
+                )
+                point = np.repeat(np.arange(hi - lo), photons)
+                ok = res.code == EXIT
+                counts = splat_exits(mesh, point[ok], res.face[ok], res.position[ok], hi - lo)
+                R[..., ch] = counts / (photons * area)
+                spec[:, ch] = np.bincount(point[res.code == -1], minlength=hi - lo) / photons
+            root["R_d"][lo:hi] = R
+            root["specular"][lo:hi] = spec
+            root["chunk_done"][c] = True  # last: the chunk is complete
+            if progress:
+                progress(hi, P)
+        return Path(out)
 
 
 def splat_exits(mesh, point: np.ndarray, face: np.ndarray, position: np.ndarray, n_points: int) -> np.ndarray:

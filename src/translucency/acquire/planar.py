@@ -26,6 +26,7 @@ import numpy as np
 from .._validate import TranslucencyError
 from .._version import __version__
 from ..io.dataset import FORMAT, VERSION, PlanarDataset, create_dataset
+from ..io.outputs import output_lock
 from ..mitsuba import engine_versions
 from .transport import TOP, check_memory, random_walk
 from .volume import Volume
@@ -178,67 +179,68 @@ def acquire_planar(
         "software": {"translucency": __version__, **mi_versions},
         "request": request,
     }
-    ds = create_dataset(out, header, overwrite=overwrite, inputs=inputs)
-    g = ds.group
-    g["x_i"][...] = x_i.astype(np.float32)
-    g["window_origin"][...] = origin.astype(np.float32)
-    done = np.asarray(g["chunk_done"][...])
-    W, H, _ = volume.size_mm
-    k = setup.chunk_points
-    area = setup.pitch**2
-    for c in range(len(done)):
-        lo, hi = c * k, min(P, (c + 1) * k)
-        if done[c]:
+    with output_lock(out):  # one writer at a time
+        ds = create_dataset(out, header, overwrite=overwrite, inputs=inputs)
+        g = ds.group
+        g["x_i"][...] = x_i.astype(np.float32)
+        g["window_origin"][...] = origin.astype(np.float32)
+        done = np.asarray(g["chunk_done"][...])
+        W, H, _ = volume.size_mm
+        k = setup.chunk_points
+        area = setup.pitch**2
+        for c in range(len(done)):
+            lo, hi = c * k, min(P, (c + 1) * k)
+            if done[c]:
+                if progress:
+                    progress(hi, P)
+                continue
+            counts = np.zeros((hi - lo, n, n, 3))
+            spec = np.zeros((hi - lo, 3))
+            top = np.zeros((hi - lo, 3))
+            per_launch = max(1, batch_photons // setup.photons)
+            for ch in range(3):
+                for b0 in range(lo, hi, per_launch):
+                    b1 = min(hi, b0 + per_launch)
+                    res = random_walk(
+                        volume,
+                        ch,
+                        x_i[b0:b1],
+                        setup.photons,
+                        seed=setup.seed,
+                        first_point=b0,
+                        theta_inc_deg=setup.theta_inc_deg,
+                        index_matched=setup.index_matched,
+                    )
+                    m = b1 - b0
+                    off = b0 - lo  # first row of this launch within the chunk
+                    local = np.arange(m).repeat(setup.photons)  # launch-local point of each photon
+                    spec[off : off + m, ch] = np.bincount(local, weights=res.code == -1, minlength=m)
+                    is_top = res.code == TOP
+                    pt = local[is_top]
+                    top[off : off + m, ch] = np.bincount(pt, minlength=m)
+                    # pixel of each exit in its own window
+                    col = np.floor((res.x[is_top] - origin[b0 + pt, 0]) / setup.pitch).astype(np.int64)
+                    row = np.floor((res.y[is_top] - origin[b0 + pt, 1]) / setup.pitch).astype(np.int64)
+                    inside = (col >= 0) & (col < n) & (row >= 0) & (row < n)
+                    flat = ((off + pt[inside]) * n + row[inside]) * n + col[inside]
+                    counts[..., ch] += np.bincount(flat, minlength=(hi - lo) * n * n).reshape(hi - lo, n, n)
+            N = float(setup.photons)
+            p_hat = counts / N
+            R_d = p_hat / area
+            var = p_hat * (1.0 - p_hat) / (N * area**2)
+            # pixel centres on the sample?
+            cx = origin[lo:hi, 0, None, None] + setup.pitch * (np.arange(n)[None, None, :] + 0.5)
+            cy = origin[lo:hi, 1, None, None] + setup.pitch * (np.arange(n)[None, :, None] + 0.5)
+            mask = (cx >= 0) & (cx <= W) & (cy >= 0) & (cy <= H)
+            g["R_d"][lo:hi] = R_d.astype(setup.dtype)
+            g["variance"][lo:hi] = var.astype(setup.dtype)
+            g["mask"][lo:hi] = mask
+            g["specular"][lo:hi] = (spec / N).astype(np.float32)
+            g["total_diffuse"][lo:hi] = (top / N).astype(np.float32)
+            g["chunk_done"][c] = True  # last: the chunk is complete
             if progress:
                 progress(hi, P)
-            continue
-        counts = np.zeros((hi - lo, n, n, 3))
-        spec = np.zeros((hi - lo, 3))
-        top = np.zeros((hi - lo, 3))
-        per_launch = max(1, batch_photons // setup.photons)
-        for ch in range(3):
-            for b0 in range(lo, hi, per_launch):
-                b1 = min(hi, b0 + per_launch)
-                res = random_walk(
-                    volume,
-                    ch,
-                    x_i[b0:b1],
-                    setup.photons,
-                    seed=setup.seed,
-                    first_point=b0,
-                    theta_inc_deg=setup.theta_inc_deg,
-                    index_matched=setup.index_matched,
-                )
-                m = b1 - b0
-                off = b0 - lo  # first row of this launch within the chunk
-                local = np.arange(m).repeat(setup.photons)  # launch-local point of each photon
-                spec[off : off + m, ch] = np.bincount(local, weights=res.code == -1, minlength=m)
-                is_top = res.code == TOP
-                pt = local[is_top]
-                top[off : off + m, ch] = np.bincount(pt, minlength=m)
-                # pixel of each exit in its own window
-                col = np.floor((res.x[is_top] - origin[b0 + pt, 0]) / setup.pitch).astype(np.int64)
-                row = np.floor((res.y[is_top] - origin[b0 + pt, 1]) / setup.pitch).astype(np.int64)
-                inside = (col >= 0) & (col < n) & (row >= 0) & (row < n)
-                flat = ((off + pt[inside]) * n + row[inside]) * n + col[inside]
-                counts[..., ch] += np.bincount(flat, minlength=(hi - lo) * n * n).reshape(hi - lo, n, n)
-        N = float(setup.photons)
-        p_hat = counts / N
-        R_d = p_hat / area
-        var = p_hat * (1.0 - p_hat) / (N * area**2)
-        # pixel centres on the sample?
-        cx = origin[lo:hi, 0, None, None] + setup.pitch * (np.arange(n)[None, None, :] + 0.5)
-        cy = origin[lo:hi, 1, None, None] + setup.pitch * (np.arange(n)[None, :, None] + 0.5)
-        mask = (cx >= 0) & (cx <= W) & (cy >= 0) & (cy <= H)
-        g["R_d"][lo:hi] = R_d.astype(setup.dtype)
-        g["variance"][lo:hi] = var.astype(setup.dtype)
-        g["mask"][lo:hi] = mask
-        g["specular"][lo:hi] = (spec / N).astype(np.float32)
-        g["total_diffuse"][lo:hi] = (top / N).astype(np.float32)
-        g["chunk_done"][c] = True  # last: the chunk is complete
-        if progress:
-            progress(hi, P)
-    return ds
+        return ds
 
 
 def _volume_fingerprint(volume: Volume) -> dict:

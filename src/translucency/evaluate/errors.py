@@ -118,9 +118,9 @@ def planar_errors(
     for s in range(0, ds.n_points, chunk_points):
         e = min(s + chunk_points, ds.n_points)
         k = e - s
-        y = np.asarray(ds.group["R_d"][s:e], dtype=np.float64).reshape(k, -1, 3)
-        v = np.asarray(ds.group["variance"][s:e], dtype=np.float64).reshape(k, -1, 3)
-        mask = np.asarray(ds.group["mask"][s:e]).reshape(k, -1)
+        y = ds.read("R_d", s, e).astype(np.float64).reshape(k, -1, 3)
+        v = ds.read("variance", s, e).astype(np.float64).reshape(k, -1, 3)
+        mask = ds.read("mask", s, e).reshape(k, -1)
         geom = window_geometry(x_i[s:e], origin[s:e], grid, ds.window)
         r = np.broadcast_to(geom.r, mask.shape)
         pred = model.R_d_window(np.arange(s, e), origin[s:e], ds.pitch, ds.window).reshape(k, -1, 3)

@@ -218,13 +218,13 @@ class _PlanarSource:
         of points s..e."""
         ds, k = self.ds, e - s
         ones = np.ones(3, np.float32)  # finite(y @ 1): all three channels finite
-        y = np.asarray(ds.group["R_d"][s:e], dtype=np.float32).reshape(k, -1, 3)
-        mask = np.asarray(ds.group["mask"][s:e]).reshape(k, -1)
+        y = ds.read("R_d", s, e).astype(np.float32).reshape(k, -1, 3)
+        mask = ds.read("mask", s, e).reshape(k, -1)
         geom = window_geometry(ctx.x_i[s:e], self.origin[s:e], self.grid, ds.window)
         valid = mask & np.isfinite(y @ ones) & (geom.r >= ctx.exclusion)
         var = None
         if not self.poisson > 0:  # with a photon count the weights use the model's Poisson variance
-            var = np.asarray(ds.group["variance"][s:e], dtype=np.float32).reshape(k, -1, 3)
+            var = ds.read("variance", s, e).astype(np.float32).reshape(k, -1, 3)
             valid &= np.isfinite(var @ ones)
             var = np.where(valid[..., None], np.maximum(var, 0.0), np.float32(0.0))
         return y, var, valid, geom.r, geom.theta, geom.pixel, self.poisson

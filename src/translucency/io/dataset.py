@@ -28,6 +28,7 @@ and ``request``: the arguments that define the data, compared on resume.
 from __future__ import annotations
 
 import json
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -68,10 +69,53 @@ class PlanarDataset:
     def __getitem__(self, key: str) -> np.ndarray:
         if key not in _ARRAYS:
             raise KeyError(key)
-        return np.asarray(self.group[key][...])
+        return self.read(key)
+
+    def read(self, key: str, s: int | None = None, e: int | None = None) -> np.ndarray:
+        """Points s..e of an array (all by default); a chunk that cannot be decoded is one line naming it."""
+        try:
+            return np.asarray(self.group[key][s:e])
+        except Exception as exc:  # noqa: BLE001 — codec and I/O faults are the file's, said in one line
+            first = 0 if s is None else s
+            raise TranslucencyError(
+                f"{self.path}: array {key!r} near incident point {first} cannot be read "
+                f"({type(exc).__name__}: {str(exc).splitlines()[0][:80]}); "
+                "re-run the acquisition to repair it"
+            ) from None
 
     def complete(self) -> bool:
-        return bool(np.all(self["chunk_done"]))
+        return bool(np.all(self["chunk_done"])) and not self.damaged_chunks(decode=False)
+
+    def damaged_chunks(self, *, decode: bool = True) -> dict:
+        """Chunks of points whose data are missing or do not decode: {array name: [chunk index, ...]}.
+
+        A chunk file that is absent reads as zeros in Zarr, silently; this looks for every chunk of every
+        per-point array of a finished chunk of points and (``decode``) decodes it.
+        """
+        k = int(self.header["chunk_points"])
+        done = np.flatnonzero(np.asarray(self.group["chunk_done"][...]))
+        bad: dict = {}
+        for name in ("R_d", "variance", "mask", "specular", "total_diffuse"):
+            arr = self.group[name]
+            # chunks holding only the fill value may be absent by design in older stores (Zarr does not
+            # write them); R_d and the mask of a finished chunk never are
+            expect_file = name in ("R_d", "mask")
+            per = int(arr.chunks[0])  # points per stored chunk of this array
+            for c in done:
+                lo, hi = c * k, min(self.n_points, (c + 1) * k)
+                keys = range(lo // per, -(-hi // per))
+                rest = "/0" * (len(arr.shape) - 1)
+                missing = expect_file and any(
+                    not (self.path / name / "c" / f"{j}{rest}").is_file() for j in keys
+                )
+                if not missing and decode:
+                    try:
+                        arr[lo:hi]
+                    except Exception:  # noqa: BLE001 — a chunk that does not decode is damaged
+                        missing = True
+                if missing:
+                    bad.setdefault(name, []).append(int(c))
+        return bad
 
 
 def create_dataset(path, header: dict, *, overwrite: bool = False, inputs=(), resume: bool = True):
@@ -92,7 +136,14 @@ def create_dataset(path, header: dict, *, overwrite: bool = False, inputs=(), re
         except TranslucencyError:
             old = None
         same = old is not None and old.header.get("request") == header["request"]
-        if same and resume:  # the same acquisition: resume
+        if same and resume:  # the same acquisition: resume, and redo the chunks whose data are damaged
+            damaged = sorted({c for chunks in old.damaged_chunks().values() for c in chunks})
+            for c in damaged:
+                old.group["chunk_done"][c] = False
+            if damaged:
+                warnings.warn(
+                    f"{path}: chunks {damaged} were missing or damaged; acquiring them again", stacklevel=2
+                )
             return old
         if not overwrite:
             raise TranslucencyError(
@@ -120,7 +171,15 @@ def create_dataset(path, header: dict, *, overwrite: bool = False, inputs=(), re
         "chunk_done": ((n_chunks,), "bool", (1,)),
     }
     for name, (shape, dt, chunks) in specs.items():
-        root.create_array(name, shape=shape, dtype=dt, chunks=chunks, compressors=comp, fill_value=0)
+        root.create_array(
+            name,
+            shape=shape,
+            dtype=dt,
+            chunks=chunks,
+            compressors=comp,
+            fill_value=0,
+            config={"write_empty_chunks": True},  # every written chunk is a file: a missing one is damage
+        )
     return PlanarDataset(path, header, root)
 
 
@@ -277,6 +336,8 @@ def describe(ds: PlanarDataset) -> dict:
         "photons per point": h.get("acquisition", {}).get("photons"),
         "seed": h.get("acquisition", {}).get("seed"),
         "complete": f"{int(done.sum())}/{done.size} chunks",
+        "damaged": ", ".join(f"{k} chunks {v}" for k, v in ds.damaged_chunks().items())
+        or "none (every finished chunk present and decodable)",
         "dtype": h["dtype"],
         "size on disk": f"{size:,} bytes ({size / 1e6:.2f} MB)",
         "software": json.dumps(h.get("software", {})),

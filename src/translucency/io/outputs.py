@@ -38,6 +38,7 @@ import os
 import shutil
 import warnings
 import zipfile
+from contextlib import contextmanager
 from pathlib import Path
 
 from .._validate import TranslucencyError
@@ -233,3 +234,50 @@ def claim_folder(path, *, overwrite: bool, inputs=(), option: str = "--out") -> 
         tmp.write_text(json.dumps({"written_by": "translucency", "version": __version__}) + "\n")
         os.replace(tmp, marker)
     return path
+
+
+@contextmanager
+def output_lock(path):
+    """Hold ``.NAME.lock`` beside ``path`` while writing it: a second process is stopped in one line.
+
+    The lock file holds the writer's process id; a lock left by a process that no longer runs (killed,
+    crashed, power cut) is taken over.  Creation is atomic (``O_CREAT | O_EXCL``), so of two processes
+    starting together exactly one wins.
+    """
+    path = Path(path)
+    lock = path.parent / f".{path.name}.lock"
+    lock.parent.mkdir(parents=True, exist_ok=True)
+    for _ in range(2):  # the second try follows the removal of a stale lock
+        try:
+            fd = os.open(lock, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
+        except FileExistsError:
+            try:
+                pid = int(lock.read_text().strip() or 0)
+            except (OSError, ValueError):
+                pid = 0
+            if pid and pid != os.getpid() and _alive(pid):
+                raise TranslucencyError(
+                    f"{path}: another translucency process (pid {pid}) is writing it; wait for it to finish, "
+                    f"or remove {lock} if that process is gone"
+                ) from None
+            lock.unlink(missing_ok=True)  # stale: its writer is gone
+            continue
+        with os.fdopen(fd, "w") as f:
+            f.write(str(os.getpid()))
+        break
+    else:
+        raise TranslucencyError(f"{path}: could not take the lock {lock}")
+    try:
+        yield lock
+    finally:
+        lock.unlink(missing_ok=True)
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:  # exists, another user's
+        return True
+    return True

@@ -1,0 +1,91 @@
+"""Damaged data sets (issue 14, item 2): missing or corrupt chunks are found, said in one line, and an
+acquisition run again repairs exactly those, bit for bit."""
+
+import hashlib
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from translucency.cli.app import app
+from translucency.io.dataset import open_dataset
+
+runner = CliRunner()
+ARGS = [
+    "acquire",
+    "planar",
+    "--material",
+    "marble",
+    "--grid",
+    "2",
+    "--span",
+    "2",
+    "--photons",
+    "400",
+    "--size",
+    "8",
+    "8",
+    "3",
+    "--voxel",
+    "0.5",
+    "--window",
+    "4",
+    "--pitch",
+    "0.5",
+    "--chunk",
+    "2",
+]
+
+
+def _digest(path):
+    return hashlib.sha256(np.ascontiguousarray(open_dataset(path)["R_d"]).tobytes()).hexdigest()
+
+
+@pytest.fixture
+def scan(tmp_path):
+    out = tmp_path / "s.zarr"
+    res = runner.invoke(app, [*ARGS, "--out", str(out)])
+    assert res.exit_code == 0, res.output
+    return out
+
+
+def test_a_missing_chunk_is_found_and_repaired(scan):
+    before = _digest(scan)
+    (scan / "R_d" / "c" / "1" / "0" / "0" / "0").unlink()  # the second chunk of points
+    assert open_dataset(scan).damaged_chunks() == {"R_d": [1]}
+    info = runner.invoke(app, ["info", str(scan)])
+    assert info.exit_code == 0 and "R_d chunks [1]" in info.output
+    fit = runner.invoke(app, ["fit", str(scan), "--out", str(scan.parent / "m.model.zip")])
+    assert fit.exit_code == 2 and "unfinished" in fit.output  # no zeros fitted
+    with pytest.warns(UserWarning, match=r"chunks \[1\]"):
+        res = runner.invoke(app, [*ARGS, "--out", str(scan)])
+    assert res.exit_code == 0, res.output
+    assert open_dataset(scan).damaged_chunks() == {} and _digest(scan) == before
+
+
+def test_a_truncated_chunk_is_one_line(scan):
+    (scan / "R_d" / "c" / "0" / "0" / "0" / "0").write_bytes(b"0123456789")
+    assert open_dataset(scan).damaged_chunks() == {"R_d": [0]}
+    res = runner.invoke(app, ["fit", str(scan), "--out", str(scan.parent / "m.model.zip")])
+    lines = [ln for ln in res.output.strip().splitlines() if ln.strip()]
+    assert res.exit_code == 2 and lines[-1].startswith("error:") and "'R_d'" in lines[-1], res.output
+    assert "Traceback" not in res.output
+
+
+def test_a_second_writer_is_stopped_and_a_stale_lock_taken_over(tmp_path):
+    import os
+    import subprocess
+    import sys
+
+    out = tmp_path / "s.zarr"
+    lock = tmp_path / ".s.zarr.lock"
+    lock.write_text(str(os.getppid()))  # a live process holds it
+    res = runner.invoke(app, [*ARGS, "--out", str(out)])
+    assert res.exit_code == 2 and "another translucency process" in res.output and not out.exists()
+    gone = subprocess.run(
+        [sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True, text=True
+    )
+    lock.write_text(gone.stdout.strip())  # its writer has exited: stale
+    res = runner.invoke(app, [*ARGS, "--out", str(out)])
+    assert res.exit_code == 0, res.output
+    assert open_dataset(out).complete() and not lock.exists()
