@@ -9,6 +9,7 @@ Pipeline: :mod:`translucency.model` → acquire → :mod:`translucency.fit` →
 from ._validate import TranslucencyError
 from ._version import __version__
 from .io.model_file import ModelFileError, load_model, save_model
+from .mitsuba._engine import prepare_libllvm
 from .model import (
     MATERIALS,
     BurleyModel,
@@ -33,3 +34,5 @@ __all__ = [
     "material",
     "__version__",
 ]
+
+prepare_libllvm()  # before any import of Mitsuba or Dr.Jit in this process (theirs or ours)

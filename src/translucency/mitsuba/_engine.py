@@ -30,6 +30,22 @@ def _find_libllvm() -> str | None:
     return None
 
 
+#: the oldest libLLVM that compiles every kernel of the package (15 aborts on ``fminimum``)
+MIN_LLVM = (16,)
+
+
+def prepare_libllvm() -> None:
+    """Point Dr.Jit at the wheel's libLLVM (``DRJIT_LIBLLVM_PATH``) unless the user chose one.
+
+    Called when translucency is imported, so that a later ``import mitsuba`` in the same process
+    loads the right library too; it has no effect once Dr.Jit has loaded one.
+    """
+    if "DRJIT_LIBLLVM_PATH" not in os.environ:
+        lib = _find_libllvm()
+        if lib:
+            os.environ["DRJIT_LIBLLVM_PATH"] = lib
+
+
 @lru_cache(maxsize=1)
 def mitsuba(variant: str | None = None):
     """Import Mitsuba 3 with a suitable variant and return the module.
@@ -37,10 +53,7 @@ def mitsuba(variant: str | None = None):
     ``variant`` defaults to ``cuda_ad_rgb`` when a CUDA device works and to
     ``llvm_ad_rgb`` otherwise.
     """
-    if "DRJIT_LIBLLVM_PATH" not in os.environ:
-        lib = _find_libllvm()
-        if lib:
-            os.environ["DRJIT_LIBLLVM_PATH"] = lib
+    prepare_libllvm()
     try:  # imported here: DRJIT_LIBLLVM_PATH must be set first, and loading Dr.Jit/Mitsuba takes seconds
         import drjit as dr
         import mitsuba as mi
@@ -56,6 +69,15 @@ def mitsuba(variant: str | None = None):
         raise TranslucencyError(
             "Dr.Jit's LLVM backend is unavailable: libLLVM >= 16 not found "
             "(install karellen-llvm-core or set DRJIT_LIBLLVM_PATH)"
+        )
+    llvm = getattr(getattr(dr, "detail", None), "llvm_version", lambda: None)()
+    if variant.startswith("llvm") and llvm is not None and tuple(llvm) < MIN_LLVM:
+        # an older libLLVM aborts the whole process on some of our kernels (fminimum): say so instead
+        raise TranslucencyError(
+            f"Dr.Jit already runs on libLLVM {'.'.join(map(str, llvm))}, which cannot compile our kernels "
+            f"(needs {MIN_LLVM[0]}+): Mitsuba or Dr.Jit was imported before translucency; import "
+            f"translucency first, or start Python with "
+            f"DRJIT_LIBLLVM_PATH={_find_libllvm() or '<libLLVM 16+>'}"
         )
     mi.set_variant(variant)
     return mi
