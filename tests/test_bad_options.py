@@ -65,3 +65,29 @@ def test_render_size_is_checked():
 def test_degenerate_lights_are_refused(text, match):
     with pytest.raises(TranslucencyError, match=match):
         parse_light(text)
+
+
+@pytest.mark.parametrize(
+    "command",
+    [
+        ["demo"],
+        ["materials"],
+        ["info"],
+        ["acquire", "planar"],
+        ["acquire", "mesh"],
+        ["fit"],
+        ["render"],
+        ["evaluate"],
+    ],
+)
+def test_help_names_the_kind_of_every_value(command):
+    out = runner.invoke(app, [*command, "--help"], terminal_width=200).output
+    for placeholder in ("<float>", "<int>", "<str>", "<path>  Output", "<bool>  Replace"):
+        assert placeholder not in out, (command, placeholder)
+
+
+def test_version():
+    from translucency import __version__
+
+    res = runner.invoke(app, ["--version"])
+    assert res.exit_code == 0 and res.output.strip() == f"translucency {__version__}"

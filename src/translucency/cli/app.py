@@ -8,6 +8,7 @@ traceback.
 from __future__ import annotations
 
 import functools
+import inspect
 import sys
 from pathlib import Path
 
@@ -500,7 +501,7 @@ def render(
     reference: bool = typer.Option(
         False, "--reference", help="Also path-trace the reference (Mitsuba volpath) and compare."
     ),
-    spp: int = typer.Option(32, "--spp", help="Samples per pixel of the reference."),
+    spp: int = typer.Option(32, "--spp", help="Samples per pixel of each of the two reference renders."),
     radius: float = typer.Option(
         None, "--radius", help="Transport truncation radius, mm (default: 99% energy)."
     ),
@@ -629,6 +630,33 @@ def evaluate(
     )
     console.print(table)
     console.print(f"report: {report / 'index.html'}")
+
+
+#: what --help shows for each kind of value (Typer would print <float>, <bool>, ...)
+_METAVARS = {
+    "Path": "PATH",
+    "int": "INT",
+    "float": "FLOAT",
+    "str": "TEXT",
+    "bool": "",
+    "list[str]": "TEXT",
+    "list[Path]": "PATH",
+    "tuple[int, int]": "W H",
+    "tuple[float, float, float]": "W H T",
+}
+
+
+def _name_metavars(*typer_apps) -> None:
+    """Give every option of every command a real metavar (FLOAT, PATH, ...) unless it has one."""
+    for typer_app in typer_apps:
+        for command in typer_app.registered_commands:
+            for param in inspect.signature(command.callback).parameters.values():
+                info = param.default
+                if isinstance(info, typer.models.OptionInfo) and info.metavar is None:
+                    info.metavar = _METAVARS.get(str(param.annotation))
+
+
+_name_metavars(app, acquire_app)
 
 
 def main() -> None:
