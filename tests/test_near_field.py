@@ -129,3 +129,31 @@ def test_fits_of_noisy_mesh_data_stay_physical(tmp_path):
     check = check_physics(fit.model)
     assert check.ok, check.describe()
     assert (check.radius <= np.linalg.norm(ball.extents)).all() and (check.total <= 1.0 + 1e-9).all()
+
+
+@pytest.mark.slow
+def test_skin_under_a_spot_renders_close_to_its_reference(tmp_path):
+    """Issue 12's failing case in kind (a new material and a spot light on a figurine; the user's cow is
+    not shipped): within 0.25 of a measured-noise volpath reference (the cow at 128 × 4000: 0.17)."""
+    from translucency.acquire.objects import make_pig
+    from translucency.mitsuba import mesh_scene
+    from translucency.render.image import Camera, VertexPicture, compare, coverage
+    from translucency.render.lights import parse_light
+    from translucency.render.reference import converged_reference
+    from translucency.render.transport import vertex_irradiance
+
+    pig = make_pig()
+    vol = object_volume("skin", pig, 1.0, seed=3)
+    data = acquire_mesh(
+        pig, vol, tmp_path / "p.zarr", n_points=96, photons=3000, seed=3, chunk_points=32, index_matched=True
+    )
+    fit = fit_mesh(data, "iso")
+    light = parse_light("spot:-60,70,90,0,0,0,25,3e4")
+    camera = Camera.looking_at(pig, (-1.0, 1.2, 0.6), 96, 72)
+    mask = coverage(pig, camera)
+    E = vertex_irradiance(pig, mesh_scene(pig), light)
+    ours = VertexPicture(pig, camera, spp=16).draw(relight_vertices(transport_matrices(fit.model, pig), E))
+    reference, info = converged_reference(pig, vol, light, camera, mask, spp=96, cache=tmp_path)
+    cmp = compare(reference, ours, mask)
+    assert cmp["rel_rmse"] < 0.25 + info["noise"], (cmp["rel_rmse"], info["noise"])
+    assert ours[mask].mean() == pytest.approx(reference[mask].mean(), rel=0.1)
