@@ -104,6 +104,9 @@ def check_mesh(mesh, name: str = "mesh", *, max_hole: float = 0.5):
     return mesh
 
 
+#: object sizes (bounding-box diagonal, mm) a scan is plausible for; outside, ``load_mesh`` warns about units
+PLAUSIBLE_MM = (2.0, 5000.0)
+
 #: rotations turning a file's up axis into our +z
 _UP = {
     "z": np.eye(3),
@@ -147,6 +150,18 @@ def load_mesh(path, *, scale_mm: float = 1.0, up: str = "z"):
     if not isinstance(mesh, trimesh.Trimesh):
         raise TranslucencyError(f"{path}: holds no triangle mesh")
     mesh.apply_scale(scale_mm)
+    size = float(np.linalg.norm(mesh.extents)) if len(mesh.vertices) else 0.0
+    if len(mesh.vertices) and not PLAUSIBLE_MM[0] <= size <= PLAUSIBLE_MM[1]:
+        hint = (
+            f"--scale {1000 * scale_mm:g} if it is in metres"
+            if size < PLAUSIBLE_MM[0]
+            else "a smaller --scale"
+        )
+        warnings.warn(
+            f"{path}: the object is {size:.3g} mm across at --scale {scale_mm:g} mm per unit; "
+            f"translucent objects are {PLAUSIBLE_MM[0]:g}–{PLAUSIBLE_MM[1]:g} mm — {hint}?",
+            stacklevel=2,
+        )
     if up not in _UP:
         raise TranslucencyError(f"up: expected one of {', '.join(_UP)}, got {up!r}")
     if up != "z":
