@@ -34,7 +34,7 @@ from translucency.render.transport import relight_vertices, transport_matrices, 
 CASES = [
     "cow-skin-spot:cow.obj:8:z:skin:128:4000:spot:-60,70,90,0,0,0,25,3e4:-1,1.2,0.6",
     "bunny-marble-directional:stanford-bunny.obj:400:y:marble:128:4000:directional:-0.3,0.4,-1,1:1,-1.6,0.7",
-    "spot-apple-sky:spot.obj:60:y:apple-slice:128:4000:env:0.05:1,-1.6,0.7",
+    "spot-skin-sky:spot.obj:30:y:skin:128:4000:env:0.05:1,-1.6,0.7",
 ]
 
 
