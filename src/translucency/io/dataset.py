@@ -323,22 +323,33 @@ def open_dataset(path, *, writable: bool = False) -> PlanarDataset:
     return PlanarDataset(path, header, root)
 
 
+def summary_of_store(path: Path, header: dict, done: np.ndarray, **fields) -> dict:
+    """The ``translucency info`` summary every data set shares — format, points, sample, photons, seed,
+    completion, size and software — with the kind's own ``fields`` in between."""
+    size = sum(f.stat().st_size for f in Path(path).rglob("*") if f.is_file())
+    acquisition = header.get("acquisition", header)  # planar headers nest it, mesh headers do not
+    return {
+        "format": f"{header['format']} v{header['version']}",
+        "incident points": header["n_points"],
+        **fields,
+        "sample": json.dumps(header.get("sample", {}))[:300],
+        "photons per point": acquisition.get("photons"),
+        "seed": acquisition.get("seed"),
+        "complete": f"{int(done.sum())}/{done.size} chunks",
+        "size on disk": f"{size:,} bytes ({size / 1e6:.2f} MB)",
+        "software": json.dumps(header.get("software", {})),
+    }
+
+
 def describe(ds: PlanarDataset) -> dict:
     """A JSON-friendly summary for ``translucency info``."""
     h = ds.header
-    done = ds["chunk_done"]
-    size = sum(f.stat().st_size for f in ds.path.rglob("*") if f.is_file())
-    return {
-        "format": f"{h['format']} v{h['version']}",
-        "incident points": h["n_points"],
-        "window": f"{h['window'][0]} x {h['window'][1]} px at {h['pitch_mm']} mm",
-        "sample": json.dumps(h.get("sample", {}))[:300],
-        "photons per point": h.get("acquisition", {}).get("photons"),
-        "seed": h.get("acquisition", {}).get("seed"),
-        "complete": f"{int(done.sum())}/{done.size} chunks",
-        "damaged": ", ".join(f"{k} chunks {v}" for k, v in ds.damaged_chunks().items())
-        or "none (every finished chunk present and decodable)",
-        "dtype": h["dtype"],
-        "size on disk": f"{size:,} bytes ({size / 1e6:.2f} MB)",
-        "software": json.dumps(h.get("software", {})),
-    }
+    damaged = ", ".join(f"{k} chunks {v}" for k, v in ds.damaged_chunks().items())
+    return summary_of_store(
+        ds.path,
+        h,
+        ds["chunk_done"],
+        window=f"{h['window'][0]} x {h['window'][1]} px at {h['pitch_mm']} mm",
+        dtype=h["dtype"],
+        damaged=damaged or "none (every finished chunk present and decodable)",
+    )

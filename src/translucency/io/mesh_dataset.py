@@ -32,6 +32,7 @@ import zarr
 from zarr.codecs import BloscCodec
 
 from .._validate import TranslucencyError
+from .dataset import summary_of_store
 from .outputs import claim_output, remove_dataset
 
 HEADER_KEY = "translucency_mesh_dataset"
@@ -151,17 +152,10 @@ def create_mesh_dataset(
 def describe_mesh(ds: MeshDataset) -> dict:
     """A JSON-friendly summary for ``translucency info``."""
     h = ds.header
-    done = ds["chunk_done"]
-    size = sum(f.stat().st_size for f in ds.path.rglob("*") if f.is_file())
-    return {
-        "format": f"{h['format']} v{h['version']}",
-        "incident points": h["n_points"],
-        "mesh": f"{h['n_vertices']:,} vertices, {ds.group['faces'].shape[0]:,} faces",
-        "sample": json.dumps(h.get("sample", {}))[:300],
-        "photons per point": h.get("photons"),
-        "seed": h.get("seed"),
-        "index matched": h.get("request", {}).get("index_matched"),
-        "complete": f"{int(done.sum())}/{done.size} chunks",
-        "size on disk": f"{size:,} bytes ({size / 1e6:.2f} MB)",
-        "software": json.dumps(h.get("software", {})),
-    }
+    return summary_of_store(
+        ds.path,
+        h,
+        ds["chunk_done"],
+        mesh=f"{h['n_vertices']:,} vertices, {ds.group['faces'].shape[0]:,} faces",
+        **{"index matched": h.get("request", {}).get("index_matched")},
+    )
