@@ -60,3 +60,13 @@ def test_extent_of_a_planar_sample():
     alpha = PlanarAlpha.uniform((30, 40), pitch=0.25)
     m = ExponentialModel([[0.0, 0.0]], [[[[0.01]]]], [[[[-2.0]]]], alpha, s_g=[1.0], s_b=[1.0])
     assert model_extent(m) == pytest.approx(12.5)
+
+
+def test_info_json_is_one_object_for_scripts(tmp_path, rng):
+    import json
+
+    path = save_model(random_exponential_model(rng, n_points=3), tmp_path / "m.model.zip")
+    res = runner.invoke(app, ["info", str(path), "--json"])
+    assert res.exit_code == 0, res.output
+    fields = json.loads(res.output)
+    assert fields["path"] == str(path) and fields["valid"].startswith("yes") and fields["n_points"] == 3

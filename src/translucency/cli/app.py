@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import functools
 import inspect
+import json
 import sys
 from pathlib import Path
 
@@ -132,25 +133,37 @@ def materials(
 
 @app.command()
 @user_errors
-def info(path: Path = typer.Argument(..., help="A model file (.model.zip) or a data set (.zarr directory).")):
+def info(
+    path: Path = typer.Argument(..., help="A model file (.model.zip) or a data set (.zarr directory)."),
+    as_json: bool = typer.Option(False, "--json", help="Print the fields as one JSON object (for scripts)."),
+):
     """Describe a model file or a data set: what it holds, its size on disk, whether it is valid."""
     if path.is_dir():
-        table = Table(title=str(path), show_header=False)
         ds = open_mesh_dataset(path) if is_mesh_dataset(path) else open_dataset(path)
-        for key, value in (describe_mesh(ds) if is_mesh_dataset(path) else describe(ds)).items():
-            table.add_row(f"[bold]{key}[/]", str(value))
-        console.print(table)
+        _show(path, describe_mesh(ds) if is_mesh_dataset(path) else describe(ds), as_json)
         return
-    _info_model(path)
+    fields, ok = _info_model(path)
+    _show(path, fields, as_json)
+    if not ok:
+        raise typer.Exit(1)
 
 
-def _info_model(path: Path) -> None:
+def _show(path: Path, fields: dict, as_json: bool) -> None:
+    """The fields of ``info`` as a table, or as one JSON object on stdout."""
+    if as_json:
+        print(json.dumps({"path": str(path), **fields}, default=str, indent=2))  # plain: no wrapping
+        return
+    table = Table(title=str(path), show_header=False)
+    for key, value in fields.items():
+        table.add_row(f"[bold]{key}[/]", str(value), style="red" if str(value).startswith("no") else None)
+    console.print(table)
+
+
+def _info_model(path: Path) -> tuple[dict, bool]:
+    """``info``'s fields of a model file, and whether it is valid (intact and physical)."""
     size = path.stat().st_size if path.exists() else 0
     header = read_header(path)  # a ModelFileError is a TranslucencyError: one line, exit 2
-    table = Table(title=str(path), show_header=False)
-    table.add_column("field", style="bold")
-    table.add_column("value")
-    table.add_row("size on disk", f"{size:,} bytes ({size / 1e6:.3f} MB)")
+    fields = {"size on disk": f"{size:,} bytes ({size / 1e6:.3f} MB)"}
     for key in (
         "format",
         "version",
@@ -163,36 +176,28 @@ def _info_model(path: Path) -> None:
         "dtype",
     ):
         if key in header:
-            table.add_row(key, str(header[key]))
+            fields[key] = header[key]
     if header.get("meta"):
-        table.add_row("meta", ", ".join(f"{k}={v}" for k, v in header["meta"].items())[:300])
+        fields["meta"] = ", ".join(f"{k}={v}" for k, v in header["meta"].items())[:300]
     try:
         model = load_model(path)
     except ModelFileError as exc:
-        table.add_row("valid", f"[red]no[/] — {exc}")
-        console.print(table)
-        raise typer.Exit(1) from None
+        fields["valid"] = f"no — {exc}"
+        return fields, False
     physics = check_physics(model)
-    total, radius = physics.total, physics.radius
-    if physics.ok:
-        table.add_row(
-            "valid", "[green]yes[/] (shapes, dtypes, finiteness, eq. (2), checksum, physical bounds)"
-        )
-    else:
-        table.add_row("valid", "[red]no[/] — the file is intact, but the model is not physical")
-    table.add_row("physical", ("[green]" if physics.ok else "[red]") + physics.describe() + "[/]")
-    table.add_row(
-        "alpha",
-        f"shape {model.alpha.shape}, range [{model.alpha.values.min():.3g}, {model.alpha.values.max():.3g}]",
+    fields["valid"] = (
+        "yes (shapes, dtypes, finiteness, eq. (2), checksum, physical bounds)"
+        if physics.ok
+        else "no — the file is intact, but the model is not physical"
     )
-    table.add_row("total R_d (R,G,B)", "mean " + " ".join(f"{v:.4g}" for v in total.mean(axis=0)))
-    table.add_row(
-        "99.9% energy radius",
-        f"{np.min(radius):.3g} … {np.max(radius):.3g} mm (object {physics.size_mm:.3g} mm)",
+    fields["physical"] = physics.describe()
+    values = model.alpha.values
+    fields["alpha"] = f"shape {model.alpha.shape}, range [{values.min():.3g}, {values.max():.3g}]"
+    fields["total R_d (R,G,B)"] = "mean " + " ".join(f"{v:.4g}" for v in physics.total.mean(axis=0))
+    fields["99.9% energy radius"] = (
+        f"{np.min(physics.radius):.3g} … {np.max(physics.radius):.3g} mm (object {physics.size_mm:.3g} mm)"
     )
-    console.print(table)
-    if not physics.ok:
-        raise typer.Exit(1)
+    return fields, physics.ok
 
 
 acquire_app = typer.Typer(
@@ -534,17 +539,21 @@ def render(
     claim_folder(out, overwrite=overwrite, inputs=[model, header.get("meta", {}).get("dataset") or None])
     cam = Camera.looking_at(mesh, direction, *size)
     vol = volume_of_dataset(mesh, dheader) if reference else None
-    res = figure2(
-        m,
-        mesh,
-        lights[0],
-        out,
-        volume=vol,
-        camera=cam,
-        spp_reference=spp,
-        radius=radius,
-        eta=boundary_eta(dheader),
-    )
+    with progress() as bar:
+        task = bar.add_task("render", total=4 if reference else 3, item="")
+        res = figure2(
+            m,
+            mesh,
+            lights[0],
+            out,
+            volume=vol,
+            camera=cam,
+            spp_reference=spp,
+            radius=radius,
+            eta=boundary_eta(dheader),
+            progress=lambda done, total, name: bar.update(task, completed=done, total=total, item=name),
+        )
+        bar.update(task, completed=4 if reference else 3, item="done")
     table = Table(title=f"render of {model.name}", show_header=False)
     for k, v in res.items():
         table.add_row(k, f"{v:.4g}" if isinstance(v, float) else str(v))

@@ -77,6 +77,7 @@ def figure2(
     eta: float = 1.0,
     spp: int = 16,
     reference_cache=True,
+    progress=None,
 ) -> dict:
     """Render ``model`` on ``mesh`` under ``light``; with ``volume`` also the reference and the comparison.
 
@@ -86,6 +87,7 @@ def figure2(
     relative error at the silhouettes). The reference is the mean of two independent renders of
     ``spp_reference`` samples each, with its noise measured and cached
     (:func:`translucency.render.reference.converged_reference`; ``reference_cache`` as there).
+    ``progress(done, total, step)`` is called as each step begins (transport, light, picture, reference).
 
     Writes ``ours.exr/.png`` (and ``reference.exr/.png``, ``figure2.png``,
     ``figure2.json``) into ``out_dir``; returns the numbers.
@@ -94,15 +96,24 @@ def figure2(
     out_dir.mkdir(parents=True, exist_ok=True)
     camera = camera or Camera.looking_at(mesh)
     mask = coverage(mesh, camera)
+    steps = 3 if volume is None else 4
+
+    def step(k, name):
+        if progress:
+            progress(k, steps, name)
+
+    step(0, "transport (once per object)")
     t = time.perf_counter()
     mats = transport_matrices(model, mesh, radius=radius)
     picture = VertexPicture(mesh, camera, spp=spp, eta=eta, light=light)  # the scene, built once
     scene = mesh_scene(mesh)  # for shadow rays
     t_prepare = time.perf_counter() - t
+    step(1, "irradiance and relight")
     t = time.perf_counter()
     E = vertex_irradiance(mesh, scene, light, eta)
     L = relight_vertices(mats, E) * exit_fresnel(mesh, camera.origin, eta)[:, None]
     t_relight = time.perf_counter() - t
+    step(2, "picture")
     t = time.perf_counter()
     ours = picture.draw(L)
     t_draw = time.perf_counter() - t
@@ -120,6 +131,7 @@ def figure2(
         save_images(ours, out_dir / "ours", exposure)
         write_json(out_dir / "figure2.json", out)
         return out
+    step(3, "volpath reference (2 renders, cached)")
     reference, ref_info = converged_reference(
         mesh, volume, light, camera, mask, spp=spp_reference, eta=eta, cache=reference_cache
     )
