@@ -38,7 +38,7 @@ from zarr.codecs import BloscCodec
 
 from .._validate import TranslucencyError, as_float_array
 from .._version import __version__
-from .outputs import claim_output, remove_dataset
+from .outputs import claim_output, reopen_or_clear
 
 FORMAT = "translucency-dataset"
 VERSION = 1
@@ -130,27 +130,24 @@ def create_dataset(path, header: dict, *, overwrite: bool = False, inputs=(), re
     """
 
     path = Path(path)
-    if claim_output(path, "planar data set", overwrite=overwrite, inputs=inputs, reuse=True):
-        try:
-            old = open_dataset(path, writable=True)
-        except TranslucencyError:
-            old = None
-        same = old is not None and old.header.get("request") == header["request"]
-        if same and resume:  # the same acquisition: resume, and redo the chunks whose data are damaged
-            damaged = sorted({c for chunks in old.damaged_chunks().values() for c in chunks})
-            for c in damaged:
-                old.group["chunk_done"][c] = False
-            if damaged:
-                warnings.warn(
-                    f"{path}: chunks {damaged} were missing or damaged; acquiring them again", stacklevel=2
-                )
-            return old
-        if not overwrite:
-            raise TranslucencyError(
-                f"--out {path}: a data set made with other arguments is already there; "
-                "choose another path or pass --overwrite to replace it"
+    old = reopen_or_clear(
+        path,
+        "planar data set",
+        header["request"],
+        lambda p: open_dataset(p, writable=True),
+        overwrite=overwrite,
+        inputs=inputs,
+        resume=resume,
+    )
+    if old is not None:  # the same acquisition: resume, and redo the chunks whose data are damaged
+        damaged = sorted({c for chunks in old.damaged_chunks().values() for c in chunks})
+        for c in damaged:
+            old.group["chunk_done"][c] = False
+        if damaged:
+            warnings.warn(
+                f"{path}: chunks {damaged} were missing or damaged; acquiring them again", stacklevel=2
             )
-        remove_dataset(path)
+        return old
     P = header["n_points"]
     H, W = header["window"]
     k = header["chunk_points"]

@@ -33,7 +33,7 @@ from zarr.codecs import BloscCodec
 
 from .._validate import TranslucencyError
 from .dataset import summary_of_store
-from .outputs import claim_output, remove_dataset
+from .outputs import reopen_or_clear
 
 HEADER_KEY = "translucency_mesh_dataset"
 FORMAT = "translucency-mesh-dataset"
@@ -114,19 +114,16 @@ def create_mesh_dataset(
     (:func:`translucency.io.outputs.claim_output`).
     """
     path = Path(path)
-    if claim_output(path, "mesh data set", overwrite=overwrite, inputs=inputs, reuse=True):
-        try:
-            old = open_mesh_dataset(path, writable=True)
-        except TranslucencyError:
-            old = None
-        if old is not None and old.header.get("request") == header["request"]:  # the same acquisition: resume
-            return old
-        if not overwrite:
-            raise TranslucencyError(
-                f"--out {path}: a mesh data set made with other arguments is already there; "
-                "choose another path or pass --overwrite to replace it"
-            )
-        remove_dataset(path)
+    old = reopen_or_clear(
+        path,
+        "mesh data set",
+        header["request"],
+        lambda p: open_mesh_dataset(p, writable=True),
+        overwrite=overwrite,
+        inputs=inputs,
+    )
+    if old is not None:  # the same acquisition: resume
+        return old
     P, V = len(incident), len(mesh.vertices)
     n_chunks = -(-P // chunk_points)
     root = zarr.create_group(

@@ -211,6 +211,34 @@ def remove_dataset(path) -> None:
         path.rmdir()
 
 
+def reopen_or_clear(
+    path, kind: str, request: dict, opener, *, overwrite: bool, inputs=(), resume: bool = True
+):
+    """The resumable-output rule of the data sets: returns the one at ``path`` to resume, or None to create.
+
+    A ``kind`` data set at ``path`` made with the same ``request`` is reopened (``opener(path)``) so that
+    its finished chunks are kept — unless ``resume`` is False (data written whole); one made with other
+    arguments is removed with ``overwrite`` (:func:`remove_dataset`) and refused without; anything else
+    is never touched (:func:`claim_output`).
+    """
+    path = Path(path)
+    if not claim_output(path, kind, overwrite=overwrite, inputs=inputs, reuse=True):
+        return None
+    try:
+        old = opener(path)
+    except TranslucencyError:
+        old = None
+    if resume and old is not None and old.header.get("request") == request:  # the same acquisition
+        return old
+    if not overwrite:
+        raise TranslucencyError(
+            f"--out {path}: a {kind} made with other arguments is already there; "
+            "choose another path or pass --overwrite to replace it"
+        )
+    remove_dataset(path)
+    return None
+
+
 def claim_folder(path, *, overwrite: bool, inputs=(), option: str = "--out") -> Path:
     """Make ``path`` an output folder of the tool (created, or empty, or one it wrote before).
 

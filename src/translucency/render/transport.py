@@ -309,16 +309,12 @@ def transport_matrices(
             spread = np.bincount(i, weights=area[o] * vals, minlength=V) * np.pi / area  # Σ_o A_o α_o P_i
             target = np.ones(V) if shared else np.maximum(total[:, ch] - area * own[:, ch], 0.0)
             vals = vals * np.divide(target, spread, out=np.zeros(V), where=spread > 0)[i]
-            diag = np.zeros(V)
-        mats.append(
-            sp.csr_matrix(
-                (
-                    np.concatenate([vals, diag]).astype(np.float32),
-                    (np.concatenate([o, np.arange(V)]), np.concatenate([i, np.arange(V)])),
-                ),
-                shape=(V, V),
-            )
+            diag = None  # the own area rides beside the matrix (Transport.own), per channel
+        rows, cols = (
+            (o, i) if diag is None else (np.concatenate([o, np.arange(V)]), np.concatenate([i, np.arange(V)]))
         )
+        data = vals if diag is None else np.concatenate([vals, diag])
+        mats.append(sp.csr_matrix((data.astype(np.float32), (rows, cols)), shape=(V, V)))
     if own is None:
         return Transport(mats, s.astype(np.float32) if shared else None)
     scale = np.maximum(total - area[:, None] * own, 0.0) if shared else None
