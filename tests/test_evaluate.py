@@ -102,7 +102,9 @@ def test_marble_exponential_beats_dipole_near_the_incident_point(marble):
 def test_fibers_need_the_anisotropic_model(fibers):
     iso = planar_errors(fit_planar(fibers, "iso", max_rounds=3).model, fibers)
     aniso = planar_errors(fit_planar(fibers, "aniso", n_directions=8, max_rounds=3).model, fibers)
-    assert aniso.rel_l2 <= 0.5 * iso.rel_l2
+    # issue 13's target on fibers: aniso ≤ 0.6 × iso (with Poisson weights iso itself fits them better
+    # than it did with a relative error term: 8.7 % against 11.5 %; aniso 5.0 %)
+    assert aniso.rel_l2 <= 0.6 * iso.rel_l2
 
 
 def test_fit_and_evaluate_cli(marble, tmp_path):

@@ -16,27 +16,39 @@ a mesh data set in :mod:`.mesh`) reads the data of points s..e and says where
 
 .. math:: \Phi = \sum_{i,j,\lambda} w_{ij\lambda}^2
           \bigl(\alpha_j P_{i\lambda}(\vec x_j) - y_{ij\lambda}\bigr)^2, \qquad
-          w^{-2} = (\rho\, \alpha P)^2 + \sigma^2,
+          w^{-2} = \bigl[(\rho\, m)^2 + v_0\, m\bigr] / b(r),
 
-a relative error of tolerance ρ (default 5 %) where the data are precise and
-the measurement variance σ² (the Poisson variance of the model for the data
-set's photon count, or the data's variance averaged over rings) where they are not —
-so values spread over orders of magnitude count alike and noise is honoured.
-Weights are refreshed from the current model each round (iteratively
-reweighted); the first round uses ring means of the data instead.  Masked,
-non-finite and excluded pixels (r below ``exclusion_mm``) have weight 0.
+with m = α P of a *reference* model (never the pixel's own noisy value), v₀ =
+1/(N p²) the Poisson variance per unit reflectance for N photons per point and
+pixel area p² (per vertex area on meshes; without a photon count v₀ = Σ var /
+Σ y of the window, and ``"relative"`` keeps the data's ring-mean variance in
+place of v₀ m), b(r) = min(1, 1 mm / r) the distance balance, and ρ by
+``weighting`` (:data:`WEIGHTINGS`): ``"poisson"`` (default) ρ = 0, the Poisson
+variance of the model, whose shape does not depend on N — more photons only
+shrink the noise; ``"relative"`` ρ = ``rel_sigma``, a relative error where the
+data are precise (its share grows with N, so it reshapes the fit as photons
+grow).  Windows without any variance (noise-free data) take the relative error.
+Masked, non-finite and excluded pixels (r below ``exclusion_mm``) have weight 0.
+
+*Which model sets the weights.*  Round 1 has none and uses ring means of the
+data (a pilot).  Its result is the reference: rounds 2, 3, … all use the
+weights of that one model, so they minimise one fixed Φ and every round's
+state — round 1's included — is scored by it (``history``).
 
 **Alternation.**  Each round (1) fits every point's parameters with α fixed,
 batched over all points (:mod:`._varpro` for exponentials, :mod:`._lm` for
 the baselines; radii grouped exactly as in :mod:`._windows`); (2) for the
 shared-colour model solves :math:`s_\lambda` per point in closed form; (3)
 solves α per pixel in closed form,
-:math:`\alpha_j = \sum w^2 P y / \sum w^2 P^2`; and fixes the scale by mean
-α = 1 (for families with a free amplitude; the dipole's amplitude is tied to
-its shape, so α keeps the scale there).  Rounds stop when Φ falls by less
-than ``tol`` relatively.  Cold starts pool fixed blocks of 16 points by
-absolute index, so the result does not depend on the chunking.  The
-anisotropic model updates its directions by
+:math:`\alpha_j = \sum w^2 P y / \sum w^2 P^2` (pooled over neighbours on
+meshes), and normalises mean α = 1 over the observed pixels, the profiles'
+amplitudes taking the scale so that αP (and Φ) are unchanged (the dipole has no
+free amplitude: its α keeps the scale).  Φ of the new state is exact without a
+further pass (Φ is quadratic in each α_j, :func:`_update_alpha`).  Rounds stop
+when Φ falls by less than ``tol`` relatively or rises; the state of lowest Φ is
+returned (:attr:`FitResult.best_round`).  Cold starts pool fixed blocks of 16
+points by absolute index and every sum runs in chunk order, so the result does
+not depend on the chunking.  The anisotropic model updates its directions by
 block coordinate descent: directions that share no pixel (even, then odd l)
 are fitted together, with the neighbours' contributions held fixed.
 
@@ -67,6 +79,8 @@ from ._windows import Segments, radius_groups
 
 #: the model families: isotropic and anisotropic sums of exponentials, and the two baselines
 KINDS = ("iso", "aniso", "dipole", "burley")
+#: the weightings: w⁻² = αP/(N p²) (the model's Poisson variance), or (ρ αP)² + αP/(N p²)
+WEIGHTINGS = ("poisson", "relative")
 _DIPOLE_STARTS = [(0.01, 1.0), (0.002, 3.0), (0.05, 0.3)]  # (σ_a, σ_s') in 1/mm
 _BURLEY_STARTS = [(0.8, 1.0), (0.5, 0.3), (0.95, 4.0)]  # (A, s in 1/mm)
 
@@ -83,11 +97,14 @@ class FitResult:
         Incident points without usable data (all masked, NaN or zero); their
         parameters are inert (zero reflectance) and the report lists them.
     history : list of float
-        Objective Φ after each round's parameter fit.
+        Objective Φ of each round's state (parameters and α), every round under
+        the same weights (those of round 1's model; with one round, round 1's own).
     seconds : float
         Wall time of the fit.
     options : dict
         The options used (stored in the model file).
+    best_round : int
+        The round whose state is returned (1-based): the lowest Φ under the common weights.
     acquisition : dict, optional
         The data set's header (mesh fits): what was acquired, so that a model
         file can rebuild its reference without the data set.
@@ -99,6 +116,7 @@ class FitResult:
     seconds: float
     options: dict = field(default_factory=dict)
     acquisition: dict | None = None
+    best_round: int = 1
 
     def metadata(self, dataset_path) -> dict:
         """The fit's record stored beside the model: data set, options, Φ per round, time, flagged points.
@@ -112,13 +130,14 @@ class FitResult:
         -------
         dict
             ``dataset``, ``fit`` (the options), ``objective_per_round``,
-            ``seconds`` (rounded to 0.01 s), ``flagged_points`` (indices) and, for
-            mesh fits, ``acquisition`` (the data set's header).
+            ``best_round`` (the round returned), ``seconds`` (rounded to 0.01 s),
+            ``flagged_points`` (indices) and, for mesh fits, ``acquisition`` (the data set's header).
         """
         meta = {
             "dataset": str(dataset_path),
             "fit": self.options,
             "objective_per_round": self.history,
+            "best_round": self.best_round,
             "seconds": round(self.seconds, 2),
             "flagged_points": np.flatnonzero(self.flagged).tolist(),
         }
@@ -128,7 +147,12 @@ class FitResult:
 
 
 def check_fit_options(
-    model: str, n_terms: int = 3, n_directions: int = 8, colour: str = "per-channel", rel_sigma: float = 0.05
+    model: str,
+    n_terms: int = 3,
+    n_directions: int = 8,
+    colour: str = "per-channel",
+    rel_sigma: float = 0.05,
+    weighting: str = "poisson",
 ) -> None:
     """Refuse bad fit options with one line naming the option (before any work)."""
     if model not in KINDS:
@@ -141,6 +165,8 @@ def check_fit_options(
         raise TranslucencyError(f"colour: expected 'shared' or 'per-channel', got {colour!r}")
     if not (rel_sigma > 0 and np.isfinite(rel_sigma)):
         raise TranslucencyError(f"rel_sigma: must be > 0, got {rel_sigma}")
+    if weighting not in WEIGHTINGS:
+        raise TranslucencyError(f"weighting: expected one of {', '.join(WEIGHTINGS)}, got {weighting!r}")
 
 
 # -- per-point profile families (without α) ---------------------------------------
@@ -174,13 +200,36 @@ class FitState:
     """Everything a fit carries between chunks and rounds (and saves in a checkpoint).
 
     P incident points, C colour rows (1: shared colour scale, 3: per channel),
-    m directions, n exponential terms; α has the source's shape.
+    m directions, n exponential terms; α has the source's shape.  Besides the
+    current state it keeps the *reference* state whose model gives the common
+    weights of rounds 2, 3, … (set once, after round 1) and the *best* state
+    found so far with its objective under those weights.
     """
 
     #: arrays of one incident point each (copied per chunk, committed back)
     PER_POINT = ("c", "a", "p", "s", "ready", "flagged")
+    #: the parameters that make a state (kept for the reference and the best state)
+    PARAMS = ("c", "a", "p", "s", "alpha")
     #: the arrays of a checkpoint, in file order
-    SAVED = ("c", "a", "p", "s", "alpha", "num", "den", "phi", "done", "ready", "flagged", "history", "round")
+    SAVED = (
+        "c",
+        "a",
+        "p",
+        "s",
+        "alpha",
+        "num",
+        "den",
+        "phi",
+        "phi_ref",
+        "done",
+        "ready",
+        "flagged",
+        "history",
+        "round",
+        *(f"ref_{k}" for k in PARAMS),
+        *(f"best_{k}" for k in PARAMS),
+        "best",
+    )
 
     def __init__(self, P: int, C: int, m: int, n: int, alpha_shape, n_chunks: int = 1):
         # exponential families: Σ_k c_k e^{−a_k r} per point, colour row and direction (a in 1/mm)
@@ -189,15 +238,21 @@ class FitState:
         self.p = np.ones((P, 3, 2))  # dipole (σ_a, σ_s') or Burley (A, s) per point and channel
         self.s = np.ones((P, 3))  # colour scale (1, s_g, s_b) of the shared-colour model
         self.alpha = np.ones(alpha_shape)  # the modulation texture α
-        # per chunk of this round: α statistics Σ w²Py, Σ w²P², objective Φ, finished?
+        # per chunk of this round: α statistics Σ w²Py, Σ w²P², objective Φ (new parameters, the
+        # round's α) and, in round 2, Φ of the reference state itself; finished?
         self.num = np.zeros((n_chunks,) + tuple(alpha_shape))
         self.den = np.zeros((n_chunks,) + tuple(alpha_shape))
         self.phi = np.zeros(n_chunks)
+        self.phi_ref = np.zeros(n_chunks)
         self.done = np.zeros(n_chunks, dtype=bool)
         self.ready = np.zeros(P, dtype=bool)  # the point's parameters have been fitted once
         self.flagged = np.zeros(P, dtype=bool)  # the point has no usable data
-        self.history = np.zeros(0)  # Φ after each round
+        self.history = np.zeros(0)  # Φ of each round's state (parameters and α)
         self.round = np.zeros(1, dtype=np.int64)  # rounds finished
+        for k in self.PARAMS:  # the reference (weights) and the best state: copies of the parameters
+            setattr(self, f"ref_{k}", getattr(self, k).copy())
+            setattr(self, f"best_{k}", getattr(self, k).copy())
+        self.best = np.array([np.inf, -1.0])  # (Φ, round index) of the best state so far
 
     def points(self, s: int, e: int) -> FitState:
         """A private copy of points s..e (α shared, read-only during a round)."""
@@ -206,6 +261,24 @@ class FitState:
             setattr(sub, k, getattr(self, k)[s:e].copy())
         sub.alpha = self.alpha
         return sub
+
+    def reference(self, s: int, e: int) -> FitState:
+        """The reference state's points s..e (read-only: its model gives the common weights)."""
+        ref = FitState.__new__(FitState)
+        for k in ("c", "a", "p", "s"):
+            setattr(ref, k, getattr(self, f"ref_{k}")[s:e])
+        ref.alpha = self.ref_alpha
+        return ref
+
+    def keep(self, prefix: str) -> None:
+        """Copy the current parameters and α into the ``prefix`` ("ref" or "best") state."""
+        for k in self.PARAMS:
+            getattr(self, f"{prefix}_{k}")[...] = getattr(self, k)
+
+    def restore_best(self) -> None:
+        """Make the best state the current one."""
+        for k in self.PARAMS:
+            getattr(self, k)[...] = getattr(self, f"best_{k}")
 
     def commit(self, sub: FitState, s: int, e: int) -> None:
         """Write the points of ``sub`` (from :meth:`points`) back as points s..e."""
@@ -244,7 +317,7 @@ class FitContext:
     m: int  # directions (1 unless anisotropic)
     C: int  # colour rows: 1 (shared colour scale) or 3
     exclusion: float  # pixels closer than this to x_i are left out, mm
-    rel_sigma: float  # ρ, the relative tolerance in the weights
+    rel_sigma: float  # ρ, the relative tolerance in the weights ("relative" weighting)
     eta: float  # refractive index (dipole)
     radius_step: float | None  # width of the merged rings beyond 1 mm, mm; None: exact radii only
     sweeps: int  # block-coordinate sweeps over the directions per round
@@ -253,6 +326,12 @@ class FitContext:
     rate_bounds: tuple | None = None  # (lo, hi) of log a (a in mm⁻¹); None: what the radii resolve
     cache_left: float = 0.0  # bytes the data may still occupy in memory between rounds
     cache: dict = field(default_factory=dict)
+    weighting: str = "poisson"  # one of WEIGHTINGS (module docstring)
+
+    @property
+    def rho(self) -> float:
+        """ρ of the weights: ``rel_sigma`` for the "relative" weighting, 0 for "poisson"."""
+        return float(self.rel_sigma) if self.weighting == "relative" else 0.0
 
 
 def alternate(
@@ -270,8 +349,12 @@ def alternate(
 ) -> FitResult:
     """The rounds of the alternation over all chunks of points (shared by planar and mesh fits).
 
-    ``request`` identifies the fit in a checkpoint; ``t0`` is the start time
-    (:func:`time.perf_counter`) for :attr:`FitResult.seconds`.
+    Round 1 weights by ring means of the data; its result becomes the reference
+    state whose model weights every later round (module docstring).  Each
+    round's state is scored by Φ under those common weights; the rounds stop
+    when Φ falls by less than ``tol`` relatively (or rises), and the best state
+    is returned.  ``request`` identifies the fit in a checkpoint; ``t0`` is the
+    start time (:func:`time.perf_counter`) for :attr:`FitResult.seconds`.
     """
     P = len(ctx.x_i)
     chunks = [(s, min(s + chunk_points, P)) for s in range(0, P, chunk_points)]
@@ -285,6 +368,8 @@ def alternate(
     workers = max(1, min(int(workers or os.cpu_count() or 1), len(chunks)))
     while state.round[0] < max_rounds:
         rnd = int(state.round[0])
+        if rnd == 1 and not state.done.any():  # round 1's result weights every later round
+            state.keep("ref")
         todo = [ci for ci in range(len(chunks)) if not state.done[ci]]
         # chunks in parallel threads (NumPy releases the GIL); each works on a private copy
         # of its points and hands back its α statistics, so results do not depend on timing
@@ -292,32 +377,48 @@ def alternate(
             futures = {pool.submit(_fit_chunk, ctx, state, *chunks[ci]): ci for ci in todo}
             for fut in as_completed(futures):
                 ci = futures[fut]
-                sub, phi, num, den = fut.result()
+                sub, phi, phi_ref, num, den = fut.result()
                 with lock:
                     state.commit(sub, *chunks[ci])
-                    state.num[ci], state.den[ci], state.phi[ci], state.done[ci] = num, den, phi, True
+                    state.num[ci], state.den[ci] = num, den
+                    state.phi[ci], state.phi_ref[ci], state.done[ci] = phi, phi_ref, True
                     if ckpt is not None:
                         state.save(ckpt, request)
                 if progress:
                     progress(rnd * len(chunks) + int(state.done.sum()), total, f"round {rnd + 1}")
-        # α in closed form, then the scale fixed by mean α = 1
-        _update_alpha(state, model, getattr(ctx.source, "smooth_alpha", None))
-        state.history = np.append(state.history, state.phi.sum())
+        # α in closed form (the scale fixed by mean α = 1), and Φ of the new state (parameters and α):
+        # Φ with the round's α, plus what the α step changed (exact: Φ is quadratic in each α_j)
+        change = _update_alpha(state, model, getattr(ctx.source, "smooth_alpha", None))
+        phi = float(state.phi.sum()) + change  # summed in chunk order: deterministic
+        if rnd == 1:  # round 1's own state, scored under the common weights it defines
+            state.history = np.array([float(state.phi_ref.sum())])
+            state.best[:] = (state.history[0], 0)  # the best arrays hold round 1's state already
+        state.history = np.append(state.history, phi)
+        if phi < state.best[0] or rnd == 0:
+            state.best[:] = (phi, rnd)
+            state.keep("best")
         state.phi[:] = 0.0
+        state.phi_ref[:] = 0.0
         state.done[:] = False
         state.round[0] = rnd + 1
         h = state.history
-        if len(h) >= 3 and (h[-2] - h[-1]) <= tol * h[-2]:  # round 1 used data-based weights
+        if rnd >= 1 and h[-2] - h[-1] <= tol * h[-2]:  # converged, or Φ rose: the best state is kept
             state.round[0] = max_rounds
         if ckpt is not None:
             state.save(ckpt, request)
     if progress:
         progress(total, total, "done")
+    state.restore_best()
     fitted = _build_model(ctx, state)
     if ckpt is not None and ckpt.exists():
         ckpt.unlink()
     return FitResult(
-        fitted, state.flagged.copy(), [float(v) for v in state.history], time.perf_counter() - t0, options
+        fitted,
+        state.flagged.copy(),
+        [float(v) for v in state.history],
+        time.perf_counter() - t0,
+        options,
+        best_round=int(state.best[1]) + 1,
     )
 
 
@@ -342,7 +443,8 @@ class _Chunk:
     base: np.ndarray  # (k, 1) and ...
     local: np.ndarray  # ... (1|k, J): α's sample of each pixel is base + local
     usable: np.ndarray | None = None  # (k,) enough valid pixels and some signal
-    poisson: object = 0.0  # 1/(N × pixel area): scalar, or (k, J, 1) float32 (mesh vertices)
+    poisson: object = 0.0  # 1/(N × pixel area): scalar, (k, 1, 1) (per window) or (k, J, 1) (vertices)
+    rel2: object = 0.0  # ρ² of the weights: scalar, or (k, 1, 1) float32 per window
     alpha: np.ndarray | None = None  # (k, J, 3) float32 current α at each pixel (set per round)
     plans: dict = field(default_factory=dict)  # Segments of the anisotropic direction classes
     first: int = 0  # the chunk's first incident point (absolute index)
@@ -390,7 +492,18 @@ def _prepare_chunk(ctx: FitContext, s: int, e: int) -> _Chunk:
     # each mm of distance counts alike: rings beyond 1 mm weighted by 1 mm / r
     balance = np.minimum(1.0, 1.0 / np.maximum(r, 1e-9)) if ctx.balance else np.ones_like(r)
     balance = balance.astype(np.float32)
-    var_ring = None if var is None else _ring_means(rings, valid, var).astype(np.float32)
+    var_ring = None
+    if var is not None and ctx.weighting == "relative":  # σ²: ring means of the data's variance
+        var_ring = _ring_means(rings, valid, var).astype(np.float32)
+    rel2 = np.float32(ctx.rho**2)
+    if var is not None and ctx.weighting == "poisson":  # σ² = v₀ αP with v₀ = Σ var / Σ y of the
+        # window (= 1/(N p²) for photon counts, whose variance is y/(N p²)); windows without any
+        # variance are noise-free: every weighting fits them alike, and they take the relative error ρ
+        v_sum = var.sum(axis=(1, 2), dtype=np.float64)
+        y_sum = y.sum(axis=(1, 2), dtype=np.float64)
+        noisy = (v_sum > 0) & (y_sum > 0)
+        poisson = np.where(noisy, v_sum / np.where(noisy, y_sum, 1.0), 0.0).astype(np.float32)[:, None, None]
+        rel2 = np.where(noisy, 0.0, ctx.rel_sigma**2).astype(np.float32)[:, None, None]
     usable = (valid.sum(axis=1) >= 2 * ctx.n + 2) & (y.sum(axis=(1, 2), dtype=np.float64) > 0)
     return _Chunk(
         y,
@@ -407,6 +520,7 @@ def _prepare_chunk(ctx: FitContext, s: int, e: int) -> _Chunk:
         local,
         usable,
         poisson,
+        rel2=rel2,
         first=s,
     )
 
@@ -473,26 +587,25 @@ def _predict(ctx: FitContext, state: FitState, sl: slice, ch: _Chunk) -> np.ndar
     return f * state.s[sl][:, None, :].astype(np.float32) if ctx.C == 1 else f
 
 
-def _weights(ctx: FitContext, ch: _Chunk, f: np.ndarray | None) -> np.ndarray:
-    r"""w² per pixel and channel (module docstring); f is P_i without α, (k, J, 3).
+def _weights(ctx: FitContext, ch: _Chunk, model: np.ndarray | None) -> np.ndarray:
+    r"""w² per pixel and channel (module docstring) for the model prediction αP, (k, J, 3) (overwritten).
 
-    The variance is taken from the model, never from the pixel's own value: a
+    The variance is taken from a model, never from the pixel's own value: a
     pixel-wise estimate is proportional to the noisy count (Poisson), and
     weighting by it would pull the fit below the data where counts are few.
-    With the data set's photon count it is the Poisson variance of the model,
-    :math:`\alpha P/(N p^2)`; otherwise the ring mean of the data's variance.
+    ``model`` None (round 1): ring means of the data stand in for αP.
     """
-    if f is None:  # first round: ring means of y/α stand in for the model
+    if model is None:  # round 1: ring means of y/α stand in for the model
         safe = np.where(ch.alpha > 0, ch.alpha, np.float32(1.0))
-        f = ch.rings.spread(_ring_means(ch.rings, ch.valid, ch.y / safe).astype(np.float32))
-    model = ch.alpha * f
-    del f
+        model = ch.rings.spread(_ring_means(ch.rings, ch.valid, ch.y / safe).astype(np.float32))
+        model *= ch.alpha
     k = model.shape[0]  # floor: 10⁻⁶ of each window's peak (keeps the weights finite)
     floor = np.maximum(1e-6 * model.reshape(k, -1).max(axis=1), np.float32(1e-15))
     np.maximum(model, floor[:, None, None], out=model)
-    # w² = static / (αP (ρ² αP + v0)) with v0 = 1/(N p²), or ρ²(αP)² + σ̄² without a photon count
-    # (in place: these are the largest arrays of a chunk)
-    den = np.multiply(model, np.float32(ctx.rel_sigma**2))
+    # w² = static / (αP (ρ² αP + v₀)) with v₀ = 1/(N p²) (ρ = 0: "poisson"), or ρ²(αP)² + σ̄² with
+    # the data's ring-mean variance σ̄² ("relative" without a photon count); in place: these are the
+    # largest arrays of a chunk
+    den = np.multiply(model, ch.rel2)
     if ch.var_ring is None:
         den += ch.poisson
         den *= model
@@ -505,10 +618,19 @@ def _weights(ctx: FitContext, ch: _Chunk, f: np.ndarray | None) -> np.ndarray:
     return w2
 
 
+def _objective(w2: np.ndarray, model: np.ndarray, y: np.ndarray) -> float:
+    """Φ = Σ w² (αP − y)² of a chunk (float64 sum)."""
+    res = model - y
+    res *= res
+    res *= w2
+    return float(np.sum(res, dtype=np.float64))
+
+
 def _fit_chunk(ctx: FitContext, glob: FitState, s: int, e: int):
     """One round's work on points s..e: parameters, colour scale, α statistics, Φ.
 
-    Returns the points' new state and their Φ, Σ w²Py and Σ w²P² (per sample pixel).
+    Returns the points' new state, their Φ (new parameters, the round's α) and, in round 2, Φ of
+    the reference state, and Σ w²Py and Σ w²P² (per sample pixel).
     """
     state = glob.points(s, e)
     ch = _load_chunk(ctx, state, s, e)
@@ -523,7 +645,19 @@ def _fit_chunk(ctx: FitContext, glob: FitState, s: int, e: int):
             state.s[sl],
             tot / np.maximum(tot[:, :1], 1e-300) * (tot[:, :1] > 0) + (tot[:, :1] <= 0),
         )
-    w2 = _weights(ctx, ch, _predict(ctx, state, sl, ch) if state.ready[sl].all() else None)
+    # the weights: round 1 from ring means of the data, every later round from the reference model
+    # (round 1's result), so that all rounds after the first minimise, and are scored by, one Φ
+    phi_ref = 0.0
+    if glob.round[0] == 0:
+        w2 = _weights(ctx, ch, None)
+    else:
+        ref = glob.reference(s, e)
+        ref_model = _predict(ctx, ref, sl, ch)
+        ref_model *= ch.per_channel(ref.alpha.astype(np.float32).ravel()[ch.pixel])
+        w2 = _weights(ctx, ch, ref_model.copy())
+        if glob.round[0] == 1:  # round 2 starts from the reference: its Φ under its own weights
+            phi_ref = _objective(w2 * usable[:, None, None], ref_model, ch.y)
+        del ref_model
     if ctx.kind in ("dipole", "burley"):
         _fit_baseline(ctx, state, sl, ch, w2)
     else:
@@ -540,17 +674,12 @@ def _fit_chunk(ctx: FitContext, glob: FitState, s: int, e: int):
     # Φ and the α statistics (summed over channels, then per sample pixel) with the new parameters
     f = _predict(ctx, state, sl, ch)
     w2 *= usable[:, None, None]
-    res = ch.alpha * f
-    res -= ch.y
-    res *= res
-    res *= w2
-    phi = float(np.sum(res, dtype=np.float64))
-    del res
+    phi = _objective(w2, ch.alpha * f, ch.y)
     wf = w2 * f
     n_px, pixel, ones = glob.alpha.size, ch.pixel.ravel(), np.ones(3, np.float32)
     num = np.bincount(pixel, ((wf * ch.y) @ ones).ravel(), n_px).reshape(glob.alpha.shape)
     den = np.bincount(pixel, ((wf * f) @ ones).ravel(), n_px).reshape(glob.alpha.shape)
-    return state, phi, num, den
+    return state, phi, phi_ref, num, den
 
 
 def _grouped(seg: Segments, G: int, C: int, w2, kappa, target, overwrite: bool = False):
@@ -697,18 +826,32 @@ def _fit_baseline(ctx: FitContext, state: FitState, sl: slice, ch: _Chunk, w2) -
     state.p[sl] = p.reshape(k, 3, 2)
 
 
-def _update_alpha(state: FitState, kind: str, smooth=None) -> None:
-    """α_j = Σ w²Py / Σ w²P² from the round's statistics, then mean α = 1 with the scale moved into P."""
+def _update_alpha(state: FitState, kind: str, smooth=None) -> float:
+    r"""α_j = Σ w²Py / Σ w²P² from the round's statistics, then mean α = 1 with the scale moved into P.
+
+    Returns the change of Φ that the new α makes against the round's α: Φ is quadratic in each
+    α_j with minimum at :math:`\alpha^*_j = N_j/D_j` (N = Σ w²Py, D = Σ w²P²), so
+    :math:`\Phi(\alpha) - \Phi(\alpha') = \sum_j D_j[(\alpha_j - \alpha^*_j)^2 - (\alpha'_j - \alpha^*_j)^2]`
+    exactly, for any α (smoothed, clipped at 0) — and free of the cancellation of expanding Φ.
+    """
     num, den = state.num.sum(axis=0), state.den.sum(axis=0)  # in chunk order: deterministic
-    if smooth is not None:  # pool the statistics of neighbouring outgoing points (meshes)
-        num, den = smooth(num), smooth(den)
     seen = den > 0
-    alpha = np.where(seen, num / np.where(seen, den, 1.0), 1.0)
+    best = np.where(seen, num / np.where(seen, den, 1.0), 1.0)  # α* per pixel
+    shown = seen
+    alpha = best
+    if smooth is not None:  # pool the statistics of neighbouring outgoing points (meshes)
+        s_num, s_den = smooth(num), smooth(den)
+        shown = s_den > 0
+        alpha = np.where(shown, s_num / np.where(shown, s_den, 1.0), 1.0)
     alpha = np.maximum(alpha, 0.0)
-    if kind != "dipole" and seen.any():
-        mean = float(alpha[seen].mean())
+    old, new = state.alpha[seen], alpha[seen]
+    change = float(np.sum(den[seen] * ((new - best[seen]) ** 2 - (old - best[seen]) ** 2)))
+    # mean α = 1 over the observed pixels, the profiles' amplitudes take the scale (α P unchanged,
+    # so Φ too); the dipole has no free amplitude, its α keeps the scale
+    if kind != "dipole" and shown.any():
+        mean = float(alpha[shown].mean())
         if mean > 0:
-            alpha = np.where(seen, alpha / mean, 1.0)
+            alpha = np.where(shown, alpha / mean, 1.0)
             if kind == "burley":
                 state.p[:, :, 0] *= mean
             else:
@@ -716,6 +859,7 @@ def _update_alpha(state: FitState, kind: str, smooth=None) -> None:
     state.alpha[...] = alpha
     state.num[...] = 0.0
     state.den[...] = 0.0
+    return change
 
 
 def _build_model(ctx: FitContext, state: FitState):

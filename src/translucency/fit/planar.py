@@ -22,13 +22,16 @@ Weighted least squares over every valid pair,
 
 .. math:: \Phi = \sum_{i,j,\lambda} w_{ij\lambda}^2
           \bigl(\alpha_j P_{i\lambda}(\vec x_j) - y_{ij\lambda}\bigr)^2, \qquad
-          w^{-2} = (\rho\, \alpha P)^2 + \sigma^2,
+          w^{-2} = \bigl[(\rho\, m)^2 + m/(N p^2)\bigr] / \min(1, 1\,\mathrm{mm}/r),
 
-minimised by alternating between every point's parameters (α fixed) and α in
-closed form, :math:`\alpha_j = \sum w^2 P y / \sum w^2 P^2`.  Masked,
-non-finite and excluded pixels (r below ``exclusion_mm``, one pixel by
-default) have weight 0; σ² is the Poisson variance of the model for the data
-set's photon count, or else the data's stored variance averaged over rings.
+with m = αP of round 1's fitted model (round 1 itself: ring means of the data),
+N the data set's photon count and ρ = 0 (``weighting="poisson"``, default) or
+``rel_sigma`` (``"relative"``).  Minimised by alternating between every point's
+parameters (α fixed) and α in closed form, :math:`\alpha_j = \sum w^2 P y /
+\sum w^2 P^2`, normalised to mean 1; every round is scored under the same
+weights, the rounds stop when Φ falls by less than ``tol`` or rises, and the
+best round is returned.  Masked, non-finite and excluded pixels (r below
+``exclusion_mm``, one pixel by default) have weight 0.
 
 Work runs in chunks of incident points read from the Zarr store, so a data
 set larger than memory can be fitted; with ``checkpoint`` the state is saved
@@ -65,6 +68,7 @@ def fit_planar(
     n_directions: int = 8,
     colour: str = "per-channel",
     exclusion_mm: float | None = None,
+    weighting: str = "poisson",
     rel_sigma: float = 0.05,
     max_rounds: int = 3,
     tol: float = 1e-3,
@@ -94,10 +98,15 @@ def fit_planar(
         or one fall-off per channel.
     exclusion_mm : float, optional
         Pixels closer than this to x_i are ignored; default one pixel.
+    weighting : {"poisson", "relative"}
+        w⁻² = αP/(N p²), the Poisson variance of a model (default: its shape does
+        not depend on N, so more photons never hurt), or (ρ αP)² + αP/(N p²),
+        a relative error ρ where the data are precise (see docs/fitting.md).
     rel_sigma : float
-        ρ, the relative tolerance in the weights.
+        ρ, the relative tolerance of the "relative" weighting.
     max_rounds, tol : int, float
-        Alternation stops after ``max_rounds`` or when Φ falls by less than ``tol``.
+        At most ``max_rounds`` rounds; they stop when Φ (under the common weights of
+        rounds ≥ 2) falls by less than ``tol`` relatively, or rises.  The best round is returned.
     radius_step : float, None or "auto"
         Merge radii beyond 1 mm into rings of this width (mm); ``None`` groups
         exactly equal radii only; ``"auto"`` is a quarter pixel.
@@ -128,7 +137,7 @@ def fit_planar(
     >>> fit = fit_planar(default_dataset_path(), "iso", max_rounds=1)   # doctest: +SKIP
     """
     t0 = time.perf_counter()
-    check_fit_options(model, n_terms, n_directions, colour, rel_sigma)
+    check_fit_options(model, n_terms, n_directions, colour, rel_sigma, weighting)
     ds = dataset if isinstance(dataset, PlanarDataset) else open_dataset(dataset)
     if not ds.complete():
         raise TranslucencyError(f"{ds.path}: the acquisition is unfinished; resume it before fitting")
@@ -158,6 +167,7 @@ def fit_planar(
         "n_directions": m,
         "colour": colour if model in ("iso", "aniso") else "per-channel",
         "exclusion_mm": exclusion,
+        "weighting": weighting,
         "rel_sigma": rel_sigma,
         "max_rounds": max_rounds,
         "tol": tol,
@@ -184,6 +194,7 @@ def fit_planar(
         C=C,
         exclusion=exclusion,
         rel_sigma=rel_sigma,
+        weighting=weighting,
         eta=eta,
         radius_step=step,
         sweeps=sweeps,
