@@ -1,0 +1,223 @@
+"""The error budget of a rendered object, by ablation against a converged reference (issue 12, item 7).
+
+Each row replaces one approximation of the pipeline by its exact (measured) counterpart and renders the
+object again; the change of the relative RMSE against the converged volpath reference is that
+approximation's share.  Every render is L_o = (1/π) Σ_j A_j E_j K(x_j, x_o) for a kernel K (exitance at
+x_o per unit power entering at x_j, mm⁻²), drawn by the same Mitsuba picture:
+
+=================  ==================================================================================
+oracle             K = the photon tally itself, every vertex an incident point (needs V² storage:
+                   a mesh of a few thousand vertices) — what no per-vertex model can beat
+oracle, radial     each vertex's own tally replaced by its ring means in Euclidean r (own area and total
+                   kept): the local model — a radially symmetric profile of the straight-line distance
+points, radial     the ring means of the P incident points only, blended to every vertex with the
+                   renderer's weights: interpolation between incident points
+points, fit        the fitted exponentials (α = 1) in place of the ring means: the fit
+points, fit, α     the fitted α as well: what ``render`` draws (checked against transport_matrices)
+=================  ==================================================================================
+
+plus the acquisition noise (4× the photons), the near field (the profile at r_min instead of the
+measured own area), the transport radius, the picture's samples per pixel and the reference's own noise.
+The default case is the cow with skin under a spot (issue 12's case); needs ``cow.obj``:
+
+    python benchmarks/objects_budget.py --meshes ../shared/meshes
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from translucency.acquire.mesh import acquire_mesh, object_volume
+from translucency.fit.mesh import fit_mesh
+from translucency.geometry import vertex_areas
+from translucency.io.mesh import load_mesh
+from translucency.io.mesh_dataset import open_mesh_dataset
+from translucency.mitsuba import mesh_scene
+from translucency.render.image import Camera, VertexPicture, compare, coverage
+from translucency.render.lights import parse_light
+from translucency.render.reference import converged_reference
+from translucency.render.transport import (
+    neighbour_weights,
+    relight_vertices,
+    transport_matrices,
+    vertex_irradiance,
+)
+
+CASE = "cow-skin-spot:cow.obj:8:z:skin:128:4000:spot:-60,70,90,0,0,0,25,3e4:-1,1.2,0.6"
+
+
+def ring_means(R: np.ndarray, r: np.ndarray, area: np.ndarray, width: float, n_bins: int) -> np.ndarray:
+    """Area-weighted ring means of one source's tally R (V, 3) over Euclidean r (V,): (n_bins, 3), mm⁻².
+    The source's own vertex (r = 0) is left out; empty rings are 0."""
+    b = np.minimum((r / width).astype(int), n_bins - 1)
+    keep = r > 0
+    w = np.bincount(b[keep], area[keep], minlength=n_bins)
+    out = np.stack([np.bincount(b[keep], area[keep] * R[keep, c], minlength=n_bins) for c in range(3)], 1)
+    return np.divide(out, w[:, None], out=np.zeros_like(out), where=w[:, None] > 0)
+
+
+def radial_kernel(tables, own, total, w, idx, r_all, area, width):
+    """K (V_o, V_j, 3) from ring tables (P, n_bins, 3) blended to every source j with (w, idx) (V_j, k);
+    own area measured on the diagonal, each column scaled to carry total_j − A_j own_j."""
+    V = len(area)
+    n_bins = tables.shape[1]
+    b = np.minimum((r_all / width).astype(int), n_bins - 1)  # (V_o, V_j)
+    K = np.zeros((V, V, 3))
+    for kk in range(w.shape[1]):
+        K += w[None, :, kk, None] * tables[idx[:, kk][None, :], b]
+    own_j = np.einsum("vk,vkc->vc", w, own[idx])
+    total_j = np.einsum("vk,vkc->vc", w, total[idx])
+    K[np.arange(V), np.arange(V)] = 0.0
+    spread = np.einsum("ojc,o->jc", K, area)
+    target = np.maximum(total_j - area[:, None] * own_j, 0.0)
+    K *= np.divide(target, spread, out=np.zeros_like(spread), where=spread > 0)[None]
+    K[np.arange(V), np.arange(V)] = own_j
+    return K
+
+
+def radiance(K, area, E):
+    """L_o = (1/π) Σ_j A_j E_j K_oj per channel, (V, 3)."""
+    E = np.repeat(E[:, None], 3, 1) if E.ndim == 1 else E
+    return np.einsum("ojc,jc->oc", K, area[:, None] * E) / np.pi
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--meshes", type=Path, default=Path("../shared/meshes"))
+    ap.add_argument("--case", default=CASE, help="as in objects_table.py")
+    ap.add_argument("--spp", type=int, default=256, help="samples per pixel of each of the two references")
+    ap.add_argument("--size", type=int, nargs=2, default=(128, 96))
+    ap.add_argument("--work", type=Path, default=Path(tempfile.mkdtemp(prefix="objects_budget_")))
+    args = ap.parse_args()
+    args.work.mkdir(parents=True, exist_ok=True)
+    name, file, scale, up, material, points, photons, kind, light, view = args.case.split(":")
+    P, N = int(points), int(photons)
+    mesh = load_mesh(args.meshes / file, scale_mm=float(scale), up=up)
+    V = len(mesh.vertices)
+    volume = object_volume(material, mesh, 1.0, seed=3)
+    light = parse_light(f"{kind}:{light}")
+    camera = Camera.looking_at(mesh, [float(v) for v in view.split(",")], *args.size)
+    mask = coverage(mesh, camera)
+    reference, info = converged_reference(mesh, volume, light, camera, mask, spp=args.spp)
+    scene = mesh_scene(mesh)
+    E = vertex_irradiance(mesh, scene, light)
+    picture = VertexPicture(mesh, camera, spp=16, light=light)
+    area = vertex_areas(mesh)
+
+    def acquire(n_points, n_photons, seed=3):
+        return acquire_mesh(
+            mesh,
+            volume,
+            args.work / f"{name}_{n_points}x{n_photons}_{seed}.zarr",
+            n_points=n_points,
+            photons=n_photons,
+            seed=seed,
+            chunk_points=32,
+            index_matched=True,
+        )
+
+    rows = []
+
+    def row(label, L, what, pic=picture):
+        img = pic.draw(L)
+        cmp = compare(reference, img, mask)
+        rows.append(
+            {
+                "row": label,
+                "what": what,
+                "rel_rmse": cmp["rel_rmse"],
+                "flip": cmp["flip_mean_object"],
+                "brightness": float(img[mask].mean() / reference[mask].mean()),
+            }
+        )
+        print(
+            f"{label:<34} rel RMSE {cmp['rel_rmse']:.3f}  FLIP {cmp['flip_mean_object']:.3f}  "
+            f"brightness {rows[-1]['brightness']:.3f}",
+            flush=True,
+        )
+
+    t0 = time.perf_counter()
+    # the pipeline as `render` runs it
+    fit = fit_mesh(acquire(P, N), "iso")
+    model = fit.model
+    row("pipeline (render's default)", relight_vertices(transport_matrices(model, mesh), E), "all terms")
+    saved = model.measured
+    model.measured = None
+    row("  near field from the profile", relight_vertices(transport_matrices(model, mesh), E), "near field")
+    model.measured = saved
+    row(
+        "  transport radius 1 m",
+        relight_vertices(transport_matrices(model, mesh, radius=1000.0), E),
+        "transport truncation",
+    )
+    fit4 = fit_mesh(acquire(P, 4 * N), "iso")
+    row(f"  {4 * N} photons per point", relight_vertices(transport_matrices(fit4.model, mesh), E), "noise")
+    fitP = fit_mesh(acquire(4 * P, N), "iso")
+    row(f"  {4 * P} incident points", relight_vertices(transport_matrices(fitP.model, mesh), E), "points")
+
+    # the oracle: every vertex an incident point, at the same photons per point
+    oracle = open_mesh_dataset(acquire(V, N))
+    R = np.asarray(oracle.group["R_d"][...], dtype=np.float64)  # (V_j, V_o, 3)
+    inc = oracle["incident"]
+    Ksrc = np.zeros((V, V, 3))
+    Ksrc[:, inc] = R.transpose(1, 0, 2)  # K[o, j]
+    L_oracle = radiance(Ksrc, area, E)
+    row("oracle: the tally, every vertex", L_oracle, "floor: discretisation, exit law, noise")
+    row(
+        "  oracle drawn at 256 spp",
+        L_oracle,
+        "drawing",
+        pic=VertexPicture(mesh, camera, spp=256, light=light),
+    )
+    v = np.asarray(mesh.vertices, dtype=np.float64)
+    r_all = np.linalg.norm(v[:, None] - v[None], axis=2)  # (V_o, V_j)
+    width = float(np.mean(mesh.edges_unique_length))
+    n_bins = int(np.ceil(r_all.max() / width)) + 1
+    own = Ksrc[np.arange(V), np.arange(V)]
+    total = np.einsum("ojc,o->jc", Ksrc, area)
+    tables = np.stack([ring_means(Ksrc[:, j], r_all[:, j], area, width, n_bins) for j in range(V)])
+    eye = (np.ones((V, 1)), np.arange(V)[:, None])
+    row(
+        "oracle, radial",
+        radiance(radial_kernel(tables, own, total, *eye, r_all, area, width), area, E),
+        "local model (radial, Euclidean r)",
+    )
+    # the P incident points of the pipeline, their ring means blended with the renderer's weights
+    pts = np.asarray(open_mesh_dataset(acquire(P, N))["incident"])
+    w, idx = neighbour_weights(model, mesh)
+    row(
+        f"points, radial ({P})",
+        radiance(radial_kernel(tables[pts], own[pts], total[pts], w, idx, r_all, area, width), area, E),
+        "interpolation between incident points",
+    )
+    # the fit in place of the ring means: exponentials tabulated on the same rings
+    rc = (np.arange(n_bins) + 0.5) * width
+    prof = np.einsum("pcn,pcnb->pbc", model.c[:, :, :, 0], np.exp(model.d[:, :, :, 0][..., None] * rc))
+    if prof.shape[2] == 1:
+        prof = prof * model.colour_scale[:, None, :]
+    row(
+        f"points, fit ({P}, α = 1)",
+        radiance(radial_kernel(prof, own[pts], total[pts], w, idx, r_all, area, width), area, E),
+        "fit",
+    )
+    out = {
+        "case": args.case,
+        "vertices": V,
+        "reference_noise": info["noise"],
+        "rows": rows,
+        "seconds": time.perf_counter() - t0,
+    }
+    print(f"reference noise {info['noise']:.3f}")
+    (args.work / "objects_budget.json").write_text(json.dumps(out, indent=2))
+    print(f"written: {args.work / 'objects_budget.json'}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
