@@ -23,6 +23,7 @@ test: $(STAMP)
 
 test-slow: $(STAMP)
 	$(PY) -m pytest -q -m slow
+	TRANSLUCENCY_HYPOTHESIS_PROFILE=long $(PY) -m pytest -q tests/test_fuzz.py
 
 test-all: $(STAMP)
 	$(PY) -m pytest -q

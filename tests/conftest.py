@@ -1,8 +1,31 @@
+import os
+
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, settings
 
 from translucency.geometry import tangent_frames
 from translucency.model import ExponentialModel, PlanarAlpha, VertexAlpha
+
+# Hypothesis profiles.  "default": Hypothesis's own budget for the property tests, while the fuzz suite
+# (tests/test_fuzz.py) keeps to a few derandomised examples per reader so the fast suite stays fast;
+# "long" (`make test-slow`: TRANSLUCENCY_HYPOTHESIS_PROFILE=long, or `--hypothesis-profile=long`) gives
+# every test, the fuzz suite included, 200 random examples.
+_FUZZ = {
+    "deadline": None,
+    "suppress_health_check": [HealthCheck.function_scoped_fixture, HealthCheck.too_slow],
+}
+settings.register_profile("long", max_examples=200, **_FUZZ)
+if os.environ.get("TRANSLUCENCY_HYPOTHESIS_PROFILE"):
+    settings.load_profile(os.environ["TRANSLUCENCY_HYPOTHESIS_PROFILE"])
+
+
+def fuzz_settings(fast_examples: int):
+    """Settings of a fuzz test: ``fast_examples`` derandomised examples, or the long profile's budget."""
+    if settings.default.max_examples >= 200:
+        return settings(settings.default, **_FUZZ)
+    return settings(max_examples=fast_examples, derandomize=True, **_FUZZ)
+
 
 #: (rate range in mm⁻¹, amplitude range in mm⁻²) of three well-separated terms: a fit can tell them apart
 SEPARATED_TERMS = (((5.0, 8.0), (0.5, 1.0)), ((1.2, 2.0), (0.05, 0.1)), ((0.3, 0.6), (0.005, 0.01)))

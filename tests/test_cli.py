@@ -143,3 +143,71 @@ def test_acquire_planar_cli(tmp_path):
     assert bad.exit_code == 2 and "error: window: 40.0 mm is larger than the sample" in bad.output
     both = runner.invoke(app, ["acquire", "planar", "--out", str(out)])
     assert both.exit_code == 2 and "exactly one of --material" in both.output
+
+
+def _tiny_planar(out, seed=0):
+    args = ["acquire", "planar", "--material", "marble", "--out", str(out), "--grid", "2", "--span", "2"]
+    args += ["--photons", "300", "--size", "6", "6", "3", "--voxel", "0.5", "--window", "2", "--pitch", "0.5"]
+    return args + ["--seed", str(seed)]
+
+
+def test_quiet_and_json_for_scripts(tmp_path):
+    """--quiet prints nothing on success; --json prints one strict JSON object on stdout (issue 14)."""
+    res = runner.invoke(app, [*_tiny_planar(tmp_path / "a.zarr"), "--quiet"])
+    assert res.exit_code == 0 and res.output.strip() == "", res.output
+    res = runner.invoke(app, [*_tiny_planar(tmp_path / "b.zarr"), "--json", "--quiet"])
+    summary = json.loads(res.stdout)
+    assert summary["complete"] and summary["points"] == 4 and summary["estimate"]["memory_bytes"] > 0
+    res = runner.invoke(
+        app, ["fit", str(tmp_path / "a.zarr"), "-o", str(tmp_path / "a.model.zip"), "--json", "-q"]
+    )
+    fit = json.loads(res.stdout)
+    assert res.exit_code == 0 and fit["kind"] == "exponential" and fit["rounds"] >= 1
+    res = runner.invoke(
+        app,
+        ["evaluate", str(tmp_path / "a.model.zip"), str(tmp_path / "a.zarr"), "--report", str(tmp_path / "r")]
+        + ["--json", "-", "--quiet"],
+    )
+    ev = json.loads(res.stdout, parse_constant=lambda c: pytest.fail(f"{c} in JSON"))
+    assert res.exit_code == 0 and ev["command"] == "evaluate" and 0 < ev["rel_l2"] < 10
+    bad = runner.invoke(app, ["fit", str(tmp_path / "nowhere.zarr"), "-o", "m.model.zip", "--quiet"])
+    assert bad.exit_code == 2 and bad.output.startswith("error:")  # errors still printed
+
+
+def test_evaluate_on_another_sample_warns(tmp_path):
+    """A model fitted on one sample, evaluated on a data set of another (here: another generated marble)."""
+    for name, seed in (("a", 0), ("b", 5)):
+        assert runner.invoke(app, _tiny_planar(tmp_path / f"{name}.zarr", seed)).exit_code == 0
+    res = runner.invoke(app, ["fit", str(tmp_path / "a.zarr"), "-o", str(tmp_path / "a.model.zip"), "-q"])
+    assert res.exit_code == 0, res.output
+    same = runner.invoke(
+        app,
+        [
+            "evaluate",
+            str(tmp_path / "a.model.zip"),
+            str(tmp_path / "a.zarr"),
+            "--report",
+            str(tmp_path / "r1"),
+        ],
+    )
+    assert same.exit_code == 0 and "another sample" not in same.output
+    other = runner.invoke(
+        app,
+        [
+            "evaluate",
+            str(tmp_path / "a.model.zip"),
+            str(tmp_path / "b.zarr"),
+            "--report",
+            str(tmp_path / "r2"),
+        ],
+    )
+    warnings = [
+        ln for ln in other.output.splitlines() if ln.startswith("warning:") and "another sample" in ln
+    ]
+    assert other.exit_code == 0 and len(warnings) == 1, other.output
+
+
+def test_usage_errors_are_one_line():
+    res = runner.invoke(app, ["acquire", "planar", "--grid", "abc", "--out", "x.zarr"])
+    lines = [ln for ln in res.output.splitlines() if ln.strip()]
+    assert res.exit_code == 2 and len(lines) == 1 and lines[0].startswith("error:") and "--grid" in lines[0]

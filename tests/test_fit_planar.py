@@ -245,7 +245,7 @@ def test_bad_options_and_datasets(tmp_path):
     import shutil
 
     shutil.rmtree(tmp_path / "d.zarr" / "variance")
-    with pytest.raises(TranslucencyError, match="missing array 'variance'"):
+    with pytest.raises(TranslucencyError, match="missing or unreadable array 'variance'"):
         fit_planar(tmp_path / "d.zarr")
 
 

@@ -10,7 +10,11 @@ from __future__ import annotations
 import functools
 import inspect
 import json
+import math
+import os
 import sys
+import time
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -19,6 +23,7 @@ from rich.console import Console
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
+from .. import _resources as resources
 from .._validate import TranslucencyError, check_option
 from .._version import __version__
 from ..acquire import PlanarSetup, acquire_planar, estimate_seconds, load_volume, make_sample
@@ -26,7 +31,7 @@ from ..acquire.mesh import acquire_mesh, object_volume
 from ..acquire.objects import make_pig
 from ..evaluate.report import model_label, write_report
 from ..fit import check_fit_options, fit_mesh, fit_planar
-from ..io.dataset import describe, open_dataset
+from ..io.dataset import dataset_identity, describe, open_dataset
 from ..io.mesh import load_mesh
 from ..io.mesh_dataset import describe_mesh, is_mesh_dataset, open_mesh_dataset
 from ..io.model_file import ModelFileError, load_model, read_header, save_model
@@ -37,7 +42,31 @@ from ..render.figure import boundary_eta, figure2, object_of_model, volume_of_da
 from ..render.image import Camera
 from ..render.lights import parse_light
 
+
+class _OneLineErrors(typer.core.TyperGroup):
+    """The top command: a usage error (unknown option, a value of the wrong type) is one ``error:`` line
+    naming the option, exit status 2, like every other error — not Click's usage box."""
+
+    def main(self, args=None, prog_name=None, complete_var=None, standalone_mode=True, **extra):
+        if not standalone_mode:
+            return super().main(args, prog_name, complete_var, standalone_mode=False, **extra)
+        try:
+            rv = super().main(args, prog_name, complete_var, standalone_mode=False, **extra)
+        except typer._click.exceptions.ClickException as exc:
+            if type(exc).__name__ == "NoArgsIsHelpError":  # the help text is the answer
+                exc.show()
+            else:
+                text = " ".join(exc.format_message().split())
+                err_console.print(f"[bold red]error:[/] {text}", highlight=False, soft_wrap=True, markup=True)
+            sys.exit(exc.exit_code)
+        except typer.Abort:
+            err_console.print("aborted", highlight=False)
+            sys.exit(1)
+        sys.exit(rv if isinstance(rv, int) else 0)
+
+
 app = typer.Typer(
+    cls=_OneLineErrors,
     help="Measure, fit, evaluate and render heterogeneous translucent materials "
     "(empirical sum-of-exponentials model of Fuchs et al.). Units: mm, R_d in mm^-2.",
     no_args_is_help=True,
@@ -64,12 +93,19 @@ def _main(
 
 
 def user_errors(func):
-    """Turn a :class:`TranslucencyError` into one ``error:`` line and exit status 2."""
+    """Turn a :class:`TranslucencyError` into one ``error:`` line and exit status 2; a warning is one
+    ``warning:`` line on stderr."""
+
+    def one_line(message, category, *args, **kwargs):
+        text = " ".join(str(message).split())
+        err_console.print(f"[yellow]warning:[/] {text}", highlight=False, soft_wrap=True)
 
     @functools.wraps(func)
     def wrapper(*args, **kwargs):
         try:
-            return func(*args, **kwargs)
+            with warnings.catch_warnings():
+                warnings.showwarning = one_line
+                return func(*args, **kwargs)
         except TranslucencyError as exc:
             err_console.print(f"[bold red]error:[/] {exc}", highlight=False, soft_wrap=True)
             raise typer.Exit(2) from None
@@ -77,8 +113,8 @@ def user_errors(func):
     return wrapper
 
 
-def progress() -> Progress:
-    """A Rich progress bar on stderr."""
+def progress(quiet: bool = False) -> Progress:
+    """A Rich progress bar on stderr (none with ``quiet``)."""
     return Progress(
         TextColumn("[bold]{task.description}"),
         BarColumn(),
@@ -87,7 +123,74 @@ def progress() -> Progress:
         TimeElapsedColumn(),
         console=err_console,
         transient=False,
+        disable=quiet,
     )
+
+
+# the options every working command shares (acquire planar|mesh, fit, evaluate, render)
+def _max_memory_option():
+    return typer.Option(
+        None,
+        "--max-memory",
+        metavar="SIZE",
+        help="Most memory the command may use, e.g. 4G or 512M (default: the machine's available memory); "
+        "a larger estimate is refused before any work.",
+    )
+
+
+def _quiet_option():
+    return typer.Option(
+        False, "--quiet", "-q", help="No progress and no information lines; errors still shown."
+    )
+
+
+def _json_option():
+    return typer.Option(False, "--json", help="Print a summary as one JSON object on stdout (for scripts).")
+
+
+def _limit(text) -> int | None:
+    return None if text is None else resources.parse_size("--max-memory", text)
+
+
+def _info(quiet: bool, text: str) -> None:
+    """An information line on stderr, unless ``quiet``."""
+    if not quiet:
+        err_console.print(text, highlight=False)
+
+
+def _jsonable(value):
+    """``value`` with every NaN or infinity as null (strict JSON), tuples and paths as lists and strings."""
+    if isinstance(value, dict):
+        return {str(k): _jsonable(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_jsonable(v) for v in value]
+    if isinstance(value, (np.floating, float)):
+        return float(value) if math.isfinite(value) else None
+    if isinstance(value, np.integer):
+        return int(value)
+    if isinstance(value, np.ndarray):
+        return _jsonable(value.tolist())
+    if isinstance(value, Path):
+        return str(value)
+    return value
+
+
+def _finish(as_json: bool, quiet: bool, summary: dict, lines=()) -> None:
+    """The end of a working command: one JSON object on stdout (``--json``), or its result lines."""
+    if as_json:
+        print(json.dumps(_jsonable(summary), allow_nan=False))
+    elif not quiet:
+        for line in lines:
+            console.print(line)
+
+
+def _bytes_at(path: Path) -> int:
+    """Bytes already at an output path (what a resumed or replaced output frees or keeps)."""
+    if path.is_file():
+        return path.stat().st_size
+    if path.is_dir():
+        return sum(f.stat().st_size for f in path.rglob("*") if f.is_file())
+    return 0
 
 
 @app.command()
@@ -242,6 +345,9 @@ def acquire_planar_cmd(
         "--overwrite",
         help="Replace a data set of translucency made with other arguments (never anything else).",
     ),
+    max_memory: str = _max_memory_option(),
+    quiet: bool = _quiet_option(),
+    as_json: bool = _json_option(),
 ):
     """Scan a pencil beam over a planar sample and record R_d around each incident point."""
     check_option("--photons", photons, lo=1)
@@ -252,12 +358,30 @@ def acquire_planar_cmd(
     for name, value in (("--span", span), ("--pitch", pitch), ("--window", window), ("--voxel", voxel)):
         check_option(name, value, lo=0, open_lo=True)
     for value in size:
-        check_option("--size", value, lo=0, open_lo=True)
+        check_option("--size", value, lo=0, open_lo=True, hi=1e5)
+    check_option("--voxel", voxel, hi=min(size))  # at least one voxel across the thinnest side
+    check_option("--pitch", pitch, hi=window)  # at least one pixel a window
 
+    check_option("--angle", angle, lo=0, hi=90, open_hi=True)
+    limit = _limit(max_memory)
     if (material is None) == (volume is None):
         raise TranslucencyError("give exactly one of --material NAME or --volume FILE.npz")
+    if dtype not in ("float32", "float16"):
+        raise TranslucencyError(f"--dtype: expected float32 or float16, got {dtype!r}")
+
+    def need(voxels):
+        n = resources.planar_acquisition(
+            grid=grid, pitch=pitch, window=window, photons=photons, chunk=chunk, voxels=voxels, dtype=dtype
+        )
+        n.disk -= _bytes_at(out)  # a resumed acquisition keeps what is there
+        return resources.check_resources("acquire planar", n, limit, out)
+
+    if volume is None:  # before the sample is generated
+        estimate = need(resources.slab_voxels(size, voxel))
     claim_output(out, "planar data set", overwrite=overwrite, inputs=[volume], reuse=True)
     vol = load_volume(volume) if volume is not None else make_sample(material, size, voxel, g=g, seed=seed)
+    if volume is not None:
+        estimate = need(vol.sigma_s.size / 3)
     setup = PlanarSetup(
         grid=(grid, grid),
         span=(span, span),
@@ -272,11 +396,14 @@ def acquire_planar_cmd(
     )
     setup.check(vol)
     est = estimate_seconds(vol, setup)
-    err_console.print(
+    _info(
+        quiet,
         f"{grid * grid} incident points x {photons:,} photons x 3 channels on a "
-        f"{' x '.join(f'{v:g}' for v in vol.size_mm)} mm slab; estimated time ~{est:.0f} s"
+        f"{' x '.join(f'{v:g}' for v in vol.size_mm)} mm slab; estimated time ~{est:.0f} s, "
+        f"memory ~{estimate.memory / 2**20:,.0f} MiB",
     )
-    with progress() as bar:
+    t0 = time.perf_counter()
+    with progress(quiet) as bar:
         task = bar.add_task("acquire", total=grid * grid, item="")
         acquire_planar(
             vol,
@@ -286,7 +413,19 @@ def acquire_planar_cmd(
             inputs=[volume],
             progress=lambda done, total: bar.update(task, completed=done, item="points"),
         )
-    console.print(f"data set: {out}")
+    ds = open_dataset(out)
+    summary = {
+        "command": "acquire planar",
+        "out": out,
+        "points": ds.n_points,
+        "window_pixels": ds.window,
+        "photons": photons,
+        "seed": seed,
+        "complete": ds.complete(),
+        "seconds": round(time.perf_counter() - t0, 3),
+        "estimate": estimate.as_dict(),
+    }
+    _finish(as_json, quiet, summary, [f"data set: {out}"])
 
 
 @acquire_app.command("mesh")
@@ -326,6 +465,9 @@ def acquire_mesh_cmd(
         "--overwrite",
         help="Replace a data set of translucency made with other arguments (never anything else).",
     ),
+    max_memory: str = _max_memory_option(),
+    quiet: bool = _quiet_option(),
+    as_json: bool = _json_option(),
 ):
     """Pencil beams at surface points of a 3D object; exits tallied per vertex (R_d in mm^-2)."""
     check_option("--photons", photons, lo=1)
@@ -336,19 +478,38 @@ def acquire_mesh_cmd(
     check_option("--scale", scale, lo=0, open_lo=True)
     check_option("--voxel", voxel, lo=0, open_lo=True)
 
+    limit = _limit(max_memory)
     if material is not None and volume is not None:
         raise TranslucencyError("give one of --material NAME or --volume FILE.npz, not both")
     claim_output(out, "mesh data set", overwrite=overwrite, inputs=[mesh, volume], reuse=True)
     obj = load_mesh(mesh, scale_mm=scale, up=up) if mesh is not None else make_pig()
+
+    def need(voxels):
+        n = resources.mesh_acquisition(
+            vertices=len(obj.vertices),
+            faces=len(obj.faces),
+            points=min(points, len(obj.vertices)),
+            photons=photons,
+            chunk=chunk,
+            voxels=voxels,
+        )
+        n.disk -= _bytes_at(out)  # a resumed acquisition keeps what is there
+        return resources.check_resources("acquire mesh", n, limit, out)
+
     if volume is not None:
         vol = load_volume(volume)
-    else:
+        estimate = need(vol.sigma_s.size / 3)
+    else:  # before the filling is generated
+        estimate = need(float(np.prod([math.ceil(e / voxel) for e in obj.extents])))
         vol = object_volume(material or "marble", obj, voxel, g=g, seed=seed)
-    err_console.print(
+    _info(
+        quiet,
         f"{points} incident points x {photons:,} photons x 3 channels on a mesh of "
-        f"{len(obj.vertices):,} vertices, {' x '.join(f'{v:.1f}' for v in obj.extents)} mm"
+        f"{len(obj.vertices):,} vertices, {' x '.join(f'{v:.1f}' for v in obj.extents)} mm; "
+        f"memory ~{estimate.memory / 2**20:,.0f} MiB",
     )
-    with progress() as bar:
+    t0 = time.perf_counter()
+    with progress(quiet) as bar:
         task = bar.add_task("acquire", total=points, item="")
         acquire_mesh(
             obj,
@@ -363,7 +524,19 @@ def acquire_mesh_cmd(
             inputs=[mesh, volume],
             progress=lambda done, total: bar.update(task, completed=done, item="points"),
         )
-    console.print(f"mesh data set: {out}")
+    ds = open_mesh_dataset(out)
+    summary = {
+        "command": "acquire mesh",
+        "out": out,
+        "points": ds.n_points,
+        "vertices": len(obj.vertices),
+        "photons": photons,
+        "seed": seed,
+        "complete": ds.complete(),
+        "seconds": round(time.perf_counter() - t0, 3),
+        "estimate": estimate.as_dict(),
+    }
+    _finish(as_json, quiet, summary, [f"mesh data set: {out}"])
 
 
 @app.command()
@@ -393,6 +566,9 @@ def fit(
     overwrite: bool = typer.Option(
         False, "--overwrite", help="Replace an earlier output of translucency at --out (never anything else)."
     ),
+    max_memory: str = _max_memory_option(),
+    quiet: bool = _quiet_option(),
+    as_json: bool = _json_option(),
 ):
     """Fit a model per incident point, with the modulation texture alpha, to a planar data set.
 
@@ -401,18 +577,43 @@ def fit(
     check_option("--rounds", rounds, lo=1)
     check_option("--exclusion", exclusion, lo=0)
     check_option("--chunk", chunk, lo=1)
+    limit = _limit(max_memory)
 
     claim_output(out, "model file", overwrite=overwrite, inputs=[data], option="--out")
+    workers = os.cpu_count() or 1
     if is_mesh_dataset(data):
-        check_fit_options(model, terms, 1, colour or "shared")
+        colour = colour or "shared"
+        check_fit_options(model, terms, 1, colour)
+        ds = open_mesh_dataset(data)
+        _refuse_damaged(ds)
+        need = resources.mesh_fit(
+            points=ds.n_points,
+            vertices=int(ds.header["n_vertices"]),
+            chunk=32,
+            workers=workers,
+            params=_params_per_point(model, terms, 1, colour),
+        )
+        resources.check_resources("fit", need, limit, out)
         return _fit_mesh_cmd(
-            data, out, model, terms, colour or "shared", exclusion, rounds, float16, overwrite
+            data, out, model, terms, colour, exclusion, rounds, float16, overwrite, quiet, as_json, need
         )
     colour = colour or "per-channel"
     check_fit_options(model, terms, directions, colour)
     ds = open_dataset(data)
+    _refuse_damaged(ds)
+    chunk = None if chunk is None else min(chunk, ds.n_points)  # a chunk beyond the data is the data
+    H, W = ds.window
+    stored = int(ds.group["R_d"].chunks[0])
+    need = resources.planar_fit(
+        points=ds.n_points,
+        pixels=H * W,
+        chunk=chunk or (stored * -(-128 // stored) if stored <= 512 else 128),
+        workers=workers,
+        params=_params_per_point(model, terms, directions, colour),
+    )
+    resources.check_resources("fit", need, limit, out)
     ckpt = out.with_name(out.name + ".partial.npz")
-    with progress() as bar:
+    with progress(quiet) as bar:
         task = bar.add_task(f"fit {model}", total=None, item="")
 
         def report(done, total, message):
@@ -434,7 +635,7 @@ def fit(
         result.model,
         out,
         dtype="float16" if float16 else "float32",
-        meta=result.metadata(data),
+        meta={**result.metadata(data), "dataset_identity": dataset_identity(ds.header)},
         overwrite=overwrite,
     )
     if result.flagged.any():
@@ -443,12 +644,52 @@ def fit(
             f"(all masked, NaN or zero) and are flagged in the model: "
             f"{np.flatnonzero(result.flagged)[:10].tolist()}…"
         )
-    _warn_unphysical(path)
-    console.print(f"model: {path} ({result.seconds:.1f} s, {len(result.history)} rounds)")
+    bad = _warn_unphysical(path)
+    summary = _fit_summary(path, result, data, bad, need)
+    _finish(
+        as_json, quiet, summary, [f"model: {path} ({result.seconds:.1f} s, {len(result.history)} rounds)"]
+    )
 
 
-def _warn_unphysical(path: Path) -> None:
-    """One warning line when the stored model breaks a physical bound (model/bounds.py)."""
+def _params_per_point(model: str, terms: int, directions: int, colour: str) -> int:
+    """Stored parameters per incident point of a fit (for the memory and size estimates)."""
+    if model in ("dipole", "burley"):
+        return 6
+    m = directions if model == "aniso" else 1
+    return (1 if colour == "shared" else 3) * m * terms * 2 + 2
+
+
+def _refuse_damaged(ds) -> None:
+    """One line for a data set with missing or undecodable chunks (``info`` lists them; re-running the
+    acquisition with the same arguments repairs exactly those)."""
+    damaged = ds.damaged_chunks()
+    if damaged:
+        listed = ", ".join(f"{k!r} chunks {v}" for k, v in damaged.items())
+        raise TranslucencyError(
+            f"{ds.path}: damaged data set ({listed} missing or undecodable); the acquisition is unfinished: "
+            "re-run it with the same arguments to repair those chunks"
+        )
+
+
+def _fit_summary(path, result, data, unphysical, need) -> dict:
+    return {
+        "command": "fit",
+        "model": path,
+        "dataset": data,
+        "kind": result.model.kind,
+        "geometry": result.model.geometry,
+        "n_points": result.model.n_points,
+        "rounds": len(result.history),
+        "objective_per_round": result.history,
+        "seconds": round(result.seconds, 3),
+        "flagged_points": np.flatnonzero(result.flagged).tolist(),
+        "unphysical_points": unphysical,
+        "estimate": need.as_dict(),
+    }
+
+
+def _warn_unphysical(path: Path) -> list[int]:
+    """One warning line when the stored model breaks a physical bound (model/bounds.py); the points."""
     physics = read_header(path)["physics"]
     bad = sorted(set(physics["over_albedo"]) | set(physics["beyond_object"]))
     if bad:
@@ -458,10 +699,13 @@ def _warn_unphysical(path: Path) -> None:
             f"{physics['max_energy_radius_mm']:.3g} mm on a {physics['size_mm']:.3g} mm object): "
             f"{bad[:10]}{'…' if len(bad) > 10 else ''}; see `translucency info {path}`"
         )
+    return bad
 
 
-def _fit_mesh_cmd(data, out, model, terms, colour, exclusion, rounds, float16, overwrite):
-    with progress() as bar:
+def _fit_mesh_cmd(
+    data, out, model, terms, colour, exclusion, rounds, float16, overwrite, quiet, as_json, need
+):
+    with progress(quiet) as bar:
         task = bar.add_task(f"fit {model} per vertex", total=None, item="")
         result = fit_mesh(
             data,
@@ -479,11 +723,12 @@ def _fit_mesh_cmd(data, out, model, terms, colour, exclusion, rounds, float16, o
         meta=result.metadata(Path(data).resolve()),
         overwrite=overwrite,
     )
-    _warn_unphysical(path)
-    console.print(
+    bad = _warn_unphysical(path)
+    line = (
         f"model: {path} ({result.seconds:.1f} s, {len(result.history)} rounds, mesh of "
         f"{len(result.model.alpha.values):,} vertices)"
     )
+    _finish(as_json, quiet, _fit_summary(path, result, data, bad, need), [line])
 
 
 @app.command()
@@ -513,12 +758,16 @@ def render(
     overwrite: bool = typer.Option(
         False, "--overwrite", help="Replace an earlier output of translucency at --out (never anything else)."
     ),
+    max_memory: str = _max_memory_option(),
+    quiet: bool = _quiet_option(),
+    as_json: bool = _json_option(),
 ):
     """Relight a fitted object: irradiance per vertex, sparse transport, a picture through Mitsuba (EXR + PNG)."""  # noqa: E501 — Typer lists the docstring verbatim as the command's one-line help; a line break would show in `translucency --help`
     check_option("--spp", spp, lo=1)
     check_option("--radius", radius, lo=0, open_lo=True)
     for value in size:
         check_option("--size", value, lo=1, hi=16384)
+    limit = _limit(max_memory)
 
     m = load_model(model)
     header = read_header(model)
@@ -536,10 +785,26 @@ def render(
     lights = [parse_light(t) for t in (light or ["point:60,-80,120,2e4"])]
     if len(lights) > 1:
         raise TranslucencyError("--light: one light per render for now (run once per light)")
+    V = len(mesh.vertices)
+    if radius is None:  # as the transport chooses it (render/transport.py)
+        fit_pairs = math.sqrt(0.5 * 2.5e7 * mesh.area / (math.pi * V**2))
+        rad = float(min(np.max(m.energy_radius(0.99)), fit_pairs))
+    else:
+        rad = float(radius)
+    need = resources.rendering(
+        vertices=V,
+        surface_mm2=float(mesh.area),
+        radius_mm=rad,
+        width=size[0],
+        height=size[1],
+        reference=reference,
+        spp_reference=spp,
+    )
+    resources.check_resources("render", need, limit, out)
     claim_folder(out, overwrite=overwrite, inputs=[model, header.get("meta", {}).get("dataset") or None])
     cam = Camera.looking_at(mesh, direction, *size)
     vol = volume_of_dataset(mesh, dheader) if reference else None
-    with progress() as bar:
+    with progress(quiet) as bar:
         task = bar.add_task("render", total=4 if reference else 3, item="")
         res = figure2(
             m,
@@ -557,8 +822,8 @@ def render(
     table = Table(title=f"render of {model.name}", show_header=False)
     for k, v in res.items():
         table.add_row(k, f"{v:.4g}" if isinstance(v, float) else str(v))
-    console.print(table)
-    console.print(f"images: {out}")
+    summary = {"command": "render", "model": model, "images": out, **res, "estimate": need.as_dict()}
+    _finish(as_json, quiet, summary, [table, f"images: {out}"])
 
 
 @app.command()
@@ -568,7 +833,10 @@ def evaluate(
     data: Path = typer.Argument(..., help="The planar data set it was fitted to (.zarr directory)."),
     report: Path = typer.Option(Path("report"), "--report", help="Directory for the figures and index.html."),
     json_out: Path = typer.Option(
-        None, "--json", help="Write the error summary (rel_l2, rel_l2_near/mid/far) here."
+        None,
+        "--json",
+        help="Write the error summary (rel_l2, rel_l2_near/mid/far) here; '-': print it as one JSON "
+        "object on stdout (for scripts).",
     ),
     compare: list[Path] = typer.Option(
         None, "--compare", help="Other model files of the same data (repeatable)."
@@ -583,13 +851,19 @@ def evaluate(
     overwrite: bool = typer.Option(
         False, "--overwrite", help="Replace an earlier output of translucency at --out (never anything else)."
     ),
+    max_memory: str = _max_memory_option(),
+    quiet: bool = _quiet_option(),
 ):
     """Relative L2 errors (overall, per distance band, energy-weighted), error maps, profiles, HTML report."""
 
-    models, flagged, exclusion = {}, {}, {}
+    limit = _limit(max_memory)
+    to_stdout = json_out is not None and str(json_out) == "-"
+    json_out = None if to_stdout else json_out
+    models, flagged, exclusion, metas = {}, {}, {}, {}
     for path in [model, *(compare or [])]:
         m = load_model(path)
         meta = read_header(path).get("meta", {})
+        metas[path] = meta if isinstance(meta, dict) else {}
         fl = meta.get("flagged_points", [])
         name = model_label(m)
         name = name if name not in models else f"{name} ({path.name})"
@@ -602,13 +876,28 @@ def evaluate(
         picks = None if points is None else [int(v) for v in points.split(",") if v.strip()]
     except ValueError:
         raise TranslucencyError(f"--points: expected comma-separated integers, got {points!r}") from None
+    ds = open_dataset(data)
+    for p in picks or []:
+        if not 0 <= p < ds.n_points:
+            raise TranslucencyError(
+                f"--points: {p} is not an incident point of {data} (0..{ds.n_points - 1})"
+            )
+    H, W = ds.window
+    need = resources.evaluation(
+        points=ds.n_points,
+        pixels=H * W,
+        params=[int(np.prod(_param_shape(m))) for m in models.values()],
+        datasets=2 if truth is not None else 1,
+    )
+    resources.check_resources("evaluate", need, limit, report)
+    _warn_other_sample(metas, ds, truth)
     inputs = [model, data, *(compare or []), truth]
     if json_out is not None:
         claim_output(json_out, "json summary", overwrite=overwrite, inputs=inputs, option="--json")
     claim_folder(report, overwrite=overwrite, inputs=inputs, option="--report")
     summary = write_report(
         models,
-        data,
+        ds,
         report,
         points=picks,
         flagged=flagged,
@@ -637,8 +926,56 @@ def evaluate(
         "[dim]the truth's noise[/]" if truth else "[dim]noise alone[/]",
         *(f"[dim]{100 * nf[k]:.2f} %[/]" for k in ("all", "near", "mid", "far")),
     )
-    console.print(table)
-    console.print(f"report: {report / 'index.html'}")
+    summary = {"command": "evaluate", "report": report / "index.html", **summary, "estimate": need.as_dict()}
+    _finish(to_stdout, quiet, summary, [table, f"report: {report / 'index.html'}"])
+
+
+def _param_shape(m) -> tuple:
+    """Parameters per incident point of a model (for the memory estimate)."""
+    if m.kind == "exponential":
+        return tuple(m.c.shape[1:]) + (2,)
+    return (6,)
+
+
+def _identity_of_model(meta: dict):
+    """The identity of the data set a model was fitted to: recorded, or read from its acquisition header
+    (mesh fits), or from the data set at the recorded path if it is still there (older model files)."""
+    if isinstance(meta.get("dataset_identity"), dict):
+        return meta["dataset_identity"]
+    if isinstance(meta.get("acquisition"), dict):
+        return dataset_identity(meta["acquisition"])
+    recorded = meta.get("dataset")
+    if isinstance(recorded, str) and recorded and Path(recorded).is_dir():
+        try:
+            opened = open_mesh_dataset(recorded) if is_mesh_dataset(recorded) else open_dataset(recorded)
+        except TranslucencyError:
+            return None
+        return dataset_identity(opened.header)
+    return None
+
+
+def _warn_other_sample(metas: dict, ds, truth) -> None:
+    """A warning line for a model fitted to data of another sample than ``ds`` (and for a truth of another
+    sample): the errors would compare two materials."""
+    own = dataset_identity(ds.header)
+    for path, meta in metas.items():
+        theirs = _identity_of_model(meta)
+        if theirs is not None and theirs != own:
+            err_console.print(
+                f"[yellow]warning:[/] {path} was fitted to data of another sample than {ds.path} "
+                f"(fitted to {meta.get('dataset', '?')}); its errors compare two materials",
+                highlight=False,
+                soft_wrap=True,
+            )
+    if truth is not None:
+        other = dataset_identity(open_dataset(truth).header)
+        if other != own:
+            err_console.print(
+                f"[yellow]warning:[/] --truth {truth} measured another sample than {ds.path} (a generated "
+                "sample's --seed also changes the sample); the errors compare two materials",
+                highlight=False,
+                soft_wrap=True,
+            )
 
 
 #: what --help shows for each kind of value (Typer would print <float>, <bool>, ...)

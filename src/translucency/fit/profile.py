@@ -24,6 +24,8 @@ from scipy.optimize import least_squares, nnls
 from .._validate import TranslucencyError, as_float_array
 from ..model.burley import burley_R
 from ..model.dipole import dipole_R_d
+from ..model.directional_dipole import directional_dipole_R_d
+from ..model.pbd import pbd_R_d
 
 
 @dataclass(frozen=True)
@@ -159,6 +161,27 @@ def fit_dipole_profile(r, y, eta: float = 1.3, *, sigma_a0: float = 0.01, sigma_
     [0.004, 2.6]
     """
     return _fit_positive_params(lambda r, p: dipole_R_d(r, p[0], p[1], eta), r, y, (sigma_a0, sigma_s_prime0))
+
+
+def fit_pbd_profile(r, y, eta: float = 1.3, *, kind: str = "pbd", sigma_a0: float = 0.01, sigma_s_prime0=1.0):
+    """Fit photon beam diffusion (``kind="pbd"``) or the directional dipole at normal incidence
+    (``"ddipole"``) to a radial profile: σ_a and σ_s' (mm⁻¹) free, η fixed; relative least squares.
+
+    Returns
+    -------
+    sigma_a, sigma_s_prime, rel_l2 : float
+
+    Examples
+    --------
+    >>> from translucency.model import pbd_R_d
+    >>> r = np.linspace(0.2, 8, 40)
+    >>> [round(v, 4) for v in fit_pbd_profile(r, pbd_R_d(r, 0.004, 2.6, 1.3))[:2]]
+    [0.004, 2.6]
+    """
+    R = {"pbd": pbd_R_d, "ddipole": directional_dipole_R_d}.get(kind)
+    if R is None:
+        raise TranslucencyError(f"kind: expected 'pbd' or 'ddipole', got {kind!r}")
+    return _fit_positive_params(lambda r, p: R(r, p[0], p[1], eta), r, y, (sigma_a0, sigma_s_prime0))
 
 
 def _fit_positive_params(profile, r, y, x0) -> tuple[float, ...]:

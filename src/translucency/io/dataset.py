@@ -93,7 +93,10 @@ class PlanarDataset:
         per-point array of a finished chunk of points and (``decode``) decodes it.
         """
         k = int(self.header["chunk_points"])
-        done = np.flatnonzero(np.asarray(self.group["chunk_done"][...]))
+        try:
+            done = np.flatnonzero(np.asarray(self.group["chunk_done"][...]))
+        except Exception:  # noqa: BLE001 — the done flags themselves do not decode: every chunk is suspect
+            return {"chunk_done": list(range(-(-self.n_points // k)))}
         bad: dict = {}
         for name in ("R_d", "variance", "mask", "specular", "total_diffuse"):
             arr = self.group[name]
@@ -300,7 +303,24 @@ def open_dataset(path, *, writable: bool = False) -> PlanarDataset:
     units = header.get("units", {})
     if units.get("length") != "mm" or units.get("R_d") != "mm^-2":
         raise TranslucencyError(f"{path}: units {units} are not mm / mm^-2")
-    P, (H, W) = header["n_points"], header["window"]
+    P, window, k = header.get("n_points"), header.get("window"), header.get("chunk_points")
+    if not (
+        isinstance(P, int)
+        and P >= 1
+        and isinstance(k, int)
+        and k >= 1
+        and isinstance(window, list)
+        and len(window) == 2
+        and all(isinstance(v, int) and v >= 1 for v in window)
+        and isinstance(header.get("pitch_mm"), (int, float))
+        and np.isfinite(header["pitch_mm"])
+        and header["pitch_mm"] > 0
+    ):
+        raise TranslucencyError(
+            f"{path}: header fields n_points {P!r}, window {window!r}, chunk_points {k!r} or pitch_mm "
+            f"{header.get('pitch_mm')!r} are not valid"
+        )
+    H, W = window
     expect = {
         "x_i": (P, 2),
         "window_origin": (P, 2),
@@ -310,14 +330,32 @@ def open_dataset(path, *, writable: bool = False) -> PlanarDataset:
         "specular": (P, 3),
         "total_diffuse": (P, 3),
     }
+    expect["chunk_done"] = (-(-P // k),)
     for name, shape in expect.items():
-        if name not in root:
-            raise TranslucencyError(f"{path}: missing array {name!r}")
-        if tuple(root[name].shape) != shape:
-            raise TranslucencyError(
-                f"{path}: array {name!r} has shape {tuple(root[name].shape)}, expected {shape}"
-            )
+        try:
+            arr = root[name]
+        except Exception:  # noqa: BLE001 — absent, or its metadata does not parse
+            raise TranslucencyError(f"{path}: missing or unreadable array {name!r}") from None
+        if tuple(arr.shape) != shape:
+            raise TranslucencyError(f"{path}: array {name!r} has shape {tuple(arr.shape)}, expected {shape}")
     return PlanarDataset(path, header, root)
+
+
+def dataset_identity(header: dict) -> dict:
+    """What names the sample a data set (planar or mesh) measured, and where — not how (photons, seed of the
+    photon streams, chunking): two acquisitions of one sample share it.
+
+    Planar: the volume's fingerprint (SHA-256 of σ_s, σ_a; shape, voxel, g, η), else the header's sample
+    description (user data); mesh: the filling's description and grid, the mesh's bounds and size.
+    A model file records it (``meta["dataset_identity"]``) so that ``evaluate`` can tell a data set of
+    another sample.
+    """
+    request = header.get("request") if isinstance(header.get("request"), dict) else {}
+    if header.get("format") == "translucency-mesh-dataset":
+        keys = ("volume", "volume_grid", "bounds", "vertices", "faces", "index_matched")
+        return {"kind": "mesh", **{k: request.get(k) for k in keys}}
+    volume = request.get("volume")
+    return {"kind": "planar", "sample": volume if isinstance(volume, dict) else header.get("sample")}
 
 
 def summary_of_store(path: Path, header: dict, done: np.ndarray, **fields) -> dict:

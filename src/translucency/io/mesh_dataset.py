@@ -23,6 +23,7 @@ arguments that define the data, compared on resume).
 from __future__ import annotations
 
 import json
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -38,6 +39,7 @@ from .outputs import reopen_or_clear
 HEADER_KEY = "translucency_mesh_dataset"
 FORMAT = "translucency-mesh-dataset"
 VERSION = 1
+_SURFACE = ("vertices", "faces", "normals", "vertex_area", "incident")
 _ARRAYS = ("vertices", "faces", "normals", "vertex_area", "incident", "R_d", "specular", "chunk_done")
 
 
@@ -56,10 +58,70 @@ class MeshDataset:
     def __getitem__(self, key: str) -> np.ndarray:
         if key not in _ARRAYS:
             raise KeyError(key)
-        return np.asarray(self.group[key][...])
+        return self.read(key)
+
+    def read(self, key: str, s: int | None = None, e: int | None = None) -> np.ndarray:
+        """Rows s..e of an array (all by default); a chunk that cannot be decoded is one line naming it."""
+        try:
+            return np.asarray(self.group[key][s:e])
+        except Exception as exc:  # noqa: BLE001 — codec and I/O faults are the file's, said in one line
+            raise TranslucencyError(
+                f"{self.path}: array {key!r} near row {0 if s is None else s} cannot be read "
+                f"({type(exc).__name__}: {(str(exc).splitlines() or [''])[0][:80]}); "
+                "re-run the acquisition to repair it"
+            ) from None
+
+    @property
+    def chunk_points(self) -> int:
+        return int(self.group["R_d"].chunks[0])
 
     def complete(self) -> bool:
-        return bool(np.all(self["chunk_done"]))
+        """Every chunk of points finished, and none of their files missing (see :meth:`damaged_chunks`)."""
+        return bool(np.all(self["chunk_done"])) and not self.damaged_chunks(decode=False)
+
+    def damaged_chunks(self, *, decode: bool = True) -> dict:
+        """Chunks whose data are missing or do not decode: {array name: [chunk index, ...]}.
+
+        A chunk file that is absent reads as zeros in Zarr, silently.  For every finished chunk of points
+        this looks for the ``R_d`` file (every chunk written is a file: ``write_empty_chunks``) and
+        (``decode``) decodes ``R_d`` and ``specular``; the arrays of the surface (vertices, faces,
+        normals, areas, incident vertices) are listed as chunk 0 when they are missing or do not decode.
+        """
+        bad: dict = {}
+        for name in _SURFACE:
+            arr = self.group[name]
+            files = [f for f in (self.path / name / "c").rglob("*") if f.is_file()]
+            if len(files) < arr.nchunks:
+                bad[name] = [0]
+            elif decode:
+                try:
+                    arr[...]
+                except Exception:  # noqa: BLE001 — a chunk that does not decode is damaged
+                    bad[name] = [0]
+        k = self.chunk_points
+        try:
+            done = np.flatnonzero(np.asarray(self.group["chunk_done"][...]))
+        except Exception:  # noqa: BLE001 — the done flags do not decode: every chunk is suspect
+            bad["chunk_done"] = list(range(-(-self.n_points // k)))
+            return bad
+        for name in ("R_d", "specular"):
+            arr = self.group[name]
+            per = int(arr.chunks[0])
+            for c in done:
+                lo, hi = c * k, min(self.n_points, (c + 1) * k)
+                rest = "/0" * (len(arr.shape) - 1)
+                missing = name == "R_d" and any(
+                    not (self.path / name / "c" / f"{j}{rest}").is_file()
+                    for j in range(lo // per, -(-hi // per))
+                )
+                if not missing and decode:
+                    try:
+                        arr[lo:hi]
+                    except Exception:  # noqa: BLE001 — a chunk that does not decode is damaged
+                        missing = True
+                if missing:
+                    bad.setdefault(name, []).append(int(c))
+        return bad
 
     def mesh(self) -> trimesh.Trimesh:
         """The object's surface (mm) as stored, vertices in their stored order."""
@@ -89,9 +151,29 @@ def open_mesh_dataset(path, *, writable: bool = False) -> MeshDataset:
         raise TranslucencyError(f"{path}: not a readable Zarr data set ({type(exc).__name__})") from None
     if not isinstance(header, dict) or header.get("format") != FORMAT or header.get("version") != VERSION:
         raise TranslucencyError(f"{path}: not a translucency mesh data set (v{VERSION})")
-    for name in _ARRAYS:
-        if name not in group:
-            raise TranslucencyError(f"{path}: missing array {name!r}")
+    P, V = header.get("n_points"), header.get("n_vertices")
+    if not (isinstance(P, int) and isinstance(V, int) and P >= 1 and V >= 3):
+        raise TranslucencyError(f"{path}: header n_points {P!r} / n_vertices {V!r} are not valid counts")
+    expect = {
+        "vertices": (V, 3),
+        "faces": (None, 3),
+        "normals": (V, 3),
+        "vertex_area": (V,),
+        "incident": (P,),
+        "R_d": (P, V, 3),
+        "specular": (P, 3),
+        "chunk_done": (None,),
+    }
+    for name, shape in expect.items():
+        try:
+            arr = group[name]
+        except Exception:  # noqa: BLE001 — absent, or its metadata does not parse
+            raise TranslucencyError(f"{path}: missing or unreadable array {name!r}") from None
+        if len(arr.shape) != len(shape) or any(w is not None and w != a for w, a in zip(shape, arr.shape)):
+            raise TranslucencyError(f"{path}: array {name!r} has shape {tuple(arr.shape)}, expected {shape}")
+    k = int(group["R_d"].chunks[0])
+    if group["chunk_done"].shape[0] != -(-P // k):
+        raise TranslucencyError(f"{path}: array 'chunk_done' does not match {P} points in chunks of {k}")
     return MeshDataset(path, header, group)
 
 
@@ -122,7 +204,27 @@ def create_mesh_dataset(
         overwrite=overwrite,
         inputs=inputs,
     )
-    if old is not None:  # the same acquisition: resume
+    if old is not None:  # the same acquisition: resume, and redo what is damaged
+        damaged = old.damaged_chunks()
+        surface = {
+            "vertices": mesh.vertices.astype(np.float32),
+            "faces": mesh.faces.astype(np.int32),
+            "normals": mesh.vertex_normals.astype(np.float32),
+            "vertex_area": vertex_area.astype(np.float32),
+            "incident": incident.astype(np.int32),
+        }
+        for name in _SURFACE:
+            if name in damaged:  # written whole at creation: write it again
+                old.group[name].with_config({"write_empty_chunks": True})[...] = surface[name]
+        chunks = sorted({c for name in ("R_d", "specular", "chunk_done") for c in damaged.get(name, [])})
+        for c in chunks:
+            old.group["chunk_done"][c] = False
+        if damaged:
+            warnings.warn(
+                f"{path}: {', '.join(f'{k} chunks {v}' for k, v in damaged.items())} were missing or "
+                "damaged; acquiring them again",
+                stacklevel=2,
+            )
         return old
     P, V = len(incident), len(mesh.vertices)
     n_chunks = -(-P // chunk_points)
@@ -137,11 +239,20 @@ def create_mesh_dataset(
         ("vertex_area", vertex_area.astype(np.float32)),
         ("incident", incident.astype(np.int32)),
     ):
-        root.create_array(name, data=data, compressors=comp)
+        root.create_array(name, data=data, compressors=comp, config={"write_empty_chunks": True})
+    every = {"write_empty_chunks": True}  # every written chunk is a file: a missing one is damage
     root.create_array(
-        "R_d", shape=(P, V, 3), dtype="float32", chunks=(chunk_points, V, 3), compressors=comp, fill_value=0
+        "R_d",
+        shape=(P, V, 3),
+        dtype="float32",
+        chunks=(chunk_points, V, 3),
+        compressors=comp,
+        fill_value=0,
+        config=every,
     )
-    root.create_array("specular", shape=(P, 3), dtype="float32", chunks=(chunk_points, 3), fill_value=0)
+    root.create_array(
+        "specular", shape=(P, 3), dtype="float32", chunks=(chunk_points, 3), fill_value=0, config=every
+    )
     root.create_array("chunk_done", shape=(n_chunks,), dtype="bool", chunks=(1,), fill_value=False)
     return MeshDataset(path, header, root)
 
@@ -149,10 +260,12 @@ def create_mesh_dataset(
 def describe_mesh(ds: MeshDataset) -> dict:
     """A JSON-friendly summary for ``translucency info``."""
     h = ds.header
+    damaged = ", ".join(f"{k} chunks {v}" for k, v in ds.damaged_chunks().items())
     return summary_of_store(
         ds.path,
         h,
         ds["chunk_done"],
         mesh=f"{h['n_vertices']:,} vertices, {ds.group['faces'].shape[0]:,} faces",
         **{"index matched": h.get("request", {}).get("index_matched")},
+        damaged=damaged or "none (every finished chunk present and decodable)",
     )

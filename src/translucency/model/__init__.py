@@ -4,6 +4,8 @@
 :class:`ExponentialModel`   eq. (1): Σ_l w_l (1, s_g, s_b) Σ_k c_kl e^{d_kl r}, α(x_o)
 :class:`DipoleModel`        Jensen et al. 2001 dipole per x_i, with α(x_o)
 :class:`BurleyModel`        Christensen & Burley 2015 normalized diffusion, with α(x_o)
+:class:`PBDModel`           Habel et al. 2013 photon beam diffusion per x_i, with α(x_o)
+:class:`DirectionalDipoleModel`  Frisvad et al. 2014 directional dipole (normal incidence), with α(x_o)
 :class:`PlanarAlpha`        α on a pixel grid over a planar sample
 :class:`VertexAlpha`        α per mesh vertex
 :func:`direction_weights`   w_l(θ), the anisotropic blend
@@ -24,15 +26,29 @@ from .dipole import (
     dipole_total_reflectance,
     fresnel_diffuse_reflectance,
 )
+from .directional_dipole import (
+    DirectionalDipoleModel,
+    directional_dipole_coefficients,
+    directional_dipole_R_d,
+)
 from .directions import direction_angles, direction_weights
 from .exponential import ExponentialModel
 from .materials import MATERIALS, Material, material
+from .pbd import PBDModel, fresnel_moment, pbd_coefficients, pbd_R_d, pbd_total_without_kappa
 
 __all__ = [
     "ReflectanceModel",
     "ExponentialModel",
     "DipoleModel",
     "BurleyModel",
+    "PBDModel",
+    "DirectionalDipoleModel",
+    "pbd_R_d",
+    "pbd_coefficients",
+    "pbd_total_without_kappa",
+    "fresnel_moment",
+    "directional_dipole_R_d",
+    "directional_dipole_coefficients",
     "PlanarAlpha",
     "VertexAlpha",
     "direction_angles",

@@ -1,0 +1,297 @@
+r"""Memory and disk before work: what a command will need, estimated from its options alone.
+
+Every command that works (``acquire planar``, ``acquire mesh``, ``fit``, ``evaluate``, ``render``)
+states its peak memory and its output size here, from the sizes its options and inputs imply, and
+refuses in one line what exceeds ``--max-memory`` (default: the machine's available memory) or the
+free space of the disk it writes to — before it allocates or writes anything
+(:func:`check_resources`).  ``--grid 100000`` or ``--pitch 0.0001`` end here (or in the options'
+bounds) in a second, not in the kernel's out-of-memory killer an hour later.
+
+The estimates are of the peak resident memory of the whole process: a fixed part (Python, NumPy,
+Zarr; with Mitsuba and Dr.Jit's JIT for the commands that trace rays) plus the arrays the work holds
+at its peak, each formula in its function's docstring.  The per-element byte counts are measured
+(``tests/test_resources.py`` runs small cases in fresh processes, reads their peak resident memory
+and asserts each estimate within a factor of 2 of it).  The output sizes are upper bounds: the
+uncompressed bytes of every array written (Blosc-zstd usually stores far less).
+
+Examples
+--------
+>>> parse_size("--max-memory", "4G")
+4294967296
+>>> need = planar_acquisition(grid=8, pitch=0.25, window=8.0, photons=10_000, chunk=16,
+...                           voxels=80 * 80 * 32, dtype="float32")
+>>> 0.2 < need.memory / 2**30 < 2
+True
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import re
+import shutil
+from dataclasses import dataclass
+from pathlib import Path
+
+from ._validate import TranslucencyError
+
+MiB = 2**20
+GiB = 2**30
+
+#: the process before the work: Python, NumPy, SciPy, Numba, Zarr, Rich (measured 230–245 MiB)
+BASE = 240 * MiB
+#: ... and with Mitsuba 3 and Dr.Jit loaded, their LLVM JIT and kernel cache (measured 277–285 MiB)
+BASE_MITSUBA = 280 * MiB
+
+_UNITS = {"": 1, "B": 1, "K": 2**10, "M": 2**20, "G": 2**30, "T": 2**40}
+
+
+@dataclass
+class Need:
+    """What a command needs: peak ``memory`` and ``disk`` (output) in bytes, and what dominates."""
+
+    memory: float
+    disk: float
+    what: str
+
+    def as_dict(self) -> dict:
+        return {"memory_bytes": int(self.memory), "disk_bytes": int(self.disk), "dominated_by": self.what}
+
+
+def parse_size(option: str, text) -> int:
+    """A size such as ``4G``, ``512M``, ``1.5GiB``, ``2TB`` or a number of bytes; binary units (G = 2³⁰).
+
+    Examples
+    --------
+    >>> parse_size("--max-memory", "512M")
+    536870912
+    >>> parse_size("--max-memory", "lots")
+    Traceback (most recent call last):
+    ...
+    translucency._validate.TranslucencyError: --max-memory: expected a size such as 4G or 512M, got 'lots'
+    """
+    m = re.fullmatch(r"\s*([0-9]*\.?[0-9]+(?:[eE][+-]?[0-9]+)?)\s*([kKmMgGtT]?)(?:i?[bB])?\s*", str(text))
+    if m is None:
+        raise TranslucencyError(f"{option}: expected a size such as 4G or 512M, got {text!r}")
+    value = float(m.group(1)) * _UNITS[m.group(2).upper()]
+    if not (math.isfinite(value) and value >= MiB):
+        raise TranslucencyError(f"{option}: must be at least 1M, got {text!r}")
+    return int(value)
+
+
+def available_memory() -> int | None:
+    """The memory the machine can give a new process now (``MemAvailable``), or None if unknown."""
+    try:
+        with open("/proc/meminfo") as f:
+            for line in f:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except (OSError, ValueError, IndexError):
+        pass
+    try:
+        return int(os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE"))
+    except (ValueError, OSError, AttributeError):
+        return None
+
+
+def free_disk(path) -> int | None:
+    """Free bytes on the file system that ``path`` (or its nearest existing parent) lives on."""
+    p = Path(path).absolute()
+    while not p.exists() and p != p.parent:
+        p = p.parent
+    try:
+        return int(shutil.disk_usage(p).free)
+    except OSError:
+        return None
+
+
+def _size(n: float) -> str:
+    for unit, scale in (("TiB", 2**40), ("GiB", GiB), ("MiB", MiB)):
+        if n >= scale:
+            return f"{n / scale:.3g} {unit}"
+    return f"{n / 2**10:.3g} KiB"
+
+
+def check_resources(command: str, need: Need, max_memory: int | None, out=None) -> Need:
+    """Refuse, in one line, a ``need`` beyond ``max_memory`` (default: available memory) or the free disk.
+
+    Called before the command allocates or writes anything.  Returns ``need``.
+    """
+    limit = max_memory if max_memory is not None else available_memory()
+    if limit is not None and need.memory > limit:
+        source = "--max-memory" if max_memory is not None else "the available memory"
+        raise TranslucencyError(
+            f"{command}: needs about {_size(need.memory)} of memory ({need.what}), more than "
+            f"{source} ({_size(limit)}); use smaller options or raise --max-memory"
+        )
+    if out is not None:
+        free = free_disk(out)
+        if free is not None and need.disk > free:
+            raise TranslucencyError(
+                f"{command}: the output needs up to {_size(need.disk)} on disk, only {_size(free)} free "
+                f"where {out} goes"
+            )
+    return need
+
+
+def planar_window_pixels(window: float, pitch: float) -> int:
+    """Pixels per window side, as :meth:`translucency.acquire.PlanarSetup.window_pixels` (odd)."""
+    n = max(1, int(min(round(window / pitch), 10**9)))  # beyond 10⁹ the estimate is refused anyway
+    return n if n % 2 == 1 else n + 1
+
+
+def planar_acquisition(
+    *,
+    grid: int,
+    pitch: float,
+    window: float,
+    photons: int,
+    chunk: int,
+    voxels: float,
+    dtype: str = "float32",
+    batch_photons: int = 4_000_000,
+) -> Need:
+    r"""``acquire planar``: P = grid², windows of n × n pixels (n = window/pitch, odd), k points a chunk.
+
+    .. math::
+        M = M_{mi} + 100\,V_{vox} + 140\,b + 40 \cdot 3\,k n^2,
+        \qquad b = \min(k, \max(1, B/N))\,N
+
+    with V_vox voxels (the generators' noise fields and σ_s, σ_a: measured 52 bytes a voxel for a
+    homogeneous slab, 94 for marble, 106 for the apple slice), b photons in flight per launch
+    (B = 4·10⁶; measured 140 bytes each: the wavefront's state and its tally), and the chunk's float64
+    counts, estimate, variance and their casts (measured 38 bytes per pixel and channel).  Output:
+    :math:`D = P n^2 (3 \cdot 2\,s + 1) + 40 P` bytes (R_d and variance of ``s`` bytes, the mask).
+    """
+    n = planar_window_pixels(window, pitch)
+    P = grid * grid
+    k = min(chunk, P)
+    b = min(k, max(1, batch_photons // photons)) * photons
+    parts = {
+        "the volume: --size / --voxel": 100 * voxels,
+        "photons in flight: --photons": 140 * b,
+        "a chunk of windows: --chunk x (--window / --pitch)^2": 40 * 3 * k * n * n,
+    }
+    s = 2 if dtype == "float16" else 4
+    disk = P * n * n * (3 * 2 * s + 1) + 40 * P
+    return Need(BASE_MITSUBA + sum(parts.values()), disk, max(parts, key=parts.get))
+
+
+def slab_voxels(size, voxel: float) -> float:
+    """Voxels of a generated sample of ``size`` (mm) at ``voxel`` mm (as ``make_sample``)."""
+    return float(math.prod(max(1, round(v / voxel)) for v in size))
+
+
+def mesh_acquisition(
+    *, vertices: int, faces: int, points: int, photons: int, chunk: int, voxels: float
+) -> Need:
+    r"""``acquire mesh``: V vertices, F faces, P incident points, k a chunk, N photons.
+
+    .. math::
+        M = M_{mi} + 100\,V_{vox} + 400\,k N + 40\,k V + 300\,(V + F)
+
+    the volume as above, all k·N photons of a chunk in flight at once (one channel; their state, exits and
+    barycentric splat: measured 370 bytes each), the chunk's R_d and counts (float32 + float64 per vertex
+    and channel) and the mesh with its ray-tracing scene.  Output: :math:`D = 12 P V + 40 (V + F) + 20 P`.
+    """
+    k = min(chunk, points)
+    parts = {
+        "the filling: --voxel": 100 * voxels,
+        "photons in flight: --chunk x --photons": 400 * k * photons,
+        "a chunk of R_d: --chunk x vertices": 40 * k * vertices,
+        "the mesh": 300 * (vertices + faces),
+    }
+    disk = 12 * points * vertices + 40 * (vertices + faces) + 20 * points
+    return Need(BASE_MITSUBA + sum(parts.values()), disk, max(parts, key=parts.get))
+
+
+def planar_fit(
+    *, points: int, pixels: int, chunk: int, workers: int, params: int, cache: float = 512 * MiB
+) -> Need:
+    r"""``fit`` of a planar data set: P points, J = H·W pixels a window, k points fitted together, w threads.
+
+    .. math:: M = M_0 + \min(C, 30\,P J) + 110\,w\,k J + 8\,P\,\pi_p
+
+    the decoded data kept between rounds (y, variance, mask, geometry ≈ 30 bytes a pixel, at most the
+    cache C = 512 MiB), each thread's chunk at work (reads, casts, weights, model values, residuals:
+    measured ≈ 100 bytes a pixel) and the π_p parameters of every point.  Output: the model file, at most
+    :math:`D = 4 P \pi_p + 4 J P + 2^{16}` (parameters and α).
+    """
+    k = min(chunk, points)
+    w = max(1, min(workers, -(-points // max(k, 1))))
+    parts = {
+        "the data cache": min(cache, 30 * points * pixels),
+        "the chunks at work: --chunk": 110 * w * k * pixels,
+        "the parameters": 8 * points * params,
+    }
+    disk = 4 * points * params + 4 * pixels * points + 2**16
+    return Need(BASE + sum(parts.values()), disk, max(parts, key=parts.get))
+
+
+def mesh_fit(*, points: int, vertices: int, chunk: int, workers: int, params: int) -> Need:
+    r"""``fit`` of a mesh data set: P points, V vertices, k = 32 points a chunk, w threads.
+
+    .. math:: M = M_0 + \min(C, 30\,P V) + 110\,w\,k V + 300\,V + 8\,P\,\pi_p
+
+    as the planar fit with the vertices as pixels, plus the vertex pooling of α (neighbour pairs) and
+    the mesh.  Output: :math:`D = 4 P \pi_p + 40 V + 2^{16}`.
+    """
+    k = min(chunk, points)
+    w = max(1, min(workers, -(-points // max(k, 1))))
+    parts = {
+        "the data cache": min(512 * MiB, 30 * points * vertices),
+        "the chunks at work": 110 * w * k * vertices,
+        "the mesh": 300 * vertices,
+        "the parameters": 8 * points * params,
+    }
+    disk = 4 * points * params + 40 * vertices + 2**16
+    return Need(BASE + sum(parts.values()), disk, max(parts, key=parts.get))
+
+
+def evaluation(*, points: int, pixels: int, params: list[int], datasets: int = 1) -> Need:
+    r"""``evaluate``: P points of J pixels, models of π_p parameters a point, d data sets (2: ``--truth``).
+
+    .. math:: M = M_0 + P J\,d\,\Big(60 + \sum_{\text{models}} (100 + 20\,\pi_p)\Big) + 80\,\mathrm{MiB}
+
+    the data read whole (R_d, variance, mask: ≈ 60 bytes a pixel), each model's values and errors on
+    every pixel (measured 330 bytes a pixel for iso n = 3 per channel, π_p = 18; 2,500 for aniso
+    m = 8, π_p = 144) and the figures.  Output: the report's figures and HTML and the JSON (≈ 4 MiB a
+    model).
+    """
+    per_pixel = 60 + sum(100 + 20 * p for p in params)
+    data = points * pixels * datasets
+    parts = {"the data and model values": per_pixel * data, "the figures": 80 * MiB}
+    return Need(BASE + sum(parts.values()), 4 * MiB * max(1, len(params)), max(parts, key=parts.get))
+
+
+def rendering(
+    *,
+    vertices: int,
+    surface_mm2: float,
+    radius_mm: float,
+    width: int,
+    height: int,
+    reference: bool,
+    spp_reference: int = 32,
+    max_pairs: float = 2.5e7,
+) -> Need:
+    r"""``render``: V vertices on A mm² of surface, transport radius r, a W × H picture.
+
+    .. math::
+        M = M_{mi} + 300\,\min(p_{max}, V^2, V + V^2 \pi r^2 / A) + W H\,(64 + 10 \cdot 16)
+            \;[+\, 2 \cdot 10\,W H s_{ref}]
+
+    the sparse transport's vertex pairs (indices, distances, profile values and the CSR matrices:
+    measured 240–330 bytes each; at most p_max = 2.5·10⁷ pairs, beyond which the transport refuses), the
+    film and the picture's 16 samples a pixel and, with ``--reference``, the two path-traced references.
+    Output: :math:`D = 60\,W H` per picture (EXR + PNG; three with the reference) + 1 MiB.
+    """
+    pairs = min(
+        max_pairs, vertices**2, vertices + vertices**2 * math.pi * radius_mm**2 / max(surface_mm2, 1e-12)
+    )
+    pixels = width * height
+    parts = {"the transport: --radius": 300 * pairs, "the picture: --size": pixels * (64 + 10 * 16)}
+    if reference:
+        parts["the reference: --size x --spp"] = 2 * 10 * pixels * spp_reference
+    disk = pixels * 60 * (3 if reference else 1) + MiB
+    return Need(BASE_MITSUBA + sum(parts.values()), disk, max(parts, key=parts.get))
