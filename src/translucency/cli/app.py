@@ -544,9 +544,27 @@ def acquire_mesh_cmd(
 def fit(
     data: Path = typer.Argument(..., help="A planar data set (.zarr directory)."),
     out: Path = typer.Option(..., "--out", "-o", help="Model file to write (.model.zip)."),
-    model: str = typer.Option("iso", "--model", help="iso | aniso | dipole | burley."),
-    terms: int = typer.Option(3, "--terms", "-n", help="Exponential terms n per profile (1-4)."),
-    directions: int = typer.Option(8, "--directions", "-m", help="Directions m of the anisotropic model."),
+    model: str = typer.Option(
+        "iso",
+        "--model",
+        help="iso | aniso (the paper's) | dipole | burley | pbd (photon beam diffusion) | ddipole "
+        "(directional dipole at normal incidence).",
+    ),
+    terms: str = typer.Option(
+        "3", "--terms", "-n", help="Exponential terms n per profile (1-4), or auto (held-out choice)."
+    ),
+    directions: str = typer.Option(
+        "8",
+        "--directions",
+        "-m",
+        help="Directions m of the anisotropic model (>= 2), or auto (m in 1, 2, 4, 8, 16 by held-out error).",
+    ),
+    weighting: str = typer.Option(
+        "poisson",
+        "--weighting",
+        help="poisson: residuals weighted by the model's Poisson variance (more photons never hurt); "
+        "relative: adds a 5 % relative error (the former default).",
+    ),
     colour: str = typer.Option(
         None,
         "--colour",
@@ -577,13 +595,18 @@ def fit(
     check_option("--rounds", rounds, lo=1)
     check_option("--exclusion", exclusion, lo=0)
     check_option("--chunk", chunk, lo=1)
+    terms, directions = _count_or_auto("--terms", terms), _count_or_auto("--directions", directions)
     limit = _limit(max_memory)
 
     claim_output(out, "model file", overwrite=overwrite, inputs=[data], option="--out")
     workers = os.cpu_count() or 1
     if is_mesh_dataset(data):
         colour = colour or "shared"
-        check_fit_options(model, terms, 1, colour)
+        if terms == "auto":
+            raise TranslucencyError("--terms: 'auto' selects on planar data only; give n for a mesh fit")
+        if weighting != "poisson":
+            raise TranslucencyError("--weighting: mesh fits weight by the Poisson variance only")
+        check_fit_options(model, terms, 1, colour, weighting=weighting)
         ds = open_mesh_dataset(data)
         _refuse_damaged(ds)
         need = resources.mesh_fit(
@@ -598,7 +621,7 @@ def fit(
             data, out, model, terms, colour, exclusion, rounds, float16, overwrite, quiet, as_json, need
         )
     colour = colour or "per-channel"
-    check_fit_options(model, terms, directions, colour)
+    check_fit_options(model, terms, directions, colour, weighting=weighting)
     ds = open_dataset(data)
     _refuse_damaged(ds)
     chunk = None if chunk is None else min(chunk, ds.n_points)  # a chunk beyond the data is the data
@@ -630,6 +653,7 @@ def fit(
             chunk_points=chunk,
             checkpoint=ckpt,
             progress=report,
+            weighting=weighting,
         )
     path = save_model(
         result.model,
@@ -653,10 +677,22 @@ def fit(
 
 def _params_per_point(model: str, terms: int, directions: int, colour: str) -> int:
     """Stored parameters per incident point of a fit (for the memory and size estimates)."""
-    if model in ("dipole", "burley"):
+    if model in ("dipole", "burley", "pbd", "ddipole"):
         return 6
-    m = directions if model == "aniso" else 1
-    return (1 if colour == "shared" else 3) * m * terms * 2 + 2
+    m = (16 if directions == "auto" else directions) if model == "aniso" else 1
+    n = 4 if terms == "auto" else terms
+    return (1 if colour == "shared" else 3) * m * n * 2 + 2
+
+
+def _count_or_auto(option: str, value: str):
+    """``auto`` or a whole number (the range is checked with the model: ``check_fit_options``)."""
+    text = str(value).strip().lower()
+    if text == "auto":
+        return "auto"
+    try:
+        return int(text)
+    except ValueError:
+        raise TranslucencyError(f"{option}: expected a whole number or 'auto', got {value!r}") from None
 
 
 def _refuse_damaged(ds) -> None:
@@ -753,7 +789,10 @@ def render(
     ),
     spp: int = typer.Option(32, "--spp", help="Samples per pixel of each of the two reference renders."),
     radius: float = typer.Option(
-        None, "--radius", help="Transport truncation radius, mm (default: 99% energy)."
+        None,
+        "--radius",
+        help="Near radius of the transport, mm: pairs within it summed exactly, those beyond it through the "
+        "hierarchical far field (default: the 99% energy radius, or less where the pairs would not fit).",
     ),
     overwrite: bool = typer.Option(
         False, "--overwrite", help="Replace an earlier output of translucency at --out (never anything else)."
