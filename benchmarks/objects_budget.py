@@ -62,22 +62,25 @@ def ring_means(R: np.ndarray, r: np.ndarray, area: np.ndarray, width: float, n_b
     return np.divide(out, w[:, None], out=np.zeros_like(out), where=w[:, None] > 0)
 
 
-def radial_kernel(tables, own, total, w, idx, r_all, area, width):
+def radial_kernel(tables, own, total, area_src, w, idx, r_all, area, width):
     """K (V_o, V_j, 3) from ring tables (P, n_bins, 3) blended to every source j with (w, idx) (V_j, k);
-    own area measured on the diagonal, each column scaled to carry total_j − A_j own_j."""
+    the near field as the renderer takes it (``render.transport``): total blended, the own cell's share
+    of it f = A own / total blended (``area_src``: the cells of the tables' sources), each column scaled
+    to carry total_j (1 − f_j)."""
     V = len(area)
     n_bins = tables.shape[1]
     b = np.minimum((r_all / width).astype(int), n_bins - 1)  # (V_o, V_j)
     K = np.zeros((V, V, 3))
     for kk in range(w.shape[1]):
         K += w[None, :, kk, None] * tables[idx[:, kk][None, :], b]
-    own_j = np.einsum("vk,vkc->vc", w, own[idx])
+    f = np.divide(area_src[:, None] * own, total, out=np.zeros_like(own), where=total > 0)
+    f_j = np.einsum("vk,vkc->vc", w, np.clip(f, 0, 1)[idx])
     total_j = np.einsum("vk,vkc->vc", w, total[idx])
     K[np.arange(V), np.arange(V)] = 0.0
     spread = np.einsum("ojc,o->jc", K, area)
-    target = np.maximum(total_j - area[:, None] * own_j, 0.0)
+    target = total_j * (1.0 - f_j)
     K *= np.divide(target, spread, out=np.zeros_like(spread), where=spread > 0)[None]
-    K[np.arange(V), np.arange(V)] = own_j
+    K[np.arange(V), np.arange(V)] = f_j * total_j / area[:, None]
     return K
 
 
@@ -185,7 +188,7 @@ def main() -> int:
     eye = (np.ones((V, 1)), np.arange(V)[:, None])
     row(
         "oracle, radial",
-        radiance(radial_kernel(tables, own, total, *eye, r_all, area, width), area, E),
+        radiance(radial_kernel(tables, own, total, area, *eye, r_all, area, width), area, E),
         "local model (radial, Euclidean r)",
     )
     # the P incident points of the pipeline, their ring means blended with the renderer's weights
@@ -193,7 +196,9 @@ def main() -> int:
     w, idx = neighbour_weights(model, mesh)
     row(
         f"points, radial ({P})",
-        radiance(radial_kernel(tables[pts], own[pts], total[pts], w, idx, r_all, area, width), area, E),
+        radiance(
+            radial_kernel(tables[pts], own[pts], total[pts], area[pts], w, idx, r_all, area, width), area, E
+        ),
         "interpolation between incident points",
     )
     # the fit in place of the ring means: exponentials tabulated on the same rings
@@ -203,7 +208,7 @@ def main() -> int:
         prof = prof * model.colour_scale[:, None, :]
     row(
         f"points, fit ({P}, α = 1)",
-        radiance(radial_kernel(prof, own[pts], total[pts], w, idx, r_all, area, width), area, E),
+        radiance(radial_kernel(prof, own[pts], total[pts], area[pts], w, idx, r_all, area, width), area, E),
         "fit",
     )
     out = {

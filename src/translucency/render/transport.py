@@ -315,7 +315,7 @@ def transport_matrices(
     alpha = model.alpha.values if len(model.alpha.values) == V else model.alpha.at(v)
     # shared colour (one fall-off, C = 1): T_λ = T · diag(s_λ) — one matrix, the scale goes with E
     shared = c.shape[1] == 1
-    own, total = _measured_per_vertex(model, weights)
+    own, total = _measured_per_vertex(model, weights, v, area)
     # the pairs beyond rad: clusters and their K × K operator, b_i = A_i/π until normalised below
     far = (
         far_field_operator(model, v, area, alpha, weights, c, d, rad, float(mesh.area), clusters)
@@ -361,14 +361,29 @@ def transport_matrices(
     )
 
 
-def _measured_per_vertex(model, weights):
-    """``model.measured``'s own and total (V, 3), blended to every vertex with the profile weights;
-    (None, None) for a model without them."""
+def _measured_per_vertex(model, weights, vertices, area):
+    r"""``model.measured``'s own and total (V, 3) at every vertex; (None, None) for a model without them.
+
+    The total exitance blends with the profile weights.  The own-area value does not: R_d(x_i, x_i) is the
+    mean over the incident vertex's own cell, so it grows as the cell shrinks toward the peak, and blending
+    it across cells of other sizes misplaces energy.  What blends is the fraction of the total that stays
+    in the own cell, :math:`f_i = A_i\,\mathrm{own}_i / \mathrm{total}_i` (A_i: the area of the vertex
+    nearest x_i):
+
+    .. math:: \mathrm{total}_v = \sum_j w_{vj}\,\mathrm{total}_j, \qquad
+              \mathrm{own}_v = \frac{\mathrm{total}_v}{A_v} \sum_j w_{vj}\, f_j
+
+    (on the cow with skin, against a converged reference: 0.170 with blended own values, 0.138 with blended
+    fractions, 0.123 with the exact per-vertex own area; ``benchmarks/objects_budget.py``).
+    """
     if not model.measured or not {"own", "total"} <= set(model.measured):
         return None, None
     w, idx = weights
-    own = np.einsum("vk,vkc->vc", w, model.measured["own"][idx])
-    total = np.einsum("vk,vkc->vc", w, model.measured["total"][idx])
+    own_i, total_i = model.measured["own"], model.measured["total"]  # (P, 3): mm⁻², 1
+    A_i = area[cKDTree(vertices).query(model.x_i)[1]]  # the incident points' own cells, mm²
+    f_i = np.divide(A_i[:, None] * own_i, total_i, out=np.zeros_like(own_i), where=total_i > 0)
+    total = np.einsum("vk,vkc->vc", w, total_i[idx])
+    own = np.einsum("vk,vkc->vc", w, np.clip(f_i, 0.0, 1.0)[idx]) * total / area[:, None]
     return own, total
 
 
