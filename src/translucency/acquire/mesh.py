@@ -28,6 +28,7 @@ import trimesh
 
 from .._validate import TranslucencyError
 from .._version import __version__
+from ..cluster import open_cluster, parse_scheduler
 from ..geometry import farthest_points, vertex_areas
 from ..io.mesh_dataset import FORMAT, VERSION, create_mesh_dataset
 from ..io.outputs import output_lock
@@ -50,6 +51,7 @@ def acquire_mesh(
     overwrite: bool = False,
     inputs=(),
     progress: Callable[[int, int], None] | None = None,
+    scheduler: str | None = "threads",
 ):
     """Scan pencil beams over a closed mesh filled with ``volume``; write a mesh data set.
 
@@ -63,6 +65,10 @@ def acquire_mesh(
         Zarr directory.
     n_points, photons, seed, chunk_points
         Incident vertices, photons per point and channel, seed, points per chunk.
+    scheduler : str, optional
+        ``"threads"`` (default: this process), ``"local:N"`` or ``"tcp://HOST:PORT"``
+        (:mod:`translucency.cluster`): each chunk a task that writes its rows and its done flag
+        (``out`` must be visible to the workers); the data are the same bit for bit.
 
     Returns
     -------
@@ -70,6 +76,7 @@ def acquire_mesh(
     """
     if photons < 1:
         raise TranslucencyError(f"photons: must be >= 1, got {photons}")
+    parse_scheduler(scheduler)  # a bad option is one line before any work
     need = np.asarray(mesh.extents) - np.asarray(volume.size_mm)
     if (need > 1e-6).any():
         raise TranslucencyError(
@@ -114,39 +121,71 @@ def acquire_mesh(
         )
         root = ds.group
         n_chunks = root["chunk_done"].shape[0]
-        scene = mesh_scene(mesh)
         done = np.asarray(root["chunk_done"][...])
-        normals = np.asarray(mesh.vertex_normals)
-        for c in range(n_chunks):
-            lo, hi = c * chunk_points, min(P, (c + 1) * chunk_points)
-            if done[c]:
-                continue
-            R = np.zeros((hi - lo, V, 3), np.float32)
-            spec = np.zeros((hi - lo, 3), np.float32)
-            for ch in range(3):
-                res = mesh_random_walk(
-                    scene,
-                    mesh.bounds,
-                    volume,
-                    ch,
-                    mesh.vertices[incident[lo:hi]],
-                    normals[incident[lo:hi]],
-                    photons,
-                    seed=seed + 7919 * ch,
-                    first_point=lo,
-                    index_matched=index_matched,
-                )
-                point = np.repeat(np.arange(hi - lo), photons)
-                ok = res.code == EXIT
-                counts = splat_exits(mesh, point[ok], res.face[ok], res.position[ok], hi - lo)
-                R[..., ch] = counts / (photons * area)
-                spec[:, ch] = np.bincount(point[res.code == -1], minlength=hi - lo) / photons
-            root["R_d"][lo:hi] = R
-            root["specular"][lo:hi] = spec
-            root["chunk_done"][c] = True  # last: the chunk is complete
-            if progress:
-                progress(hi, P)
+        todo = [(c, c * chunk_points, min(P, (c + 1) * chunk_points)) for c in range(n_chunks) if not done[c]]
+        finished = P - sum(hi - lo for _, lo, hi in todo)
+        walk = (photons, seed, index_matched)
+        with open_cluster(scheduler) as cluster:
+            if cluster is None:  # this process, chunk after chunk (Dr.Jit uses every core)
+                scene = mesh_scene(mesh)
+                for c, lo, hi in todo:
+                    _acquire_mesh_chunk(mesh, volume, area, ds, c, lo, hi, incident[lo:hi], walk, scene)
+                    finished += hi - lo
+                    if progress:
+                        progress(finished, P)
+            else:  # a task per chunk: each builds the scene once per worker, writes its rows and flag
+                shared = (cluster.keep(mesh), cluster.keep(volume), cluster.keep(area))
+                tasks = [(ds, c, lo, hi, incident[lo:hi], walk) for c, lo, hi in todo]
+                for i, _ in cluster.run(_acquire_mesh_chunk, tasks, shared=shared):
+                    finished += todo[i][2] - todo[i][1]
+                    if progress:
+                        progress(finished, P)
         return Path(out)
+
+
+#: per process: (mesh, its Mitsuba scene) of the acquisition running there
+_SCENE: list = []
+
+
+def _acquire_mesh_chunk(mesh, volume, area, ds, c, lo, hi, incident, walk, scene=None) -> None:
+    """Trace chunk ``c`` (incident vertices ``incident``, points lo..hi), write its rows, then its flag.
+
+    ``walk`` = (photons, seed, index_matched).  A pure function of its arguments: here or on a worker
+    (which builds the scene once per mesh), again after an interruption, it writes the same bytes.
+    """
+    photons, seed, index_matched = walk
+    if scene is None:
+        if not _SCENE or _SCENE[0] is not mesh:
+            _SCENE[:] = [mesh, mesh_scene(mesh)]
+        scene = _SCENE[1]
+    root = ds.group
+    V = len(mesh.vertices)
+    normals = np.asarray(mesh.vertex_normals)
+    R = np.zeros((hi - lo, V, 3), np.float32)
+    spec = np.zeros((hi - lo, 3), np.float32)
+    for ch in range(3):
+        res = mesh_random_walk(
+            scene,
+            mesh.bounds,
+            volume,
+            ch,
+            mesh.vertices[incident],
+            normals[incident],
+            photons,
+            seed=seed + 7919 * ch,
+            first_point=lo,
+            index_matched=index_matched,
+        )
+        point = np.repeat(np.arange(hi - lo), photons)
+        ok = res.code == EXIT
+        counts = splat_exits(mesh, point[ok], res.face[ok], res.position[ok], hi - lo)
+        R[..., ch] = counts / (photons * area)
+        spec[:, ch] = np.bincount(point[res.code == -1], minlength=hi - lo) / photons
+    # every chunk written is a file, zeros too: a missing one is damage (MeshDataset.damaged_chunks)
+    every = {"write_empty_chunks": True}
+    root["R_d"].with_config(every)[lo:hi] = R
+    root["specular"].with_config(every)[lo:hi] = spec
+    root["chunk_done"][c] = True  # last: the chunk is complete
 
 
 def splat_exits(mesh, point: np.ndarray, face: np.ndarray, position: np.ndarray, n_points: int) -> np.ndarray:

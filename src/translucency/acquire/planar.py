@@ -25,6 +25,7 @@ import numpy as np
 
 from .._validate import TranslucencyError
 from .._version import __version__
+from ..cluster import open_cluster, parse_scheduler
 from ..io.dataset import FORMAT, VERSION, PlanarDataset, create_dataset
 from ..io.outputs import output_lock
 from ..mitsuba import engine_versions
@@ -119,6 +120,7 @@ def acquire_planar(
     progress: Callable[[int, int], None] | None = None,
     batch_photons: int = 4_000_000,
     memory_limit: float = 8 * 2**30,
+    scheduler: str | None = "threads",
 ) -> PlanarDataset:
     """Run a virtual DISCO acquisition of ``volume`` and write the data set to ``out``.
 
@@ -138,6 +140,11 @@ def acquire_planar(
         Called after each chunk.
     batch_photons : int
         Photons traced per Dr.Jit launch (memory).
+    scheduler : str, optional
+        Where the chunks are traced: ``"threads"`` (default: this process), ``"local:N"`` or
+        ``"tcp://HOST:PORT"`` (:mod:`translucency.cluster`): each chunk a task that writes its
+        part of the store and its done flag (``out`` must be visible to the workers).  The data
+        are the same bit for bit, and an interrupted run resumes either way.
 
     Returns
     -------
@@ -145,6 +152,7 @@ def acquire_planar(
     """
 
     setup.check(volume)
+    parse_scheduler(scheduler)  # a bad option is one line before any work
     check_memory(min(batch_photons, setup.photons * setup.chunk_points), volume, memory_limit)
     mi_versions = engine_versions()
     x_i = setup.incident_points(volume)
@@ -185,62 +193,92 @@ def acquire_planar(
         g["x_i"][...] = x_i.astype(np.float32)
         g["window_origin"][...] = origin.astype(np.float32)
         done = np.asarray(g["chunk_done"][...])
-        W, H, _ = volume.size_mm
         k = setup.chunk_points
-        area = setup.pitch**2
-        for c in range(len(done)):
-            lo, hi = c * k, min(P, (c + 1) * k)
-            if done[c]:
-                if progress:
-                    progress(hi, P)
-                continue
-            counts = np.zeros((hi - lo, n, n, 3))
-            spec = np.zeros((hi - lo, 3))
-            top = np.zeros((hi - lo, 3))
-            per_launch = max(1, batch_photons // setup.photons)
-            for ch in range(3):
-                for b0 in range(lo, hi, per_launch):
-                    b1 = min(hi, b0 + per_launch)
-                    res = random_walk(
-                        volume,
-                        ch,
-                        x_i[b0:b1],
-                        setup.photons,
-                        seed=setup.seed,
-                        first_point=b0,
-                        theta_inc_deg=setup.theta_inc_deg,
-                        index_matched=setup.index_matched,
-                    )
-                    m = b1 - b0
-                    off = b0 - lo  # first row of this launch within the chunk
-                    local = np.arange(m).repeat(setup.photons)  # launch-local point of each photon
-                    spec[off : off + m, ch] = np.bincount(local, weights=res.code == -1, minlength=m)
-                    is_top = res.code == TOP
-                    pt = local[is_top]
-                    top[off : off + m, ch] = np.bincount(pt, minlength=m)
-                    # pixel of each exit in its own window
-                    col = np.floor((res.x[is_top] - origin[b0 + pt, 0]) / setup.pitch).astype(np.int64)
-                    row = np.floor((res.y[is_top] - origin[b0 + pt, 1]) / setup.pitch).astype(np.int64)
-                    inside = (col >= 0) & (col < n) & (row >= 0) & (row < n)
-                    flat = ((off + pt[inside]) * n + row[inside]) * n + col[inside]
-                    counts[..., ch] += np.bincount(flat, minlength=(hi - lo) * n * n).reshape(hi - lo, n, n)
-            N = float(setup.photons)
-            p_hat = counts / N
-            R_d = p_hat / area
-            var = p_hat * (1.0 - p_hat) / (N * area**2)
-            # pixel centres on the sample?
-            cx = origin[lo:hi, 0, None, None] + setup.pitch * (np.arange(n)[None, None, :] + 0.5)
-            cy = origin[lo:hi, 1, None, None] + setup.pitch * (np.arange(n)[None, :, None] + 0.5)
-            mask = (cx >= 0) & (cx <= W) & (cy >= 0) & (cy <= H)
-            g["R_d"][lo:hi] = R_d.astype(setup.dtype)
-            g["variance"][lo:hi] = var.astype(setup.dtype)
-            g["mask"][lo:hi] = mask
-            g["specular"][lo:hi] = (spec / N).astype(np.float32)
-            g["total_diffuse"][lo:hi] = (top / N).astype(np.float32)
-            g["chunk_done"][c] = True  # last: the chunk is complete
-            if progress:
-                progress(hi, P)
+        todo = [(c, c * k, min(P, (c + 1) * k)) for c in range(len(done)) if not done[c]]
+        finished = P - sum(hi - lo for _, lo, hi in todo)  # points of the chunks done before
+        if progress and finished:
+            progress(finished, P)
+        with open_cluster(scheduler) as cluster:
+            if cluster is None:  # this process, chunk after chunk (Dr.Jit uses every core)
+                for c, lo, hi in todo:
+                    _acquire_chunk(volume, setup, ds, c, lo, hi, x_i[lo:hi], origin[lo:hi], batch_photons)
+                    finished += hi - lo
+                    if progress:
+                        progress(finished, P)
+            else:  # a task per chunk: each writes its part of the store and its done flag
+                tasks = [(ds, c, lo, hi, x_i[lo:hi], origin[lo:hi], batch_photons) for c, lo, hi in todo]
+                shared = (cluster.keep(volume), setup)
+                for i, _ in cluster.run(_acquire_chunk, tasks, shared=shared):
+                    finished += todo[i][2] - todo[i][1]
+                    if progress:
+                        progress(finished, P)
         return ds
+
+
+def _acquire_chunk(
+    volume: Volume,
+    setup: PlanarSetup,
+    ds: PlanarDataset,
+    c: int,
+    lo: int,
+    hi: int,
+    x_i: np.ndarray,
+    origin: np.ndarray,
+    batch_photons: int,
+) -> None:
+    """Trace chunk ``c`` (points lo..hi at ``x_i``, windows at ``origin``), write it, then its done flag.
+
+    A pure function of its arguments (photon streams seeded by absolute point index): run here or on
+    a worker, again after an interruption, it writes the same bytes.
+    """
+    g = ds.group
+    W, H, _ = volume.size_mm
+    n = setup.window_pixels()
+    area = setup.pitch**2
+    counts = np.zeros((hi - lo, n, n, 3))
+    spec = np.zeros((hi - lo, 3))
+    top = np.zeros((hi - lo, 3))
+    per_launch = max(1, batch_photons // setup.photons)
+    for ch in range(3):
+        for b0 in range(lo, hi, per_launch):
+            b1 = min(hi, b0 + per_launch)
+            res = random_walk(
+                volume,
+                ch,
+                x_i[b0 - lo : b1 - lo],
+                setup.photons,
+                seed=setup.seed,
+                first_point=b0,
+                theta_inc_deg=setup.theta_inc_deg,
+                index_matched=setup.index_matched,
+            )
+            m = b1 - b0
+            off = b0 - lo  # first row of this launch within the chunk
+            local = np.arange(m).repeat(setup.photons)  # launch-local point of each photon
+            spec[off : off + m, ch] = np.bincount(local, weights=res.code == -1, minlength=m)
+            is_top = res.code == TOP
+            pt = local[is_top]
+            top[off : off + m, ch] = np.bincount(pt, minlength=m)
+            # pixel of each exit in its own window
+            col = np.floor((res.x[is_top] - origin[b0 - lo + pt, 0]) / setup.pitch).astype(np.int64)
+            row = np.floor((res.y[is_top] - origin[b0 - lo + pt, 1]) / setup.pitch).astype(np.int64)
+            inside = (col >= 0) & (col < n) & (row >= 0) & (row < n)
+            flat = ((off + pt[inside]) * n + row[inside]) * n + col[inside]
+            counts[..., ch] += np.bincount(flat, minlength=(hi - lo) * n * n).reshape(hi - lo, n, n)
+    N = float(setup.photons)
+    p_hat = counts / N
+    R_d = p_hat / area
+    var = p_hat * (1.0 - p_hat) / (N * area**2)
+    # pixel centres on the sample?
+    cx = origin[:, 0, None, None] + setup.pitch * (np.arange(n)[None, None, :] + 0.5)
+    cy = origin[:, 1, None, None] + setup.pitch * (np.arange(n)[None, :, None] + 0.5)
+    mask = (cx >= 0) & (cx <= W) & (cy >= 0) & (cy <= H)
+    g["R_d"][lo:hi] = R_d.astype(setup.dtype)
+    g["variance"][lo:hi] = var.astype(setup.dtype)
+    g["mask"][lo:hi] = mask
+    g["specular"][lo:hi] = (spec / N).astype(np.float32)
+    g["total_diffuse"][lo:hi] = (top / N).astype(np.float32)
+    g["chunk_done"][c] = True  # last: the chunk is complete
 
 
 def _volume_fingerprint(volume: Volume) -> dict:

@@ -29,6 +29,7 @@ from .._version import __version__
 from ..acquire import PlanarSetup, acquire_planar, estimate_seconds, load_volume, make_sample
 from ..acquire.mesh import acquire_mesh, object_volume
 from ..acquire.objects import make_pig
+from ..cluster import parse_scheduler
 from ..evaluate.report import model_label, write_report
 from ..fit import check_fit_options, fit_mesh, fit_planar
 from ..io.dataset import dataset_identity, describe, open_dataset
@@ -41,6 +42,7 @@ from ..pipeline import DEMO_FITS, run_demo
 from ..render.figure import boundary_eta, figure2, object_of_model, volume_of_dataset
 from ..render.image import Camera
 from ..render.lights import parse_light
+from .rig import acquire_photographs_cmd, import_app
 
 
 class _OneLineErrors(typer.core.TyperGroup):
@@ -128,6 +130,17 @@ def progress(quiet: bool = False) -> Progress:
 
 
 # the options every working command shares (acquire planar|mesh, fit, evaluate, render)
+def _scheduler_option():
+    return typer.Option(
+        "threads",
+        "--scheduler",
+        metavar="WHERE",
+        help="Where work runs: threads (this process), local:N (N Dask worker processes started for this "
+        "command) or tcp://HOST:PORT (a running Dask cluster; the data set's path must be visible to its "
+        "workers). Results are identical whichever.",
+    )
+
+
 def _max_memory_option():
     return typer.Option(
         None,
@@ -308,6 +321,8 @@ acquire_app = typer.Typer(
     no_args_is_help=True,
 )
 app.add_typer(acquire_app, name="acquire")
+app.add_typer(import_app, name="import")
+acquire_app.command("photographs")(acquire_photographs_cmd)
 
 
 @acquire_app.command("planar")
@@ -345,11 +360,13 @@ def acquire_planar_cmd(
         "--overwrite",
         help="Replace a data set of translucency made with other arguments (never anything else).",
     ),
+    scheduler: str = _scheduler_option(),
     max_memory: str = _max_memory_option(),
     quiet: bool = _quiet_option(),
     as_json: bool = _json_option(),
 ):
     """Scan a pencil beam over a planar sample and record R_d around each incident point."""
+    parse_scheduler(scheduler)  # a bad value or an unreachable cluster: one line, before work
     check_option("--photons", photons, lo=1)
     check_option("--seed", seed, lo=0)
     check_option("--grid", grid, lo=1, hi=4096)
@@ -412,6 +429,7 @@ def acquire_planar_cmd(
             overwrite=overwrite,
             inputs=[volume],
             progress=lambda done, total: bar.update(task, completed=done, item="points"),
+            scheduler=scheduler,
         )
     ds = open_dataset(out)
     summary = {
@@ -465,11 +483,13 @@ def acquire_mesh_cmd(
         "--overwrite",
         help="Replace a data set of translucency made with other arguments (never anything else).",
     ),
+    scheduler: str = _scheduler_option(),
     max_memory: str = _max_memory_option(),
     quiet: bool = _quiet_option(),
     as_json: bool = _json_option(),
 ):
     """Pencil beams at surface points of a 3D object; exits tallied per vertex (R_d in mm^-2)."""
+    parse_scheduler(scheduler)  # a bad value or an unreachable cluster: one line, before work
     check_option("--photons", photons, lo=1)
     check_option("--seed", seed, lo=0)
     check_option("--points", points, lo=1)
@@ -523,6 +543,7 @@ def acquire_mesh_cmd(
             overwrite=overwrite,
             inputs=[mesh, volume],
             progress=lambda done, total: bar.update(task, completed=done, item="points"),
+            scheduler=scheduler,
         )
     ds = open_mesh_dataset(out)
     summary = {
@@ -584,6 +605,7 @@ def fit(
     overwrite: bool = typer.Option(
         False, "--overwrite", help="Replace an earlier output of translucency at --out (never anything else)."
     ),
+    scheduler: str = _scheduler_option(),
     max_memory: str = _max_memory_option(),
     quiet: bool = _quiet_option(),
     as_json: bool = _json_option(),
@@ -592,6 +614,7 @@ def fit(
 
     An interrupted fit resumes from OUT.partial.npz when run again with the same arguments.
     """
+    parse_scheduler(scheduler)  # a bad value or an unreachable cluster: one line, before work
     check_option("--rounds", rounds, lo=1)
     check_option("--exclusion", exclusion, lo=0)
     check_option("--chunk", chunk, lo=1)
@@ -618,7 +641,19 @@ def fit(
         )
         resources.check_resources("fit", need, limit, out)
         return _fit_mesh_cmd(
-            data, out, model, terms, colour, exclusion, rounds, float16, overwrite, quiet, as_json, need
+            data,
+            out,
+            model,
+            terms,
+            colour,
+            exclusion,
+            rounds,
+            float16,
+            overwrite,
+            quiet,
+            as_json,
+            need,
+            scheduler,
         )
     colour = colour or "per-channel"
     check_fit_options(model, terms, directions, colour, weighting=weighting)
@@ -654,6 +689,7 @@ def fit(
             checkpoint=ckpt,
             progress=report,
             weighting=weighting,
+            scheduler=scheduler,
         )
     path = save_model(
         result.model,
@@ -739,7 +775,7 @@ def _warn_unphysical(path: Path) -> list[int]:
 
 
 def _fit_mesh_cmd(
-    data, out, model, terms, colour, exclusion, rounds, float16, overwrite, quiet, as_json, need
+    data, out, model, terms, colour, exclusion, rounds, float16, overwrite, quiet, as_json, need, scheduler
 ):
     with progress(quiet) as bar:
         task = bar.add_task(f"fit {model} per vertex", total=None, item="")
@@ -751,6 +787,7 @@ def _fit_mesh_cmd(
             exclusion_mm=exclusion,
             max_rounds=rounds,
             progress=lambda done, total, msg: bar.update(task, completed=done, total=total or None, item=msg),
+            scheduler=scheduler,
         )
     path = save_model(
         result.model,
@@ -1041,7 +1078,7 @@ def _name_metavars(*typer_apps) -> None:
                     info.metavar = _METAVARS.get(str(param.annotation))
 
 
-_name_metavars(app, acquire_app)
+_name_metavars(app, acquire_app, import_app)
 
 
 def main() -> None:

@@ -69,16 +69,26 @@ from pathlib import Path
 import numpy as np
 
 from .._validate import TranslucencyError
+from ..cluster import compact, expand, open_cluster
 from ..io.atomic import atomic_path
 from ..model import BurleyModel, DipoleModel, ExponentialModel
 from ..model.burley import burley_R
 from ..model.dipole import dipole_R_d
+from ..model.directional_dipole import DirectionalDipoleModel, directional_dipole_R_d
+from ..model.pbd import PBDModel, pbd_R_d
 from ._lm import fit_params_batched
 from ._varpro import fit_exponentials_batched
 from ._windows import Segments, radius_groups
 
 #: the model families: isotropic and anisotropic sums of exponentials, and the two baselines
-KINDS = ("iso", "aniso", "dipole", "burley")
+KINDS = ("iso", "aniso", "dipole", "burley", "pbd", "ddipole")
+#: the per-point baselines with two positive parameters per channel, fitted by batched LM
+BASELINES = ("dipole", "burley", "pbd", "ddipole")
+#: baselines parametrised by (σ_a, σ_s') with no free amplitude: α keeps the scale
+_PHYSICAL = ("dipole", "pbd", "ddipole")
+#: the candidates of model selection (``n_terms="auto"``, ``n_directions="auto"``)
+AUTO_TERMS = (1, 2, 3, 4)
+AUTO_DIRECTIONS = (1, 2, 4, 8, 16)
 #: the weightings: w⁻² = αP/(N p²) (the model's Poisson variance), or (ρ αP)² + αP/(N p²)
 WEIGHTINGS = ("poisson", "relative")
 _DIPOLE_STARTS = [(0.01, 1.0), (0.002, 3.0), (0.05, 0.3)]  # (σ_a, σ_s') in 1/mm
@@ -157,9 +167,12 @@ def check_fit_options(
     """Refuse bad fit options with one line naming the option (before any work)."""
     if model not in KINDS:
         raise TranslucencyError(f"model: expected one of {', '.join(KINDS)}, got {model!r}")
-    if not 1 <= int(n_terms) <= 4:
-        raise TranslucencyError(f"terms: n must be between 1 and 4, got {n_terms}")
-    if model == "aniso" and int(n_directions) < 2:
+    if n_terms != "auto" and not 1 <= _as_count(n_terms) <= 4:
+        raise TranslucencyError(f"terms: n must be between 1 and 4 or 'auto', got {n_terms!r}")
+    if n_directions == "auto":
+        if model != "aniso":
+            raise TranslucencyError(f"directions: 'auto' needs the anisotropic model, got model {model!r}")
+    elif model == "aniso" and _as_count(n_directions) < 2:
         raise TranslucencyError(f"directions: the anisotropic model needs m >= 2, got {n_directions}")
     if colour not in ("shared", "per-channel"):
         raise TranslucencyError(f"colour: expected 'shared' or 'per-channel', got {colour!r}")
@@ -169,20 +182,37 @@ def check_fit_options(
         raise TranslucencyError(f"weighting: expected one of {', '.join(WEIGHTINGS)}, got {weighting!r}")
 
 
+def _as_count(v) -> int:
+    """An integer option as int, or −1 when it is not one (so that the range checks name it)."""
+    try:
+        return int(v)
+    except (TypeError, ValueError):
+        return -1
+
+
 # -- per-point profile families (without α) ---------------------------------------
 def _exp_sum(c, a, r):
     """Σ_k c_k e^{−a_k r}: c, a (..., n) broadcast against r (...) in mm."""
     return np.einsum("...k,...k->...", c, np.exp(-a * r[..., None]))
 
 
-def _dipole_profile(eta):
-    """Jensen's dipole R_d(r; σ_a, σ_s') per row of p = (σ_a, σ_s') (1/mm), for refractive index eta."""
-    return lambda r, p: dipole_R_d(r[None, :], p[:, :1], p[:, 1:2], eta)
-
-
 def _burley_profile(r, p):
     """Christensen–Burley R(r; A, s) per row of p = (A, s)."""
     return burley_R(r[None, :], p[:, :1], p[:, 1:2])
+
+
+#: R_d(r; p₀, p₁, η) of each baseline: (σ_a, σ_s') in 1/mm, or Burley's (A, s)
+_BASELINE_R = {
+    "dipole": dipole_R_d,
+    "burley": lambda r, A, s, eta: burley_R(r, A, s),
+    "pbd": pbd_R_d,
+    "ddipole": directional_dipole_R_d,
+}
+
+
+def _physical_profile(kind, eta):
+    """R_d(r; σ_a, σ_s') of the dipole, PBD or directional dipole per row of p = (σ_a, σ_s') (1/mm)."""
+    return lambda r, p: _BASELINE_R[kind](r[None, :], p[:, :1], p[:, 1:2], eta)
 
 
 def _hat(theta, m):
@@ -254,11 +284,14 @@ class FitState:
             setattr(self, f"best_{k}", getattr(self, k).copy())
         self.best = np.array([np.inf, -1.0])  # (Φ, round index) of the best state so far
 
+    #: the first point held: 0, or s of a :meth:`part` (points s..e only)
+    offset = 0
+
     def points(self, s: int, e: int) -> FitState:
         """A private copy of points s..e (α shared, read-only during a round)."""
         sub = FitState.__new__(FitState)
         for k in self.PER_POINT:
-            setattr(sub, k, getattr(self, k)[s:e].copy())
+            setattr(sub, k, getattr(self, k)[s - self.offset : e - self.offset].copy())
         sub.alpha = self.alpha
         return sub
 
@@ -266,9 +299,21 @@ class FitState:
         """The reference state's points s..e (read-only: its model gives the common weights)."""
         ref = FitState.__new__(FitState)
         for k in ("c", "a", "p", "s"):
-            setattr(ref, k, getattr(self, f"ref_{k}")[s:e])
+            setattr(ref, k, getattr(self, f"ref_{k}")[s - self.offset : e - self.offset])
         ref.alpha = self.ref_alpha
         return ref
+
+    def part(self, s: int, e: int) -> FitState:
+        """Points s..e alone with their reference parameters: what a task on a worker needs besides
+        α (sent once per round) and the store (read by the worker); :meth:`points` and
+        :meth:`reference` of it take absolute indices."""
+        sub = FitState.__new__(FitState)
+        for k in self.PER_POINT:
+            setattr(sub, k, getattr(self, k)[s:e].copy())
+        for k in ("c", "a", "p", "s"):
+            setattr(sub, f"ref_{k}", getattr(self, f"ref_{k}")[s:e].copy())
+        sub.offset = s
+        return sub
 
     def keep(self, prefix: str) -> None:
         """Copy the current parameters and α into the ``prefix`` ("ref" or "best") state."""
@@ -346,6 +391,7 @@ def alternate(
     checkpoint,
     progress,
     t0: float,
+    scheduler=None,
 ) -> FitResult:
     """The rounds of the alternation over all chunks of points (shared by planar and mesh fits).
 
@@ -354,8 +400,19 @@ def alternate(
     round's state is scored by Φ under those common weights; the rounds stop
     when Φ falls by less than ``tol`` relatively (or rises), and the best state
     is returned.  ``request`` identifies the fit in a checkpoint; ``t0`` is the
-    start time (:func:`time.perf_counter`) for :attr:`FitResult.seconds`.
+    start time (:func:`time.perf_counter`) for :attr:`FitResult.seconds`.  ``scheduler``: where
+    the chunks run (:mod:`translucency.cluster`); the result is the same bit for bit.
     """
+    with open_cluster(scheduler) as cluster:
+        return _alternate(
+            ctx, options, request, max_rounds, tol, chunk_points, workers, checkpoint, progress, t0, cluster
+        )
+
+
+def _alternate(
+    ctx, options, request, max_rounds, tol, chunk_points, workers, checkpoint, progress, t0, cluster
+):
+    """:func:`alternate` with its cluster open (``None``: threads)."""
     P = len(ctx.x_i)
     chunks = [(s, min(s + chunk_points, P)) for s in range(0, P, chunk_points)]
     model = ctx.kind
@@ -366,26 +423,28 @@ def alternate(
     total = max_rounds * len(chunks)
     lock = threading.Lock()
     workers = max(1, min(int(workers or os.cpu_count() or 1), len(chunks)))
+    # the context goes to the cluster once (its source holds paths, not data)
+    ctx_task = cluster.keep((os.urandom(8).hex(), ctx)) if cluster is not None else None
     while state.round[0] < max_rounds:
         rnd = int(state.round[0])
         if rnd == 1 and not state.done.any():  # round 1's result weights every later round
             state.keep("ref")
         todo = [ci for ci in range(len(chunks)) if not state.done[ci]]
-        # chunks in parallel threads (NumPy releases the GIL); each works on a private copy
-        # of its points and hands back its α statistics, so results do not depend on timing
-        with ThreadPoolExecutor(workers) as pool:
-            futures = {pool.submit(_fit_chunk, ctx, state, *chunks[ci]): ci for ci in todo}
-            for fut in as_completed(futures):
-                ci = futures[fut]
-                sub, phi, phi_ref, num, den = fut.result()
-                with lock:
-                    state.commit(sub, *chunks[ci])
-                    state.num[ci], state.den[ci] = num, den
-                    state.phi[ci], state.phi_ref[ci], state.done[ci] = phi, phi_ref, True
-                    if ckpt is not None:
-                        state.save(ckpt, request)
-                if progress:
-                    progress(rnd * len(chunks) + int(state.done.sum()), total, f"round {rnd + 1}")
+        # chunks in parallel threads (NumPy releases the GIL) or tasks on a cluster; each works on a
+        # private copy of its points and hands back its α statistics, so results do not depend on timing
+        if cluster is None:
+            results = _thread_chunks(ctx, state, chunks, todo, workers)
+        else:
+            results = _cluster_chunks(cluster, ctx_task, state, chunks, todo)
+        for ci, (sub, phi, phi_ref, num, den) in results:
+            with lock:
+                state.commit(sub, *chunks[ci])
+                state.num[ci], state.den[ci] = num, den
+                state.phi[ci], state.phi_ref[ci], state.done[ci] = phi, phi_ref, True
+                if ckpt is not None:
+                    state.save(ckpt, request)
+            if progress:
+                progress(rnd * len(chunks) + int(state.done.sum()), total, f"round {rnd + 1}")
         # α in closed form (the scale fixed by mean α = 1), and Φ of the new state (parameters and α):
         # Φ with the round's α, plus what the α step changed (exact: Φ is quadratic in each α_j)
         change = _update_alpha(state, model, getattr(ctx.source, "smooth_alpha", None))
@@ -420,6 +479,48 @@ def alternate(
         options,
         best_round=int(state.best[1]) + 1,
     )
+
+
+def _thread_chunks(ctx, state, chunks, todo, workers):
+    """(chunk index, :func:`_fit_chunk`'s result) of the chunks ``todo``, run in threads, as they finish."""
+    with ThreadPoolExecutor(workers) as pool:
+        futures = {pool.submit(_fit_chunk, ctx, state, *chunks[ci]): ci for ci in todo}
+        for fut in as_completed(futures):
+            yield futures[fut], fut.result()
+
+
+def _cluster_chunks(cluster, ctx_task, state, chunks, todo):
+    """The same as :func:`_thread_chunks`, the chunks run as tasks on a Dask cluster: each task takes its
+    points' parameters and reads its data from the store; α goes out once per round, and a chunk's α
+    statistics come back as the box under its windows."""
+    shared = cluster.keep((state.alpha.copy(), state.ref_alpha.copy(), state.round.copy()))
+    tasks = [(state.part(*chunks[ci]), *chunks[ci]) for ci in todo]
+    shape = state.alpha.shape
+    for i, (sub, phi, phi_ref, num, den) in cluster.run(_fit_task, tasks, shared=(ctx_task, shared)):
+        yield todo[i], (sub, phi, phi_ref, expand(num, shape), expand(den, shape))
+
+
+#: per worker process: the context of the fit running there, with its own cache of decoded chunks
+_LIVE: dict = {}
+_LIVE_LOCK = threading.Lock()
+
+
+def _fit_task(kept, shared, part: FitState, s: int, e: int):
+    """:func:`_fit_chunk` on a worker: ``part`` (:meth:`FitState.part`) with the round's α from ``shared``.
+
+    ``kept`` = (token, context): the context as sent stays as it is (a worker that fetches it from
+    another gets no cache with it); the worker's working copy caches its chunks between rounds.
+    """
+    token, ctx = kept
+    with _LIVE_LOCK:
+        if token not in _LIVE:
+            _LIVE.clear()  # one fit's cache per process
+            _LIVE[token] = replace(ctx, cache={})
+        live = _LIVE[token]
+    part.alpha, part.ref_alpha, part.round = shared
+    sub, phi, phi_ref, num, den = _fit_chunk(live, part, s, e)
+    sub.alpha = None  # the caller has it
+    return sub, phi, phi_ref, compact(num), compact(den)
 
 
 @dataclass
@@ -542,15 +643,10 @@ def _load_chunk(ctx: FitContext, state: FitState, s: int, e: int) -> _Chunk:
 
 def _group_profiles(ctx: FitContext, state: FitState, sl: slice, r_g: np.ndarray) -> np.ndarray:
     """Each point's profile at the group radii, (k, G, C, m), without α or colour scale."""
-    if ctx.kind in ("dipole", "burley"):
+    if ctx.kind in BASELINES:
         p = state.p[sl][:, None]  # (k, 1, 3, 2)
         r = r_g[None, :, None]
-        f = (
-            dipole_R_d(r, p[..., 0], p[..., 1], ctx.eta)
-            if ctx.kind == "dipole"
-            else burley_R(r, p[..., 0], p[..., 1])
-        )
-        return f[..., None]
+        return _BASELINE_R[ctx.kind](r, p[..., 0], p[..., 1], ctx.eta)[..., None]
     return _exp_sum(state.c[sl][:, None], state.a[sl][:, None], r_g[None, :, None, None])
 
 
@@ -658,7 +754,7 @@ def _fit_chunk(ctx: FitContext, glob: FitState, s: int, e: int):
         if glob.round[0] == 1:  # round 2 starts from the reference: its Φ under its own weights
             phi_ref = _objective(w2 * usable[:, None, None], ref_model, ch.y)
         del ref_model
-    if ctx.kind in ("dipole", "burley"):
+    if ctx.kind in BASELINES:
         _fit_baseline(ctx, state, sl, ch, w2)
     else:
         _fit_exponential(ctx, state, sl, ch, w2)
@@ -814,8 +910,8 @@ def _fit_baseline(ctx: FitContext, state: FitState, sl: slice, ch: _Chunk, w2) -
     """Dipole or Burley: two positive parameters per point and channel."""
     k = ch.y.shape[0]
     W, Y = _grouped(ch.rings, ch.r_g.size, 3, w2, ch.alpha, ch.y)
-    profile = _dipole_profile(ctx.eta) if ctx.kind == "dipole" else _burley_profile
-    starts = _DIPOLE_STARTS if ctx.kind == "dipole" else _BURLEY_STARTS
+    profile = _burley_profile if ctx.kind == "burley" else _physical_profile(ctx.kind, ctx.eta)
+    starts = _BURLEY_STARTS if ctx.kind == "burley" else _DIPOLE_STARTS
     p = state.p[sl].reshape(-1, 2)
     ready = np.repeat(state.ready[sl], 3)
     if ready.any():  # warm: the previous round's parameters, kept unless the refit is better
@@ -848,7 +944,7 @@ def _update_alpha(state: FitState, kind: str, smooth=None) -> float:
     change = float(np.sum(den[seen] * ((new - best[seen]) ** 2 - (old - best[seen]) ** 2)))
     # mean α = 1 over the observed pixels, the profiles' amplitudes take the scale (α P unchanged,
     # so Φ too); the dipole has no free amplitude, its α keeps the scale
-    if kind != "dipole" and shown.any():
+    if kind not in _PHYSICAL and shown.any():
         mean = float(alpha[shown].mean())
         if mean > 0:
             alpha = np.where(shown, alpha / mean, 1.0)
@@ -866,8 +962,9 @@ def _build_model(ctx: FitContext, state: FitState):
     """The fitted reflectance model of the family, with the source's α and frames."""
     alpha = ctx.source.make_alpha(state.alpha)
     frame = getattr(ctx.source, "frame", None)
-    if ctx.kind == "dipole":
-        return DipoleModel(ctx.x_i, state.p[:, :, 0], state.p[:, :, 1], ctx.eta, alpha, frame=frame)
+    if ctx.kind in _PHYSICAL:
+        cls = {"dipole": DipoleModel, "pbd": PBDModel, "ddipole": DirectionalDipoleModel}[ctx.kind]
+        return cls(ctx.x_i, state.p[:, :, 0], state.p[:, :, 1], ctx.eta, alpha, frame=frame)
     if ctx.kind == "burley":
         return BurleyModel(ctx.x_i, state.p[:, :, 0], state.p[:, :, 1], alpha, frame=frame)
     d = -state.a

@@ -85,6 +85,7 @@ def fit_mesh(
     chunk_points: int = 32,
     workers: int | None = None,
     progress=None,
+    scheduler: str | None = "threads",
 ) -> FitResult:
     """Fit the isotropic model (or a baseline) per incident vertex of a mesh data set, with α per vertex.
 
@@ -108,6 +109,9 @@ def fit_mesh(
         hold e⁻³ of its value at the nearest vertices, or the data cannot tell its amplitude (a steeper
         term is unconstrained and blows the total 2π Σ c/d² up).  The slowest is 9.23 / (object's size D):
         each term then holds 99.9 % of its energy, (1 + aD) e^{-aD} = 10⁻³, within the object.
+    scheduler : str, optional
+        Where the chunks run: ``"threads"`` (default), ``"local:N"`` or ``"tcp://HOST:PORT"``
+        (:mod:`translucency.cluster`); the result is the same bit for bit.
 
     Returns
     -------
@@ -187,6 +191,7 @@ def fit_mesh(
         checkpoint=None,
         progress=progress,
         t0=t0,
+        scheduler=scheduler,
     )
     if model == "iso":
         result.options["scaled_to_albedo_bound"] = bound_albedo(result.model).tolist()

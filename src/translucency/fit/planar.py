@@ -11,7 +11,9 @@ per-incident-point profile of the chosen family:
 ``iso``     :math:`(1, s_g, s_b) \sum_k c_k e^{d_k r}` (the paper's isotropic model),
 ``aniso``   :math:`(1, s_g, s_b) \sum_l w_l(\theta) \sum_k c_{lk} e^{d_{lk} r}` (m directions),
 ``dipole``  Jensen's dipole with per-point, per-channel :math:`\sigma_a, \sigma_s'`,
-``burley``  Christensen–Burley with per-point, per-channel A and s.
+``burley``  Christensen–Burley with per-point, per-channel A and s,
+``pbd``     photon beam diffusion (Habel et al. 2013) with per-point, per-channel σ_a, σ_s',
+``ddipole`` the directional dipole (Frisvad et al. 2014) at normal incidence, likewise.
 
 (``colour="per-channel"`` gives the exponential families one fall-off per
 channel instead of the colour scale.)  r (mm) and θ (rad, in the sample's
@@ -52,9 +54,31 @@ from .._validate import TranslucencyError
 from ..geometry import SampleGrid, window_geometry
 from ..io.dataset import PlanarDataset, open_dataset
 from ..model import PlanarAlpha
-from ._alternation import POOL_POINTS, FitContext, FitResult, alternate, check_fit_options
+from ._alternation import (
+    AUTO_DIRECTIONS,
+    AUTO_TERMS,
+    POOL_POINTS,
+    FitContext,
+    FitResult,
+    alternate,
+    check_fit_options,
+)
 
-__all__ = ["FitResult", "PlanarFit", "check_fit_options", "fit_planar"]
+__all__ = [
+    "FitResult",
+    "PlanarFit",
+    "check_fit_options",
+    "fit_planar",
+    "held_out_error",
+    "pair_half",
+    "select_model",
+]
+
+#: model selection scores held-out pairs from this distance (mm) on: the two interleaved halves have
+#: different exact radii near x_i, and a per-direction fit from half the pixels extrapolates between them
+#: (scored over all radii, near-field spikes hid the fibers' anisotropy; from 1 mm on: fibers m = 16,
+#: homogeneous marble m = 1)
+NEAR_MM = 1.0
 
 #: the result of :func:`fit_planar` (the name before the alternation was shared with meshes)
 PlanarFit = FitResult
@@ -79,7 +103,10 @@ def fit_planar(
     workers: int | None = None,
     cache_mb: float = 512,
     checkpoint=None,
+    half: int | None = None,
+    select_tol: float = 0.01,
     progress: Callable[[int, int, str], None] | None = None,
+    scheduler: str | None = "threads",
 ) -> FitResult:
     """Fit a model family to every incident point of a planar data set, with α.
 
@@ -87,12 +114,14 @@ def fit_planar(
     ----------
     dataset : PlanarDataset or path
         The measurement (:func:`translucency.io.dataset.open_dataset`).
-    model : {"iso", "aniso", "dipole", "burley"}
+    model : {"iso", "aniso", "dipole", "burley", "pbd", "ddipole"}
         Model family (see the module docstring).
-    n_terms : int
-        n, exponential terms per profile (1–4).
-    n_directions : int
-        m, directions of the anisotropic model (≥ 2).
+    n_terms : int or "auto"
+        n, exponential terms per profile (1–4); ``"auto"``: chosen from 1–4 by
+        held-out error (:func:`select_model`).
+    n_directions : int or "auto"
+        m, directions of the anisotropic model (≥ 2); ``"auto"``: chosen from
+        {1, 2, 4, 8, 16} by held-out error (m = 1: the isotropic model).
     colour : {"shared", "per-channel"}
         Exponential families: the paper's (1, s_g, s_b) scale of one fall-off,
         or one fall-off per channel.
@@ -124,8 +153,20 @@ def fit_planar(
         beyond it are read again from the store each round.
     checkpoint : path, optional
         Save the state after each chunk and resume from it.
+    half : {0, 1}, optional
+        Fit only the pairs (point i, sample-grid pixel (row, col)) with
+        (row + col + i) mod 2 = ``half``: two interleaved halves of every window,
+        alternating between points, so that α at a pixel held out in one window is
+        fitted from the others (held-out evaluation, :func:`held_out_error`).  Default: all pairs.
+    select_tol : float
+        Model selection: the simplest candidate whose held-out squared error is
+        within this fraction of the best one's is chosen.
     progress : callable, optional
         ``progress(done, total, message)``.
+    scheduler : str, optional
+        Where the chunks run: ``"threads"`` (default), ``"local:N"`` or ``"tcp://HOST:PORT"``
+        (:mod:`translucency.cluster`; the data set's path must be visible to the workers).  The
+        result is the same bit for bit; ``cache_mb`` is then per worker.
 
     Returns
     -------
@@ -141,6 +182,14 @@ def fit_planar(
     ds = dataset if isinstance(dataset, PlanarDataset) else open_dataset(dataset)
     if not ds.complete():
         raise TranslucencyError(f"{ds.path}: the acquisition is unfinished; resume it before fitting")
+    if "auto" in (n_terms, n_directions):  # model selection by held-out error, then the chosen fit
+        if not (select_tol >= 0 and np.isfinite(select_tol)):
+            raise TranslucencyError(f"select_tol: must be >= 0, got {select_tol}")
+        kw = dict(colour=colour, exclusion_mm=exclusion_mm, weighting=weighting, rel_sigma=rel_sigma,
+                  max_rounds=max_rounds, tol=tol, radius_step=radius_step, sweeps=sweeps, balance=balance,
+                  chunk_points=chunk_points, workers=workers, cache_mb=cache_mb)  # fmt: skip
+        return select_model(ds, model, n_terms, n_directions, select_tol=select_tol, checkpoint=checkpoint,
+                            progress=progress, scheduler=scheduler, **kw)  # fmt: skip
     pitch = ds.pitch
     exclusion = pitch if exclusion_mm is None else float(exclusion_mm)
     if exclusion < 0 or not np.isfinite(exclusion):
@@ -185,7 +234,12 @@ def fit_planar(
         sort_keys=True,
     )
 
-    source = _PlanarSource(ds, grid, origin, photons and 1.0 / (float(photons) * pitch * pitch))
+    if half is not None:
+        if half not in (0, 1):
+            raise TranslucencyError(f"half: expected 0 or 1, got {half!r}")
+        options["half"] = int(half)
+        request = json.dumps({**json.loads(request), "half": int(half)}, sort_keys=True)
+    source = _PlanarSource(ds, grid, origin, photons and 1.0 / (float(photons) * pitch * pitch), half)
     ctx = FitContext(
         source=source,
         kind=model,
@@ -213,14 +267,18 @@ def fit_planar(
         checkpoint=checkpoint,
         progress=progress,
         t0=t0,
+        scheduler=scheduler,
     )
 
 
 class _PlanarSource:
     """Windows of a planar data set: pixels on the sample grid, α on that grid."""
 
-    def __init__(self, ds: PlanarDataset, grid: SampleGrid, origin: np.ndarray, poisson: float | None):
+    def __init__(
+        self, ds: PlanarDataset, grid: SampleGrid, origin: np.ndarray, poisson: float | None, half=None
+    ):
         self.ds, self.grid, self.origin, self.poisson = ds, grid, origin, poisson or 0.0
+        self.half = half  # None, or the half of the pairs the fit may use (:func:`pair_half`)
         self.alpha_shape = grid.shape
         self.pitch = grid.pitch
 
@@ -233,6 +291,10 @@ class _PlanarSource:
         mask = ds.read("mask", s, e).reshape(k, -1)
         geom = window_geometry(ctx.x_i[s:e], self.origin[s:e], self.grid, ds.window)
         valid = mask & np.isfinite(y @ ones) & (geom.r >= ctx.exclusion)
+        if self.half is not None:  # held-out evaluation: the other half of the pairs is left out
+            valid &= (
+                pair_half(np.arange(s, e), np.broadcast_to(geom.pixel, valid.shape), self.grid) == self.half
+            )
         var = None
         if not self.poisson > 0:  # with a photon count the weights use the model's Poisson variance
             var = ds.read("variance", s, e).astype(np.float32).reshape(k, -1, 3)
@@ -242,3 +304,116 @@ class _PlanarSource:
 
     def make_alpha(self, values: np.ndarray):
         return PlanarAlpha(values.copy(), self.grid.origin, self.grid.pitch)
+
+
+def pair_half(i, pixel, grid: SampleGrid) -> np.ndarray:
+    """The half (0 or 1) of each pair (point i (k,), sample-grid pixel (k, J)): (row + col + i) mod 2."""
+    return (pixel // grid.shape[1] + pixel % grid.shape[1] + np.asarray(i)[:, None]) % 2
+
+
+def held_out_error(fit: FitResult, ds: PlanarDataset, *, near: float = 0.0, chunk_points: int = 256) -> float:
+    """Relative L2 error ‖αP − y‖ / ‖y‖ of a fit made on one ``half`` over the other half's pairs.
+
+    α at a held-out pair's pixel comes from the windows where that pixel was
+    fitted; pixels no fitted pair covers take the mean α of their fitted
+    4-neighbours.  Pairs as in the fit (mask set, finite, flagged points left
+    out), from the smallest radius the fit saw in each window on: the halves
+    interleave, so the first held-out ring may lie inside the first fitted one,
+    and a profile is not asked to extrapolate towards x_i.
+
+    Examples
+    --------
+    >>> e = held_out_error(fit_planar(ds, "iso", half=0), ds)   # doctest: +SKIP
+    """
+    model, fitted = fit.model, int(fit.options["half"])
+    grid = SampleGrid.covering(ds["window_origin"].astype(np.float64), ds.pitch, ds.window)
+    x_i = ds["x_i"].astype(np.float64)
+    origin = ds["window_origin"].astype(np.float64)
+    exclusion = float(fit.options.get("exclusion_mm", ds.pitch))
+
+    def pairs(s, e):  # data, geometry and the valid pairs of points s..e (both halves)
+        k = e - s
+        y = ds.read("R_d", s, e).astype(np.float64).reshape(k, -1, 3)
+        geom = window_geometry(x_i[s:e], origin[s:e], grid, ds.window)
+        r, theta = (np.broadcast_to(a, (k, y.shape[1])) for a in (geom.r, geom.theta))
+        pixel = np.broadcast_to(geom.pixel, r.shape)
+        valid = ds.read("mask", s, e).reshape(k, -1) & np.isfinite(y).all(axis=2) & (r >= exclusion)
+        valid &= ~fit.flagged[s:e, None]
+        return y, r, theta, pixel, valid, pair_half(np.arange(s, e), pixel, grid) == fitted
+
+    chunks = [(s, min(s + chunk_points, ds.n_points)) for s in range(0, ds.n_points, chunk_points)]
+    # the pixels some fitted pair covers; the others take their fitted neighbours' mean α
+    seen = np.zeros(grid.shape[0] * grid.shape[1], dtype=bool)
+    for s, e in chunks:
+        _, _, _, pixel, valid, train = pairs(s, e)
+        seen[pixel[valid & train]] = True
+    seen = seen.reshape(grid.shape)
+    alpha = np.asarray(model.alpha.values, dtype=np.float64)
+    pad_seen = np.pad(seen, 1).astype(np.float64)
+    padded = np.pad(alpha, 1) * pad_seen
+    num = padded[:-2, 1:-1] + padded[2:, 1:-1] + padded[1:-1, :-2] + padded[1:-1, 2:]
+    cnt = pad_seen[:-2, 1:-1] + pad_seen[2:, 1:-1] + pad_seen[1:-1, :-2] + pad_seen[1:-1, 2:]
+    alpha = np.where(seen, alpha, num / np.maximum(cnt, 1.0)).ravel()
+    sq_err = sq_data = 0.0
+    for s, e in chunks:
+        y, r, theta, pixel, valid, train = pairs(s, e)
+        # no inward extrapolation: held-out pairs from the smallest radius the fit saw in the window on
+        r_fit = np.where(valid & train, r, np.inf).min(axis=1, keepdims=True)
+        test = valid & ~train & (r >= np.maximum(r_fit, near))
+        i = np.broadcast_to(np.arange(s, e)[:, None], r.shape)
+        pred = alpha[pixel[test]][:, None] * model.profile(i[test], r[test], theta[test])
+        sq_err += float(np.sum((pred - y[test]) ** 2))
+        sq_data += float(np.sum(y[test] ** 2))
+    return float(np.sqrt(sq_err / max(sq_data, 1e-300)))
+
+
+def select_model(ds, model, n_terms, n_directions, *, select_tol=0.01, checkpoint=None, progress=None,
+                 scheduler="threads", **kw) -> FitResult:  # fmt: skip
+    """Choose n (1–4) and/or m ({1, 2, 4, 8, 16}) by held-out error, then fit the choice on all pixels.
+
+    The pairs (point, pixel) are split into two interleaved halves
+    (:func:`pair_half`: a checkerboard over each window's pixels, flipped from
+    one point to the next); every candidate is fitted on one half and scored by
+    :func:`held_out_error` on the other.  n is chosen first (with m = 1 when m is chosen too), then m with
+    that n; the simplest candidate whose held-out squared error lies within
+    ``select_tol`` of the best one's wins (ties to the simpler model: noise
+    never buys terms or directions).  m = 1 is the isotropic model.  The
+    returned fit's ``options["selection"]`` holds every candidate's held-out
+    error and the choice.  Per sample: one n and one m for all points.
+
+    Examples
+    --------
+    >>> fit = fit_planar(ds, "aniso", n_terms="auto", n_directions="auto")   # doctest: +SKIP
+    >>> fit.options["selection"]["chosen"]   # doctest: +SKIP
+    {'n_terms': 3, 'n_directions': 1}
+    """
+
+    def score(kind, n, m):  # fitted on half 0, scored on half 1
+        fit = fit_planar(ds, kind, n_terms=n, n_directions=max(m, 2), half=0, **kw)
+        return held_out_error(fit, ds, near=NEAR_MM)
+
+    def pick(errors: dict):  # the simplest candidate within select_tol (in squared error) of the best
+        best = min(errors.values())
+        return next(c for c, e in errors.items() if e**2 <= best**2 * (1.0 + select_tol))
+
+    selection = {}
+    n = n_terms
+    if n_terms == "auto" and model in ("iso", "aniso"):
+        kind = "iso" if n_directions == "auto" else model
+        m0 = 1 if n_directions == "auto" else int(n_directions)
+        errors = {c: score(kind, c, m0) for c in AUTO_TERMS}
+        n = pick(errors)
+        selection["n_terms"] = {str(c): e for c, e in errors.items()}
+    elif n_terms == "auto":  # the baselines have no terms
+        n = 3
+    m = n_directions
+    if n_directions == "auto":
+        errors = {c: score("iso" if c == 1 else "aniso", n, c) for c in AUTO_DIRECTIONS}
+        m = pick(errors)
+        selection["n_directions"] = {str(c): e for c, e in errors.items()}
+    final = model if m != 1 else "iso"
+    selection["chosen"] = {"n_terms": int(n), "n_directions": int(m)}
+    fit = fit_planar(ds, final, n_terms=n, n_directions=max(int(m), 2), checkpoint=checkpoint,
+                     progress=progress, scheduler=scheduler, **kw)  # fmt: skip
+    fit.options["selection"] = selection
+    return fit

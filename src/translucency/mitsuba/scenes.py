@@ -135,3 +135,57 @@ def spot_dict(position, target, cutoff_deg: float, intensity: float = 1.0, up=No
         "beam_width": SPOT_BEAM_FRACTION * float(cutoff_deg),
         "to_world": look_at(position, target, up),
     }
+
+
+def slab_shape_dict(volume, channel: int) -> dict:
+    """The slab of ``volume`` as a Mitsuba ``cube`` over [0, W] × [0, H] × [−T, 0] with a ``null`` BSDF
+    (index-matched boundary) holding one channel of the volume (:func:`slab_medium_dict`).
+
+    A dielectric boundary would render black under a delta light (next-event estimation cannot pass a
+    smooth interface), hence the index-matched slab of the virtual photographs and of ``validate``.
+    """
+    mi = mitsuba()
+    W, H, T = volume.size_mm
+    box = mi.ScalarTransform4f().translate([W / 2, H / 2, -T / 2]) @ mi.ScalarTransform4f().scale(
+        [W / 2, H / 2, T / 2]
+    )
+    return {
+        "type": "cube",
+        "to_world": box,
+        "bsdf": {"type": "null"},
+        "interior": slab_medium_dict(volume, channel),
+    }
+
+
+def perspective_camera_dict(
+    origin, target, fov_deg: float, width: int, height: int, spp: int = 16, up=None
+) -> dict:
+    """Mitsuba ``perspective`` sensor at ``origin`` looking at ``target`` (mm), horizontal field of view
+    ``fov_deg``, an RGB ``hdrfilm`` of ``width`` × ``height`` pixels with a box filter (a pixel's value is
+    the mean radiance over its footprint)."""
+    return {
+        "type": "perspective",
+        "fov": float(fov_deg),
+        "fov_axis": "x",
+        "near_clip": 1e-2,
+        "far_clip": 1e5,
+        "to_world": look_at(origin, target, up),
+        "film": {
+            "type": "hdrfilm",
+            "width": int(width),
+            "height": int(height),
+            "rfilter": {"type": "box"},
+            "pixel_format": "rgb",
+        },
+        "sampler": {"type": "independent", "sample_count": int(spp)},
+    }
+
+
+def marker_dict(x: float, y: float, radius: float, radiance: float = 1.0, z: float = 1e-3) -> dict:
+    """A glowing disc marker of ``radius`` (mm) lying on the plane z ≈ 0 at (x, y), facing +z (calibration
+    targets of the virtual rig)."""
+    mi = mitsuba()
+    to_world = mi.ScalarTransform4f().translate(
+        [float(x), float(y), float(z)]
+    ) @ mi.ScalarTransform4f().scale([float(radius), float(radius), 1.0])
+    return {"type": "disk", "to_world": to_world, "emitter": {"type": "area", "radiance": float(radiance)}}

@@ -1,0 +1,300 @@
+"""Virtual photographs of a virtual DISCO sample, rendered by Mitsuba 3: the test rig of the importer.
+
+A slab (:func:`translucency.mitsuba.scenes.slab_shape_dict`, index-matched: Mitsuba cannot pass a delta
+light through a smooth dielectric) is lit by a narrow ``spot`` beam straight down at each incident point
+and seen by a ``perspective`` camera at a known oblique pose (:class:`VirtualCamera`).  ``volpath``
+renders the radiance L per unit intensity of the spot, one grey channel of the volume at a time.  A
+sensor model (:func:`expose`) then turns radiance into raw pixel values: a gain ``k`` (value per unit
+radiance), vignetting, pixel response non-uniformity (the flat field), a dark offset, photon noise
+(``gain`` values per electron), read noise and clipping at the saturation level.
+
+The camera's plane-to-image homography follows from its pose (:meth:`VirtualCamera.homography`):
+with Mitsuba's ``look_at`` frame (left, up, forward) R, focal length f = (W/2)/tan(fov/2) pixels and the
+image centre c, ``H = K Rᵀ [e_x, e_y, −o]``, ``K = [[−f, 0, c_u], [0, −f, c_v], [0, 0, 1]]`` (u grows to
+the camera's right = −left, v downwards); pixel [row, col] is centred at (u, v) = (col, row).
+
+:func:`photograph_sample` writes what a lab would hand over: a folder of HDR images (PFM or EXR), a
+``positions.csv``, a dark frame, a flat field, a photograph of glowing calibration markers and a
+``calibration.json`` with the marked points.  Units: mm; the spot's power in W per W/sr of intensity.
+"""
+
+from __future__ import annotations
+
+import csv
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .._validate import TranslucencyError
+from ..io.atomic import atomic_path, write_json
+from ..mitsuba import SPOT_BEAM_FRACTION, mitsuba, spot_dict
+from ..mitsuba.scenes import marker_dict, perspective_camera_dict, slab_shape_dict
+from .calibration import Homography, find_markers, homography_from_points, match_markers
+from .hdr import write_exr, write_pfm
+
+NO_ROULETTE = 1 << 30  # an rr_depth volpath never reaches (see validate/volpath.py on roulette)
+
+
+@dataclass(frozen=True)
+class VirtualCamera:
+    """A pinhole camera at ``origin`` looking at ``target`` (mm) with a horizontal field of view (degrees)."""
+
+    origin: tuple[float, float, float]
+    target: tuple[float, float, float]
+    fov_deg: float = 36.0
+    width: int = 64
+    height: int = 64
+
+    def frame(self) -> np.ndarray:
+        """Rows left, up, forward of Mitsuba's ``look_at`` (up hint +z off the axis, as scenes.look_at)."""
+        o, t = np.asarray(self.origin, float), np.asarray(self.target, float)
+        fwd = (t - o) / np.linalg.norm(t - o)
+        hint = np.array([0.0, 0.0, 1.0]) if abs(fwd[2]) < 0.99 else np.array([0.0, 1.0, 0.0])
+        left = np.cross(hint, fwd)
+        left /= np.linalg.norm(left)
+        return np.stack([left, np.cross(fwd, left), fwd])
+
+    def homography(self) -> Homography:
+        """The plane z = 0 → image homography of this pose (see the module's notes).
+
+        Examples
+        --------
+        >>> cam = VirtualCamera((5.0, 5.0, 20.0), (5.0, 5.0, 0.0), 40.0, 64, 64)
+        >>> np.round(cam.homography().to_image([[5.0, 5.0]]), 6).tolist()
+        [[31.5, 31.5]]
+        """
+        R = self.frame()
+        f = 0.5 * self.width / np.tan(np.radians(self.fov_deg) / 2)
+        K = np.array([[-f, 0, 0.5 * self.width - 0.5], [0, -f, 0.5 * self.height - 0.5], [0, 0, 1.0]])
+        o = np.asarray(self.origin, float)
+        M = K @ np.column_stack([R[:, 0], R[:, 1], -R @ o])
+        return Homography.from_matrix(M, "camera pose")
+
+    def sensor_dict(self, spp: int) -> dict:
+        return perspective_camera_dict(self.origin, self.target, self.fov_deg, self.width, self.height, spp)
+
+
+@dataclass(frozen=True)
+class Beam:
+    """The laser of the virtual rig: a spot at ``distance_mm`` above the point, lighting a disc of
+    ``radius_mm`` (Mitsuba's linear fall-off from :data:`SPOT_BEAM_FRACTION` of the cutoff)."""
+
+    radius_mm: float = 0.3
+    distance_mm: float = 50.0
+
+    @property
+    def cutoff_deg(self) -> float:
+        return float(np.degrees(np.arctan(self.radius_mm / self.distance_mm)))
+
+    def power(self) -> float:
+        """Power (W) per unit intensity (W/sr): 2π ∫ f(θ) sin θ dθ over the cone, in float64."""
+        tc = np.radians(self.cutoff_deg)
+        tw = SPOT_BEAM_FRACTION * tc
+        th = np.linspace(0.0, tc, 20001)
+        f = np.where(th <= tw, 1.0, (tc - th) / (tc - tw))
+        return float(2 * np.pi * np.trapezoid(f * np.sin(th), th))
+
+    def emitter_dict(self, x: float, y: float) -> dict:
+        return spot_dict((x, y, self.distance_mm), (x, y, 0.0), self.cutoff_deg, 1.0, up=(0.0, 1.0, 0.0))
+
+
+def render_radiance(
+    volume, camera: VirtualCamera, beam: Beam, x_i, *, spp: int = 64, seed: int = 0, channels=(0, 1, 2)
+):
+    """Radiance (H, W, 3) per unit spot intensity of the slab lit at ``x_i``, one ``volpath`` render per
+    channel in ``channels`` (the others copy the last rendered: for grey volumes, render one)."""
+    mi = mitsuba()
+    out = np.zeros((camera.height, camera.width, 3), np.float32)
+    for c in range(3):
+        if c not in channels:
+            out[..., c] = out[..., c - 1]
+            continue
+        scene = mi.load_dict(
+            {
+                "type": "scene",
+                "integrator": {"type": "volpath", "max_depth": -1, "rr_depth": NO_ROULETTE},
+                "slab": slab_shape_dict(volume, c),
+                "spot": beam.emitter_dict(float(x_i[0]), float(x_i[1])),
+                "camera": camera.sensor_dict(spp),
+            }
+        )
+        out[..., c] = np.array(mi.render(scene, spp=int(spp), seed=3 * int(seed) + c))[..., 0]
+    return out
+
+
+def render_markers(camera: VirtualCamera, markers_mm, radius_mm: float = 0.25, spp: int = 16) -> np.ndarray:
+    """A photograph (H, W, 3) of glowing disc markers at ``markers_mm`` (N, 2) on the plane z = 0."""
+    mi = mitsuba()
+    scene = {"type": "scene", "integrator": {"type": "direct"}, "camera": camera.sensor_dict(spp)}
+    for k, (x, y) in enumerate(np.asarray(markers_mm, float)):
+        scene[f"marker{k}"] = marker_dict(x, y, radius_mm)
+    return np.array(mi.render(mi.load_dict(scene), spp=int(spp), seed=0), dtype=np.float32)
+
+
+@dataclass(frozen=True)
+class Sensor:
+    """Raw pixel value = clip(Poisson(k·L·vig·prnu / gain)·gain + dark + N(0, read²), saturation).
+
+    ``k``: value per unit radiance; ``gain``: values per electron; ``vignetting``: (k1, k2) of
+    1 + k1 ρ² + k2 ρ⁴ (ρ from the image centre in half-diagonals); ``prnu``: relative spread of the
+    pixels' response (the flat field); ``dark``: mean dark offset (with a gentle gradient).
+    """
+
+    k: float = 5e6
+    gain: float = 0.01
+    read_noise: float = 0.02
+    dark: float = 0.5
+    vignetting: tuple = (-0.3, 0.05)
+    prnu: float = 0.02
+    saturation: float = 60.0
+
+    def frames(self, shape, seed: int = 0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The dark frame, the flat field (mean 1) and the vignetting fall-off of this sensor."""
+        rng = np.random.default_rng(seed)
+        H, W = shape[:2]
+        v, u = np.mgrid[0:H, 0:W].astype(np.float32)
+        dark = self.dark * (1 + 0.2 * (u / W - 0.5))[..., None] * np.ones(3, np.float32)
+        flat = 1 + self.prnu * rng.standard_normal((H, W, 3)).astype(np.float32)
+        flat /= flat.mean()
+        rho2 = ((u - (W - 1) / 2) ** 2 + (v - (H - 1) / 2) ** 2) / (0.25 * (W * W + H * H))
+        vig = np.ones_like(rho2)
+        for i, c in enumerate(self.vignetting, start=1):
+            vig = vig + c * rho2**i
+        return dark.astype(np.float32), flat.astype(np.float32), vig[..., None].astype(np.float32)
+
+    def expose(self, radiance: np.ndarray, seed: int = 0, frames_seed: int = 0) -> np.ndarray:
+        """Raw pixel values of one exposure of ``radiance``."""
+        dark, flat, vig = self.frames(radiance.shape, frames_seed)
+        rng = np.random.default_rng(seed)
+        signal = np.maximum(self.k * radiance * vig * flat, 0.0)
+        electrons = rng.poisson(signal / self.gain) if self.gain > 0 else signal
+        raw = electrons * self.gain + dark + self.read_noise * rng.standard_normal(radiance.shape)
+        return np.minimum(raw, self.saturation).astype(np.float32)
+
+
+def photograph_sample(
+    volume,
+    x_i,
+    folder,
+    *,
+    camera: VirtualCamera,
+    beam: Beam | None = None,
+    sensor: Sensor | None = None,
+    spp: int = 64,
+    seed: int = 0,
+    channels=(0, 1, 2),
+    image_format: str = "pfm",
+    markers_mm=None,
+    scale=None,
+    reference: dict | None = None,
+) -> dict:
+    """Photograph ``volume`` lit at each of ``x_i`` (P, 2) and write a lab's hand-over into ``folder``.
+
+    Files: ``shot_NNN.pfm|exr`` (raw pixel values), ``positions.csv`` (file, x, y, power),
+    ``dark.pfm``, ``flat.pfm``, ``markers.pfm`` and ``calibration.json`` (marked points found in the marker
+    photograph, the dark and flat frames, vignetting, noise model, saturation and — if given — the
+    radiometric ``scale``, or a ``reference``: {"volume", "x" (mm), "radius_mm", "total" (its known
+    reflectance within that radius, R, G, B), "exposure_s"} photographed into ``reference.pfm``).
+
+    Returns
+    -------
+    dict
+        ``homography`` (the true one, from the pose), ``marked`` (estimated one), ``rms_px``, ``power``.
+    """
+    beam = beam or Beam()
+    sensor = sensor or Sensor()
+    if image_format not in ("pfm", "exr"):
+        raise TranslucencyError(f"format: pfm or exr, got {image_format!r}")
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    x_i = np.asarray(x_i, float).reshape(-1, 2)
+    power = beam.power()
+    rows = []
+    shape = (camera.height, camera.width, 3)
+    for j, p in enumerate(x_i):
+        L = render_radiance(volume, camera, beam, p, spp=spp, seed=seed + j, channels=channels)
+        raw = sensor.expose(L, seed=1000 + seed + j)
+        name = f"shot_{j:03d}.{image_format}"
+        _write(folder / name, raw)
+        rows.append({"file": name, "x": f"{p[0]:.6f}", "y": f"{p[1]:.6f}", "power": f"{power:.9g}"})
+    with atomic_path(folder / "positions.csv") as tmp:
+        with open(tmp, "w", newline="") as f:
+            w = csv.DictWriter(f, fieldnames=["file", "x", "y", "power"])
+            w.writeheader()
+            w.writerows(rows)
+    dark, flat, _ = sensor.frames(shape)
+    _write(folder / "dark.pfm", dark)
+    _write(folder / "flat.pfm", flat)
+    if markers_mm is None:
+        markers_mm = default_markers(x_i, camera)
+    photo = render_markers(camera, markers_mm)
+    _write(folder / "markers.pfm", photo)
+    truth = camera.homography()
+    found = match_markers(markers_mm, find_markers(photo, len(markers_mm)), truth)
+    est, rms = homography_from_points(markers_mm, found)
+    calib = {
+        "points": {"sample_mm": np.asarray(markers_mm).tolist(), "image_px": found.tolist()},
+        "dark": "dark.pfm",
+        "flat": "flat.pfm",
+        "vignetting": list(sensor.vignetting),
+        "gain": sensor.gain,
+        "read_noise": sensor.read_noise,
+        "saturation": sensor.saturation,
+    }
+    if scale is not None:
+        calib["scale"] = np.asarray(scale).tolist()
+    if reference is not None:  # a photograph of a reference of known reflectance, at a shorter exposure
+        t = float(reference.get("exposure_s", 0.1))
+        L = render_radiance(
+            reference["volume"], camera, beam, reference["x"], spp=spp, seed=seed + 999, channels=channels
+        )
+        ref_sensor = Sensor(**{**sensor.__dict__, "k": sensor.k * t})
+        _write(folder / "reference.pfm", ref_sensor.expose(L, seed=seed + 4242))
+        calib["reference"] = {
+            "image": "reference.pfm",
+            "x": float(reference["x"][0]),
+            "y": float(reference["x"][1]),
+            "radius_mm": float(reference["radius_mm"]),
+            "total": np.asarray(reference["total"], float).tolist(),
+            "power": power,
+            "exposure_s": t,
+        }
+    write_json(folder / "calibration.json", calib)
+    return {"homography": truth, "marked": est, "rms_px": rms, "power": power}
+
+
+def default_markers(x_i, camera: VirtualCamera, margin_px: float = 4.0) -> np.ndarray:
+    """Eight markers on an ellipse around the incident points, as wide as the camera sees them whole."""
+    c = np.asarray(x_i, float).reshape(-1, 2).mean(axis=0)
+    a = np.radians(np.arange(8) * 45.0 + 10.0)
+    H = camera.homography()
+    for r in np.linspace(20.0, 0.5, 200):  # mm, shrinking until every marker is inside the picture
+        m = np.stack([c[0] + r * np.cos(a), c[1] + 0.8 * r * np.sin(a)], axis=1)
+        uv = H.to_image(m)
+        lo, hi = margin_px, np.array([camera.width, camera.height]) - 1 - margin_px
+        if np.all((uv >= lo) & (uv <= hi)):
+            return m
+    raise TranslucencyError("markers: the camera does not see the incident points")
+
+
+def _write(path: Path, image: np.ndarray) -> None:
+    with atomic_path(path) as tmp:
+        (write_pfm if path.suffix == ".pfm" else write_exr)(tmp, image)
+
+
+def homography_error(estimated: Homography, truth: Homography, xy) -> float:
+    """Largest image distance (pixels) between the two homographies' images of sample points ``xy``."""
+    return float(np.max(np.linalg.norm(estimated.to_image(xy) - truth.to_image(xy), axis=1)))
+
+
+__all__ = [
+    "VirtualCamera",
+    "Beam",
+    "Sensor",
+    "render_radiance",
+    "render_markers",
+    "photograph_sample",
+    "default_markers",
+    "homography_error",
+]

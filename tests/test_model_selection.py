@@ -1,0 +1,79 @@
+"""Model selection by held-out error (issue 13, item 3): n_terms="auto", n_directions="auto"."""
+
+import numpy as np
+import pytest
+
+from translucency._validate import TranslucencyError
+from translucency.acquire import PlanarSetup, acquire_planar, make_sample
+from translucency.fit.planar import fit_planar, held_out_error, pair_half
+from translucency.geometry import SampleGrid
+
+
+def _scan(tmp_path_factory, sample, seed=4):
+    """2 × 2 points over 2 mm, 100 k photons, 6 mm windows of 0.25 mm (as tests/test_evaluate.py)."""
+    vol = make_sample(sample, (12.0, 12.0, 6.0), 0.25, seed=seed)
+    setup = PlanarSetup(grid=(2, 2), span=(2.0, 2.0), pitch=0.25, window=6.0, photons=100_000, seed=seed,
+                        chunk_points=4)  # fmt: skip
+    return acquire_planar(vol, setup, tmp_path_factory.mktemp(sample.replace(":", "_")) / "scan.zarr")
+
+
+@pytest.fixture(scope="module")
+def homogeneous(tmp_path_factory):
+    return _scan(tmp_path_factory, "homogeneous:marble")
+
+
+@pytest.fixture(scope="module")
+def fibers(tmp_path_factory):
+    return _scan(tmp_path_factory, "fibers")
+
+
+def test_halves_interleave_and_alternate_between_points(homogeneous):
+    grid = SampleGrid.covering(homogeneous["window_origin"].astype(np.float64), 0.25, homogeneous.window)
+    pixel = np.arange(grid.shape[0] * grid.shape[1])[None, :].repeat(2, axis=0)
+    h = pair_half(np.array([0, 1]), pixel, grid)
+    assert abs(h[0].mean() - 0.5) < 0.01  # half of every window
+    assert (h[0] != h[1]).all()  # a pixel held out in one window is fitted in the next
+    row, col = np.divmod(pixel[0], grid.shape[1])
+    assert (h[0] != pair_half(np.array([0]), (pixel[0] + 1)[None], grid)[0])[col < grid.shape[1] - 1].all()
+
+
+def test_homogeneous_material_gets_one_direction(homogeneous):
+    fit = fit_planar(homogeneous, "aniso", n_terms="auto", n_directions="auto", max_rounds=3)
+    sel = fit.options["selection"]
+    assert sel["chosen"]["n_directions"] == 1
+    assert fit.model.kind == "exponential" and fit.model.n_directions == 1
+    assert fit.model.c.shape[-1] == sel["chosen"]["n_terms"]
+    e = sel["n_directions"]
+    # no direction count buys anything on held-out pairs (none more than 3 % below the isotropic error) ...
+    assert min(e.values()) >= e["1"] / 1.03
+    # ... and more terms than the data support do not help either: one term is clearly short
+    n = sel["n_terms"]
+    assert n["1"] > 1.5 * min(n.values())
+
+
+def test_fibers_get_many_directions(fibers):
+    fit = fit_planar(fibers, "aniso", n_terms=3, n_directions="auto", max_rounds=3)
+    sel = fit.options["selection"]
+    assert sel["chosen"]["n_directions"] >= 8
+    assert fit.model.n_directions == sel["chosen"]["n_directions"]
+    e = sel["n_directions"]
+    # the lamellae's anisotropy shows on held-out pairs: the chosen m beats isotropy by a wide margin
+    assert e[str(sel["chosen"]["n_directions"])] < 0.7 * e["1"]
+
+
+def test_held_out_error_of_the_right_model_is_near_its_in_sample_error(homogeneous):
+    """Fitted on half 0 and scored on half 1, the isotropic model is as good as on pairs it saw (it does not
+    fit the noise); a 16-direction fit is not better held out (it has nothing to find)."""
+    iso = fit_planar(homogeneous, "iso", half=0, max_rounds=3)
+    aniso = fit_planar(homogeneous, "aniso", n_directions=16, half=0, max_rounds=3)
+    e_iso, e_aniso = held_out_error(iso, homogeneous, near=1.0), held_out_error(aniso, homogeneous, near=1.0)
+    assert e_aniso >= e_iso * 0.99
+
+
+def test_bad_selection_options(homogeneous):
+    with pytest.raises(TranslucencyError, match="directions"):
+        fit_planar(homogeneous, "iso", n_directions="auto")
+    with pytest.raises(TranslucencyError, match="terms"):
+        fit_planar(homogeneous, "iso", n_terms="many")
+    with pytest.raises(TranslucencyError, match="half"):
+        fit_planar(homogeneous, "iso", half=2)

@@ -1,0 +1,562 @@
+"""A real rig's data (issue 15): HDR images of a scanned laser spot + camera calibration → planar data sets.
+
+Fast: readers, the LDR merge, homographies (matrix, marked points, checkerboard), an exact synthetic import
+(an analytic R_d photographed through a known homography), the corrections, the noise model, masks,
+resuming and one-line refusals; a tiny Mitsuba rig (markers against the pose, one photograph).
+Slow: the end-to-end — Mitsuba photographs of a heterogeneous slab, imported and fitted, against the fit
+of the photon tally of the same sample.
+"""
+
+import json
+
+import numpy as np
+import pytest
+import typer
+from typer.testing import CliRunner
+
+from translucency._validate import TranslucencyError
+from translucency.cli.rig import acquire_photographs_cmd, import_app
+from translucency.io.dataset import open_dataset
+from translucency.rig import (
+    Calibration,
+    Homography,
+    ImportSetup,
+    homography_from_checkerboard,
+    homography_from_points,
+    import_images,
+    merge_exposures,
+    read_hdr,
+    write_pfm,
+)
+from translucency.rig.hdr import write_exr
+from translucency.rig.photographs import VirtualCamera, homography_error
+
+runner = CliRunner()
+cli = typer.Typer()
+cli.add_typer(import_app, name="import")
+acquire = typer.Typer()
+acquire.command("photographs")(acquire_photographs_cmd)
+cli.add_typer(acquire, name="acquire")
+
+#: an oblique pose over a 10 × 10 mm sample: 40° from the normal, ~0.05 mm per pixel
+CAMERA = VirtualCamera((5.0, -4.0, 11.0), (5.0, 5.0, 0.0), 40.0, 240, 200)
+
+
+def profile(r):
+    """An analytic R_d(r), mm⁻² (two exponentials), per channel."""
+    r = np.asarray(r)[..., None]
+    c = np.array([[0.30, 0.20, 0.10], [0.02, 0.015, 0.01]])
+    d = np.array([[3.0, 4.0, 5.0], [0.8, 1.0, 1.3]])
+    return (c[0] * np.exp(-d[0] * r) + c[1] * np.exp(-d[1] * r)).astype(np.float64)
+
+
+def photograph(H, shape, x_i, scale=1.0, power=1.0, pixel="radiance", ss=4):
+    """The image a camera with homography H sees of profile() around x_i: each pixel the mean over ss × ss
+    points of its area in the image (radiance), or that times the pixel's footprint on the sample (flux)."""
+    Hh, Ww = shape
+    off = (np.arange(ss) + 0.5) / ss - 0.5
+    v, u = np.mgrid[0:Hh, 0:Ww].astype(float)
+    acc = np.zeros((Hh, Ww, 3))
+    for a in off:
+        for b in off:
+            xy = H.to_sample(np.stack([(u + a).ravel(), (v + b).ravel()], 1))
+            r = np.hypot(xy[:, 0] - x_i[0], xy[:, 1] - x_i[1])
+            val = profile(r)
+            if pixel == "flux":
+                val = val / H.pixels_per_mm2(xy)[:, None]
+            acc += val.reshape(Hh, Ww, 3)
+    return (acc / ss**2 * scale * power).astype(np.float32)
+
+
+def window_truth(x_i, origin, n, pitch, ss=8):
+    """profile() averaged over each window pixel (n, n, 3)."""
+    sub = (np.arange(n * ss) + 0.5) * pitch / ss
+    X, Y = np.meshgrid(origin[0] + sub, origin[1] + sub)
+    return profile(np.hypot(X - x_i[0], Y - x_i[1])).reshape(n, ss, n, ss, 3).mean(axis=(1, 3))
+
+
+def _lab(tmp_path, points=((4.0, 5.0), (6.0, 5.5)), **kw):
+    """A folder of analytic photographs + positions.csv; returns (folder, calibration, x_i)."""
+    folder = tmp_path / "rig"
+    folder.mkdir()
+    H = CAMERA.homography()
+    rows = ["file,x,y,power"]
+    for j, p in enumerate(points):
+        img = photograph(H, (CAMERA.height, CAMERA.width), p, scale=2.0, power=0.5 + j, **kw)
+        write_pfm(folder / f"shot_{j}.pfm", img)
+        rows.append(f"shot_{j}.pfm,{p[0]},{p[1]},{0.5 + j}")
+    (tmp_path / "positions.csv").write_text("\n".join(rows) + "\n")
+    return folder, Calibration(H, scale=2.0, pixel=kw.get("pixel", "radiance")), np.array(points)
+
+
+# -- readers and the merge -----------------------------------------------------------------------------
+def test_hdr_files_round_trip(tmp_path, rng):
+    img = rng.uniform(0, 50, (5, 7, 3)).astype(np.float32)
+    write_pfm(tmp_path / "a.pfm", img)
+    assert np.array_equal(read_hdr(tmp_path / "a.pfm"), img)
+    write_exr(tmp_path / "a.exr", img)
+    assert np.allclose(read_hdr(tmp_path / "a.exr"), img, rtol=1e-3)  # half or float, as Mitsuba writes
+    write_exr(tmp_path / "a.hdr", img)
+    err = np.abs(read_hdr(tmp_path / "a.hdr") - img)
+    assert np.all(err <= img.max(axis=2, keepdims=True) / 128)  # RGBE: 8-bit mantissas, a shared exponent
+    (tmp_path / "bad.pfm").write_bytes(b"PF\n4 4\n-1.0\n" + b"\0" * 10)
+    with pytest.raises(TranslucencyError, match="truncated"):
+        read_hdr(tmp_path / "bad.pfm")
+
+
+@pytest.mark.parametrize("gamma", [1.0, 2.2])
+def test_debevec_merge_recovers_radiance_over_a_wide_range(rng, gamma):
+    E = np.exp(rng.uniform(np.log(10.0), np.log(5e4), (40, 50, 3)))  # nearly four decades, per second
+    times = [1.0, 1 / 16, 1 / 256, 1 / 4096]
+    lut = 255.0 * (np.arange(256) / 255.0) ** gamma  # f⁻¹ as a table: code → linear exposure (scaled)
+    shots = []
+    for t in times:
+        lin = np.clip(E * t, 0, 255) / 255.0
+        shots.append(np.round(255 * lin ** (1 / gamma)).astype(np.uint8))
+    merged, var, sat, under = merge_exposures(shots, times, response=lut, read_noise=0.5)
+    ok = ~(sat | under)
+    rel = np.abs(merged / E - 1)[ok]
+    assert ok.mean() > 0.99 and np.median(rel) < (0.01 if gamma == 1 else 0.02) and rel.max() < 0.1
+    assert np.all(var[ok] > 0)
+    # a pixel brighter than the shortest exposure holds is flagged saturated
+    shots[-1][0, 0] = 255
+    shots[-2][0, 0] = 255
+    shots[0][0, 0] = shots[1][0, 0] = 255
+    assert merge_exposures(shots, times)[2][0, 0]
+
+
+# -- homographies --------------------------------------------------------------------------------------
+def test_homography_from_marked_points_and_refusals(rng):
+    H = CAMERA.homography()
+    xy = rng.uniform(0, 10, (9, 2))
+    est, rms = homography_from_points(xy, H.to_image(xy))
+    assert rms < 1e-6 and homography_error(est, H, xy) < 1e-6
+    noisy, rms = homography_from_points(xy, H.to_image(xy) + rng.normal(0, 0.2, (9, 2)))
+    assert 0.05 < rms < 0.3 and homography_error(noisy, H, [[5, 5]]) < 0.5
+    with pytest.raises(TranslucencyError, match="at least 4"):
+        homography_from_points(xy[:3], H.to_image(xy[:3]))
+    line = np.stack([np.arange(5.0), np.arange(5.0)], 1)
+    with pytest.raises(TranslucencyError, match="degenerate"):
+        homography_from_points(line, H.to_image(line))
+    with pytest.raises(TranslucencyError, match="singular"):
+        Homography.from_matrix([[1, 2, 3], [2, 4, 6], [0, 0, 1]])
+
+
+def test_homography_from_a_checkerboard_photograph():
+    H = CAMERA.homography()
+    v, u = np.mgrid[0 : CAMERA.height, 0 : CAMERA.width].astype(float)
+    img = np.zeros(u.shape)
+    for a in (-0.25, 0.25):  # a little anti-aliasing
+        for b in (-0.25, 0.25):
+            xy = H.to_sample(np.stack([(u + a).ravel(), (v + b).ravel()], 1))
+            q = np.floor((xy - [2.0, 2.0]) / 1.0).astype(int)  # 1 mm squares from (2, 2)
+            inside = (q >= 0).all(1) & (q < 7).all(1)
+            img += (((q.sum(1) % 2) == 0) & inside).reshape(u.shape) * 0.25
+    est, rms = homography_from_checkerboard(img, (6, 6), 1.0, origin_mm=(3.0, 3.0))
+    assert rms < 0.5 and homography_error(est, H, [[3, 3], [8, 8], [5.5, 5.5]]) < 0.5
+
+
+# -- the exact synthetic import ------------------------------------------------------------------------
+@pytest.mark.parametrize("pixel", ["radiance", "flux"])
+def test_imported_windows_equal_the_analytic_profile(tmp_path, pixel):
+    folder, calib, x_i = _lab(tmp_path, pixel=pixel)
+    setup = ImportSetup(pitch=0.25, window=3.0, supersample=4)
+    ds = import_images(folder, tmp_path / "positions.csv", calib, tmp_path / "out.zarr", setup)
+    R, origin = ds["R_d"], ds["window_origin"]
+    n = ds.window[0]
+    assert ds.header["units"]["R_d"] == "mm^-2" and ds.header["provenance"]["sha256"][0][0]
+    for j in range(2):
+        truth = window_truth(x_i[j], origin[j], n, 0.25)
+        cx = origin[j, 0] + 0.25 * (np.arange(n) + 0.5)
+        cy = origin[j, 1] + 0.25 * (np.arange(n) + 0.5)
+        r = np.hypot(*np.meshgrid(cx - x_i[j, 0], cy - x_i[j, 1]))
+        far = (r > 0.4) & ds["mask"][j]
+        rel = np.abs(R[j] / truth - 1)[far]
+        assert np.median(rel) < 0.005 and rel.max() < 0.03, (j, np.median(rel), rel.max())
+    # the window centre pixel holds x_i, on the lattice of an acquisition
+    assert np.allclose((origin / 0.25) % 1, 0.5, atol=1e-4) or np.allclose((origin / 0.25) % 1, 0, atol=1e-4)
+
+
+def test_corrections_undo_dark_flat_and_vignetting(tmp_path, rng):
+    folder, calib, x_i = _lab(tmp_path)
+    clean = import_images(
+        folder, tmp_path / "positions.csv", calib, tmp_path / "clean.zarr", ImportSetup(window=3.0)
+    )
+    shape = (CAMERA.height, CAMERA.width, 3)
+    dark = rng.uniform(0.1, 0.2, shape).astype(np.float32)
+    flat = rng.uniform(0.9, 1.1, shape).astype(np.float32)
+    flat /= flat.mean()
+    vig = Calibration(calib.homography, vignetting=(-0.3, 0.05))
+    v, u = np.mgrid[0 : shape[0], 0 : shape[1]]
+    fall = vig.falloff(u, v, shape)[..., None]
+    for j in range(2):
+        img = read_hdr(folder / f"shot_{j}.pfm")
+        write_pfm(folder / f"shot_{j}.pfm", img * fall * flat + dark)
+    cal = Calibration(calib.homography, scale=2.0, dark=dark, flat=flat, vignetting=(-0.3, 0.05))
+    ds = import_images(
+        folder, tmp_path / "positions.csv", cal, tmp_path / "raw.zarr", ImportSetup(window=3.0)
+    )
+    assert np.allclose(ds["R_d"], clean["R_d"], rtol=1e-4, atol=1e-7)
+
+
+def test_variance_follows_the_noise_model(tmp_path, rng):
+    from translucency.rig.importer import Shot, load_frame, resample_window
+
+    H = CAMERA.homography()
+    setup = ImportSetup(pitch=0.5, window=2.0, supersample=3)
+    calib = Calibration(H, scale=1.0, gain=0.05, read_noise=0.1)
+    signal = photograph(H, (CAMERA.height, CAMERA.width), (5.0, 5.0), scale=40.0, ss=1)
+    origin = np.array([4.0, 4.0]) + 0.5 * np.floor(0)  # a 4 × 4 window from (4, 4)
+    shot = Shot((tmp_path / "n.pfm",), (5.0, 5.0), "mm")
+    values = []
+    for _ in range(60):
+        noisy = rng.poisson(signal / calib.gain) * calib.gain + rng.normal(0, 0.1, signal.shape)
+        write_pfm(tmp_path / "n.pfm", noisy.astype(np.float32))
+        frame = load_frame(shot, calib, setup)
+        val, var, _ = resample_window(frame, calib, setup, (5.0, 5.0), origin)
+        values.append(val)
+    spread = np.var(values, axis=0, ddof=1)
+    ratio = np.median(spread / var)
+    # bilinear reads of neighbouring pixels correlate the sub-samples: the stated variance is an estimate
+    assert 0.5 < ratio < 2.0, ratio
+
+
+def test_masks_saturated_and_specular_pixels(tmp_path):
+    folder, calib, x_i = _lab(tmp_path, points=((5.0, 5.0),))
+    calib.saturation = 0.3  # the centre of the spot is clipped at 0.3 (scale 2 × power 0.5 × R_d)
+    img = read_hdr(folder / "shot_0.pfm")
+    write_pfm(folder / "shot_0.pfm", np.minimum(img, 0.3))
+    setup = ImportSetup(pitch=0.25, window=3.0, specular_radius=0.3)
+    ds = import_images(folder, tmp_path / "positions.csv", calib, tmp_path / "m.zarr", setup)
+    mask, R = ds["mask"][0], ds["R_d"][0]
+    n = ds.window[0]
+    c = n // 2
+    assert not mask[c, c]  # specular and saturated
+    assert (~mask).sum() > 1 and mask.mean() > 0.7
+    truth = window_truth(x_i[0], ds["window_origin"][0], n, 0.25)
+    assert np.abs(R[mask] / truth[mask] - 1).max() < 0.05  # what is kept is not clipped
+
+
+def test_json_table_in_pixels_with_repeated_frames(tmp_path):
+    folder, calib, x_i = _lab(tmp_path)
+    ref = import_images(
+        folder, tmp_path / "positions.csv", calib, tmp_path / "a.zarr", ImportSetup(window=3.0)
+    )
+    uv = calib.homography.to_image(x_i)
+    rows = []
+    for j in range(2):
+        img = read_hdr(folder / f"shot_{j}.pfm")
+        write_pfm(folder / f"rep_{j}a.pfm", img * 0.9)
+        write_pfm(folder / f"rep_{j}b.pfm", img * 1.1)
+        rows.append({"file": f"rep_{j}a.pfm;rep_{j}b.pfm", "u": uv[j, 0], "v": uv[j, 1], "power": 0.5 + j})
+    (tmp_path / "pos.json").write_text(json.dumps({"points": rows}))
+    ds = import_images(folder, tmp_path / "pos.json", calib, tmp_path / "b.zarr", ImportSetup(window=3.0))
+    assert np.allclose(ds["x_i"], x_i, atol=1e-5)
+    assert np.allclose(ds["R_d"], ref["R_d"], rtol=1e-5, atol=1e-9)
+    # two frames 0.9 and 1.1 times the mean: the variance of their mean is (0.1 · value)² / ... > 0
+    assert np.all(ds["variance"][ds["mask"]] > 0)
+    assert ds.header["acquisition"]["noise_model"] == "repeated frames"
+
+
+def test_ldr_brackets_import_like_the_hdr_image(tmp_path):
+    import imageio.v3 as iio
+
+    folder, calib, x_i = _lab(tmp_path, points=((5.0, 5.0),))
+    hdr = import_images(
+        folder, tmp_path / "positions.csv", calib, tmp_path / "h.zarr", ImportSetup(window=3.0)
+    )
+    img = read_hdr(folder / "shot_0.pfm") * 2e5  # radiance per second in codes
+    times = [1.0, 1 / 8, 1 / 64]
+    names = []
+    for t in times:
+        name = f"b_{round(1 / t)}.tif"  # 16-bit RGB TIFF
+        iio.imwrite(folder / name, np.clip(np.round(img * t), 0, 65535).astype(np.uint16))
+        names.append(name)
+    (tmp_path / "brackets.csv").write_text(
+        "file,x,y,power,exposure\n" + f"{';'.join(names)},5.0,5.0,0.5,{';'.join(map(str, times))}\n"
+    )
+    cal = Calibration(calib.homography, scale=2.0 * 2e5)
+    ds = import_images(folder, tmp_path / "brackets.csv", cal, tmp_path / "l.zarr", ImportSetup(window=3.0))
+    ok = ds["mask"][0]
+    assert ok.mean() > 0.9
+    assert np.allclose(ds["R_d"][0][ok], hdr["R_d"][0][ok], rtol=2e-3, atol=1e-6)
+
+
+# -- files, resuming, refusals -------------------------------------------------------------------------
+def test_cli_imports_resumes_and_refuses_changes(tmp_path):
+    folder, calib, _ = _lab(tmp_path)
+    (tmp_path / "cal.json").write_text(
+        json.dumps({"homography": calib.homography.matrix.tolist(), "scale": 2.0})
+    )
+    args = ["import", "images", str(folder), "-p", str(tmp_path / "positions.csv")]
+    args += [
+        "-c",
+        str(tmp_path / "cal.json"),
+        "--window",
+        "3",
+        "--chunk",
+        "1",
+        "-o",
+        str(tmp_path / "d.zarr"),
+    ]
+    res = runner.invoke(cli, args)
+    assert res.exit_code == 0, res.output
+    first = open_dataset(tmp_path / "d.zarr")["R_d"]
+    ds = open_dataset(tmp_path / "d.zarr", writable=True)
+    ds.group["chunk_done"][1] = False
+    ds.group["R_d"][1] = 0
+    res = runner.invoke(cli, args)  # resumes: redoes chunk 1 only
+    assert res.exit_code == 0 and np.array_equal(open_dataset(tmp_path / "d.zarr")["R_d"], first)
+    write_pfm(folder / "shot_1.pfm", read_hdr(folder / "shot_1.pfm") * 1.01)
+    res = runner.invoke(cli, args)  # an image changed: another import, not replaced without --overwrite
+    assert res.exit_code == 2 and "other arguments" in res.output
+    assert runner.invoke(cli, args + ["--overwrite"]).exit_code == 0
+
+
+def _refusal(tmp_path, break_it, match):
+    folder, calib, _ = _lab(tmp_path)
+    cal = {"homography": calib.homography.matrix.tolist(), "scale": 2.0}
+    break_it(folder, tmp_path, cal)
+    (tmp_path / "cal.json").write_text(json.dumps(cal))
+    args = ["import", "images", str(folder), "-p", str(tmp_path / "positions.csv")]
+    args += ["-c", str(tmp_path / "cal.json"), "--window", "3", "-o", str(tmp_path / "d.zarr")]
+    res = runner.invoke(cli, args)
+    assert res.exit_code == 2, res.output
+    line = res.output.strip()
+    assert line.startswith("error:") and len(line.splitlines()) == 1, line
+    assert match in line, line
+
+
+@pytest.mark.parametrize(
+    "case",
+    ["missing", "counts", "singular", "sizes", "nan", "points"],
+)
+def test_bad_input_is_refused_in_one_line(tmp_path, case):
+    def missing(folder, tmp, cal):
+        (folder / "shot_1.pfm").unlink()
+
+    def counts(folder, tmp, cal):  # no file column: two rows, three images
+        (tmp / "positions.csv").write_text("x,y\n4,5\n6,5.5\n")
+        write_pfm(folder / "shot_2.pfm", np.zeros((CAMERA.height, CAMERA.width, 3), np.float32))
+
+    def singular(folder, tmp, cal):
+        cal["homography"] = [[1, 2, 3], [2, 4, 6], [0, 0, 1]]
+
+    def sizes(folder, tmp, cal):
+        write_pfm(folder / "shot_1.pfm", np.zeros((10, 12, 3), np.float32))
+
+    def nan(folder, tmp, cal):
+        img = read_hdr(folder / "shot_1.pfm")
+        img[7, 9, 1] = np.nan
+        write_pfm(folder / "shot_1.pfm", img)
+
+    def points(folder, tmp, cal):
+        del cal["homography"]
+        cal["points"] = {
+            "sample_mm": [[0, 0], [1, 1], [2, 2], [3, 3]],
+            "image_px": [[0, 0], [1, 1], [2, 2], [3, 3]],
+        }
+
+    match = {
+        "missing": "shot_1.pfm is missing",
+        "counts": "2 laser positions but 3 images",
+        "singular": "singular",
+        "sizes": "12 x 10 pixels among images of 240 x 200",
+        "nan": "row 7, column 9, channel 1",
+        "points": "degenerate",
+    }[case]
+    _refusal(tmp_path, locals()[case], match)
+
+
+# -- the fitter reads an import ------------------------------------------------------------------------
+def test_fitter_reads_an_imported_data_set(tmp_path):
+    from translucency.fit import fit_planar
+
+    folder, calib, x_i = _lab(tmp_path)
+    ds = import_images(
+        folder, tmp_path / "positions.csv", calib, tmp_path / "d.zarr", ImportSetup(pitch=0.25, window=4.0)
+    )
+    fit = fit_planar(ds, "iso", n_terms=2, exclusion_mm=0.3)
+    model = fit.model
+    got = model.energy_within(np.arange(2), np.full(2, 2.0)) * model.alpha.values.mean()
+    r = np.linspace(0, 2, 4001)
+    want = np.trapezoid(2 * np.pi * r[:, None] * profile(r), r, axis=0)
+    assert np.allclose(got, want[None], rtol=0.05), (got, want)
+
+
+# -- a tiny Mitsuba rig --------------------------------------------------------------------------------
+def test_markers_photographed_by_mitsuba_give_the_pose(tmp_path):
+    from translucency.rig.calibration import find_markers, match_markers
+    from translucency.rig.photographs import default_markers, render_markers
+
+    cam = VirtualCamera((5.0, -4.0, 11.0), (5.0, 5.0, 0.0), 40.0, 96, 80)
+    markers = default_markers([[5.0, 5.0]], cam)
+    photo = render_markers(cam, markers, radius_mm=0.2)
+    truth = cam.homography()
+    found = match_markers(markers, find_markers(photo, len(markers)), truth)
+    est, rms = homography_from_points(markers, found)
+    err = homography_error(est, truth, [[4.0, 4.0], [6.0, 6.0], [5.0, 5.0], [4.0, 6.0]])
+    assert rms < 0.3 and err < 0.3, (rms, err)
+
+
+def test_cli_photographs_then_imports(tmp_path):
+    out = tmp_path / "shots"
+    res = runner.invoke(
+        cli,
+        [
+            "acquire",
+            "photographs",
+            "-o",
+            str(out),
+            "-m",
+            "homogeneous:skin1",
+            "--grid",
+            "1",
+            "--size",
+            "8",
+            "8",
+            "3",
+        ]
+        + ["--voxel", "1", "--resolution", "48", "40", "--spp", "8", "--camera", "0", "-6", "9"],
+    )
+    assert res.exit_code == 0, res.output
+    assert {"shot_000.pfm", "positions.csv", "calibration.json", "dark.pfm", "flat.pfm", "markers.pfm"} <= {
+        p.name for p in out.iterdir()
+    }
+    res = runner.invoke(
+        cli,
+        ["import", "images", str(out), "-p", str(out / "positions.csv"), "-c", str(out / "calibration.json")]
+        + [
+            "--scale",
+            "1e5",
+            "--window",
+            "3",
+            "--pitch",
+            "0.5",
+            "--specular-radius",
+            "0.3",
+            "-o",
+            str(tmp_path / "d.zarr"),
+        ],
+    )
+    assert res.exit_code == 0, res.output
+    ds = open_dataset(tmp_path / "d.zarr")
+    assert ds.n_points == 1 and ds.window == (7, 7) and ds["mask"].sum() > 20
+    assert ds.header["provenance"]["calibration"]["source"]["method"] == "points"
+
+
+# -- the end-to-end: Mitsuba photographs against the photon tally ---------------------------------------
+def rig_sample():
+    """A heterogeneous slab (12 × 12 × 4 mm): scattering rising along x, absorption in blobs, per channel."""
+    from translucency.acquire.volume import Volume
+
+    Z, Y, X = 8, 24, 24
+    x = (np.arange(X) + 0.5) / X
+    yy, xx = np.meshgrid((np.arange(Y) + 0.5) / Y, x, indexing="ij")
+    blob = 1 + 0.5 * np.exp(-((xx - 0.6) ** 2 + (yy - 0.4) ** 2) / 0.02)
+    ss = np.broadcast_to((1.6 + 0.8 * xx)[None, :, :, None], (Z, Y, X, 3)) * np.ones(3)
+    sa = np.broadcast_to(blob[None, :, :, None], (Z, Y, X, 3)) * np.array([0.05, 0.1, 0.2])
+    return Volume(ss.astype(np.float32), sa.astype(np.float32), 0.5, 0.0, 1.3, {"generator": "rig test"})
+
+
+def end_to_end(tmp_path, *, spp, photons, grid=2, resolution=(96, 80)):
+    """Photograph, import, fit; tally, fit; the figures of the comparison."""
+    from translucency.acquire import PlanarSetup, acquire_planar
+    from translucency.acquire.volume import Volume
+    from translucency.fit import fit_planar
+    from translucency.rig import load_calibration
+    from translucency.rig.photographs import Beam, Sensor, photograph_sample
+
+    vol = rig_sample()
+    window, pitch, exclusion, radius = 5.0, 0.25, 0.75, 2.4
+    setup = PlanarSetup(
+        grid=(grid, grid), span=(4.0, 4.0), pitch=pitch, window=window, photons=photons, index_matched=True
+    )
+    tally = acquire_planar(vol, setup, tmp_path / "tally.zarr")
+    x_i = setup.incident_points(vol)
+    # the reference: a homogeneous slab of the sample's mean coefficients, its reflectance within 2.4 mm known
+    ref_vol = Volume.homogeneous(
+        vol.shape, 0.5, vol.sigma_s.mean(axis=(0, 1, 2)), vol.sigma_a.mean(axis=(0, 1, 2)), 0.0, 1.3
+    )
+    ref_setup = PlanarSetup(
+        grid=(1, 1),
+        span=(0.1, 0.1),
+        pitch=pitch,
+        window=window,
+        photons=4 * photons,
+        index_matched=True,
+        seed=7,
+    )
+    ref = acquire_planar(ref_vol, ref_setup, tmp_path / "ref.zarr")
+    ref_x = ref_setup.incident_points(ref_vol)[0]
+    n = ref.window[0]
+    c = (np.arange(n) + 0.5) * pitch + ref["window_origin"][0, 0] - ref_x[0]
+    r = np.hypot(*np.meshgrid(c, c))
+    total = (ref["R_d"][0] * (r <= radius)[..., None]).sum(axis=(0, 1)) * pitch**2
+    camera = VirtualCamera((6.0, -3.0, 11.0), (6.0, 6.0, 0.0), 40.0, *resolution)
+    shots = tmp_path / "shots"
+    res = photograph_sample(
+        vol,
+        x_i,
+        shots,
+        camera=camera,
+        beam=Beam(0.25, 50.0),
+        sensor=Sensor(k=5e6),
+        spp=spp,
+        reference={"volume": ref_vol, "x": ref_x, "radius_mm": radius, "total": total, "exposure_s": 0.1},
+    )
+    calib = load_calibration(shots / "calibration.json")
+    imported = import_images(
+        shots,
+        shots / "positions.csv",
+        calib,
+        tmp_path / "photo.zarr",
+        ImportSetup(pitch=pitch, window=window, specular_radius=0.5, dilate=1),
+    )
+    P = len(x_i)
+    energy, rate = {}, {}
+    for key, ds in (("photo", imported), ("tally", tally)):
+        # two terms: the model's energy in the annulus the fit sees (exclusion .. radius), α included
+        m = fit_planar(ds, "iso", n_terms=2, exclusion_mm=exclusion).model
+        o, xi = ds["window_origin"].astype(float), ds["x_i"].astype(float)
+        pred = m.R_d_window(np.arange(P), o, pitch, ds.window)  # α · P at every window pixel
+        cx = o[:, 0, None] + pitch * (np.arange(n) + 0.5) - xi[:, 0, None]
+        cy = o[:, 1, None] + pitch * (np.arange(n) + 0.5) - xi[:, 1, None]
+        rr = np.hypot(cx[:, None, :], cy[:, :, None])
+        annulus = ((rr >= exclusion) & (rr <= radius))[..., None]
+        energy[key] = (pred * annulus).sum(axis=(1, 2)) * pitch**2
+        # one term: the fall-off rate of each point and channel
+        rate[key] = np.abs(fit_planar(ds, "iso", n_terms=1, exclusion_mm=exclusion).model.d).reshape(P, -1)
+    # the data themselves, ring by ring (0.75 .. 2.25 mm), where both are measured
+    o = imported["window_origin"]
+    ratios = []
+    for j in range(P):
+        cx = o[j, 0] + pitch * (np.arange(n) + 0.5) - x_i[j, 0]
+        cy = o[j, 1] + pitch * (np.arange(n) + 0.5) - x_i[j, 1]
+        rr = np.hypot(*np.meshgrid(cx, cy))
+        ok = imported["mask"][j]
+        for lo in np.arange(0.75, 2.25, 0.5):
+            ring = ok & (rr >= lo) & (rr < lo + 0.5)
+            if ring.sum() > 3:
+                ratios.append(imported["R_d"][j][ring].mean(0) / tally["R_d"][j][ring].mean(0))
+    truth_H, marked_H = res["homography"], res["marked"]
+    figures = {
+        "median_rel_diff_energy": float(np.median(np.abs(energy["photo"] / energy["tally"] - 1))),
+        "median_rel_diff_rate": float(np.median(np.abs(rate["photo"] / rate["tally"] - 1))),
+        "median_rel_diff_rings": float(np.median(np.abs(np.array(ratios) - 1))),
+        "homography_error_px": homography_error(marked_H, truth_H, x_i),
+        "marker_rms_px": res["rms_px"],
+        "masked_fraction": float(1 - imported["mask"].mean()),
+        "scale": np.asarray(calib.scale).tolist(),
+    }
+    return figures
+
+
+@pytest.mark.slow
+def test_photographs_import_and_fit_like_the_photon_tally(tmp_path):
+    figures = end_to_end(tmp_path, spp=128, photons=40_000)
+    print("rig end-to-end:", json.dumps(figures))
+    assert figures["homography_error_px"] < 0.3
+    assert figures["median_rel_diff_rings"] < 0.1
+    assert figures["median_rel_diff_energy"] < 0.1
+    assert figures["median_rel_diff_rate"] < 0.1
