@@ -8,7 +8,10 @@ Measures, and writes to ``bench_data/scale_out.json``:
    beforehand, workers warmed up), and in this process (threads) for reference; the ratio 2 / 1 worker;
    the decoded data rate per worker (R_d, variance and mask of every chunk read, per round).
 2. **Memory per worker**: the peak resident set of each worker during the fit over its resident set
-   before it (sampled every 10 ms in the worker), against one chunk's decoded data and the data set.
+   before it (sampled every 10 ms in the worker), against one chunk's decoded data and the data set;
+   the same for the driver (this process), and the bytes of α's statistics the driver holds: one
+   running sum per statistic (one sample grid each) against the grid per chunk kept before issue 16's
+   follow-up.
 3. **Scheduler overhead**: empty tasks through the same path the fit's tasks take (per task), times the
    fit's task count, as a share of the fit's time; and the fit on ``local:1`` against threads with one
    thread (everything the cluster adds: transfers, α sent per round, results sent back).
@@ -17,7 +20,9 @@ Measures, and writes to ``bench_data/scale_out.json``:
 Every result is also checked bit-identical to the threads run.  The machine may be shared: the load
 average before and after is recorded.
 
-    python benchmarks/scale_out.py [--copies 16] [--rounds 2] [--memory-limit 1GiB]
+    python benchmarks/scale_out.py [--copies 16] [--rounds 2] [--memory-limit 1GiB] [--skip-acquire]
+
+(``--skip-acquire`` writes ``bench_data/scale_out_fit_COPIES.json``.)
 """
 
 from __future__ import annotations
@@ -97,6 +102,29 @@ def _stop_sampler(dask_worker=None):
     return state["peak"]
 
 
+class _Sampler:
+    """This process's resident set, sampled every 10 ms in a thread while the block runs."""
+
+    def __enter__(self):
+        import psutil
+
+        self._proc = psutil.Process()
+        self.base = self.peak = self._proc.memory_info().rss
+        self._run = True
+        self._thread = threading.Thread(target=self._loop, daemon=True)
+        self._thread.start()
+        return self
+
+    def _loop(self):
+        while self._run:
+            self.peak = max(self.peak, self._proc.memory_info().rss)
+            time.sleep(0.01)
+
+    def __exit__(self, *exc):
+        self._run = False
+        self._thread.join()
+
+
 def _same(a, b) -> bool:
     return bool(
         np.array_equal(a.model.c, b.model.c)
@@ -164,9 +192,14 @@ def main() -> None:
                 del shared
                 base = client.run(_start_sampler)
                 t = time.perf_counter()
-                with get_task_stream(client=client) as stream:
+                with get_task_stream(client=client) as stream, _Sampler() as driver:
                     fit = fit_planar(ds, "iso", scheduler=cluster, **options)
                 secs = time.perf_counter() - t
+                report[f"driver_peak_growth_MB_{n}w"] = (driver.peak - driver.base) / 1e6
+                grid = fit.model.alpha.values.size
+                report["alpha_grid_samples"] = grid
+                report["alpha_sums_driver_MB"] = 2 * grid * 8 / 1e6  # Σw²Py, Σw²P²: float64, one grid each
+                report["alpha_sums_per_chunk_grid_MB"] = n_tasks * 2 * grid * 8 / 1e6  # as kept before
                 compute = sum(
                     ss["stop"] - ss["start"]
                     for task in stream.data
@@ -221,9 +254,12 @@ def main() -> None:
                 report[f"acquire_local{n}_identical"] = bool(np.array_equal(here["R_d"], there["R_d"]))
         report["acquire_speedup_2w_over_1w"] = report["acquire_local1_s"] / report["acquire_local2_s"]
     report["load_after"] = os.getloadavg()
-    (OUT / ("scale_out_acquire.json" if args.skip_fit else "scale_out.json")).write_text(
-        json.dumps(report, indent=1)
-    )
+    name = "scale_out.json"
+    if args.skip_fit:
+        name = "scale_out_acquire.json"
+    elif args.skip_acquire:
+        name = f"scale_out_fit_{args.copies}.json"
+    (OUT / name).write_text(json.dumps(report, indent=1))
     for key, value in report.items():
         print(f"{key:40s} {value}")
 

@@ -78,6 +78,28 @@ def test_fit_on_a_cluster_is_bit_identical(address, threads_run):
     _same_fit(fit_planar(ds, "iso", scheduler=address, **FIT), ref)
 
 
+def test_a_fit_interrupted_on_a_cluster_resumes_identically(address, threads_run, tmp_path):
+    """Stopped in round 2: the checkpoint holds α's running sums (one grid, not one per chunk) and the
+    next chunk to add; the fit resumed on the cluster equals the threads run bit for bit."""
+    ds, ref = threads_run
+    ckpt = tmp_path / "fit.partial.npz"
+
+    class Stop(Exception):
+        pass
+
+    def interrupt(done, total, message):
+        if done == 5:  # 4 chunks per round: round 2's first chunk is in
+            raise Stop
+
+    with pytest.raises(Stop):
+        fit_planar(ds, "iso", scheduler=address, checkpoint=ckpt, progress=interrupt, **FIT)
+    with np.load(ckpt) as z:
+        assert z["num"].shape == z["den"].shape == ref.model.alpha.values.shape
+        assert int(z["added"][0]) == 1 and int(z["round"][0]) == 1
+    _same_fit(fit_planar(ds, "iso", scheduler=address, checkpoint=ckpt, **FIT), ref)
+    assert not ckpt.exists()
+
+
 def test_mesh_acquisition_and_fit_on_a_cluster_are_bit_identical(address, tmp_path):
     import trimesh
 
@@ -155,3 +177,20 @@ def test_ordered_sum_does_not_depend_on_arrival():
     np.testing.assert_array_equal(ordered_sum(shuffled, 20), expect)
     with pytest.raises(ValueError):
         ordered_sum(enumerate(parts[:3]), 4)
+
+
+def test_a_window_keeps_results_near_the_oldest_unfinished_task(address):
+    """``Cluster.run(window=w)`` submits task i only when every task before i − w + 1 has finished: with
+    the first task slow, no more than w − 1 later results can arrive before it."""
+
+    def task(i):  # local: pickled by value to the workers
+        import time as _time
+
+        _time.sleep(1.0 if i == 0 else 0.01)
+        return i
+
+    with open_cluster(address) as cluster:
+        order = [i for i, _ in cluster.run(task, [(i,) for i in range(8)], window=3)]
+        assert sorted(order) == list(range(8))
+        assert order.index(0) <= 2  # at most tasks 1 and 2 ran ahead of task 0
+        assert [r for _, r in cluster.run(task, [(i,) for i in range(4)])] != []  # no window: all at once

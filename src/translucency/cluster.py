@@ -45,6 +45,10 @@ THREADS = "threads"
 CONNECT_TIMEOUT_S = 5.0
 #: the most worker processes ``local:N`` starts
 MAX_LOCAL_WORKERS = 1024
+#: chunks a driver lets run ahead of the oldest unfinished one, per worker (:func:`in_order_window`) ...
+IN_FLIGHT_PER_WORKER = 4
+#: ... and at least
+IN_FLIGHT_MIN = 16
 _TCP = re.compile(r"^tcp://(?P<host>[A-Za-z0-9_.\-]+|\[[0-9A-Fa-f:.]+\]):(?P<port>[0-9]{1,5})$")
 
 
@@ -138,22 +142,39 @@ class Cluster:
         *,
         shared: tuple = (),
         name: str | None = None,
+        window: int | None = None,
     ) -> Iterator[tuple[int, object]]:
         """Run ``fn(*shared, *tasks[i])`` for every i on the cluster; yield (i, result) as they finish.
 
-        ``shared``: futures from :meth:`keep` (or small values) every task takes first.  A task that
-        raises ends the iteration with its error (a :class:`TranslucencyError` stays one); a task that
-        killed the workers it ran on more than Dask's ``allowed-failures`` times is one line.
+        ``shared``: futures from :meth:`keep` (or small values) every task takes first.  ``window``:
+        task i is submitted only once every task before i − ``window`` + 1 has finished, so that a
+        caller that reduces the results in index order holds at most ``window`` − 1 of them out of
+        order (:func:`in_order_window`); ``None``: all at once.  A task that raises ends the iteration
+        with its error (a :class:`TranslucencyError` stays one); a task that killed the workers it ran
+        on more than Dask's ``allowed-failures`` times is one line.
         """
         from distributed import as_completed  # the package is imported with this module (below)
 
         prefix = name or getattr(fn, "__name__", "task")
-        futures = {
-            self.client.submit(fn, *shared, *args, key=f"{prefix}-{i}-{_token()}", pure=False): i
-            for i, args in enumerate(tasks)
-        }
+        n = len(tasks)
+        width = n if window is None else max(1, int(window))
+        futures: dict = {}
+        finished: set = set()
+        low = submitted = 0  # every task before ``low`` has finished; tasks before ``submitted`` are out
+        stream = as_completed([], loop=self.client.loop)
+
+        def submit() -> None:
+            nonlocal submitted
+            while submitted < n and submitted < low + width:
+                i = submitted
+                fut = self.client.submit(fn, *shared, *tasks[i], key=f"{prefix}-{i}-{_token()}", pure=False)
+                futures[fut] = i
+                stream.add(fut)
+                submitted += 1
+
+        submit()
         try:
-            for fut in as_completed(list(futures), loop=self.client.loop):
+            for fut in stream:
                 i = futures.pop(fut)
                 try:
                     result = fut.result()
@@ -164,6 +185,11 @@ class Cluster:
                         f"scheduler {self.spec}: task {i} of {prefix} killed its workers repeatedly ({exc})"
                     ) from None
                 fut.release()
+                finished.add(i)
+                while low in finished:
+                    finished.discard(low)
+                    low += 1
+                submit()  # before handing the result over: the cluster works while the caller does
                 yield i, result
         finally:
             if futures:  # an error or an abandoned iteration: cancel what waits, let what runs end
@@ -294,6 +320,13 @@ def ordered_sum(parts: Iterable[tuple[int, np.ndarray]], n: int) -> np.ndarray:
     for i in range(1, n):
         total += held[i]
     return total
+
+
+def in_order_window(workers: int) -> int:
+    """How far ahead of the oldest unfinished chunk a driver lets its chunks run: wide enough to keep
+    ``workers`` busy past a slow chunk, narrow enough that the results it must hold until the chunks
+    before them are in (to reduce them in order) stay a few per worker."""
+    return max(IN_FLIGHT_MIN, IN_FLIGHT_PER_WORKER * max(1, int(workers)))
 
 
 def compact(a: np.ndarray) -> tuple[tuple[slice, ...], np.ndarray]:

@@ -186,12 +186,15 @@ def acquire_planar(
         },
         "software": {"translucency": __version__, **mi_versions},
         "request": request,
+        # every chunk of every array is a file (all-zero ones too, :func:`_every_chunk`): a missing
+        # file is damage; stores made before say nothing here and may lack their all-zero chunks
+        "chunk_files": "every",
     }
     with output_lock(out):  # one writer at a time
         ds = create_dataset(out, header, overwrite=overwrite, inputs=inputs)
         g = ds.group
-        g["x_i"][...] = x_i.astype(np.float32)
-        g["window_origin"][...] = origin.astype(np.float32)
+        _every_chunk(g)("x_i")[...] = x_i.astype(np.float32)
+        _every_chunk(g)("window_origin")[...] = origin.astype(np.float32)
         done = np.asarray(g["chunk_done"][...])
         k = setup.chunk_points
         todo = [(c, c * k, min(P, (c + 1) * k)) for c in range(len(done)) if not done[c]]
@@ -273,12 +276,24 @@ def _acquire_chunk(
     cx = origin[:, 0, None, None] + setup.pitch * (np.arange(n)[None, None, :] + 0.5)
     cy = origin[:, 1, None, None] + setup.pitch * (np.arange(n)[None, :, None] + 0.5)
     mask = (cx >= 0) & (cx <= W) & (cy >= 0) & (cy <= H)
-    g["R_d"][lo:hi] = R_d.astype(setup.dtype)
-    g["variance"][lo:hi] = var.astype(setup.dtype)
-    g["mask"][lo:hi] = mask
-    g["specular"][lo:hi] = (spec / N).astype(np.float32)
-    g["total_diffuse"][lo:hi] = (top / N).astype(np.float32)
-    g["chunk_done"][c] = True  # last: the chunk is complete
+    out = _every_chunk(g)
+    out("R_d")[lo:hi] = R_d.astype(setup.dtype)
+    out("variance")[lo:hi] = var.astype(setup.dtype)
+    out("mask")[lo:hi] = mask
+    out("specular")[lo:hi] = (spec / N).astype(np.float32)
+    out("total_diffuse")[lo:hi] = (top / N).astype(np.float32)
+    out("chunk_done")[c] = True  # last: the chunk is complete
+
+
+def _every_chunk(group):
+    """The group's arrays as writers that store every chunk as a file, all-zero ones included.
+
+    Zarr's ``write_empty_chunks`` is a runtime setting, not saved with the array: a store opened again
+    would skip chunks holding only the fill value (an index-matched slab's ``specular``, a dark window's
+    ``variance``), and a missing chunk file would then be indistinguishable from one deleted.
+    """
+    every = {"write_empty_chunks": True}
+    return lambda name: group[name].with_config(every)
 
 
 def _volume_fingerprint(volume: Volume) -> dict:

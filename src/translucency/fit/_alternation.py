@@ -53,8 +53,13 @@ block coordinate descent: directions that share no pixel (even, then odd l)
 are fitted together, with the neighbours' contributions held fixed.
 
 Work runs in chunks of incident points read from the store, so a data set
-larger than memory can be fitted; with a checkpoint the state is saved after
-every chunk and an interrupted fit resumes from it.
+larger than memory can be fitted.  α's statistics are one running sum per
+statistic, added in chunk order (a chunk that finishes early waits until the
+chunks before it are in), so they take one sample grid whatever the number of
+chunks.  With a checkpoint the state (running sums and the next chunk to add
+included) is saved as chunks are added — at most :data:`CHECKPOINT_SHARE` of
+the time — and at the end of every round; an interrupted fit resumes from it
+bit for bit.
 """
 
 from __future__ import annotations
@@ -62,14 +67,14 @@ from __future__ import annotations
 import os
 import threading
 import time
-from concurrent.futures import ThreadPoolExecutor, as_completed
+from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
 
 from .._validate import TranslucencyError
-from ..cluster import compact, expand, open_cluster
+from ..cluster import compact, in_order_window, open_cluster
 from ..io.atomic import atomic_path
 from ..model import BurleyModel, DipoleModel, ExponentialModel
 from ..model.burley import burley_R
@@ -86,6 +91,11 @@ KINDS = ("iso", "aniso", "dipole", "burley", "pbd", "ddipole")
 BASELINES = ("dipole", "burley", "pbd", "ddipole")
 #: baselines parametrised by (σ_a, σ_s') with no free amplitude: α keeps the scale
 _PHYSICAL = ("dipole", "pbd", "ddipole")
+#: the most of the driver's time the checkpoints written within a round may take: a checkpoint holds
+#: every point's parameters (O(points)), so after one that took t the next waits (1/share − 1)·t; the
+#: chunks added since the last one are fitted again on resume (the same bits: a chunk's task is a pure
+#: function of the round's start state).  The state at the end of a round is always written.
+CHECKPOINT_SHARE = 0.1
 #: the candidates of model selection (``n_terms="auto"``, ``n_directions="auto"``)
 AUTO_TERMS = (1, 2, 3, 4)
 AUTO_DIRECTIONS = (1, 2, 4, 8, 16)
@@ -249,9 +259,9 @@ class FitState:
         "alpha",
         "num",
         "den",
+        "added",
         "phi",
         "phi_ref",
-        "done",
         "ready",
         "flagged",
         "history",
@@ -268,13 +278,16 @@ class FitState:
         self.p = np.ones((P, 3, 2))  # dipole (σ_a, σ_s') or Burley (A, s) per point and channel
         self.s = np.ones((P, 3))  # colour scale (1, s_g, s_b) of the shared-colour model
         self.alpha = np.ones(alpha_shape)  # the modulation texture α
-        # per chunk of this round: α statistics Σ w²Py, Σ w²P², objective Φ (new parameters, the
-        # round's α) and, in round 2, Φ of the reference state itself; finished?
-        self.num = np.zeros((n_chunks,) + tuple(alpha_shape))
-        self.den = np.zeros((n_chunks,) + tuple(alpha_shape))
+        # this round's α statistics Σ w²Py, Σ w²P² of chunks 0 .. added − 1: running sums in chunk
+        # order, one sample grid whatever the number of chunks (a chunk that finishes early waits in
+        # ``held`` until the chunks before it are in); per chunk (scalars), Φ with the new parameters
+        # and the round's α and, in round 2, Φ of the reference state itself
+        self.num = np.zeros(alpha_shape)
+        self.den = np.zeros(alpha_shape)
+        self.added = np.zeros(1, dtype=np.int64)  # the next chunk to add (chunks before it are done)
         self.phi = np.zeros(n_chunks)
         self.phi_ref = np.zeros(n_chunks)
-        self.done = np.zeros(n_chunks, dtype=bool)
+        self.held: dict = {}  # finished chunks waiting for earlier ones: {chunk: result} (not saved)
         self.ready = np.zeros(P, dtype=bool)  # the point's parameters have been fitted once
         self.flagged = np.zeros(P, dtype=bool)  # the point has no usable data
         self.history = np.zeros(0)  # Φ of each round's state (parameters and α)
@@ -329,6 +342,17 @@ class FitState:
         """Write the points of ``sub`` (from :meth:`points`) back as points s..e."""
         for k in self.PER_POINT:
             getattr(self, k)[s:e] = getattr(sub, k)
+
+    def add(self, ci: int, sub: FitState, s: int, e: int, phi: float, phi_ref: float, num, den) -> None:
+        """Take chunk ``ci`` (points s..e), the next in chunk order: its points' new parameters, its Φ,
+        and its α statistics (boxes from :func:`_pixel_sums`) added to the running sums."""
+        if ci != int(self.added[0]):
+            raise ValueError(f"chunk {ci} added out of order (next: {int(self.added[0])})")
+        self.commit(sub, s, e)
+        for total, (box, values) in ((self.num, num), (self.den, den)):
+            total[box] += values  # outside the box the chunk's sums are 0: the same as adding them
+        self.phi[ci], self.phi_ref[ci] = phi, phi_ref
+        self.added[0] = ci + 1
 
     def save(self, path: Path, request: str) -> None:
         """Write the state and the request it belongs to (an ``.npz`` file, atomically)."""
@@ -427,24 +451,37 @@ def _alternate(
     ctx_task = cluster.keep((os.urandom(8).hex(), ctx)) if cluster is not None else None
     while state.round[0] < max_rounds:
         rnd = int(state.round[0])
-        if rnd == 1 and not state.done.any():  # round 1's result weights every later round
+        if rnd == 1 and state.added[0] == 0:  # round 1's result weights every later round
             state.keep("ref")
-        todo = [ci for ci in range(len(chunks)) if not state.done[ci]]
+        todo = list(range(int(state.added[0]), len(chunks)))  # the chunks before are added
+        next_save = 0.0  # perf_counter time of the next checkpoint (the round's first addition: at once)
         # chunks in parallel threads (NumPy releases the GIL) or tasks on a cluster; each works on a
         # private copy of its points and hands back its α statistics, so results do not depend on timing
         if cluster is None:
             results = _thread_chunks(ctx, state, chunks, todo, workers)
         else:
             results = _cluster_chunks(cluster, ctx_task, state, chunks, todo)
-        for ci, (sub, phi, phi_ref, num, den) in results:
+        for ci, result in results:
+            # in chunk order (float sums are not associative): a chunk that finished early is held
+            # until every chunk before it is in, then added and dropped
+            state.held[ci] = result
+            first = int(state.added[0])
             with lock:
-                state.commit(sub, *chunks[ci])
-                state.num[ci], state.den[ci] = num, den
-                state.phi[ci], state.phi_ref[ci], state.done[ci] = phi, phi_ref, True
-                if ckpt is not None:
+                while int(state.added[0]) in state.held:
+                    nxt = int(state.added[0])
+                    state.add(nxt, *_with_range(state.held.pop(nxt), chunks[nxt]))
+                if ckpt is not None and state.added[0] > first and time.perf_counter() >= next_save:
+                    t_save = time.perf_counter()
                     state.save(ckpt, request)
+                    now = time.perf_counter()
+                    next_save = now + (now - t_save) * (1 - CHECKPOINT_SHARE) / CHECKPOINT_SHARE
             if progress:
-                progress(rnd * len(chunks) + int(state.done.sum()), total, f"round {rnd + 1}")
+                for done in range(first + 1, int(state.added[0]) + 1):
+                    progress(rnd * len(chunks) + done, total, f"round {rnd + 1}")
+        if state.held or state.added[0] != len(chunks):  # pragma: no cover - a runner lost a chunk
+            raise RuntimeError(
+                f"fit: chunks {sorted(state.held)} finished but {int(state.added[0])} is missing"
+            )
         # α in closed form (the scale fixed by mean α = 1), and Φ of the new state (parameters and α):
         # Φ with the round's α, plus what the α step changed (exact: Φ is quadratic in each α_j)
         change = _update_alpha(state, model, getattr(ctx.source, "smooth_alpha", None))
@@ -458,7 +495,7 @@ def _alternate(
             state.keep("best")
         state.phi[:] = 0.0
         state.phi_ref[:] = 0.0
-        state.done[:] = False
+        state.added[0] = 0
         state.round[0] = rnd + 1
         h = state.history
         if rnd >= 1 and h[-2] - h[-1] <= tol * h[-2]:  # converged, or Φ rose: the best state is kept
@@ -481,12 +518,38 @@ def _alternate(
     )
 
 
+def _with_range(result, chunk):
+    """A chunk's result (sub, Φ, Φ_ref, num, den) as the arguments of :meth:`FitState.add`."""
+    sub, phi, phi_ref, num, den = result
+    return sub, *chunk, phi, phi_ref, num, den
+
+
 def _thread_chunks(ctx, state, chunks, todo, workers):
-    """(chunk index, :func:`_fit_chunk`'s result) of the chunks ``todo``, run in threads, as they finish."""
+    """(chunk index, :func:`_fit_chunk`'s result) of the chunks ``todo``, run in threads, as they finish.
+
+    Chunk i starts only once every chunk before i − window + 1 has finished (:func:`in_order_window`),
+    so that the results held until the chunks before them are in stay a few per thread; a finished
+    future is dropped at once (its result is the caller's).
+    """
+    window = in_order_window(workers)
     with ThreadPoolExecutor(workers) as pool:
-        futures = {pool.submit(_fit_chunk, ctx, state, *chunks[ci]): ci for ci in todo}
-        for fut in as_completed(futures):
-            yield futures[fut], fut.result()
+        running: dict = {}
+        finished: set = set()
+        low = nxt = 0  # todo[:low] finished; todo[:nxt] submitted
+        while True:
+            while nxt < len(todo) and nxt < low + window:
+                running[pool.submit(_fit_chunk, ctx, state, *chunks[todo[nxt]])] = nxt
+                nxt += 1
+            if not running:
+                return
+            done, _ = wait(running, return_when=FIRST_COMPLETED)
+            for fut in sorted(done, key=running.get):
+                i = running.pop(fut)
+                finished.add(i)
+                while low in finished:
+                    finished.discard(low)
+                    low += 1
+                yield todo[i], fut.result()
 
 
 def _cluster_chunks(cluster, ctx_task, state, chunks, todo):
@@ -494,10 +557,24 @@ def _cluster_chunks(cluster, ctx_task, state, chunks, todo):
     points' parameters and reads its data from the store; α goes out once per round, and a chunk's α
     statistics come back as the box under its windows."""
     shared = cluster.keep((state.alpha.copy(), state.ref_alpha.copy(), state.round.copy()))
-    tasks = [(state.part(*chunks[ci]), *chunks[ci]) for ci in todo]
-    shape = state.alpha.shape
-    for i, (sub, phi, phi_ref, num, den) in cluster.run(_fit_task, tasks, shared=(ctx_task, shared)):
-        yield todo[i], (sub, phi, phi_ref, expand(num, shape), expand(den, shape))
+    tasks = _Parts(state, [chunks[ci] for ci in todo])
+    window = in_order_window(cluster.n_workers)
+    for i, result in cluster.run(_fit_task, tasks, shared=(ctx_task, shared), window=window):
+        yield todo[i], result
+
+
+class _Parts:
+    """The tasks of :func:`_cluster_chunks`, made as they are submitted: (points' state, s, e)."""
+
+    def __init__(self, state: FitState, ranges: list):
+        self.state, self.ranges = state, ranges
+
+    def __len__(self) -> int:
+        return len(self.ranges)
+
+    def __getitem__(self, i: int):
+        s, e = self.ranges[i]
+        return self.state.part(s, e), s, e
 
 
 #: per worker process: the context of the fit running there, with its own cache of decoded chunks
@@ -520,7 +597,7 @@ def _fit_task(kept, shared, part: FitState, s: int, e: int):
     part.alpha, part.ref_alpha, part.round = shared
     sub, phi, phi_ref, num, den = _fit_chunk(live, part, s, e)
     sub.alpha = None  # the caller has it
-    return sub, phi, phi_ref, compact(num), compact(den)
+    return sub, phi, phi_ref, num, den
 
 
 @dataclass
@@ -772,10 +849,24 @@ def _fit_chunk(ctx: FitContext, glob: FitState, s: int, e: int):
     w2 *= usable[:, None, None]
     phi = _objective(w2, ch.alpha * f, ch.y)
     wf = w2 * f
-    n_px, pixel, ones = glob.alpha.size, ch.pixel.ravel(), np.ones(3, np.float32)
-    num = np.bincount(pixel, ((wf * ch.y) @ ones).ravel(), n_px).reshape(glob.alpha.shape)
-    den = np.bincount(pixel, ((wf * f) @ ones).ravel(), n_px).reshape(glob.alpha.shape)
+    pixel, ones, shape = ch.pixel.ravel(), np.ones(3, np.float32), glob.alpha.shape
+    num = _pixel_sums(pixel, ((wf * ch.y) @ ones).ravel(), shape)
+    den = _pixel_sums(pixel, ((wf * f) @ ones).ravel(), shape)
     return state, phi, phi_ref, num, den
+
+
+def _pixel_sums(pixel: np.ndarray, values: np.ndarray, shape) -> tuple:
+    """Σ ``values`` per α sample (flat indices ``pixel`` into ``shape``) as the smallest box holding every
+    non-zero sum (:func:`translucency.cluster.compact`): a chunk's statistics cover its windows, not the
+    grid.  The same sums as a ``bincount`` over the whole grid, bit for bit (each sample's values are
+    added in the same order)."""
+    if not pixel.size:
+        return compact(np.zeros((0,) * len(shape)))
+    row = int(np.prod(shape[1:], dtype=np.int64))  # samples per row of the first axis
+    r0, r1 = int(pixel.min()) // row, int(pixel.max()) // row + 1  # the rows the pixels lie in
+    band = np.bincount(pixel - r0 * row, values, (r1 - r0) * row).reshape((r1 - r0, *shape[1:]))
+    box, inner = compact(band)
+    return (slice(box[0].start + r0, box[0].stop + r0), *box[1:]), inner
 
 
 def _grouped(seg: Segments, G: int, C: int, w2, kappa, target, overwrite: bool = False):
@@ -930,7 +1021,7 @@ def _update_alpha(state: FitState, kind: str, smooth=None) -> float:
     :math:`\Phi(\alpha) - \Phi(\alpha') = \sum_j D_j[(\alpha_j - \alpha^*_j)^2 - (\alpha'_j - \alpha^*_j)^2]`
     exactly, for any α (smoothed, clipped at 0) — and free of the cancellation of expanding Φ.
     """
-    num, den = state.num.sum(axis=0), state.den.sum(axis=0)  # in chunk order: deterministic
+    num, den = state.num, state.den  # summed in chunk order (FitState.add): deterministic
     seen = den > 0
     best = np.where(seen, num / np.where(seen, den, 1.0), 1.0)  # α* per pixel
     shown = seen

@@ -101,8 +101,9 @@ class PlanarDataset:
         for name in ("R_d", "variance", "mask", "specular", "total_diffuse"):
             arr = self.group[name]
             # chunks holding only the fill value may be absent by design in older stores (Zarr does not
-            # write them); R_d and the mask of a finished chunk never are
-            expect_file = name in ("R_d", "mask")
+            # write them); R_d and the mask of a finished chunk never are, nor any chunk of a store
+            # written with every chunk as a file (its header says so)
+            expect_file = name in ("R_d", "mask") or self.header.get("chunk_files") == "every"
             per = int(arr.chunks[0])  # points per stored chunk of this array
             for c in done:
                 lo, hi = c * k, min(self.n_points, (c + 1) * k)
