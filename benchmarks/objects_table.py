@@ -35,6 +35,8 @@ CASES = [
     "cow-skin-spot:cow.obj:8:z:skin:128:4000:spot:-60,70,90,0,0,0,25,3e4:-1,1.2,0.6",
     "bunny-marble-directional:stanford-bunny.obj:400:y:marble:128:4000:directional:-0.3,0.4,-1,1:1,-1.6,0.7",
     "spot-skin-sky:spot.obj:30:y:skin:128:4000:env:0.05:1,-1.6,0.7",
+    "spot-marble-spot:spot.obj:20:y:marble:128:4000:spot:50,-80,40,0,0,0,25,3e4:1,-1.6,0.7",
+    "cow-apple-point:cow.obj:4:z:apple-slice:128:4000:point:-30,35,45,8e3:-1,1.2,0.6",
 ]
 
 
