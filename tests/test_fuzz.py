@@ -354,3 +354,138 @@ def test_max_memory_values():
             app, ["acquire", "planar", "--material", "marble", "--out", "x.zarr", "--max-memory", text]
         )
         assert check(res, ["--max-memory"]) == "error" and not Path("x.zarr").exists(), res.output
+
+
+# -- (c) render: environment maps and numeric options ----------------------------------------------------
+@pytest.fixture(scope="module")
+def renderable(tmp_path_factory):
+    """A per-vertex model that carries its mesh (162 vertices: a render takes about a second) and two
+    environment maps, EXR and HDR."""
+    from conftest import random_exponential_model
+    from translucency import save_model
+    from translucency.mitsuba import mitsuba
+
+    root = tmp_path_factory.mktemp("renderable")
+    ball = trimesh.creation.icosphere(2, radius=5.0)
+    rng = np.random.default_rng(3)
+    terms = (((2.0, 3.0), (0.2, 0.5)), ((0.3, 0.6), (0.01, 0.05)))
+    model = random_exponential_model(
+        rng, geometry="mesh", mesh=ball, points=np.arange(0, 162, 11), terms=terms
+    )
+    model.faces = np.asarray(ball.faces)
+    save_model(model, root / "r.model.zip")
+    sky = np.zeros((16, 32, 3), np.float32)
+    sky[:] = np.linspace(0.3, 0.02, 16)[:, None, None]
+    sky[3:5, 20:22] = 40.0
+    for name in ("sky.exr", "sky.hdr"):
+        mitsuba().Bitmap(sky).write(str(root / name))
+    return root
+
+
+RENDER_BASE = ["--size", "24", "18", "-q"]
+
+
+def _rendered_finite(out: Path) -> None:
+    """A successful render wrote finite pictures and JSON."""
+    from translucency.mitsuba import mitsuba
+
+    pixels = np.asarray(mitsuba().Bitmap(str(out / "ours.exr")))
+    assert np.isfinite(pixels).all() and (pixels >= 0).all()
+    _strict_json((out / "figure2.json").read_text())
+
+
+def _map_with(path: Path, how: str) -> Path:
+    """A map of the wrong kind: NaN/inf/negative pixels, one pixel, grey, black."""
+    from translucency.mitsuba import mitsuba
+
+    img = np.full((8, 16, 3), 0.2, np.float32)
+    if how == "nan":
+        img[3, 5, 1] = np.nan
+    elif how == "inf":
+        img[0, 0, 0] = np.inf
+    elif how == "negative":
+        img[7, 15, 2] = -1.0
+    elif how == "one pixel":
+        img = img[:1, :1]
+    elif how == "grey":
+        img = img[..., :1]
+    elif how == "black":
+        img[:] = 0.0
+    mitsuba().Bitmap(img).write(str(path))
+    return path
+
+
+@fuzz_settings(6)
+@given(
+    which=st.sampled_from(["sky.exr", "sky.hdr"]),
+    how=st.one_of(
+        damage.map(lambda d: ("bytes", d)),
+        st.sampled_from(["nan", "inf", "negative", "one pixel", "grey", "black"]).map(
+            lambda k: ("pixels", k)
+        ),
+    ),
+    scale=st.sampled_from(["", ",1", ",0", ",1e30", ",-1", ",nan"]),
+)
+def test_damaged_environment_map(renderable, tmp_path_factory, which, how, scale):
+    tmp = tmp_path_factory.mktemp("envmap")
+    model = _fresh(renderable, tmp, "r.model.zip")
+    if how[0] == "bytes":
+        env = _fresh(renderable, tmp, which)
+        mutate(env, *how[1])
+    else:
+        env = _map_with(tmp / ("odd.exr" if how[1] == "grey" else which.replace("sky", "odd")), how[1])
+    before = _hashes(env) if env.exists() else {}
+    res = _run(["render", model, "--light", f"env:{env}{scale}", "--out", tmp / "r", *RENDER_BASE])
+    outcome = check(res, [env.name, "scale"])
+    if outcome == "ok":
+        _rendered_finite(tmp / "r")
+    assert (_hashes(env) if env.exists() else {}) == before
+    tally(f"environment map ({how[0]}: {how[1] if how[0] == 'pixels' else how[1][0]})", outcome)
+
+
+number = st.one_of(
+    st.sampled_from(["-1", "0", "-0", "nan", "inf", "1e308", "1e-320", "1e20", "1e21", "abc", ""]),
+    st.floats(-1e6, 1e6, allow_nan=False).map(repr),
+)
+#: the light templates, a number drawn into each slot
+LIGHTS = [
+    "point:{},-30,30,{}",
+    "directional:{},1,-1,{}",
+    "spot:0,-30,30,{},0,0,{},{}",
+    "env:{}",
+]
+RENDER_OPTIONS = ["--size", "--radius", "--spp", "--view"]
+
+
+@fuzz_settings(12)
+@given(
+    case=st.one_of(
+        st.sampled_from(RENDER_OPTIONS).map(lambda o: ("option", o)),
+        st.sampled_from(LIGHTS).map(lambda t: ("light", t)),
+    ),
+    values=st.lists(number, min_size=3, max_size=3),
+)
+def test_render_option_values(renderable, tmp_path_factory, case, values):
+    tmp = tmp_path_factory.mktemp("renderopt")
+    model = _fresh(renderable, tmp, "r.model.zip")
+    before = _hashes(model)
+    kind, what = case
+    args = ["render", model, "--out", tmp / "r", *RENDER_BASE]
+    if kind == "light":
+        args += ["--light", what.format(*values[: what.count("{}")])]
+        names = ["light"]
+    elif what == "--size":
+        args += ["--size", values[0], values[1]]
+        names = ["--size"]
+    elif what == "--view":
+        args += ["--view", ",".join(values)]
+        names = ["--view"]
+    else:
+        args += [what, values[0]]
+        names = [what]
+    res = _run(args)
+    outcome = check(res, [*names, "--max-memory", "memory"])
+    if outcome == "ok":
+        _rendered_finite(tmp / "r")
+    assert _hashes(model) == before
+    tally(f"render {what}", outcome)

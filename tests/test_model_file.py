@@ -12,7 +12,16 @@ from hypothesis import strategies as st
 from conftest import random_exponential_model
 from translucency import ModelFileError, TranslucencyError, load_model, save_model
 from translucency.io import model_file as mf
-from translucency.model import MATERIALS, BurleyModel, DipoleModel, PlanarAlpha
+from translucency.model import (
+    MATERIALS,
+    BurleyModel,
+    DipoleModel,
+    DirectionalDipoleModel,
+    PBDModel,
+    PlanarAlpha,
+    VertexAlpha,
+    check_physics,
+)
 
 
 def assert_same(a, b):
@@ -54,6 +63,81 @@ def test_baseline_models_round_trip(tmp_path):
     assert load_model(tmp_path / "dipole.model.zip").eta == pytest.approx(1.3)
 
 
+@pytest.mark.parametrize("cls", [PBDModel, DirectionalDipoleModel])
+@pytest.mark.parametrize("geometry", ["planar", "mesh"])
+def test_new_baselines_round_trip(tmp_path, rng, cls, geometry):
+    """Photon beam diffusion and the directional dipole: stored like the dipole (σ_a, σ_s' per point and
+    channel, η in the header); the loaded model evaluates to the same R_d and passes the same physics."""
+    mats = [MATERIALS["marble"], MATERIALS["apple"], MATERIALS["skin1"]]
+    f32 = lambda a: np.asarray(a, float).astype(np.float32).astype(float)  # noqa: E731
+    sa, sp = f32([m.sigma_a for m in mats]), f32([m.sigma_s_prime for m in mats])
+    if geometry == "planar":
+        x_i, frame = f32([[1, 1], [2, 3], [4, 2]]), None
+        alpha = PlanarAlpha(f32(rng.uniform(0.5, 1.5, (12, 12))), np.zeros(2), 0.5)
+    else:
+        verts = f32(10 * rng.normal(size=(9, 3)))
+        x_i, alpha = verts[:3], VertexAlpha(f32(rng.uniform(0.5, 1.5, 9)), verts)
+        q, _ = np.linalg.qr(rng.normal(size=(3, 3, 3)))
+        frame = f32(np.transpose(q, (0, 2, 1)))
+    model = cls(x_i, sa, sp, 1.4, alpha, frame=frame)
+    path = save_model(model, tmp_path / f"{model.kind}.model.zip", meta={"fit": {"model": model.kind}})
+    back = load_model(path)
+    assert_same(model, back)
+    assert back.kind == model.kind and back.eta == pytest.approx(1.4)
+    i, r = np.repeat(np.arange(3), 4), np.tile([0.05, 0.5, 2.0, 8.0], 3)
+    np.testing.assert_allclose(back.profile(i, r, 0 * r), model.profile(i, r, 0 * r), rtol=1e-12)
+    np.testing.assert_allclose(back.total_reflectance(), model.total_reflectance(), rtol=1e-12)
+    header = mf.read_header(path)
+    assert header["kind"] == model.kind and header["physics"] == check_physics(back).summary()
+
+
+def test_new_baselines_in_info(tmp_path):
+    from typer.testing import CliRunner
+
+    from translucency.cli.app import app
+
+    m = MATERIALS["marble"]
+    f32 = lambda a: np.asarray(a, float).astype(np.float32).astype(float)  # noqa: E731
+    for cls in (PBDModel, DirectionalDipoleModel):
+        model = cls(
+            [[4.0, 4.0]], f32([m.sigma_a]), f32([m.sigma_s_prime]), 1.3, PlanarAlpha.uniform((16, 16))
+        )
+        path = save_model(model, tmp_path / f"{model.kind}.model.zip")
+        res = CliRunner().invoke(app, ["info", str(path), "--json"])
+        assert res.exit_code in (0, 1), res.output  # 1: valid, but marble spreads beyond an 8 mm sample
+        fields = json.loads(res.stdout)
+        assert fields["kind"] == model.kind and "total R_d (R,G,B)" in fields, fields
+
+
+def test_overflowing_fit_is_stored_flagged(tmp_path, rng):
+    """A noisy fit whose amplitude exceeds float32 (a spike inside the excluded centre pixel) is stored
+    with that term inert and the point flagged, with one warning naming the point — not refused with
+    a message suggesting the setting already in use."""
+    model = random_exponential_model(rng, n_points=4, m=2)
+    model.c[2, 0, 1, 0], model.d[2, 0, 1, 0] = 5e131, -2138.0
+    with pytest.warns(UserWarning, match=r"unphysical at 1 incident points.*: 2 \(c\).*stored inert"):
+        path = save_model(model, tmp_path / "m.model.zip", meta={"flagged_points": [0]})
+    back = load_model(path)
+    assert back.c[2, 0, 1, 0] == 0.0 and back.d[2, 0, 1, 0] == -1.0
+    np.testing.assert_array_equal(back.c[[0, 1, 3]], model.c[[0, 1, 3]])
+    header = mf.read_header(path)
+    assert header["meta"]["flagged_points"] == [0, 2]
+    assert header["unstorable"] == {"2": ["c"]}
+    # float16 on top: the message names the points and the setting to change
+    model.c[2, 0, 1, 0] = 0.1
+    model.c[3, 0, 0, 1] = 1e6
+    with pytest.raises(TranslucencyError, match=r"params/c overflows float16 .* at incident points \[3\]"):
+        save_model(model, tmp_path / "h.model.zip", dtype="float16")
+
+
+def test_overflowing_sigma_fit_is_refused_naming_the_point(tmp_path):
+    sa = np.array([[0.01] * 3, [1e39, 0.01, 0.01]])
+    model = PBDModel([[0.0, 0.0], [1.0, 1.0]], sa, np.ones((2, 3)), 1.3, PlanarAlpha.uniform((3, 3)))
+    with pytest.raises(TranslucencyError, match=r"pbd fit is unphysical at incident points 1 \(sigma_a\)"):
+        save_model(model, tmp_path / "p.model.zip")
+    assert not (tmp_path / "p.model.zip").exists()
+
+
 def test_float16_refuses_values_it_cannot_hold(tmp_path, rng):
     model = random_exponential_model(rng, n_points=2)
     model.d[0, 0, 0, 0] = -1e-9  # rounds to -0.0 in float16: eq. (2) would break
@@ -63,7 +147,7 @@ def test_float16_refuses_values_it_cannot_hold(tmp_path, rng):
         save_model(model, tmp_path / "m.model.zip", dtype="float16")
     model.d[0, 0, 0, 0] = -1.0
     model.c[1, 0, 0, 2] = 1e6
-    with pytest.raises(TranslucencyError, match="params/c overflows float16"):
+    with pytest.raises(TranslucencyError, match=r"params/c overflows float16 .* at incident points \[1\]"):
         save_model(model, tmp_path / "m.model.zip", dtype="float16")
     assert not (tmp_path / "m.model.zip").exists()
     assert list(tmp_path.iterdir()) == []  # no temporary debris

@@ -7,6 +7,7 @@ traceback.
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import inspect
 import json
@@ -20,7 +21,7 @@ from pathlib import Path
 import numpy as np
 import typer
 from rich.console import Console
-from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 from rich.table import Table
 
 from .. import _resources as resources
@@ -123,6 +124,8 @@ def progress(quiet: bool = False) -> Progress:
         TextColumn("{task.completed}/{task.total}"),
         TextColumn("{task.fields[item]}"),
         TimeElapsedColumn(),
+        TextColumn("left"),
+        TimeRemainingColumn(),  # from the measured rate of the steps done so far
         console=err_console,
         transient=False,
         disable=quiet,
@@ -159,6 +162,17 @@ def _quiet_option():
 
 def _json_option():
     return typer.Option(False, "--json", help="Print a summary as one JSON object on stdout (for scripts).")
+
+
+def _timed(command: str, units: dict) -> resources.TimeEstimate:
+    """The calibrated time estimate of a command (``_resources.estimate_time``)."""
+    return resources.estimate_time(command, units)
+
+
+def _calibrate(command: str, units: dict, seconds: float, fresh: bool = True) -> None:
+    """Teach this machine's time calibration how long the work took (not after a resumed run)."""
+    if fresh:
+        resources.record_time(command, units, seconds)
 
 
 def _limit(text) -> int | None:
@@ -412,11 +426,17 @@ def acquire_planar_cmd(
         dtype=dtype,
     )
     setup.check(vol)
-    est = estimate_seconds(vol, setup)
+    units = {
+        "points": grid * grid,
+        "photon_steps": estimate_seconds(vol, setup, steps_per_second=1.0),
+        "pixels": grid * grid * setup.window_pixels() ** 2,
+    }
+    fresh = _bytes_at(out) == 0
+    timing = _timed("acquire planar", units)
     _info(
         quiet,
         f"{grid * grid} incident points x {photons:,} photons x 3 channels on a "
-        f"{' x '.join(f'{v:g}' for v in vol.size_mm)} mm slab; estimated time ~{est:.0f} s, "
+        f"{' x '.join(f'{v:g}' for v in vol.size_mm)} mm slab; time {timing.text()}, "
         f"memory ~{estimate.memory / 2**20:,.0f} MiB",
     )
     t0 = time.perf_counter()
@@ -431,6 +451,7 @@ def acquire_planar_cmd(
             progress=lambda done, total: bar.update(task, completed=done, item="points"),
             scheduler=scheduler,
         )
+    _calibrate("acquire planar", units, time.perf_counter() - t0, fresh)
     ds = open_dataset(out)
     summary = {
         "command": "acquire planar",
@@ -442,6 +463,7 @@ def acquire_planar_cmd(
         "complete": ds.complete(),
         "seconds": round(time.perf_counter() - t0, 3),
         "estimate": estimate.as_dict(),
+        "time_estimate": timing.as_dict(),
     }
     _finish(as_json, quiet, summary, [f"data set: {out}"])
 
@@ -522,11 +544,15 @@ def acquire_mesh_cmd(
     else:  # before the filling is generated
         estimate = need(float(np.prod([math.ceil(e / voxel) for e in obj.extents])))
         vol = object_volume(material or "marble", obj, voxel, g=g, seed=seed)
+    P = min(points, len(obj.vertices))
+    units = {"points": P, "photons": 3 * P * photons, "point_vertices": P * len(obj.vertices)}
+    fresh = _bytes_at(out) == 0
+    timing = _timed("acquire mesh", units)
     _info(
         quiet,
         f"{points} incident points x {photons:,} photons x 3 channels on a mesh of "
         f"{len(obj.vertices):,} vertices, {' x '.join(f'{v:.1f}' for v in obj.extents)} mm; "
-        f"memory ~{estimate.memory / 2**20:,.0f} MiB",
+        f"time {timing.text()}, memory ~{estimate.memory / 2**20:,.0f} MiB",
     )
     t0 = time.perf_counter()
     with progress(quiet) as bar:
@@ -545,6 +571,7 @@ def acquire_mesh_cmd(
             progress=lambda done, total: bar.update(task, completed=done, item="points"),
             scheduler=scheduler,
         )
+    _calibrate("acquire mesh", units, time.perf_counter() - t0, fresh)
     ds = open_mesh_dataset(out)
     summary = {
         "command": "acquire mesh",
@@ -556,6 +583,7 @@ def acquire_mesh_cmd(
         "complete": ds.complete(),
         "seconds": round(time.perf_counter() - t0, 3),
         "estimate": estimate.as_dict(),
+        "time_estimate": timing.as_dict(),
     }
     _finish(as_json, quiet, summary, [f"mesh data set: {out}"])
 
@@ -671,6 +699,11 @@ def fit(
     )
     resources.check_resources("fit", need, limit, out)
     ckpt = out.with_name(out.name + ".partial.npz")
+    candidates = (4 if terms == "auto" else 1) * (5 if directions == "auto" else 1)
+    units = {"point_pixels": ds.n_points * H * W * rounds * candidates}
+    timing = _timed(f"fit {model}", units)
+    _info(quiet, f"fit {model} on {ds.n_points} incident points x {H * W:,} pixels; time {timing.text()}")
+    fresh, t0 = not ckpt.exists(), time.perf_counter()
     with progress(quiet) as bar:
         task = bar.add_task(f"fit {model}", total=None, item="")
 
@@ -691,6 +724,7 @@ def fit(
             weighting=weighting,
             scheduler=scheduler,
         )
+    _calibrate(f"fit {model}", units, time.perf_counter() - t0, fresh)
     path = save_model(
         result.model,
         out,
@@ -705,7 +739,7 @@ def fit(
             f"{np.flatnonzero(result.flagged)[:10].tolist()}…"
         )
     bad = _warn_unphysical(path)
-    summary = _fit_summary(path, result, data, bad, need)
+    summary = {**_fit_summary(path, result, data, bad, need), "time_estimate": timing.as_dict()}
     _finish(
         as_json, quiet, summary, [f"model: {path} ({result.seconds:.1f} s, {len(result.history)} rounds)"]
     )
@@ -777,6 +811,12 @@ def _warn_unphysical(path: Path) -> list[int]:
 def _fit_mesh_cmd(
     data, out, model, terms, colour, exclusion, rounds, float16, overwrite, quiet, as_json, need, scheduler
 ):
+    mds = open_mesh_dataset(data)
+    units = {"point_pixels": mds.n_points * int(mds.header["n_vertices"]) * rounds}
+    timing = _timed(f"fit {model}", units)
+    _info(quiet, f"fit {model} on {mds.n_points} incident points x {int(mds.header['n_vertices']):,} "
+          f"vertices; time {timing.text()}")  # fmt: skip
+    t0 = time.perf_counter()
     with progress(quiet) as bar:
         task = bar.add_task(f"fit {model} per vertex", total=None, item="")
         result = fit_mesh(
@@ -789,6 +829,7 @@ def _fit_mesh_cmd(
             progress=lambda done, total, msg: bar.update(task, completed=done, total=total or None, item=msg),
             scheduler=scheduler,
         )
+    _calibrate(f"fit {model}", units, time.perf_counter() - t0)
     path = save_model(
         result.model,
         out,
@@ -801,7 +842,8 @@ def _fit_mesh_cmd(
         f"model: {path} ({result.seconds:.1f} s, {len(result.history)} rounds, mesh of "
         f"{len(result.model.alpha.values):,} vertices)"
     )
-    _finish(as_json, quiet, _fit_summary(path, result, data, bad, need), [line])
+    summary = {**_fit_summary(path, result, data, bad, need), "time_estimate": timing.as_dict()}
+    _finish(as_json, quiet, summary, [line])
 
 
 @app.command()
@@ -840,7 +882,7 @@ def render(
 ):
     """Relight a fitted object: irradiance per vertex, sparse transport, a picture through Mitsuba (EXR + PNG)."""  # noqa: E501 — Typer lists the docstring verbatim as the command's one-line help; a line break would show in `translucency --help`
     check_option("--spp", spp, lo=1)
-    check_option("--radius", radius, lo=0, open_lo=True)
+    check_option("--radius", radius, lo=1e-6, hi=1e9)  # 1 nm to 1000 km (the far field divides by r²)
     for value in size:
         check_option("--size", value, lo=1, hi=16384)
     limit = _limit(max_memory)
@@ -856,8 +898,10 @@ def render(
         direction = [float(v) for v in view.split(",")]
     except ValueError:
         direction = []
-    if len(direction) != 3 or not np.isfinite(direction).all() or not np.linalg.norm(direction) > 0:
+    if len(direction) != 3 or not np.isfinite(direction).all() or not np.abs(direction).max() > 0:
         raise TranslucencyError(f"--view: expected three finite numbers x,y,z not all zero, got {view!r}")
+    direction = np.asarray(direction) / np.abs(direction).max()  # 1e308 or 1e-320: no overflow, no 0
+    direction /= np.linalg.norm(direction)
     lights = [parse_light(t) for t in (light or ["point:60,-80,120,2e4"])]
     if len(lights) > 1:
         raise TranslucencyError("--light: one light per render for now (run once per light)")
@@ -878,7 +922,18 @@ def render(
     )
     resources.check_resources("render", need, limit, out)
     claim_folder(out, overwrite=overwrite, inputs=[model, header.get("meta", {}).get("dataset") or None])
+    units = {
+        "vertices": V,
+        "pairs": min(2.5e7, V**2, V + V**2 * math.pi * min(rad, 1e9) ** 2 / max(float(mesh.area), 1e-12)),
+        "samples": 16 * size[0] * size[1],
+        "reference_samples": 2 * size[0] * size[1] * spp if reference else 0,
+    }
+    timing = _timed("render", units)
+    _info(quiet, f"render of {V:,} vertices at {size[0]} x {size[1]}; time {timing.text()}")
+    t0 = time.perf_counter()
     cam = Camera.looking_at(mesh, direction, *size)
+    if abs(direction[2]) > 0.999:  # looking straight up or down: the image's up is +y, not +z
+        cam = dataclasses.replace(cam, up=(0.0, 1.0, 0.0))
     vol = volume_of_dataset(mesh, dheader) if reference else None
     with progress(quiet) as bar:
         task = bar.add_task("render", total=4 if reference else 3, item="")
@@ -895,10 +950,19 @@ def render(
             progress=lambda done, total, name: bar.update(task, completed=done, total=total, item=name),
         )
         bar.update(task, completed=4 if reference else 3, item="done")
+    _calibrate("render", units, time.perf_counter() - t0, not res.get("reference_cached", False))
     table = Table(title=f"render of {model.name}", show_header=False)
     for k, v in res.items():
         table.add_row(k, f"{v:.4g}" if isinstance(v, float) else str(v))
-    summary = {"command": "render", "model": model, "images": out, **res, "estimate": need.as_dict()}
+    summary = {
+        "command": "render",
+        "model": model,
+        "images": out,
+        **res,
+        "estimate": need.as_dict(),
+        "time_estimate": timing.as_dict(),
+        "seconds": round(time.perf_counter() - t0, 3),
+    }
     _finish(as_json, quiet, summary, [table, f"images: {out}"])
 
 

@@ -15,13 +15,15 @@ Layout::
     measured/total        (N, 3) float32   mesh only, optional: measured diffuse exitance per unit power
     params/...            per kind, dtype = header["dtype"]:
         exponential:  c, d (N, C, m, n) in mm⁻² and mm⁻¹; s_g, s_b (N,) when C = 1
-        dipole:       sigma_a, sigma_s_prime (N, 3) in mm⁻¹
+        dipole, pbd, ddipole:  sigma_a, sigma_s_prime (N, 3) in mm⁻¹ (and ``eta`` in the header)
         burley:       A (N, 3); s (N, 3) in mm⁻¹
 
 Header (JSON): ``format`` = "translucency-model", ``version`` = 1, ``kind``
-("exponential" | "dipole" | "burley"), ``geometry`` ("planar" | "mesh"),
+("exponential" | "dipole" | "burley" | "pbd" | "ddipole"), ``geometry`` ("planar" | "mesh"),
 ``dtype`` ("float32" | "float16"), ``units``, ``alpha`` ({origin, pitch} for
-planar), ``eta`` (dipole), ``meta`` (free-form provenance), ``physics`` (the
+planar), ``eta`` (dipole, pbd, ddipole), ``meta`` (free-form provenance; ``meta["flagged_points"]``
+lists the points an evaluation leaves out), ``unstorable`` (points whose fitted
+values did not fit in the storage type, stored inert and flagged), ``physics`` (the
 per-point bounds of :mod:`translucency.model.bounds`: the largest total
 reflectance and energy radius, the object's size and the indices of the points
 that break a bound), ``software`` and
@@ -48,7 +50,16 @@ from zarr.codecs import BloscCodec
 
 from .._validate import TranslucencyError
 from .._version import __version__
-from ..model import BurleyModel, DipoleModel, ExponentialModel, PlanarAlpha, ReflectanceModel, VertexAlpha
+from ..model import (
+    BurleyModel,
+    DipoleModel,
+    DirectionalDipoleModel,
+    ExponentialModel,
+    PBDModel,
+    PlanarAlpha,
+    ReflectanceModel,
+    VertexAlpha,
+)
 from ..model.bounds import check_physics
 from .atomic import atomic_path
 from .outputs import claim_output
@@ -62,7 +73,12 @@ _PARAMS = {
     "exponential": ("c", "d", "s_g", "s_b"),
     "dipole": ("sigma_a", "sigma_s_prime"),
     "burley": ("A", "s"),
+    "pbd": ("sigma_a", "sigma_s_prime"),
+    "ddipole": ("sigma_a", "sigma_s_prime"),
 }
+#: the families parametrised by (σ_a, σ_s') per point and a global η
+_SIGMA_MODELS = {"dipole": DipoleModel, "pbd": PBDModel, "ddipole": DirectionalDipoleModel}
+_STORABLE = (ExponentialModel, BurleyModel, *_SIGMA_MODELS.values())
 
 
 class ModelFileError(TranslucencyError):
@@ -70,11 +86,58 @@ class ModelFileError(TranslucencyError):
 
 
 # -- writing -------------------------------------------------------------------
-def _model_arrays(model: ReflectanceModel, dtype: str) -> dict[str, np.ndarray]:
+def _model_arrays(model: ReflectanceModel, dtype: str, params: dict | None = None) -> dict[str, np.ndarray]:
     """Every array of the file, keyed by its path in the store, already cast."""
-    params = {name: getattr(model, name) for name in _PARAMS[model.kind]}
+    if params is None:
+        params = {name: getattr(model, name) for name in _PARAMS[model.kind]}
     with np.errstate(over="ignore"):  # overflow in the cast is reported by save_model
         return _cast_arrays(model, params, dtype)
+
+
+def _points_over(value: np.ndarray, dtype) -> np.ndarray:
+    """Per incident point (axis 0): does any value of ``value`` overflow ``dtype``?"""
+    with np.errstate(over="ignore", invalid="ignore"):
+        bad = ~np.isfinite(np.asarray(value, dtype=np.float64).astype(dtype))
+    return bad.reshape(len(bad), -1).any(axis=1) if bad.ndim else np.array([bool(bad)])
+
+
+def _inert_where_unstorable(model: ReflectanceModel) -> tuple[dict, dict]:
+    """The parameters to store, with every value that overflows float32 made inert, and those points.
+
+    A noisy fit can reach amplitudes beyond float32 (a term c e^{d r} with d ≈ −2000 mm⁻¹ and
+    c ≈ 10¹³⁰ mm⁻² that spikes inside the excluded centre pixel): not a storage problem but an
+    unphysical fit.  Such terms are stored inert (c = 0, d = −1 mm⁻¹; for Burley A = 0, s = 1), which
+    changes R_d only where the spike exceeded every float; the point is flagged.  Returns
+    ``(params, {point: [names]})``.  The (σ_a, σ_s') families have no inert setting: refused.
+    """
+    params = {name: getattr(model, name) for name in _PARAMS[model.kind]}
+    params = {k: None if v is None else np.array(v, dtype=np.float64) for k, v in params.items()}
+    over = {k: _points_over(v, np.float32) for k, v in params.items() if v is not None}
+    points = sorted({int(i) for v in over.values() for i in np.flatnonzero(v)})
+    if not points:
+        return params, {}
+    names = {i: [k for k, v in over.items() if v[i]] for i in points}
+    if model.kind == "exponential":
+        c, d = params["c"], params["d"]
+        with np.errstate(over="ignore", invalid="ignore"):
+            term = ~(np.isfinite(c.astype(np.float32)) & np.isfinite(d.astype(np.float32)))
+        for scale in ("s_g", "s_b"):  # a colour scale beyond float32: the whole point is inert
+            if params[scale] is not None:
+                whole = over[scale]
+                term[whole] = True
+                params[scale][whole] = 1.0
+        c[term], d[term] = 0.0, -1.0
+    elif model.kind == "burley":
+        for i in points:
+            params["A"][i], params["s"][i] = 0.0, 1.0
+    else:
+        listed = ", ".join(f"{i} ({'/'.join(names[i])})" for i in points[:10])
+        raise TranslucencyError(
+            f"the {model.kind} fit is unphysical at incident points {listed}"
+            f"{' …' if len(points) > 10 else ''}: values beyond float32 (3.4e38 mm^-1); "
+            "refit with more photons or a coarser --pitch"
+        )
+    return params, names
 
 
 def _cast_arrays(model: ReflectanceModel, params: dict, dtype: str) -> dict[str, np.ndarray]:
@@ -115,7 +178,7 @@ def save_model(
 
     Parameters
     ----------
-    model : ExponentialModel, DipoleModel or BurleyModel
+    model : ExponentialModel, DipoleModel, BurleyModel, PBDModel or DirectionalDipoleModel
         The model to store.
     path : str or Path
         Destination; an existing model file is replaced (with ``overwrite``)
@@ -147,22 +210,56 @@ def save_model(
     path = Path(path)
     if dtype not in ("float32", "float16"):
         raise TranslucencyError(f"dtype: expected 'float32' or 'float16', got {dtype!r}")
-    if not isinstance(model, (ExponentialModel, DipoleModel, BurleyModel)):
+    if not isinstance(model, _STORABLE):
         raise TranslucencyError(f"model: cannot store a {type(model).__name__}")
     claim_output(path, "model file", overwrite=overwrite)
-    arrays = _model_arrays(model, dtype)
+    try:
+        params, unstorable = _inert_where_unstorable(model)
+    except TranslucencyError as exc:
+        raise TranslucencyError(f"{path}: {exc}") from None
+    if unstorable:
+        meta = dict(meta or {})
+        flagged = {int(i) for i in meta.get("flagged_points", [])} | set(unstorable)
+        meta["flagged_points"] = sorted(flagged)
+        listed = ", ".join(f"{i} ({'/'.join(v)})" for i, v in list(unstorable.items())[:10])
+        warnings.warn(
+            f"{path}: the fit is unphysical at {len(unstorable)} incident points, whose values exceed "
+            f"float32 (3.4e38): {listed}{' …' if len(unstorable) > 10 else ''}; those terms are stored "
+            "inert and the points flagged (evaluate leaves them out); more photons or a coarser "
+            "--pitch avoid it",
+            stacklevel=2,
+        )
+    arrays = _model_arrays(model, dtype, params)
     # the stored (cast) values must still form a valid model
     for key, a in arrays.items():
         if not np.isfinite(a).all():
-            raise TranslucencyError(f"{path}: {key} overflows {dtype}; store with dtype='float32'")
+            raise TranslucencyError(f"{path}: {_overflow_message(key, a, dtype, model)}")
     try:
         stored = _from_arrays(arrays, _header(model, dtype, meta, ""))
     except TranslucencyError as exc:
         raise TranslucencyError(f"{path}: not representable in {dtype}: {exc}") from None
     header = _header(model, dtype, meta, _checksum(arrays))
+    if unstorable:
+        header["unstorable"] = {str(i): v for i, v in unstorable.items()}
     header["physics"] = check_physics(stored).summary()  # what the stored values promise (model/bounds.py)
     _write_store(path, header, arrays)
     return path
+
+
+def _overflow_message(key: str, cast: np.ndarray, dtype: str, model: ReflectanceModel) -> str:
+    """What overflowed where, and what to do (only float16, or a non-parameter array, gets here)."""
+    where = np.argwhere(~np.isfinite(cast))
+    if key.startswith("params/") or key in ("x_i", "frame"):
+        points = sorted({int(i) for i in where[:, 0]})
+        place = f"incident points {points[:10]}{' …' if len(points) > 10 else ''}"
+    else:
+        place = f"index {tuple(int(v) for v in where[0])}"
+    if dtype == "float16":
+        return (
+            f"{key} overflows float16 (largest 65504) at {place}; store as float32 "
+            "(without --float16, or dtype='float32')"
+        )
+    return f"{key} overflows float32 (3.4e38) at {place}: the model is unphysical there"
 
 
 def _write_store(path: Path, header: dict, arrays: dict[str, np.ndarray]) -> None:
@@ -199,7 +296,7 @@ def _header(model: ReflectanceModel, dtype: str, meta: dict | None, checksum: st
     }
     if isinstance(model.alpha, PlanarAlpha):
         header["alpha"] = {"origin": [float(v) for v in model.alpha.origin], "pitch": model.alpha.pitch}
-    if isinstance(model, DipoleModel):
+    if model.kind in _SIGMA_MODELS:
         header["eta"] = model.eta
     if isinstance(model, ExponentialModel):
         header.update(n_terms=model.n_terms, n_directions=model.n_directions, colour=model.colour)
@@ -223,8 +320,9 @@ def _from_arrays(arrays: dict[str, np.ndarray], header: dict) -> ReflectanceMode
     p = {name: arrays.get(f"params/{name}") for name in _PARAMS[header["kind"]]}
     if header["kind"] == "exponential":
         model = ExponentialModel(x_i, p["c"], p["d"], alpha, s_g=p["s_g"], s_b=p["s_b"], frame=frame)
-    elif header["kind"] == "dipole":
-        model = DipoleModel(x_i, p["sigma_a"], p["sigma_s_prime"], header["eta"], alpha, frame=frame)
+    elif header["kind"] in _SIGMA_MODELS:
+        cls = _SIGMA_MODELS[header["kind"]]
+        model = cls(x_i, p["sigma_a"], p["sigma_s_prime"], header["eta"], alpha, frame=frame)
     else:
         model = BurleyModel(x_i, p["A"], p["s"], alpha, frame=frame)
     _attach_surface(model, arrays)
@@ -327,7 +425,7 @@ def load_model(path) -> ReflectanceModel:
 
     Returns
     -------
-    ExponentialModel, DipoleModel or BurleyModel
+    ExponentialModel, DipoleModel, BurleyModel, PBDModel or DirectionalDipoleModel
     """
     path = Path(path)
     root, header = _open(path)

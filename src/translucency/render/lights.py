@@ -19,6 +19,14 @@ import numpy as np
 from .._validate import TranslucencyError
 from ..mitsuba import SPOT_BEAM_FRACTION, mitsuba, spot_dict
 
+#: the largest power (I in W/sr, E in W/mm², L and a map's scale in W/(mm² sr)) a light may have: far
+#: beyond any lamp or the sun, well inside float32, so that irradiance, transport and pictures stay finite
+MAX_POWER = 1e20
+#: the largest coordinate of a light's position or target, mm (a kilometre is 1e6 mm)
+MAX_COORDINATE = 1e12
+#: the narrowest spot cone, degrees (Mitsuba's falloff divides by the cone's width)
+MIN_CUTOFF_DEG = 0.01
+
 
 @dataclass(frozen=True)
 class PointLight:
@@ -129,11 +137,21 @@ def parse_light(text: str):
         raise TranslucencyError(f"light: cannot read numbers in {text!r}") from None
     if not np.isfinite(v).all():
         raise TranslucencyError(f"light: every number must be finite, got {text!r}")
-    power = {"point": 3, "directional": 3, "spot": 7}.get(kind)
+    power = {"point": 3, "directional": 3, "spot": 7, "env": 0}.get(kind)
     if power is not None and len(v) > power and v[power] < 0:
         raise TranslucencyError(f"light: the intensity of {text!r} must be >= 0")
+    if power is not None and len(v) > power and v[power] > MAX_POWER:
+        raise TranslucencyError(f"light: the intensity of {text!r} must be at most {MAX_POWER:g}")
+    if max((abs(x) for x in (v[:power] if power is not None else v)), default=0.0) > MAX_COORDINATE:
+        raise TranslucencyError(
+            f"light: positions and directions of {text!r} must lie within ±{MAX_COORDINATE:g}"
+        )
     if kind == "spot" and len(v) >= 6 and np.allclose(v[:3], v[3:6]):
         raise TranslucencyError(f"light: the spot in {text!r} is aimed at its own position")
+    if kind == "spot" and len(v) in (7, 8) and not MIN_CUTOFF_DEG <= v[6] < 90:
+        raise TranslucencyError(
+            f"light: the spot's cutoff angle in {text!r} must lie in [{MIN_CUTOFF_DEG:g}, 90) degrees"
+        )
     if kind == "point" and len(v) in (3, 4):
         return PointLight(tuple(v[:3]), *(v[3:] or []))
     if kind == "directional" and len(v) in (3, 4):
@@ -141,7 +159,7 @@ def parse_light(text: str):
         if not np.linalg.norm(d) > 0:
             raise TranslucencyError("light: a directional light needs a non-zero direction")
         return DirectionalLight(tuple(d / np.linalg.norm(d)), *(v[3:] or []))
-    if kind == "spot" and len(v) in (7, 8) and 0 < v[6] < 90:
+    if kind == "spot" and len(v) in (7, 8):
         return SpotLight(tuple(v[:3]), tuple(v[3:6]), *v[6:])
     if kind == "env" and len(v) == 1 and v[0] >= 0:
         return EnvironmentLight(v[0])
@@ -161,13 +179,41 @@ def _environment_map(rest: str) -> EnvironmentLight:
         s = float(scale) if scale.strip() else 1.0
     except ValueError:
         raise TranslucencyError(f"light: cannot read the scale {scale!r} of env:{rest}") from None
-    if not (s >= 0 and np.isfinite(s)):
-        raise TranslucencyError(f"light: the scale of env:{rest} must be >= 0")
+    if not (np.isfinite(s) and 0 <= s <= MAX_POWER):
+        raise TranslucencyError(f"light: the scale of env:{rest} must lie in [0, {MAX_POWER:g}]")
     light = EnvironmentLight(s, filename=str(path.resolve()))
     try:
+        pixels = np.asarray(mitsuba().Bitmap(str(path.resolve())), dtype=np.float64)
         mitsuba().load_dict(light.emitter_dict())
     except Exception as exc:  # noqa: BLE001 — Mitsuba's message is long; one line names the file
-        raise TranslucencyError(
-            f"light: {path} is not a readable environment map ({str(exc).splitlines()[0][:120]})"
-        ) from None
+        text = (str(exc).strip().splitlines() or [type(exc).__name__])[0]
+        raise TranslucencyError(f"light: {path} is not a readable environment map ({text[:120]})") from None
+    _check_map_pixels(path, pixels, s)
     return light
+
+
+def _check_map_pixels(path: Path, pixels: np.ndarray, scale: float) -> None:
+    """An environment map's pixels: a latitude–longitude image of finite, non-negative radiance."""
+    if pixels.ndim not in (2, 3) or min(pixels.shape[:2]) < 1 or (pixels.ndim == 3 and pixels.shape[2] > 4):
+        raise TranslucencyError(
+            f"light: {path} is not a latitude-longitude image (pixel array of shape {pixels.shape})"
+        )
+    bad = ~np.isfinite(pixels)
+    if bad.any():
+        row, col = (int(x) for x in np.argwhere(bad)[0][:2])
+        raise TranslucencyError(
+            f"light: {path} holds {int(bad.sum())} non-finite values (NaN or infinity), the first at pixel "
+            f"row {row}, column {col}"
+        )
+    if (pixels < 0).any():
+        row, col = (int(x) for x in np.argwhere(pixels < 0)[0][:2])
+        raise TranslucencyError(
+            f"light: {path} holds negative radiance ({pixels.min():.3g} at pixel row {row}, column {col})"
+        )
+    if not pixels.max(initial=0.0) > 1e-30:  # Mitsuba's importance sampling of a black map divides by 0
+        raise TranslucencyError(f"light: {path} is black (no pixel above 1e-30): it lights nothing")
+    if pixels.max(initial=0.0) * scale > MAX_POWER:
+        raise TranslucencyError(
+            f"light: {path} times its scale reaches a radiance of {pixels.max() * scale:.3g}, more than "
+            f"{MAX_POWER:g}"
+        )
