@@ -99,8 +99,9 @@ def default_clusters(V: int, surface: float, radius: float) -> int:
     """K: seeds spaced about half the near radius apart (K ≈ 4 · surface / (π R²)), 256 to 3,000."""
     if not radius > 0:  # no near part: the finest clustering allowed
         return int(min(V, MAX_CLUSTERS))
-    with np.errstate(over="ignore"):  # a radius so small that K overflows is simply the cap
-        return int(min(V, np.clip(np.ceil(4.0 * surface / (np.pi * radius**2)), 256, MAX_CLUSTERS)))
+    with np.errstate(over="ignore", divide="ignore"):  # a radius so small that K overflows: the cap
+        K = np.ceil(4.0 * surface / (np.pi * np.float64(radius) ** 2))
+    return int(min(V, np.clip(K, 256, MAX_CLUSTERS)))
 
 
 def far_field_operator(model, v, area, alpha, weights, c, d, radius, surface, clusters=None):
