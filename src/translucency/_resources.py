@@ -300,8 +300,9 @@ def rendering(
 #: seconds per unit of work of each command, measured on the development machine (2 shared cores); each
 #: machine calibrates its own factor on top of them (:func:`estimate_time`)
 TIME_TERMS = {
-    # photon_steps: Σ over points, photons and channels of the expected steps of a walk
-    # (translucency.acquire.estimate_seconds at one step a second); points: each point's window and its writes
+    # photon_steps: Σ over points, photons and channels of the steps of a walk, counted by a probe of the
+    # walk on the volume (translucency.acquire.estimate_seconds at one step a second); points: each point's
+    # window and its writes.  Before a first run, the probe's own seconds a step set the factor.
     "acquire planar": {"overhead": 0.4, "points": 0.015, "photon_steps": 2.7e-7, "pixels": 2e-6},
     # photons: points x photons x 3 channels; point_vertices: each point's tally over the mesh
     "acquire mesh": {"overhead": 0.8, "points": 0.05, "photons": 1.5e-5, "point_vertices": 2e-7},
@@ -312,6 +313,15 @@ TIME_TERMS = {
     "fit burley": {"overhead": 0.3, "point_pixels": 1.5e-6},
     "fit pbd": {"overhead": 0.3, "point_pixels": 7.4e-5},
     "fit ddipole": {"overhead": 0.3, "point_pixels": 1.7e-6},
+    # point_pixels: points x window pixels x data sets (2 with --truth); model_pixels: the same per model;
+    # param_pixels: Σ over models of parameters a point x points x pixels x data sets; models: their figures
+    "evaluate": {
+        "overhead": 1.2,
+        "point_pixels": 2e-7,
+        "model_pixels": 3e-7,
+        "param_pixels": 3e-8,
+        "models": 0.5,
+    },
     # pairs: vertex pairs of the transport; samples: picture pixels x 16; reference_samples: 2 x pixels x spp
     "render": {"overhead": 1.5, "vertices": 2e-4, "pairs": 5e-7, "samples": 3e-7, "reference_samples": 2e-6},
 }
@@ -407,13 +417,14 @@ def _raw_seconds(command: str, units: dict) -> float:
     return terms.get("overhead", 0.0) + sum(terms[k] * float(v) for k, v in units.items())
 
 
-def estimate_time(command: str, units: dict) -> TimeEstimate:
+def estimate_time(command: str, units: dict, first: tuple[float, str] | None = None) -> TimeEstimate:
     """The time ``command`` will take on this machine for ``units`` of work (keys of :data:`TIME_TERMS`).
 
     The formula's rates (measured on the development machine) times this machine's factor for the
     command: the median of actual/formula over its latest :data:`CALIBRATION_RUNS` runs here
-    (:func:`record_time`), or, before the first run, the ratio of a 0.45 s probe of the machine's speed
-    to the development machine's.  Both are cached in :func:`timing_file`.
+    (:func:`record_time`), or, before the first run, ``first`` (a factor and where it came from: the
+    command's own probe of its work, as ``acquire planar``'s timed walk) or else the ratio of a 0.45 s
+    probe of the machine's speed to the development machine's (cached in :func:`timing_file`).
 
     Examples
     --------
@@ -428,6 +439,8 @@ def estimate_time(command: str, units: dict) -> TimeEstimate:
         factor = ratios[len(ratios) // 2]
         runs = f"{len(ratios)} earlier run{'s' if len(ratios) > 1 else ''}"
         return TimeEstimate(raw * factor, f"calibrated on this machine by {runs}")
+    if first is not None and math.isfinite(first[0]) and first[0] > 0:
+        return TimeEstimate(raw * first[0], first[1])
     probe = entry.get("probe_s")
     if not isinstance(probe, (int, float)) or not probe > 0:
         probe = _probe_seconds()

@@ -5,7 +5,7 @@
 writes a chunked, resumable data set (:mod:`translucency.io.dataset`).
 """
 
-from .planar import PlanarSetup, acquire_planar, estimate_seconds
+from .planar import PlanarSetup, WalkProbe, acquire_planar, estimate_seconds, probe_walk
 from .samples import GENERATORS, make_sample
 from .volume import Volume, load_volume
 
@@ -13,6 +13,8 @@ __all__ = [
     "PlanarSetup",
     "acquire_planar",
     "estimate_seconds",
+    "probe_walk",
+    "WalkProbe",
     "GENERATORS",
     "make_sample",
     "Volume",

@@ -27,7 +27,7 @@ from rich.table import Table
 from .. import _resources as resources
 from .._validate import TranslucencyError, check_option
 from .._version import __version__
-from ..acquire import PlanarSetup, acquire_planar, estimate_seconds, load_volume, make_sample
+from ..acquire import PlanarSetup, acquire_planar, estimate_seconds, load_volume, make_sample, probe_walk
 from ..acquire.mesh import acquire_mesh, object_volume
 from ..acquire.objects import make_pig
 from ..cluster import parse_scheduler
@@ -426,13 +426,17 @@ def acquire_planar_cmd(
         dtype=dtype,
     )
     setup.check(vol)
+    walk = probe_walk(vol, setup)  # a short trace of this volume: its steps per photon, this machine's speed
     units = {
         "points": grid * grid,
-        "photon_steps": estimate_seconds(vol, setup, steps_per_second=1.0),
+        "photon_steps": estimate_seconds(vol, setup, steps_per_second=1.0, probe=walk),
         "pixels": grid * grid * setup.window_pixels() ** 2,
     }
     fresh = _bytes_at(out) == 0
-    timing = _timed("acquire planar", units)
+    first = walk.seconds_per_step / resources.TIME_TERMS["acquire planar"]["photon_steps"]
+    timing = resources.estimate_time(
+        "acquire planar", units, (first, "from a probe of the walk on this sample")
+    )
     _info(
         quiet,
         f"{grid * grid} incident points x {photons:,} photons x 3 channels on a "
@@ -1035,6 +1039,16 @@ def evaluate(
     if json_out is not None:
         claim_output(json_out, "json summary", overwrite=overwrite, inputs=inputs, option="--json")
     claim_folder(report, overwrite=overwrite, inputs=inputs, option="--report")
+    d = 2 if truth is not None else 1
+    units = {
+        "point_pixels": ds.n_points * H * W * d,
+        "model_pixels": len(models) * ds.n_points * H * W * d,
+        "param_pixels": sum(int(np.prod(_param_shape(m))) for m in models.values()) * ds.n_points * H * W * d,
+        "models": len(models),
+    }
+    timing = _timed("evaluate", units)
+    _info(quiet, f"{len(models)} model(s) on {ds.n_points} points x {H} x {W} pixels; time {timing.text()}")
+    t0 = time.perf_counter()
     summary = write_report(
         models,
         ds,
@@ -1066,7 +1080,10 @@ def evaluate(
         "[dim]the truth's noise[/]" if truth else "[dim]noise alone[/]",
         *(f"[dim]{100 * nf[k]:.2f} %[/]" for k in ("all", "near", "mid", "far")),
     )
+    seconds = time.perf_counter() - t0
+    _calibrate("evaluate", units, seconds)
     summary = {"command": "evaluate", "report": report / "index.html", **summary, "estimate": need.as_dict()}
+    summary.update(seconds=round(seconds, 3), time_estimate=timing.as_dict())
     _finish(to_stdout, quiet, summary, [table, f"report: {report / 'index.html'}"])
 
 
