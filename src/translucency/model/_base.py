@@ -20,7 +20,7 @@ from abc import ABC, abstractmethod
 
 import numpy as np
 
-from .._validate import TranslucencyError, as_float_array, as_index_array
+from .._validate import TranslucencyError, as_float_array, as_index_array, check_nonnegative, check_positive
 from .alpha import Modulation, PlanarAlpha, VertexAlpha
 
 #: channels of every profile (linear RGB)
@@ -220,3 +220,17 @@ def bisect_radius(energy_within, total: np.ndarray, fraction: float, iters: int 
         s = short(mid)
         lo, hi = np.where(s, mid, lo), np.where(s, hi, mid)
     return hi
+
+
+def medium_parameters(n_points: int, sigma_a, sigma_s_prime, eta):
+    """The per-point medium of the physically based baselines, checked: σ_a ≥ 0 and σ_s' > 0 (N, 3) in
+    mm⁻¹, and the boundary's relative index η > 0.  Returns (sigma_a, sigma_s_prime, eta)."""
+    shape = (n_points, N_CHANNELS)
+    sigma_a = as_float_array("sigma_a", sigma_a, shape=shape)
+    sigma_s_prime = as_float_array("sigma_s_prime", sigma_s_prime, shape=shape)
+    check_nonnegative("sigma_a", sigma_a)
+    check_positive("sigma_s_prime", sigma_s_prime)
+    eta = float(as_float_array("eta", eta, ndim=0))
+    if not eta > 0:
+        raise TranslucencyError(f"eta: must be > 0, got {eta}")
+    return sigma_a, sigma_s_prime, eta

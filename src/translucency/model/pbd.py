@@ -59,8 +59,8 @@ from functools import lru_cache
 import numpy as np
 from numba import njit
 
-from .._validate import TranslucencyError, as_float_array, check_nonnegative, check_positive
-from ._base import N_CHANNELS, ReflectanceModel
+from .._validate import TranslucencyError
+from ._base import ReflectanceModel, medium_parameters
 from .alpha import Modulation
 
 #: Gauss–Legendre nodes of the beam integrals (over w = u^{1/3}, u the exponential's CDF)
@@ -294,15 +294,9 @@ class _TabulatedRadialModel(ReflectanceModel):
 
     def __init__(self, x_i, sigma_a, sigma_s_prime, eta: float, alpha: Modulation, *, frame=None):
         super().__init__(x_i, alpha, frame)
-        shape = (self.n_points, N_CHANNELS)
-        sigma_a = as_float_array("sigma_a", sigma_a, shape=shape)
-        sigma_s_prime = as_float_array("sigma_s_prime", sigma_s_prime, shape=shape)
-        check_nonnegative("sigma_a", sigma_a)
-        check_positive("sigma_s_prime", sigma_s_prime)
-        eta = float(as_float_array("eta", eta, ndim=0))
-        if not eta > 0:
-            raise TranslucencyError(f"eta: must be > 0, got {eta}")
-        self.sigma_a, self.sigma_s_prime, self.eta = sigma_a, sigma_s_prime, eta
+        self.sigma_a, self.sigma_s_prime, self.eta = medium_parameters(
+            self.n_points, sigma_a, sigma_s_prime, eta
+        )
         self._table = None
 
     def _R(self, r, sigma_a, sigma_s_prime):  # the family's R_d(r) per parameter set
