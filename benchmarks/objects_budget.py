@@ -62,17 +62,39 @@ def ring_means(R: np.ndarray, r: np.ndarray, area: np.ndarray, width: float, n_b
     return np.divide(out, w[:, None], out=np.zeros_like(out), where=w[:, None] > 0)
 
 
-def radial_kernel(tables, own, total, area_src, w, idx, r_all, area, width):
-    """K (V_o, V_j, 3) from ring tables (P, n_bins, 3) blended to every source j with (w, idx) (V_j, k);
-    the near field as the renderer takes it (``render.transport``): total blended, the own cell's share
-    of it f = A own / total blended (``area_src``: the cells of the tables' sources), each column scaled
-    to carry total_j (1 − f_j)."""
-    V = len(area)
+def table_shape(tables, w, idx, r_all, width):
+    """K (V_o, V_j, 3) before normalisation: the ring tables (P, n_bins, 3) of each source's k points,
+    read at the ring of r_oj and blended with (w, idx) (V_j, k)."""
     n_bins = tables.shape[1]
     b = np.minimum((r_all / width).astype(int), n_bins - 1)  # (V_o, V_j)
-    K = np.zeros((V, V, 3))
+    K = np.zeros(r_all.shape + (3,))
     for kk in range(w.shape[1]):
         K += w[None, :, kk, None] * tables[idx[:, kk][None, :], b]
+    return K
+
+
+def fit_shape(model, w, idx, r_all, r_min):
+    """K (V_o, V_j, 3) before normalisation: the fitted exponentials of each source's k points at the
+    exact distance (below r_min at r_min, as the renderer), blended with (w, idx); α = 1."""
+    c, d = model.c[:, :, 0, :], model.d[:, :, 0, :]  # (P, C, n)
+    r = np.maximum(r_all, r_min)
+    K = np.zeros(r_all.shape + (3,))
+    for kk in range(w.shape[1]):
+        p = idx[:, kk]  # (V_j,)
+        scale = model.colour_scale[p] if c.shape[1] == 1 else np.ones((len(p), 3))
+        for ch in range(3):
+            cc, dd = c[p, min(ch, c.shape[1] - 1)], d[p, min(ch, c.shape[1] - 1)]  # (V_j, n)
+            prof = np.einsum("jn,ojn->oj", cc, np.exp(dd[None] * r[..., None]))
+            K[..., ch] += w[None, :, kk] * scale[None, :, ch] * prof
+    return K
+
+
+def normalised(K, own, total, area_src, w, idx, area):
+    """The near field as the renderer takes it (``render.transport``) applied to a kernel shape K
+    (V_o, V_j, 3): total blended, the own cell's share of it f = A own / total blended (``area_src``: the
+    cells of the points' vertices), each column scaled to carry total_j (1 − f_j), the own cell on the
+    diagonal."""
+    V = len(area)
     f = np.divide(area_src[:, None] * own, total, out=np.zeros_like(own), where=total > 0)
     f_j = np.einsum("vk,vkc->vc", w, np.clip(f, 0, 1)[idx])
     total_j = np.einsum("vk,vkc->vc", w, total[idx])
@@ -188,7 +210,7 @@ def main() -> int:
     eye = (np.ones((V, 1)), np.arange(V)[:, None])
     row(
         "oracle, radial",
-        radiance(radial_kernel(tables, own, total, area, *eye, r_all, area, width), area, E),
+        radiance(normalised(table_shape(tables, *eye, r_all, width), own, total, area, *eye, area), area, E),
         "local model (radial, Euclidean r)",
     )
     # the P incident points of the pipeline, their ring means blended with the renderer's weights
@@ -197,18 +219,23 @@ def main() -> int:
     row(
         f"points, radial ({P})",
         radiance(
-            radial_kernel(tables[pts], own[pts], total[pts], area[pts], w, idx, r_all, area, width), area, E
+            normalised(
+                table_shape(tables[pts], w, idx, r_all, width), own[pts], total[pts], area[pts], w, idx, area
+            ),
+            area,
+            E,
         ),
         "interpolation between incident points",
     )
-    # the fit in place of the ring means: exponentials tabulated on the same rings
-    rc = (np.arange(n_bins) + 0.5) * width
-    prof = np.einsum("pcn,pcnb->pbc", model.c[:, :, :, 0], np.exp(model.d[:, :, :, 0][..., None] * rc))
-    if prof.shape[2] == 1:
-        prof = prof * model.colour_scale[:, None, :]
+    # the fit in place of the ring means, at the exact distances (below r_min at r_min, as the renderer)
+    r_min = 0.5 * width
     row(
         f"points, fit ({P}, α = 1)",
-        radiance(radial_kernel(prof, own[pts], total[pts], area[pts], w, idx, r_all, area, width), area, E),
+        radiance(
+            normalised(fit_shape(model, w, idx, r_all, r_min), own[pts], total[pts], area[pts], w, idx, area),
+            area,
+            E,
+        ),
         "fit",
     )
     out = {
