@@ -38,11 +38,10 @@ bench: $(STAMP)
 clean:
 	rm -rf $(VENV) $(OUT) .pytest_cache .hypothesis
 
-# the embedded default data set (about 1 minute on 2 cores)
+# the embedded default data: the fitted scan, its held-out truth and the fine near-x_i profiles of Figure 1
+# (marble with a fibrous band, translucency.pipeline.write_default_data; about 10 minutes on 2 quiet cores)
 default-data: $(STAMP)
-	$(VENV)/bin/translucency acquire planar --material marble --size 32 32 10 --voxel 0.25 \
-	  --grid 32 --span 16 --pitch 0.25 --window 12 --photons 20000 --seed 1 --dtype float16 \
-	  --chunk 64 --out src/translucency/data/marble_default.zarr --overwrite
+	$(PY) -c "from translucency.pipeline import write_default_data as w; print(w())"
 
 # the converged volpath reference of Figure 2 (2 x 256 samples per pixel, about 10 minutes on 2 cores)
 default-reference: $(STAMP)

@@ -4,9 +4,13 @@
    fit of the dipole for every material of Jensen's table, and writes a model
    file of those fits;
 2. fits the embedded default measurement (a virtual DISCO scan of the
-   generated marble sample) per incident point with α — isotropic and
-   anisotropic exponentials, the dipole and Christensen–Burley — and writes
-   the evaluation report with the paper's Figure 1 (profiles and error maps).
+   generated marble sample with a fibrous band, :func:`demo_volume`) per
+   incident point with α — isotropic and anisotropic exponentials, the dipole
+   and Christensen–Burley — and writes the evaluation report with the paper's
+   Figure 1 (profiles and error maps), every model against an independent
+   acquisition of the same sample and points (the held-out truth).
+
+The embedded data are made by :func:`write_default_data` (``make default-data``).
 """
 
 from __future__ import annotations
@@ -19,8 +23,11 @@ import numpy as np
 from .acquire.mesh import acquire_mesh, object_volume
 from .acquire.objects import make_pig
 from .acquire.pattern import acquire_pattern
-from .acquire.samples import sample_of_dataset
-from .data import default_dataset_path
+from .acquire.planar import PlanarSetup, acquire_planar
+from .acquire.samples import make_sample, sample_of_dataset
+from .acquire.transport import TOP, random_walk
+from .acquire.volume import Volume
+from .data import DATA_DIR, default_dataset_path, default_fine_profiles_path, default_truth_path
 from .evaluate.baselines import material_profiles, plot_profiles
 from .evaluate.relight import pattern_irradiance, plot_relighting, relight
 from .evaluate.report import write_report
@@ -39,7 +46,14 @@ from .render.reference import converged_reference
 
 
 def relight_check(
-    ds, models: dict, figure, *, pattern: str = "stripe", photons: int = 1000, seed: int = 5
+    ds,
+    models: dict,
+    figure,
+    *,
+    pattern: str = "stripe",
+    photons: int = 1000,
+    seed: int = 5,
+    volume: Volume | None = None,
 ) -> dict:
     """Relight the data set's sample with each model and with photon transport; plot and compare.
 
@@ -54,7 +68,15 @@ def relight_check(
     origin = x_i.min(axis=0) - margin
     shape = tuple(int(round((np.ptp(x_i[:, k]) + 2 * margin) / ds.pitch)) for k in (1, 0))
     reference = acquire_pattern(
-        sample_of_dataset(ds.header), x_i, spacing, E, origin, ds.pitch, shape, photons=photons, seed=seed
+        volume if volume is not None else sample_of_dataset(ds.header),
+        x_i,
+        spacing,
+        E,
+        origin,
+        ds.pitch,
+        shape,
+        photons=photons,
+        seed=seed,
     )
     preds = {
         name: relight(m, E, spacing**2, origin, ds.pitch, shape, radius=margin) for name, m in models.items()
@@ -131,6 +153,142 @@ def write_figure2_reference(folder=None, *, spp: int = FIGURE2_REFERENCE_SPP, si
     return info
 
 
+# -- the embedded default data (Figure 1) ----------------------------------------------------------
+
+#: the generated sample of the embedded data: the ``marble`` generator's slab (seed 1) with a fibrous band
+DEFAULT_SAMPLE = {"size_mm": (32.0, 32.0, 10.0), "voxel_mm": 0.25, "seed": 1, "band_y_mm": 17.0}
+#: the scan: 32 x 32 incident points 0.5 mm apart over the central 16 mm, 0.25 mm pixels, 8 mm windows
+DEFAULT_SCAN = {"grid": 32, "span_mm": 16.0, "pitch_mm": 0.25, "window_mm": 8.0}
+#: photons per point and channel and photon seed of the fitted data and of the held-out truth (same sample)
+DEFAULT_ACQUISITIONS = {"fit": (20_000, 1), "truth": (60_000, 2)}
+#: the near-x_i profiles on a fine radial grid (ring tally of the exits, no pixels)
+FINE_PROFILES = {"photons": 400_000, "seed": 3, "bin_mm": 0.05, "r_max_mm": 2.0}
+
+
+def demo_volume(
+    size_mm=DEFAULT_SAMPLE["size_mm"],
+    voxel_mm: float = DEFAULT_SAMPLE["voxel_mm"],
+    seed: int = DEFAULT_SAMPLE["seed"],
+    band_y_mm: float = DEFAULT_SAMPLE["band_y_mm"],
+) -> Volume:
+    """The sample of the embedded data: veined marble with a fibrous band (the anisotropic model's case).
+
+    Below ``y = band_y_mm`` it is the ``marble`` generator's slab (white body, grey-green veins); above,
+    clear lamellae (σ_s = 0.15 mm⁻¹, 0.5 mm wide, 1 mm pitch in y, the full depth) alternate with the
+    veined marble scattering 1.6× more: light channels along x, so R_d spreads farther along x than y.
+    The coefficients vary across y but not along x in the band.
+    """
+    vol = make_sample("marble", size_mm, voxel_mm, seed=seed)
+    y = (np.arange(vol.sigma_s.shape[1]) + 0.5) * voxel_mm
+    band = y >= band_y_mm
+    clear = band & (np.cos(2 * np.pi * (y - band_y_mm)) < 0.0)
+    s, a = vol.sigma_s.copy(), vol.sigma_a.copy()
+    s[:, band] *= 1.6
+    s[:, clear] = np.array([0.150, 0.160, 0.140], np.float32)
+    a[:, clear] = np.array([0.003, 0.002, 0.006], np.float32)
+    description = {
+        "composite": "marble with a fibrous band (translucency.pipeline.demo_volume)",
+        "seed": seed,
+        "band_y_mm": band_y_mm,
+        "g": 0.0,
+    }
+    return Volume(s, a, voxel_mm, 0.0, vol.eta, description)
+
+
+def default_setup(which: str) -> PlanarSetup:
+    """The :class:`PlanarSetup` of the embedded ``"fit"`` data or of its held-out ``"truth"``."""
+    photons, seed = DEFAULT_ACQUISITIONS[which]
+    sc = DEFAULT_SCAN
+    return PlanarSetup(
+        grid=(sc["grid"], sc["grid"]),
+        span=(sc["span_mm"], sc["span_mm"]),
+        pitch=sc["pitch_mm"],
+        window=sc["window_mm"],
+        photons=photons,
+        seed=seed,
+        chunk_points=64,
+        dtype="float16",
+    )
+
+
+def profile_points(x_i: np.ndarray, volume: Volume, band_y_mm: float = DEFAULT_SAMPLE["band_y_mm"]):
+    """Four incident points for Figure 1's profiles: clean marble, a vein, a clear lamella and the
+    marble between lamellae in the band (by the surface voxel's absorption and scattering)."""
+    v = volume.voxel_mm
+    row = np.clip((x_i[:, 1] / v).astype(int), 0, volume.sigma_a.shape[1] - 1)
+    col = np.clip((x_i[:, 0] / v).astype(int), 0, volume.sigma_a.shape[2] - 1)
+    sa = volume.sigma_a[0, row, col, 1]
+    ss = volume.sigma_s[0, row, col, 1]
+    lo, hi = x_i.min(0) + 1.0, x_i.max(0) - 1.0
+    inner = (x_i >= lo).all(1) & (x_i <= hi).all(1)
+    below = inner & (x_i[:, 1] < band_y_mm - 1.0)
+    above = inner & (x_i[:, 1] > band_y_mm + 1.0)
+    pick = lambda sel, key: int(np.flatnonzero(sel)[np.argmin(key[sel])])  # noqa: E731
+    return [pick(below, sa), pick(below, -sa), pick(above, ss), pick(above, -ss)]
+
+
+def fine_profiles(
+    volume: Volume, x_i: np.ndarray, points, *, photons: int, seed: int, bin_mm: float, r_max_mm: float
+) -> dict:
+    """Ring-averaged R_d(r) around ``points`` on a fine radial grid, straight from the photon exits.
+
+    R_d of a ring = exits in it / (N · ring area); its variance p̂(1 − p̂)/(N · area²).  Per channel.
+    """
+    edges = np.arange(0.0, r_max_mm + 1e-9, bin_mm)
+    area = np.pi * np.diff(edges**2)
+    xy = x_i[list(points)]
+    R = np.zeros((len(points), len(edges) - 1, 3))
+    var = np.zeros_like(R)
+    for ch in range(3):
+        res = random_walk(volume, ch, xy, photons, seed=seed)
+        which = np.arange(len(points)).repeat(photons)
+        top = res.code == TOP
+        r = np.hypot(res.x[top] - xy[which[top], 0], res.y[top] - xy[which[top], 1])
+        for k in range(len(points)):
+            n = np.histogram(r[which[top] == k], edges)[0].astype(float)
+            p = n / photons
+            R[k, :, ch] = p / area
+            var[k, :, ch] = p * (1 - p) / photons / area**2
+    return {
+        "edges_mm": edges,
+        "points": np.asarray(points),
+        "x_i": xy,
+        "R_d": R,
+        "variance": var,
+        "photons": photons,
+        "seed": seed,
+    }
+
+
+def write_default_data(folder=None, *, overwrite: bool = True) -> dict:
+    """Make the embedded data (``make default-data``): the fitted scan, its held-out truth (the same
+    sample, another photon seed, 3x the photons) and the fine near-x_i profiles, into ``folder``
+    (default: the package's data folder).  About 10 minutes on 2 quiet cores."""
+    folder = Path(folder or DATA_DIR)
+    vol = demo_volume()
+    out = {}
+    for which, name in (("fit", "marble_default.zarr"), ("truth", "marble_default_truth.zarr")):
+        acquire_planar(vol, default_setup(which), folder / name, overwrite=overwrite)
+        out[which] = folder / name
+    x_i = open_dataset(out["fit"])["x_i"].astype(np.float64)
+    prof = fine_profiles(
+        vol,
+        x_i,
+        profile_points(x_i, vol),
+        **{
+            "photons": FINE_PROFILES["photons"],
+            "seed": FINE_PROFILES["seed"],
+            "bin_mm": FINE_PROFILES["bin_mm"],
+            "r_max_mm": FINE_PROFILES["r_max_mm"],
+        },
+    )
+    out["fine"] = folder / "marble_default_fine_profiles.npz"
+    with atomic_path(out["fine"]) as tmp:
+        with open(tmp, "wb") as fh:
+            np.savez_compressed(fh, **prof)
+    return out
+
+
 #: the planar fits of the main job: label -> fit_planar arguments
 DEMO_FITS = {
     "iso": dict(model="iso"),
@@ -164,9 +322,11 @@ def run_demo(
         The planar fits of the default data set (``dataset`` overrides it):
         iso, aniso (m = 8), dipole and Burley, each with its α.
     ``report/``
-        Their evaluation (:func:`translucency.evaluate.report.write_report`):
-        Figure 1's profiles and error maps, α, parameters, ``report.json``
-        and ``index.html``.
+        Their evaluation (:func:`translucency.evaluate.report.write_report`)
+        against the embedded held-out truth (the same sample and incident
+        points, an independent acquisition with 3x the photons; the default
+        data only): Figure 1's profiles with residuals and the fine near-x_i
+        rings, error maps, α, parameters, ``report.json`` and ``index.html``.
 
     ``out_dir`` must be new, empty, or an earlier output folder of the tool
     (then only with ``overwrite``): :func:`translucency.io.outputs.claim_folder`.
@@ -204,6 +364,8 @@ def run_demo(
 
     # -- the embedded measurement: planar fits and Figure 1 -------------------------
     ds = open_dataset(dataset or default_dataset_path())
+    embedded = dataset is None  # the default data come with their held-out truth and fine profiles
+    truth = open_dataset(default_truth_path()) if embedded else None
     models, flagged = {}, {}
     for label, kw in DEMO_FITS.items():
         if step:
@@ -216,7 +378,12 @@ def run_demo(
     # -- relighting: a stripe of light, models against photon transport ------------------
     if step:
         step("relighting")
-    relit = relight_check(ds, {k: models[k] for k in ("iso", "dipole")}, out_dir / "report" / "relight.png")
+    relit = relight_check(
+        ds,
+        {k: models[k] for k in ("iso", "dipole")},
+        out_dir / "report" / "relight.png",
+        volume=demo_volume() if embedded else None,
+    )
     write_json(out_dir / "report" / "relight.json", relit)
     if step:
         step("report")
@@ -231,6 +398,8 @@ def run_demo(
         ds,
         out_dir / "report",
         flagged=flagged,
+        truth=truth,
+        fine=default_fine_profiles_path() if embedded else None,
         extra=[
             (
                 "relight.png",

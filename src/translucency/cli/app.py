@@ -353,7 +353,15 @@ def acquire_planar_cmd(
         None, "--volume", help="A user's volume: .npz with sigma_s, sigma_a (Z,Y,X,3) in 1/mm, voxel_mm."
     ),
     photons: int = typer.Option(10_000, "--photons", "-N", help="Photons per incident point and channel."),
-    seed: int = typer.Option(0, "--seed", help="Random seed (results are deterministic for a seed)."),
+    seed: int = typer.Option(
+        0, "--seed", help="Random seed of the photons (results are deterministic for a seed)."
+    ),
+    sample_seed: int = typer.Option(
+        None,
+        "--sample-seed",
+        help="Seed of the generated sample (default: --seed). A held-out truth of the same sample: "
+        "the same --sample-seed, another --seed.",
+    ),
     grid: int = typer.Option(8, "--grid", help="Incident points per axis (grid x grid)."),
     span: float = typer.Option(8.0, "--span", help="Side of the incident grid, mm (centred on the sample)."),
     pitch: float = typer.Option(0.25, "--pitch", help="Pixel size, mm."),
@@ -383,6 +391,7 @@ def acquire_planar_cmd(
     parse_scheduler(scheduler)  # a bad value or an unreachable cluster: one line, before work
     check_option("--photons", photons, lo=1)
     check_option("--seed", seed, lo=0)
+    check_option("--sample-seed", sample_seed, lo=0)
     check_option("--grid", grid, lo=1, hi=4096)
     check_option("--chunk", chunk, lo=1)
     check_option("--g", g, lo=-1, hi=1, open_lo=True, open_hi=True)
@@ -410,7 +419,12 @@ def acquire_planar_cmd(
     if volume is None:  # before the sample is generated
         estimate = need(resources.slab_voxels(size, voxel))
     claim_output(out, "planar data set", overwrite=overwrite, inputs=[volume], reuse=True)
-    vol = load_volume(volume) if volume is not None else make_sample(material, size, voxel, g=g, seed=seed)
+    sample_seed = seed if sample_seed is None else sample_seed
+    vol = (
+        load_volume(volume)
+        if volume is not None
+        else make_sample(material, size, voxel, g=g, seed=sample_seed)
+    )
     if volume is not None:
         estimate = need(vol.sigma_s.size / 3)
     setup = PlanarSetup(
@@ -1129,7 +1143,7 @@ def _warn_other_sample(metas: dict, ds, truth) -> None:
         if other != own:
             err_console.print(
                 f"[yellow]warning:[/] --truth {truth} measured another sample than {ds.path} (a generated "
-                "sample's --seed also changes the sample); the errors compare two materials",
+                "sample is set by --sample-seed, default --seed); the errors compare two materials",
                 highlight=False,
                 soft_wrap=True,
             )

@@ -1,16 +1,38 @@
-"""Data shipped with the package.
+"""Data shipped with the package (regenerate all of it with ``make default-data``:
+:func:`translucency.pipeline.write_default_data`, about 10 minutes on 2 quiet cores).
 
-``marble_default.zarr`` — the embedded default measurement: a virtual DISCO
-scan of the generated ``marble`` sample (32 × 32 × 10 mm slab, 0.25 mm voxels,
-seed 1): 32 × 32 incident points over the central 16 mm, 0.25 mm pixels,
-49 × 49-pixel (12.25 mm) windows, 20,000 photons per point and channel,
-stored as float16 (9 MB).  Regenerate with ``make default-data``.
+The sample is :func:`translucency.pipeline.demo_volume`: the generated ``marble`` slab (32 × 32 × 10 mm,
+0.25 mm voxels, seed 1) with a fibrous band (clear lamellae along x) above y = 17 mm.  The scan: 32 × 32
+incident points 0.5 mm apart over the central 16 mm, 0.25 mm pixels, 33 × 33-pixel (8.25 mm) windows,
+float16.
+
+``marble_default.zarr``
+    The embedded default measurement (the data the main job fits): 20,000 photons per point and channel,
+    photon seed 1.
+``marble_default_truth.zarr``
+    Its held-out truth: the same sample and points, an independent acquisition (photon seed 2) with
+    60,000 photons per point and channel.
+``marble_default_fine_profiles.npz``
+    Ring-averaged R_d(r) on 0.05 mm rings (r < 2 mm) around Figure 1's four profile points, 400,000
+    photons per point and channel (photon seed 3): the near-x_i shape the pixels cannot resolve.
 """
 
 from importlib.resources import files
 from pathlib import Path
 
+DATA_DIR = Path(str(files("translucency") / "data"))
+
 
 def default_dataset_path() -> Path:
-    """Path of the embedded default marble data set."""
-    return Path(str(files("translucency") / "data" / "marble_default.zarr"))
+    """Path of the embedded default data set (the fitted scan)."""
+    return DATA_DIR / "marble_default.zarr"
+
+
+def default_truth_path() -> Path:
+    """Path of the embedded data set's held-out truth (same sample and points, independent photons)."""
+    return DATA_DIR / "marble_default_truth.zarr"
+
+
+def default_fine_profiles_path() -> Path:
+    """Path of the fine near-x_i ring profiles of Figure 1 (``.npz``)."""
+    return DATA_DIR / "marble_default_fine_profiles.npz"

@@ -20,7 +20,18 @@ which counts light leaving outside the window too).
 
 Evaluated against an independent acquisition of the same incident points
 (``translucency evaluate --truth``), these measure the model against the
-material rather than against the noise it was fitted to.
+material rather than against the noise it was fitted to.  The truth's own
+noise is then independent of the model, so the squared error splits into
+the model's error and the truth's variance, and
+
+.. math:: \mathrm{beyond\_noise} = \sqrt{\max(\lVert \hat R_d - R_d \rVert^2 - \sum \sigma^2, 0)}
+          / \lVert R_d \rVert
+
+estimates the model's error against the noise-free material (0 when the
+error is within the noise).  In-sample (the fitted data as the reference)
+this subtraction is not valid: the fit has followed part of that noise.
+``energy_noise`` is the noise of the energies the same way (the truth's
+variance summed over the band's pixels).
 
 Maps: the error per incident point, :math:`\lVert \hat R_{d,i} - R_{d,i}\rVert / \lVert R_{d,i}\rVert`
 over its window, and per outgoing pixel of the sample, the same over the pairs
@@ -53,19 +64,48 @@ class PlanarErrors:
     per_pixel: np.ndarray  # (H, W) relative error per outgoing pixel on the sample grid
     grid: SampleGrid
     map_radius: float
+    beyond_noise: dict | None = None  # "all" and band -> error beyond the reference's noise
+    energy_noise: dict | None = None  # band and "window" -> noise of the per-point energies
+    per_point_noise: np.ndarray | None = None  # (P,) the reference's noise per incident point
+    per_pixel_noise: np.ndarray | None = None  # (H, W) the reference's noise per outgoing pixel
+    per_point_beyond: np.ndarray | None = None  # (P,) error beyond the noise per incident point
+    per_pixel_beyond: np.ndarray | None = None  # (H, W) error beyond the noise per outgoing pixel
 
     def summary(self) -> dict:
-        """The JSON fields of ``translucency evaluate``."""
+        """The JSON fields of ``translucency evaluate`` (NaN for an empty band: files written from it pass
+        through :func:`finite_or_null`, which makes it null)."""
         out = {"rel_l2": self.rel_l2}
         out.update({f"rel_l2_{b}": v for b, v in self.bands.items()})
         out["noise_floor"] = self.noise
+        out["beyond_noise"] = self.beyond_noise
         out["energy_error"] = self.energy
+        out["energy_noise"] = self.energy_noise
         pp = self.per_point[np.isfinite(self.per_point)]
         out["per_point"] = {
             "median": float(np.median(pp)) if pp.size else None,
             "p95": float(np.quantile(pp, 0.95)) if pp.size else None,
         }
         return out
+
+
+def finite_or_null(value):
+    """``value`` with every non-finite float (NaN, inf) replaced by None, through dicts and lists."""
+    if isinstance(value, dict):
+        return {k: finite_or_null(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [finite_or_null(v) for v in value]
+    if isinstance(value, (float, np.floating)):
+        return float(value) if np.isfinite(value) else None
+    return value
+
+
+def beyond(err2, var, ref2):
+    """The relative error left after the reference's noise: sqrt(max(err² − var, 0) / ref²) (NaN if
+    ref² = 0); element-wise on arrays."""
+    err2, var, ref2 = (np.asarray(v, dtype=np.float64) for v in (err2, var, ref2))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        out = np.where(ref2 > 0, np.sqrt(np.maximum(err2 - var, 0.0) / np.where(ref2 > 0, ref2, 1.0)), np.nan)
+    return float(out) if out.ndim == 0 else out
 
 
 def planar_errors(
@@ -109,12 +149,15 @@ def planar_errors(
     ref2 = {b: 0.0 for b in BANDS}
     var = {b: 0.0 for b in BANDS}
     per_point = np.full(ds.n_points, np.nan)
+    pt_err2, pt_ref2, pt_var = (np.zeros(ds.n_points) for _ in range(3))
     # per point and band: the energy Σ R_d p² of model and data (RGB summed), for the energy-weighted errors
     e_model = {b: np.zeros(ds.n_points) for b in (*BANDS, "window")}
     e_data = {b: np.zeros(ds.n_points) for b in (*BANDS, "window")}
+    e_var = {b: np.zeros(ds.n_points) for b in (*BANDS, "window")}
     area = ds.pitch**2
     pix_err = np.zeros(grid.shape[0] * grid.shape[1])
     pix_ref = np.zeros_like(pix_err)
+    pix_var = np.zeros_like(pix_err)
     for s in range(0, ds.n_points, chunk_points):
         e = min(s + chunk_points, ds.n_points)
         k = e - s
@@ -130,6 +173,7 @@ def planar_errors(
         v2 = np.where(ok, v.sum(2), 0.0)
         p_sum = np.where(ok, pred.sum(2), 0.0) * area  # (k, J): energy per pixel, RGB summed
         y_sum = np.where(ok, y.sum(2), 0.0) * area
+        v_sum = v2 * area**2  # variance of each pixel's energy
         for b, (lo, hi) in BANDS.items():
             sel = (r >= lo) & (r < hi)
             err2[b] += float(d2[sel].sum())
@@ -137,13 +181,17 @@ def planar_errors(
             var[b] += float(v2[sel].sum())
             e_model[b][s:e] = np.where(sel, p_sum, 0.0).sum(1)
             e_data[b][s:e] = np.where(sel, y_sum, 0.0).sum(1)
+            e_var[b][s:e] = np.where(sel, v_sum, 0.0).sum(1)
         e_model["window"][s:e], e_data["window"][s:e] = p_sum.sum(1), y_sum.sum(1)
+        e_var["window"][s:e] = v_sum.sum(1)
         den = y2.sum(1)
+        pt_err2[s:e], pt_ref2[s:e], pt_var[s:e] = d2.sum(1), den, v2.sum(1)
         per_point[s:e] = np.where(den > 0, np.sqrt(d2.sum(1) / np.where(den > 0, den, 1.0)), np.nan)
         n_px = pix_err.size
         near = r < map_radius
         pix_err += np.bincount(geom.pixel[near], d2[near], minlength=n_px)
         pix_ref += np.bincount(geom.pixel[near], y2[near], minlength=n_px)
+        pix_var += np.bincount(geom.pixel[near], v2[near], minlength=n_px)
 
     def ratio(a, b):
         return float(np.sqrt(a / b)) if b > 0 else float("nan")
@@ -161,7 +209,13 @@ def planar_errors(
     energy["total"] = ratio(
         float(((total_model - total_data)[keep] ** 2).sum()), float((total_data[keep] ** 2).sum())
     )
-    per_pixel = np.where(pix_ref > 0, np.sqrt(pix_err / np.where(pix_ref > 0, pix_ref, 1.0)), np.nan)
+    energy_noise = {b: ratio(float(e_var[b][keep].sum()), float((e_data[b][keep] ** 2).sum())) for b in e_var}
+    safe = np.where(pix_ref > 0, pix_ref, 1.0)
+    per_pixel = np.where(pix_ref > 0, np.sqrt(pix_err / safe), np.nan)
+    per_pixel_noise = np.where(pix_ref > 0, np.sqrt(pix_var / safe), np.nan)
+    pt_safe = np.where(pt_ref2 > 0, pt_ref2, 1.0)
+    per_point_noise = np.where(np.isfinite(per_point), np.sqrt(pt_var / pt_safe), np.nan)
+    per_point_beyond = np.where(np.isfinite(per_point), beyond(pt_err2, pt_var, pt_safe), np.nan)
     return PlanarErrors(
         rel_l2=ratio(tot_e, tot_r),
         bands={b: ratio(err2[b], ref2[b]) for b in BANDS},
@@ -171,4 +225,13 @@ def planar_errors(
         per_pixel=per_pixel.reshape(grid.shape),
         grid=grid,
         map_radius=map_radius,
+        beyond_noise={
+            "all": beyond(tot_e, tot_v, tot_r),
+            **{b: beyond(err2[b], var[b], ref2[b]) for b in BANDS},
+        },
+        energy_noise=energy_noise,
+        per_point_noise=per_point_noise,
+        per_pixel_noise=per_pixel_noise.reshape(grid.shape),
+        per_point_beyond=per_point_beyond,
+        per_pixel_beyond=beyond(pix_err, pix_var, pix_ref).reshape(grid.shape),
     )
