@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import trimesh
+from scipy.spatial import cKDTree
 
 from conftest import random_exponential_model
 from translucency import TranslucencyError
@@ -121,8 +122,11 @@ def test_measured_totals_are_carried_by_near_and_far_together(capsule):
     T = transport_matrices(model, capsule, radius=R_NEAR, r_min=R_MIN)
     assert T.far is not None
     w, idx = neighbour_weights(model, capsule)
-    own = np.einsum("vk,vkc->vc", w, model.measured["own"][idx])
+    # between incident points the own cell's share of the total blends, f_i = A_i own_i / total_i
+    A_i = area[cKDTree(np.asarray(capsule.vertices)).query(model.x_i)[1]]
+    f = np.clip(A_i[:, None] * model.measured["own"] / model.measured["total"], 0.0, 1.0)
     total = np.einsum("vk,vkc->vc", w, model.measured["total"][idx])
+    own = np.einsum("vk,vkc->vc", w, f[idx]) * total / area[:, None]
     # unit power into each incident vertex: its measured total, whatever the near radius
     src = farthest_points(np.asarray(capsule.vertices), 40)
     for p, v in enumerate(src[:6]):

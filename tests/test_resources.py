@@ -13,13 +13,23 @@ from translucency.cli.app import app
 
 runner = CliRunner()
 
+# The child's own high-water mark: VmHWM of its memory map (Linux).  Not getrusage's ru_maxrss, which
+# Linux carries across fork + exec — a child of a pytest process grown to gigabytes would report those.
 PEAK = """
 import resource, sys
 from translucency.cli.app import app
+def peak():
+    try:
+        for line in open("/proc/self/status"):
+            if line.startswith("VmHWM:"):
+                return int(line.split()[1]) * 1024
+    except OSError:
+        pass
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
 try:
     app(sys.argv[1:], standalone_mode=False)
 finally:
-    print("PEAK", resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024, file=sys.stderr)
+    print("PEAK", peak(), file=sys.stderr)
 """
 
 

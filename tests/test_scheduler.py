@@ -95,7 +95,9 @@ def test_a_fit_interrupted_on_a_cluster_resumes_identically(address, threads_run
         fit_planar(ds, "iso", scheduler=address, checkpoint=ckpt, progress=interrupt, **FIT)
     with np.load(ckpt) as z:
         assert z["num"].shape == z["den"].shape == ref.model.alpha.values.shape
-        assert int(z["added"][0]) == 1 and int(z["round"][0]) == 1
+        # round 2 (index 1) under way: how many of its chunks were added before the stop depends on
+        # which workers finished first; the resumed fit must not care
+        assert 1 <= int(z["added"][0]) < 4 and int(z["round"][0]) == 1
     _same_fit(fit_planar(ds, "iso", scheduler=address, checkpoint=ckpt, **FIT), ref)
     assert not ckpt.exists()
 

