@@ -54,6 +54,7 @@ enters leaves): :func:`pbd_total_without_kappa`, checked in the tests.
 
 from __future__ import annotations
 
+from abc import abstractmethod
 from functools import lru_cache
 
 import numpy as np
@@ -299,8 +300,9 @@ class _TabulatedRadialModel(ReflectanceModel):
         )
         self._table = None
 
-    def _R(self, r, sigma_a, sigma_s_prime):  # the family's R_d(r) per parameter set
-        raise NotImplementedError
+    @abstractmethod
+    def _R(self, r, sigma_a, sigma_s_prime):
+        """The family's R_d(r) in mm⁻² per parameter set (PBD, the directional dipole)."""
 
     def profile(self, i, r, theta) -> np.ndarray:
         """:math:`R_d(r)` per channel (rotationally symmetric: θ is unused)."""
