@@ -353,14 +353,22 @@ class Calibration:
 
 
 def scale_from_reference(
-    image: np.ndarray, homography: Homography, x_i, radius_mm: float, total, power: float = 1.0
+    image: np.ndarray,
+    homography: Homography,
+    x_i,
+    radius_mm: float,
+    total,
+    power: float = 1.0,
+    inner_mm: float = 0.0,
 ):
     """The radiometric scale from a photograph of a reference of known total diffuse reflectance.
 
     The reference (a sample whose R_d integrates to ``total`` over the disc of ``radius_mm`` around the
-    beam at ``x_i``) is lit with ``power``; the image integrated over that disc in sample-plane area,
-    ∫ value dA = scale · total · power, gives the scale (pixel value per unit exitance), per channel for
-    an RGB image and three totals.  A pixel's area on the sample is 1 / (pixels per mm²) of H.
+    beam at ``x_i`` — or over the annulus ``inner_mm`` .. ``radius_mm``) is lit with ``power``; the image
+    integrated over that region in sample-plane area, ∫ value dA = scale · total · power, gives the scale
+    (pixel value per unit exitance), per channel for an RGB image and three totals.  A pixel's area on the
+    sample is 1 / (pixels per mm²) of H.  An annulus matching the fit's (exclusion .. radius) carries the
+    angular factor of the light the fit sees, not that of the light near the beam.
 
     Examples
     --------
@@ -374,7 +382,8 @@ def scale_from_reference(
     Hh, Ww = img.shape[:2]
     v, u = np.mgrid[0:Hh, 0:Ww]
     xy = homography.to_sample(np.stack([u.ravel(), v.ravel()], 1))
-    inside = np.hypot(xy[:, 0] - x_i[0], xy[:, 1] - x_i[1]) <= radius_mm
+    dist = np.hypot(xy[:, 0] - x_i[0], xy[:, 1] - x_i[1])
+    inside = (dist <= radius_mm) & (dist >= inner_mm)
     area = 1.0 / homography.pixels_per_mm2(xy[inside])  # mm² per pixel
     integral = (img.reshape(-1, img.shape[2])[inside] * area[:, None]).sum(axis=0)
     total = np.asarray(total, dtype=np.float64)
@@ -397,8 +406,9 @@ def load_calibration(path) -> Calibration:
     ``scale``; optional ``pixel``, ``dark``, ``flat`` (image files, relative to the JSON), ``vignetting``,
     ``centre_px``, ``gain``, ``read_noise``, ``saturation``; or, instead of ``scale``, ``reference``
     ({"image": file, "x", "y": beam (mm), "radius_mm", "total": reflectance within that radius (one or
-    R, G, B), "power": W, "exposure_s"}) — the scale from a photograph of a reference of known
-    reflectance (:func:`scale_from_reference`), corrected like every shot.
+    R, G, B), "power": W, "exposure_s", optional "inner_mm": the total is over the annulus from there})
+    — the scale from a photograph of a reference of known reflectance (:func:`scale_from_reference`),
+    corrected like every shot.
     """
     from .hdr import read_hdr  # the readers of the frames
 
@@ -478,5 +488,6 @@ def _reference_scale(calib: Calibration, ref: dict, image: np.ndarray):
             float(ref["radius_mm"]),
             ref["total"],
             float(ref.get("power", 1.0)),
+            float(ref.get("inner_mm", 0.0)),
         )
     )

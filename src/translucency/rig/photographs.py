@@ -195,7 +195,9 @@ def photograph_sample(
     ``dark.pfm``, ``flat.pfm``, ``markers.pfm`` and ``calibration.json`` (marked points found in the marker
     photograph, the dark and flat frames, vignetting, noise model, saturation and — if given — the
     radiometric ``scale``, or a ``reference``: {"volume", "x" (mm), "radius_mm", "total" (its known
-    reflectance within that radius, R, G, B), "exposure_s"} photographed into ``reference.pfm``).
+    reflectance within that radius, R, G, B), "exposure_s", optional "inner_mm" (the total is over the
+    annulus from there) and "spp" (samples per pixel of its photograph)} photographed into
+    ``reference.pfm``).
 
     Returns
     -------
@@ -246,8 +248,9 @@ def photograph_sample(
         calib["scale"] = np.asarray(scale).tolist()
     if reference is not None:  # a photograph of a reference of known reflectance, at a shorter exposure
         t = float(reference.get("exposure_s", 0.1))
+        ref_spp = int(reference.get("spp", spp))  # one image sets every shot's scale: worth more samples
         L = render_radiance(
-            reference["volume"], camera, beam, reference["x"], spp=spp, seed=seed + 999, channels=channels
+            reference["volume"], camera, beam, reference["x"], spp=ref_spp, seed=seed + 999, channels=channels
         )
         ref_sensor = Sensor(**{**sensor.__dict__, "k": sensor.k * t})
         _write(folder / "reference.pfm", ref_sensor.expose(L, seed=seed + 4242))
@@ -256,6 +259,7 @@ def photograph_sample(
             "x": float(reference["x"][0]),
             "y": float(reference["x"][1]),
             "radius_mm": float(reference["radius_mm"]),
+            "inner_mm": float(reference.get("inner_mm", 0.0)),
             "total": np.asarray(reference["total"], float).tolist(),
             "power": power,
             "exposure_s": t,
