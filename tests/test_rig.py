@@ -220,6 +220,27 @@ def test_two_views_average_where_both_see(tmp_path):
     bad = [(other, [], cal2)]
     with pytest.raises(TranslucencyError, match="0 laser positions"):
         import_images(folder, tmp_path / "positions.csv", calib, tmp_path / "bad.zarr", setup, views=bad)
+    # the same from the command line: --view FOLDER,POSITIONS,CALIBRATION gives the same windows
+    for name, c in (("cal1.json", calib), ("cal2.json", cal2)):
+        spec = {"homography": c.homography.matrix.tolist(), "scale": c.scale}
+        spec.update(saturation=c.saturation, read_noise=c.read_noise)
+        (tmp_path / name).write_text(json.dumps(spec))
+    args = ["import", "images", str(folder), "-p", str(tmp_path / "positions.csv")]
+    args += [
+        "-c",
+        str(tmp_path / "cal1.json"),
+        "--window",
+        "3",
+        "--supersample",
+        "4",
+        "-o",
+        str(tmp_path / "c.zarr"),
+    ]
+    res = runner.invoke(cli, [*args, "--view", f"{other},{other / 'positions.csv'},{tmp_path / 'cal2.json'}"])
+    assert res.exit_code == 0, res.output
+    np.testing.assert_allclose(open_dataset(tmp_path / "c.zarr")["R_d"], R, rtol=1e-6)
+    res = runner.invoke(cli, [*args[:-1], str(tmp_path / "d.zarr"), "--view", f"{other},nowhere.csv"])
+    assert res.exit_code == 2 and res.output.startswith("error: --view"), res.output
 
 
 def test_corrections_undo_dark_flat_and_vignetting(tmp_path, rng):

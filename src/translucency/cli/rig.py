@@ -42,6 +42,18 @@ def _user_errors(func):
     return wrapper
 
 
+def _parse_view(text: str) -> tuple[Path, Path, Path]:
+    """``--view FOLDER,POSITIONS,CALIBRATION`` → three paths, each checked to exist."""
+    parts = [p.strip() for p in str(text).split(",")]
+    if len(parts) != 3 or not all(parts):
+        raise TranslucencyError(f"--view: expected FOLDER,POSITIONS,CALIBRATION, got {text!r}")
+    folder, positions, calibration = (Path(p) for p in parts)
+    for what, path in (("folder", folder), ("positions", positions), ("calibration", calibration)):
+        if not path.exists():
+            raise TranslucencyError(f"--view: {what} {path}: no such file or folder")
+    return folder, positions, calibration
+
+
 @import_app.command("images")
 @_user_errors
 def import_images_cmd(
@@ -82,6 +94,14 @@ def import_images_cmd(
     eta: float = typer.Option(1.3, "--eta", help="Relative index of refraction of the sample."),
     chunk: int = typer.Option(16, "--chunk", help="Incident points per chunk (unit of resuming)."),
     dtype: str = typer.Option("float32", "--dtype", help="Storage of R_d and variance: float32 or float16."),
+    view: list[str] = typer.Option(
+        None,
+        "--view",
+        metavar="FOLDER,POSITIONS,CALIBRATION",
+        help="Another camera's photographs of the same laser positions, with its own table and calibration "
+        "(repeatable): the views are averaged onto the same windows where all of them are valid — two "
+        "cameras on opposite sides cancel the slant of light leaving obliquely.",
+    ),
     overwrite: bool = typer.Option(
         False,
         "--overwrite",
@@ -98,14 +118,26 @@ def import_images_cmd(
     check_option("--eta", eta, lo=0, open_lo=True)
     if scale is not None:
         check_option("--scale", scale, lo=0, open_lo=True)
+    views = [_parse_view(text) for text in view or ()]
+    view_inputs = [p for v in views for p in v]
     claim_output(
-        out, "planar data set", overwrite=overwrite, inputs=[folder, positions, calibration], reuse=True
+        out,
+        "planar data set",
+        overwrite=overwrite,
+        inputs=[folder, positions, calibration, *view_inputs],
+        reuse=True,
     )
     if not calibration.is_file():
         raise TranslucencyError(f"--calibration {calibration}: no such file")
     calib = load_calibration(calibration)
     if scale is not None:
         calib.scale = scale
+    other_views = []
+    for v_folder, v_positions, v_calibration in views:
+        v_calib = load_calibration(v_calibration)
+        if scale is not None:
+            v_calib.scale = scale
+        other_views.append((v_folder, v_positions, v_calib))
     size = None
     if sample_size is not None:
         try:
@@ -126,7 +158,16 @@ def import_images_cmd(
         chunk_points=chunk,
         dtype=dtype,
     )
-    ds = import_images(folder, positions, calib, out, setup, overwrite=overwrite, inputs=[calibration])
+    ds = import_images(
+        folder,
+        positions,
+        calib,
+        out,
+        setup,
+        overwrite=overwrite,
+        inputs=[calibration, *(v[2] for v in views)],
+        views=other_views,
+    )
     rms = calib.source.get("rms_px")
     console.print(
         f"data set: {out} ({ds.n_points} points, windows {ds.window[0]} x {ds.window[1]} at {ds.pitch} mm"
