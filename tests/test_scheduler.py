@@ -196,3 +196,16 @@ def test_a_window_keeps_results_near_the_oldest_unfinished_task(address):
         assert sorted(order) == list(range(8))
         assert order.index(0) <= 2  # at most tasks 1 and 2 ran ahead of task 0
         assert [r for _, r in cluster.run(task, [(i,) for i in range(4)])] != []  # no window: all at once
+
+
+def test_evaluate_on_a_cluster_is_identical(address, threads_run):
+    """The errors' chunks as tasks that read their own chunks, summed in chunk order: the same numbers."""
+    from translucency.evaluate.errors import planar_errors
+
+    ds, ref = threads_run
+    here = planar_errors(ref.model, ds, chunk_points=3)
+    there = planar_errors(ref.model, ds, chunk_points=3, scheduler=address)
+    assert here.rel_l2 == there.rel_l2 and here.bands == there.bands and here.energy == there.energy
+    np.testing.assert_array_equal(here.per_point, there.per_point)
+    np.testing.assert_array_equal(here.per_pixel, there.per_pixel)
+    np.testing.assert_array_equal(here.per_pixel_noise, there.per_pixel_noise)

@@ -1009,10 +1009,12 @@ def evaluate(
     overwrite: bool = typer.Option(
         False, "--overwrite", help="Replace an earlier output of translucency at --out (never anything else)."
     ),
+    scheduler: str = _scheduler_option(),
     max_memory: str = _max_memory_option(),
     quiet: bool = _quiet_option(),
 ):
     """Relative L2 errors (overall, per distance band, energy-weighted), error maps, profiles, HTML report."""
+    parse_scheduler(scheduler)  # a bad value or an unreachable cluster: one line, before work
 
     limit = _limit(max_memory)
     to_stdout = json_out is not None and str(json_out) == "-"
@@ -1072,6 +1074,7 @@ def evaluate(
         json_path=json_out,
         truth=truth,
         exclusion=exclusion,
+        scheduler=scheduler,
     )
     title = (
         f"relative L2 error against the truth {truth}"

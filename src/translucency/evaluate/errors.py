@@ -46,6 +46,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._validate import TranslucencyError
+from ..cluster import compact, expand, in_order_window, open_cluster
 from ..geometry import SampleGrid, window_geometry
 from ..io.dataset import PlanarDataset, open_dataset
 
@@ -116,6 +117,7 @@ def planar_errors(
     chunk_points: int = 256,
     flagged=None,
     map_radius: float = 4.0,
+    scheduler=None,
 ) -> PlanarErrors:
     """Relative L2 errors of ``model`` on a planar data set, overall, per band and as maps.
 
@@ -128,6 +130,9 @@ def planar_errors(
         Pairs closer than this are left out; default one pixel (as the fit).
     flagged : array of bool, optional
         Incident points to leave out (points the fit flagged).
+    scheduler : str or Cluster, optional
+        Where the chunks are evaluated (:func:`translucency.cluster.open_cluster`): ``"threads"`` (this
+        process, the default), ``"local:N"`` or ``"tcp://HOST:PORT"``; the errors are the same.
 
     Returns
     -------
@@ -154,44 +159,22 @@ def planar_errors(
     e_model = {b: np.zeros(ds.n_points) for b in (*BANDS, "window")}
     e_data = {b: np.zeros(ds.n_points) for b in (*BANDS, "window")}
     e_var = {b: np.zeros(ds.n_points) for b in (*BANDS, "window")}
-    area = ds.pitch**2
-    pix_err = np.zeros(grid.shape[0] * grid.shape[1])
-    pix_ref = np.zeros_like(pix_err)
-    pix_var = np.zeros_like(pix_err)
-    for s in range(0, ds.n_points, chunk_points):
-        e = min(s + chunk_points, ds.n_points)
-        k = e - s
-        y = ds.read("R_d", s, e).astype(np.float64).reshape(k, -1, 3)
-        v = ds.read("variance", s, e).astype(np.float64).reshape(k, -1, 3)
-        mask = ds.read("mask", s, e).reshape(k, -1)
-        geom = window_geometry(x_i[s:e], origin[s:e], grid, ds.window)
-        r = np.broadcast_to(geom.r, mask.shape)
-        pred = model.R_d_window(np.arange(s, e), origin[s:e], ds.pitch, ds.window).reshape(k, -1, 3)
-        ok = mask & np.isfinite(y).all(2) & np.isfinite(v).all(2) & (r >= exclusion) & ~flagged[s:e, None]
-        d2 = np.where(ok, ((pred - y) ** 2).sum(2), 0.0)
-        y2 = np.where(ok, (y**2).sum(2), 0.0)
-        v2 = np.where(ok, v.sum(2), 0.0)
-        p_sum = np.where(ok, pred.sum(2), 0.0) * area  # (k, J): energy per pixel, RGB summed
-        y_sum = np.where(ok, y.sum(2), 0.0) * area
-        v_sum = v2 * area**2  # variance of each pixel's energy
-        for b, (lo, hi) in BANDS.items():
-            sel = (r >= lo) & (r < hi)
-            err2[b] += float(d2[sel].sum())
-            ref2[b] += float(y2[sel].sum())
-            var[b] += float(v2[sel].sum())
-            e_model[b][s:e] = np.where(sel, p_sum, 0.0).sum(1)
-            e_data[b][s:e] = np.where(sel, y_sum, 0.0).sum(1)
-            e_var[b][s:e] = np.where(sel, v_sum, 0.0).sum(1)
-        e_model["window"][s:e], e_data["window"][s:e] = p_sum.sum(1), y_sum.sum(1)
-        e_var["window"][s:e] = v_sum.sum(1)
-        den = y2.sum(1)
-        pt_err2[s:e], pt_ref2[s:e], pt_var[s:e] = d2.sum(1), den, v2.sum(1)
-        per_point[s:e] = np.where(den > 0, np.sqrt(d2.sum(1) / np.where(den > 0, den, 1.0)), np.nan)
-        n_px = pix_err.size
-        near = r < map_radius
-        pix_err += np.bincount(geom.pixel[near], d2[near], minlength=n_px)
-        pix_ref += np.bincount(geom.pixel[near], y2[near], minlength=n_px)
-        pix_var += np.bincount(geom.pixel[near], v2[near], minlength=n_px)
+    n_px = grid.shape[0] * grid.shape[1]
+    pix_err, pix_ref, pix_var = (np.zeros(n_px) for _ in range(3))
+    ranges = [(s, min(s + chunk_points, ds.n_points)) for s in range(0, ds.n_points, chunk_points)]
+    common = (x_i, origin, grid, exclusion, flagged, map_radius)
+    # every chunk's sums, added in chunk order (in this process, or as tasks that read their own chunks)
+    for (s, e), sums in zip(ranges, _chunk_sums_in_order(model, ds, ranges, common, scheduler)):
+        for b in BANDS:
+            err2[b] += sums["err2"][b]
+            ref2[b] += sums["ref2"][b]
+            var[b] += sums["var"][b]
+        for b in e_model:
+            e_model[b][s:e], e_data[b][s:e], e_var[b][s:e] = sums["energy"][b]
+        pt_err2[s:e], pt_ref2[s:e], pt_var[s:e], per_point[s:e] = sums["per_point"]
+        pix_err += expand(sums["pix_err"], n_px)
+        pix_ref += expand(sums["pix_ref"], n_px)
+        pix_var += expand(sums["pix_var"], n_px)
 
     def ratio(a, b):
         return float(np.sqrt(a / b)) if b > 0 else float("nan")
@@ -235,3 +218,62 @@ def planar_errors(
         per_point_beyond=per_point_beyond,
         per_pixel_beyond=beyond(pix_err, pix_var, pix_ref).reshape(grid.shape),
     )
+
+
+def _chunk_sums(model, dataset, common, s: int, e: int) -> dict:
+    """One chunk of points [s, e): its squared errors, data and variances summed per band, its points'
+    energies per band and errors, and its pixels' sums for the maps (packed: only the box under its
+    windows).  ``dataset``: an open data set, or its path (a task on a worker opens it itself)."""
+    x_i, origin, grid, exclusion, flagged, map_radius = common
+    ds = dataset if isinstance(dataset, PlanarDataset) else open_dataset(dataset)
+    k = e - s
+    y = ds.read("R_d", s, e).astype(np.float64).reshape(k, -1, 3)
+    v = ds.read("variance", s, e).astype(np.float64).reshape(k, -1, 3)
+    mask = ds.read("mask", s, e).reshape(k, -1)
+    geom = window_geometry(x_i[s:e], origin[s:e], grid, ds.window)
+    r = np.broadcast_to(geom.r, mask.shape)
+    pred = model.R_d_window(np.arange(s, e), origin[s:e], ds.pitch, ds.window).reshape(k, -1, 3)
+    ok = mask & np.isfinite(y).all(2) & np.isfinite(v).all(2) & (r >= exclusion) & ~flagged[s:e, None]
+    d2 = np.where(ok, ((pred - y) ** 2).sum(2), 0.0)
+    y2 = np.where(ok, (y**2).sum(2), 0.0)
+    v2 = np.where(ok, v.sum(2), 0.0)
+    area = ds.pitch**2
+    p_sum = np.where(ok, pred.sum(2), 0.0) * area  # (k, J): energy per pixel, RGB summed
+    y_sum = np.where(ok, y.sum(2), 0.0) * area
+    v_sum = v2 * area**2  # variance of each pixel's energy
+    out = {"err2": {}, "ref2": {}, "var": {}, "energy": {}}
+    for b, (lo, hi) in BANDS.items():
+        sel = (r >= lo) & (r < hi)
+        out["err2"][b] = float(d2[sel].sum())
+        out["ref2"][b] = float(y2[sel].sum())
+        out["var"][b] = float(v2[sel].sum())
+        out["energy"][b] = tuple(np.where(sel, x, 0.0).sum(1) for x in (p_sum, y_sum, v_sum))
+    out["energy"]["window"] = (p_sum.sum(1), y_sum.sum(1), v_sum.sum(1))
+    den = y2.sum(1)
+    rel = np.where(den > 0, np.sqrt(d2.sum(1) / np.where(den > 0, den, 1.0)), np.nan)
+    out["per_point"] = (d2.sum(1), den, v2.sum(1), rel)
+    n_px = grid.shape[0] * grid.shape[1]
+    near = r < map_radius
+    for name, x in (("pix_err", d2), ("pix_ref", y2), ("pix_var", v2)):
+        out[name] = compact(np.bincount(geom.pixel[near], x[near], minlength=n_px))
+    return out
+
+
+def _chunk_sums_in_order(model, ds, ranges, common, scheduler):
+    """Each chunk's :func:`_chunk_sums`, yielded in chunk order: computed here one after the other
+    (``threads``), or as tasks on a Dask cluster (``local:N``, ``tcp://…``, an open Cluster) that open
+    the data set themselves; a chunk finished early waits until those before it are handed over, so
+    the sums are added in the same order and the result is the same wherever the work ran."""
+    with open_cluster(scheduler) as cluster:
+        if cluster is None:
+            for s, e in ranges:
+                yield _chunk_sums(model, ds, common, s, e)
+            return
+        shared = (cluster.keep(model), str(ds.path), cluster.keep(common))
+        held, nxt = {}, 0
+        window = in_order_window(cluster.n_workers)
+        for i, sums in cluster.run(_chunk_sums, ranges, shared=shared, name="evaluate", window=window):
+            held[i] = sums
+            while nxt in held:
+                yield held.pop(nxt)
+                nxt += 1

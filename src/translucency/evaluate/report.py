@@ -27,6 +27,7 @@ import numpy as np
 
 from .._plotting import pyplot
 from .._version import __version__
+from ..cluster import open_cluster
 from ..io.atomic import atomic_path, write_json
 from ..io.dataset import PlanarDataset, open_dataset
 from ..model.bounds import check_physics
@@ -508,8 +509,12 @@ def write_report(
     exclusion=None,
     fine=None,
     command: str | None = None,
+    scheduler=None,
 ) -> dict:
     """Evaluate models on a planar data set and write the figures, JSON and HTML report.
+
+    ``scheduler``: where the errors' chunks are computed (``"threads"``, ``"local:N"``,
+    ``"tcp://HOST:PORT"`` or an open :class:`translucency.cluster.Cluster`); the report is the same.
 
     With ``truth`` (an independent acquisition of the same sample and incident points: another photon
     seed, usually more photons) every figure and headline number is against the truth, the error beyond
@@ -555,18 +560,17 @@ def write_report(
     out_dir.mkdir(parents=True, exist_ok=True)
     exclusion = exclusion or {}
     fine = _load_fine(fine)
-    in_sample = {
-        name: planar_errors(m, ds, flagged=flagged.get(name), exclusion_mm=exclusion.get(name))
-        for name, m in models.items()
-    }
-    held_out = None
-    if truth is not None:
-        truth = truth if isinstance(truth, PlanarDataset) else open_dataset(truth)
-        held_out = {
-            name: planar_errors(m, truth, flagged=flagged.get(name), exclusion_mm=exclusion.get(name))
-            for name, m in models.items()
-        }
-    else:
+    truth = None if truth is None else truth if isinstance(truth, PlanarDataset) else open_dataset(truth)
+    with open_cluster(scheduler) as cluster:  # one cluster (if any) for every model's errors
+
+        def errors_on(data, name, m):
+            return planar_errors(
+                m, data, flagged=flagged.get(name), exclusion_mm=exclusion.get(name), scheduler=cluster
+            )
+
+        in_sample = {name: errors_on(ds, name, m) for name, m in models.items()}
+        held_out = None if truth is None else {name: errors_on(truth, name, m) for name, m in models.items()}
+    if truth is None:
         for e in in_sample.values():  # against the fitted data the noise cannot be subtracted
             e.per_pixel_beyond = e.per_point_beyond = None
     errors = held_out or in_sample
