@@ -359,15 +359,18 @@ def dataset_identity(header: dict) -> dict:
     return {"kind": "planar", "sample": volume if isinstance(volume, dict) else header.get("sample")}
 
 
-def summary_of_store(path: Path, header: dict, done: np.ndarray, **fields) -> dict:
+def summary_of_store(path: Path, header: dict, done: np.ndarray, damaged: dict, **fields) -> dict:
     """The ``translucency info`` summary every data set shares — format, points, sample, photons, seed,
-    completion, size and software — with the kind's own ``fields`` in between."""
+    completion, size and software — with the kind's own ``fields`` and the ``damaged`` chunks
+    ({array: [chunk, ...]}, from ``damaged_chunks()``) in between."""
     size = sum(f.stat().st_size for f in Path(path).rglob("*") if f.is_file())
     acquisition = header.get("acquisition", header)  # planar headers nest it, mesh headers do not
     return {
         "format": f"{header['format']} v{header['version']}",
         "incident points": header["n_points"],
         **fields,
+        "damaged": ", ".join(f"{k} chunks {v}" for k, v in damaged.items())
+        or "none (every finished chunk present and decodable)",
         "sample": json.dumps(header.get("sample", {}))[:300],
         "photons per point": acquisition.get("photons"),
         "seed": acquisition.get("seed"),
@@ -380,12 +383,11 @@ def summary_of_store(path: Path, header: dict, done: np.ndarray, **fields) -> di
 def describe(ds: PlanarDataset) -> dict:
     """A JSON-friendly summary for ``translucency info``."""
     h = ds.header
-    damaged = ", ".join(f"{k} chunks {v}" for k, v in ds.damaged_chunks().items())
     return summary_of_store(
         ds.path,
         h,
         ds["chunk_done"],
+        ds.damaged_chunks(),
         window=f"{h['window'][0]} x {h['window'][1]} px at {h['pitch_mm']} mm",
         dtype=h["dtype"],
-        damaged=damaged or "none (every finished chunk present and decodable)",
     )

@@ -260,12 +260,11 @@ def create_mesh_dataset(
 def describe_mesh(ds: MeshDataset) -> dict:
     """A JSON-friendly summary for ``translucency info``."""
     h = ds.header
-    damaged = ", ".join(f"{k} chunks {v}" for k, v in ds.damaged_chunks().items())
     return summary_of_store(
         ds.path,
         h,
         ds["chunk_done"],
+        ds.damaged_chunks(),
         mesh=f"{h['n_vertices']:,} vertices, {ds.group['faces'].shape[0]:,} faces",
         **{"index matched": h.get("request", {}).get("index_matched")},
-        damaged=damaged or "none (every finished chunk present and decodable)",
     )
