@@ -23,11 +23,12 @@ from translucency.acquire import PlanarSetup, acquire_planar, make_sample
 from translucency.evaluate.errors import finite_or_null, planar_errors
 from translucency.fit.planar import fit_planar
 
-SAMPLES = ["marble", "apple-slice", "skin", "fibers", "homogeneous:marble"]
+SAMPLES = ["marble", "apple-slice", "skin", "fibers", "homogeneous:marble", "banded", "layered"]
 FITS = {  # label -> fit_planar arguments
     "iso": dict(model="iso"),
     "iso shared colour": dict(model="iso", colour="shared"),
     "aniso m=8": dict(model="aniso", n_directions=8),
+    "aniso auto": dict(model="aniso", n_directions="auto"),
     "dipole": dict(model="dipole"),
     "burley": dict(model="burley"),
     "pbd": dict(model="pbd"),
@@ -85,11 +86,14 @@ def targets(results: dict) -> list[str]:
             + " %",
         )
     if "fibers" in results:
-        iso, an = results["fibers"]["iso"], results["fibers"]["aniso m=8"]
+        iso = results["fibers"]["iso"]
+        label = min(("aniso m=8", "aniso auto"), key=lambda k: results["fibers"][k]["rel_l2"])
+        an = results["fibers"][label]
         line(
             an["rel_l2"] <= 0.6 * iso["rel_l2"],
-            f"fibers: aniso ≤ 0.6 × iso overall: {pct(an['rel_l2'])} vs 0.6 × {pct(iso['rel_l2'])} % "
-            f"(beyond noise {pct(an['beyond_noise']['all'])} vs {pct(iso['beyond_noise']['all'])} %)",
+            f"fibers: aniso (the better of m = 8 and auto: {label}) ≤ 0.6 × iso overall: {pct(an['rel_l2'])} "
+            f"vs 0.6 × {pct(iso['rel_l2'])} % (ratio {an['rel_l2'] / iso['rel_l2']:.2f}; beyond noise "
+            f"{pct(an['beyond_noise']['all'])} vs {pct(iso['beyond_noise']['all'])} %)",
         )
     for sample in results:
         if not sample.startswith("homogeneous"):
@@ -100,6 +104,13 @@ def targets(results: dict) -> list[str]:
             abs(an["rel_l2"] - iso["rel_l2"]) <= noise,
             f"{sample}: aniso within the truth's noise of iso: |{pct(an['rel_l2'])} − {pct(iso['rel_l2'])}| "
             f"≤ {pct(noise)} %",
+        )
+        # in-sample, a model with 8× the parameters may gain their share of the noise, not more: on
+        # 33 × 33 × 3 values per window, 144 − 18 extra parameters are 3.9 % of χ², 2 % of the L2 error
+        line(
+            an["in_sample"]["rel_l2"] >= 0.98 * iso["in_sample"]["rel_l2"],
+            f"{sample}: aniso does not fit the noise in-sample: {pct(an['in_sample']['rel_l2'])} vs iso "
+            f"{pct(iso['in_sample']['rel_l2'])} % (at least 0.98 × iso's)",
         )
     return out
 

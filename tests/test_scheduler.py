@@ -96,8 +96,9 @@ def test_a_fit_interrupted_on_a_cluster_resumes_identically(address, threads_run
     with np.load(ckpt) as z:
         assert z["num"].shape == z["den"].shape == ref.model.alpha.values.shape
         # round 2 (index 1) under way: how many of its chunks were added before the stop depends on
-        # which workers finished first; the resumed fit must not care
-        assert 1 <= int(z["added"][0]) < 4 and int(z["round"][0]) == 1
+        # which workers finished first (on a loaded machine all 4 may be in before the callback
+        # runs); the resumed fit must not care
+        assert 1 <= int(z["added"][0]) <= 4 and int(z["round"][0]) == 1
     _same_fit(fit_planar(ds, "iso", scheduler=address, checkpoint=ckpt, **FIT), ref)
     assert not ckpt.exists()
 

@@ -12,6 +12,8 @@ a Henyey–Greenstein ``g`` the single-scattering coefficient is
 ``apple-slice``       radial flesh structure with a core and absorbing seeds
 ``skin``              thin absorbing epidermis over dermis, with pores and freckles
 ``fibers``            clear lamellae aligned with x: light spreads farther along x than y
+``banded``            skin-like bulk with diagonal cream bands and an absorbing disc
+``layered``           a clear, wax-like layer of varying depth over a dense scattering bulk
 ===================  ===============================================================
 """
 
@@ -24,7 +26,7 @@ from .._validate import TranslucencyError
 from ..model.materials import ETA, MATERIALS, material
 from .volume import Volume
 
-GENERATORS = ("homogeneous:<name>", "marble", "apple-slice", "skin", "fibers")
+GENERATORS = ("homogeneous:<name>", "marble", "apple-slice", "skin", "fibers", "banded", "layered")
 
 
 def _grid(size_mm, voxel_mm):
@@ -176,6 +178,50 @@ def fibers(size_mm, voxel_mm, g=0.0, seed=0) -> Volume:
     return Volume(s, a, voxel_mm, g, ETA, {"generator": "fibers", "seed": seed, "g": g})
 
 
+def banded(size_mm, voxel_mm, g=0.0, seed=0) -> Volume:
+    """Skin-like bulk ('skin2') crossed by diagonal bands of 'cream' and an absorbing disc.
+
+    Bands 1.5 mm wide at a 3 mm pitch run at 45° through the whole depth, their
+    edges softened over 0.25 mm and wandering by ±0.3 mm; the cream scatters
+    4–7× more and absorbs far less than the bulk, so light spreads along the
+    bands but differently from the lamellae of ``fibers`` (oblique, wider, and
+    brighter rather than clearer).  A disc of radius 2 mm, 1 mm deep, at a
+    seeded position near the centre absorbs 20× more (a mole or an inclusion).
+    """
+    rng = np.random.default_rng(seed)
+    z, y, x = _grid(size_mm, voxel_mm)
+    wobble = 0.3 * _noise(z.shape[1:], max(2.0 / voxel_mm, 0.5), rng)[None]
+    u = (x + y) / np.sqrt(2.0) + wobble  # distance along the bands' normal, mm
+    band = 0.5 + 0.5 * np.tanh((0.75 - np.abs((u % 3.0) - 1.5)) / 0.25)
+    bulk, cream = _coeffs("skin2", g), _coeffs("cream", g)
+    s, a = _mix([(1.0 - band, bulk), (band, cream)], z.shape)
+    w, h, _ = size_mm
+    cx, cy = w / 2 + rng.uniform(-0.15, 0.15) * w, h / 2 + rng.uniform(-0.15, 0.15) * h
+    disc = (np.hypot(x - cx, y - cy) < 2.0) & (z > -1.0)
+    a[disc] *= 20.0
+    return Volume(s, a, voxel_mm, g, ETA, {"generator": "banded", "seed": seed, "g": g})
+
+
+def layered(size_mm, voxel_mm, g=0.0, seed=0) -> Volume:
+    """A clear, wax-like layer over a dense scattering bulk, its depth varying across the sample.
+
+    The top layer is 'skimmilk' with a fifth of its scattering (a long mean free
+    path: light runs sideways in it before it meets the bulk); beneath is
+    'wholemilk' with 3× its scattering.  The interface lies 0.3–1.2 mm deep,
+    following smooth noise on a 3 mm scale, so the profile's shape (not only
+    its scale) changes from point to point: a two-slope fall-off whose knee
+    moves with the layer's depth.
+    """
+    rng = np.random.default_rng(seed)
+    z, y, x = _grid(size_mm, voxel_mm)
+    depth = 0.75 + 0.45 * _noise(z.shape[1:], max(3.0 / voxel_mm, 0.5), rng)[None]  # mm
+    top = 0.5 + 0.5 * np.tanh((z + depth) / max(voxel_mm, 0.05))  # 1 above the interface
+    clear = (0.2 * _coeffs("skimmilk", g)[0], material("skimmilk").sigma_a)
+    dense = (3.0 * _coeffs("wholemilk", g)[0], material("wholemilk").sigma_a)
+    s, a = _mix([(top, clear), (1.0 - top, dense)], z.shape)
+    return Volume(s, a, voxel_mm, g, ETA, {"generator": "layered", "seed": seed, "g": g})
+
+
 def make_sample(name: str, size_mm, voxel_mm: float, *, g: float = 0.0, seed: int = 0) -> Volume:
     """Build a sample volume by generator name (see the module table).
 
@@ -202,7 +248,14 @@ def make_sample(name: str, size_mm, voxel_mm: float, *, g: float = 0.0, seed: in
         if mat.lower() not in MATERIALS:
             raise TranslucencyError(f"material: unknown {mat!r}; choose homogeneous:<{'|'.join(MATERIALS)}>")
         return homogeneous(mat.lower(), size_mm, voxel_mm, g, seed)
-    table = {"marble": marble, "apple-slice": apple_slice, "skin": skin, "fibers": fibers}
+    table = {
+        "marble": marble,
+        "apple-slice": apple_slice,
+        "skin": skin,
+        "fibers": fibers,
+        "banded": banded,
+        "layered": layered,
+    }
     if name not in table:
         raise TranslucencyError(f"material: unknown sample {name!r}; choose one of {', '.join(GENERATORS)}")
     return table[name](size_mm, voxel_mm, g, seed)

@@ -52,6 +52,28 @@ not depend on the chunking.  The anisotropic model updates its directions by
 block coordinate descent: directions that share no pixel (even, then odd l)
 are fitted together, with the neighbours' contributions held fixed.
 
+*Anisotropic regularisation.*  A direction sees about 2/m of a window, so its
+ring means are √(m/2) times noisier than the isotropic ones, and 6 free
+parameters per direction and channel follow that noise (in-sample below the
+noise floor, held-out worse than the isotropic model on homogeneous
+material).  Two things keep the directions honest (:func:`_regularise`):
+
+* *shrinkage* — direction l's ring means :math:`Y_{lg}` are pulled towards the
+  inverse-variance mean :math:`\bar Y_g` of the directions fitted with it,
+  :math:`Y'_{lg} = \bar Y_g + b_l (Y_{lg} - \bar Y_g)`, by the empirical-Bayes
+  (James–Stein) factor :math:`b_l = S_l / (S_l + q)`, where
+  :math:`S_l = \max(\chi^2_l - E[\chi^2_l], 0)` is the directional signal
+  beyond the noise, :math:`\chi^2_l = \sum_g \sigma_{lg}^{-2} (Y_{lg} - \bar Y_g)^2`,
+  and q = 2n the parameters a direction's profile can give the noise.  A
+  homogeneous material gets b ≈ 0 (every direction the isotropic profile), a
+  fibrous one b ≈ 1.
+* *tail anchor* — beyond the window the data say nothing about direction; each
+  direction's profile is tied to the point's isotropic fit at 1.5, 2 and 3 × the
+  window's largest radius (each anchor weighted like the outer fifth of the
+  rings together), so that
+  no direction grows a slow term whose integral beyond the window inflates
+  the total reflectance.
+
 Work runs in chunks of incident points read from the store, so a data set
 larger than memory can be fitted.  α's statistics are one running sum per
 statistic, added in chunk order (a chunk that finishes early waits until the
@@ -82,7 +104,7 @@ from ..model.dipole import dipole_R_d
 from ..model.directional_dipole import DirectionalDipoleModel, directional_dipole_R_d
 from ..model.pbd import PBDModel, pbd_R_d
 from ._lm import fit_params_batched
-from ._varpro import fit_exponentials_batched
+from ._varpro import fit_exponentials_batched, rate_bounds
 from ._windows import Segments, radius_groups
 
 #: the model families: isotropic and anisotropic sums of exponentials, and the two baselines
@@ -247,7 +269,7 @@ class FitState:
     """
 
     #: arrays of one incident point each (copied per chunk, committed back)
-    PER_POINT = ("c", "a", "p", "s", "ready", "flagged")
+    PER_POINT = ("c", "a", "p", "s", "c_iso", "a_iso", "ready", "flagged")
     #: the parameters that make a state (kept for the reference and the best state)
     PARAMS = ("c", "a", "p", "s", "alpha")
     #: the arrays of a checkpoint, in file order
@@ -262,6 +284,8 @@ class FitState:
         "added",
         "phi",
         "phi_ref",
+        "c_iso",
+        "a_iso",
         "ready",
         "flagged",
         "history",
@@ -275,6 +299,9 @@ class FitState:
         # exponential families: Σ_k c_k e^{−a_k r} per point, colour row and direction (a in 1/mm)
         self.c = np.zeros((P, C, m, n))
         self.a = np.ones((P, C, m, n))
+        # the isotropic fit each direction starts from (anisotropic model): the tails' anchor
+        self.c_iso = np.zeros((P, C, n))
+        self.a_iso = np.ones((P, C, n))
         self.p = np.ones((P, 3, 2))  # dipole (σ_a, σ_s') or Burley (A, s) per point and channel
         self.s = np.ones((P, 3))  # colour scale (1, s_g, s_b) of the shared-colour model
         self.alpha = np.ones(alpha_shape)  # the modulation texture α
@@ -626,6 +653,7 @@ class _Chunk:
     alpha: np.ndarray | None = None  # (k, J, 3) float32 current α at each pixel (set per round)
     plans: dict = field(default_factory=dict)  # Segments of the anisotropic direction classes
     first: int = 0  # the chunk's first incident point (absolute index)
+    noisy: np.ndarray | None = None  # (k,) bool: the window has a variance (the regularisation's noise)
 
     @property
     def static(self) -> np.ndarray:
@@ -683,6 +711,11 @@ def _prepare_chunk(ctx: FitContext, s: int, e: int) -> _Chunk:
         poisson = np.where(noisy, v_sum / np.where(noisy, y_sum, 1.0), 0.0).astype(np.float32)[:, None, None]
         rel2 = np.where(noisy, 0.0, ctx.rel_sigma**2).astype(np.float32)[:, None, None]
     usable = (valid.sum(axis=1) >= 2 * ctx.n + 2) & (y.sum(axis=(1, 2), dtype=np.float64) > 0)
+    # windows with noise: a photon count (Poisson factor > 0) or a variance
+    p_k = np.asarray(poisson)
+    noisy = (np.broadcast_to(p_k, (k,) + p_k.shape[1:]) > 0).reshape(k, -1).any(axis=1)
+    if var is not None:
+        noisy |= var.sum(axis=(1, 2), dtype=np.float64) > 0
     return _Chunk(
         y,
         valid,
@@ -700,6 +733,7 @@ def _prepare_chunk(ctx: FitContext, s: int, e: int) -> _Chunk:
         poisson,
         rel2=rel2,
         first=s,
+        noisy=noisy,
     )
 
 
@@ -895,29 +929,33 @@ def _grouped(seg: Segments, G: int, C: int, w2, kappa, target, overwrite: bool =
 POOL_POINTS = 16
 
 
-def _fit_cold(ctx: FitContext, ch: _Chunk, W, Y, point: np.ndarray, **options):
+def _fit_cold(ctx: FitContext, ch: _Chunk, W, Y, point: np.ndarray, radii=None, **options):
     """``fit_exponentials_batched`` from pooled starts, pooled over fixed blocks of :data:`POOL_POINTS`
     points (``point``: each row's point within the chunk); returns c, a of shape (rows, n)."""
+    r_g, r_base = (ch.r_g, ch.r_base) if radii is None else radii
     block = (ch.first + np.asarray(point)) // POOL_POINTS
     c, a = np.zeros((len(W), ctx.n)), np.ones((len(W), ctx.n))
     for b in np.unique(block):
         sel = block == b
         c[sel], a[sel], _ = fit_exponentials_batched(
-            ch.r_g,
+            r_g,
             W[sel],
             Y[sel],
             ctx.n,
-            r_base=ch.r_base,
+            r_base=r_base,
             n_starts=3,
             pooled=True,
-            bounds=ctx.rate_bounds,
+            bounds=ctx.rate_bounds or rate_bounds(ch.r_g),
             **options,
         )
     return c, a
 
 
-def _solve_exponentials(ctx, state, sl, ch, W, Y, index):
-    """Fit the sub-problems at ``index`` (into c/a viewed as (k·C·m, n)); warm where ready."""
+def _solve_exponentials(ctx, state, sl, ch, W, Y, index, radii=None):
+    """Fit the sub-problems at ``index`` (into c/a viewed as (k·C·m, n)); warm where ready.
+
+    ``radii``: (r, base) of the columns of W and Y when they are not the chunk's groups."""
+    r_g, r_base = (ch.r_g, ch.r_base) if radii is None else radii
     c = state.c[sl].reshape(-1, ctx.n)
     a = state.a[sl].reshape(-1, ctx.n)
     ready = np.repeat(state.ready[sl], state.c.shape[1] * state.c.shape[2])[index]
@@ -929,19 +967,19 @@ def _solve_exponentials(ctx, state, sl, ch, W, Y, index):
         rows = index[sel]
         if warm:
             cc, aa, _ = fit_exponentials_batched(
-                ch.r_g,
+                r_g,
                 W[sel],
                 Y[sel],
                 ctx.n,
                 rates0=a[rows],
-                r_base=ch.r_base,
+                r_base=r_base,
                 n_starts=3,
                 max_iter=15,
                 tol=1e-4,
-                bounds=ctx.rate_bounds,
+                bounds=ctx.rate_bounds or rate_bounds(ch.r_g),
             )
         else:
-            cc, aa = _fit_cold(ctx, ch, W[sel], Y[sel], rows // per_point, max_iter=12, tol=1e-4)
+            cc, aa = _fit_cold(ctx, ch, W[sel], Y[sel], rows // per_point, max_iter=12, tol=1e-4, radii=radii)
         c[rows], a[rows] = cc, aa
     state.c[sl] = c.reshape(state.c[sl].shape)
     state.a[sl] = a.reshape(state.a[sl].shape)
@@ -958,9 +996,12 @@ def _fit_exponential(ctx: FitContext, state: FitState, sl: slice, ch: _Chunk, w2
     if not state.ready[sl].all():  # start every direction from the isotropic fit
         W, Y = _grouped(ch.rings, G, C, w2, kappa, ch.y)
         cc, aa = _fit_cold(ctx, ch, W, Y, np.arange(k * C) // C, max_iter=25, tol=1e-5)
+        state.c_iso[sl], state.a_iso[sl] = cc.reshape(k, C, ctx.n), aa.reshape(k, C, ctx.n)
         state.c[sl] = np.repeat(cc.reshape(k, C, 1, ctx.n), m, axis=2)
         state.a[sl] = np.repeat(aa.reshape(k, C, 1, ctx.n), m, axis=2)
         state.ready[sl] = True
+    r_a = _anchor_radii(ch.r_g)  # the anchors' radii (exact: their own base radii)
+    radii = (np.r_[ch.r_g, r_a], np.r_[ch.r_base, r_a])
     l0, t = _hat(ch.theta, m)
     l1 = (l0 + 1) % m
     classes = [np.arange(0, m, 2), np.arange(1, m, 2)] if m % 2 == 0 else [np.array([l]) for l in range(m)]
@@ -982,7 +1023,71 @@ def _fit_exponential(ctx: FitContext, state: FitState, sl: slice, ch: _Chunk, w2
             del target
             rows = (np.arange(k)[:, None, None] * C + np.arange(C)[None, :, None]) * m + cls[None, None, :]
             rows = rows.ravel()
-            _solve_exponentials(ctx, state, sl, ch, W[rows], Y[rows], rows)
+            W_r, Y_r = _regularise(ctx, state, sl, ch, W[rows], Y[rows], len(cls))
+            _solve_exponentials(ctx, state, sl, ch, W_r, Y_r, rows, radii)
+
+
+#: where each direction is tied to the isotropic fit: at the head, in units of the smallest radius
+#: fitted (r → 0, where R_d has one value whatever the direction, and half-way to the first ring),
+#: and at the tail, in units of the window's largest radius
+HEAD_ANCHORS = np.array([0.0])
+HEAD_RINGS = 1.5  # the head anchor weighs like a direction's rings within 1.5 × its first radius
+#: directional signal counts only beyond this many standard deviations √(2E) of χ² under noise alone
+SIGNIFICANCE = 2.0
+TAIL_ANCHORS = np.array([1.5, 2.0, 3.0])
+
+
+def _anchor_radii(r_g: np.ndarray) -> np.ndarray:
+    """The anchors' radii (mm) for a chunk's ring radii ``r_g``."""
+    return np.r_[HEAD_ANCHORS * r_g[r_g > 0].min(), TAIL_ANCHORS * r_g.max()]
+
+
+def _regularise(ctx: FitContext, state: FitState, sl: slice, ch: _Chunk, W, Y, n_cls: int):
+    """Shrink one class of direction sub-problems towards their mean and anchor their heads and
+    tails (module docstring): W, Y (k·C·n_cls, G) → (·, G + anchors)."""
+    G = ch.r_g.size
+    k, C = W.shape[0] // (ctx.C * n_cls), ctx.C
+    W4, Y4 = W.reshape(k, C, n_cls, G), Y.reshape(k, C, n_cls, G)
+    # σ⁻² of each ring mean: W² without the distance balance (W² = b(r) / σ²)
+    bal = np.minimum(1.0, 1.0 / np.maximum(ch.r_g, 1e-9)) if ctx.balance else np.ones(G)
+    ivar = W4**2 / bal
+    # Ȳ: the inverse-variance mean over the class's directions, per point, colour row and ring
+    tot = ivar.sum(axis=2, keepdims=True)
+    Y_bar = np.divide((ivar * Y4).sum(axis=2, keepdims=True), tot, out=np.zeros_like(tot), where=tot > 0)
+    # χ² of each direction about Ȳ and its expectation under noise alone, Σ_g (1 − σ⁻²_l / Σ_l σ⁻²)
+    chi2 = (ivar * (Y4 - Y_bar) ** 2).sum(axis=3)
+    expected = np.divide(ivar, tot, out=np.ones_like(ivar), where=tot > 0)
+    expected = ((1.0 - expected) * (W4 > 0)).sum(axis=3)
+    S = np.maximum(chi2 - expected - SIGNIFICANCE * np.sqrt(2.0 * expected), 0.0)
+    b = S / (S + 2.0 * ctx.n)  # the James–Stein factor b_l ∈ [0, 1)
+    # noise-free windows (no variance: a simulation's exact profiles) have no noise to shrink or anchor
+    noisy = ch.noisy[:, None, None]
+    b = np.where(noisy, b, 1.0)
+    Y_shrunk = Y_bar + b[..., None] * (Y4 - Y_bar)
+    # anchors: the isotropic fit at the head and tail radii, weighted like the inner and the outer
+    # fifth of the window's rings together (the rings a spike or a slow term would be fitted to)
+    r_h, r_t = HEAD_ANCHORS * ch.r_g[ch.r_g > 0].min(), TAIL_ANCHORS * ch.r_g.max()
+    c0, a0 = state.c_iso[sl], state.a_iso[sl]  # (k, C, n)
+    F = np.einsum("kcn,kcnt->kct", c0, np.exp(-a0[..., None] * np.r_[r_h, r_t]))[:, :, None, :]
+    span = ch.r_g.max() - ch.r_g.min()
+    # the head: the rings within HEAD_RINGS × each direction's own first radius (with m = 16 some
+    # directions see no pixel at the window's smallest radius)
+    r_first = np.where(W4 > 0, ch.r_g, np.inf).min(axis=3, keepdims=True)
+    W2_inner = (W4**2 * (ch.r_g <= HEAD_RINGS * r_first)).sum(axis=3)
+    W2_outer = (W4[..., ch.r_g >= ch.r_g.max() - 0.2 * span] ** 2).sum(axis=3)
+    W_a = np.sqrt(
+        np.concatenate(
+            [
+                np.repeat(W2_inner[..., None], r_h.size, axis=3),
+                np.repeat(W2_outer[..., None], r_t.size, axis=3),
+            ],
+            axis=3,
+        )
+    )
+    W_a = W_a * noisy[..., None]
+    W_out = np.concatenate([W4, W_a], axis=3).reshape(-1, G + W_a.shape[3])
+    Y_out = np.concatenate([Y_shrunk, np.broadcast_to(F, W_a.shape)], axis=3).reshape(-1, G + W_a.shape[3])
+    return W_out, Y_out
 
 
 def _fit_colour(ctx: FitContext, state: FitState, sl: slice, ch: _Chunk, w2) -> None:
