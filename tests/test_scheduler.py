@@ -210,3 +210,16 @@ def test_evaluate_on_a_cluster_is_identical(address, threads_run):
     np.testing.assert_array_equal(here.per_point, there.per_point)
     np.testing.assert_array_equal(here.per_pixel, there.per_pixel)
     np.testing.assert_array_equal(here.per_pixel_noise, there.per_pixel_noise)
+
+
+def _malloc_trim():
+    return os.environ.get("MALLOC_TRIM_THRESHOLD_")
+
+
+def test_local_workers_keep_glibc_adaptive_malloc():
+    """Dask's nanny sets MALLOC_TRIM_THRESHOLD_, which switches off glibc's adaptive mmap threshold: every
+    large NumPy temporary is mapped and faulted in afresh, and the fit ran 1.85× slower in a worker
+    (benchmarks/scale_out.py). ``local:N`` workers start without it, with the rest of Dask's settings."""
+    assert cluster_mod.worker_environ().get("OMP_NUM_THREADS") == 1
+    with open_cluster("local:1", memory_limit="1GiB") as c:
+        assert set(c.client.run(_malloc_trim).values()) == {None}
