@@ -42,6 +42,7 @@ from translucency.acquire import PlanarSetup, acquire_planar, make_sample
 from translucency.cluster import open_cluster
 from translucency.data import default_dataset_path
 from translucency.fit import fit_planar
+from translucency.fit.planar import default_chunk_points
 from translucency.io.dataset import create_dataset, open_dataset, write_dataset
 
 OUT = Path("bench_data")
@@ -73,6 +74,11 @@ def make_tiled(path: Path, copies: int):
                 g[name][j * P0 + lo : j * P0 + hi] = s[name][lo:hi]
     g["chunk_done"][...] = True
     return open_dataset(path)
+
+
+def _warm_worker(path: str) -> None:
+    """In a worker process: a small fit of ``path`` in that process (imports, Numba's kernels)."""
+    fit_planar(path, "iso", max_rounds=1, workers=1)
 
 
 def _noop(i):
@@ -149,7 +155,7 @@ def main() -> None:
     report["make_data_s"] = time.perf_counter() - t
     H, W = ds.window
     stored = int(ds.group["R_d"].chunks[0])
-    chunk = stored * -(-128 // stored)  # fit_planar's default
+    chunk = default_chunk_points(ds.n_points, stored)  # fit_planar's default
     per_point = H * W * (3 * 4 + 3 * 4 + 1)  # decoded R_d, variance (float32) and mask
     n_tasks = -(-ds.n_points // chunk)
     report.update(
@@ -183,6 +189,9 @@ def main() -> None:
             with open_cluster(f"local:{n}", memory_limit=args.memory_limit) as cluster:
                 client = cluster.client
                 fit_planar(warm, "iso", max_rounds=1, scheduler=cluster)
+                # and every worker on its own (the fit above may have run on one worker only): imports
+                # and Numba's compiled kernels are loaded before the memory is sampled
+                client.run(_warm_worker, str(warm.path))
                 # scheduler overhead: empty tasks along the fit's path (one shared value, results back)
                 shared = cluster.keep(0)
                 t = time.perf_counter()

@@ -210,18 +210,22 @@ def planar_fit(
 ) -> Need:
     r"""``fit`` of a planar data set: P points, J = H·W pixels a window, k points fitted together, w threads.
 
-    .. math:: M = M_0 + \min(C, 30\,P J) + 110\,w\,k J + 8\,P\,\pi_p
+    .. math:: M = M_0 + \min(C, 30\,P J) + w\,(30\,k + 110\,\min(k, b)) J + 8\,P\,\pi_p
 
     the decoded data kept between rounds (y, variance, mask, geometry ≈ 30 bytes a pixel, at most the
-    cache C = 512 MiB), each thread's chunk at work (reads, casts, weights, model values, residuals:
-    measured ≈ 100 bytes a pixel) and the π_p parameters of every point.  Output: the model file, at most
+    cache C = 512 MiB), each thread's chunk at work — its data as read (≈ 30 bytes a pixel) and the
+    working arrays of the b = ``FIT_BLOCK`` points computed at a time (casts, weights, model values,
+    residuals: measured ≈ 100 bytes a pixel) — and the π_p parameters of every point.  Output: the
+    model file, at most
     :math:`D = 4 P \pi_p + 4 J P + 2^{16}` (parameters and α).
     """
+    from .fit._alternation import FIT_BLOCK  # the points computed at a time within a chunk
+
     k = min(chunk, points)
     w = max(1, min(workers, -(-points // max(k, 1))))
     parts = {
         "the data cache": min(cache, 30 * points * pixels),
-        "the chunks at work: --chunk": 110 * w * k * pixels,
+        "the chunks at work: --chunk": w * (30 * k + 110 * min(k, FIT_BLOCK)) * pixels,
         "the parameters": 8 * points * params,
     }
     disk = 4 * points * params + 4 * pixels * points + 2**16

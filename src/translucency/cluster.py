@@ -30,6 +30,7 @@ None
 from __future__ import annotations
 
 import logging
+import os
 import re
 from collections.abc import Callable, Iterable, Iterator, Sequence
 from contextlib import contextmanager
@@ -244,6 +245,22 @@ except ImportError:  # pragma: no cover - dask[distributed] is a dependency
         pass
 
 
+_TRIM = "MALLOC_TRIM_THRESHOLD_"
+
+
+@contextmanager
+def _without_env(name: str):
+    """``name`` absent from this process's environment for the block, restored after (Dask's nanny
+    copies its pre-spawn variables into the parent's environment, where later workers inherit them;
+    glibc read this process's own setting at start, so removing it here changes nothing here)."""
+    old = os.environ.pop(name, None)
+    try:
+        yield
+    finally:
+        if old is not None:
+            os.environ[name] = old
+
+
 def worker_environ() -> dict:
     """The environment Dask's nanny gives a new worker process, less ``MALLOC_TRIM_THRESHOLD_``.
 
@@ -255,7 +272,7 @@ def worker_environ() -> dict:
     of a ``tcp://`` cluster are started by their owner: start them without it (docs/scaling.md).
     """
     env = dict(dask.config.get("distributed.nanny.pre-spawn-environ", default={}) or {})
-    env.pop("MALLOC_TRIM_THRESHOLD_", None)
+    env.pop(_TRIM, None)
     return env
 
 
@@ -293,7 +310,7 @@ def open_cluster(
     if Client is None:  # pragma: no cover
         raise TranslucencyError(f"scheduler {spec}: dask[distributed] is not installed")
     if spec.kind == "local":
-        with dask.config.set({"distributed.nanny.pre-spawn-environ": worker_environ()}):
+        with dask.config.set({"distributed.nanny.pre-spawn-environ": worker_environ()}), _without_env(_TRIM):
             local = LocalCluster(
                 n_workers=spec.workers,
                 threads_per_worker=1,

@@ -33,6 +33,7 @@ from ..acquire.objects import make_pig
 from ..cluster import parse_scheduler
 from ..evaluate.report import model_label, write_report
 from ..fit import check_fit_options, fit_mesh, fit_planar
+from ..fit.planar import default_chunk_points
 from ..io.dataset import dataset_identity, describe, open_dataset
 from ..io.mesh import load_mesh
 from ..io.mesh_dataset import describe_mesh, is_mesh_dataset, open_mesh_dataset
@@ -645,7 +646,8 @@ def fit(
     chunk: int = typer.Option(
         None,
         "--chunk",
-        help="Incident points read and fitted together (default 128, in whole chunks of the store).",
+        help="Incident points read and fitted together, a task (default: an eighth of the points, "
+        "128 to 512, in whole chunks of the store).",
     ),
     float16: bool = typer.Option(False, "--float16", help="Store parameters as float16 (smaller file)."),
     overwrite: bool = typer.Option(
@@ -711,7 +713,7 @@ def fit(
     need = resources.planar_fit(
         points=ds.n_points,
         pixels=H * W,
-        chunk=chunk or (stored * -(-128 // stored) if stored <= 512 else 128),
+        chunk=chunk or default_chunk_points(ds.n_points, stored),
         workers=workers,
         params=_params_per_point(model, terms, directions, colour),
     )

@@ -677,9 +677,10 @@ def _ring_means(rings: Segments, valid: np.ndarray, v: np.ndarray) -> np.ndarray
     return num / np.maximum(cnt, 1.0)[..., None]
 
 
-def _prepare_chunk(ctx: FitContext, s: int, e: int) -> _Chunk:
-    """Read points s..e and put each window's pixels in radius-group order (done once per chunk)."""
-    y, var, valid, r, theta, pixel, poisson = ctx.source.read(ctx, s, e)
+def _prepare_chunk(ctx: FitContext, s: int, e: int, raw=None) -> _Chunk:
+    """Read points s..e (or take them from ``raw``, what the source read for them) and put each
+    window's pixels in radius-group order (done once per chunk)."""
+    y, var, valid, r, theta, pixel, poisson = ctx.source.read(ctx, s, e) if raw is None else raw
     k = e - s
     pixel = np.broadcast_to(pixel, valid.shape)
     base = pixel[:, :1].astype(np.int64)
@@ -737,11 +738,11 @@ def _prepare_chunk(ctx: FitContext, s: int, e: int) -> _Chunk:
     )
 
 
-def _load_chunk(ctx: FitContext, state: FitState, s: int, e: int) -> _Chunk:
-    """Points s..e from the cache of earlier rounds (or the source), with the current α."""
+def _load_chunk(ctx: FitContext, state: FitState, s: int, e: int, raw=None) -> _Chunk:
+    """Points s..e from the cache of earlier rounds (or ``raw``, or the source), with the current α."""
     ch = ctx.cache.get((s, e))
     if ch is None:
-        ch = _prepare_chunk(ctx, s, e)
+        ch = _prepare_chunk(ctx, s, e, raw)
         nbytes = sum(
             np.asarray(a).nbytes
             for a in (ch.y, ch.valid, ch.balance, ch.local, ch.r, ch.theta, ch.gid, ch.poisson)
@@ -833,14 +834,76 @@ def _objective(w2: np.ndarray, model: np.ndarray, y: np.ndarray) -> float:
     return float(np.sum(res, dtype=np.float64))
 
 
+#: incident points whose pooled profile seeds their cold starts together; blocks follow the points'
+#: absolute indices, so a fit does not depend on how its points are chunked (chunks hold whole blocks)
+POOL_POINTS = 16
+
+#: points whose pixels a chunk works on at a time, on absolute multiples (as the pooled starts): the
+#: chunk is read from the store at once, but its working arrays (weights, model, products: ~10 of the
+#: data's size) are those of FIT_BLOCK points, so a task needs about its data, not 5× it (issue 16)
+FIT_BLOCK = 4 * POOL_POINTS
+
+
+def _blocks(s: int, e: int) -> list[tuple[int, int]]:
+    """Points s..e cut at the multiples of :data:`FIT_BLOCK`."""
+    cuts = range((s // FIT_BLOCK + 1) * FIT_BLOCK, e, FIT_BLOCK)
+    edges = [s, *cuts, e]
+    return list(zip(edges[:-1], edges[1:]))
+
+
+def _rows(raw: tuple, i0: int, i1: int, k: int) -> tuple:
+    """Rows i0..i1 of what a source read for k points (arrays with one row for all stay whole)."""
+    return tuple(
+        x[i0:i1] if isinstance(x, np.ndarray) and x.ndim and x.shape[0] == k and k > 1 else x for x in raw
+    )
+
+
+def _merge_boxes(parts: list) -> tuple:
+    """One (box, values) of several :func:`compact` boxes, summed in list order."""
+    full = [p for p in parts if p[1].size]
+    if not full:
+        return parts[0]
+    nd = len(full[0][0])
+    box = tuple(slice(min(p[0][d].start for p in full), max(p[0][d].stop for p in full)) for d in range(nd))
+    out = np.zeros(tuple(b.stop - b.start for b in box), dtype=full[0][1].dtype)
+    for b, v in full:
+        out[tuple(slice(b[d].start - box[d].start, b[d].stop - box[d].start) for d in range(nd))] += v
+    return box, out
+
+
 def _fit_chunk(ctx: FitContext, glob: FitState, s: int, e: int):
-    """One round's work on points s..e: parameters, colour scale, α statistics, Φ.
+    """One round's work on points s..e (block by block, :data:`FIT_BLOCK`): parameters, colour scale,
+    α statistics, Φ.
 
     Returns the points' new state, their Φ (new parameters, the round's α) and, in round 2, Φ of
-    the reference state, and Σ w²Py and Σ w²P² (per sample pixel).
+    the reference state, and Σ w²Py and Σ w²P² (per sample pixel, as a box).
     """
+    blocks = _blocks(s, e)
+    if len(blocks) == 1:
+        return _fit_block(ctx, glob, s, e)
+    # blocks that are whole chunks of the store are read one by one (the chunk's data is never in
+    # memory at once); otherwise one read for the whole chunk (no stored chunk decoded twice)
+    stored = getattr(ctx.source, "stored_points", 0)
+    aligned = stored > 0 and FIT_BLOCK % stored == 0 and all(b0 % stored == 0 for b0, _ in blocks)
+    raw = None if aligned or all(b in ctx.cache for b in blocks) else ctx.source.read(ctx, s, e)
+    results = []
+    for b0, b1 in blocks:
+        part = None if raw is None or (b0, b1) in ctx.cache else _rows(raw, b0 - s, b1 - s, e - s)
+        results.append(_fit_block(ctx, glob, b0, b1, part))
+    del raw
+    state = FitState.__new__(FitState)
+    for key in FitState.PER_POINT:
+        setattr(state, key, np.concatenate([getattr(r[0], key) for r in results]))
+    state.alpha = glob.alpha
+    phi = sum((r[1] for r in results), 0.0)
+    phi_ref = sum((r[2] for r in results), 0.0)
+    return state, phi, phi_ref, _merge_boxes([r[3] for r in results]), _merge_boxes([r[4] for r in results])
+
+
+def _fit_block(ctx: FitContext, glob: FitState, s: int, e: int, raw=None):
+    """:func:`_fit_chunk` for the points of one block (``raw``: their data, if already read)."""
     state = glob.points(s, e)
-    ch = _load_chunk(ctx, state, s, e)
+    ch = _load_chunk(ctx, state, s, e, raw)
     k = e - s
     sl = slice(0, k)
     usable = ch.usable
@@ -922,11 +985,6 @@ def _grouped(seg: Segments, G: int, C: int, w2, kappa, target, overwrite: bool =
     k = A.shape[0]
     A, B = (x.reshape(k, -1, G, C).transpose(0, 3, 1, 2).reshape(-1, G).astype(np.float64) for x in (A, B))
     return np.sqrt(A), np.divide(B, A, out=np.zeros_like(B), where=A > 0)
-
-
-#: incident points whose pooled profile seeds their cold starts together; blocks follow the points'
-#: absolute indices, so a fit does not depend on how its points are chunked (chunks hold whole blocks)
-POOL_POINTS = 16
 
 
 def _fit_cold(ctx: FitContext, ch: _Chunk, W, Y, point: np.ndarray, radii=None, **options):

@@ -49,6 +49,7 @@ class _MeshSource:
         self.incident = np.asarray(group["incident"][...])
         self.frame = tangent_frames(np.asarray(group["normals"][...], dtype=np.float64)[self.incident])
         self.alpha_shape = (len(self.vertices),)
+        self.stored_points = int(group["R_d"].chunks[0])  # incident points per chunk of the store
         edges = np.asarray(group["faces"][...])
         v = self.vertices
         self.pitch = float(np.mean(np.linalg.norm(v[edges[:, 0]] - v[edges[:, 1]], axis=1)))  # mean edge, mm

@@ -84,6 +84,26 @@ NEAR_MM = 1.0
 PlanarFit = FitResult
 
 
+def default_chunk_points(n_points: int, stored: int) -> int:
+    """Incident points per chunk when none is asked for: an eighth of the data set, at least 128 and at
+    most 512, rounded up to whole chunks of the store (of ``stored`` points; up to 512) so that no
+    stored chunk is decoded twice.
+
+    A chunk is the unit of work sent to a thread or a worker; its points are computed
+    :data:`~translucency.fit._alternation.FIT_BLOCK` at a time, so a larger chunk costs memory only
+    for its data.  Large data sets get 512-point chunks: a task then runs for ~0.2 s, and the
+    scheduler's few ms per task stay below 5 % of the fit (benchmarks/scale_out.py).  The choice
+    depends only on the data set, so every scheduler gets the same chunks and the same result.
+
+    Examples
+    --------
+    >>> default_chunk_points(1024, 64), default_chunk_points(4096, 64), default_chunk_points(100_000, 1000)
+    (128, 512, 512)
+    """
+    want = int(np.clip(-(-n_points // 8), 128, 512))
+    return stored * -(-want // stored) if stored <= 512 else want
+
+
 def fit_planar(
     dataset,
     model: str = "iso",
@@ -142,10 +162,10 @@ def fit_planar(
     sweeps : int
         Block-coordinate sweeps over the directions per round (aniso).
     chunk_points : int, optional
-        Incident points read and fitted together; default 128, rounded up to
-        whole chunks of the store (up to 512) so that no stored chunk is
-        decoded twice, and to whole blocks of 16 points (the pooled starts),
-        so that the result does not depend on it.
+        Incident points read and fitted together (a task); default
+        :func:`default_chunk_points` (an eighth of the points, 128 to 512, in
+        whole stored chunks); rounded up to whole blocks of 16 points (the
+        pooled starts), so that the result does not depend on it.
     workers : int, optional
         Chunks fitted in parallel threads (default: the number of CPUs).
     cache_mb : float
@@ -195,9 +215,8 @@ def fit_planar(
     if exclusion < 0 or not np.isfinite(exclusion):
         raise TranslucencyError(f"exclusion: must be >= 0 mm, got {exclusion_mm}")
     step = pitch / 4 if radius_step == "auto" else radius_step
-    if chunk_points is None:
-        stored = int(ds.group["R_d"].chunks[0])
-        chunk_points = stored * -(-128 // stored) if stored <= 512 else 128
+    if chunk_points is None:  # an eighth of the points, 128 to 512, in whole stored chunks (below)
+        chunk_points = default_chunk_points(ds.n_points, int(ds.group["R_d"].chunks[0]))
     elif int(chunk_points) < 1:
         raise TranslucencyError(f"chunk: must be >= 1 point, got {chunk_points}")
     # whole blocks of the pooled cold starts, so that the fit does not depend on the chunking
@@ -281,6 +300,7 @@ class _PlanarSource:
         self.half = half  # None, or the half of the pairs the fit may use (:func:`pair_half`)
         self.alpha_shape = grid.shape
         self.pitch = grid.pitch
+        self.stored_points = int(ds.group["R_d"].chunks[0])  # incident points per chunk of the store
 
     def read(self, ctx: FitContext, s: int, e: int):
         """y (k, J, 3), var or None, valid (k, J), r, θ (1|k, J), pixel (k, J), and the Poisson factor
