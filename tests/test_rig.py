@@ -697,3 +697,20 @@ def test_photographs_import_and_fit_like_the_photon_tally(tmp_path):
     # bound only guards against regressions
     held = figures["held_out_rel_l2"]
     assert held["photo"] <= 4 * held["tally"], held
+
+
+def test_import_on_a_cluster_writes_the_same_bytes(tmp_path):
+    """``scheduler="local:2"``: each chunk a task that reads its images and writes its part of the store
+    and its done flag (issue 16) — the data set equals the one imported in this process, bit for bit."""
+    from translucency.cluster import open_cluster
+
+    folder, calib, _ = _lab(tmp_path, points=((4.0, 5.0), (6.0, 5.5), (5.0, 4.5)))
+    setup = ImportSetup(pitch=0.25, window=3.0, chunk_points=1)
+    here = import_images(folder, tmp_path / "positions.csv", calib, tmp_path / "here.zarr", setup)
+    with open_cluster("local:2", memory_limit="1GiB") as cluster:
+        there = import_images(
+            folder, tmp_path / "positions.csv", calib, tmp_path / "there.zarr", setup, scheduler=cluster
+        )
+    for key in ("R_d", "variance", "mask", "total_diffuse", "chunk_done", "x_i", "window_origin"):
+        np.testing.assert_array_equal(np.asarray(here[key]), np.asarray(there[key]), err_msg=key)
+    assert np.asarray(there["chunk_done"]).all() and np.asarray(there["R_d"]).any()

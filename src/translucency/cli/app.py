@@ -44,6 +44,7 @@ from ..pipeline import DEMO_FITS, run_demo
 from ..render.figure import boundary_eta, figure2, object_of_model, volume_of_dataset
 from ..render.image import Camera
 from ..render.lights import parse_light
+from ._options import scheduler_option as _scheduler_option
 from .rig import acquire_photographs_cmd, import_app
 
 
@@ -130,18 +131,6 @@ def progress(quiet: bool = False) -> Progress:
         console=err_console,
         transient=False,
         disable=quiet,
-    )
-
-
-# the options every working command shares (acquire planar|mesh, fit, evaluate, render)
-def _scheduler_option():
-    return typer.Option(
-        "threads",
-        "--scheduler",
-        metavar="WHERE",
-        help="Where work runs: threads (this process), local:N (N Dask worker processes started for this "
-        "command) or tcp://HOST:PORT (a running Dask cluster; the data set's path must be visible to its "
-        "workers). Results are identical whichever.",
     )
 
 

@@ -16,9 +16,11 @@ from rich.console import Console
 
 from .._validate import TranslucencyError, check_option
 from ..acquire import load_volume, make_sample
+from ..cluster import parse_scheduler
 from ..io.outputs import claim_folder, claim_output
 from ..rig.calibration import load_calibration
 from ..rig.importer import ImportSetup, import_images
+from ._options import scheduler_option
 
 console = Console()
 err_console = Console(stderr=True)
@@ -107,8 +109,10 @@ def import_images_cmd(
         "--overwrite",
         help="Replace a data set of translucency made from other inputs (never anything else).",
     ),
+    scheduler: str = scheduler_option(),
 ):
     """Import HDR photographs of a scanned laser spot (with the camera calibration) as a planar data set."""
+    parse_scheduler(scheduler)  # a bad value or an unreachable cluster: one line, before work
     for name, value in (("--pitch", pitch), ("--window", window)):
         check_option(name, value, lo=0, open_lo=True)
     check_option("--supersample", supersample, lo=1, hi=16)
@@ -167,6 +171,7 @@ def import_images_cmd(
         overwrite=overwrite,
         inputs=[calibration, *(v[2] for v in views)],
         views=other_views,
+        scheduler=scheduler,
     )
     rms = calib.source.get("rms_px")
     console.print(

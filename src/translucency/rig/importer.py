@@ -45,6 +45,7 @@ from scipy.ndimage import binary_dilation
 
 from .._validate import TranslucencyError
 from .._version import __version__
+from ..cluster import open_cluster, parse_scheduler
 from ..io.dataset import FORMAT, VERSION, PlanarDataset, create_dataset
 from ..io.outputs import output_lock
 from .calibration import Calibration
@@ -383,6 +384,7 @@ def import_images(
     progress: Callable[[int, int], None] | None = None,
     workers: int | None = None,
     views=(),
+    scheduler: str | None = "threads",
 ) -> PlanarDataset:
     """Import a rig's photographs as a planar data set at ``out`` (resumable, chunk by chunk).
 
@@ -400,6 +402,11 @@ def import_images(
         Output grid, window, masks, chunking.
     workers : int, optional
         Images read and resampled at once (threads; default min(4, CPUs)).
+    scheduler : str, optional
+        Where the chunks run: ``"threads"`` (this process, default), ``"local:N"`` or
+        ``"tcp://HOST:PORT"`` (:mod:`translucency.cluster`): each chunk a task that reads its images and
+        writes its part of the store and its done flag; the same bytes either way.  The images and the
+        output must be visible to the workers at the same paths.
     views : sequence of (folder, positions, Calibration), optional
         The same laser positions photographed by further cameras (one row per position, in the same
         order; the laser positions are the first table's).  Each view is resampled onto the same windows
@@ -427,6 +434,7 @@ def import_images(
     """
     setup = setup or ImportSetup()
     setup.check()
+    parse_scheduler(scheduler)  # a bad option is one line before any work
     folder = Path(folder)
     table = None
     if not isinstance(positions, list | tuple):
@@ -533,48 +541,86 @@ def import_images(
         "request": request,
     }
     P, k = len(shots), setup.chunk_points
-    side = n * p
-
-    def view(j, shot, calib, shp):  # one image → its window, variance and mask
-        region = window_region(calib, origin[j], side, shp)
-        frame = load_frame(shot, calib, setup, shp, region)
-        val, var, mask = resample_window(frame, _shifted(calib, region), setup, x_i[j], origin[j])
-        norm = (np.asarray(calib.scale, np.float64) * shot.power).astype(np.float32)
-        return val / norm, var / (norm * norm), mask
-
-    def one(j):  # one laser position → the mean of its views where all are valid (in a worker thread)
-        val, var, mask = view(j, shots[j], calibration, shape)
-        for _, _, v_shots, v_calib, v_shape in others:
-            v_val, v_var, v_mask = view(j, v_shots[j], v_calib, v_shape)
-            val, var, mask = val + v_val, var + v_var, mask & v_mask
-        k = 1 + len(others)
-        return val / k, var / (k * k), mask
-
-    with ThreadPoolExecutor(workers) as pool, output_lock(out):
+    job = _ImportJob(shots, calibration, shape, [o[2:] for o in others], setup, x_i, origin)
+    with output_lock(out):
         view_inputs = [p for o in others for p in o[:2]]
         ds = create_dataset(out, header, overwrite=overwrite, inputs=[folder, table, *view_inputs, *inputs])
         g = ds.group
         g["x_i"][...] = x_i.astype(np.float32)
         g["window_origin"][...] = origin.astype(np.float32)
         done = np.asarray(g["chunk_done"][...])
-        for c in range(len(done)):
-            lo, hi = c * k, min(P, (c + 1) * k)
-            if done[c]:
-                if progress:
-                    progress(hi, P)
-                continue
-            R = np.zeros((hi - lo, n, n, 3), np.float32)
-            V = np.zeros_like(R)
-            M = np.zeros((hi - lo, n, n), bool)
-            for j, (val, var, mask) in zip(range(lo, hi), pool.map(one, range(lo, hi))):
-                R[j - lo], V[j - lo], M[j - lo] = val, var, mask
-            g["R_d"][lo:hi] = R.astype(setup.dtype)
-            g["variance"][lo:hi] = V.astype(setup.dtype)
-            g["mask"][lo:hi] = M
-            g["specular"][lo:hi] = np.zeros((hi - lo, 3), np.float32)  # not measured by a camera
-            total = np.where(M[..., None], R, 0).sum(axis=(1, 2)) * p * p
-            g["total_diffuse"][lo:hi] = total.astype(np.float32)
-            g["chunk_done"][c] = True  # last: the chunk is complete
-            if progress:
-                progress(hi, P)
+        todo = [(c, c * k, min(P, (c + 1) * k)) for c in range(len(done)) if not done[c]]
+        finished = P - sum(hi - lo for _, lo, hi in todo)  # points of the chunks done before
+        if progress and finished:
+            progress(finished, P)
+        with open_cluster(scheduler) as cluster:
+            if cluster is None:  # this process: chunk after chunk, a chunk's images in threads
+                with ThreadPoolExecutor(workers) as pool:
+                    for c, lo, hi in todo:
+                        _import_chunk(job, ds, c, lo, hi, pool)
+                        finished += hi - lo
+                        if progress:
+                            progress(finished, P)
+            else:  # a task per chunk: each reads its images, writes its part of the store and its flag
+                tasks = [(ds, c, lo, hi) for c, lo, hi in todo]
+                for i, _ in cluster.run(_import_chunk, tasks, shared=(cluster.keep(job),)):
+                    finished += todo[i][2] - todo[i][1]
+                    if progress:
+                        progress(finished, P)
         return ds
+
+
+@dataclass
+class _ImportJob:
+    """What every chunk of an import needs besides its index range (sent to a cluster once)."""
+
+    shots: list  # the first view's laser positions (Shot)
+    calibration: Calibration
+    shape: tuple  # its images' shape
+    others: list  # further views: (shots, calibration, image shape)
+    setup: ImportSetup
+    x_i: np.ndarray  # (P, 2) laser positions, mm
+    origin: np.ndarray  # (P, 2) window origins, mm
+
+    def view(self, j: int, shot: Shot, calib: Calibration, shape) -> tuple:
+        """One image → its window of R_d, variance and mask, normalised by scale and laser power."""
+        side = self.setup.window_pixels() * self.setup.pitch
+        region = window_region(calib, self.origin[j], side, shape)
+        frame = load_frame(shot, calib, self.setup, shape, region)
+        val, var, mask = resample_window(
+            frame, _shifted(calib, region), self.setup, self.x_i[j], self.origin[j]
+        )
+        norm = (np.asarray(calib.scale, np.float64) * shot.power).astype(np.float32)
+        return val / norm, var / (norm * norm), mask
+
+    def point(self, j: int) -> tuple:
+        """Laser position j → the mean of its views where all of them are valid."""
+        val, var, mask = self.view(j, self.shots[j], self.calibration, self.shape)
+        for v_shots, v_calib, v_shape in self.others:
+            v_val, v_var, v_mask = self.view(j, v_shots[j], v_calib, v_shape)
+            val, var, mask = val + v_val, var + v_var, mask & v_mask
+        k = 1 + len(self.others)
+        return val / k, var / (k * k), mask
+
+
+def _import_chunk(job: _ImportJob, ds: PlanarDataset, c: int, lo: int, hi: int, pool=None) -> None:
+    """Import chunk ``c`` (laser positions lo..hi), write it, then its done flag.
+
+    A pure function of the images and its arguments: in this process (its images read in ``pool``'s
+    threads) or as a task on a worker, it writes the same bytes.
+    """
+    setup, g = job.setup, ds.group
+    n, p = setup.window_pixels(), setup.pitch
+    R = np.zeros((hi - lo, n, n, 3), np.float32)
+    V = np.zeros_like(R)
+    M = np.zeros((hi - lo, n, n), bool)
+    results = pool.map(job.point, range(lo, hi)) if pool is not None else map(job.point, range(lo, hi))
+    for j, (val, var, mask) in zip(range(lo, hi), results):
+        R[j - lo], V[j - lo], M[j - lo] = val, var, mask
+    g["R_d"][lo:hi] = R.astype(setup.dtype)
+    g["variance"][lo:hi] = V.astype(setup.dtype)
+    g["mask"][lo:hi] = M
+    g["specular"][lo:hi] = np.zeros((hi - lo, 3), np.float32)  # not measured by a camera
+    total = np.where(M[..., None], R, 0).sum(axis=(1, 2)) * p * p
+    g["total_diffuse"][lo:hi] = total.astype(np.float32)
+    g["chunk_done"][c] = True  # last: the chunk is complete
