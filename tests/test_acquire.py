@@ -142,7 +142,9 @@ def test_dataset_content_is_consistent(tmp_path):
     assert mask.all()  # the windows fit on this sample
 
 
-@pytest.mark.parametrize("name", ["marble", "apple-slice", "skin", "fibers", "homogeneous:apple"])
+@pytest.mark.parametrize(
+    "name", ["marble", "apple-slice", "skin", "fibers", "banded", "layered", "homogeneous:apple"]
+)
 def test_generators_make_valid_volumes(name):
     v = make_sample(name, (8, 8, 3), 0.25, seed=2)
     assert v.shape == (12, 32, 32)
@@ -158,6 +160,26 @@ def test_fibers_spread_light_farther_along_x():
     sx = np.sqrt(np.mean((res.x[top] - 10.05) ** 2))
     sy = np.sqrt(np.mean((res.y[top] - 10.05) ** 2))
     assert sx > 1.3 * sy
+
+
+def test_banded_runs_diagonally_and_layered_changes_with_depth():
+    """The two samples of issue 13's accuracy table: bands at 45° (constant along x − y, varying along
+    x + y) with an absorbing disc; a clear layer whose interface depth varies across the sample."""
+    v = make_sample("banded", (12, 12, 3), 0.25, seed=1)
+    s = v.sigma_s[0, ..., 1]  # top layer, green
+    i = np.arange(48)
+    across = s[i[:-1], i[1:]]  # y − x = const: across the bands
+    along = s[i[:24], 24 - i[:24]]  # y + x = const: along one band
+    assert along.std() < 0.5 * across.std()
+    a = v.sigma_a[0, ..., 1]
+    assert a.max() > 15 * np.median(a)  # the disc absorbs 20× more
+    w = make_sample("layered", (12, 12, 3), 0.25, seed=1)
+    top, bottom = w.sigma_s[0, ..., 1], w.sigma_s[-1, ..., 1]
+    assert (top < 0.25 * bottom).all() and np.median(top) < 0.05 * np.median(
+        bottom
+    )  # clear above, dense below
+    interface = (w.sigma_s[..., 1] < 0.5 * bottom).sum(axis=0) * 0.25  # clear depth per column, mm
+    assert 0.25 <= interface.min() and interface.max() <= 1.5 and interface.max() - interface.min() > 0.4
 
 
 def test_bad_volumes_are_named(tmp_path):
