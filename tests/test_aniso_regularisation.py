@@ -66,3 +66,26 @@ def test_fibers_keep_their_direction_and_a_physical_total(fibers):
         ratio = f.model.total_reflectance() * np.mean(f.model.alpha.values) / tally
         assert abs(np.median(ratio) - 1) < 0.2 and ratio.max() < 1.6
     assert (aniso.model.total_reflectance() < 1).all()
+
+
+def test_fitted_totals_respect_the_measured_energy():
+    """No profile may carry more energy than the point reflects: on the embedded sample, unguarded, 25 of
+    1,024 isotropic profiles had totals of 1.04–1.96 where the tally says 0.38–0.81 (a term too slow for
+    the window to see, or a spike inside the first pixel). Judged against the independent truth's tally."""
+    from translucency.data import default_dataset_path, default_truth_path
+    from translucency.io.dataset import open_dataset
+
+    data, truth = open_dataset(default_dataset_path()), open_dataset(default_truth_path())
+    tally = truth["total_diffuse"].astype(np.float64)
+    iso = fit_planar(data, "iso").model
+    total = iso.total_reflectance() * np.mean(iso.alpha.values)
+    assert (total <= 1.0).all()
+    ratio = total / tally
+    assert np.median(np.abs(ratio - 1)) < 0.1 and ratio.max() < 1.5, np.percentile(ratio, [50, 100])
+    # the anisotropic model: its directions are tied to the (bounded) isotropic fit at r = 0 and beyond
+    # the window (bounding each point's mean over directions too cost fibers 20 % held out: not done)
+    aniso = fit_planar(data, "aniso", n_directions=8).model
+    ratio = aniso.total_reflectance() * np.mean(aniso.alpha.values) / tally
+    assert np.median(np.abs(ratio - 1)) < 0.1 and np.quantile(ratio, 0.99) < 1.5, np.percentile(
+        ratio, [50, 99]
+    )

@@ -142,6 +142,36 @@ def test_alpha_recovery_with_modulation(tmp_path):
     assert fit.history[-1] < fit.history[1]  # the alternation lowers the objective
 
 
+def test_pooled_alpha_keeps_the_noise_of_a_sparse_grid_out(tmp_path):
+    """2 × 2 points, α = 1, photon noise (10 % of ‖R‖): per pixel α follows the noise of the ≤ 4 windows
+    over each pixel (its spread ~0.2) and the model with it; pooled over a 1 mm disc α stays near 1 and the
+    model lies closer to the noise-free windows.  ``alpha_radius=0`` is the per-pixel fit, bit for bit."""
+    rng = np.random.default_rng(21)
+    x_i = _grid_points(side=2)
+    c, d = exponential_terms(rng, len(x_i))
+    truth = ExponentialModel(x_i, c, d, PlanarAlpha.uniform((40, 40), (0.0, 0.0), PITCH))
+    origin, R = _windows(truth, x_i, half=10)
+    photons = 20_000
+    counts = rng.poisson(R * photons * PITCH**2)
+    ds = write_dataset(
+        tmp_path / "d.zarr", x_i, origin, counts / (photons * PITCH**2), PITCH, photons=photons
+    )
+    ok = np.hypot(*np.mgrid[-10:11, -10:11]) >= 1  # the fit's default exclusion: one pixel
+    fits, errors = {}, {}
+    for rad in (None, 0.0, 1.0):
+        fits[rad] = fit_planar(ds, "iso", n_terms=2, alpha_radius=rad)
+        pred = fits[rad].model.R_d_window(np.arange(len(x_i)), origin, PITCH, R.shape[1:3])
+        errors[rad] = np.linalg.norm((pred - R)[:, ok]) / np.linalg.norm(R[:, ok])
+    np.testing.assert_array_equal(fits[0.0].model.alpha.values, fits[None].model.alpha.values)
+    np.testing.assert_array_equal(fits[0.0].model.c, fits[None].model.c)
+    assert "alpha_radius" not in fits[None].options and fits[1.0].options["alpha_radius"] == 1.0
+    spread = {rad: float(fits[rad].model.alpha.values.std()) for rad in (None, 1.0)}
+    assert spread[None] > 0.1 and spread[1.0] < 0.3 * spread[None], spread
+    assert errors[1.0] < 0.7 * errors[None], errors
+    with pytest.raises(TranslucencyError, match="alpha_radius"):
+        fit_planar(ds, "iso", alpha_radius=-1.0)
+
+
 def test_aniso_recovers_directional_profiles(tmp_path):
     rng = np.random.default_rng(13)
     x_i = _grid_points(side=3)

@@ -525,6 +525,11 @@ def rig_sample():
     return Volume(ss.astype(np.float32), sa.astype(np.float32), 0.5, 0.0, 1.3, {"generator": "rig test"})
 
 
+#: α's pooling radius (mm) of the held-out comparison: chosen on the photon tallies alone (held-out error of
+#: the tally's model 0.106 per pixel, 0.045 / 0.043 / 0.044 pooled over 1 / 2 / 3 mm; docs/rig.md §4)
+ALPHA_RADIUS = 2.0
+
+
 def fitted(ds, exclusion=0.75, radius=2.4):
     """The fitted figures of a data set: the 2-term model, its energy in exclusion..radius (α included)
     per point and channel, and the 1-term fall-off rate per point and channel."""
@@ -575,10 +580,12 @@ def compare(a, b, fa, fb, mask):
 def end_to_end(tmp_path, *, spp, photons, grid=2, resolution=(96, 80), beam_mm=0.25, seed=0, views=2):
     """Photograph, import, fit; tally twice (independent seeds), fit; tally a held-out truth (16 × the
     photons). Returns the figures: photographs against the tally, the second tally against the first
-    (the noise floor of the comparison), and the held-out errors of both fitted models."""
+    (the noise floor of the comparison), and the held-out errors of both fitted models (α per pixel, and
+    pooled over :data:`ALPHA_RADIUS`)."""
     from translucency.acquire import PlanarSetup, acquire_planar
     from translucency.acquire.volume import Volume
     from translucency.evaluate.errors import planar_errors
+    from translucency.fit import fit_planar
     from translucency.rig import load_calibration
     from translucency.rig.photographs import Beam, Sensor, photograph_sample
 
@@ -664,6 +671,16 @@ def end_to_end(tmp_path, *, spp, photons, grid=2, resolution=(96, 80), beam_mm=0
         key: planar_errors(fits[key]["model"], truth, exclusion_mm=exclusion).rel_l2
         for key in ("photo", "tally")
     }
+    # the same with α pooled over a disc (fit_planar's alpha_radius): 2 × 2 points overlap at most four
+    # windows on a pixel, and α per pixel follows their noise (the photographs' most)
+    pooled = {
+        key: planar_errors(
+            fit_planar(ds, "iso", n_terms=2, exclusion_mm=exclusion, alpha_radius=ALPHA_RADIUS).model,
+            truth,
+            exclusion_mm=exclusion,
+        ).rel_l2
+        for key, ds in (("photo", imported), ("tally", tally))
+    }
     return {
         "photo_vs_tally": compare(imported, tally, fits["photo"], fits["tally"], mask),
         "tally_vs_tally": compare(tally2, tally, fits["tally2"], fits["tally"], mask),
@@ -674,6 +691,7 @@ def end_to_end(tmp_path, *, spp, photons, grid=2, resolution=(96, 80), beam_mm=0
             for k, v in compare(halves[1], halves[0], fits["half1"], fits["half0"], mask).items()
         },
         "held_out_rel_l2": held_out,
+        "held_out_rel_l2_pooled_alpha": pooled,
         "homography_error_px": max(homography_error(r["marked"], r["homography"], x_i) for r in results),
         "marker_rms_px": max(r["rms_px"] for r in results),
         "masked_fraction": float(1 - imported["mask"].mean()),
@@ -693,10 +711,14 @@ def test_photographs_import_and_fit_like_the_photon_tally(tmp_path):
         floor = np.sqrt((floor_t[key] ** 2 + floor_p[key] ** 2) / 2)
         assert photo[key] <= max(0.02, 2 * floor), (key, photo[key], floor_t[key], floor_p[key])
     # held out, against a tally of 16× the photons: issue 15 asks for the photographs' model within 10 % of
-    # the tally's; measured 2.7–3.2 × (the photographs' render noise goes into α, docs/rig.md §4) — this
-    # bound only guards against regressions
-    held = figures["held_out_rel_l2"]
+    # the tally's.  α per pixel (≤ 4 windows per pixel) follows the data's noise: measured 0.297 / 0.106
+    # (α at 1 for both: 0.074 / 0.044).  Pooled over 2 mm: 0.097 / 0.043 — the rest is the photographs'
+    # render noise (1.7–3.7 × the tally's per pixel) and their scale (+3 %), not the fit (docs/rig.md §4);
+    # the target is not met, these bounds guard against regressions
+    held, pooled = figures["held_out_rel_l2"], figures["held_out_rel_l2_pooled_alpha"]
     assert held["photo"] <= 4 * held["tally"], held
+    assert pooled["photo"] <= 0.5 * held["photo"] and pooled["tally"] <= held["tally"], (pooled, held)
+    assert pooled["photo"] <= 3 * pooled["tally"], pooled
 
 
 def test_import_on_a_cluster_writes_the_same_bytes(tmp_path):

@@ -638,6 +638,13 @@ def fit(
         help="Incident points read and fitted together, a task (default: an eighth of the points, "
         "128 to 512, in whole chunks of the store).",
     ),
+    alpha_radius: float = typer.Option(
+        None,
+        "--alpha-radius",
+        help="Pool alpha's statistics over the pixels (vertices) within this distance, mm. Default: alpha "
+        "per pixel on planar data (dense scans), 12 mean edge lengths on meshes. For sparse grids of "
+        "incident points or noisy data such as photographs (docs/rig.md).",
+    ),
     float16: bool = typer.Option(False, "--float16", help="Store parameters as float16 (smaller file)."),
     overwrite: bool = typer.Option(
         False, "--overwrite", help="Replace an earlier output of translucency at --out (never anything else)."
@@ -655,6 +662,7 @@ def fit(
     check_option("--rounds", rounds, lo=1)
     check_option("--exclusion", exclusion, lo=0)
     check_option("--chunk", chunk, lo=1)
+    check_option("--alpha-radius", alpha_radius, lo=0)
     terms, directions = _count_or_auto("--terms", terms), _count_or_auto("--directions", directions)
     limit = _limit(max_memory)
 
@@ -691,6 +699,7 @@ def fit(
             as_json,
             need,
             scheduler,
+            alpha_radius,
         )
     colour = colour or "per-channel"
     check_fit_options(model, terms, directions, colour, weighting=weighting)
@@ -731,6 +740,7 @@ def fit(
             checkpoint=ckpt,
             progress=report,
             weighting=weighting,
+            alpha_radius=alpha_radius,
             scheduler=scheduler,
         )
     _calibrate(f"fit {model}", units, time.perf_counter() - t0, fresh)
@@ -818,8 +828,9 @@ def _warn_unphysical(path: Path) -> list[int]:
 
 
 def _fit_mesh_cmd(
-    data, out, model, terms, colour, exclusion, rounds, float16, overwrite, quiet, as_json, need, scheduler
-):
+    data, out, model, terms, colour, exclusion, rounds, float16, overwrite, quiet, as_json, need, scheduler,
+    alpha_radius=None,
+):  # fmt: skip
     mds = open_mesh_dataset(data)
     units = {"point_pixels": mds.n_points * int(mds.header["n_vertices"]) * rounds}
     timing = _timed(f"fit {model}", units)
@@ -835,6 +846,7 @@ def _fit_mesh_cmd(
             colour=colour,
             exclusion_mm=exclusion,
             max_rounds=rounds,
+            alpha_radius=alpha_radius,
             progress=lambda done, total, msg: bar.update(task, completed=done, total=total or None, item=msg),
             scheduler=scheduler,
         )
