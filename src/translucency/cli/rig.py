@@ -94,6 +94,13 @@ def import_images_cmd(
         None, "--sample-size", help="Sample width,height in mm (e.g. 20,20): pixels outside are masked."
     ),
     eta: float = typer.Option(1.3, "--eta", help="Relative index of refraction of the sample."),
+    beam_rms: float = typer.Option(
+        0.0,
+        "--beam-rms",
+        help="The laser beam's rms radius on the sample, mm (sqrt of the mean squared distance of its "
+        "irradiance from its centre; a uniform disc of radius b has b/sqrt(2)). Windows are corrected to a "
+        "pencil beam's response by its second moment. Default 0: a pencil beam, no correction.",
+    ),
     chunk: int = typer.Option(16, "--chunk", help="Incident points per chunk (unit of resuming)."),
     dtype: str = typer.Option("float32", "--dtype", help="Storage of R_d and variance: float32 or float16."),
     view: list[str] = typer.Option(
@@ -119,6 +126,7 @@ def import_images_cmd(
     check_option("--specular-radius", specular_radius, lo=0)
     check_option("--dilate", dilate, lo=0)
     check_option("--chunk", chunk, lo=1)
+    check_option("--beam-rms", beam_rms, lo=0)
     check_option("--eta", eta, lo=0, open_lo=True)
     if scale is not None:
         check_option("--scale", scale, lo=0, open_lo=True)
@@ -161,6 +169,7 @@ def import_images_cmd(
         eta=eta,
         chunk_points=chunk,
         dtype=dtype,
+        beam_rms=beam_rms,
     )
     ds = import_images(
         folder,

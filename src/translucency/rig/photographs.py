@@ -87,6 +87,17 @@ class Beam:
     def cutoff_deg(self) -> float:
         return float(np.degrees(np.arctan(self.radius_mm / self.distance_mm)))
 
+    def rms_mm(self) -> float:
+        """√⟨ρ²⟩ of the irradiance the beam puts on the sample, mm (for ``ImportSetup.beam_rms``):
+        ρ = d tan θ, irradiance ∝ f(θ) cos³θ (the spot's fall-off f, the inverse square and the slant)."""
+        tc = np.radians(self.cutoff_deg)
+        tw = SPOT_BEAM_FRACTION * tc
+        th = np.linspace(0.0, tc, 20001)
+        f = np.where(th <= tw, 1.0, (tc - th) / (tc - tw)) * np.cos(th) ** 3
+        rho = self.distance_mm * np.tan(th)
+        area = rho * np.gradient(rho, th)  # ρ dρ/dθ: the plane's area element per dθ (× 2π)
+        return float(np.sqrt(np.trapezoid(f * rho**2 * area, th) / np.trapezoid(f * area, th)))
+
     def power(self) -> float:
         """Power (W) per unit intensity (W/sr): 2π ∫ f(θ) sin θ dθ over the cone, in float64."""
         tc = np.radians(self.cutoff_deg)
