@@ -689,6 +689,12 @@ def _ring_means(rings: Segments, valid: np.ndarray, v: np.ndarray) -> np.ndarray
     return num / np.maximum(cnt, 1.0)[..., None]
 
 
+def _balance(ctx: FitContext, r: np.ndarray) -> np.ndarray:
+    """b(r) of the weights: each mm of distance counts alike, rings beyond 1 mm weighted by 1 mm / r
+    (1 everywhere without ``ctx.balance``)."""
+    return np.minimum(1.0, 1.0 / np.maximum(r, 1e-9)) if ctx.balance else np.ones_like(r, dtype=np.float64)
+
+
 def _prepare_chunk(ctx: FitContext, s: int, e: int, raw=None) -> _Chunk:
     """Read points s..e (or take them from ``raw``, what the source read for them) and put each
     window's pixels in radius-group order (done once per chunk)."""
@@ -708,9 +714,7 @@ def _prepare_chunk(ctx: FitContext, s: int, e: int, raw=None) -> _Chunk:
         poisson = rings.order(np.broadcast_to(poisson, (k,) + np.shape(poisson)[1:]))
     rings = rings.in_order()
     y = np.where(valid[..., None], y, np.float32(0.0))
-    # each mm of distance counts alike: rings beyond 1 mm weighted by 1 mm / r
-    balance = np.minimum(1.0, 1.0 / np.maximum(r, 1e-9)) if ctx.balance else np.ones_like(r)
-    balance = balance.astype(np.float32)
+    balance = _balance(ctx, r).astype(np.float32)
     var_ring = None
     if var is not None and ctx.weighting == "relative":  # σ²: ring means of the data's variance
         var_ring = _ring_means(rings, valid, var).astype(np.float32)
@@ -1123,8 +1127,7 @@ def _regularise(ctx: FitContext, state: FitState, sl: slice, ch: _Chunk, W, Y, n
     k, C = W.shape[0] // (ctx.C * n_cls), ctx.C
     W4, Y4 = W.reshape(k, C, n_cls, G), Y.reshape(k, C, n_cls, G)
     # σ⁻² of each ring mean: W² without the distance balance (W² = b(r) / σ²)
-    bal = np.minimum(1.0, 1.0 / np.maximum(ch.r_g, 1e-9)) if ctx.balance else np.ones(G)
-    ivar = W4**2 / bal
+    ivar = W4**2 / _balance(ctx, ch.r_g)
     # Ȳ: the inverse-variance mean over the class's directions, per point, colour row and ring
     tot = ivar.sum(axis=2, keepdims=True)
     Y_bar = np.divide((ivar * Y4).sum(axis=2, keepdims=True), tot, out=np.zeros_like(tot), where=tot > 0)
