@@ -10,8 +10,10 @@ import math
 import numpy as np
 import pytest
 
+from translucency.evaluate.directions import spread_directions
 from translucency.evaluate.errors import beyond, finite_or_null, planar_errors
-from translucency.evaluate.report import model_rings, ring_stats, spread_directions, write_report
+from translucency.evaluate.report import write_report
+from translucency.evaluate.rings import model_rings, ring_stats
 from translucency.io.dataset import write_dataset
 from translucency.model import DipoleModel, ExponentialModel, PlanarAlpha
 

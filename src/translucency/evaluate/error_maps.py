@@ -1,0 +1,123 @@
+"""Figure 1 (right): relative error maps per outgoing pixel and per incident point, and error ratios."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from .._plotting import pyplot
+from ._figures import draw_directions, mark_noise, point_map, save_figure
+from .errors import PlanarErrors
+
+
+def plot_error_maps(
+    errors: dict[str, PlanarErrors], x_i: np.ndarray, path, models: dict | None = None
+) -> None:
+    """Figure 1 (right): relative error per outgoing pixel (raw, and beyond the reference's noise) and per
+    incident point; one logarithmic colour scale per row set by the data (2nd–99th percentile over every
+    model), shared across models, with the reference's noise marked on the colour bar; for anisotropic
+    models the fitted spreading directions are drawn over the per-point map."""
+    plt = pyplot()
+    from matplotlib.colors import LogNorm  # matplotlib is loaded by pyplot() above
+
+    names = list(errors)
+    has_noise = all(e.per_pixel_beyond is not None for e in errors.values())
+    rows = ["per_pixel", "per_pixel_beyond", "per_point"] if has_noise else ["per_pixel", "per_point"]
+    titles = {
+        "per_pixel": "per outgoing pixel (pairs r < {r:g} mm)",
+        "per_pixel_beyond": "per pixel, beyond the truth's noise",
+        "per_point": "per incident point, rel_l2 {e:.1f} %",
+    }
+
+    def norm_of(keys, noise_key):
+        v = np.concatenate([np.ravel(getattr(e, k)) for e in errors.values() for k in keys])
+        v = v[np.isfinite(v) & (v > 0)]
+        if not v.size:
+            return LogNorm(1e-3, 1.0)
+        lo, hi = np.quantile(v, [0.02, 0.99])
+        noise = getattr(next(iter(errors.values())), noise_key)
+        noise = np.ravel(noise)[np.isfinite(np.ravel(noise))] if noise is not None else np.zeros(0)
+        if noise.size:  # the noise marks stay on the bar
+            lo, hi = min(lo, np.quantile(noise, 0.1) / 1.2), max(hi, np.quantile(noise, 0.9) * 1.2)
+        return LogNorm(max(lo, 1e-4), max(hi, 2 * max(lo, 1e-4)))
+
+    keys = ["per_pixel", "per_pixel_beyond"] if has_noise else ["per_pixel"]
+    pixel_norm = norm_of(keys, "per_pixel_noise")
+    point_norm = norm_of(["per_point"], "per_point_noise")
+    fig, axes = plt.subplots(
+        len(rows), len(names), figsize=(3.7 * len(names) + 1.6, 3.5 * len(rows)), squeeze=False
+    )
+    lo, hi = x_i.min(axis=0) - 1.0, x_i.max(axis=0) + 1.0  # the scanned area
+    cmap = pyplot().get_cmap("magma").with_extremes(under="black", bad="0.85")
+    mappables = {}
+    for j, name in enumerate(names):
+        e = errors[name]
+        h, w = e.grid.shape
+        ext = [
+            e.grid.origin[0],
+            e.grid.origin[0] + w * e.grid.pitch,
+            e.grid.origin[1],
+            e.grid.origin[1] + h * e.grid.pitch,
+        ]
+        for row, key in enumerate(rows):
+            ax = axes[row][j]
+            vals = getattr(e, key)
+            if key == "per_point":
+                im = point_map(ax, x_i, np.maximum(vals, 1e-12), cmap=cmap, norm=point_norm)
+                if models is not None and getattr(models[name], "n_directions", 1) > 1:
+                    draw_directions(ax, models[name], x_i)
+            else:
+                shown = np.where(np.isfinite(vals), np.maximum(vals, 1e-12), np.nan)
+                im = ax.imshow(shown, origin="lower", extent=ext, cmap=cmap, norm=pixel_norm)
+                ax.set_xlabel("x [mm]")
+                ax.set_ylabel("y [mm]")
+            ax.set_xlim(lo[0], hi[0])
+            ax.set_ylim(lo[1], hi[1])
+            if j > 0:
+                ax.set_ylabel("")
+            head = f"{name}\n" if row == 0 else ""
+            ax.set_title(head + titles[key].format(r=e.map_radius, e=100 * e.rel_l2), fontsize=9)
+            mappables[key] = im
+    first = errors[names[0]]
+    for row, key in enumerate(rows):
+        noise = first.per_point_noise if key == "per_point" else first.per_pixel_noise
+        label = "relative L2 error" + (" (black: within noise)" if key.endswith("beyond") else "")
+        finite = None if noise is None else np.ravel(noise)[np.isfinite(np.ravel(noise))]
+        if finite is not None and finite.size:
+            label += f"\ncyan: truth's noise, median {100 * np.median(finite):.1f} %"
+        cb = fig.colorbar(mappables[key], ax=axes[row].tolist(), shrink=0.85, extend="both", label=label)
+        if finite is not None:
+            mark_noise(cb, finite)
+    save_figure(fig, Path(path))
+
+
+def plot_error_ratios(
+    errors: dict[str, PlanarErrors], x_i: np.ndarray, path, models: dict | None = None
+) -> None:
+    """Per incident point, each model's error over the first model's (same reference, so the reference's
+    noise is in both): below 1 (blue) the model is closer to the reference there; log colour scale 1/3–3."""
+    plt = pyplot()
+    from matplotlib.colors import LogNorm  # matplotlib is loaded by pyplot() above
+
+    names = list(errors)
+    base = names[0]
+    others = names[1:]
+    fig, axes = plt.subplots(
+        1, max(len(others), 1), figsize=(4.0 * max(len(others), 1) + 1.2, 3.9), squeeze=False
+    )
+    norm = LogNorm(1 / 3, 3)
+    im = None
+    for ax, name in zip(axes[0], others):
+        with np.errstate(divide="ignore", invalid="ignore"):
+            ratio = errors[name].per_point / errors[base].per_point
+        im = point_map(ax, x_i, ratio, cmap="RdBu_r", norm=norm)
+        med = np.nanmedian(ratio) if np.isfinite(ratio).any() else np.nan
+        ax.set_title(f"{name} / {base}, per incident point\n(median {med:.2f})", fontsize=9)
+        if models is not None and getattr(models[name], "n_directions", 1) > 1:
+            draw_directions(ax, models[name], x_i, colour="k")
+    if im is not None:
+        fig.colorbar(im, ax=axes[0].tolist(), shrink=0.85, extend="both", label=f"relative error / {base}'s")
+    else:
+        axes[0][0].set_visible(False)
+    save_figure(fig, Path(path))

@@ -1,0 +1,11 @@
+"""Short names of fitted models, as the report, its figures and the command line show them."""
+
+from __future__ import annotations
+
+
+def model_label(model) -> str:
+    """A short name: 'iso n=3 (shared colour)', 'aniso m=8 n=3', 'dipole', 'burley'."""
+    if model.kind != "exponential":
+        return model.kind
+    shape = "iso" if model.n_directions == 1 else f"aniso m={model.n_directions}"
+    return f"{shape} n={model.n_terms}" + (" (shared colour)" if model.colour == "shared" else "")

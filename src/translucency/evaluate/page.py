@@ -1,0 +1,107 @@
+"""The report's HTML page: the summary's table, the definitions and every figure side by side."""
+
+from __future__ import annotations
+
+import html
+from pathlib import Path
+
+import numpy as np
+
+from ..io.atomic import atomic_path
+from ..io.dataset import PlanarDataset
+
+
+def _percent(v) -> str:
+    return "–" if v is None or not np.isfinite(v) else f"{100 * v:.2f} %"
+
+
+def write_page(path: Path, ds: PlanarDataset, summary: dict, extra: list) -> None:
+    held_out = summary.get("truth") is not None
+    rows = []
+    for name, s in summary["models"].items():
+        cells = "".join(
+            f"<td>{_percent(s[k])}</td>" for k in ("rel_l2", "rel_l2_near", "rel_l2_mid", "rel_l2_far")
+        )
+        if held_out:
+            b = s.get("beyond_noise") or {}
+            cells += f"<td>{_percent(b.get('all'))}</td><td>{_percent(b.get('near'))}</td>"
+        en = s["energy_error"]
+        cells += "".join(f"<td>{_percent(en.get(k))}</td>" for k in ("near", "mid", "total"))
+        if held_out:
+            cells += f"<td>{_percent(s['in_sample']['rel_l2'])}</td>"
+        ph = s["physics"]
+        unphysical = len(set(ph["over_albedo"]) | set(ph["beyond_object"]))
+        max_rho = ph["max_total_reflectance"]
+        rows.append(
+            f"<tr><th>{html.escape(name)}</th>{cells}<td>{len(s['flagged_points'])}</td>"
+            f"<td>{unphysical} (max ρ {'–' if max_rho is None else f'{max_rho:.3g}'})</td></tr>"
+        )
+    first = next(iter(summary["models"].values()))
+    nf, ne = first["noise_floor"], first.get("energy_noise") or {}
+    noise_cells = "".join(f"<td>{_percent(nf.get(k))}</td>" for k in ("all", "near", "mid", "far"))
+    if held_out:
+        noise_cells += "<td>0</td><td>0</td>"
+    noise_cells += f"<td>{_percent(ne.get('near'))}</td><td>{_percent(ne.get('mid'))}</td><td></td>"
+    if held_out:
+        noise_cells += f"<td>{_percent(first['in_sample']['noise_floor']['all'])}</td>"
+    noise_cells += "<td></td><td></td>"
+    noise_label = "the truth's own noise" if held_out else "measurement noise alone"
+    against = (
+        f"an independent acquisition of the same sample and incident points "
+        f"(<code>{html.escape(summary['truth'])}</code>); 'in-sample' is against the fitted data"
+        if held_out
+        else "the data the models were fitted to (in-sample: a model that fits noise scores well here)"
+    )
+    own_noise = "The last row's in-sample cell is the fitted data's own noise." if held_out else ""
+    beyond_head = "<th>beyond noise, all</th><th>beyond noise, near</th>" if held_out else ""
+    in_head = "<th>in-sample, all</th>" if held_out else ""
+    defs = "".join(
+        f"<li><b>{html.escape(k)}</b>: {html.escape(v)}</li>" for k, v in summary["definition"].items()
+    )
+    figures = "".join(
+        f'<figure><img src="{html.escape(f)}"><figcaption>{html.escape(c)}</figcaption></figure>'
+        for f, c in extra
+    )
+    fine = summary.get("fine_profiles")
+    fine_text = (
+        ""
+        if not fine
+        else f" The lower two rows: the truth on {fine['bin_mm']:g} mm rings ({fine['photons']:,} photons "
+        "per point and channel) against each model's ring means — the fits saw r ≥ the dotted line only."
+    )
+    page = f"""<!doctype html><html><head><meta charset="utf-8"><title>translucency report</title>
+<style>body{{font-family:sans-serif;max-width:1500px;margin:auto}} table{{border-collapse:collapse}}
+td,th{{border:1px solid #ccc;padding:4px 8px;text-align:right}} img{{max-width:100%}}</style></head><body>
+<h1>Planar fit report</h1>
+<p>{html.escape(summary["written_by"])}, {html.escape(summary["date"])}; command
+<code>{html.escape(summary["command_line"])}</code>. Paths are relative to this page's folder.</p>
+<p>Data set: <code>{html.escape(summary["dataset"])}</code> — {ds.n_points} incident points,
+windows {ds.window[0]}×{ds.window[1]} px at {ds.pitch} mm.</p>
+<h2>Errors</h2><p>Against {against}. Relative, RGB summed.</p>
+<table><tr><th>model</th><th>all</th><th>near &lt; 1 mm</th><th>mid 1–4 mm</th><th>far &gt; 4 mm</th>
+{beyond_head}<th>energy, near</th><th>energy, mid</th><th>total reflectance per point</th>{in_head}
+<th>flagged points</th><th>unphysical points (ρ &gt; 1 or r<sub>99.9</sub> beyond the sample)</th></tr>
+{"".join(rows)}
+<tr><th>{noise_label}</th>{noise_cells}</tr></table>
+<p style="font-size:90%">{own_noise}</p>
+<ul style="font-size:90%">{defs}</ul>
+<figure><img src="profiles.png"><figcaption>Figure 1 (left): ring-averaged R_d around chosen incident points
+(green channel), log scale; beneath each, model / truth − 1 with the truth's ±1σ noise band (grey).{fine_text}
+</figcaption></figure>
+<figure><img src="error_maps.png"><figcaption>Figure 1 (right): relative error per outgoing pixel (pairs
+within 4 mm), the same beyond the truth's noise (black: within the noise), and per incident point; one
+logarithmic colour scale per row, shared across models, set by the data; the truth's noise marked on each
+colour bar (cyan line: its median, cyan band: 10–90 %). Segments on an anisotropic model's map: its fitted
+direction of farthest spread, length ∝ (rms radius along / across − 1).</figcaption></figure>
+<figure><img src="error_ratios.png"><figcaption>Each model's error per incident point over the first
+model's (blue: lower, red: higher; the reference's noise is in both), with an anisotropic model's fitted
+directions.</figcaption></figure>
+<figure><img src="alpha.png"><figcaption>Modulation texture α (dimensionless), one colour scale.
+</figcaption></figure>
+<figure><img src="params.png"><figcaption>Parameters of every model over the incident points, with units
+(G: green channel).</figcaption></figure>
+{figures}
+</body></html>
+"""
+    with atomic_path(path) as tmp:
+        tmp.write_text(page)
