@@ -266,7 +266,9 @@ def test_corrections_undo_dark_flat_and_vignetting(tmp_path, rng):
 
 
 def test_variance_follows_the_noise_model(tmp_path, rng):
-    from translucency.rig.importer import Shot, load_frame, resample_window
+    from translucency.rig.frames import load_frame
+    from translucency.rig.positions import Shot
+    from translucency.rig.resample import resample_window
 
     H = CAMERA.homography()
     setup = ImportSetup(pitch=0.5, window=2.0, supersample=3)
@@ -746,7 +748,7 @@ def test_beam_correction_undoes_a_disc_beam():
     """A 0.25 mm uniform disc beam, convolved numerically with the analytic profile() (not the
     second-order model the correction uses), raises R_d by 1–5 % at 0.75–2 mm; corrected by the beam's
     second moment (b²/2) it is back within a quarter of that."""
-    from translucency.rig.importer import beam_correction
+    from translucency.rig.beam import beam_correction
 
     setup = ImportSetup(pitch=0.1, window=4.1, beam_rms=0.25 / np.sqrt(2.0))
     n = setup.window_pixels()

@@ -7,6 +7,7 @@ and of mesh data (:func:`fit_mesh`) build on it, sharing one alternation
 """
 
 from ._alternation import FitResult, check_fit_options
+from ._varpro import fit_exponentials_batched
 from .mesh import fit_mesh
 from .planar import PlanarFit, fit_planar
 from .profile import ProfileFit, fit_burley_profile, fit_dipole_profile, fit_exponential_profile
@@ -19,6 +20,7 @@ __all__ = [
     "fit_burley_profile",
     "fit_dipole_profile",
     "fit_exponential_profile",
+    "fit_exponentials_batched",
     "fit_mesh",
     "fit_planar",
 ]
