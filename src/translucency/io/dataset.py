@@ -29,7 +29,6 @@ from __future__ import annotations
 
 import json
 import warnings
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -38,6 +37,7 @@ from zarr.codecs import BloscCodec
 
 from .._validate import TranslucencyError, as_float_array
 from .._version import __version__
+from ._store import ChunkedStore
 from .outputs import claim_output, reopen_or_clear
 
 FORMAT = "translucency-dataset"
@@ -46,17 +46,12 @@ HEADER_KEY = "translucency_dataset"
 _ARRAYS = ("x_i", "window_origin", "R_d", "variance", "mask", "specular", "total_diffuse", "chunk_done")
 
 
-@dataclass
-class PlanarDataset:
+class PlanarDataset(ChunkedStore):
     """An opened data set; arrays are read lazily from the Zarr group."""
 
-    path: Path
-    header: dict
-    group: object
-
-    @property
-    def n_points(self) -> int:
-        return int(self.header["n_points"])
+    ARRAYS = _ARRAYS
+    PER_POINT = ("R_d", "variance", "mask", "specular", "total_diffuse")
+    ROW = "incident point"
 
     @property
     def pitch(self) -> float:
@@ -66,60 +61,15 @@ class PlanarDataset:
     def window(self) -> tuple[int, int]:
         return tuple(self.header["window"])
 
-    def __getitem__(self, key: str) -> np.ndarray:
-        if key not in _ARRAYS:
-            raise KeyError(key)
-        return self.read(key)
+    @property
+    def chunk_points(self) -> int:
+        return int(self.header["chunk_points"])
 
-    def read(self, key: str, s: int | None = None, e: int | None = None) -> np.ndarray:
-        """Points s..e of an array (all by default); a chunk that cannot be decoded is one line naming it."""
-        try:
-            return np.asarray(self.group[key][s:e])
-        except Exception as exc:  # noqa: BLE001 — codec and I/O faults are the file's, said in one line
-            first = 0 if s is None else s
-            raise TranslucencyError(
-                f"{self.path}: array {key!r} near incident point {first} cannot be read "
-                f"({type(exc).__name__}: {str(exc).splitlines()[0][:80]}); "
-                "re-run the acquisition to repair it"
-            ) from None
-
-    def complete(self) -> bool:
-        return bool(np.all(self["chunk_done"])) and not self.damaged_chunks(decode=False)
-
-    def damaged_chunks(self, *, decode: bool = True) -> dict:
-        """Chunks of points whose data are missing or do not decode: {array name: [chunk index, ...]}.
-
-        A chunk file that is absent reads as zeros in Zarr, silently; this looks for every chunk of every
-        per-point array of a finished chunk of points and (``decode``) decodes it.
-        """
-        k = int(self.header["chunk_points"])
-        try:
-            done = np.flatnonzero(np.asarray(self.group["chunk_done"][...]))
-        except Exception:  # noqa: BLE001 — the done flags themselves do not decode: every chunk is suspect
-            return {"chunk_done": list(range(-(-self.n_points // k)))}
-        bad: dict = {}
-        for name in ("R_d", "variance", "mask", "specular", "total_diffuse"):
-            arr = self.group[name]
-            # chunks holding only the fill value may be absent by design in older stores (Zarr does not
-            # write them); R_d and the mask of a finished chunk never are, nor any chunk of a store
-            # written with every chunk as a file (its header says so)
-            expect_file = name in ("R_d", "mask") or self.header.get("chunk_files") == "every"
-            per = int(arr.chunks[0])  # points per stored chunk of this array
-            for c in done:
-                lo, hi = c * k, min(self.n_points, (c + 1) * k)
-                keys = range(lo // per, -(-hi // per))
-                rest = "/0" * (len(arr.shape) - 1)
-                missing = expect_file and any(
-                    not (self.path / name / "c" / f"{j}{rest}").is_file() for j in keys
-                )
-                if not missing and decode:
-                    try:
-                        arr[lo:hi]
-                    except Exception:  # noqa: BLE001 — a chunk that does not decode is damaged
-                        missing = True
-                if missing:
-                    bad.setdefault(name, []).append(int(c))
-        return bad
+    def _expects_files(self, name: str) -> bool:
+        # chunks holding only the fill value may be absent by design in older stores (Zarr does not
+        # write them); R_d and the mask of a finished chunk never are, nor any chunk of a store
+        # written with every chunk as a file (its header says so)
+        return name in ("R_d", "mask") or self.header.get("chunk_files") == "every"
 
 
 def create_dataset(path, header: dict, *, overwrite: bool = False, inputs=(), resume: bool = True):
@@ -144,9 +94,9 @@ def create_dataset(path, header: dict, *, overwrite: bool = False, inputs=(), re
         resume=resume,
     )
     if old is not None:  # the same acquisition: resume, and redo the chunks whose data are damaged
-        damaged = sorted({c for chunks in old.damaged_chunks().values() for c in chunks})
-        for c in damaged:
-            old.group["chunk_done"][c] = False
+        damaged = sorted({chunk for chunks in old.damaged_chunks().values() for chunk in chunks})
+        for chunk in damaged:
+            old.group["chunk_done"][chunk] = False
         if damaged:
             warnings.warn(
                 f"{path}: chunks {damaged} were missing or damaged; acquiring them again", stacklevel=2

@@ -24,7 +24,6 @@ from __future__ import annotations
 
 import json
 import warnings
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -33,6 +32,7 @@ import zarr
 from zarr.codecs import BloscCodec
 
 from .._validate import TranslucencyError
+from ._store import ChunkedStore
 from .dataset import summary_of_store
 from .outputs import reopen_or_clear
 
@@ -43,50 +43,26 @@ _SURFACE = ("vertices", "faces", "normals", "vertex_area", "incident")
 _ARRAYS = ("vertices", "faces", "normals", "vertex_area", "incident", "R_d", "specular", "chunk_done")
 
 
-@dataclass
-class MeshDataset:
-    """An opened mesh data set; arrays are read lazily from the Zarr group."""
+class MeshDataset(ChunkedStore):
+    """An opened mesh data set; arrays are read lazily from the Zarr group.
 
-    path: Path
-    header: dict
-    group: object
+    For every finished chunk of points :meth:`damaged_chunks` looks for the ``R_d`` file (every chunk
+    written is a file: ``write_empty_chunks``) and (``decode``) decodes ``R_d`` and ``specular``; the
+    arrays of the surface (vertices, faces, normals, areas, incident vertices) are listed as chunk 0
+    when they are missing or do not decode.
+    """
 
-    @property
-    def n_points(self) -> int:
-        return int(self.header["n_points"])
-
-    def __getitem__(self, key: str) -> np.ndarray:
-        if key not in _ARRAYS:
-            raise KeyError(key)
-        return self.read(key)
-
-    def read(self, key: str, s: int | None = None, e: int | None = None) -> np.ndarray:
-        """Rows s..e of an array (all by default); a chunk that cannot be decoded is one line naming it."""
-        try:
-            return np.asarray(self.group[key][s:e])
-        except Exception as exc:  # noqa: BLE001 — codec and I/O faults are the file's, said in one line
-            raise TranslucencyError(
-                f"{self.path}: array {key!r} near row {0 if s is None else s} cannot be read "
-                f"({type(exc).__name__}: {(str(exc).splitlines() or [''])[0][:80]}); "
-                "re-run the acquisition to repair it"
-            ) from None
+    ARRAYS = _ARRAYS
+    PER_POINT = ("R_d", "specular")
 
     @property
     def chunk_points(self) -> int:
         return int(self.group["R_d"].chunks[0])
 
-    def complete(self) -> bool:
-        """Every chunk of points finished, and none of their files missing (see :meth:`damaged_chunks`)."""
-        return bool(np.all(self["chunk_done"])) and not self.damaged_chunks(decode=False)
+    def _expects_files(self, name: str) -> bool:
+        return name == "R_d"
 
-    def damaged_chunks(self, *, decode: bool = True) -> dict:
-        """Chunks whose data are missing or do not decode: {array name: [chunk index, ...]}.
-
-        A chunk file that is absent reads as zeros in Zarr, silently.  For every finished chunk of points
-        this looks for the ``R_d`` file (every chunk written is a file: ``write_empty_chunks``) and
-        (``decode``) decodes ``R_d`` and ``specular``; the arrays of the surface (vertices, faces,
-        normals, areas, incident vertices) are listed as chunk 0 when they are missing or do not decode.
-        """
+    def _damaged_whole(self, decode: bool) -> dict:
         bad: dict = {}
         for name in _SURFACE:
             arr = self.group[name]
@@ -98,29 +74,6 @@ class MeshDataset:
                     arr[...]
                 except Exception:  # noqa: BLE001 — a chunk that does not decode is damaged
                     bad[name] = [0]
-        k = self.chunk_points
-        try:
-            done = np.flatnonzero(np.asarray(self.group["chunk_done"][...]))
-        except Exception:  # noqa: BLE001 — the done flags do not decode: every chunk is suspect
-            bad["chunk_done"] = list(range(-(-self.n_points // k)))
-            return bad
-        for name in ("R_d", "specular"):
-            arr = self.group[name]
-            per = int(arr.chunks[0])
-            for c in done:
-                lo, hi = c * k, min(self.n_points, (c + 1) * k)
-                rest = "/0" * (len(arr.shape) - 1)
-                missing = name == "R_d" and any(
-                    not (self.path / name / "c" / f"{j}{rest}").is_file()
-                    for j in range(lo // per, -(-hi // per))
-                )
-                if not missing and decode:
-                    try:
-                        arr[lo:hi]
-                    except Exception:  # noqa: BLE001 — a chunk that does not decode is damaged
-                        missing = True
-                if missing:
-                    bad.setdefault(name, []).append(int(c))
         return bad
 
     def mesh(self) -> trimesh.Trimesh:
@@ -216,9 +169,11 @@ def create_mesh_dataset(
         for name in _SURFACE:
             if name in damaged:  # written whole at creation: write it again
                 old.group[name].with_config({"write_empty_chunks": True})[...] = surface[name]
-        chunks = sorted({c for name in ("R_d", "specular", "chunk_done") for c in damaged.get(name, [])})
-        for c in chunks:
-            old.group["chunk_done"][c] = False
+        chunks = sorted(
+            {chunk for name in ("R_d", "specular", "chunk_done") for chunk in damaged.get(name, [])}
+        )
+        for chunk in chunks:
+            old.group["chunk_done"][chunk] = False
         if damaged:
             warnings.warn(
                 f"{path}: {', '.join(f'{k} chunks {v}' for k, v in damaged.items())} were missing or "
