@@ -88,10 +88,11 @@ def material_profiles(mat: Material, r=None, n_terms: int = 3) -> MaterialProfil
     dipole = dipole_R_d(r[:, None], mat.sigma_a, mat.sigma_s_prime, mat.eta)
     total = dipole_total_reflectance(mat.sigma_a, mat.sigma_s_prime, mat.eta)
     s0 = burley_shape(total, mat.mean_free_path)
-    burley_fits = [fit_burley_profile(r, dipole[:, ch], A0=total[ch], s0=s0[ch]) for ch in range(3)]
+    # per colour channel c
+    burley_fits = [fit_burley_profile(r, dipole[:, c], A0=total[c], s0=s0[c]) for c in range(3)]
     A, s = (np.array([f[j] for f in burley_fits]) for j in (0, 1))
     burley = burley_R(r[:, None], A, s)
-    fits = [fit_exponential_profile(r, dipole[:, ch], n_terms) for ch in range(3)]
+    fits = [fit_exponential_profile(r, dipole[:, c], n_terms) for c in range(3)]
     expo = np.stack([f(r) for f in fits], axis=1)
     return MaterialProfiles(mat, r, dipole, burley, expo, fits, total, A, s)
 

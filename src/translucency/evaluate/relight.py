@@ -118,8 +118,8 @@ def relight(
         rows, cols = np.broadcast_arrays(rows, cols)
         ok = (rows >= 0) & (rows < h) & (cols >= 0) & (cols < w)
         flat = rows[ok] * w + cols[ok]
-        for ch in range(3):
-            B[..., ch] += np.bincount(flat, contrib[..., ch][ok], minlength=h * w).reshape(h, w)
+        for channel in range(3):
+            B[..., channel] += np.bincount(flat, contrib[..., channel][ok], minlength=h * w).reshape(h, w)
     return B
 
 

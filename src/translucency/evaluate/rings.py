@@ -32,8 +32,8 @@ def ring_stats(window: np.ndarray, variance: np.ndarray | None, pitch: float):
     sums = np.bincount(ring, window.ravel(), minlength=n)[:n]
     var = np.zeros(n) if variance is None else np.bincount(ring, variance.ravel(), minlength=n)[:n]
     keep = (np.arange(n) >= 1) & (cnt > 0)
-    c = cnt[keep]
-    return np.arange(n)[keep] * pitch, sums[keep] / c, np.sqrt(var[keep]) / c
+    count = cnt[keep]
+    return np.arange(n)[keep] * pitch, sums[keep] / count, np.sqrt(var[keep]) / count
 
 
 def model_rings(model, point: int, edges: np.ndarray, channel: int = 1, samples: int = 8, angles: int = 64):
