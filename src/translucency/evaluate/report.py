@@ -7,11 +7,16 @@ writes, into a directory:
                      every model, log scale (Figure 1, left);
 ``error_maps.png``   relative error per outgoing pixel and per incident point of
                      every model, one colour scale with a colour bar (Figure 1, right);
+``error_ratios.png`` each model's error per incident point over the first model's;
 ``alpha.png``        the modulation texture α of every model;
 ``params.png``       maps of the first model's parameters over the incident points;
 ``report.json``      rel_l2 overall and per band (near < 1 mm, mid 1–4 mm, far > 4 mm),
                      noise floors, flagged points, per model;
 ``index.html``       all of it side by side.
+
+This module puts the report together; the figures are drawn in :mod:`.profile_figure`,
+:mod:`.error_maps` and :mod:`.model_maps`, the numbers summed up in :mod:`.summary` and the page
+written in :mod:`.page`.
 """
 
 from __future__ import annotations
