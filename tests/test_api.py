@@ -152,3 +152,34 @@ def test_fit_dispatches_on_the_data_set(tmp_path):
     assert result.model.geometry == "planar" and result.model.n_points == 1
     errors = tl.evaluate(result, ds)
     assert np.isfinite(errors.rel_l2) and errors.rel_l2 == tl.evaluate(result.model, ds.path).rel_l2
+
+
+def test_acquire_fit_and_render_an_object(tmp_path):
+    import trimesh
+
+    ball = trimesh.creation.icosphere(2, radius=4.0)
+    ds = tl.acquire_mesh(
+        ball,
+        tmp_path / "ball.zarr",
+        "homogeneous:marble",
+        voxel_mm=1.0,
+        points=4,
+        photons=300,
+        index_matched=True,
+    )
+    assert type(ds).__name__ == "MeshDataset" and ds.n_points == 4
+    assert type(tl.open_dataset(ds.path)).__name__ == "MeshDataset"
+    result = tl.fit(ds, max_rounds=1)
+    assert result.model.geometry == "mesh" and result.model.n_points == 4
+    shown = tl.render(result, size=(16, 12))
+    assert shown.picture.shape == (12, 16, 3) and np.isfinite(shown.picture).all() and shown.picture.max() > 0
+    assert (
+        shown.folder is None and shown.reference is None and shown.numbers["vertices"] == len(ball.vertices)
+    )
+    kept = tl.render(result, tmp_path / "r", size=(16, 12))
+    assert kept.folder == tmp_path / "r" and (tmp_path / "r" / "ours.exr").is_file()
+    np.testing.assert_array_equal(kept.picture, shown.picture)
+    with pytest.raises(tl.TranslucencyError, match="pass overwrite=True"):
+        tl.render(result, tmp_path / "r", size=(16, 12))
+    with pytest.raises(tl.TranslucencyError, match="^model: a per-vertex model; evaluate computes planar"):
+        tl.evaluate(result, ds)
