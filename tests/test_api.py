@@ -183,3 +183,14 @@ def test_acquire_fit_and_render_an_object(tmp_path):
         tl.render(result, tmp_path / "r", size=(16, 12))
     with pytest.raises(tl.TranslucencyError, match="^model: a per-vertex model; evaluate computes planar"):
         tl.evaluate(result, ds)
+
+
+def test_acquire_planar_then_fit(tmp_path):
+    slab = tl.make_sample("marble", (6.0, 6.0, 2.0), 1.0)
+    with pytest.raises(tl.TranslucencyError, match="^grid: must be >= 1, got 0$"):
+        tl.acquire_planar(slab, tmp_path / "d.zarr", grid=0)
+    ds = tl.acquire_planar(slab, tmp_path / "d.zarr", grid=1, span=0.0, window=2.0, photons=100)
+    assert ds.n_points == 1 and ds.window == (9, 9) and ds.header["acquisition"]["photons"] == 100
+    with pytest.raises(tl.TranslucencyError, match="pass overwrite=True"):
+        tl.acquire_planar(slab, tmp_path / "d.zarr", grid=1, span=0.0, window=2.0, photons=200)
+    assert tl.fit(tmp_path / "d.zarr", max_rounds=1).model.n_points == 1

@@ -192,13 +192,13 @@ def acquire_planar(
     >>> ds = tl.acquire_planar(slab, tempfile.mkdtemp() + "/d.zarr", grid=2, span=2.0, window=2.0,
     ...                        photons=200)  # doctest: +SKIP
     >>> ds.n_points, ds.window  # doctest: +SKIP
-    (4, (8, 8))
+    (4, (9, 9))
     """
     out = _path("out", out)
     volume = _sample("sample", sample)
     setup = PlanarSetup(
-        grid=_pair("grid", grid, int),
-        span=_pair("span", span, float),
+        grid=_pair("grid", grid, lambda v: _count("grid", v)),
+        span=_pair("span", span, lambda v: float(check_option("span", v, lo=0))),
         pitch=float(check_option("pitch", pitch, lo=0, open_lo=True)),
         window=float(check_option("window", window, lo=0, open_lo=True)),
         photons=_count("photons", photons),
@@ -276,7 +276,7 @@ def acquire_mesh(
         mesh = load_mesh(mesh, scale_mm=scale_mm, up=up)
     elif not hasattr(mesh, "vertices") or not hasattr(mesh, "faces"):
         raise TranslucencyError(f"mesh: expected a trimesh.Trimesh or a mesh file, got {type(mesh).__name__}")
-    if isinstance(sample, str) and not Path(sample).suffix == ".npz":
+    if isinstance(sample, str) and Path(sample).suffix != ".npz":
         check_option("voxel_mm", voxel_mm, lo=0, open_lo=True)
         check_option("g", g, lo=-1, hi=1, open_lo=True, open_hi=True)
         volume = object_volume(sample, mesh, float(voxel_mm), g=float(g), seed=_count("seed", seed, lo=0))
@@ -474,7 +474,7 @@ def _model_and_record(name: str, model) -> tuple[object, dict]:
     if isinstance(model, (str, os.PathLike)):
         meta = read_header(model).get("meta", {})
         return load_model(model), meta if isinstance(meta, dict) else {}
-    if not hasattr(model, "R_d_window") and not hasattr(model, "alpha"):
+    if not all(hasattr(model, a) for a in ("alpha", "n_points", "geometry")):
         raise TranslucencyError(
             f"{name}: expected a model, a FitResult or a model file, got {type(model).__name__}"
         )
