@@ -82,7 +82,9 @@ def test_stage_modules_do_not_replace_the_functions():
         assert getattr(tl, name).__doc__ and "Examples" in getattr(tl, name).__doc__
     # the stage stays importable; only the attribute chain ``translucency.fit.planar`` is the function's
     assert sys.modules["translucency.fit"].fit_planar is sys.modules["translucency.fit.planar"].fit_planar
-    assert set(tl.WORKFLOW) <= set(dir(tl)) and set(tl.WORKFLOW) <= set(tl.__all__)
+    api = {"acquire_planar", "acquire_mesh", "open_dataset", "fit", "evaluate", "render", "import_images"}
+    assert api <= set(dir(tl)) and api <= set(tl.__all__)
+    assert not {"prepare_libllvm", "sys", "types"} & set(dir(tl))
 
 
 def test_open_dataset_opens_either_kind(tmp_path):

@@ -15,8 +15,8 @@ The workflow as functions (:mod:`translucency.workflow`, loaded on first use)::
 modules (``from translucency.fit import fit_planar``).
 """
 
-import sys
-import types
+import sys as _sys
+import types as _types
 
 from . import data
 from ._validate import TranslucencyError
@@ -34,7 +34,7 @@ from .model import (
 )
 
 #: the workflow's functions, loaded from :mod:`translucency.workflow` when first used
-WORKFLOW = (
+_WORKFLOW = (
     "acquire_planar",
     "acquire_mesh",
     "open_dataset",
@@ -59,13 +59,13 @@ __all__ = [
     "MATERIALS",
     "material",
     "data",
-    *WORKFLOW,
+    *_WORKFLOW,
     "__version__",
 ]
 
 
 def __getattr__(name: str):
-    if name in WORKFLOW:
+    if name in _WORKFLOW:
         from . import workflow  # heavy: the stages load Dask, Matplotlib and Mitsuba's wrappers
 
         value = getattr(workflow, name)
@@ -75,18 +75,18 @@ def __getattr__(name: str):
 
 
 def __dir__():
-    return sorted({*globals(), *WORKFLOW})
+    return sorted({*__all__, *(k for k in globals() if not k.startswith("_"))})
 
 
-class _Package(types.ModuleType):
+class _Package(_types.ModuleType):
     """The package's module: importing the stage ``translucency.fit`` (``.evaluate``, ``.render``) does
     not replace the function of that name here (the stage stays in ``sys.modules`` and importable)."""
 
     def __setattr__(self, name, value):
-        if name in WORKFLOW and isinstance(value, types.ModuleType):
+        if name in _WORKFLOW and isinstance(value, _types.ModuleType):
             return
         super().__setattr__(name, value)
 
 
-sys.modules[__name__].__class__ = _Package
+_sys.modules[__name__].__class__ = _Package
 _prepare_libllvm()  # before any import of Mitsuba or Dr.Jit in this process (theirs or ours)
