@@ -98,5 +98,5 @@ def test_acquire_mesh_with_a_users_volume(tmp_path):
 def test_a_mesh_in_metres_is_warned_about(tmp_path):
     path = tmp_path / "small.ply"
     trimesh.creation.icosphere(2, radius=0.04).export(path)  # an 8 cm ball written in metres
-    with pytest.warns(UserWarning, match="--scale 1000 if it is in metres"):
+    with pytest.warns(UserWarning, match="scale_mm=1000 if it is in metres"):
         load_mesh(path)

@@ -1,15 +1,28 @@
 """translucency — measure, fit, evaluate and render heterogeneous translucent materials
 with the empirical subsurface-scattering model of Fuchs, Goesele, Chen and Seidel.
 
-Pipeline: :mod:`translucency.model` → acquire → :mod:`translucency.fit` →
-:mod:`translucency.evaluate` → render, with :mod:`translucency.io` and
-:mod:`translucency.cli` beside.  Units: mm, R_d in mm⁻², σ in mm⁻¹, linear RGB.
+Pipeline: :mod:`translucency.model` → acquire → fit → evaluate → render, with :mod:`translucency.io`
+and :mod:`translucency.cli` beside.  Units: mm, R_d in mm⁻², σ in mm⁻¹, linear RGB.
+
+The workflow as functions (:mod:`translucency.workflow`, loaded on first use)::
+
+    import translucency as tl
+    data = tl.data.default_dataset()
+    result = tl.fit(data, "iso")
+    print(tl.evaluate(result, data, truth=tl.data.default_truth()).rel_l2)
+
+``tl.fit``, ``tl.evaluate`` and ``tl.render`` are the functions; their stages stay importable as
+modules (``from translucency.fit import fit_planar``).
 """
 
+import sys as _sys
+import types as _types
+
+from . import data
 from ._validate import TranslucencyError
 from ._version import __version__
 from .io.model_file import ModelFileError, load_model, save_model
-from .mitsuba._engine import prepare_libllvm
+from .mitsuba import prepare_libllvm as _prepare_libllvm
 from .model import (
     MATERIALS,
     BurleyModel,
@@ -18,6 +31,19 @@ from .model import (
     PlanarAlpha,
     VertexAlpha,
     material,
+)
+
+#: the workflow's functions, loaded from :mod:`translucency.workflow` when first used
+_WORKFLOW = (
+    "acquire_planar",
+    "acquire_mesh",
+    "open_dataset",
+    "fit",
+    "evaluate",
+    "render",
+    "import_images",
+    "make_sample",
+    "Rendering",
 )
 
 __all__ = [
@@ -32,7 +58,35 @@ __all__ = [
     "VertexAlpha",
     "MATERIALS",
     "material",
+    "data",
+    *_WORKFLOW,
     "__version__",
 ]
 
-prepare_libllvm()  # before any import of Mitsuba or Dr.Jit in this process (theirs or ours)
+
+def __getattr__(name: str):
+    if name in _WORKFLOW:
+        from . import workflow  # heavy: the stages load Dask, Matplotlib and Mitsuba's wrappers
+
+        value = getattr(workflow, name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted({*__all__, *(k for k in globals() if not k.startswith("_"))})
+
+
+class _Package(_types.ModuleType):
+    """The package's module: importing the stage ``translucency.fit`` (``.evaluate``, ``.render``) does
+    not replace the function of that name here (the stage stays in ``sys.modules`` and importable)."""
+
+    def __setattr__(self, name, value):
+        if name in _WORKFLOW and isinstance(value, _types.ModuleType):
+            return
+        super().__setattr__(name, value)
+
+
+_sys.modules[__name__].__class__ = _Package
+_prepare_libllvm()  # before any import of Mitsuba or Dr.Jit in this process (theirs or ours)

@@ -88,17 +88,18 @@ def as_index_array(name: str, value, n: int) -> np.ndarray:
 def check_option(name: str, value, *, lo=None, hi=None, open_lo: bool = False, open_hi: bool = False):
     """A number given on the command line or to an API boundary: finite and within [lo, hi].
 
-    ``open_lo``/``open_hi`` exclude the bound itself.  Raises one line naming the option, e.g.
-    ``--spp: must be >= 1, got 0``.  Returns ``value`` unchanged (None passes: "not given").
+    ``open_lo``/``open_hi`` exclude the bound itself.  Raises one line naming the option: the Python
+    argument in the library (``spp: must be >= 1, got 0``), the flag on the command line (``--spp``).
+    Returns ``value`` unchanged (None passes: "not given").
 
     Examples
     --------
-    >>> check_option("--spp", 16, lo=1)
+    >>> check_option("spp", 16, lo=1)
     16
-    >>> check_option("--eta", 0.0, lo=0, open_lo=True)
+    >>> check_option("eta", 0.0, lo=0, open_lo=True)
     Traceback (most recent call last):
     ...
-    translucency._validate.TranslucencyError: --eta: must be > 0, got 0.0
+    translucency._validate.TranslucencyError: eta: must be > 0, got 0.0
     """
     if value is None:
         return value
@@ -113,3 +114,15 @@ def check_option(name: str, value, *, lo=None, hi=None, open_lo: bool = False, o
     if hi is not None and (v >= hi if open_hi else v > hi):
         raise TranslucencyError(f"{name}: must be {'<' if open_hi else '<='} {hi:g}, got {value!r}")
     return value
+
+
+def check_undamaged(dataset) -> None:
+    """Refuse a data set with missing or undecodable chunks (``dataset.damaged_chunks()``) in one line;
+    re-running the acquisition with the same arguments repairs exactly those chunks."""
+    damaged = dataset.damaged_chunks()
+    if damaged:
+        listed = ", ".join(f"{k!r} chunks {v}" for k, v in damaged.items())
+        raise TranslucencyError(
+            f"{dataset.path}: damaged data set ({listed} missing or undecodable); the acquisition is "
+            "unfinished: re-run it with the same arguments to repair those chunks"
+        )

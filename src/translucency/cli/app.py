@@ -44,6 +44,7 @@ from ..pipeline import DEMO_FITS, run_demo
 from ..render.figure import boundary_eta, figure2, object_of_model, volume_of_dataset
 from ..render.image import Camera
 from ..render.lights import parse_light
+from ._flags import cli_words
 from ._options import scheduler_option as _scheduler_option
 from .rig import acquire_photographs_cmd, import_app
 
@@ -102,7 +103,7 @@ def user_errors(func):
     ``warning:`` line on stderr."""
 
     def one_line(message, category, *args, **kwargs):
-        text = " ".join(str(message).split())
+        text = cli_words(" ".join(str(message).split()))
         err_console.print(f"[yellow]warning:[/] {text}", highlight=False, soft_wrap=True)
 
     @functools.wraps(func)
@@ -112,7 +113,7 @@ def user_errors(func):
                 warnings.showwarning = one_line
                 return func(*args, **kwargs)
         except TranslucencyError as exc:
-            err_console.print(f"[bold red]error:[/] {exc}", highlight=False, soft_wrap=True)
+            err_console.print(f"[bold red]error:[/] {cli_words(str(exc))}", highlight=False, soft_wrap=True)
             raise typer.Exit(2) from None
 
     return wrapper

@@ -20,6 +20,7 @@ from ..cluster import parse_scheduler
 from ..io.outputs import claim_folder, claim_output
 from ..rig.calibration import load_calibration
 from ..rig.importer import ImportSetup, import_images
+from ._flags import cli_words
 from ._options import scheduler_option
 
 console = Console()
@@ -38,7 +39,7 @@ def _user_errors(func):
         try:
             return func(*args, **kwargs)
         except TranslucencyError as exc:
-            err_console.print(f"[bold red]error:[/] {exc}", highlight=False, soft_wrap=True)
+            err_console.print(f"[bold red]error:[/] {cli_words(str(exc))}", highlight=False, soft_wrap=True)
             raise typer.Exit(2) from None
 
     return wrapper

@@ -20,6 +20,8 @@ float16.
 from importlib.resources import files
 from pathlib import Path
 
+from ..io.dataset import PlanarDataset, open_dataset
+
 DATA_DIR = Path(str(files("translucency") / "data"))
 
 
@@ -36,3 +38,19 @@ def default_truth_path() -> Path:
 def default_fine_profiles_path() -> Path:
     """Path of the fine near-x_i ring profiles of Figure 1 (``.npz``)."""
     return DATA_DIR / "marble_default_fine_profiles.npz"
+
+
+def default_dataset() -> PlanarDataset:
+    """The embedded default data set, opened (1024 incident points, 33 × 33-pixel windows).
+
+    Examples
+    --------
+    >>> default_dataset().n_points
+    1024
+    """
+    return open_dataset(default_dataset_path())
+
+
+def default_truth() -> PlanarDataset:
+    """The embedded data set's held-out truth, opened (the same sample and points, independent photons)."""
+    return open_dataset(default_truth_path())

@@ -140,7 +140,7 @@ def load_mesh(path, *, scale_mm: float = 1.0, up: str = "z"):
     if not path.exists():
         raise TranslucencyError(f"{path}: no such mesh file")
     if not (np.isfinite(scale_mm) and scale_mm > 0):
-        raise TranslucencyError(f"scale: must be a positive number of mm per file unit, got {scale_mm}")
+        raise TranslucencyError(f"scale_mm: must be a positive number of mm per file unit, got {scale_mm}")
     try:
         mesh = trimesh.load(path, force="mesh", process=True)
     except Exception as exc:  # noqa: BLE001 — any parser failure is the file's fault
@@ -153,12 +153,12 @@ def load_mesh(path, *, scale_mm: float = 1.0, up: str = "z"):
     size = float(np.linalg.norm(mesh.extents)) if len(mesh.vertices) else 0.0
     if len(mesh.vertices) and not PLAUSIBLE_MM[0] <= size <= PLAUSIBLE_MM[1]:
         hint = (
-            f"--scale {1000 * scale_mm:g} if it is in metres"
+            f"scale_mm={1000 * scale_mm:g} if it is in metres"
             if size < PLAUSIBLE_MM[0]
-            else "a smaller --scale"
+            else "a smaller scale_mm"
         )
         warnings.warn(
-            f"{path}: the object is {size:.3g} mm across at --scale {scale_mm:g} mm per unit; "
+            f"{path}: the object is {size:.3g} mm across at scale_mm={scale_mm:g} mm per unit; "
             f"translucent objects are {PLAUSIBLE_MM[0]:g}–{PLAUSIBLE_MM[1]:g} mm — {hint}?",
             stacklevel=2,
         )

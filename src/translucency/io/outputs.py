@@ -14,7 +14,8 @@ The rule, for every command that writes (acquire, fit, evaluate, render, demo):
   ``zarr.json`` files and array folders); anything else found inside is kept.
 
 Every refusal is a :class:`~translucency._validate.TranslucencyError` naming the
-path, and a message recommends ``--overwrite`` only for the tool's own outputs.
+argument and the path, and a message recommends ``overwrite=True`` only for the tool's
+own outputs (the command line says ``--out`` and ``--overwrite``: :mod:`translucency.cli._flags`).
 
 Examples
 --------
@@ -26,7 +27,7 @@ Examples
 ...     claim_output(folder / "thesis.tex", "model file", overwrite=True)
 ... except TranslucencyError as exc:
 ...     print(str(exc).split(";")[0])  # doctest: +ELLIPSIS
---out /.../thesis.tex: exists and is not a translucency model file
+out /.../thesis.tex: exists and is not a translucency model file
 >>> (folder / "thesis.tex").read_text()
 'my thesis'
 """
@@ -108,7 +109,7 @@ def _within(inner: Path, outer: Path) -> bool:
 
 
 def claim_output(
-    path, kind: str, *, overwrite: bool, inputs=(), option: str = "--out", reuse: bool = False
+    path, kind: str, *, overwrite: bool, inputs=(), option: str = "out", reuse: bool = False
 ) -> bool:
     """Check that ``path`` may be written as a ``kind``; return whether an old one of that kind is there.
 
@@ -119,11 +120,11 @@ def claim_output(
     kind : str
         One of :data:`KINDS`; for data sets the other data-set kind is refused.
     overwrite : bool
-        The user's ``--overwrite``: an existing output of this kind may be replaced.
+        An existing output of this kind may be replaced.
     inputs : iterable of path
         The command's inputs: never the output, never inside it, never holding it.
     option : str
-        The option named in messages.
+        The argument named in messages (``"out"``; the command line passes its flag).
     reuse : bool
         The caller reopens an existing output of this kind (an acquisition that
         resumes): it is not refused without ``overwrite``.
@@ -182,7 +183,7 @@ def claim_output(
     if not overwrite and not reuse:
         raise TranslucencyError(
             f"{option} {path}: a {kind} written by translucency is already there; "
-            "choose another path or pass --overwrite to replace it"
+            "choose another path or pass overwrite=True to replace it"
         )
     return True
 
@@ -212,17 +213,17 @@ def remove_dataset(path) -> None:
 
 
 def reopen_or_clear(
-    path, kind: str, request: dict, opener, *, overwrite: bool, inputs=(), resume: bool = True
+    path, kind: str, request: dict, opener, *, overwrite: bool, inputs=(), resume: bool = True, option="out"
 ):
     """The resumable-output rule of the data sets: returns the one at ``path`` to resume, or None to create.
 
     A ``kind`` data set at ``path`` made with the same ``request`` is reopened (``opener(path)``) so that
     its finished chunks are kept — unless ``resume`` is False (data written whole); one made with other
     arguments is removed with ``overwrite`` (:func:`remove_dataset`) and refused without; anything else
-    is never touched (:func:`claim_output`).
+    is never touched (:func:`claim_output`; ``option`` as there).
     """
     path = Path(path)
-    if not claim_output(path, kind, overwrite=overwrite, inputs=inputs, reuse=True):
+    if not claim_output(path, kind, overwrite=overwrite, inputs=inputs, option=option, reuse=True):
         return None
     try:
         old = opener(path)
@@ -232,14 +233,14 @@ def reopen_or_clear(
         return old
     if not overwrite:
         raise TranslucencyError(
-            f"--out {path}: a {kind} made with other arguments is already there; "
-            "choose another path or pass --overwrite to replace it"
+            f"{option} {path}: a {kind} made with other arguments is already there; "
+            "choose another path or pass overwrite=True to replace it"
         )
     remove_dataset(path)
     return None
 
 
-def claim_folder(path, *, overwrite: bool, inputs=(), option: str = "--out") -> Path:
+def claim_folder(path, *, overwrite: bool, inputs=(), option: str = "out") -> Path:
     """Make ``path`` an output folder of the tool (created, or empty, or one it wrote before).
 
     A new or empty folder gets the marker file :data:`MARKER`; a folder with

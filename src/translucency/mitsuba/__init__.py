@@ -6,7 +6,7 @@ libLLVM of the ``karellen-llvm-core`` wheel, CUDA when present);
 stage that talks to Mitsuba goes through here.
 """
 
-from ._engine import drjit, engine_versions, mitsuba
+from ._engine import drjit, engine_versions, mitsuba, prepare_libllvm
 from .scenes import (
     SPOT_BEAM_FRACTION,
     load_with_mesh,
@@ -22,6 +22,7 @@ __all__ = [
     "mitsuba",
     "drjit",
     "engine_versions",
+    "prepare_libllvm",
     "rays",
     "write_ply",
     "load_with_mesh",
