@@ -19,7 +19,7 @@ per-incident-point profile of the chosen family:
 channel instead of the colour scale.)  r (mm) and θ (rad, in the sample's
 frame) of each window pixel come from :func:`translucency.geometry.window_geometry`.
 
-**Objective and alternation** (:mod:`._alternation`, shared with the mesh fit).
+**Objective and alternation** (:mod:`._chunk`, :mod:`._rounds`, shared with the mesh fit).
 Weighted least squares over every valid pair,
 
 .. math:: \Phi = \sum_{i,j,\lambda} w_{ij\lambda}^2
@@ -63,15 +63,10 @@ from .._validate import TranslucencyError
 from ..geometry import SampleGrid, window_geometry
 from ..io.dataset import PlanarDataset, open_dataset
 from ..model import PlanarAlpha
-from ._alternation import (
-    AUTO_DIRECTIONS,
-    AUTO_TERMS,
-    POOL_POINTS,
-    FitContext,
-    FitResult,
-    alternate,
-    check_fit_options,
-)
+from ._chunk import POOL_POINTS
+from ._options import AUTO_DIRECTIONS, AUTO_TERMS, FitContext, FitResult, check_fit_options
+from ._rounds import alternate
+from .families import FAMILIES
 
 __all__ = [
     "FitResult",
@@ -104,7 +99,7 @@ def default_chunk_points(n_points: int, stored: int) -> int:
     stored chunk is decoded twice.
 
     A chunk is the unit of work sent to a thread or a worker; its points are computed
-    :data:`~translucency.fit._alternation.FIT_BLOCK` at a time, so a larger chunk costs memory only
+    :data:`~translucency.fit.FIT_BLOCK` at a time, so a larger chunk costs memory only
     for its data.  Large data sets get 512-point chunks: a task then runs for ~0.2 s, and the
     scheduler's few ms per task stay below 5 % of the fit (benchmarks/scale_out.py).  The choice
     depends only on the data set, so every scheduler gets the same chunks and the same result.
@@ -248,7 +243,8 @@ def fit_planar(
     chunk_points = POOL_POINTS * -(-int(chunk_points) // POOL_POINTS)
     m = int(n_directions) if model == "aniso" else 1
     n = int(n_terms)
-    C = 1 if (colour == "shared" and model in ("iso", "aniso")) else 3
+    shared = FAMILIES[model].shared_colour  # the exponential families have the colour scale
+    C = 1 if (colour == "shared" and shared) else 3
     x_i = ds["x_i"].astype(np.float64)
     origin = ds["window_origin"].astype(np.float64)
     grid = SampleGrid.covering(origin, pitch, ds.window)
@@ -258,7 +254,7 @@ def fit_planar(
         "model": model,
         "n_terms": n,
         "n_directions": m,
-        "colour": colour if model in ("iso", "aniso") else "per-channel",
+        "colour": colour if shared else "per-channel",
         "exclusion_mm": exclusion,
         "weighting": weighting,
         "rel_sigma": rel_sigma,
