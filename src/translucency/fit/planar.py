@@ -80,8 +80,7 @@ __all__ = [
 
 #: model selection scores held-out pairs from this distance (mm) on: the two interleaved halves have
 #: different exact radii near x_i, and a per-direction fit from half the pixels extrapolates between them
-#: (scored over all radii, near-field spikes hid the fibers' anisotropy; from 1 mm on: fibers m = 16,
-#: homogeneous marble m = 1)
+#: (scored over all radii, near-field spikes hide a fibrous material's anisotropy; docs/fitting.md)
 NEAR_MM = 1.0
 
 #: the result of :func:`fit_planar` (the name before the alternation was shared with meshes)
@@ -200,9 +199,8 @@ def fit_planar(
     alpha_radius : float, optional
         α at a pixel pools the statistics of the pixels within this distance (mm) of it
         (module docstring); default ``None`` or 0: α per pixel.  For data where few windows
-        overlap each pixel or the data are noisy (photographs): on the rig's end-to-end sample
-        (2 × 2 points) 2 mm lowered the held-out error of the photographs' model from 0.30 to 0.10
-        and of the photon tally's from 0.106 to 0.043 (docs/rig.md, section 4).
+        overlap each pixel or the data are noisy (photographs), where a radius of a few mm lowers the
+        held-out error (docs/fitting.md, docs/rig.md section 4).
 
     Returns
     -------
