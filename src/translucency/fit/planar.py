@@ -329,7 +329,7 @@ class _PlanarSource:
         self.pitch = grid.pitch
         self.stored_points = int(ds.group["R_d"].chunks[0])  # incident points per chunk of the store
         # α's statistics pooled over a disc (module docstring); None: α per pixel (the alternation's
-        # _update_alpha calls smooth_alpha only where a source has one)
+        # update_alpha calls smooth_alpha only where a source has one)
         self.smooth_alpha = DiscPool(alpha_radius / grid.pitch) if alpha_radius > 0 else None
         # a photon tally counts every exit, inside the window or not: its total bounds the model's
         est = str((ds.header.get("acquisition") or {}).get("estimator") or "")
