@@ -74,10 +74,10 @@ class FitState:
     objective under those weights (``best_score``).
     """
 
-    #: the parameters of one incident point each (copied per chunk, committed back)
+    #: the parameters of one incident point each, and its other arrays (copied per chunk, committed back)
     POINT_PARAMS = ("c", "a", "p", "s")
-    #: arrays of one incident point each (copied per chunk, committed back)
-    PER_POINT = (*POINT_PARAMS, "c_iso", "a_iso", "ready", "flagged")
+    POINT_EXTRA = ("c_iso", "a_iso", "ready", "flagged")
+    PER_POINT = (*POINT_PARAMS, *POINT_EXTRA)
     #: the running arrays of a checkpoint besides the parameter sets, in file order
     RUNNING = (
         "num",
@@ -145,7 +145,7 @@ class FitState:
         """A state of some points alone: ``arrays`` holds every :data:`PER_POINT` array, α as given."""
         sub = cls.__new__(cls)
         sub.now = Params(*(arrays[k] for k in cls.POINT_PARAMS), alpha)
-        for k in cls.PER_POINT[len(cls.POINT_PARAMS) :]:
+        for k in cls.POINT_EXTRA:
             setattr(sub, k, arrays[k])
         return sub
 
