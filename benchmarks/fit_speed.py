@@ -97,7 +97,11 @@ def whole_fit(path: Path, kind: str) -> dict:
 def solver_vs_scipy(path: Path, n_sample: int) -> dict:
     from scipy.optimize import least_squares
 
-    from translucency.fit._alternation import FitContext, FitState, _grouped, _load_chunk, _weights
+    from translucency.fit._chunk import load_chunk as _load_chunk
+    from translucency.fit._chunk import weights as _weights
+    from translucency.fit._options import FitContext
+    from translucency.fit._pixels import grouped as _grouped
+    from translucency.fit._state import FitState
     from translucency.fit._varpro import fit_exponentials_batched
     from translucency.fit.planar import _PlanarSource
     from translucency.geometry import SampleGrid

@@ -137,7 +137,7 @@ def test_alpha_statistics_are_one_running_sum_whatever_the_number_of_chunks(monk
 
     from translucency.cluster import in_order_window
     from translucency.data import default_dataset_path
-    from translucency.fit import _alternation
+    from translucency.fit import _rounds as _alternation
     from translucency.io.dataset import open_dataset
 
     ds = open_dataset(default_dataset_path())
@@ -182,7 +182,7 @@ def test_an_interrupted_fit_resumes_identically_with_chunks_held_out_of_order(mo
     import time
 
     from translucency.data import default_dataset_path
-    from translucency.fit import _alternation
+    from translucency.fit import _rounds as _alternation
     from translucency.io.dataset import open_dataset
 
     ds = open_dataset(default_dataset_path())

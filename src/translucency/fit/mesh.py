@@ -4,7 +4,7 @@ The data are :math:`R_d(x_i, v)` per incident vertex :math:`x_i` and every
 vertex v (:mod:`translucency.acquire.mesh`).  As in the paper, the isotropic
 model is fitted with the Euclidean distance :math:`r = |v - x_i|`, and α and
 the colour per vertex; the alternation, the weights and the batched solvers are
-shared with the planar fit (:mod:`translucency.fit._alternation`), with vertices
+shared with the planar fit (:mod:`translucency.fit._rounds`), with vertices
 in the place of pixels: the Poisson variance of a vertex is :math:`\alpha P/(N A_v)`
 for its area :math:`A_v`.
 
@@ -27,7 +27,9 @@ from .._validate import TranslucencyError
 from ..geometry import tangent_frames
 from ..io.mesh_dataset import open_mesh_dataset
 from ..model import VertexAlpha
-from ._alternation import FitContext, FitResult, alternate, check_fit_options
+from ._options import FitContext, FitResult, check_fit_options
+from ._rounds import alternate
+from .families import FAMILIES
 
 #: α's pooling radius in mean edge lengths.  Measured on the main job's pig against its converged reference
 #: (relative RMSE at 96 x 8,000 / 384 x 2,000 / 1,536 x 500 photons): 3 edges 0.082 / 0.070 / 0.078,
@@ -148,7 +150,7 @@ def fit_mesh(
         )
     rate_bounds = (float(np.log(a_min)), float(np.log(a_max)))
     x_i = source.vertices[source.incident]
-    C = 1 if colour == "shared" and model == "iso" else 3
+    C = 1 if colour == "shared" and FAMILIES[model].shared_colour else 3
     options = {
         "model": model,
         "n_terms": int(n_terms),

@@ -19,7 +19,7 @@ per-incident-point profile of the chosen family:
 channel instead of the colour scale.)  r (mm) and θ (rad, in the sample's
 frame) of each window pixel come from :func:`translucency.geometry.window_geometry`.
 
-**Objective and alternation** (:mod:`._alternation`, shared with the mesh fit).
+**Objective and alternation** (:mod:`._chunk`, :mod:`._rounds`, shared with the mesh fit).
 Weighted least squares over every valid pair,
 
 .. math:: \Phi = \sum_{i,j,\lambda} w_{ij\lambda}^2
@@ -63,15 +63,10 @@ from .._validate import TranslucencyError
 from ..geometry import SampleGrid, window_geometry
 from ..io.dataset import PlanarDataset, open_dataset
 from ..model import PlanarAlpha
-from ._alternation import (
-    AUTO_DIRECTIONS,
-    AUTO_TERMS,
-    POOL_POINTS,
-    FitContext,
-    FitResult,
-    alternate,
-    check_fit_options,
-)
+from ._chunk import POOL_POINTS
+from ._options import AUTO_DIRECTIONS, AUTO_TERMS, FitContext, FitResult, check_fit_options
+from ._rounds import alternate
+from .families import FAMILIES
 
 __all__ = [
     "FitResult",
@@ -85,8 +80,7 @@ __all__ = [
 
 #: model selection scores held-out pairs from this distance (mm) on: the two interleaved halves have
 #: different exact radii near x_i, and a per-direction fit from half the pixels extrapolates between them
-#: (scored over all radii, near-field spikes hid the fibers' anisotropy; from 1 mm on: fibers m = 16,
-#: homogeneous marble m = 1)
+#: (scored over all radii, near-field spikes hide a fibrous material's anisotropy; docs/fitting.md)
 NEAR_MM = 1.0
 
 #: the result of :func:`fit_planar` (the name before the alternation was shared with meshes)
@@ -104,7 +98,7 @@ def default_chunk_points(n_points: int, stored: int) -> int:
     stored chunk is decoded twice.
 
     A chunk is the unit of work sent to a thread or a worker; its points are computed
-    :data:`~translucency.fit._alternation.FIT_BLOCK` at a time, so a larger chunk costs memory only
+    :data:`~translucency.fit.FIT_BLOCK` at a time, so a larger chunk costs memory only
     for its data.  Large data sets get 512-point chunks: a task then runs for ~0.2 s, and the
     scheduler's few ms per task stay below 5 % of the fit (benchmarks/scale_out.py).  The choice
     depends only on the data set, so every scheduler gets the same chunks and the same result.
@@ -205,9 +199,8 @@ def fit_planar(
     alpha_radius : float, optional
         α at a pixel pools the statistics of the pixels within this distance (mm) of it
         (module docstring); default ``None`` or 0: α per pixel.  For data where few windows
-        overlap each pixel or the data are noisy (photographs): on the rig's end-to-end sample
-        (2 × 2 points) 2 mm lowered the held-out error of the photographs' model from 0.30 to 0.10
-        and of the photon tally's from 0.106 to 0.043 (docs/rig.md, section 4).
+        overlap each pixel or the data are noisy (photographs), where a radius of a few mm lowers the
+        held-out error (docs/fitting.md, docs/rig.md section 4).
 
     Returns
     -------
@@ -248,7 +241,8 @@ def fit_planar(
     chunk_points = POOL_POINTS * -(-int(chunk_points) // POOL_POINTS)
     m = int(n_directions) if model == "aniso" else 1
     n = int(n_terms)
-    C = 1 if (colour == "shared" and model in ("iso", "aniso")) else 3
+    shared = FAMILIES[model].shared_colour  # the exponential families have the colour scale
+    C = 1 if (colour == "shared" and shared) else 3
     x_i = ds["x_i"].astype(np.float64)
     origin = ds["window_origin"].astype(np.float64)
     grid = SampleGrid.covering(origin, pitch, ds.window)
@@ -258,7 +252,7 @@ def fit_planar(
         "model": model,
         "n_terms": n,
         "n_directions": m,
-        "colour": colour if model in ("iso", "aniso") else "per-channel",
+        "colour": colour if shared else "per-channel",
         "exclusion_mm": exclusion,
         "weighting": weighting,
         "rel_sigma": rel_sigma,
@@ -335,7 +329,7 @@ class _PlanarSource:
         self.pitch = grid.pitch
         self.stored_points = int(ds.group["R_d"].chunks[0])  # incident points per chunk of the store
         # α's statistics pooled over a disc (module docstring); None: α per pixel (the alternation's
-        # _update_alpha calls smooth_alpha only where a source has one)
+        # update_alpha calls smooth_alpha only where a source has one)
         self.smooth_alpha = DiscPool(alpha_radius / grid.pitch) if alpha_radius > 0 else None
         # a photon tally counts every exit, inside the window or not: its total bounds the model's
         est = str((ds.header.get("acquisition") or {}).get("estimator") or "")

@@ -24,8 +24,7 @@ from scipy.optimize import least_squares, nnls
 from .._validate import TranslucencyError, as_float_array
 from ..model.burley import burley_R
 from ..model.dipole import dipole_R_d
-from ..model.directional_dipole import directional_dipole_R_d
-from ..model.pbd import pbd_R_d
+from .families import FAMILIES
 
 
 @dataclass(frozen=True)
@@ -178,9 +177,9 @@ def fit_pbd_profile(r, y, eta: float = 1.3, *, kind: str = "pbd", sigma_a0: floa
     >>> [round(v, 4) for v in fit_pbd_profile(r, pbd_R_d(r, 0.004, 2.6, 1.3))[:2]]
     [0.004, 2.6]
     """
-    R = {"pbd": pbd_R_d, "ddipole": directional_dipole_R_d}.get(kind)
-    if R is None:
+    if kind not in ("pbd", "ddipole"):
         raise TranslucencyError(f"kind: expected 'pbd' or 'ddipole', got {kind!r}")
+    R = FAMILIES[kind].R_d  # the family's R_d(r; σ_a, σ_s', η)
     return _fit_positive_params(lambda r, p: R(r, p[0], p[1], eta), r, y, (sigma_a0, sigma_s_prime0))
 
 

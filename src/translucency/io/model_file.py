@@ -13,7 +13,7 @@ Layout::
     mesh/faces            (F, 3) int32     mesh only, optional: the triangles (the model renders on its own)
     measured/own          (N, 3) float32   mesh only, optional: R_d over each incident vertex's own area, mm⁻²
     measured/total        (N, 3) float32   mesh only, optional: measured diffuse exitance per unit power
-    params/...            per kind, dtype = header["dtype"]:
+    params/...            per kind (the model class's ``STORED``), dtype = header["dtype"]:
         exponential:  c, d (N, C, m, n) in mm⁻² and mm⁻¹; s_g, s_b (N,) when C = 1
         dipole, pbd, ddipole:  sigma_a, sigma_s_prime (N, 3) in mm⁻¹ (and ``eta`` in the header)
         burley:       A (N, 3); s (N, 3) in mm⁻¹
@@ -29,6 +29,11 @@ reflectance and energy radius, the object's size and the indices of the points
 that break a bound), ``software`` and
 ``checksum``: the SHA-256 of every array's decoded bytes in a fixed order, so
 that corruption that survives decompression is still caught.
+
+Each model class (:data:`translucency.model.MODEL_KINDS`, by ``kind``) declares what it
+stores: its parameter arrays (``STORED``, ``required_params``), its header fields
+(``header_fields``), how it is rebuilt (``from_stored``) and how values beyond float32 are
+made inert (``store_inert``); this module is the same for every kind.
 
 Arrays are compressed with Blosc (zstd, byte shuffle), one chunk per field (all
 points of one parameter, term and direction), which keeps spatially coherent
@@ -50,16 +55,7 @@ from zarr.codecs import BloscCodec
 
 from .._validate import TranslucencyError
 from .._version import __version__
-from ..model import (
-    BurleyModel,
-    DipoleModel,
-    DirectionalDipoleModel,
-    ExponentialModel,
-    PBDModel,
-    PlanarAlpha,
-    ReflectanceModel,
-    VertexAlpha,
-)
+from ..model import MODEL_KINDS, PlanarAlpha, ReflectanceModel, VertexAlpha
 from ..model.bounds import check_physics
 from .atomic import atomic_path
 from .outputs import claim_output
@@ -68,17 +64,9 @@ FORMAT = "translucency-model"
 VERSION = 1
 HEADER_KEY = "translucency_model"
 
-#: parameter arrays of each model kind, in checksum order
-_PARAMS = {
-    "exponential": ("c", "d", "s_g", "s_b"),
-    "dipole": ("sigma_a", "sigma_s_prime"),
-    "burley": ("A", "s"),
-    "pbd": ("sigma_a", "sigma_s_prime"),
-    "ddipole": ("sigma_a", "sigma_s_prime"),
-}
-#: the families parametrised by (σ_a, σ_s') per point and a global η
-_SIGMA_MODELS = {"dipole": DipoleModel, "pbd": PBDModel, "ddipole": DirectionalDipoleModel}
-_STORABLE = (ExponentialModel, BurleyModel, *_SIGMA_MODELS.values())
+_STORABLE = tuple(MODEL_KINDS.values())
+#: the parameter arrays of each kind, in file order (as each model class declares them)
+_PARAMS = {kind: cls.STORED for kind, cls in MODEL_KINDS.items()}
 
 
 class ModelFileError(TranslucencyError):
@@ -89,7 +77,7 @@ class ModelFileError(TranslucencyError):
 def _model_arrays(model: ReflectanceModel, dtype: str, params: dict | None = None) -> dict[str, np.ndarray]:
     """Every array of the file, keyed by its path in the store, already cast."""
     if params is None:
-        params = {name: getattr(model, name) for name in _PARAMS[model.kind]}
+        params = model.stored()
     with np.errstate(over="ignore"):  # overflow in the cast is reported by save_model
         return _cast_arrays(model, params, dtype)
 
@@ -106,31 +94,19 @@ def _inert_where_unstorable(model: ReflectanceModel) -> tuple[dict, dict]:
 
     A noisy fit can reach amplitudes beyond float32 (a term c e^{d r} with d ≈ −2000 mm⁻¹ and
     c ≈ 10¹³⁰ mm⁻² that spikes inside the excluded centre pixel): not a storage problem but an
-    unphysical fit.  Such terms are stored inert (c = 0, d = −1 mm⁻¹; for Burley A = 0, s = 1), which
-    changes R_d only where the spike exceeded every float; the point is flagged.  Returns
-    ``(params, {point: [names]})``.  The (σ_a, σ_s') families have no inert setting: refused.
+    unphysical fit.  Such terms are stored inert (the model class's ``store_inert``: c = 0,
+    d = −1 mm⁻¹; for Burley A = 0, s = 1), which changes R_d only where the spike exceeded every
+    float; the point is flagged.  Returns ``(params, {point: [names]})``.  The (σ_a, σ_s') families
+    have no inert setting: refused.
     """
-    params = {name: getattr(model, name) for name in _PARAMS[model.kind]}
+    params = model.stored()
     params = {k: None if v is None else np.array(v, dtype=np.float64) for k, v in params.items()}
     over = {k: _points_over(v, np.float32) for k, v in params.items() if v is not None}
     points = sorted({int(i) for v in over.values() for i in np.flatnonzero(v)})
     if not points:
         return params, {}
     names = {i: [k for k, v in over.items() if v[i]] for i in points}
-    if model.kind == "exponential":
-        c, d = params["c"], params["d"]
-        with np.errstate(over="ignore", invalid="ignore"):
-            term = ~(np.isfinite(c.astype(np.float32)) & np.isfinite(d.astype(np.float32)))
-        for scale in ("s_g", "s_b"):  # a colour scale beyond float32: the whole point is inert
-            if params[scale] is not None:
-                whole = over[scale]
-                term[whole] = True
-                params[scale][whole] = 1.0
-        c[term], d[term] = 0.0, -1.0
-    elif model.kind == "burley":
-        for i in points:
-            params["A"][i], params["s"][i] = 0.0, 1.0
-    else:
+    if not model.store_inert(params, over, points):
         listed = ", ".join(f"{i} ({'/'.join(names[i])})" for i in points[:10])
         raise TranslucencyError(
             f"the {model.kind} fit is unphysical at incident points {listed}"
@@ -296,10 +272,7 @@ def _header(model: ReflectanceModel, dtype: str, meta: dict | None, checksum: st
     }
     if isinstance(model.alpha, PlanarAlpha):
         header["alpha"] = {"origin": [float(v) for v in model.alpha.origin], "pitch": model.alpha.pitch}
-    if model.kind in _SIGMA_MODELS:
-        header["eta"] = model.eta
-    if isinstance(model, ExponentialModel):
-        header.update(n_terms=model.n_terms, n_directions=model.n_directions, colour=model.colour)
+    header.update(model.header_fields())
     try:
         json.dumps(header)
     except TypeError as exc:
@@ -317,14 +290,10 @@ def _from_arrays(arrays: dict[str, np.ndarray], header: dict) -> ReflectanceMode
         alpha = PlanarAlpha(arrays["alpha/values"], np.asarray(a["origin"]), a["pitch"])
     else:
         alpha = VertexAlpha(arrays["alpha/values"], arrays["alpha/vertices"])
-    p = {name: arrays.get(f"params/{name}") for name in _PARAMS[header["kind"]]}
-    if header["kind"] == "exponential":
-        model = ExponentialModel(x_i, p["c"], p["d"], alpha, s_g=p["s_g"], s_b=p["s_b"], frame=frame)
-    elif header["kind"] in _SIGMA_MODELS:
-        cls = _SIGMA_MODELS[header["kind"]]
-        model = cls(x_i, p["sigma_a"], p["sigma_s_prime"], header["eta"], alpha, frame=frame)
-    else:
-        model = BurleyModel(x_i, p["A"], p["s"], alpha, frame=frame)
+    cls = MODEL_KINDS[header["kind"]]
+    model = cls.from_stored(
+        x_i, {name: arrays.get(f"params/{name}") for name in cls.STORED}, alpha, frame, header
+    )
     _attach_surface(model, arrays)
     return model
 
@@ -358,10 +327,7 @@ def _required(header: dict) -> list[str]:
     keys = ["x_i", "alpha/values"]
     if header["geometry"] == "mesh":
         keys += ["frame", "alpha/vertices"]
-    params = _PARAMS[header["kind"]]
-    if header["kind"] == "exponential" and header.get("colour") != "shared":
-        params = ("c", "d")
-    return keys + [f"params/{p}" for p in params]
+    return keys + [f"params/{p}" for p in MODEL_KINDS[header["kind"]].required_params(header)]
 
 
 def read_header(path) -> dict:
@@ -395,7 +361,7 @@ def _open(path: Path):
             f"{path}: format version {version!r} is not supported (this reader knows {VERSION})"
         )
     for key, allowed in (
-        ("kind", tuple(_PARAMS)),
+        ("kind", tuple(MODEL_KINDS)),
         ("geometry", ("planar", "mesh")),
         ("dtype", ("float32", "float16")),
     ):
@@ -432,7 +398,7 @@ def load_model(path) -> ReflectanceModel:
     want_dtype = np.dtype(header["dtype"])
     arrays = {}
     required = _required(header)
-    optional = [k for k in ("params/s_g", "params/s_b") if k not in required]
+    optional = [f"params/{p}" for p in MODEL_KINDS[header["kind"]].STORED if f"params/{p}" not in required]
     if header["geometry"] == "mesh":
         optional += ["mesh/faces", "measured/own", "measured/total"]
     for key in required + optional:

@@ -10,6 +10,7 @@
 :class:`VertexAlpha`        α per mesh vertex
 :func:`direction_weights`   w_l(θ), the anisotropic blend
 :data:`MATERIALS`           Jensen 2001 measured coefficients
+:data:`MODEL_KINDS`         the model classes by the kind a model file stores
 :func:`check_physics`       per-point bounds: total reflectance ≤ 1, energy radius within the object
 ==========================  =====================================================
 """
@@ -36,7 +37,14 @@ from .exponential import ExponentialModel
 from .materials import MATERIALS, Material, material
 from .pbd import PBDModel, fresnel_moment, pbd_coefficients, pbd_R_d, pbd_total_without_kappa
 
+#: the model classes by ``kind``, the name a model file's header stores (:mod:`translucency.io.model_file`);
+#: each class declares what it stores (``STORED``, ``header_fields``, ``from_stored``)
+MODEL_KINDS: dict[str, type[ReflectanceModel]] = {
+    cls.kind: cls for cls in (ExponentialModel, DipoleModel, BurleyModel, PBDModel, DirectionalDipoleModel)
+}
+
 __all__ = [
+    "MODEL_KINDS",
     "ReflectanceModel",
     "ExponentialModel",
     "DipoleModel",

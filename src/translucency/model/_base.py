@@ -186,6 +186,40 @@ class ReflectanceModel(ABC):
         i = np.arange(self.n_points)
         return bisect_radius(lambda rad: self.energy_within(i, rad), self.total_reflectance(), fraction)
 
+    # -- storage (what a model file holds: translucency.io.model_file) -------
+    #: the parameter arrays a model file stores as ``params/<name>``, in file order
+    STORED: tuple = ()
+
+    def stored(self) -> dict:
+        """The parameter arrays to store, by name (None: the model has none of that name)."""
+        return {name: getattr(self, name) for name in self.STORED}
+
+    def header_fields(self) -> dict:
+        """The model file header's fields of this kind (besides those every model has)."""
+        return {}
+
+    @classmethod
+    def required_params(cls, header: dict) -> tuple:
+        """The parameter arrays a model file of this kind must hold (``header``: the file's)."""
+        return cls.STORED
+
+    @classmethod
+    def from_stored(cls, x_i, params: dict, alpha: Modulation, frame, header: dict) -> ReflectanceModel:
+        """The model from a file's arrays: ``params`` by name (None where absent) and its header."""
+        raise NotImplementedError(f"{cls.__name__} cannot be read from a model file")
+
+    @staticmethod
+    def store_inert(params: dict, over: dict, points: list) -> bool:
+        """Make the values that overflow float32 inert (zero reflectance) in ``params`` (float64 copies,
+        changed in place; ``over``: per parameter, (N,) bool of the points that overflow, ``points``
+        their indices); False when the kind has no inert setting (the file is refused)."""
+        return False
+
+    @property
+    def param_shape(self) -> tuple:
+        """The stored parameters of one incident point, as a shape (for the memory estimates)."""
+        return (sum(int(np.prod(np.shape(v)[1:])) for v in self.stored().values() if v is not None),)
+
     def __repr__(self) -> str:
         return f"<{type(self).__name__} {self.geometry}, {self.n_points} incident points>"
 
@@ -234,3 +268,17 @@ def medium_parameters(n_points: int, sigma_a, sigma_s_prime, eta):
     if not eta > 0:
         raise TranslucencyError(f"eta: must be > 0, got {eta}")
     return sigma_a, sigma_s_prime, eta
+
+
+class MediumStorage:
+    """The storage of the models of (σ_a, σ_s') per point and channel (mm⁻¹) and a global η
+    (the dipole, PBD and the directional dipole): the two arrays, η in the header."""
+
+    STORED = ("sigma_a", "sigma_s_prime")
+
+    def header_fields(self) -> dict:
+        return {"eta": self.eta}
+
+    @classmethod
+    def from_stored(cls, x_i, params, alpha, frame, header):
+        return cls(x_i, params["sigma_a"], params["sigma_s_prime"], header["eta"], alpha, frame=frame)

@@ -96,6 +96,18 @@ class BurleyModel(ReflectanceModel):
         check_positive("s", s)
         self.A, self.s = A, s
 
+    STORED = ("A", "s")
+
+    @classmethod
+    def from_stored(cls, x_i, params, alpha, frame, header):
+        return cls(x_i, params["A"], params["s"], alpha, frame=frame)
+
+    @staticmethod
+    def store_inert(params, over, points):
+        for i in points:  # A = 0: no reflectance
+            params["A"][i], params["s"][i] = 0.0, 1.0
+        return True
+
     def profile(self, i, r, theta) -> np.ndarray:
         """Burley :math:`R(r)` per channel (θ unused); r clamped to ``R_MIN``."""
         return burley_R(r[..., None], self.A[i], self.s[i])

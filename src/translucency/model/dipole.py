@@ -35,7 +35,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._base import ReflectanceModel, medium_parameters
+from ._base import MediumStorage, ReflectanceModel, medium_parameters
 from .alpha import Modulation
 
 
@@ -124,7 +124,7 @@ def dipole_total_reflectance(sigma_a, sigma_s_prime, eta) -> np.ndarray:
     return 0.5 * k.alpha_prime * (1.0 + np.exp(-4.0 / 3.0 * k.A * root)) * np.exp(-root)
 
 
-class DipoleModel(ReflectanceModel):
+class DipoleModel(MediumStorage, ReflectanceModel):
     """Jensen's dipole with per-:math:`\\vec x_i` coefficients and a global modulation texture.
 
     This is the approach the paper replaces: each incident point gets its own

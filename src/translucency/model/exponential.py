@@ -101,6 +101,38 @@ class ExponentialModel(ReflectanceModel):
             raise TranslucencyError("s_g, s_b: the per-channel model (C = 3) has no colour scales")
         self.c, self.d, self.s_g, self.s_b = c, d, s_g, s_b
 
+    # -- storage ----------------------------------------------------------------
+    STORED = ("c", "d", "s_g", "s_b")
+
+    def header_fields(self) -> dict:
+        return {"n_terms": self.n_terms, "n_directions": self.n_directions, "colour": self.colour}
+
+    @classmethod
+    def required_params(cls, header):
+        return cls.STORED if header.get("colour") == "shared" else ("c", "d")
+
+    @classmethod
+    def from_stored(cls, x_i, params, alpha, frame, header):
+        return cls(x_i, params["c"], params["d"], alpha, s_g=params["s_g"], s_b=params["s_b"], frame=frame)
+
+    @staticmethod
+    def store_inert(params, over, points):
+        """Terms beyond float32 become c = 0, d = −1 mm⁻¹; a colour scale beyond it makes its point inert."""
+        c, d = params["c"], params["d"]
+        with np.errstate(over="ignore", invalid="ignore"):
+            term = ~(np.isfinite(c.astype(np.float32)) & np.isfinite(d.astype(np.float32)))
+        for scale in ("s_g", "s_b"):  # a colour scale beyond float32: the whole point is inert
+            if params[scale] is not None:
+                whole = over[scale]
+                term[whole] = True
+                params[scale][whole] = 1.0
+        c[term], d[term] = 0.0, -1.0
+        return True
+
+    @property
+    def param_shape(self) -> tuple:
+        return tuple(self.c.shape[1:]) + (2,)
+
     # -- shape ----------------------------------------------------------------
     @property
     def n_terms(self) -> int:

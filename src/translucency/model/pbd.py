@@ -61,7 +61,7 @@ import numpy as np
 from numba import njit
 
 from .._validate import TranslucencyError
-from ._base import ReflectanceModel, medium_parameters
+from ._base import MediumStorage, ReflectanceModel, medium_parameters
 from .alpha import Modulation
 
 #: Gauss–Legendre nodes of the beam integrals (over w = u^{1/3}, u the exponential's CDF)
@@ -289,7 +289,7 @@ def table_energy_within(edges, energy, radius) -> np.ndarray:
     return np.where(small, energy[..., 0] * (radius / edges[0]) ** 2, out)
 
 
-class _TabulatedRadialModel(ReflectanceModel):
+class _TabulatedRadialModel(MediumStorage, ReflectanceModel):
     """A per-point radial profile with parameters (σ_a, σ_s') per channel and a global η,
     whose enclosed energy comes from a table (:func:`radial_table`), built on first use."""
 

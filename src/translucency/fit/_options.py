@@ -1,0 +1,153 @@
+"""The options of a fit (checked at the API boundary), what every chunk shares, and the result."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .._validate import TranslucencyError
+from .families import AUTO_DIRECTIONS, AUTO_TERMS, FAMILIES, Family
+
+__all__ = [
+    "AUTO_DIRECTIONS",
+    "AUTO_TERMS",
+    "KINDS",
+    "WEIGHTINGS",
+    "FitContext",
+    "FitResult",
+    "check_fit_options",
+]
+
+#: the model families' names: isotropic and anisotropic sums of exponentials, and the baselines
+KINDS = tuple(FAMILIES)
+#: the weightings: w⁻² = αP/(N p²) (the model's Poisson variance), or (ρ αP)² + αP/(N p²)
+WEIGHTINGS = ("poisson", "relative")
+
+
+@dataclass
+class FitResult:
+    """Result of :func:`translucency.fit.fit_planar` or :func:`translucency.fit.fit_mesh`.
+
+    Attributes
+    ----------
+    model : ReflectanceModel
+        The fitted model (α included).
+    flagged : ndarray of bool, shape (P,)
+        Incident points without usable data (all masked, NaN or zero); their
+        parameters are inert (zero reflectance) and the report lists them.
+    history : list of float
+        Objective Φ of each round's state (parameters and α), every round under
+        the same weights (those of round 1's model; with one round, round 1's own).
+    seconds : float
+        Wall time of the fit.
+    options : dict
+        The options used (stored in the model file).
+    best_round : int
+        The round whose state is returned (1-based): the lowest Φ under the common weights.
+    acquisition : dict, optional
+        The data set's header (mesh fits): what was acquired, so that a model
+        file can rebuild its reference without the data set.
+    """
+
+    model: object
+    flagged: np.ndarray
+    history: list
+    seconds: float
+    options: dict = field(default_factory=dict)
+    acquisition: dict | None = None
+    best_round: int = 1
+
+    def metadata(self, dataset_path) -> dict:
+        """The fit's record stored beside the model: data set, options, Φ per round, time, flagged points.
+
+        Parameters
+        ----------
+        dataset_path : path
+            The data set that was fitted (stored as a string).
+
+        Returns
+        -------
+        dict
+            ``dataset``, ``fit`` (the options), ``objective_per_round``,
+            ``best_round`` (the round returned), ``seconds`` (rounded to 0.01 s),
+            ``flagged_points`` (indices) and, for mesh fits, ``acquisition`` (the data set's header).
+        """
+        meta = {
+            "dataset": str(dataset_path),
+            "fit": self.options,
+            "objective_per_round": self.history,
+            "best_round": self.best_round,
+            "seconds": round(self.seconds, 2),
+            "flagged_points": np.flatnonzero(self.flagged).tolist(),
+        }
+        if self.acquisition is not None:
+            meta["acquisition"] = self.acquisition
+        return meta
+
+
+def check_fit_options(
+    model: str,
+    n_terms: int = 3,
+    n_directions: int = 8,
+    colour: str = "per-channel",
+    rel_sigma: float = 0.05,
+    weighting: str = "poisson",
+) -> None:
+    """Refuse bad fit options with one line naming the option (before any work)."""
+    if model not in KINDS:
+        raise TranslucencyError(f"model: expected one of {', '.join(KINDS)}, got {model!r}")
+    if n_terms != "auto" and not 1 <= _as_count(n_terms) <= 4:
+        raise TranslucencyError(f"terms: n must be between 1 and 4 or 'auto', got {n_terms!r}")
+    directional = FAMILIES[model].directional
+    if n_directions == "auto":
+        if not directional:
+            raise TranslucencyError(f"directions: 'auto' needs the anisotropic model, got model {model!r}")
+    elif directional and _as_count(n_directions) < 2:
+        raise TranslucencyError(f"directions: the anisotropic model needs m >= 2, got {n_directions}")
+    if colour not in ("shared", "per-channel"):
+        raise TranslucencyError(f"colour: expected 'shared' or 'per-channel', got {colour!r}")
+    if not (rel_sigma > 0 and np.isfinite(rel_sigma)):
+        raise TranslucencyError(f"rel_sigma: must be > 0, got {rel_sigma}")
+    if weighting not in WEIGHTINGS:
+        raise TranslucencyError(f"weighting: expected one of {', '.join(WEIGHTINGS)}, got {weighting!r}")
+
+
+def _as_count(v) -> int:
+    """An integer option as int, or −1 when it is not one (so that the range checks name it)."""
+    try:
+        return int(v)
+    except (TypeError, ValueError):
+        return -1
+
+
+@dataclass(kw_only=True)
+class FitContext:
+    """What every chunk of a fit shares: the source, the model family and the fit options."""
+
+    source: object  # where the chunks come from: a planar or a mesh source
+    kind: str  # one of KINDS: the family's name
+    n: int  # exponential terms per profile
+    m: int  # directions (1 unless anisotropic)
+    C: int  # colour rows: 1 (shared colour scale) or 3
+    exclusion: float  # pixels closer than this to x_i are left out, mm
+    rel_sigma: float  # ρ, the relative tolerance in the weights ("relative" weighting)
+    eta: float  # refractive index (dipole)
+    radius_step: float | None  # width of the merged rings beyond 1 mm, mm; None: exact radii only
+    sweeps: int  # block-coordinate sweeps over the directions per round
+    balance: bool  # weight rings beyond 1 mm by 1 mm / r
+    x_i: np.ndarray  # (P, 2|3) incident points, mm
+    rate_bounds: tuple | None = None  # (lo, hi) of log a (a in mm⁻¹); None: what the radii resolve
+    cache_left: float = 0.0  # bytes the data may still occupy in memory between rounds
+    cache: dict = field(default_factory=dict)
+    weighting: str = "poisson"  # one of WEIGHTINGS (module docstring)
+
+    @property
+    def family(self) -> Family:
+        """The model family of :attr:`kind` (:data:`~translucency.fit.families.FAMILIES`)."""
+        return FAMILIES[self.kind]
+
+    @property
+    def rho(self) -> float:
+        """ρ of the weights: ``rel_sigma`` for the "relative" weighting, 0 for "poisson"."""
+        return float(self.rel_sigma) if self.weighting == "relative" else 0.0

@@ -1,0 +1,78 @@
+"""The protocol every model family of the fit follows (:class:`Family`).
+
+A family is one object (:data:`translucency.fit.families.FAMILIES`) that knows
+its parameters, its profile P_i(r) at the rings of a chunk, its fit step with α
+fixed, what becomes of its amplitudes when α is normalised to mean 1, the model
+it builds from the fit's state, and the rates of its time estimate.  The
+alternation (:mod:`translucency.fit._rounds`) and the chunk's work
+(:mod:`translucency.fit._block`) ask the family and never switch on its name.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, ClassVar
+
+import numpy as np
+
+if TYPE_CHECKING:  # annotations only
+    from ...model import ReflectanceModel
+    from .._chunk import Chunk
+    from .._options import FitContext
+    from .._state import FitState, Params
+
+#: the candidates of model selection (``n_terms="auto"``, ``n_directions="auto"``)
+AUTO_TERMS = (1, 2, 3, 4)
+AUTO_DIRECTIONS = (1, 2, 4, 8, 16)
+
+
+class Family:
+    """One model family of the fit: P_i(r) per incident point, fitted with α fixed.
+
+    Attributes
+    ----------
+    name : str
+        The family's name (``fit --model NAME``; ``FitContext.kind``).
+    shared_colour : bool
+        ``colour="shared"`` applies: one fall-off scaled by (1, s_g, s_b) (C = 1 colour row).
+    directional : bool
+        The family has m > 1 directions (``n_directions``; m ≥ 2 required).
+    keeps_alpha_scale : bool
+        No free amplitude (σ_a, σ_s'): α is not normalised to mean 1, it keeps the scale.
+    time_terms : dict
+        Seconds of ``translucency fit`` on the development machine: ``overhead`` and per
+        ``point_pixels`` (points × window pixels, or vertices, × rounds).
+    """
+
+    name: ClassVar[str]
+    shared_colour: ClassVar[bool] = False
+    directional: ClassVar[bool] = False
+    keeps_alpha_scale: ClassVar[bool] = False
+    time_terms: ClassVar[dict]
+
+    def params_per_point(self, n_terms, n_directions, colour: str) -> int:
+        """Stored parameters per incident point (``"auto"`` counts the largest candidate)."""
+        raise NotImplementedError
+
+    def profiles(self, ctx: FitContext, params: Params | FitState, sl: slice, r_g: np.ndarray) -> np.ndarray:
+        """Each point's profile at the group radii r_g (mm), (k, G, C, m), without α or colour scale."""
+        raise NotImplementedError
+
+    def fit(self, ctx: FitContext, state: FitState, sl: slice, ch: Chunk, w2: np.ndarray) -> None:
+        """One round's fit of points ``sl`` of the chunk ``ch`` with α fixed, weights ``w2`` (k, J, 3)."""
+        raise NotImplementedError
+
+    def make_inert(self, state: FitState, bad: np.ndarray) -> None:
+        """Parameters of zero reflectance at the points ``bad`` (no usable data)."""
+        state.c[bad] = 0.0
+        state.a[bad] = 1.0
+
+    def rescale(self, state: FitState, mean: float) -> None:
+        """Take the scale ``mean`` from α (normalised to mean 1) into the amplitudes: αP unchanged."""
+        raise NotImplementedError
+
+    def build(self, ctx: FitContext, state: FitState, alpha, frame) -> ReflectanceModel:
+        """The fitted reflectance model of the current state, with the source's α and frames."""
+        raise NotImplementedError
+
+    def __repr__(self) -> str:
+        return f"<{type(self).__name__} {self.name!r}>"
