@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
-from conftest import random_exponential_model
+from helpers import random_exponential_model
 from translucency import load_model, save_model
 from translucency.cli.app import app
 from translucency.io.dataset import dataset_identity, open_dataset
