@@ -5,6 +5,7 @@ import pytest
 from hypothesis import settings
 
 from helpers import FUZZ
+from translucency.acquire import PlanarSetup, acquire_planar, make_sample
 
 # Hypothesis profiles.  "default": Hypothesis's own budget for the property tests, while the fuzz suite
 # (tests/test_fuzz.py) keeps to a few derandomised examples per reader so the fast suite stays fast;
@@ -26,3 +27,29 @@ def _in_a_scratch_folder(tmp_path, monkeypatch):
     the checkout."""
     monkeypatch.chdir(tmp_path)
     monkeypatch.setenv("TRANSLUCENCY_CACHE", str(tmp_path / "cache"))  # never the user's own cache
+
+
+@pytest.fixture(scope="session")
+def planar_scan(tmp_path_factory):
+    """The planar photon scans of the tests, each acquired once per session.
+
+    ``planar_scan(sample, side=, span=, photons=, seed=, volume_seed=seed)`` → the data set of side × side
+    incident points over span mm (one chunk), 6 mm windows of 0.25 mm, ``photons`` per point and channel
+    with photon seed ``seed``, on a 12 × 12 × 6 mm volume of ``sample`` at 0.25 mm (generator seed
+    ``volume_seed``).  The same arguments give the same (read-only) data set.
+    """
+    volumes, scans = {}, {}
+
+    def scan(sample, *, side, span, photons, seed, volume_seed=None):
+        volume_seed = seed if volume_seed is None else volume_seed
+        key = (sample, side, span, photons, seed, volume_seed)
+        if key not in scans:
+            if (sample, volume_seed) not in volumes:
+                volumes[sample, volume_seed] = make_sample(sample, (12.0, 12.0, 6.0), 0.25, seed=volume_seed)
+            setup = PlanarSetup(grid=(side, side), span=(span, span), pitch=0.25, window=6.0, photons=photons,
+                                seed=seed, chunk_points=side * side)  # fmt: skip
+            folder = tmp_path_factory.mktemp(sample.replace(":", "_"))
+            scans[key] = acquire_planar(volumes[sample, volume_seed], setup, folder / "scan.zarr")
+        return scans[key]
+
+    return scan
