@@ -202,6 +202,14 @@ def test_acquire_planar_cli(tmp_path):
     ]
     res = runner.invoke(app, args)
     assert res.exit_code == 0, res.output
+    # what the flags asked for: 2 × 2 points, 4 mm windows of 0.5 mm pixels, 500 photons; R_d a density
+    ds = open_dataset(out)
+    n = ds.window[0]
+    assert ds["x_i"].shape == (4, 2) and ds.pitch == 0.5 and n % 2 == 1 and abs(n * 0.5 - 4) <= 0.5
+    assert ds.header["acquisition"]["photons"] == 500 and ds.complete()
+    R = np.asarray(ds["R_d"])
+    assert R.shape == (4, n, n, 3) and np.isfinite(R).all() and (R >= 0).all() and (R.sum((1, 2)) > 0).all()
+    assert (R.sum(axis=(1, 2)) * 0.5**2 <= np.asarray(ds["total_diffuse"]) + 1e-6).all()
     info = runner.invoke(app, ["info", str(out)])
     assert info.exit_code == 0 and "translucency-dataset v1" in info.output and "1/1 chunks" in info.output
     bad = runner.invoke(app, args[:-2] + ["--window", "40"])
