@@ -92,16 +92,13 @@ class Import:
     alias: ast.alias
     target: str  # dotted module
     name: str | None  # an imported name that is not a module, or None
-    local: bool  # inside a def
 
 
 def _unit(rel: Path) -> str:
-    if len(rel.parts) > 1:
-        return rel.parts[0]
-    stem = rel.stem
-    if stem == "__init__":
+    name = rel.parts[0] if len(rel.parts) > 1 else rel.stem
+    if name == "__init__":
         return "translucency"
-    return "resources" if stem in ("_resources", "resources") else stem
+    return "resources" if name in ("_resources", "resources") else name
 
 
 def _comments(source: str) -> dict[int, str]:
@@ -158,12 +155,11 @@ def _in_def(node: ast.AST, parents: dict) -> bool:
 def imports(module: Module, root: Path) -> list[Import]:
     """Every import of ``module``, relative ones resolved, ``from pkg import submodule`` as the submodule."""
     known = _by_name(root)
-    parents = _parents(module.tree)
     found = []
     for node in ast.walk(module.tree):
         if isinstance(node, ast.Import):
             for alias in node.names:
-                found.append(Import(node, alias, alias.name, None, _in_def(node, parents)))
+                found.append(Import(node, alias, alias.name, None))
         elif isinstance(node, ast.ImportFrom):
             if node.level:
                 base = module.name.split(".") if module.is_package else module.name.split(".")[:-1]
@@ -174,9 +170,9 @@ def imports(module: Module, root: Path) -> list[Import]:
             for alias in node.names:
                 sub = f"{target}.{alias.name}"
                 if sub in known:
-                    found.append(Import(node, alias, sub, None, _in_def(node, parents)))
+                    found.append(Import(node, alias, sub, None))
                 else:
-                    found.append(Import(node, alias, target, alias.name, _in_def(node, parents)))
+                    found.append(Import(node, alias, target, alias.name))
     return found
 
 
