@@ -48,11 +48,14 @@ MAY_IMPORT: dict[str, frozenset[str]] = {
     "rig": _BASE,
     # cross-checks beside the pipeline (tests, benchmarks)
     "validate": _BASE | {"acquire", "fit", "evaluate", "render"},
-    # on top: the main job, the commands, ``python -m translucency`` and the façade
-    "pipeline": _BASE | {"acquire", "fit", "evaluate", "render", "rig", "validate"},
-    "cli": _BASE | {"acquire", "fit", "evaluate", "render", "rig", "validate", "pipeline"},
+    # on top: the workflow as functions (``translucency.fit(...)``), the main job, the commands,
+    # ``python -m translucency`` and the façade
+    "workflow": _BASE | {"acquire", "fit", "evaluate", "render", "rig"},
+    "pipeline": _BASE | {"acquire", "fit", "evaluate", "render", "rig", "validate", "workflow"},
+    "cli": _BASE | {"acquire", "fit", "evaluate", "render", "rig", "validate", "workflow", "pipeline"},
     "__main__": frozenset({"cli"}),
-    "translucency": _BASE | {"acquire", "fit", "evaluate", "render", "rig", "validate", "pipeline"},
+    "translucency": _BASE
+    | {"acquire", "fit", "evaluate", "render", "rig", "validate", "workflow", "pipeline"},
 }
 
 #: Mitsuba's calls that build a scene (or a part of one) from a description
@@ -605,6 +608,7 @@ VIOLATIONS = [
     (imports_against_the_pipeline, {"rig/x.py": "from ..fit import fit_all\n"}, "rig/x.py:1"),
     (imports_against_the_pipeline, {"render/x.py": "from ..cli.app import main\n"}, "render/x.py:1"),
     (imports_against_the_pipeline, {"pipeline.py": "from .cli import app\n"}, "pipeline.py:1"),
+    (imports_against_the_pipeline, {"workflow.py": "from .pipeline import run\n"}, "workflow.py:1"),
     (imports_against_the_pipeline, {"fit/x.py": "from translucency import Model\n"}, "fit/x.py:1"),
     (imports_against_the_pipeline, {"newthing.py": "X = 1\n"}, "newthing.py:1"),
     (
