@@ -2,82 +2,18 @@ import os
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, settings
+from hypothesis import settings
 
-from translucency.geometry import tangent_frames
-from translucency.model import ExponentialModel, PlanarAlpha, VertexAlpha
+from helpers import FUZZ
+from translucency.acquire import PlanarSetup, acquire_planar, make_sample
 
 # Hypothesis profiles.  "default": Hypothesis's own budget for the property tests, while the fuzz suite
 # (tests/test_fuzz.py) keeps to a few derandomised examples per reader so the fast suite stays fast;
 # "long" (`make test-slow`: TRANSLUCENCY_HYPOTHESIS_PROFILE=long, or `--hypothesis-profile=long`) gives
 # every test, the fuzz suite included, 200 random examples.
-_FUZZ = {
-    "deadline": None,
-    "suppress_health_check": [HealthCheck.function_scoped_fixture, HealthCheck.too_slow],
-}
-settings.register_profile("long", max_examples=200, **_FUZZ)
+settings.register_profile("long", max_examples=200, **FUZZ)
 if os.environ.get("TRANSLUCENCY_HYPOTHESIS_PROFILE"):
     settings.load_profile(os.environ["TRANSLUCENCY_HYPOTHESIS_PROFILE"])
-
-
-def fuzz_settings(fast_examples: int):
-    """Settings of a fuzz test: ``fast_examples`` derandomised examples, or the long profile's budget."""
-    if settings.default.max_examples >= 200:
-        return settings(settings.default, **_FUZZ)
-    return settings(max_examples=fast_examples, derandomize=True, **_FUZZ)
-
-
-#: (rate range in mm⁻¹, amplitude range in mm⁻²) of three well-separated terms: a fit can tell them apart
-SEPARATED_TERMS = (((5.0, 8.0), (0.5, 1.0)), ((1.2, 2.0), (0.05, 0.1)), ((0.3, 0.6), (0.005, 0.01)))
-
-
-def exponential_terms(rng, P, m=1, C=3, terms=SEPARATED_TERMS):
-    """c, d of shape (P, C, m, n), term k drawn from ``terms[k]``; rates first, sorted steepest first."""
-    a = np.sort(np.stack([rng.uniform(*rate, (P, C, m)) for rate, _ in terms], axis=-1), axis=-1)[..., ::-1]
-    c = np.stack([rng.uniform(*amplitude, (P, C, m)) for _, amplitude in terms], axis=-1)
-    return c, -a
-
-
-def random_exponential_model(
-    rng, n_points=4, m=1, n=3, colour="shared", geometry="planar", *, terms=None, mesh=None, points=None
-):
-    """The test suite's one model factory: a valid random :class:`ExponentialModel`.
-
-    Without ``terms``: physical (each profile's total reflectance 2π Σ c/d² below 1: c_k ≤ d_k²/(2π n),
-    times a colour scale ≤ 1.2; its 99.9 % energy radius ≤ 9.3/|d| ≤ 6.2 mm, within the sample or object)
-    and exactly representable in float16, so file round trips are exact.  With ``terms`` (see
-    :data:`SEPARATED_TERMS`): the given rate and amplitude ranges per term (:func:`exponential_terms`).
-
-    ``geometry="mesh"``: on ``mesh`` (a trimesh) at vertex indices ``points`` with tangent frames and α per
-    vertex, or, without a mesh, on 20 random vertices with random frames.
-    """
-    C = 1 if colour == "shared" else 3
-    if mesh is not None:
-        n_points = len(points)
-    if terms is None:
-        d = -rng.uniform(1.5, 6.0, (n_points, C, m, n))
-        c = rng.uniform(0.05, 0.8, (n_points, C, m, n)) * d**2 / (2 * np.pi * n * 1.2)
-        f16 = lambda a: None if a is None else a.astype(np.float16).astype(np.float64)  # noqa: E731
-    else:
-        c, d = exponential_terms(rng, n_points, m, C, terms)
-        f16 = lambda a: a  # noqa: E731
-    s_g = rng.uniform(0.3, 1.2, n_points) if C == 1 else None
-    s_b = rng.uniform(0.3, 1.2, n_points) if C == 1 else None
-    if geometry == "planar":
-        x_i = rng.uniform(0, 8, (n_points, 2)).astype(np.float32).astype(float)
-        alpha = PlanarAlpha(f16(rng.uniform(0.5, 1.5, (16, 16))), np.array([0.0, 0.0]), 0.5)
-        frame = None
-    elif mesh is not None:
-        x_i = np.asarray(mesh.vertices)[points]
-        alpha = VertexAlpha(rng.uniform(0.8, 1.2, len(mesh.vertices)), np.asarray(mesh.vertices))
-        frame = tangent_frames(np.asarray(mesh.vertex_normals)[points])
-    else:
-        verts = (4 * rng.normal(size=(20, 3))).astype(np.float32).astype(float)
-        x_i = verts[:n_points]
-        alpha = VertexAlpha(f16(rng.uniform(0.5, 1.5, 20)), verts)
-        q, _ = np.linalg.qr(rng.normal(size=(n_points, 3, 3)))
-        frame = np.transpose(q, (0, 2, 1)).astype(np.float32).astype(float)
-    return ExponentialModel(x_i, f16(c), f16(d), alpha, s_g=f16(s_g), s_b=f16(s_b), frame=frame)
 
 
 @pytest.fixture
@@ -91,3 +27,29 @@ def _in_a_scratch_folder(tmp_path, monkeypatch):
     the checkout."""
     monkeypatch.chdir(tmp_path)
     monkeypatch.setenv("TRANSLUCENCY_CACHE", str(tmp_path / "cache"))  # never the user's own cache
+
+
+@pytest.fixture(scope="session")
+def planar_scan(tmp_path_factory):
+    """The planar photon scans of the tests, each acquired once per session.
+
+    ``planar_scan(sample, side=, span=, photons=, seed=, volume_seed=seed)`` → the data set of side × side
+    incident points over span mm (one chunk), 6 mm windows of 0.25 mm, ``photons`` per point and channel
+    with photon seed ``seed``, on a 12 × 12 × 6 mm volume of ``sample`` at 0.25 mm (generator seed
+    ``volume_seed``).  The same arguments give the same (read-only) data set.
+    """
+    volumes, scans = {}, {}
+
+    def scan(sample, *, side, span, photons, seed, volume_seed=None):
+        volume_seed = seed if volume_seed is None else volume_seed
+        key = (sample, side, span, photons, seed, volume_seed)
+        if key not in scans:
+            if (sample, volume_seed) not in volumes:
+                volumes[sample, volume_seed] = make_sample(sample, (12.0, 12.0, 6.0), 0.25, seed=volume_seed)
+            setup = PlanarSetup(grid=(side, side), span=(span, span), pitch=0.25, window=6.0, photons=photons,
+                                seed=seed, chunk_points=side * side)  # fmt: skip
+            folder = tmp_path_factory.mktemp(sample.replace(":", "_"))
+            scans[key] = acquire_planar(volumes[sample, volume_seed], setup, folder / "scan.zarr")
+        return scans[key]
+
+    return scan

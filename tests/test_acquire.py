@@ -142,15 +142,117 @@ def test_dataset_content_is_consistent(tmp_path):
     assert mask.all()  # the windows fit on this sample
 
 
-@pytest.mark.parametrize(
-    "name", ["marble", "apple-slice", "skin", "fibers", "banded", "layered", "homogeneous:apple"]
-)
+def _reduced(name):
+    """(σ_s', σ_a) of a Jensen 2001 material in mm⁻¹, as float32 like the volumes."""
+    m = material(name)
+    return np.float32(m.sigma_s_prime), np.float32(m.sigma_a)
+
+
+def _marble(v):
+    """Body voxels are the marble material; veins absorb more and scatter 40 % less."""
+    s, a = v.sigma_s, v.sigma_a
+    ss, sa = _reduced("marble")
+    np.testing.assert_allclose(s.max(axis=(0, 1, 2)), ss, rtol=1e-6)  # pure body somewhere
+    np.testing.assert_allclose(a.min(axis=(0, 1, 2)), sa, rtol=1e-6)
+    assert (s.min(axis=(0, 1, 2)) >= 0.6 * ss * (1 - 1e-6)).all() and (s.min(axis=(0, 1, 2)) < 0.7 * ss).all()
+    assert (a.max(axis=(0, 1, 2)) > 5 * sa).all()  # the veins
+
+
+def _apple_slice(v):
+    """Apple flesh, a core scattering half as much, five absorbing seeds, little scattering outside."""
+    s, a = v.sigma_s, v.sigma_a
+    ss, sa = _reduced("apple")
+    seeds = (a == np.float32([0.8, 1.2, 1.6])).all(axis=-1)
+    assert seeds.any() and (s[seeds] == 2.0).all()
+    np.testing.assert_allclose(a[~seeds], np.broadcast_to(sa, a[~seeds].shape), rtol=1e-6)
+    centre = s[:, 15:17, 15:17]  # r < 0.2 of the 4 mm radius: the core
+    assert (centre <= 0.5 * 1.15 * ss).all() and (s[:, 8, 16] > 0.6 * ss).all()  # flesh at r = 0.47
+    assert (s[:, 0, 0] <= 0.05 * 1.15 * ss).all()  # a corner lies outside the slice
+
+
+def _skin(v):
+    """An absorbing epidermis (skin1, 3× σ_a, freckles 4× more) over dermis (skin2), with pores."""
+    s, a = v.sigma_s, v.sigma_a
+    (epi_s, epi_a), (der_s, der_a) = _reduced("skin1"), _reduced("skin2")
+    assert (a[0] >= 3 * epi_a * (1 - 1e-6)).all() and np.isclose(a[0].max(axis=(0, 1)), 12 * epi_a).all()
+    assert set(np.unique(s[0, ..., 0])) == {np.float32(epi_s[0]), np.float32(epi_s[0]) * np.float32(0.2)}
+    assert (a[1:] == der_a).all() and (s[2:] == der_s).all()  # dermis below 0.5 mm: no pores there
+    assert (s[1] < der_s).any()  # the pores reach into the dermis
+
+
+def _fibers(v):
+    """Clear lamellae (σ_s ≈ 0.3 mm⁻¹) and a scattering matrix (≈ 8 mm⁻¹): varying across y, never along x."""
+    s = v.sigma_s
+    assert np.ptp(s, axis=2).max() == 0 and np.ptp(v.sigma_a, axis=2).max() == 0
+    np.testing.assert_allclose(np.unique(s[..., 0]), [0.30, 7.5], rtol=1e-6)
+    assert 0.3 < np.mean(s[..., 0] < 1.0) < 0.7  # 50 % fill
+
+
+def _banded(v):
+    """Skin2 bulk crossed by cream bands (4–7× its scattering) and an absorbing disc (20× σ_a)."""
+    s, a = v.sigma_s, v.sigma_a
+    (bulk_s, bulk_a), (cream_s, _) = _reduced("skin2"), _reduced("cream")
+    np.testing.assert_allclose(s.min(axis=(0, 1, 2)), bulk_s, rtol=0.02)  # between the bands: the bulk
+    np.testing.assert_allclose(s.max(axis=(0, 1, 2)), cream_s, rtol=0.02)  # inside a band: cream
+    assert 0.3 < np.mean(s[..., 0] > 0.5 * (bulk_s[0] + cream_s[0])) < 0.7  # 1.5 mm bands, 3 mm pitch
+    assert (a.max(axis=(0, 1, 2)) > 10 * bulk_a).all()  # the disc
+    assert (a[-1] <= bulk_a * (1 + 1e-6)).all()  # the disc is 1 mm deep
+
+
+def _layered(v):
+    """A clear layer (skim milk at a fifth of its scattering) over a dense bulk (3× whole milk)."""
+    s = v.sigma_s
+    clear, dense = 0.2 * _reduced("skimmilk")[0], 3 * _reduced("wholemilk")[0]
+    assert (s[0] < s[-1]).all() and (s >= clear * (1 - 1e-6)).all() and (s <= dense * (1 + 1e-6)).all()
+    np.testing.assert_allclose(s[-1], np.broadcast_to(dense, s[-1].shape), rtol=1e-4)
+    assert (s[0] < 0.6 * dense).all()
+
+
+def _homogeneous_apple(v):
+    """One material everywhere: apple's coefficients."""
+    ss, sa = _reduced("apple")
+    assert (v.sigma_s == ss).all() and (v.sigma_a == sa).all()
+
+
+#: generator → what its docstring says it holds, checked on an 8 × 8 × 3 mm volume of 0.25 mm voxels
+STRUCTURE = {
+    "marble": _marble,
+    "apple-slice": _apple_slice,
+    "skin": _skin,
+    "fibers": _fibers,
+    "banded": _banded,
+    "layered": _layered,
+    "homogeneous:apple": _homogeneous_apple,
+}
+
+
+@pytest.mark.parametrize("name", list(STRUCTURE))
 def test_generators_make_valid_volumes(name):
+    """Physical coefficients (finite, σ_s, σ_a ≥ 0, albedo < 1), the stated materials and structure, the
+    anisotropy g entering as σ_s = σ_s'/(1 − g), and the seed: the same seed the same volume."""
     v = make_sample(name, (8, 8, 3), 0.25, seed=2)
-    assert v.shape == (12, 32, 32)
-    assert (v.sigma_t > 0).all()
+    assert v.shape == (12, 32, 32) and v.sigma_s.shape == v.sigma_a.shape == (12, 32, 32, 3)
+    assert v.sigma_s.dtype == v.sigma_a.dtype == np.float32
+    assert np.isfinite(v.sigma_s).all() and np.isfinite(v.sigma_a).all()
+    assert (v.sigma_s >= 0).all() and (v.sigma_a > 0).all() and (v.sigma_t > 0).all()
+    albedo = v.sigma_s / (v.sigma_s + v.sigma_a)
+    assert (albedo < 1).all() and (albedo > 0).all()
+    assert v.voxel_mm == 0.25 and v.size_mm == (8.0, 8.0, 3.0)
+    assert v.g == 0.0 and -1 < v.g < 1 and v.eta == 1.3
+    assert v.description["generator"] == name
+    STRUCTURE[name](v)
     again = make_sample(name, (8, 8, 3), 0.25, seed=2)
     np.testing.assert_array_equal(v.sigma_s, again.sigma_s)
+    np.testing.assert_array_equal(v.sigma_a, again.sigma_a)
+    if name in ("marble", "apple-slice", "skin", "banded", "layered"):  # noise or positions from the seed
+        other = make_sample(name, (8, 8, 3), 0.25, seed=3)
+        assert not np.array_equal(v.sigma_s, other.sigma_s) or not np.array_equal(v.sigma_a, other.sigma_a)
+    # forward scattering: the same reduced scattering σ_s (1 − g), the same absorption
+    fwd = make_sample(name, (8, 8, 3), 0.25, g=0.5, seed=2)
+    assert fwd.g == 0.5 and fwd.description["g"] == 0.5
+    np.testing.assert_array_equal(fwd.sigma_a, v.sigma_a)
+    scaled = ~(v.sigma_a == np.float32([0.8, 1.2, 1.6])).all(axis=-1)  # apple's seeds: σ_s = 2 mm⁻¹ for any g
+    np.testing.assert_allclose((fwd.sigma_s * 0.5)[scaled], v.sigma_s[scaled], rtol=1e-6)
 
 
 def test_fibers_spread_light_farther_along_x():

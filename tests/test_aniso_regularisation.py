@@ -8,32 +8,27 @@ against the data the model was fitted to.
 import numpy as np
 import pytest
 
-from translucency.acquire import PlanarSetup, acquire_planar, make_sample
 from translucency.evaluate.errors import planar_errors
 from translucency.fit.planar import fit_planar
 
 
-def _scans(tmp_path_factory, sample):
+def _scans(planar_scan, sample):
     """3 × 3 points over 2 mm, 6 mm windows of 0.25 mm: the fitted data (40 k photons, seed 1) and the
-    truth (120 k photons, seed 2) of one volume."""
-    vol = make_sample(sample, (12.0, 12.0, 6.0), 0.25, seed=4)
-    out = []
-    for photons, seed in ((40_000, 1), (120_000, 2)):
-        setup = PlanarSetup(grid=(3, 3), span=(2.0, 2.0), pitch=0.25, window=6.0, photons=photons, seed=seed,
-                            chunk_points=9)  # fmt: skip
-        path = tmp_path_factory.mktemp(sample.replace(":", "_")) / f"scan{seed}.zarr"
-        out.append(acquire_planar(vol, setup, path))
-    return out
+    truth (120 k photons, seed 2) of one volume (generator seed 4)."""
+    return [
+        planar_scan(sample, side=3, span=2.0, photons=photons, seed=seed, volume_seed=4)
+        for photons, seed in ((40_000, 1), (120_000, 2))
+    ]
 
 
 @pytest.fixture(scope="module")
-def homogeneous(tmp_path_factory):
-    return _scans(tmp_path_factory, "homogeneous:marble")
+def homogeneous(planar_scan):
+    return _scans(planar_scan, "homogeneous:marble")
 
 
 @pytest.fixture(scope="module")
-def fibers(tmp_path_factory):
-    return _scans(tmp_path_factory, "fibers")
+def fibers(planar_scan):
+    return _scans(planar_scan, "fibers")
 
 
 def _fits(data):

@@ -6,7 +6,7 @@ import pytest
 from scipy.integrate import quad
 from typer.testing import CliRunner
 
-from conftest import random_exponential_model
+from helpers import random_exponential_model
 from translucency import ExponentialModel, PlanarAlpha, load_model, save_model
 from translucency.cli.app import app
 from translucency.io.model_file import read_header

@@ -1,12 +1,14 @@
 """The command line: help everywhere, the main job, info, one-line errors."""
 
 import json
+import re
 
 import numpy as np
 import pytest
+import typer
 from typer.testing import CliRunner
 
-from conftest import random_exponential_model
+from helpers import random_exponential_model
 from translucency import load_model, save_model
 from translucency.cli.app import app
 from translucency.io.dataset import dataset_identity, open_dataset
@@ -14,22 +16,41 @@ from translucency.io.dataset import dataset_identity, open_dataset
 runner = CliRunner()
 
 
+def _commands(command, path=()):
+    """(path, command) of the command line and of every command and subcommand under it."""
+    yield list(path), command
+    for name, sub in getattr(command, "commands", {}).items():
+        yield from _commands(sub, (*path, name))
+
+
+COMMANDS = list(_commands(typer.main.get_command(app)))
+
+
+def _flat(text):
+    """Help text without the boxes' borders and line breaks: words separated by single spaces."""
+    return " ".join(re.sub(r"[│╭╮╰╯─]", " ", text).split())
+
+
 @pytest.mark.parametrize(
-    "args",
-    [
-        ["--help"],
-        ["demo", "--help"],
-        ["info", "--help"],
-        ["materials", "--help"],
-        ["fit", "--help"],
-        ["evaluate", "--help"],
-        ["acquire", "planar", "--help"],
-    ],
+    ("path", "command"), COMMANDS, ids=[" ".join(p) or "translucency" for p, _ in COMMANDS]
 )
-def test_help(args):
-    res = runner.invoke(app, args)
-    assert res.exit_code == 0
-    assert "Usage" in res.output
+def test_help(path, command):
+    """Every command and subcommand: ``--help`` exits 0 and shows its description, every option (each of
+    its names) and argument with its own help text, and every subcommand."""
+    res = runner.invoke(app, [*path, "--help"], env={"COLUMNS": "240"})
+    assert res.exit_code == 0, res.output
+    assert "Usage" in res.output and "Traceback" not in res.output
+    out = _flat(res.output)
+    assert command.help, f"{path}: no description"
+    assert _flat(command.help.split("\n\n")[0]) in out, path
+    for param in command.params:
+        assert param.help, f"{path}: {param.name} has no help text"
+        assert _flat(param.help) in out, (path, param.name)
+        if param.param_type_name == "option":
+            assert all(f" {name} " in f" {out} " for name in param.opts + param.secondary_opts), param.opts
+    for name, sub in getattr(command, "commands", {}).items():
+        assert not sub.hidden and f" {name} " in out, (path, name)
+    assert len(command.params) + len(getattr(command, "commands", {})) > 0, f"{path}: nothing to list"
 
 
 def test_help_lists_commands():
@@ -97,10 +118,46 @@ def test_demo_fits_the_embedded_measurement(demo_out):
     assert iso["beyond_noise"]["near"] < 0.6 * dip["beyond_noise"]["near"]
     assert noise["near"] < iso["rel_l2_near"]
     assert aniso["rel_l2"] <= iso["rel_l2"]
-    for name in ("index.html", "profiles.png", "error_maps.png", "alpha.png", "params.png"):
-        assert (tmp_path / "report" / name).stat().st_size > 1000
     for label in ("iso", "aniso", "dipole", "burley"):
         assert load_model(tmp_path / "fits" / f"{label}.model.zip").n_points == 1024
+    # every planar model the demo fitted is in the report, with finite held-out errors within [0, 1]
+    planar = {p.name.removesuffix(".model.zip") for p in (tmp_path / "fits").glob("*.model.zip")}
+    planar = {
+        label for label in planar if load_model(tmp_path / "fits" / f"{label}.model.zip").geometry == "planar"
+    }
+    assert set(rep["models"]) == planar and {"iso", "aniso", "dipole", "burley"} <= planar
+    for label, row in [("report", rep), *rep["models"].items()]:
+        held_out = [row[k] for k in ("rel_l2", "rel_l2_near", "rel_l2_mid", "rel_l2_far")]
+        held_out += [row["beyond_noise"][band] for band in ("all", "near", "mid", "far")]
+        assert all(np.isfinite(e) and 0 <= e <= 1 for e in held_out), (label, held_out)
+    assert rep["model"] in rep["models"] and rep["rel_l2"] == rep["models"][rep["model"]]["rel_l2"]
+
+
+def _png_size(path):
+    """(width, height) of a PNG file whose every chunk checks out (its CRCs, its end)."""
+    from PIL import Image  # Pillow comes with matplotlib
+
+    with Image.open(path) as im:
+        assert im.format == "PNG", path
+        im.verify()
+    with Image.open(path) as im:
+        im.load()
+        return im.size
+
+
+def test_demo_report_shows_every_figure(demo_out):
+    """index.html shows every figure of the report, and each is a PNG that decodes and is not empty."""
+    report = demo_out / "report"
+    shown = re.findall(r'<img src="([^"]+)"', (report / "index.html").read_text())
+    assert len(shown) == len(set(shown))
+    # the figures of Figure 1 (profiles, error maps, α, parameters), the relighting and Figure 2
+    assert {"profiles.png", "error_maps.png", "error_ratios.png", "alpha.png", "params.png"} <= set(shown)
+    assert {"relight.png", "figure2.png"} <= set(shown)
+    # every other picture of the folder is one that Figure 2 puts side by side
+    assert {p.name for p in report.glob("*.png")} - set(shown) <= {"ours.png", "reference.png"}
+    for name in {*shown, "ours.png", "reference.png"}:
+        width, height = _png_size(report / name)
+        assert width > 0 and height > 0 and (report / name).stat().st_size > 0, name
 
 
 def test_demo_makes_figure_2(demo_out):
@@ -108,6 +165,9 @@ def test_demo_makes_figure_2(demo_out):
     # the fitted pig beside its converged volpath reference (2 x 256 spp, its own noise 0.043): measured
     # 0.083 / 0.114 with the measured near field (0.50 / 0.43 before it, 0.17 / 0.28 without it)
     assert fig["reference_noise"] < 0.05
+    for key in ("rel_rmse", "flip_mean_object", "flip_mean_image", "reference_noise"):
+        assert np.isfinite(fig[key]) and 0 <= fig[key] <= 1, key
+    assert all(np.isfinite(r["rel_rmse"]) and r["rel_rmse"] >= 0 for r in fig["regions"].values())
     assert fig["rel_rmse"] < 0.12 and fig["flip_mean_object"] < 0.15
     assert all(
         fig["regions"][k]["pixels"] > 0 for k in ("thin", "thick", "shadow edge", "unlit", "silhouette")
@@ -142,6 +202,14 @@ def test_acquire_planar_cli(tmp_path):
     ]
     res = runner.invoke(app, args)
     assert res.exit_code == 0, res.output
+    # what the flags asked for: 2 × 2 points, 4 mm windows of 0.5 mm pixels, 500 photons; R_d a density
+    ds = open_dataset(out)
+    n = ds.window[0]
+    assert ds["x_i"].shape == (4, 2) and ds.pitch == 0.5 and n % 2 == 1 and abs(n * 0.5 - 4) <= 0.5
+    assert ds.header["acquisition"]["photons"] == 500 and ds.complete()
+    R = np.asarray(ds["R_d"])
+    assert R.shape == (4, n, n, 3) and np.isfinite(R).all() and (R >= 0).all() and (R.sum((1, 2)) > 0).all()
+    assert (R.sum(axis=(1, 2)) * 0.5**2 <= np.asarray(ds["total_diffuse"]) + 1e-6).all()
     info = runner.invoke(app, ["info", str(out)])
     assert info.exit_code == 0 and "translucency-dataset v1" in info.output and "1/1 chunks" in info.output
     bad = runner.invoke(app, args[:-2] + ["--window", "40"])

@@ -9,7 +9,6 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
-from translucency.acquire import PlanarSetup, acquire_planar, make_sample
 from translucency.cli.app import app
 from translucency.evaluate.errors import BANDS, planar_errors
 from translucency.fit.planar import fit_planar
@@ -19,29 +18,16 @@ from translucency.model import DipoleModel, PlanarAlpha
 runner = CliRunner()
 
 
-def _scan(tmp_path_factory, sample, side, span, seed):
-    """A small virtual-DISCO scan: side × side points over span mm, 100 k photons, 6 mm windows."""
-    vol = make_sample(sample, (12.0, 12.0, 6.0), 0.25, seed=seed)
-    setup = PlanarSetup(
-        grid=(side, side),
-        span=(span, span),
-        pitch=0.25,
-        window=6.0,
-        photons=100_000,
-        seed=seed,
-        chunk_points=side * side,
-    )
-    return acquire_planar(vol, setup, tmp_path_factory.mktemp(sample) / f"{sample}.zarr")
+@pytest.fixture(scope="module")
+def marble(planar_scan):
+    """3 × 3 points over 3 mm, 100 k photons, seed 3."""
+    return planar_scan("marble", side=3, span=3.0, photons=100_000, seed=3)
 
 
 @pytest.fixture(scope="module")
-def marble(tmp_path_factory):
-    return _scan(tmp_path_factory, "marble", 3, 3.0, 3)
-
-
-@pytest.fixture(scope="module")
-def fibers(tmp_path_factory):
-    return _scan(tmp_path_factory, "fibers", 2, 2.0, 4)
+def fibers(planar_scan):
+    """2 × 2 points over 2 mm, 100 k photons, seed 4 (the data set of tests/test_model_selection.py)."""
+    return planar_scan("fibers", side=2, span=2.0, photons=100_000, seed=4)
 
 
 def test_errors_match_a_plain_loop(tmp_path):

@@ -7,7 +7,7 @@ import pytest
 from scipy import stats
 from scipy.integrate import dblquad, quad
 
-from conftest import random_exponential_model
+from helpers import random_exponential_model
 from translucency import TranslucencyError
 from translucency.model import ExponentialModel, PlanarAlpha
 

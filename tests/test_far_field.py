@@ -8,7 +8,7 @@ import pytest
 import trimesh
 from scipy.spatial import cKDTree
 
-from conftest import random_exponential_model
+from helpers import random_exponential_model
 from translucency import TranslucencyError
 from translucency.geometry import farthest_points, vertex_areas
 from translucency.render.transport import (

@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from conftest import exponential_terms
+from helpers import exponential_terms
 from translucency import TranslucencyError
 from translucency.fit._lm import fit_params_batched
 from translucency.fit._varpro import fit_exponentials_batched, nnls_small

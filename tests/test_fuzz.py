@@ -23,7 +23,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 from typer.testing import CliRunner
 
-from conftest import fuzz_settings
+from helpers import fuzz_settings
 from translucency import load_model
 from translucency.cli.app import app
 from translucency.io.dataset import open_dataset
@@ -361,7 +361,7 @@ def test_max_memory_values():
 def renderable(tmp_path_factory):
     """A per-vertex model that carries its mesh (162 vertices: a render takes about a second) and two
     environment maps, EXR and HDR."""
-    from conftest import random_exponential_model
+    from helpers import random_exponential_model
     from translucency import save_model
     from translucency.mitsuba import mitsuba
 

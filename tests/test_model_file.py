@@ -9,7 +9,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from conftest import random_exponential_model
+from helpers import random_exponential_model
 from translucency import ModelFileError, TranslucencyError, load_model, save_model
 from translucency.io import model_file as mf
 from translucency.model import (

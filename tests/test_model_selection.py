@@ -4,27 +4,21 @@ import numpy as np
 import pytest
 
 from translucency._validate import TranslucencyError
-from translucency.acquire import PlanarSetup, acquire_planar, make_sample
 from translucency.fit.planar import fit_planar, held_out_error, pair_half
 from translucency.geometry import SampleGrid
 
-
-def _scan(tmp_path_factory, sample, seed=4):
-    """2 × 2 points over 2 mm, 100 k photons, 6 mm windows of 0.25 mm (as tests/test_evaluate.py)."""
-    vol = make_sample(sample, (12.0, 12.0, 6.0), 0.25, seed=seed)
-    setup = PlanarSetup(grid=(2, 2), span=(2.0, 2.0), pitch=0.25, window=6.0, photons=100_000, seed=seed,
-                        chunk_points=4)  # fmt: skip
-    return acquire_planar(vol, setup, tmp_path_factory.mktemp(sample.replace(":", "_")) / "scan.zarr")
+#: 2 × 2 points over 2 mm, 100 k photons, seed 4 (volume and photons), as tests/test_evaluate.py's fibers
+SCAN = dict(side=2, span=2.0, photons=100_000, seed=4)
 
 
 @pytest.fixture(scope="module")
-def homogeneous(tmp_path_factory):
-    return _scan(tmp_path_factory, "homogeneous:marble")
+def homogeneous(planar_scan):
+    return planar_scan("homogeneous:marble", **SCAN)
 
 
 @pytest.fixture(scope="module")
-def fibers(tmp_path_factory):
-    return _scan(tmp_path_factory, "fibers")
+def fibers(planar_scan):
+    return planar_scan("fibers", **SCAN)
 
 
 def test_halves_interleave_and_alternate_between_points(homogeneous):

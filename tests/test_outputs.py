@@ -14,7 +14,7 @@ import pytest
 import trimesh
 from typer.testing import CliRunner
 
-from conftest import random_exponential_model
+from helpers import random_exponential_model
 from translucency import TranslucencyError, save_model
 from translucency.cli.app import app
 from translucency.io.dataset import write_dataset

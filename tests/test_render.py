@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 import trimesh
 
-from conftest import random_exponential_model
+from helpers import random_exponential_model
 from translucency import TranslucencyError
 from translucency.geometry import tangent_frames, vertex_areas
 from translucency.mitsuba import mesh_scene

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import time
 from collections.abc import Callable
 from dataclasses import asdict, dataclass
 
@@ -124,8 +125,6 @@ def probe_walk(volume: Volume, setup: PlanarSetup, *, budget_steps: float = 2e6)
     ``budget_steps`` allows; that pass runs twice, the second time timed without its kernel's
     compilation (``seconds_per_step``): about 0.1–0.6 s in all on 2 shared cores.
     """
-    import time
-
     x_i = setup.incident_points(volume)
     walk = dict(seed=setup.seed, theta_inc_deg=setup.theta_inc_deg, index_matched=setup.index_matched)
     t0 = time.perf_counter()
