@@ -102,10 +102,10 @@ def solver_vs_scipy(path: Path, n_sample: int) -> dict:
     from translucency.fit._options import FitContext
     from translucency.fit._pixels import grouped as _grouped
     from translucency.fit._state import FitState
-    from translucency.fit._varpro import fit_exponentials_batched
     from translucency.fit.planar import _PlanarSource
     from translucency.geometry import SampleGrid
     from translucency.io.dataset import open_dataset
+    from translucency.solvers.varpro import fit_exponentials_batched
 
     ds = open_dataset(path)
     rng = np.random.default_rng(0)

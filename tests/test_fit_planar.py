@@ -11,12 +11,12 @@ import pytest
 
 from helpers import exponential_terms
 from translucency import TranslucencyError
-from translucency.fit._lm import fit_params_batched
-from translucency.fit._varpro import fit_exponentials_batched, nnls_small
 from translucency.fit.planar import fit_planar
 from translucency.fit.profile import fit_exponential_profile
 from translucency.io.dataset import write_dataset
 from translucency.model import BurleyModel, DipoleModel, ExponentialModel, PlanarAlpha, burley_R, dipole_R_d
+from translucency.solvers.lm import fit_params_batched
+from translucency.solvers.varpro import fit_exponentials_batched, nnls_small
 
 PITCH = 0.25
 
@@ -65,8 +65,8 @@ def test_batched_varpro_equals_scipy_per_profile():
 
 def test_ring_recurrence_exponentials_equal_numpy_exp():
     """The solver's e^{-a r} (ring-to-ring products and a series to the mean radius) against np.exp."""
-    from translucency.fit._varpro import _exponentials
     from translucency.fit._windows import radius_groups
+    from translucency.solvers.varpro import _exponentials
 
     r_px = np.hypot(*np.mgrid[-40:41, -40:41]).ravel()[None] * PITCH
     gid, r_g, r_base = radius_groups(r_px, PITCH, r_exact=1.0, radius_step=PITCH / 4)

@@ -7,9 +7,9 @@ and of mesh data (:func:`fit_mesh`) build on it, sharing one alternation
 families (:data:`FAMILIES`, :mod:`.families`).
 """
 
+from ..solvers import fit_exponentials_batched
 from ._chunk import FIT_BLOCK
 from ._options import KINDS, WEIGHTINGS, FitContext, FitResult, check_fit_options
-from ._varpro import fit_exponentials_batched
 from .families import FAMILIES, Family
 from .mesh import fit_mesh
 from .planar import PlanarFit, default_chunk_points, fit_planar

@@ -40,8 +40,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ..solvers import fit_exponentials_batched, rate_bounds
 from ._chunk import distance_balance
-from ._varpro import fit_exponentials_batched, rate_bounds
 
 if TYPE_CHECKING:  # annotations only
     from ._chunk import Chunk

@@ -14,7 +14,7 @@ says where α lives; the objective and its weights are in :mod:`._chunk`.
 
 **Alternation.**  Each round (1) fits every point's parameters with α fixed,
 batched over all points (the family's :meth:`~.families.Family.fit`:
-:mod:`._varpro` for exponentials, :mod:`._lm` for the baselines; radii grouped
+:mod:`translucency.solvers` (VarPro for exponentials, LM for the baselines); radii grouped
 exactly as in :mod:`._windows`); (2) for the shared-colour model solves
 :math:`s_\lambda` per point in closed form; (3) solves α per pixel in closed form,
 :math:`\alpha_j = \sum w^2 P y / \sum w^2 P^2` (pooled over neighbours on

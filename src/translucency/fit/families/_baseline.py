@@ -12,7 +12,7 @@ from typing import ClassVar
 
 import numpy as np
 
-from .._lm import fit_params_batched
+from ...solvers import fit_params_batched
 from .._pixels import grouped
 from ._base import Family
 

@@ -1,7 +1,7 @@
 """The sums of exponentials (the paper's eq. (1)): what the isotropic and the anisotropic family share.
 
 P_i(r) = Σ_k c_k e^{−a_k r} per colour row (and direction), fitted by variable
-projection (:mod:`translucency.fit._varpro`): every (point, colour row[,
+projection (:mod:`translucency.solvers.varpro`): every (point, colour row[,
 direction]) sub-problem at once, warm from the previous round where the point
 is ready, else from starts pooled over fixed blocks of
 :data:`~translucency.fit._chunk.POOL_POINTS` points.  With the shared colour
@@ -16,9 +16,9 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ...model import ExponentialModel
+from ...solvers import fit_exponentials_batched, rate_bounds
 from .._chunk import POOL_POINTS
 from .._pixels import predict
-from .._varpro import fit_exponentials_batched, rate_bounds
 from ._base import AUTO_DIRECTIONS, AUTO_TERMS, Family
 
 if TYPE_CHECKING:  # annotations only
