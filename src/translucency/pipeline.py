@@ -40,7 +40,7 @@ from .io.outputs import claim_folder
 from .model import MATERIALS, ExponentialModel, PlanarAlpha
 from .render import Camera, PointLight
 from .render.figure import figure2
-from .render.image import coverage
+from .render.picture import coverage
 from .render.reference import SHIPPED as SHIPPED_REFERENCES
 from .render.reference import converged_reference
 
