@@ -45,7 +45,7 @@ from scipy.spatial import cKDTree
 
 from .._validate import TranslucencyError
 from ..geometry import tangent_frames, vertex_areas
-from ..mitsuba import drjit, mitsuba, rays
+from ..mitsuba import drjit, load_plugin, mitsuba, rays
 from ._far_field import FarField, far_field_operator
 from .lights import EnvironmentLight, PointLight, SpotLight
 
@@ -142,7 +142,7 @@ def _environment_irradiance(mi, mesh, scene, light: EnvironmentLight, eta: float
         w = np.einsum("vkj,vji->vki", local, frame).reshape(-1, 3)
         weight = np.full((len(w), 1), np.pi * light.radiance)  # L cos / p with p = cos/π
     else:
-        emitter = mi.load_dict(light.emitter_dict())
+        emitter = load_plugin(light.emitter_dict())
         it = drjit().zeros(mi.Interaction3f, len(o))
         it.p = mi.Point3f(*(o[:, j].astype(np.float32) for j in range(3)))
         ds, spec = emitter.sample_direction(
@@ -409,7 +409,7 @@ def _measured_per_vertex(model, weights, vertices, area):
     .. math:: \mathrm{total}_v = \sum_j w_{vj}\,\mathrm{total}_j, \qquad
               \mathrm{own}_v = \frac{\mathrm{total}_v}{A_v} \sum_j w_{vj}\, f_j
 
-    (why the fractions blend and the own values do not: docs/objects.md, "The own area").
+    (how much each choice errs against a converged reference: docs/objects.md, "The near field").
     """
     if not model.measured or not {"own", "total"} <= set(model.measured):
         return None, None
