@@ -47,7 +47,7 @@ K_NEAREST = 8
 MAX_CLUSTERS = 3000
 
 
-@dataclass
+@dataclass(kw_only=True)
 class FarField:
     r"""The prepared far field: :math:`L^{far} = \alpha \odot W F B X` (module docstring)."""
 
@@ -157,7 +157,12 @@ def far_field_operator(model, *, v, area, alpha, weights, c, d, radius, surface,
         F.append(out.astype(np.float32))
     B = sp.csr_matrix((area / np.pi, (label, np.arange(V))), shape=(K, V), dtype=np.float32)
     return FarField(
-        mls_weights(v, p), F, [B.copy() for _ in F], alpha.astype(np.float32), label, float(radius)
+        W=mls_weights(v, p),
+        F=F,
+        B=[B.copy() for _ in F],
+        alpha=alpha.astype(np.float32),
+        label=label,
+        radius=float(radius),
     )
 
 

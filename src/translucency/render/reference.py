@@ -122,7 +122,7 @@ def converged_reference(
     Parameters
     ----------
     mesh, volume, light, camera
-        The scene (:func:`translucency.render.image.render_reference`).
+        The scene (:func:`render_reference`).
     mask : ndarray of bool, shape (H, W)
         The object's pixels, over which the noise is measured.
     spp : int

@@ -387,13 +387,13 @@ def transport_matrices(
         data = vals if diag is None else np.concatenate([vals, diag])
         mats.append(sp.csr_matrix((data.astype(np.float32), (rows, cols)), shape=(V, V)))
     if own is None:
-        return Transport(mats, s.astype(np.float32) if shared else None, far=far)
+        return Transport(matrices=mats, scale=s.astype(np.float32) if shared else None, far=far)
     scale = np.maximum(total - area[:, None] * own, 0.0) if shared else None
     return Transport(
-        mats,
-        None if scale is None else scale.astype(np.float32),
-        (area[:, None] / np.pi * own).astype(np.float32),
-        far,
+        matrices=mats,
+        scale=None if scale is None else scale.astype(np.float32),
+        own=(area[:, None] / np.pi * own).astype(np.float32),
+        far=far,
     )
 
 
@@ -422,7 +422,7 @@ def _measured_per_vertex(model, weights, vertices, area):
     return own, total
 
 
-@dataclass
+@dataclass(kw_only=True)
 class Transport:
     r"""The prepared transport: L_λ = T_λ E per channel (:func:`transport_matrices`).
 

@@ -38,7 +38,7 @@ def ring_profile(image: RadianceImage, centre_xy, edges_mm) -> tuple[np.ndarray,
     return 0.5 * (edges[1:] + edges[:-1]), mean, var
 
 
-@dataclass
+@dataclass(kw_only=True)
 class Agreement:
     """How two estimates of the same radiance image agree.
 
@@ -79,4 +79,11 @@ def compare(ours: RadianceImage, ref: RadianceImage, centre_xy, ring_edges_mm) -
     z = z_scores(ours, ref)
     r, m_o, v_o = ring_profile(ours, centre_xy, ring_edges_mm)
     _, m_r, v_r = ring_profile(ref, centre_xy, ring_edges_mm)
-    return Agreement(z[np.isfinite(z)], r, m_o, v_o, m_r, v_r)
+    return Agreement(
+        z=z[np.isfinite(z)],
+        ring_r=r,
+        ring_ours=m_o,
+        ring_ours_var=v_o,
+        ring_ref=m_r,
+        ring_ref_var=v_r,
+    )

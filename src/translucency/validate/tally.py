@@ -37,7 +37,7 @@ from .window import PixelWindow, RadianceImage, _check_fits, pixel_centres
 WALK_BATCH = 8_000_000  # photons per wavefront (about 1 GB of walk state and entry points)
 
 
-@dataclass
+@dataclass(kw_only=True)
 class TopExits:
     """Photons of one channel that left through the top face: position (mm) and cos θ to +z.
 
@@ -84,7 +84,12 @@ def walk_spot(
         cs.append(res.cos_exit[top])
     seconds = time.perf_counter() - t0
     return TopExits(
-        np.concatenate(xs), np.concatenate(ys), np.concatenate(cs), n, spot_power(*profile), seconds
+        x=np.concatenate(xs),
+        y=np.concatenate(ys),
+        cos_exit=np.concatenate(cs),
+        n_photons=n,
+        power=spot_power(*profile),
+        seconds=seconds,
     )
 
 

@@ -18,14 +18,15 @@ camera looking straight down at a window of pixels around the beam:
   :math:`\theta_c = \arctan(\rho_b/D)` with Mitsuba's linear falloff from the
   beam width :math:`\tfrac34\theta_c` to :math:`\theta_c`.  The irradiance of
   the plane z = 0 is :math:`E(\rho) = I\,f(\theta)\cos^3\theta/D^2`; it is
-  read from Mitsuba's own emitter (float32 included) by :func:`spot_profile`.
+  read from Mitsuba's own emitter (float32 included) by :func:`.beam.spot_profile`.
 * **camera**: ``orthographic`` along −z, ``hdrfilm`` with a box filter, so a
   pixel's value is the mean radiance :math:`L(\vec x_o, +\hat z)` over its
   footprint; the ``moment`` integrator records each pixel's second moment,
   whence the variance of the pixel mean, :math:`(\overline{L^2} - \bar L^2)/(S-1)`
   for S samples per pixel.
 
-Units: mm, and radiance per unit intensity of the spot (W mm⁻² sr⁻¹ per W sr⁻¹).
+The scene is built by :func:`translucency.mitsuba.scenes.slab_scene`.  Units: mm, and radiance per
+unit intensity of the spot (W mm⁻² sr⁻¹ per W sr⁻¹).
 """
 
 from __future__ import annotations
