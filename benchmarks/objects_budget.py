@@ -39,8 +39,10 @@ from translucency.geometry import vertex_areas
 from translucency.io.mesh import load_mesh
 from translucency.io.mesh_dataset import open_mesh_dataset
 from translucency.mitsuba import mesh_scene
-from translucency.render.image import Camera, VertexPicture, compare, coverage
+from translucency.render.camera import Camera
+from translucency.render.compare import compare
 from translucency.render.lights import parse_light
+from translucency.render.picture import VertexPicture, coverage
 from translucency.render.reference import converged_reference
 from translucency.render.transport import (
     neighbour_weights,

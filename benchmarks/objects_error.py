@@ -19,7 +19,8 @@ from translucency.acquire.mesh import acquire_mesh
 from translucency.fit.mesh import fit_mesh
 from translucency.mitsuba import mesh_scene
 from translucency.pipeline import FIGURE2_REFERENCE_SPP, figure2_scene
-from translucency.render.image import VertexPicture, compare, coverage
+from translucency.render.compare import compare
+from translucency.render.picture import VertexPicture, coverage
 from translucency.render.reference import converged_reference
 from translucency.render.transport import relight_vertices, transport_matrices, vertex_irradiance
 

@@ -25,9 +25,10 @@ from translucency.acquire.mesh import acquire_mesh, object_volume
 from translucency.fit.mesh import fit_mesh
 from translucency.io.mesh import load_mesh
 from translucency.mitsuba import mesh_scene
-from translucency.render.figure import region_errors
-from translucency.render.image import Camera, VertexPicture, compare, coverage
+from translucency.render.camera import Camera
+from translucency.render.compare import compare, region_errors
 from translucency.render.lights import parse_light
+from translucency.render.picture import VertexPicture, coverage
 from translucency.render.reference import converged_reference
 from translucency.render.transport import relight_vertices, transport_matrices, vertex_irradiance
 

@@ -27,8 +27,9 @@ from translucency.fit.mesh import fit_mesh
 from translucency.mitsuba import mesh_scene
 from translucency.pipeline import FIGURE2_REFERENCE_SPP, figure2_scene
 from translucency.render import PointLight, relight_vertices, transport_matrices, vertex_irradiance
-from translucency.render.image import VertexPicture, coverage, rel_rmse, render_reference
-from translucency.render.reference import converged_reference
+from translucency.render.compare import rel_rmse
+from translucency.render.picture import VertexPicture, coverage
+from translucency.render.reference import converged_reference, render_reference
 
 
 def fitted(pig, tmp, points, photons, index_matched=True):

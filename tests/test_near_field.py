@@ -137,8 +137,10 @@ def test_skin_under_a_spot_renders_close_to_its_reference(tmp_path):
     not shipped): within 0.25 of a measured-noise volpath reference (the cow at 128 × 4000: 0.17)."""
     from translucency.acquire.objects import make_pig
     from translucency.mitsuba import mesh_scene
-    from translucency.render.image import Camera, VertexPicture, compare, coverage
+    from translucency.render.camera import Camera
+    from translucency.render.compare import compare
     from translucency.render.lights import parse_light
+    from translucency.render.picture import VertexPicture, coverage
     from translucency.render.reference import converged_reference
     from translucency.render.transport import vertex_irradiance
 

@@ -6,8 +6,9 @@ import numpy as np
 import pytest
 
 from translucency.pipeline import FIGURE2_REFERENCE_SPP, figure2_scene
-from translucency.render.image import coverage, rel_rmse, render_reference
-from translucency.render.reference import SHIPPED, converged_reference, reference_key
+from translucency.render.compare import rel_rmse
+from translucency.render.picture import coverage
+from translucency.render.reference import SHIPPED, converged_reference, reference_key, render_reference
 
 
 def test_the_main_jobs_reference_is_shipped_under_its_key():
@@ -26,7 +27,7 @@ def test_noise_is_measured_from_two_independent_renders(tmp_path):
     import trimesh
 
     from translucency.acquire.mesh import object_volume
-    from translucency.render.image import Camera
+    from translucency.render.camera import Camera
     from translucency.render.lights import PointLight
 
     ball = trimesh.creation.icosphere(2, radius=4.0)

@@ -22,7 +22,7 @@ from translucency.render import (
     transport_matrices,
     vertex_irradiance,
 )
-from translucency.render.image import coverage
+from translucency.render.picture import coverage
 
 
 @pytest.fixture(scope="module")
@@ -304,7 +304,7 @@ def test_fresnel_factors_against_closed_forms():
 
 
 def test_bad_environment_maps_and_dielectric_references(ball, tmp_path):
-    from translucency.render.image import render_reference
+    from translucency.render.reference import render_reference
 
     with pytest.raises(TranslucencyError, match="does not exist"):
         parse_light(f"env:{tmp_path / 'none.exr'}")
@@ -359,7 +359,7 @@ def test_parameters_follow_the_surface_not_the_gap():
 
 def test_thickness_and_region_errors():
     """Thickness along −n of a box is its extent across that face; region errors are relative RMSEs."""
-    from translucency.render.figure import region_errors, vertex_thickness
+    from translucency.render.compare import region_errors, vertex_thickness
 
     box = trimesh.creation.box(extents=(8.0, 20.0, 30.0)).subdivide().subdivide()
     scene = mesh_scene(box)

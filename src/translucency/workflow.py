@@ -33,7 +33,8 @@ from .io.mesh_dataset import MeshDataset, is_mesh_dataset, open_mesh_dataset
 from .io.model_file import load_model, read_header
 from .io.outputs import claim_folder
 from .render import Camera, parse_light
-from .render.figure import boundary_eta, figure2, object_of_model, volume_of_dataset
+from .render.figure import figure2
+from .render.object import boundary_eta, object_of_model, volume_of_dataset
 from .rig import ImportSetup, load_calibration
 from .rig import import_images as _import_images
 from .rig.hdr import read_hdr

@@ -41,9 +41,10 @@ from ..io.model_file import ModelFileError, load_model, read_header, save_model
 from ..io.outputs import claim_folder, claim_output
 from ..model import MATERIALS, check_physics, dipole_total_reflectance
 from ..pipeline import DEMO_FITS, run_demo
-from ..render.figure import boundary_eta, figure2, object_of_model, volume_of_dataset
-from ..render.image import Camera
+from ..render.camera import Camera
+from ..render.figure import figure2
 from ..render.lights import parse_light
+from ..render.object import boundary_eta, object_of_model, volume_of_dataset
 from ._flags import cli_words
 from ._options import scheduler_option as _scheduler_option
 from .rig import acquire_photographs_cmd, import_app

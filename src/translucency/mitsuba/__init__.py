@@ -8,13 +8,21 @@ stage that talks to Mitsuba goes through here.
 
 from ._engine import drjit, engine_versions, mitsuba, prepare_libllvm
 from .scenes import (
+    NO_ROULETTE,
     SPOT_BEAM_FRACTION,
+    load_plugin,
     load_with_mesh,
     look_at,
+    markers_scene,
     mesh_scene,
+    object_volpath_scene,
+    perspective_camera_dict,
+    pinhole_sensor_dict,
     rays,
     slab_medium_dict,
+    slab_scene,
     spot_dict,
+    vertex_radiance_scene,
     write_ply,
 )
 
@@ -31,4 +39,12 @@ __all__ = [
     "look_at",
     "spot_dict",
     "SPOT_BEAM_FRACTION",
+    "NO_ROULETTE",
+    "load_plugin",
+    "perspective_camera_dict",
+    "pinhole_sensor_dict",
+    "vertex_radiance_scene",
+    "object_volpath_scene",
+    "slab_scene",
+    "markers_scene",
 ]

@@ -1,9 +1,9 @@
-"""Mitsuba scene pieces built from our arrays: ray wavefronts, meshes, media from volumes.
+"""Mitsuba scenes built from our arrays: ray wavefronts, meshes, media from volumes, and every scene.
 
-One home for handing our data to Mitsuba 3, used by the acquisition (photon
-walks in a mesh), the renderer (shadow rays, pictures, the ``volpath``
-reference) and the validation harness (the slab under ``volpath``).  Units: mm,
-coefficients in mm⁻¹.
+One home for handing our data to Mitsuba 3 (every ``load_dict`` of the package is here), used by the
+acquisition (photon walks in a mesh), the renderer (shadow rays, :func:`vertex_radiance_scene` for our
+picture, :func:`object_volpath_scene` for the reference), the validation harness and the virtual rig
+(:func:`slab_scene`: the slab under ``volpath``; :func:`markers_scene`).  Units: mm, coefficients in mm⁻¹.
 """
 
 from __future__ import annotations
@@ -15,6 +15,8 @@ import numpy as np
 
 from ._engine import mitsuba
 
+#: an rr_depth that ``volpath`` never reaches: Russian roulette off (see :func:`slab_scene`)
+NO_ROULETTE = 1 << 30
 #: Mitsuba's ``spot`` emitter: full intensity up to this fraction of the cutoff angle (its default
 #: ``beam_width``), then falling linearly in angle to 0 at the cutoff
 SPOT_BEAM_FRACTION = 0.75
@@ -158,17 +160,20 @@ def slab_shape_dict(volume, channel: int) -> dict:
 
 
 def perspective_camera_dict(
-    origin, target, fov_deg: float, width: int, height: int, spp: int = 16, up=None
+    origin, target, fov_deg: float, width: int, height: int, spp: int = 16, up=None, *, far_clip=1e5
 ) -> dict:
     """Mitsuba ``perspective`` sensor at ``origin`` looking at ``target`` (mm), horizontal field of view
     ``fov_deg``, an RGB ``hdrfilm`` of ``width`` × ``height`` pixels with a box filter (a pixel's value is
-    the mean radiance over its footprint)."""
+    the mean radiance over its footprint).
+
+    ``far_clip`` (mm) with the near clip at 0.01 mm; None leaves both and the field of view's axis to
+    Mitsuba's defaults (the renderer's :class:`translucency.render.Camera`).
+    """
+    clip = {} if far_clip is None else {"fov_axis": "x", "near_clip": 1e-2, "far_clip": float(far_clip)}
     return {
         "type": "perspective",
         "fov": float(fov_deg),
-        "fov_axis": "x",
-        "near_clip": 1e-2,
-        "far_clip": 1e5,
+        **clip,
         "to_world": look_at(origin, target, up),
         "film": {
             "type": "hdrfilm",
@@ -181,6 +186,22 @@ def perspective_camera_dict(
     }
 
 
+def pinhole_sensor_dict(camera, spp: int) -> dict:
+    """The ``perspective`` sensor of a pinhole ``camera`` (its ``origin``, ``target``, ``up`` in mm, ``fov``
+    in degrees, ``width`` × ``height`` pixels; :class:`translucency.render.Camera`), ``spp`` samples a
+    pixel, with Mitsuba's default clipping planes."""
+    return perspective_camera_dict(
+        camera.origin,
+        camera.target,
+        camera.fov,
+        camera.width,
+        camera.height,
+        spp,
+        up=camera.up,
+        far_clip=None,
+    )
+
+
 def marker_dict(x: float, y: float, radius: float, radiance: float = 1.0, z: float = 1e-3) -> dict:
     """A glowing disc marker of ``radius`` (mm) lying on the plane z ≈ 0 at (x, y), facing +z (calibration
     targets of the virtual rig)."""
@@ -189,3 +210,89 @@ def marker_dict(x: float, y: float, radius: float, radiance: float = 1.0, z: flo
         [float(x), float(y), float(z)]
     ) @ mi.ScalarTransform4f().scale([float(radius), float(radius), 1.0])
     return {"type": "disk", "to_world": to_world, "emitter": {"type": "area", "radiance": float(radiance)}}
+
+
+def load_plugin(description: dict):
+    """One Mitsuba object (an emitter, a sensor, …) from its dictionary, outside any scene."""
+    return mitsuba().load_dict(description)
+
+
+def vertex_radiance_scene(mesh, sensor: dict, *, eta: float = 1.0, environment: dict | None = None):
+    """Our picture's scene: ``mesh`` as an area emitter of its ``vertex_color`` (zero, set later), seen by
+    ``sensor`` through Mitsuba's ``direct`` integrator.
+
+    η ≠ 1 gives the surface a ``plastic`` BSDF with no diffuse part (Fresnel reflection off a smooth
+    dielectric); ``environment``, an emitter dictionary, is seen behind the object and in that reflection.
+    """
+    bsdf = (
+        {"type": "diffuse", "reflectance": 0.0}
+        if eta == 1.0
+        else {"type": "plastic", "diffuse_reflectance": 0.0, "int_ior": float(eta), "ext_ior": 1.0}
+    )
+    scene = {
+        "type": "scene",
+        "integrator": {"type": "direct"},
+        "object": {
+            "bsdf": bsdf,
+            "emitter": {"type": "area", "radiance": {"type": "mesh_attribute", "name": "vertex_color"}},
+        },
+        "camera": sensor,
+    }
+    if environment is not None:
+        scene["sky"] = environment
+    return load_with_mesh(mesh, scene, colour=np.zeros((len(mesh.vertices), 3)))
+
+
+def object_volpath_scene(mesh, volume, channel: int, emitter: dict, sensor: dict, *, eta: float = 1.0):
+    """The reference's scene: ``mesh`` filled with one channel of ``volume`` (over its bounding box),
+    behind a ``null`` (η = 1) or smooth ``dielectric`` boundary, lit by ``emitter``, path-traced by
+    ``volpath`` without depth limit or Russian roulette before depth 100,000."""
+    boundary = (
+        {"type": "null"} if eta == 1.0 else {"type": "dielectric", "int_ior": float(eta), "ext_ior": 1.0}
+    )
+    lo, hi = mesh.bounds
+    return load_with_mesh(
+        mesh,
+        {
+            "type": "scene",
+            "integrator": {"type": "volpath", "max_depth": -1, "rr_depth": 100_000},
+            "object": {
+                "bsdf": boundary,
+                "interior": slab_medium_dict(volume, channel, (lo[0], lo[1], hi[2])),
+            },
+            "light": emitter,
+            "camera": sensor,
+        },
+    )
+
+
+def slab_scene(
+    volume, channel: int, emitter: dict, sensor: dict, *, rr_depth: int = NO_ROULETTE, moment=False
+):
+    """The index-matched slab of one channel of ``volume`` (:func:`slab_shape_dict`) lit by ``emitter`` and
+    seen by ``sensor``, path-traced by ``volpath`` (unbounded depth, roulette from ``rr_depth``).
+
+    ``moment``: ``volpath`` nested in the ``moment`` integrator, which also records each pixel's second
+    moment (the variance of the validation harness).
+    """
+    integrator = {"type": "volpath", "max_depth": -1, "rr_depth": int(rr_depth)}
+    if moment:
+        integrator = {"type": "moment", "nested": integrator}
+    return mitsuba().load_dict(
+        {
+            "type": "scene",
+            "integrator": integrator,
+            "slab": slab_shape_dict(volume, channel),
+            "spot": emitter,
+            "camera": sensor,
+        }
+    )
+
+
+def markers_scene(sensor: dict, markers_mm, radius_mm: float):
+    """Glowing disc markers (:func:`marker_dict`) at ``markers_mm`` (N, 2) on z ≈ 0, seen by ``sensor``
+    through the ``direct`` integrator."""
+    scene = {"type": "scene", "integrator": {"type": "direct"}, "camera": sensor}
+    for k, (x, y) in enumerate(np.asarray(markers_mm, float)):
+        scene[f"marker{k}"] = marker_dict(x, y, radius_mm)
+    return mitsuba().load_dict(scene)

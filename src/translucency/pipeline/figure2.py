@@ -10,7 +10,7 @@ from ..fit.mesh import fit_mesh
 from ..io.model_file import save_model
 from ..render import Camera, PointLight
 from ..render.figure import figure2
-from ..render.image import coverage
+from ..render.picture import coverage
 from ..render.reference import SHIPPED as SHIPPED_REFERENCES
 from ..render.reference import converged_reference
 

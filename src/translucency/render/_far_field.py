@@ -47,7 +47,7 @@ K_NEAREST = 8
 MAX_CLUSTERS = 3000
 
 
-@dataclass
+@dataclass(kw_only=True)
 class FarField:
     r"""The prepared far field: :math:`L^{far} = \alpha \odot W F B X` (module docstring)."""
 
@@ -104,7 +104,7 @@ def default_clusters(V: int, surface: float, radius: float) -> int:
     return int(min(V, np.clip(K, 256, MAX_CLUSTERS)))
 
 
-def far_field_operator(model, v, area, alpha, weights, c, d, radius, surface, clusters=None):
+def far_field_operator(model, *, v, area, alpha, weights, c, d, radius, surface, clusters=None):
     r"""The far field of a transport with near radius ``radius`` (mm), before normalisation
     (:math:`b_i = A_i/\pi`); ``None`` when every pair of vertices lies within it.
 
@@ -141,28 +141,28 @@ def far_field_operator(model, v, area, alpha, weights, c, d, radius, surface, cl
     for ch in range(c.shape[1]):
         out = np.empty((K, K))
         _cluster_to_seed(
-            p,
-            centroid,
-            rho,
-            float(radius),
-            THETA,
-            rep.indptr,
-            rep.indices,
-            rep.data,
-            np.ascontiguousarray(model.c[:, ch, 0]),
-            np.ascontiguousarray(model.d[:, ch, 0]),
-            mem_ptr,
-            order,
-            mem_w,
-            v,
-            np.ascontiguousarray(c[:, ch]),
-            np.ascontiguousarray(d[:, ch]),
-            out,
+            seeds=p,
+            centroid=centroid,
+            rho=rho,
+            radius=float(radius),
+            representatives=rep,
+            point_c=np.ascontiguousarray(model.c[:, ch, 0]),
+            point_d=np.ascontiguousarray(model.d[:, ch, 0]),
+            members=(mem_ptr, order, mem_w),
+            x=v,
+            vertex_c=np.ascontiguousarray(c[:, ch]),
+            vertex_d=np.ascontiguousarray(d[:, ch]),
+            out=out,
         )
         F.append(out.astype(np.float32))
     B = sp.csr_matrix((area / np.pi, (label, np.arange(V))), shape=(K, V), dtype=np.float32)
     return FarField(
-        mls_weights(v, p), F, [B.copy() for _ in F], alpha.astype(np.float32), label, float(radius)
+        W=mls_weights(v, p),
+        F=F,
+        B=[B.copy() for _ in F],
+        alpha=alpha.astype(np.float32),
+        label=label,
+        radius=float(radius),
     )
 
 
@@ -187,12 +187,46 @@ def _farthest_points(x, k):
     return chosen
 
 
-@njit(parallel=True, cache=True)
 def _cluster_to_seed(
+    *, seeds, centroid, rho, radius, representatives, point_c, point_d, members, x, vertex_c, vertex_d, out
+) -> None:
+    """Fill ``out`` (K, K) with F of one channel (:func:`_cluster_to_seed_kernel`), every array by name.
+
+    ``seeds``, ``centroid`` (K, 3) mm and ``rho`` (K,) mm: the clusters' seeds, area centroids and radii;
+    ``representatives``: (K × N) CSR, each cluster's mean profile as weights of the incident points;
+    ``point_c``, ``point_d`` (N, n): the incident points' terms; ``members`` = (ptr (K + 1,), vertex
+    (V,), A_i / A_J (V,)): the members of each cluster; ``x`` (V, 3) mm and ``vertex_c``, ``vertex_d``
+    (V, T): the vertices and their blended terms.
+    """
+    mem_ptr, mem_i, mem_w = members
+    _cluster_to_seed_kernel(
+        seeds,
+        centroid,
+        rho,
+        radius,
+        THETA,
+        representatives.indptr,
+        representatives.indices,
+        representatives.data,
+        point_c,
+        point_d,
+        mem_ptr,
+        mem_i,
+        mem_w,
+        x,
+        vertex_c,
+        vertex_d,
+        out,
+    )
+
+
+@njit(parallel=True, cache=True)
+def _cluster_to_seed_kernel(
     p, centroid, rho, R, theta, rep_ptr, rep_p, rep_w, cp, dp, mem_ptr, mem_i, mem_w, x, cv, dv, out
 ):
     """out[O, J]: radiance at seed O per unit power of cluster J (mm⁻²), the rule of the module docstring.
-    cp, dp: incident points' terms (N, n); cv, dv: the vertices' blended terms (V, T)."""
+    cp, dp: incident points' terms (N, n); cv, dv: the vertices' blended terms (V, T).  Called only by
+    :func:`_cluster_to_seed`, which names every argument (Numba takes no keyword-only ones)."""
     K = p.shape[0]
     for O in prange(K):
         for J in range(K):

@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from .._validate import TranslucencyError
-from ..mitsuba import SPOT_BEAM_FRACTION, mitsuba, spot_dict
+from ..mitsuba import SPOT_BEAM_FRACTION, load_plugin, mitsuba, spot_dict
 
 #: the largest power (I in W/sr, E in W/mm², L and a map's scale in W/(mm² sr)) a light may have: far
 #: beyond any lamp or the sun, well inside float32, so that irradiance, transport and pictures stay finite
@@ -184,7 +184,7 @@ def _environment_map(rest: str) -> EnvironmentLight:
     light = EnvironmentLight(s, filename=str(path.resolve()))
     try:
         pixels = np.asarray(mitsuba().Bitmap(str(path.resolve())), dtype=np.float64)
-        mitsuba().load_dict(light.emitter_dict())
+        load_plugin(light.emitter_dict())
     except Exception as exc:  # noqa: BLE001 — Mitsuba's message is long; one line names the file
         text = (str(exc).strip().splitlines() or [type(exc).__name__])[0]
         raise TranslucencyError(f"light: {path} is not a readable environment map ({text[:120]})") from None

@@ -1,10 +1,15 @@
-r"""A converged path-traced reference whose own noise is measured, cached on disk.
+r"""The path-traced reference picture of an object, converged, its own noise measured, cached on disk.
 
-An object comparison is only as good as its reference: Mitsuba's ``volpath``
-at S samples per pixel carries Monte Carlo noise of relative size
-:math:`\propto 1/\sqrt S`.  :func:`converged_reference` renders the reference
-twice with independent seeds (A, B) and returns their mean with its measured
-noise,
+:func:`render_reference` renders the same object, volume, light and camera as our picture with
+Mitsuba's ``volpath`` (heterogeneous medium over the bounding box, one grey channel at a time as in
+:mod:`translucency.validate.volpath`), behind a ``null`` boundary (index-matched) or a smooth
+``dielectric`` one.  A dielectric object can only be path-traced under an environment light: point,
+spot and directional lights reach its inside through a delta refraction, a path ``volpath`` cannot
+sample.
+
+An object comparison is only as good as its reference: ``volpath`` at S samples per pixel carries
+Monte Carlo noise of relative size :math:`\propto 1/\sqrt S`.  :func:`converged_reference` renders the
+reference twice with independent seeds (A, B) and returns their mean with its measured noise,
 
 .. math:: \varepsilon_{ref} = \frac{\lVert A - B \rVert}{2\,\lVert (A + B)/2 \rVert}
           \quad\text{(relative RMSE over the object's pixels)},
@@ -15,6 +20,8 @@ that defines it — mesh, volume, light, camera, samples, boundary and the
 version of translucency (Mitsuba's is recorded beside it) — in ``$TRANSLUCENCY_CACHE`` (default
 ``~/.cache/translucency``), and looked up first among the references shipped
 with the package (``translucency/data/references``: the main job's).
+
+Units: radiance in W/(mm² sr) for the lights' W/sr (point) or W/mm² (directional).
 """
 
 from __future__ import annotations
@@ -27,10 +34,43 @@ from pathlib import Path
 
 import numpy as np
 
+from .._validate import TranslucencyError
 from .._version import __version__
 from ..io.atomic import atomic_path, write_json
-from ..mitsuba import engine_versions, mitsuba
-from .image import Camera, rel_rmse, render_reference
+from ..mitsuba import engine_versions, mitsuba, object_volpath_scene, pinhole_sensor_dict
+from .camera import Camera
+from .compare import rel_rmse
+from .lights import EnvironmentLight
+
+
+def render_reference(
+    mesh, volume, light, camera: Camera, *, spp: int = 256, seed: int = 0, eta: float = 1.0
+) -> tuple[np.ndarray, float]:
+    """The same object path-traced by Mitsuba's ``volpath``; returns (image (H, W, 3), seconds).
+
+    The seconds are the path tracing alone (three grey renders; building the scenes is not counted).
+
+    ``eta`` ≠ 1: a smooth dielectric boundary (environment lights only, see the module docstring).
+    """
+    mi = mitsuba()
+    if eta != 1.0 and not isinstance(light, EnvironmentLight):
+        raise TranslucencyError(
+            "reference: volpath cannot light a dielectric object with a point, spot or "
+            "directional light (a delta refraction); use an env light or an index-matched "
+            "data set"
+        )
+    if not hasattr(light, "emitter_dict"):
+        raise TranslucencyError(f"light: no reference for {light!r}")
+    emitter = light.emitter_dict()
+    seconds = 0.0
+    channels = []
+    for ch in range(3):
+        scene = object_volpath_scene(mesh, volume, ch, emitter, pinhole_sensor_dict(camera, spp), eta=eta)
+        t = time.perf_counter()
+        channels.append(np.asarray(mi.render(scene, seed=3 * seed + ch), dtype=np.float64)[..., ch])
+        seconds += time.perf_counter() - t
+    return np.stack(channels, axis=2), seconds
+
 
 #: references shipped with the package (the main job's), looked up before the user's cache
 SHIPPED = Path(__file__).resolve().parent.parent / "data" / "references"
@@ -82,7 +122,7 @@ def converged_reference(
     Parameters
     ----------
     mesh, volume, light, camera
-        The scene (:func:`translucency.render.image.render_reference`).
+        The scene (:func:`render_reference`).
     mask : ndarray of bool, shape (H, W)
         The object's pixels, over which the noise is measured.
     spp : int

@@ -45,7 +45,7 @@ from scipy.spatial import cKDTree
 
 from .._validate import TranslucencyError
 from ..geometry import tangent_frames, vertex_areas
-from ..mitsuba import drjit, mitsuba, rays
+from ..mitsuba import drjit, load_plugin, mitsuba, rays
 from ._far_field import FarField, far_field_operator
 from .lights import EnvironmentLight, PointLight, SpotLight
 
@@ -142,7 +142,7 @@ def _environment_irradiance(mi, mesh, scene, light: EnvironmentLight, eta: float
         w = np.einsum("vkj,vji->vki", local, frame).reshape(-1, 3)
         weight = np.full((len(w), 1), np.pi * light.radiance)  # L cos / p with p = cos/π
     else:
-        emitter = mi.load_dict(light.emitter_dict())
+        emitter = load_plugin(light.emitter_dict())
         it = drjit().zeros(mi.Interaction3f, len(o))
         it.p = mi.Point3f(*(o[:, j].astype(np.float32) for j in range(3)))
         ds, spec = emitter.sample_direction(
@@ -243,13 +243,44 @@ def vertex_parameters(model, vertices, k: int = 4, weights=None):
     return c, d, s
 
 
+#: the most vertex pairs a transport holds (near pairs both ways, plus the diagonal): about 7.5 GB at the
+#: measured 240–330 bytes a pair; :func:`default_radius` stays below it and :func:`transport_matrices`
+#: refuses beyond it
+MAX_PAIRS = 2.5e7
+
+
+def default_radius(model, mesh, *, max_pairs: float = MAX_PAIRS) -> float:
+    r"""The transport's default near radius (mm): the model's 99 % energy radius, or less where the pairs
+    would not fit.
+
+    Pairs within r on a surface of area A with V vertices number about :math:`V^2 \pi r^2 / A`; the radius
+    is capped where that reaches half of ``max_pairs``, :math:`r \le \sqrt{p_{max} A / (2 \pi V^2)}`.
+
+    Parameters
+    ----------
+    model : VertexModel
+        Its ``energy_radius(0.99)`` (largest over points and channels) is the wanted radius.
+    mesh : trimesh.Trimesh
+        The object (its vertices and surface area).
+    max_pairs : float
+        The pair limit, :data:`MAX_PAIRS` by default.
+
+    Examples
+    --------
+    >>> r = default_radius(model, mesh)  # doctest: +SKIP
+    """
+    V = len(mesh.vertices)
+    fit_pairs = np.sqrt(0.5 * max_pairs * mesh.area / (np.pi * V**2))
+    return float(min(np.max(model.energy_radius(0.99)), fit_pairs))
+
+
 def transport_matrices(
     model,
     mesh,
     *,
     radius: float | None = None,
     r_min: float | None = None,
-    max_pairs: float = 2.5e7,
+    max_pairs: float = MAX_PAIRS,
     far_field: bool = True,
     clusters: int | None = None,
 ):
@@ -292,13 +323,8 @@ def transport_matrices(
     area = vertex_areas(mesh)
     weights = neighbour_weights(model, mesh)
     c, d, s = vertex_parameters(model, mesh, weights=weights)
-    if radius is None:
-        # the 99 % energy radius, or less where the pairs would not fit in memory:
-        # pairs ≈ V² π r² / (surface area)
-        fit_pairs = np.sqrt(0.5 * max_pairs * mesh.area / (np.pi * V**2))
-        rad = float(min(np.max(model.energy_radius(0.99)), fit_pairs))
-    else:
-        rad = float(radius)
+    own, total = _measured_per_vertex(model, weights, v, area)
+    rad = default_radius(model, mesh, max_pairs=max_pairs) if radius is None else float(radius)
     pairs = cKDTree(v).query_pairs(rad, output_type="ndarray")
     if 2 * len(pairs) + V > max_pairs:
         raise TranslucencyError(
@@ -315,10 +341,20 @@ def transport_matrices(
     alpha = model.alpha.values if len(model.alpha.values) == V else model.alpha.at(v)
     # shared colour (one fall-off, C = 1): T_λ = T · diag(s_λ) — one matrix, the scale goes with E
     shared = c.shape[1] == 1
-    own, total = _measured_per_vertex(model, weights, v, area)
     # the pairs beyond rad: clusters and their K × K operator, b_i = A_i/π until normalised below
     far = (
-        far_field_operator(model, v, area, alpha, weights, c, d, rad, float(mesh.area), clusters)
+        far_field_operator(
+            model,
+            v=v,
+            area=area,
+            alpha=alpha,
+            weights=weights,
+            c=c,
+            d=d,
+            radius=rad,
+            surface=float(mesh.area),
+            clusters=clusters,
+        )
         if far_field
         else None
     )
@@ -351,13 +387,13 @@ def transport_matrices(
         data = vals if diag is None else np.concatenate([vals, diag])
         mats.append(sp.csr_matrix((data.astype(np.float32), (rows, cols)), shape=(V, V)))
     if own is None:
-        return Transport(mats, s.astype(np.float32) if shared else None, far=far)
+        return Transport(matrices=mats, scale=s.astype(np.float32) if shared else None, far=far)
     scale = np.maximum(total - area[:, None] * own, 0.0) if shared else None
     return Transport(
-        mats,
-        None if scale is None else scale.astype(np.float32),
-        (area[:, None] / np.pi * own).astype(np.float32),
-        far,
+        matrices=mats,
+        scale=None if scale is None else scale.astype(np.float32),
+        own=(area[:, None] / np.pi * own).astype(np.float32),
+        far=far,
     )
 
 
@@ -373,8 +409,7 @@ def _measured_per_vertex(model, weights, vertices, area):
     .. math:: \mathrm{total}_v = \sum_j w_{vj}\,\mathrm{total}_j, \qquad
               \mathrm{own}_v = \frac{\mathrm{total}_v}{A_v} \sum_j w_{vj}\, f_j
 
-    (on the cow with skin, against a converged reference: 0.170 with blended own values, 0.138 with blended
-    fractions, 0.123 with the exact per-vertex own area; ``benchmarks/objects_budget.py``).
+    (how much each choice errs against a converged reference: docs/objects.md, "The near field").
     """
     if not model.measured or not {"own", "total"} <= set(model.measured):
         return None, None
@@ -387,7 +422,7 @@ def _measured_per_vertex(model, weights, vertices, area):
     return own, total
 
 
-@dataclass
+@dataclass(kw_only=True)
 class Transport:
     r"""The prepared transport: L_λ = T_λ E per channel (:func:`transport_matrices`).
 

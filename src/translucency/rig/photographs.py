@@ -1,6 +1,6 @@
 """Virtual photographs of a virtual DISCO sample, rendered by Mitsuba 3: the test rig of the importer.
 
-A slab (:func:`translucency.mitsuba.scenes.slab_shape_dict`, index-matched: Mitsuba cannot pass a delta
+A slab (:func:`translucency.mitsuba.scenes.slab_scene`, index-matched: Mitsuba cannot pass a delta
 light through a smooth dielectric) is lit by a narrow ``spot`` beam straight down at each incident point
 and seen by a ``perspective`` camera at a known oblique pose (:class:`VirtualCamera`).  ``volpath``
 renders the radiance L per unit intensity of the spot, one grey channel of the volume at a time.  A
@@ -28,12 +28,16 @@ import numpy as np
 
 from .._validate import TranslucencyError
 from ..io.atomic import atomic_path, write_json
-from ..mitsuba import SPOT_BEAM_FRACTION, mitsuba, spot_dict
-from ..mitsuba.scenes import marker_dict, perspective_camera_dict, slab_shape_dict
+from ..mitsuba import (
+    SPOT_BEAM_FRACTION,
+    markers_scene,
+    mitsuba,
+    perspective_camera_dict,
+    slab_scene,
+    spot_dict,
+)
 from .calibration import Homography, find_markers, homography_from_points, match_markers
 from .hdr import write_exr, write_pfm
-
-NO_ROULETTE = 1 << 30  # an rr_depth volpath never reaches (see validate/volpath.py on roulette)
 
 
 @dataclass(frozen=True)
@@ -121,26 +125,16 @@ def render_radiance(
         if c not in channels:
             out[..., c] = out[..., c - 1]
             continue
-        scene = mi.load_dict(
-            {
-                "type": "scene",
-                "integrator": {"type": "volpath", "max_depth": -1, "rr_depth": NO_ROULETTE},
-                "slab": slab_shape_dict(volume, c),
-                "spot": beam.emitter_dict(float(x_i[0]), float(x_i[1])),
-                "camera": camera.sensor_dict(spp),
-            }
-        )
+        emitter = beam.emitter_dict(float(x_i[0]), float(x_i[1]))
+        scene = slab_scene(volume, c, emitter, camera.sensor_dict(spp))
         out[..., c] = np.array(mi.render(scene, spp=int(spp), seed=3 * int(seed) + c))[..., 0]
     return out
 
 
 def render_markers(camera: VirtualCamera, markers_mm, radius_mm: float = 0.25, spp: int = 16) -> np.ndarray:
     """A photograph (H, W, 3) of glowing disc markers at ``markers_mm`` (N, 2) on the plane z = 0."""
-    mi = mitsuba()
-    scene = {"type": "scene", "integrator": {"type": "direct"}, "camera": camera.sensor_dict(spp)}
-    for k, (x, y) in enumerate(np.asarray(markers_mm, float)):
-        scene[f"marker{k}"] = marker_dict(x, y, radius_mm)
-    return np.array(mi.render(mi.load_dict(scene), spp=int(spp), seed=0), dtype=np.float32)
+    scene = markers_scene(camera.sensor_dict(spp), markers_mm, radius_mm)
+    return np.array(mitsuba().render(scene, spp=int(spp), seed=0), dtype=np.float32)
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,55 @@
+"""The object of a per-vertex model: its mesh, its volume (for the reference) and its boundary η.
+
+:func:`object_of_model` rebuilds the mesh of a model (from the model itself, or from its data set for
+older files); :func:`volume_of_dataset` the generated filling of a mesh data set; :func:`boundary_eta`
+the index of the boundary it was acquired behind.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import trimesh
+
+from .._validate import TranslucencyError
+from ..acquire.mesh import object_volume
+from ..io.mesh_dataset import open_mesh_dataset
+
+
+def object_from_dataset(path):
+    """(mesh, header) of a mesh data set (:mod:`translucency.io.mesh_dataset`)."""
+    ds = open_mesh_dataset(path)
+    return ds.mesh(), ds.header
+
+
+def object_of_model(model, header: dict):
+    """(mesh, acquisition header) of a per-vertex model file: from the model itself when it carries its
+    triangles (``model.faces``, ``meta["acquisition"]``), else from its data set (older files)."""
+    meta = header.get("meta", {})
+    if model.faces is not None:
+        mesh = trimesh.Trimesh(np.asarray(model.alpha.vertices), np.asarray(model.faces), process=False)
+        return mesh, meta.get("acquisition", {})
+    dataset = meta.get("dataset", "")
+    if not dataset or not Path(dataset).exists():
+        raise TranslucencyError(
+            f"model: holds no mesh and its data set {dataset or '(none recorded)'} is gone; "
+            "refit it with this version (models now carry their mesh)"
+        )
+    return object_from_dataset(dataset)
+
+
+def volume_of_dataset(mesh, header):
+    """The generated filling of a mesh data set, rebuilt from its description."""
+    d = header.get("sample", {})
+    if "generator" not in d or "voxel_mm" not in header.get("request", {}).get("volume_grid", {}):
+        raise TranslucencyError("data set: its filling cannot be rebuilt (not generated here); no reference")
+    grid = header["request"]["volume_grid"]
+    return object_volume(
+        d["generator"], mesh, grid["voxel_mm"], g=header.get("g", 0.0), seed=d.get("seed", 0)
+    )
+
+
+def boundary_eta(header) -> float:
+    """η of a mesh data set's boundary: 1 when it was acquired index-matched."""
+    return 1.0 if header.get("request", {}).get("index_matched", False) else float(header.get("eta", 1.0))
