@@ -13,6 +13,6 @@ def pyplot():
     import matplotlib  # heavy, and the backend must be chosen before pyplot is imported
 
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # after the backend: pyplot reads it when it first loads
 
     return plt

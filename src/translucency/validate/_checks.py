@@ -7,13 +7,13 @@ import numpy as np
 from .._validate import TranslucencyError, as_float_array
 
 
-def _point(name: str, value) -> tuple[float, float]:
+def check_point(name: str, value) -> tuple[float, float]:
     """Two finite coordinates (x, y) in mm, or a one-line error."""
     x, y = as_float_array(name, value, shape=(2,))
     return float(x), float(y)
 
 
-def _positive(name: str, value, unit: str = "mm") -> float:
+def check_positive(name: str, value, unit: str = "mm") -> float:
     """A finite number > 0, or a one-line error naming ``unit``.
 
     (``_validate.check_positive`` works on arrays and reports an index; this is its scalar form.)
@@ -27,7 +27,7 @@ def _positive(name: str, value, unit: str = "mm") -> float:
     return v
 
 
-def _check_channels(channels) -> tuple[int, ...]:
+def check_channels(channels) -> tuple[int, ...]:
     try:
         ch = tuple(int(c) for c in channels)
     except (TypeError, ValueError):

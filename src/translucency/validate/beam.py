@@ -16,7 +16,7 @@ import numpy as np
 
 from .._validate import TranslucencyError
 from ..mitsuba import SPOT_BEAM_FRACTION, drjit, load_plugin, mitsuba, spot_dict
-from ._checks import _point, _positive
+from ._checks import check_point, check_positive
 
 
 @dataclass(frozen=True)
@@ -31,9 +31,9 @@ class SpotBeam:
     distance_mm: float = 100.0
 
     def __post_init__(self):
-        object.__setattr__(self, "centre_xy", _point("beam centre", self.centre_xy))
-        object.__setattr__(self, "radius_mm", _positive("beam radius", self.radius_mm))
-        object.__setattr__(self, "distance_mm", _positive("beam distance", self.distance_mm))
+        object.__setattr__(self, "centre_xy", check_point("beam centre", self.centre_xy))
+        object.__setattr__(self, "radius_mm", check_positive("beam radius", self.radius_mm))
+        object.__setattr__(self, "distance_mm", check_positive("beam distance", self.distance_mm))
         # float32 resolves cos θ only to ~6e-8, i.e. θ to ~3.5e-4 rad: keep the cutoff well above
         if self.cutoff_deg < 0.2 or self.cutoff_deg > 30.0:
             raise TranslucencyError(

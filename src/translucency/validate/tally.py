@@ -30,7 +30,7 @@ import numpy as np
 from .._validate import TranslucencyError
 from ..acquire.transport import TOP, random_walk
 from ..acquire.volume import Volume
-from ._checks import _check_channels, _positive
+from ._checks import check_channels, check_positive
 from .beam import SpotBeam, sample_spot_entries, spot_power, spot_profile
 from .window import PixelWindow, RadianceImage, _check_fits, pixel_centres
 
@@ -66,7 +66,7 @@ def walk_spot(
     batch size: results are the same only statistically.)  The time includes
     sampling the entries.
     """
-    n = _positive("photons", n_photons, "photons")
+    n = check_positive("photons", n_photons, "photons")
     if n != int(n):
         raise TranslucencyError(f"photons: must be a positive integer, got {n_photons!r}")
     n = int(n)
@@ -110,7 +110,7 @@ def radiance_from_exits(
 
     ``x``, ``y``: pixel centres (n, n) indexed [row, column], as from :func:`pixel_centres`.
     """
-    if not 0.0 < _positive("cone", cone_deg, "degrees") <= 90.0:
+    if not 0.0 < check_positive("cone", cone_deg, "degrees") <= 90.0:
         raise TranslucencyError(f"cone: must lie in (0, 90] degrees, got {cone_deg!r}")
     n = x.shape[0]
     keep = exits.cos_exit > np.cos(np.radians(cone_deg))
@@ -140,7 +140,7 @@ def tally_radiance(
     the top exits per channel (to re-tally with other cones without re-walking).
     """
     _check_fits(volume, beam, window)
-    channels = _check_channels(channels)
+    channels = check_channels(channels)
     x, y = pixel_centres(window)
     profile = spot_profile(beam)
     exits = [walk_spot(volume, beam, c, n_photons, seed=3 * int(seed) + c, profile=profile) for c in channels]

@@ -38,7 +38,7 @@ import numpy as np
 from .._validate import TranslucencyError
 from ..acquire.volume import Volume
 from ..mitsuba import NO_ROULETTE, mitsuba, slab_scene
-from ._checks import _check_channels, _positive
+from ._checks import check_channels, check_positive
 from .beam import SpotBeam
 from .window import PixelWindow, RadianceImage, _check_fits, pixel_centres
 
@@ -94,8 +94,8 @@ def render_volpath_spot(
     """
     mi = mitsuba()
     _check_fits(volume, beam, window)
-    channels = _check_channels(channels)
-    if _positive("spp", spp, "samples per pixel") < 2 or spp != int(spp):
+    channels = check_channels(channels)
+    if check_positive("spp", spp, "samples per pixel") < 2 or spp != int(spp):
         raise TranslucencyError(
             f"spp: need an integer of at least 2 samples per pixel (for a variance), got {spp!r}"
         )

@@ -14,7 +14,7 @@ import numpy as np
 from .._validate import TranslucencyError
 from ..acquire.volume import Volume
 from ..mitsuba import load_plugin, mitsuba
-from ._checks import _point, _positive
+from ._checks import check_point, check_positive
 from .beam import SpotBeam
 
 CAMERA_HEIGHT_MM = 10.0  # orthographic camera plane above the slab (any height > 0 would do)
@@ -29,12 +29,12 @@ class PixelWindow:
     pitch_mm: float = 0.25
 
     def __post_init__(self):
-        object.__setattr__(self, "centre_xy", _point("window centre", self.centre_xy))
-        n = _positive("window pixels", self.n_pixels, "pixels")
+        object.__setattr__(self, "centre_xy", check_point("window centre", self.centre_xy))
+        n = check_positive("window pixels", self.n_pixels, "pixels")
         if n != int(n):
             raise TranslucencyError(f"window pixels: must be a positive integer, got {self.n_pixels!r}")
         object.__setattr__(self, "n_pixels", int(n))
-        object.__setattr__(self, "pitch_mm", _positive("pitch", self.pitch_mm))
+        object.__setattr__(self, "pitch_mm", check_positive("pitch", self.pitch_mm))
 
     @property
     def side_mm(self) -> float:
