@@ -8,8 +8,8 @@ import sys
 import pytest
 from typer.testing import CliRunner
 
-from translucency import _resources as resources
 from translucency.cli.app import app
+from translucency.resources import memory as resources
 
 runner = CliRunner()
 
