@@ -100,6 +100,15 @@ def json_option():
     return typer.Option(False, "--json", help="Print a summary as one JSON object on stdout (for scripts).")
 
 
+def dataset_overwrite_option():
+    """``--overwrite`` of a command that writes a resumable data set (acquire planar|mesh)."""
+    return typer.Option(
+        False,
+        "--overwrite",
+        help="Replace a data set of translucency made with other arguments (never anything else).",
+    )
+
+
 def overwrite_option():
     return typer.Option(
         False, "--overwrite", help="Replace an earlier output of translucency at --out (never anything else)."

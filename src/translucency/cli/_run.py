@@ -24,6 +24,7 @@ from __future__ import annotations
 import contextlib
 import functools
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -45,7 +46,7 @@ class Work:
     """The work under way: ``update(**fields)`` moves its progress bar (Rich's ``Progress.update`` of its
     task); ``fresh = False`` keeps a run that reused earlier work out of the calibration."""
 
-    update: object
+    update: Callable[..., None]
     fresh: bool = True
 
 

@@ -21,6 +21,7 @@ from ..io.outputs import claim_folder, claim_output
 from ..rig.photographs import VirtualCamera, photograph_sample
 from ._common import (
     console,
+    dataset_overwrite_option,
     err_console,
     json_option,
     max_memory_option,
@@ -134,11 +135,7 @@ def acquire_planar_cmd(
     ),
     chunk: int = typer.Option(16, "--chunk", help="Incident points per chunk (unit of resuming)."),
     dtype: str = typer.Option("float32", "--dtype", help="Storage of R_d and variance: float32 or float16."),
-    overwrite: bool = typer.Option(
-        False,
-        "--overwrite",
-        help="Replace a data set of translucency made with other arguments (never anything else).",
-    ),
+    overwrite: bool = dataset_overwrite_option(),
     scheduler: str = scheduler_option(),
     max_memory: str = max_memory_option(),
     quiet: bool = quiet_option(),
@@ -203,7 +200,7 @@ def acquire_planar_cmd(
         pixels=grid * grid * setup.window_pixels() ** 2,
     )
     fresh = bytes_at(out) == 0
-    first = walk.seconds_per_step / resources.TIME_TERMS["acquire planar"]["photon_steps"]
+    first = resources.timing.probe_factor("acquire planar", "photon_steps", walk.seconds_per_step)
     timing = run.time(units, (first, "from a probe of the walk on this sample"))
     run.info(
         f"{grid * grid} incident points x {photons:,} photons x 3 channels on a "
@@ -266,11 +263,7 @@ def acquire_mesh_cmd(
     index_matched: bool = typer.Option(
         False, "--index-matched", help="No Fresnel reflection at the surface."
     ),
-    overwrite: bool = typer.Option(
-        False,
-        "--overwrite",
-        help="Replace a data set of translucency made with other arguments (never anything else).",
-    ),
+    overwrite: bool = dataset_overwrite_option(),
     scheduler: str = scheduler_option(),
     max_memory: str = max_memory_option(),
     quiet: bool = quiet_option(),

@@ -80,29 +80,18 @@ def render(
         raise TranslucencyError("--light: one light per render for now (run once per light)")
     V = len(mesh.vertices)
     rad = default_radius(m, mesh) if radius is None else float(radius)
-    run.check(
-        resources.memory.rendering(
-            vertices=V,
-            surface_mm2=float(mesh.area),
-            radius_mm=rad,
-            width=size[0],
-            height=size[1],
-            reference=reference,
-            spp_reference=spp,
-        ),
-        out,
-    )
-    claim_folder(out, overwrite=overwrite, inputs=[model, header.get("meta", {}).get("dataset") or None])
-    units = resources.timing.rendering_units(
+    picture = dict(
         vertices=V,
         surface_mm2=float(mesh.area),
         radius_mm=rad,
         width=size[0],
         height=size[1],
         reference=reference,
-        spp=spp,
+        spp_reference=spp,
     )
-    timing = run.time(units)
+    run.check(resources.memory.rendering(**picture), out)
+    claim_folder(out, overwrite=overwrite, inputs=[model, header.get("meta", {}).get("dataset") or None])
+    timing = run.time(resources.timing.rendering_units(**picture))
     run.info(f"render of {V:,} vertices at {size[0]} x {size[1]}; time {timing.text()}")
     run.start()  # the camera and the reference's volume are part of the work
     cam = Camera.looking_at(mesh, direction, *size)

@@ -178,6 +178,12 @@ def record_time(command: str, units: dict, seconds: float) -> None:
     _write_timing({**entry, "runs": runs})
 
 
+def probe_factor(command: str, term: str, seconds_per_unit: float) -> float:
+    """The factor of ``command`` on this machine from a probe of its own work: the probe's seconds per
+    unit of ``term`` over the development machine's (a first estimate before any run here)."""
+    return seconds_per_unit / TIME_TERMS[command][term]
+
+
 # -- the units of work of each command (the keys of TIME_TERMS) -----------------------------------------
 def planar_acquisition_units(*, points: int, photon_steps: float, pixels: int) -> dict:
     """``acquire planar``: P points, the probe's photon steps (Σ over points, photons and channels) and the
@@ -207,13 +213,20 @@ def evaluation_units(*, points: int, pixels: int, params: list[int], datasets: i
 
 
 def rendering_units(
-    *, vertices: int, surface_mm2: float, radius_mm: float, width: int, height: int, reference: bool, spp: int
+    *,
+    vertices: int,
+    surface_mm2: float,
+    radius_mm: float,
+    width: int,
+    height: int,
+    reference: bool,
+    spp_reference: int,
 ) -> dict:
     """``render``: V vertices, the transport's pairs within the radius, a W x H picture (16 samples a pixel),
-    and the two path-traced references of ``spp`` samples a pixel with ``--reference``."""
+    and the two path-traced references of ``spp_reference`` samples a pixel with ``--reference``."""
     return {
         "vertices": vertices,
         "pairs": transport_pairs(vertices=vertices, surface_mm2=surface_mm2, radius_mm=radius_mm),
         "samples": 16 * width * height,
-        "reference_samples": 2 * width * height * spp if reference else 0,
+        "reference_samples": 2 * width * height * spp_reference if reference else 0,
     }
