@@ -1,5 +1,5 @@
 """The anisotropic fit's regularisation (issue 13, item 3): shrinkage towards the mean of the
-directions and anchors at r = 0 and beyond the window (``fit/_alternation.py``, module docstring).
+directions and anchors at r = 0 and beyond the window (``fit/_regularise.py``, module docstring).
 
 Judged against an independent acquisition of the same sample (another photon seed), never only
 against the data the model was fitted to.

@@ -8,8 +8,9 @@ import sys
 import pytest
 from typer.testing import CliRunner
 
-from translucency import _resources as resources
 from translucency.cli.app import app
+from translucency.fit import FIT_BLOCK
+from translucency.resources import memory as resources
 
 runner = CliRunner()
 
@@ -82,7 +83,7 @@ def test_estimates_follow_the_measured_peak(tmp_path):
     assert res.exit_code == 0, res.output
     measured = peak_bytes(["fit", "fit.zarr", "--out", "m.model.zip", "--rounds", "1", "-q"], tmp_path)
     estimate = resources.planar_fit(
-        points=64, pixels=61 * 61, chunk=64, workers=2, params=3 * 3 * 2 + 2
+        points=64, pixels=61 * 61, chunk=64, workers=2, params=3 * 3 * 2 + 2, block=FIT_BLOCK
     ).memory
     ratios["fit"] = estimate / measured
 

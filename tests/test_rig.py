@@ -16,7 +16,8 @@ import typer
 from typer.testing import CliRunner
 
 from translucency._validate import TranslucencyError
-from translucency.cli.rig import acquire_photographs_cmd, import_app
+from translucency.cli.acquire import acquire_photographs_cmd
+from translucency.cli.imports import app as import_app
 from translucency.io.dataset import open_dataset
 from translucency.rig import (
     Calibration,

@@ -12,8 +12,8 @@ import pytest
 import trimesh
 from typer.testing import CliRunner
 
-from translucency import _resources as resources
 from translucency.cli.app import app
+from translucency.resources import timing as resources
 
 runner = CliRunner()
 PLANAR = [

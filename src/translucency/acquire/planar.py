@@ -158,7 +158,7 @@ def estimate_seconds(
 
     The steps per photon (all three channels) are counted by :func:`probe_walk` on ``volume`` itself
     (pass ``probe`` to reuse one); with ``steps_per_second=1`` this is the number of photon steps, which
-    ``translucency._resources.estimate_time`` turns into seconds calibrated on this machine.  The
+    ``translucency.resources.estimate_time`` turns into seconds calibrated on this machine.  The
     diffusion guess used before (a path of 1/√(3 σ_a σ_t)) was off by up to 4× between materials.
     """
     probe = probe if probe is not None else probe_walk(volume, setup)

@@ -5,6 +5,7 @@ A new family is one module here (a :class:`Family` subclass) and one line in :da
 (with its storage, :data:`translucency.model.MODEL_KINDS`).
 """
 
+from ...resources.timing import register_terms
 from ._base import AUTO_DIRECTIONS, AUTO_TERMS, Family
 from .aniso import AnisoFamily
 from .burley import BurleyFamily
@@ -25,5 +26,8 @@ FAMILIES: dict[str, Family] = {
         DirectionalDipoleFamily(),
     )
 }
+
+# each family's seconds per point-pixel for the time estimate of ``translucency fit --model NAME``
+register_terms({f"fit {name}": family.time_terms for name, family in FAMILIES.items()})
 
 __all__ = ["AUTO_DIRECTIONS", "AUTO_TERMS", "FAMILIES", "Family"]

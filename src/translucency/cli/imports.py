@@ -1,48 +1,23 @@
-"""``translucency import images`` and ``translucency acquire photographs``: a real rig, and a virtual one.
-
-Registered in :mod:`translucency.cli.app` (``app.add_typer(import_app, name="import")`` and
-``acquire_app.command("photographs")(acquire_photographs_cmd)``).  A user's mistake prints one
-``error:`` line and exits with status 2, as every command of the tool.
-"""
+"""``translucency import images``: a real rig's HDR photographs of a scanned laser spot, with the camera
+calibration, as a planar data set the fitter reads."""
 
 from __future__ import annotations
 
-import functools
 from pathlib import Path
 
 import numpy as np
 import typer
-from rich.console import Console
 
 from .._validate import TranslucencyError, check_option
-from ..acquire import load_volume, make_sample
 from ..cluster import parse_scheduler
-from ..io.outputs import claim_folder, claim_output
+from ..io.outputs import claim_output
 from ..rig.calibration import load_calibration
 from ..rig.importer import ImportSetup, import_images
-from ._flags import cli_words
-from ._options import scheduler_option
+from ._common import console, scheduler_option, user_errors
 
-console = Console()
-err_console = Console(stderr=True)
-
-import_app = typer.Typer(
+app = typer.Typer(
     help="Import measurements of a real rig as data sets the fitter reads.", no_args_is_help=True
 )
-
-
-def _user_errors(func):
-    """A :class:`TranslucencyError` → one ``error:`` line and exit status 2 (as ``cli.app.user_errors``)."""
-
-    @functools.wraps(func)
-    def wrapper(*args, **kwargs):
-        try:
-            return func(*args, **kwargs)
-        except TranslucencyError as exc:
-            err_console.print(f"[bold red]error:[/] {cli_words(str(exc))}", highlight=False, soft_wrap=True)
-            raise typer.Exit(2) from None
-
-    return wrapper
 
 
 def _parse_view(text: str) -> tuple[Path, Path, Path]:
@@ -57,8 +32,8 @@ def _parse_view(text: str) -> tuple[Path, Path, Path]:
     return folder, positions, calibration
 
 
-@import_app.command("images")
-@_user_errors
+@app.command("images")
+@user_errors
 def import_images_cmd(
     folder: Path = typer.Argument(
         ..., help="Folder of images, one (or a bracket / repeated frames) per laser position."
@@ -188,66 +163,4 @@ def import_images_cmd(
         f"data set: {out} ({ds.n_points} points, windows {ds.window[0]} x {ds.window[1]} at {ds.pitch} mm"
         + (f"; marked points fit to {rms:.3f} px rms" if rms is not None else "")
         + ")"
-    )
-
-
-@_user_errors
-def acquire_photographs_cmd(
-    out: Path = typer.Option(
-        ..., "--out", "-o", help="Output folder: images, positions.csv, calibration.json."
-    ),
-    material: str = typer.Option(
-        None,
-        "--material",
-        "-m",
-        help="Sample generator: homogeneous:<name>, marble, apple-slice, skin, fibers.",
-    ),
-    volume: Path = typer.Option(None, "--volume", help="A user's volume (.npz, as acquire planar)."),
-    grid: int = typer.Option(2, "--grid", help="Incident points per axis (grid x grid)."),
-    span: float = typer.Option(4.0, "--span", help="Side of the incident grid, mm (centred on the sample)."),
-    size: tuple[float, float, float] = typer.Option(
-        (12.0, 12.0, 4.0), "--size", help="Generated slab: width height thickness, mm."
-    ),
-    voxel: float = typer.Option(0.5, "--voxel", help="Voxel size of generated samples, mm."),
-    camera: tuple[float, float, float] = typer.Option(
-        (0.0, -8.0, 11.0), "--camera", help="Camera position relative to the sample's centre, mm."
-    ),
-    fov: float = typer.Option(40.0, "--fov", help="Horizontal field of view, degrees."),
-    resolution: tuple[int, int] = typer.Option(
-        (64, 64), "--resolution", help="Image width and height, pixels."
-    ),
-    spp: int = typer.Option(64, "--spp", help="Samples per pixel of Mitsuba's volpath."),
-    seed: int = typer.Option(0, "--seed", help="Random seed of the sample, renders and sensor noise."),
-    image_format: str = typer.Option("pfm", "--format", help="pfm or exr."),
-    overwrite: bool = typer.Option(
-        False, "--overwrite", help="Replace an earlier output folder of translucency (never anything else)."
-    ),
-):
-    """Photograph a virtual sample with Mitsuba 3 (narrow beam per point, oblique perspective camera,
-    sensor noise, dark offset, vignetting, saturation): a lab's hand-over for `translucency import images`."""
-    from ..acquire import PlanarSetup
-    from ..rig.photographs import VirtualCamera, photograph_sample
-
-    check_option("--grid", grid, lo=1, hi=64)
-    check_option("--spp", spp, lo=1)
-    check_option("--fov", fov, lo=1, hi=120)
-    for v in resolution:
-        check_option("--resolution", v, lo=8, hi=8192)
-    if (material is None) == (volume is None):
-        raise TranslucencyError("give exactly one of --material NAME or --volume FILE.npz")
-    claim_folder(out, overwrite=overwrite, inputs=[volume])
-    vol = load_volume(volume) if volume is not None else make_sample(material, size, voxel, seed=seed)
-    W, H, _ = vol.size_mm
-    setup = PlanarSetup(grid=(grid, grid), span=(span, span), pitch=0.25, window=min(W, H) / 2)
-    setup.check(vol)
-    x_i = setup.incident_points(vol)
-    centre = np.array([W / 2, H / 2, 0.0])
-    cam = VirtualCamera(tuple(centre + np.asarray(camera)), tuple(centre), fov, *resolution)
-    err_console.print(
-        f"{len(x_i)} photographs x 3 channels at {spp} spp ({resolution[0]} x {resolution[1]} px)"
-    )
-    res = photograph_sample(vol, x_i, out, camera=cam, spp=spp, seed=seed, image_format=image_format)
-    console.print(
-        f"photographs: {out} (markers fit to {res['rms_px']:.3f} px rms; true homography "
-        f"{np.round(res['homography'].matrix, 4).tolist()})"
     )

@@ -33,7 +33,9 @@ import shutil
 from dataclasses import dataclass
 from pathlib import Path
 
-from ._validate import TranslucencyError
+import numpy as np
+
+from .._validate import TranslucencyError
 
 MiB = 2**20
 GiB = 2**30
@@ -77,6 +79,19 @@ def parse_size(option: str, text) -> int:
     if not (math.isfinite(value) and value >= MiB):
         raise TranslucencyError(f"{option}: must be at least 1M, got {text!r}")
     return int(value)
+
+
+def memory_limit(text) -> int | None:
+    """``--max-memory``: its size in bytes, or None when not given (the machine's available memory).
+
+    Examples
+    --------
+    >>> memory_limit("4G")
+    4294967296
+    >>> memory_limit(None) is None
+    True
+    """
+    return None if text is None else parse_size("--max-memory", text)
 
 
 def available_memory() -> int | None:
@@ -182,6 +197,12 @@ def slab_voxels(size, voxel: float) -> float:
     return float(math.prod(max(1, round(v / voxel)) for v in size))
 
 
+def object_voxels(extents, voxel: float) -> float:
+    """Voxels of the filling of an object with bounding box ``extents`` (mm) at ``voxel`` mm (as
+    ``translucency.acquire.mesh.object_volume``)."""
+    return float(np.prod([math.ceil(e / voxel) for e in extents]))
+
+
 def mesh_acquisition(
     *, vertices: int, faces: int, points: int, photons: int, chunk: int, voxels: float
 ) -> Need:
@@ -206,7 +227,7 @@ def mesh_acquisition(
 
 
 def planar_fit(
-    *, points: int, pixels: int, chunk: int, workers: int, params: int, cache: float = 512 * MiB
+    *, points: int, pixels: int, chunk: int, workers: int, params: int, block: int, cache: float = 512 * MiB
 ) -> Need:
     r"""``fit`` of a planar data set: P points, J = H·W pixels a window, k points fitted together, w threads.
 
@@ -214,18 +235,16 @@ def planar_fit(
 
     the decoded data kept between rounds (y, variance, mask, geometry ≈ 30 bytes a pixel, at most the
     cache C = 512 MiB), each thread's chunk at work — its data as read (≈ 30 bytes a pixel) and the
-    working arrays of the b = ``FIT_BLOCK`` points computed at a time (casts, weights, model values,
-    residuals: measured ≈ 100 bytes a pixel) — and the π_p parameters of every point.  Output: the
-    model file, at most
+    working arrays of the b = ``block`` points computed at a time (``translucency.fit.FIT_BLOCK``; casts,
+    weights, model values, residuals: measured ≈ 100 bytes a pixel) — and the π_p parameters of every
+    point.  Output: the model file, at most
     :math:`D = 4 P \pi_p + 4 J P + 2^{16}` (parameters and α).
     """
-    from .fit._alternation import FIT_BLOCK  # the points computed at a time within a chunk
-
     k = min(chunk, points)
     w = max(1, min(workers, -(-points // max(k, 1))))
     parts = {
         "the data cache": min(cache, 30 * points * pixels),
-        "the chunks at work: --chunk": w * (30 * k + 110 * min(k, FIT_BLOCK)) * pixels,
+        "the chunks at work: --chunk": w * (30 * k + 110 * min(k, block)) * pixels,
         "the parameters": 8 * points * params,
     }
     disk = 4 * points * params + 4 * pixels * points + 2**16
@@ -276,8 +295,8 @@ def rendering(
     width: int,
     height: int,
     reference: bool,
+    max_pairs: float,
     spp_reference: int = 32,
-    max_pairs: float = 2.5e7,
 ) -> Need:
     r"""``render``: V vertices on A mm² of surface, transport radius r, a W × H picture.
 
@@ -286,12 +305,14 @@ def rendering(
             \;[+\, 2 \cdot 10\,W H s_{ref}]
 
     the sparse transport's vertex pairs (indices, distances, profile values and the CSR matrices:
-    measured 240–330 bytes each; at most p_max = 2.5·10⁷ pairs, beyond which the transport refuses), the
+    measured 240–330 bytes each; at most p_max pairs, ``translucency.render.MAX_PAIRS``, beyond which the
+    transport refuses), the
     film and the picture's 16 samples a pixel and, with ``--reference``, the two path-traced references.
     Output: :math:`D = 60\,W H` per picture (EXR + PNG; three with the reference) + 1 MiB.
     """
-    r = min(float(radius_mm), 1e9)  # beyond any object: every pair (and no float overflow at 1e308)
-    pairs = min(max_pairs, vertices**2, vertices + vertices**2 * math.pi * r**2 / max(surface_mm2, 1e-12))
+    pairs = transport_pairs(
+        vertices=vertices, surface_mm2=surface_mm2, radius_mm=radius_mm, max_pairs=max_pairs
+    )
     pixels = width * height
     parts = {"the transport: --radius": 300 * pairs, "the picture: --size": pixels * (64 + 10 * 16)}
     if reference:
@@ -300,165 +321,18 @@ def rendering(
     return Need(BASE_MITSUBA + sum(parts.values()), disk, max(parts, key=parts.get))
 
 
-# -- time before work ----------------------------------------------------------------------------------
-#: seconds per unit of work of each command, measured on the development machine (2 shared cores); each
-#: machine calibrates its own factor on top of them (:func:`estimate_time`)
-TIME_TERMS = {
-    # photon_steps: Σ over points, photons and channels of the steps of a walk, counted by a probe of the
-    # walk on the volume (translucency.acquire.estimate_seconds at one step a second); points: each point's
-    # window and its writes.  Before a first run, the probe's own seconds a step set the factor.
-    "acquire planar": {"overhead": 0.4, "points": 0.015, "photon_steps": 2.7e-7, "pixels": 2e-6},
-    # photons: points x photons x 3 channels; point_vertices: each point's tally over the mesh
-    "acquire mesh": {"overhead": 0.8, "points": 0.05, "photons": 1.5e-5, "point_vertices": 2e-7},
-    # point_pixels: points x window pixels (or vertices) x rounds, per model family
-    "fit iso": {"overhead": 0.3, "point_pixels": 1.0e-6},
-    "fit aniso": {"overhead": 0.3, "point_pixels": 3.2e-6},
-    "fit dipole": {"overhead": 0.3, "point_pixels": 2.5e-6},
-    "fit burley": {"overhead": 0.3, "point_pixels": 1.5e-6},
-    "fit pbd": {"overhead": 0.3, "point_pixels": 7.4e-5},
-    "fit ddipole": {"overhead": 0.3, "point_pixels": 1.7e-6},
-    # point_pixels: points x window pixels x data sets (2 with --truth); model_pixels: the same per model;
-    # param_pixels: Σ over models of parameters a point x points x pixels x data sets; models: their figures
-    "evaluate": {
-        "overhead": 1.2,
-        "point_pixels": 2e-7,
-        "model_pixels": 3e-7,
-        "param_pixels": 3e-8,
-        "models": 0.5,
-    },
-    # pairs: vertex pairs of the transport; samples: picture pixels x 16; reference_samples: 2 x pixels x spp
-    "render": {"overhead": 1.5, "vertices": 2e-4, "pairs": 5e-7, "samples": 3e-7, "reference_samples": 2e-6},
-}
-#: seconds the machine probe took on the development machine
-PROBE_REFERENCE_S = 0.45
-#: how many of a command's latest runs calibrate it
-CALIBRATION_RUNS = 5
+def transport_pairs(*, vertices: int, surface_mm2: float, radius_mm: float, max_pairs: float) -> float:
+    r"""Vertex pairs of the sparse transport within ``radius_mm`` on ``surface_mm2`` of V vertices.
 
+    .. math:: p = \min(p_{max}, V^2, V + V^2 \pi r^2 / A)
 
-@dataclass
-class TimeEstimate:
-    """The time a command is expected to take, and where its calibration came from."""
-
-    seconds: float
-    source: str
-
-    def text(self) -> str:
-        s = self.seconds
-        amount = f"{s:.0f} s" if s < 120 else f"{s / 60:.0f} min" if s < 7200 else f"{s / 3600:.1f} h"
-        return f"about {amount} ({self.source})"
-
-    def as_dict(self) -> dict:
-        return {"seconds": round(self.seconds, 3), "source": self.source}
-
-
-def timing_file() -> Path:
-    """The time calibration per machine: ``$TRANSLUCENCY_CACHE/timing.json`` (default ``~/.cache/...``)."""
-    root = os.environ.get("TRANSLUCENCY_CACHE") or Path.home() / ".cache" / "translucency"
-    return Path(root) / "timing.json"
-
-
-def _machine() -> str:
-    import platform
-
-    return f"{platform.node()}|{platform.machine()}|{os.cpu_count()}"
-
-
-def _read_timing() -> dict:
-    import json
-
-    try:
-        data = json.loads(timing_file().read_text())
-    except (OSError, ValueError):
-        return {}
-    entry = data.get(_machine()) if isinstance(data, dict) else None
-    return entry if isinstance(entry, dict) else {}
-
-
-def _write_timing(entry: dict) -> None:
-    """Store this machine's calibration (atomically; a cache that cannot be written is skipped)."""
-    import json
-
-    from .io.atomic import atomic_path
-
-    path = timing_file()
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        try:
-            data = json.loads(path.read_text())
-            data = data if isinstance(data, dict) else {}
-        except (OSError, ValueError):
-            data = {}
-        data[_machine()] = entry
-        with atomic_path(path) as tmp:
-            tmp.write_text(json.dumps(data, indent=1))
-    except OSError:
-        pass
-
-
-def _probe_seconds() -> float:
-    """A short probe of this machine's speed (≈ 0.45 s on the development machine): the kind of array
-    work the commands do (exponentials, sums, a small matrix product), best of three."""
-    import time
-
-    import numpy as np
-
-    x = np.linspace(0.0, 5.0, 400_000)
-    a = np.random.default_rng(0).random((160, 160))
-    best = math.inf
-    for _ in range(3):
-        t = time.perf_counter()
-        for _ in range(8):
-            y = np.exp(-x) * x
-            float(y.sum())
-            a = a @ a
-            a /= np.abs(a).max()
-        best = min(best, time.perf_counter() - t)
-    return best * 3
-
-
-def _raw_seconds(command: str, units: dict) -> float:
-    terms = TIME_TERMS[command]
-    return terms.get("overhead", 0.0) + sum(terms[k] * float(v) for k, v in units.items())
-
-
-def estimate_time(command: str, units: dict, first: tuple[float, str] | None = None) -> TimeEstimate:
-    """The time ``command`` will take on this machine for ``units`` of work (keys of :data:`TIME_TERMS`).
-
-    The formula's rates (measured on the development machine) times this machine's factor for the
-    command: the median of actual/formula over its latest :data:`CALIBRATION_RUNS` runs here
-    (:func:`record_time`), or, before the first run, ``first`` (a factor and where it came from: the
-    command's own probe of its work, as ``acquire planar``'s timed walk) or else the ratio of a 0.45 s
-    probe of the machine's speed to the development machine's (cached in :func:`timing_file`).
+    each vertex with itself, and the others within r of it on a uniformly covered surface; at most
+    p_max (``translucency.render.MAX_PAIRS``, beyond which the transport refuses).
 
     Examples
     --------
-    >>> TimeEstimate(42.0, "calibrated on this machine by 3 earlier runs").text()
-    'about 42 s (calibrated on this machine by 3 earlier runs)'
+    >>> transport_pairs(vertices=100, surface_mm2=1e4, radius_mm=1e300, max_pairs=2.5e7)
+    10000
     """
-    raw = _raw_seconds(command, units)
-    entry = _read_timing()
-    ratios = [r for r in entry.get("runs", {}).get(command, []) if isinstance(r, (int, float)) and r > 0]
-    if ratios:
-        ratios = sorted(ratios[-CALIBRATION_RUNS:])
-        factor = ratios[len(ratios) // 2]
-        runs = f"{len(ratios)} earlier run{'s' if len(ratios) > 1 else ''}"
-        return TimeEstimate(raw * factor, f"calibrated on this machine by {runs}")
-    if first is not None and math.isfinite(first[0]) and first[0] > 0:
-        return TimeEstimate(raw * first[0], first[1])
-    probe = entry.get("probe_s")
-    if not isinstance(probe, (int, float)) or not probe > 0:
-        probe = _probe_seconds()
-        _write_timing({**entry, "probe_s": probe})
-    return TimeEstimate(raw * probe / PROBE_REFERENCE_S, "from a probe of this machine's speed")
-
-
-def record_time(command: str, units: dict, seconds: float) -> None:
-    """Calibrate ``command`` on this machine with the ``seconds`` a run of ``units`` really took."""
-    raw = _raw_seconds(command, units)
-    if not (raw > 0 and math.isfinite(seconds) and seconds > 0):
-        return
-    entry = _read_timing()
-    runs = entry.get("runs") if isinstance(entry.get("runs"), dict) else {}
-    kept = [r for r in runs.get(command, []) if isinstance(r, (int, float))][-(CALIBRATION_RUNS - 1) :]
-    runs[command] = kept + [seconds / raw]
-    _write_timing({**entry, "runs": runs})
+    r = min(float(radius_mm), 1e9)  # beyond any object: every pair (and no float overflow at 1e308)
+    return min(max_pairs, vertices**2, vertices + vertices**2 * math.pi * r**2 / max(surface_mm2, 1e-12))

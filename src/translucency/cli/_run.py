@@ -1,0 +1,117 @@
+"""The sequence every working command runs (``acquire planar|mesh``, ``fit``, ``evaluate``, ``render``).
+
+estimate its memory and disk (refused in one line beyond ``--max-memory`` or the free disk) → claim
+its output (the command's own call: a file or a folder, resumable or not) → estimate its time → work
+under a progress bar → teach this machine's calibration how long the work took → its summary (result
+lines, or one JSON object with the estimates and the seconds).
+
+Examples
+--------
+A new working command::
+
+    run = Run("render", max_memory=max_memory, quiet=quiet)
+    run.check(resources.memory.rendering(...), out)
+    claim_folder(out, overwrite=overwrite)
+    timing = run.time(resources.timing.rendering_units(...))
+    run.info(f"render ...; time {timing.text()}")
+    with run.work("render", total=3) as work:
+        do_it(progress=lambda done, total, name: work.update(completed=done, item=name))
+    run.finish(as_json, {"command": "render", ...}, ["images: ..."])
+"""
+
+from __future__ import annotations
+
+import contextlib
+import functools
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+from ..resources import Need, TimeEstimate, check_resources, estimate_time, memory_limit, record_time
+from ._common import finish, info, progress
+
+
+def bytes_at(path: Path) -> int:
+    """Bytes already at an output path (what a resumed or replaced output frees or keeps)."""
+    if path.is_file():
+        return path.stat().st_size
+    if path.is_dir():
+        return sum(f.stat().st_size for f in path.rglob("*") if f.is_file())
+    return 0
+
+
+@dataclass
+class Work:
+    """The work under way: ``update(**fields)`` moves its progress bar (Rich's ``Progress.update`` of its
+    task); ``fresh = False`` keeps a run that reused earlier work out of the calibration."""
+
+    update: Callable[..., None]
+    fresh: bool = True
+
+
+class Run:
+    """One run of a working command: its ``--max-memory``, its estimates, its clock.
+
+    ``command`` names it in refusals and summaries; ``timer`` (default ``command``) is its entry of
+    :data:`translucency.resources.TIME_TERMS` (``fit iso``, ``fit aniso``, ...).
+    """
+
+    def __init__(self, command: str, *, max_memory: str | None, quiet: bool, timer: str | None = None):
+        self.command, self.timer, self.quiet = command, timer or command, quiet
+        self.limit = memory_limit(max_memory)  # a bad size: one line, before any work
+        self.need: Need | None = None
+        self.units: dict | None = None
+        self.timing: TimeEstimate | None = None
+        self.t0: float | None = None
+
+    def check(self, need: Need, out: Path | None = None, *, resumed: bool = False) -> Need:
+        """Refuse ``need`` beyond ``--max-memory`` or the free disk where ``out`` goes (``resumed``: the
+        bytes already at ``out`` are kept, not written again)."""
+        if resumed:
+            need.disk -= bytes_at(out)
+        self.need = check_resources(self.command, need, self.limit, out)
+        return self.need
+
+    def time(self, units: dict, first: tuple[float, str] | None = None) -> TimeEstimate:
+        """The time estimate of ``units`` of work (``first``: a factor before this machine's first run)."""
+        self.units = units
+        self.timing = estimate_time(self.timer, units, first)
+        return self.timing
+
+    def info(self, text: str) -> None:
+        """An information line on stderr, unless ``--quiet``."""
+        info(self.quiet, text)
+
+    def start(self) -> None:
+        """Start the clock before :meth:`work` (preparations that belong to the timed work)."""
+        self.t0 = time.perf_counter()
+
+    @contextlib.contextmanager
+    def work(self, description: str | None = None, *, total=None, fresh: bool = True):
+        """Start the clock (and a progress bar named ``description``, none if None); on success, record
+        the seconds in this machine's calibration unless the run reused earlier work (``fresh``)."""
+        if self.t0 is None:
+            self.start()
+        if description is None:
+            work = Work(update=lambda **fields: None, fresh=fresh)
+            yield work
+        else:
+            with progress(self.quiet) as bar:
+                task = bar.add_task(description, total=total, item="")
+                work = Work(update=functools.partial(bar.update, task), fresh=fresh)
+                yield work
+        if work.fresh:
+            record_time(self.timer, self.units, time.perf_counter() - self.t0)
+
+    def seconds(self) -> float:
+        """Seconds since the work started (rounded to a millisecond, as the summaries state them)."""
+        return round(time.perf_counter() - self.t0, 3)
+
+    def finish(self, as_json: bool, summary: dict, lines=()) -> None:
+        """The summary: ``summary`` with the estimates and the seconds (where it states none of its own)
+        as one JSON object (``--json``), or the result ``lines``."""
+        extra = {"estimate": self.need.as_dict(), "time_estimate": self.timing.as_dict()}
+        summary = {**summary, **{k: v for k, v in extra.items() if k not in summary}}
+        summary.setdefault("seconds", self.seconds())
+        finish(as_json, self.quiet, summary, lines)

@@ -1,0 +1,170 @@
+"""``translucency evaluate``: a model's relative L2 errors on its data set (overall, per distance band,
+energy-weighted) or against an independent truth, error maps, profiles and the HTML report."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import typer
+from rich.table import Table
+
+from .. import resources
+from .._validate import TranslucencyError
+from ..cluster import parse_scheduler
+from ..evaluate.report import model_label, write_report
+from ..io.dataset import dataset_identity, open_dataset
+from ..io.mesh_dataset import is_mesh_dataset, open_mesh_dataset
+from ..io.model_file import load_model, read_header
+from ..io.outputs import claim_folder, claim_output
+from ._common import max_memory_option, overwrite_option, quiet_option, scheduler_option, user_errors, warn
+from ._run import Run
+
+
+@user_errors
+def evaluate(
+    model: Path = typer.Argument(..., help="The model file to evaluate (.model.zip)."),
+    data: Path = typer.Argument(..., help="The planar data set it was fitted to (.zarr directory)."),
+    report: Path = typer.Option(Path("report"), "--report", help="Directory for the figures and index.html."),
+    json_out: Path = typer.Option(
+        None,
+        "--json",
+        help="Write the error summary (rel_l2, rel_l2_near/mid/far) here; '-': print it as one JSON "
+        "object on stdout (for scripts).",
+    ),
+    compare: list[Path] = typer.Option(
+        None, "--compare", help="Other model files of the same data (repeatable)."
+    ),
+    points: str = typer.Option(None, "--points", help="Incident points for the profiles, e.g. '0,17,40'."),
+    truth: Path = typer.Option(
+        None,
+        "--truth",
+        help="An independent acquisition of the same incident points (another seed, more photons): "
+        "errors against it, with the in-sample errors beside.",
+    ),
+    overwrite: bool = overwrite_option(),
+    scheduler: str = scheduler_option(),
+    max_memory: str = max_memory_option(),
+    quiet: bool = quiet_option(),
+):
+    """Relative L2 errors (overall, per distance band, energy-weighted), error maps, profiles, HTML report."""
+    parse_scheduler(scheduler)  # a bad value or an unreachable cluster: one line, before work
+
+    run = Run("evaluate", max_memory=max_memory, quiet=quiet)
+    to_stdout = json_out is not None and str(json_out) == "-"
+    json_out = None if to_stdout else json_out
+    models, flagged, exclusion, metas = {}, {}, {}, {}
+    for path in [model, *(compare or [])]:
+        m = load_model(path)
+        meta = read_header(path).get("meta", {})
+        metas[path] = meta if isinstance(meta, dict) else {}
+        fl = meta.get("flagged_points", [])
+        name = model_label(m)
+        name = name if name not in models else f"{name} ({path.name})"
+        models[name] = m
+        exclusion[name] = meta.get("fit", {}).get("exclusion_mm")  # evaluate where the fit looked
+        mask = np.zeros(m.n_points, bool)
+        mask[np.asarray(fl, dtype=int)] = True
+        flagged[name] = mask
+    try:
+        picks = None if points is None else [int(v) for v in points.split(",") if v.strip()]
+    except ValueError:
+        raise TranslucencyError(f"--points: expected comma-separated integers, got {points!r}") from None
+    ds = open_dataset(data)
+    for p in picks or []:
+        if not 0 <= p < ds.n_points:
+            raise TranslucencyError(
+                f"--points: {p} is not an incident point of {data} (0..{ds.n_points - 1})"
+            )
+    H, W = ds.window
+    params = [int(np.prod(m.param_shape)) for m in models.values()]
+    d = 2 if truth is not None else 1
+    run.check(
+        resources.memory.evaluation(points=ds.n_points, pixels=H * W, params=params, datasets=d), report
+    )
+    _warn_other_sample(metas, ds, truth)
+    inputs = [model, data, *(compare or []), truth]
+    if json_out is not None:
+        claim_output(json_out, "json summary", overwrite=overwrite, inputs=inputs, option="--json")
+    claim_folder(report, overwrite=overwrite, inputs=inputs, option="--report")
+    units = resources.timing.evaluation_units(points=ds.n_points, pixels=H * W, params=params, datasets=d)
+    timing = run.time(units)
+    run.info(f"{len(models)} model(s) on {ds.n_points} points x {H} x {W} pixels; time {timing.text()}")
+    with run.work():
+        summary = write_report(
+            models,
+            ds,
+            report,
+            points=picks,
+            flagged=flagged,
+            json_path=json_out,
+            truth=truth,
+            exclusion=exclusion,
+            scheduler=scheduler,
+        )
+    title = (
+        f"relative L2 error against the truth {truth}"
+        if truth
+        else f"relative L2 error on {data} (in-sample)"
+    )
+    table = Table(title=title)
+    columns = ["model", "all", "near <1 mm", "mid 1-4 mm", "far >4 mm", "total refl."]
+    table_columns = columns + (["in-sample all"] if truth else [])
+    for col in table_columns:
+        table.add_column(col)
+    for name, s in summary["models"].items():
+        cells = [f"{100 * s[k]:.2f} %" for k in ("rel_l2", "rel_l2_near", "rel_l2_mid", "rel_l2_far")]
+        cells.append(f"{100 * s['energy_error']['total']:.2f} %")
+        if truth:
+            cells.append(f"{100 * s['in_sample']['rel_l2']:.2f} %")
+        table.add_row(name, *cells)
+    nf = summary["noise_floor"]
+    table.add_row(
+        "[dim]the truth's noise[/]" if truth else "[dim]noise alone[/]",
+        *(f"[dim]{100 * nf[k]:.2f} %[/]" for k in ("all", "near", "mid", "far")),
+    )
+    summary = {
+        "command": "evaluate",
+        "report": report / "index.html",
+        **summary,
+        "estimate": run.need.as_dict(),
+    }
+    summary["seconds"] = run.seconds()
+    run.finish(to_stdout, summary, [table, f"report: {report / 'index.html'}"])
+
+
+def _identity_of_model(meta: dict):
+    """The identity of the data set a model was fitted to: recorded, or read from its acquisition header
+    (mesh fits), or from the data set at the recorded path if it is still there (older model files)."""
+    if isinstance(meta.get("dataset_identity"), dict):
+        return meta["dataset_identity"]
+    if isinstance(meta.get("acquisition"), dict):
+        return dataset_identity(meta["acquisition"])
+    recorded = meta.get("dataset")
+    if isinstance(recorded, str) and recorded and Path(recorded).is_dir():
+        try:
+            opened = open_mesh_dataset(recorded) if is_mesh_dataset(recorded) else open_dataset(recorded)
+        except TranslucencyError:
+            return None
+        return dataset_identity(opened.header)
+    return None
+
+
+def _warn_other_sample(metas: dict, ds, truth) -> None:
+    """A warning line for a model fitted to data of another sample than ``ds`` (and for a truth of another
+    sample): the errors would compare two materials."""
+    own = dataset_identity(ds.header)
+    for path, meta in metas.items():
+        theirs = _identity_of_model(meta)
+        if theirs is not None and theirs != own:
+            warn(
+                f"{path} was fitted to data of another sample than {ds.path} "
+                f"(fitted to {meta.get('dataset', '?')}); its errors compare two materials"
+            )
+    if truth is not None:
+        other = dataset_identity(open_dataset(truth).header)
+        if other != own:
+            warn(
+                f"--truth {truth} measured another sample than {ds.path} (a generated "
+                "sample is set by --sample-seed, default --seed); the errors compare two materials"
+            )

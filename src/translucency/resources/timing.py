@@ -1,0 +1,241 @@
+r"""Time before work: how long a command will take on this machine, and its calibration.
+
+Every command that works prints "about N s" before it starts: the seconds per unit of work of
+:data:`TIME_TERMS` (measured on the development machine) times this machine's factor for the command
+— a probe of the machine's speed at first, then the median of its own latest runs here
+(:func:`record_time`), cached in :func:`timing_file`.
+
+Examples
+--------
+>>> est = TimeEstimate(90.0, "from a probe of this machine's speed")
+>>> est.text()
+"about 90 s (from a probe of this machine's speed)"
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import platform
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..io.atomic import atomic_path
+from .memory import transport_pairs
+
+#: seconds per unit of work of each command, measured on the development machine (2 shared cores); each
+#: machine calibrates its own factor on top of them (:func:`estimate_time`)
+TIME_TERMS = {
+    # photon_steps: Σ over points, photons and channels of the steps of a walk, counted by a probe of the
+    # walk on the volume (translucency.acquire.estimate_seconds at one step a second); points: each point's
+    # window and its writes.  Before a first run, the probe's own seconds a step set the factor.
+    "acquire planar": {"overhead": 0.4, "points": 0.015, "photon_steps": 2.7e-7, "pixels": 2e-6},
+    # photons: points x photons x 3 channels; point_vertices: each point's tally over the mesh
+    "acquire mesh": {"overhead": 0.8, "points": 0.05, "photons": 1.5e-5, "point_vertices": 2e-7},
+    # "fit <family>": each model family states its own (``Family.time_terms``, registered by
+    # translucency.fit.families through :func:`register_terms`)
+    # point_pixels: points x window pixels x data sets (2 with --truth); model_pixels: the same per model;
+    # param_pixels: Σ over models of parameters a point x points x pixels x data sets; models: their figures
+    "evaluate": {
+        "overhead": 1.2,
+        "point_pixels": 2e-7,
+        "model_pixels": 3e-7,
+        "param_pixels": 3e-8,
+        "models": 0.5,
+    },
+    # pairs: vertex pairs of the transport; samples: picture pixels x 16; reference_samples: 2 x pixels x spp
+    "render": {"overhead": 1.5, "vertices": 2e-4, "pairs": 5e-7, "samples": 3e-7, "reference_samples": 2e-6},
+}
+
+
+def register_terms(terms: dict) -> None:
+    """Add the seconds per unit of work of further commands to :data:`TIME_TERMS` (``{command: terms}``).
+
+    The stage that defines a kind of work states its cost (e.g. each fit family its seconds per
+    point-pixel) so that adding a family touches its own module only.
+    """
+    TIME_TERMS.update({command: dict(t) for command, t in terms.items()})
+
+
+#: seconds the machine probe took on the development machine
+PROBE_REFERENCE_S = 0.45
+#: how many of a command's latest runs calibrate it
+CALIBRATION_RUNS = 5
+
+
+@dataclass
+class TimeEstimate:
+    """The time a command is expected to take, and where its calibration came from."""
+
+    seconds: float
+    source: str
+
+    def text(self) -> str:
+        s = self.seconds
+        amount = f"{s:.0f} s" if s < 120 else f"{s / 60:.0f} min" if s < 7200 else f"{s / 3600:.1f} h"
+        return f"about {amount} ({self.source})"
+
+    def as_dict(self) -> dict:
+        return {"seconds": round(self.seconds, 3), "source": self.source}
+
+
+def timing_file() -> Path:
+    """The time calibration per machine: ``$TRANSLUCENCY_CACHE/timing.json`` (default ``~/.cache/...``)."""
+    root = os.environ.get("TRANSLUCENCY_CACHE") or Path.home() / ".cache" / "translucency"
+    return Path(root) / "timing.json"
+
+
+def _machine() -> str:
+    return f"{platform.node()}|{platform.machine()}|{os.cpu_count()}"
+
+
+def _read_timing() -> dict:
+    try:
+        data = json.loads(timing_file().read_text())
+    except (OSError, ValueError):
+        return {}
+    entry = data.get(_machine()) if isinstance(data, dict) else None
+    return entry if isinstance(entry, dict) else {}
+
+
+def _write_timing(entry: dict) -> None:
+    """Store this machine's calibration (atomically; a cache that cannot be written is skipped)."""
+    path = timing_file()
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        try:
+            data = json.loads(path.read_text())
+            data = data if isinstance(data, dict) else {}
+        except (OSError, ValueError):
+            data = {}
+        data[_machine()] = entry
+        with atomic_path(path) as tmp:
+            tmp.write_text(json.dumps(data, indent=1))
+    except OSError:
+        pass
+
+
+def _probe_seconds() -> float:
+    """A short probe of this machine's speed (≈ 0.45 s on the development machine): the kind of array
+    work the commands do (exponentials, sums, a small matrix product), best of three."""
+    x = np.linspace(0.0, 5.0, 400_000)
+    a = np.random.default_rng(0).random((160, 160))
+    best = math.inf
+    for _ in range(3):
+        t = time.perf_counter()
+        for _ in range(8):
+            y = np.exp(-x) * x
+            float(y.sum())
+            a = a @ a
+            a /= np.abs(a).max()
+        best = min(best, time.perf_counter() - t)
+    return best * 3
+
+
+def _raw_seconds(command: str, units: dict) -> float:
+    terms = TIME_TERMS[command]
+    return terms.get("overhead", 0.0) + sum(terms[k] * float(v) for k, v in units.items())
+
+
+def estimate_time(command: str, units: dict, first: tuple[float, str] | None = None) -> TimeEstimate:
+    """The time ``command`` will take on this machine for ``units`` of work (keys of :data:`TIME_TERMS`).
+
+    The formula's rates (measured on the development machine) times this machine's factor for the
+    command: the median of actual/formula over its latest :data:`CALIBRATION_RUNS` runs here
+    (:func:`record_time`), or, before the first run, ``first`` (a factor and where it came from: the
+    command's own probe of its work, as ``acquire planar``'s timed walk) or else the ratio of a 0.45 s
+    probe of the machine's speed to the development machine's (cached in :func:`timing_file`).
+
+    Examples
+    --------
+    >>> TimeEstimate(42.0, "calibrated on this machine by 3 earlier runs").text()
+    'about 42 s (calibrated on this machine by 3 earlier runs)'
+    """
+    raw = _raw_seconds(command, units)
+    entry = _read_timing()
+    ratios = [r for r in entry.get("runs", {}).get(command, []) if isinstance(r, (int, float)) and r > 0]
+    if ratios:
+        ratios = sorted(ratios[-CALIBRATION_RUNS:])
+        factor = ratios[len(ratios) // 2]
+        runs = f"{len(ratios)} earlier run{'s' if len(ratios) > 1 else ''}"
+        return TimeEstimate(raw * factor, f"calibrated on this machine by {runs}")
+    if first is not None and math.isfinite(first[0]) and first[0] > 0:
+        return TimeEstimate(raw * first[0], first[1])
+    probe = entry.get("probe_s")
+    if not isinstance(probe, (int, float)) or not probe > 0:
+        probe = _probe_seconds()
+        _write_timing({**entry, "probe_s": probe})
+    return TimeEstimate(raw * probe / PROBE_REFERENCE_S, "from a probe of this machine's speed")
+
+
+def record_time(command: str, units: dict, seconds: float) -> None:
+    """Calibrate ``command`` on this machine with the ``seconds`` a run of ``units`` really took."""
+    raw = _raw_seconds(command, units)
+    if not (raw > 0 and math.isfinite(seconds) and seconds > 0):
+        return
+    entry = _read_timing()
+    runs = entry.get("runs") if isinstance(entry.get("runs"), dict) else {}
+    kept = [r for r in runs.get(command, []) if isinstance(r, (int, float))][-(CALIBRATION_RUNS - 1) :]
+    runs[command] = kept + [seconds / raw]
+    _write_timing({**entry, "runs": runs})
+
+
+def probe_factor(command: str, term: str, seconds_per_unit: float) -> float:
+    """The factor of ``command`` on this machine from a probe of its own work: the probe's seconds per
+    unit of ``term`` over the development machine's (a first estimate before any run here)."""
+    return seconds_per_unit / TIME_TERMS[command][term]
+
+
+# -- the units of work of each command (the keys of TIME_TERMS) -----------------------------------------
+def planar_acquisition_units(*, points: int, photon_steps: float, pixels: int) -> dict:
+    """``acquire planar``: P points, the probe's photon steps (Σ over points, photons and channels) and the
+    P·n² pixels of the windows."""
+    return {"points": points, "photon_steps": photon_steps, "pixels": pixels}
+
+
+def mesh_acquisition_units(*, points: int, photons: int, vertices: int) -> dict:
+    """``acquire mesh``: P points, N photons a point and channel, V vertices."""
+    return {"points": points, "photons": 3 * points * photons, "point_vertices": points * vertices}
+
+
+def fit_units(*, points: int, pixels: int, rounds: int, candidates: int = 1) -> dict:
+    """``fit``: P points x J window pixels (or vertices) x rounds x the candidates of an ``auto`` choice."""
+    return {"point_pixels": points * pixels * rounds * candidates}
+
+
+def evaluation_units(*, points: int, pixels: int, params: list[int], datasets: int = 1) -> dict:
+    """``evaluate``: P points of J pixels, models of π_p parameters a point, d data sets (2: ``--truth``)."""
+    d = datasets
+    return {
+        "point_pixels": points * pixels * d,
+        "model_pixels": len(params) * points * pixels * d,
+        "param_pixels": sum(params) * points * pixels * d,
+        "models": len(params),
+    }
+
+
+def rendering_units(
+    *,
+    vertices: int,
+    surface_mm2: float,
+    radius_mm: float,
+    width: int,
+    height: int,
+    reference: bool,
+    spp_reference: int,
+    max_pairs: float,
+) -> dict:
+    """``render``: V vertices, the transport's pairs within the radius, a W x H picture (16 samples a pixel),
+    and the two path-traced references of ``spp_reference`` samples a pixel with ``--reference``."""
+    return {
+        "vertices": vertices,
+        "pairs": transport_pairs(
+            vertices=vertices, surface_mm2=surface_mm2, radius_mm=radius_mm, max_pairs=max_pairs
+        ),
+        "samples": 16 * width * height,
+        "reference_samples": 2 * width * height * spp_reference if reference else 0,
+    }
