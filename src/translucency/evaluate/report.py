@@ -136,7 +136,7 @@ def write_report(
         fine=fine if truth is not None else None,
         exclusion=exclusion,
     )
-    plot_error_maps(errors, ds["x_i"], out_dir / "error_maps.png", models=models)
+    plot_error_maps(errors, ds["x_i"], out_dir / "error_maps.png", models=models, held_out=truth is not None)
     plot_error_ratios(errors, ds["x_i"], out_dir / "error_ratios.png", models=models)
     plot_alpha(models, out_dir / "alpha.png")
     plot_parameters(models, out_dir / "params.png")
