@@ -11,9 +11,10 @@ from ..io.atomic import atomic_path
 from .directions import spread_directions
 
 
-def save_figure(fig, path: Path) -> None:
+def save_figure(fig, path: Path, *, dpi: int = 110) -> None:
+    """Write ``fig`` to ``path`` (PNG, whole or not at all) and close it."""
     with atomic_path(path) as tmp:
-        fig.savefig(tmp, dpi=110)
+        fig.savefig(tmp, dpi=dpi)
     pyplot().close(fig)
 
 

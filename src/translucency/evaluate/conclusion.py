@@ -25,6 +25,10 @@ def _pc(v) -> str:
     return f"{100 * v:.2f} %" if _finite(v) else "–"
 
 
+def _points(k: int) -> str:
+    return f"{k} point" if k == 1 else f"{k} points"
+
+
 def _beyond(s: dict):
     return (s.get("beyond_noise") or {}).get("all")
 
@@ -154,9 +158,9 @@ def _physics(per_model: dict, n_points: int) -> list[str]:
         n_over, n_beyond = len(ph.get("over_albedo") or []), len(ph.get("beyond_object") or [])
         rho = ph.get("max_total_reflectance")
         if n_over:
-            over.append(f"{n_over} points of {name}" + (f" (up to {rho:.3g})" if _finite(rho) else ""))
+            over.append(f"{_points(n_over)} of {name}" + (f" (up to {rho:.3g})" if _finite(rho) else ""))
         if n_beyond:
-            beyond.append(f"{n_beyond} {'points ' if not beyond else ''}of {name}")
+            beyond.append(f"{_points(n_beyond) if not beyond else n_beyond} of {name}")
         if not (n_over or n_beyond):
             clean.append(name)
     if not (over or beyond):

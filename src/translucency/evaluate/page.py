@@ -57,9 +57,14 @@ def write_page(path: Path, ds: PlanarDataset, summary: dict, extra: list) -> Non
     own_noise = "The last row's in-sample cell is the fitted data's own noise." if held_out else ""
     beyond_head = "<th>beyond noise, all</th><th>beyond noise, near</th>" if held_out else ""
     in_head = "<th>in-sample, all</th>" if held_out else ""
-    defs = "".join(
-        f"<li><b>{html.escape(k)}</b>: {html.escape(v)}</li>" for k, v in summary["definition"].items()
+    shown = (
+        summary["definition"].items()
+        if held_out
+        else (  # in-sample: no truth's noise, no held-out
+            (k, v) for k, v in summary["definition"].items() if k not in ("beyond_noise", "in_sample")
+        )
     )
+    defs = "".join(f"<li><b>{html.escape(k)}</b>: {html.escape(v)}</li>" for k, v in shown)
     figures = "".join(
         f'<figure><img src="{html.escape(f)}"><figcaption>{html.escape(c)}</figcaption></figure>'
         for f, c in extra

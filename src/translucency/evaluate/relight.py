@@ -21,7 +21,7 @@ import numpy as np
 
 from .._plotting import pyplot
 from .._validate import TranslucencyError
-from ..io.atomic import atomic_path
+from ._figures import save_figure
 
 PATTERNS = ("edge", "stripe", "spot")
 
@@ -177,7 +177,5 @@ def plot_relighting(reference: np.ndarray, predictions: dict, extent, path, chan
     axes[1][0].set_title("profile across the middle rows", fontsize=9)
     axes[1][0].set_ylabel(f"exitance B, {rgb} [W mm$^{{-2}}$]")
     axes[1][0].legend(fontsize=7)
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, dpi=100)
-    plt.close(fig)
+    save_figure(fig, Path(path), dpi=100)
     return errors
