@@ -79,7 +79,8 @@ def write_page(path: Path, ds: PlanarDataset, summary: dict, extra: list) -> Non
         "per point and channel) against each model's ring means — the fits saw r ≥ the dotted line only."
     )
     page = f"""<!doctype html><html><head><meta charset="utf-8"><title>translucency report</title>
-<style>body{{font-family:sans-serif;max-width:1500px;margin:auto}} table{{border-collapse:collapse}}
+<style>body{{font-family:sans-serif;max-width:1500px;margin:auto;padding:0 12px}}
+table{{border-collapse:collapse}}
 td,th{{border:1px solid #ccc;padding:4px 8px;text-align:right}} td{{white-space:nowrap}}
 img{{max-width:100%}} .summary{{background:#f2f5f9;border-left:4px solid #3a7;padding:8px 12px}}</style>
 </head><body>
