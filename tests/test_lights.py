@@ -186,7 +186,7 @@ def test_two_lights_on_one_object_share_one_exposure(ball_model, tmp_path):
     assert "exposure_rule" not in summary["front", "auto"]
     # a light of twice the power: a stop less
     double = tmp_path / "double"
-    figure2(model, ball, parse_light("point@-60,40,1.5x,4e4", place), double, camera=camera, spp=1)
+    figure2(model, ball, parse_light("point@-60,40,1.5x,2e4", place), double, camera=camera, spp=1)
     half = json.loads((double / "render.json").read_text())["exposure"]
     assert half == pytest.approx(summary["front", "fixed"]["exposure"] / 2)
     # Figure 2 keeps its names and its auto exposure (no rule stated)

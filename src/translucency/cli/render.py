@@ -46,7 +46,7 @@ def render(
         "directional@AZ,EL[,E] (coming FROM AZ,EL): AZ degrees from +x towards +y, EL degrees above the "
         "xy plane, around the object's centre; DIST in mm or object sizes with x (2x; size = the "
         f"bounding box's diagonal; default {DEFAULT_DISTANCE:g}x); AZ,EL may be camera (from the "
-        "camera's side) or back (behind the object); I defaults to 2e4 W/sr, E to 1 W/mm^2.",
+        "camera's side) or back (behind the object). Without I or E: 1e4 W/sr, 1 W/mm^2.",
     ),
     view: str = typer.Option(
         "1,-1.6,0.7",

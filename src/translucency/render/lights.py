@@ -36,9 +36,9 @@ MIN_CUTOFF_DEG = 0.01
 #: the distance from the object's centre of a light placed relative to it when none is given, in object
 #: sizes (the size: its bounding box's diagonal); the camera sits at 1.9
 DEFAULT_DISTANCE = 1.5
-#: the power of a light placed relative to the object when none is given: I of a point or spot (W/sr),
-#: E of a directional light (W/mm²) — those of the absolute forms' defaults on the command line
-DEFAULT_INTENSITY = 2.0e4
+#: the power of a light when none is given, in every form: I of a point or spot (W/sr), E of a
+#: directional light (W/mm²)
+DEFAULT_INTENSITY = 1.0e4
 DEFAULT_IRRADIANCE = 1.0
 #: the cone of a spot placed relative to the object when none is given, degrees
 DEFAULT_CUTOFF_DEG = 20.0
@@ -49,7 +49,7 @@ class PointLight:
     """Isotropic point light: intensity I (W/sr) at ``position`` (mm)."""
 
     position: tuple
-    intensity: float = 1.0e4
+    intensity: float = DEFAULT_INTENSITY
 
     def emitter_dict(self) -> dict:
         """The Mitsuba emitter of this light."""
@@ -69,7 +69,7 @@ class DirectionalLight:
     """Distant light: irradiance E (W/mm²) on a surface facing it, travelling along ``direction``."""
 
     direction: tuple
-    irradiance: float = 1.0
+    irradiance: float = DEFAULT_IRRADIANCE
 
     def emitter_dict(self) -> dict:
         """The Mitsuba emitter of this light."""
@@ -95,7 +95,7 @@ class SpotLight:
     position: tuple
     target: tuple
     cutoff_deg: float = 20.0
-    intensity: float = 1.0e4
+    intensity: float = DEFAULT_INTENSITY
 
     @property
     def beam_width_deg(self) -> float:
