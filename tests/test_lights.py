@@ -189,6 +189,10 @@ def test_two_lights_on_one_object_share_one_exposure(ball_model, tmp_path):
     figure2(model, ball, parse_light("point@-60,40,1.5x,2e4", place), double, camera=camera, spp=1)
     half = json.loads((double / "render.json").read_text())["exposure"]
     assert half == pytest.approx(summary["front", "fixed"]["exposure"] / 2)
+    # a black light has no fixed exposure: auto, and the rule says why
+    dark = tmp_path / "dark"
+    figure2(model, ball, parse_light("point@-60,40,1.5x,0", place), dark, camera=camera, spp=1)
+    assert json.loads((dark / "render.json").read_text())["exposure_rule"].startswith("auto: no fixed")
     # Figure 2 keeps its names and its auto exposure (no rule stated)
     fig = tmp_path / "fig"
     figure2(
@@ -224,6 +228,12 @@ def test_render_writes_render_json_and_places_the_light(ball_model, tmp_path):
     )
     assert res.exit_code == 0, res.output
     assert "exposure_rule" not in json.loads((out / "render.json").read_text())
+    res = runner.invoke(
+        app,
+        ["render", str(path), "--out", str(out), "--size", "24", "18", "--exposure", "3.5", "--overwrite"],
+    )
+    assert res.exit_code == 0, res.output
+    assert json.loads((out / "render.json").read_text())["exposure"] == 3.5
 
 
 @pytest.mark.parametrize(

@@ -18,7 +18,7 @@ from ..io.atomic import atomic_path, write_json
 from ..mitsuba import mesh_scene
 from .camera import Camera
 from .compare import compare, region_errors
-from .lights import DEFAULT_DISTANCE
+from .lights import DEFAULT_DISTANCE, Placement
 from .picture import VertexPicture, coverage
 from .reference import converged_reference
 from .tonemap import Exposure, auto_exposure, parse_exposure, save_images, tonemap
@@ -145,13 +145,17 @@ def _exposure(exposure: Exposure, model, mesh, light, out: dict, auto) -> float:
     """
     rule = None
     if exposure.rule == "scale":
-        scale, rule = float(exposure.scale), "given"
+        scale = float(exposure.scale)
+        rule = f"given: the factor {scale:g}"
     elif exposure.rule == "fixed":
-        distance = DEFAULT_DISTANCE * float(np.linalg.norm(mesh.extents))
+        distance = DEFAULT_DISTANCE * Placement.of(mesh).size
         with np.errstate(all="ignore"):
             R = float(np.median(model.total_reflectance().mean(axis=1)) * np.median(model.alpha.values))
             E = float(light.irradiance_scale(distance))
+        try:
             scale = exposure.fixed(reflectance=R, irradiance=E) if R > 0 and E > 0 else math.nan
+        except (ZeroDivisionError, OverflowError):  # R E so small or large that the factor is no number
+            scale = math.nan
         if math.isfinite(scale) and scale > 0:
             rule = exposure.describe(reflectance=R, irradiance=E, distance=distance)
         else:
