@@ -3,10 +3,8 @@ through Mitsuba (EXR + PNG), and with ``--reference`` the path-traced reference 
 
 from __future__ import annotations
 
-import dataclasses
 from pathlib import Path
 
-import numpy as np
 import typer
 from rich.table import Table
 
@@ -15,7 +13,7 @@ from .._validate import TranslucencyError, check_option
 from ..io.model_file import load_model, read_header
 from ..io.outputs import claim_folder
 from ..render import MAX_PAIRS, default_radius
-from ..render.camera import Camera
+from ..render.camera import Camera, view_direction
 from ..render.figure import figure2
 from ..render.lights import DEFAULT_DISTANCE, Placement, parse_light, place_light
 from ..render.object import boundary_eta, object_of_model, volume_of_dataset
@@ -99,14 +97,7 @@ def render(
             f"{model}: a planar model; render needs a per-vertex model of a mesh data set"
         )
     mesh, dheader = object_of_model(m, header)
-    try:
-        direction = [float(v) for v in view.split(",")]
-    except ValueError:
-        direction = []
-    if len(direction) != 3 or not np.isfinite(direction).all() or not np.abs(direction).max() > 0:
-        raise TranslucencyError(f"--view: expected three finite numbers x,y,z not all zero, got {view!r}")
-    direction = np.asarray(direction) / np.abs(direction).max()  # 1e308 or 1e-320: no overflow, no 0
-    direction /= np.linalg.norm(direction)
+    direction = view_direction(view, "--view")
     placement = Placement.of(mesh, direction)
     lights = [place_light(lit, placement) for lit in relative]
     V = len(mesh.vertices)
@@ -128,8 +119,6 @@ def render(
     run.info(f"{placement.describe()}; light {lights[0]!r}")
     run.start()  # the camera and the reference's volume are part of the work
     cam = Camera.looking_at(mesh, direction, *size)
-    if abs(direction[2]) > 0.999:  # looking straight up or down: the image's up is +y, not +z
-        cam = dataclasses.replace(cam, up=(0.0, 1.0, 0.0))
     vol = volume_of_dataset(mesh, dheader) if reference else None
     steps = 4 if reference else 3
     with run.work("render", total=steps) as work:
