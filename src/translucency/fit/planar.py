@@ -62,7 +62,7 @@ from scipy.ndimage import correlate
 from .._validate import TranslucencyError
 from ..geometry import SampleGrid, window_geometry
 from ..io.dataset import PlanarDataset, open_dataset
-from ..model import PlanarAlpha
+from ..model import PlanarAlpha, Rectangle
 from ._chunk import POOL_POINTS
 from ._options import AUTO_DIRECTIONS, AUTO_TERMS, FitContext, FitResult, check_fit_options
 from ._rounds import alternate
@@ -296,7 +296,7 @@ def fit_planar(
         x_i=x_i,
         cache_left=cache_mb * 2**20,
     )
-    return alternate(
+    result = alternate(
         ctx,
         options,
         request,
@@ -309,6 +309,20 @@ def fit_planar(
         t0=t0,
         scheduler=scheduler,
     )
+    # what the physical bounds need (model/bounds.py): the sample the windows lie on, the tally's photons
+    result.model.extent = sample_extent(ds)
+    result.model.tally_photons = int(photons) if photons and source.tally_total else None
+    return result
+
+
+def sample_extent(ds: PlanarDataset) -> Rectangle | None:
+    """The top face of the sample a planar data set was acquired on: [0, W] × [0, H] mm from its header's
+    ``sample.size_mm`` (an acquisition's slab); None where the header does not say (imported data: the
+    bounds take α's support)."""
+    size = (ds.header.get("sample") or {}).get("size_mm")
+    if not size or len(size) < 2 or not all(np.isfinite(float(v)) and float(v) > 0 for v in size[:2]):
+        return None
+    return Rectangle((0.0, 0.0), (float(size[0]), float(size[1])))
 
 
 class _PlanarSource:
