@@ -309,7 +309,11 @@ def fit_planar(
         t0=t0,
         scheduler=scheduler,
     )
-    # what the physical bounds need (model/bounds.py): the sample the windows lie on, the tally's photons
+    # the energy guard's bound on the model returned (after α's last normalisation), and what the
+    # physical bounds need (model/bounds.py): the sample the windows lie on, the tally's photons
+    scaled = FAMILIES[model].keep_totals(result.model, source.total_bound(0, ds.n_points))
+    if scaled.size:
+        result.options["scaled_to_total_bound"] = scaled.tolist()
     result.model.extent = sample_extent(ds)
     result.model.tally_photons = int(photons) if photons and source.tally_total else None
     return result

@@ -69,11 +69,11 @@ class ExponentialModel(ReflectanceModel):
     Examples
     --------
     >>> from translucency.model import PlanarAlpha
-    >>> c = np.array([[[[0.5, 0.1, 0.01]]]]); d = np.array([[[[-4.0, -1.0, -0.3]]]])
+    >>> c = np.array([[[[0.5, 0.1, 0.01]]]]); d = np.array([[[[-4.0, -1.5, -0.6]]]])
     >>> m = ExponentialModel([[0.0, 0.0]], c, d, PlanarAlpha.uniform((8, 8), (-2, -2), 0.5),
     ...                      s_g=[0.8], s_b=[0.6])
     >>> m.total_reflectance().round(4)   # 2π Σ c/d² × (1, s_g, s_b)
-    array([[1.5228, 1.2182, 0.9137]])
+    array([[0.6501, 0.5201, 0.3901]])
     """
 
     kind = "exponential"

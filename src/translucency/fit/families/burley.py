@@ -1,5 +1,7 @@
 """The family ``burley``: Christensen–Burley normalized diffusion with per-point, per-channel A and s."""
 
+import numpy as np
+
 from ...model import BurleyModel
 from ...model.burley import burley_R
 from ._baseline import BaselineFamily
@@ -22,6 +24,11 @@ class BurleyFamily(BaselineFamily):
 
     def rescale(self, state, mean):
         state.p[:, :, 0] *= mean
+
+    def keep_totals(self, model, bound):
+        over = model.A > bound  # the total reflectance of R(r; A, s) is A
+        model.A[over] = bound[over]
+        return np.flatnonzero(over.any(axis=1))
 
     def build(self, ctx, state, alpha, frame):
         return BurleyModel(ctx.x_i, state.p[:, :, 0], state.p[:, :, 1], alpha, frame=frame)
