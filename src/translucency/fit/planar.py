@@ -311,7 +311,8 @@ def fit_planar(
     )
     # the energy guard's bound on the model returned (after α's last normalisation), and what the
     # physical bounds need (model/bounds.py): the sample the windows lie on, the tally's photons
-    scaled = FAMILIES[model].keep_totals(result.model, source.total_bound(0, ds.n_points))
+    bound = np.where(source.noisy_points()[:, None], source.total_bound(0, ds.n_points), np.inf)
+    scaled = FAMILIES[model].keep_totals(result.model, bound)  # noise-free profiles keep their own tails
     if scaled.size:
         result.options["scaled_to_total_bound"] = scaled.tolist()
     result.model.extent = sample_extent(ds)
@@ -363,6 +364,18 @@ class _PlanarSource:
             ok = np.isfinite(measured) & (measured > 0)
             bound = np.where(ok, np.minimum(bound, (1 + TOTAL_TOLERANCE) * measured), bound)
         return bound
+
+    def noisy_points(self) -> np.ndarray:
+        """(P,) bool: the point's window has noise — a photon count, or a variance somewhere (the windows
+        the energy guard bounds; noise-free ones, a simulation's exact profiles, determine their tails)."""
+        if self.poisson > 0:
+            return np.ones(self.ds.n_points, dtype=bool)
+        out = np.zeros(self.ds.n_points, dtype=bool)
+        for s in range(0, self.ds.n_points, self.stored_points):
+            e = min(s + self.stored_points, self.ds.n_points)
+            var = self.ds.read("variance", s, e).astype(np.float64).reshape(e - s, -1)
+            out[s:e] = np.nansum(np.maximum(var, 0.0), axis=1) > 0
+        return out
 
     def read(self, ctx: FitContext, s: int, e: int):
         """y (k, J, 3), var or None, valid (k, J), r, θ (1|k, J), pixel (k, J), and the Poisson factor
