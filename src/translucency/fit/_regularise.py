@@ -172,19 +172,31 @@ def bound_totals(ctx: FitContext, ch: Chunk, c, a, W, Y):
 
 
 def bound_directions(ctx: FitContext, ch: Chunk, c, a):
-    r"""Scale the directions of every noisy (point, colour row) whose blend's total
+    r"""Lower the directions of every noisy (point, colour row) whose blend's total
     :math:`(2\pi/m) \sum_l \sum_k c_{lk} / a_{lk}^2` exceeds the source's bound (the one
-    :func:`bound_totals` keeps the isotropic fit to) down to it, alike; returns c (k, C, m, n).
+    :func:`bound_totals` keeps the isotropic fit to) to it; returns c (k, C, m, n).
 
     The anchors tie each direction's head and tail to the bounded isotropic fit, but the directions'
-    own slow terms can still integrate, beyond the window, to more than the point can reflect; a common
-    factor keeps the fitted anisotropy (the directions' ratios) and the energy the point received.
+    own slow terms can still integrate, beyond the window, to more than the point can reflect.  The
+    excess is taken from where it lies: the slowest term of every direction (terms are sorted steepest
+    first) is scaled by one factor over the directions; where those terms alone cannot carry it, every
+    term is scaled by a common factor.  Both keep the ratios between the directions.
     """
     if ch.total_bound is None:
         return c
     m = c.shape[2]
-    total = (2 * np.pi / m) * np.sum(c / a**2, axis=(2, 3))  # (k, C)
+    energy = (2 * np.pi / m) * c / a**2  # (k, C, m, n): each term's share of the blend's total
+    total = energy.sum(axis=(2, 3))
     bound = row_bounds(ctx, ch)
     over = (total > bound) & ch.noisy[:, None]  # noise-free profiles determine their own tails
-    scale = np.where(over, bound / np.where(over, total, 1.0), 1.0)
-    return c * scale[:, :, None, None]
+    if not over.any():
+        return c
+    slow = energy[..., -1].sum(axis=2)  # (k, C): the slowest terms' energy
+    rest = total - slow
+    tail = over & (rest <= bound) & (slow > 0)  # the slow terms alone can carry the excess
+    c = c.copy()
+    f_tail = np.where(tail, (bound - rest) / np.where(tail, slow, 1.0), 1.0)
+    c[..., -1] *= f_tail[:, :, None]
+    common = over & ~tail
+    f_all = np.where(common, bound / np.where(common, total, 1.0), 1.0)
+    return c * f_all[:, :, None, None]
