@@ -86,8 +86,7 @@ def test_the_share_beyond_a_sample_against_a_plain_integral():
     of exponentials and the baselines' enclosed-energy path against 2-D quadrature."""
     from scipy.integrate import quad as quad1
 
-    from translucency.model import Rectangle, check_physics
-    from translucency.model._base import ReflectanceModel
+    from translucency.model import Rectangle, ReflectanceModel, check_physics
     from translucency.model.bounds import N_ANGLES
 
     c, a = np.array([0.02, 0.004]), np.array([1.2, 0.3])
@@ -223,6 +222,7 @@ def test_jensens_materials_are_semi_infinite_slabs(tmp_path):
     model = fits_model([material_profiles(m) for m in MATERIALS.values()])
     check = check_physics(model)
     assert check.ok and check.radius.max() > 100 and np.isinf(check.size_mm)
+    assert check.summary()["size_mm"] is None and check.summary()["extent"] == "semi-infinite"
     path = save_model(model, tmp_path / "dipole_fits.model.zip")
     assert read_header(path)["object"] == {"extent": {"kind": "semi-infinite"}}
     assert runner.invoke(app, ["info", str(path)]).exit_code == 0

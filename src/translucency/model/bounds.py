@@ -126,7 +126,8 @@ class PhysicsCheck:
         out = {
             "albedo_bound": 1.0,
             "albedo_tolerance": round(float(self.albedo_bound) - 1.0, 6),
-            "size_mm": round(float(self.size_mm), 4) if math.isfinite(self.size_mm) else math.inf,
+            # null for a semi-infinite slab: the header stays strict JSON (no Infinity) for every Zarr reader
+            "size_mm": round(float(self.size_mm), 4) if math.isfinite(self.size_mm) else None,
             "extent": self.extent,
             "max_total_reflectance": float(np.max(self.total)) if self.total.size else 0.0,
             "max_energy_radius_mm": float(np.max(self.radius)) if self.radius.size else 0.0,
