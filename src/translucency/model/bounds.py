@@ -94,6 +94,8 @@ class PhysicsCheck:
         The kind of object (:mod:`translucency.model.extent`).
     direction_total : ndarray, shape (N,), optional
         Anisotropic models: the largest of each point's directions' own totals (reported, not bounded).
+    object : str, optional
+        The object in words ("a 32 x 32 mm sample"); default from ``size_mm``.
     """
 
     total: np.ndarray
@@ -106,6 +108,7 @@ class PhysicsCheck:
     beyond_bound: float = BEYOND_TOLERANCE
     extent: str = "rectangle"
     direction_total: np.ndarray | None = None
+    object: str | None = None
 
     def __post_init__(self):
         if self.beyond is None:
@@ -129,6 +132,7 @@ class PhysicsCheck:
             # null for a semi-infinite slab: the header stays strict JSON (no Infinity) for every Zarr reader
             "size_mm": round(float(self.size_mm), 4) if math.isfinite(self.size_mm) else None,
             "extent": self.extent,
+            "object": self._object(),
             "max_total_reflectance": float(np.max(self.total)) if self.total.size else 0.0,
             "max_energy_radius_mm": float(np.max(self.radius)) if self.radius.size else 0.0,
             "beyond_object_bound": float(self.beyond_bound),
@@ -141,6 +145,8 @@ class PhysicsCheck:
         return out
 
     def _object(self) -> str:
+        if self.object:
+            return self.object
         if not math.isfinite(self.size_mm):
             return "a semi-infinite slab"
         return f"a {self.size_mm:.3g} mm object"
@@ -241,4 +247,4 @@ def check_physics(model, *, size_mm: float | None = None) -> PhysicsCheck:
     beyond = ~(share <= BEYOND_TOLERANCE)
     own = model.direction_totals().max(axis=(1, 2)) if getattr(model, "n_directions", 1) > 1 else None
     return PhysicsCheck(total, radius, extent.size_mm, over, beyond, share, bound, BEYOND_TOLERANCE,
-                        extent.kind, own)  # fmt: skip
+                        extent.kind, own, extent.describe())  # fmt: skip

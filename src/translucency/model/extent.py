@@ -42,6 +42,10 @@ class ObjectExtent:
         ``theta`` (T,) of its tangent plane; inf where there is no edge."""
         raise NotImplementedError
 
+    def describe(self) -> str:
+        """The object in words, for a person ("a 32 x 32 mm sample")."""
+        raise NotImplementedError
+
     def as_dict(self) -> dict:
         """JSON-friendly record (the model file's ``object`` header field)."""
         raise NotImplementedError
@@ -66,6 +70,9 @@ class SemiInfinite(ObjectExtent):
 
     def distance(self, x_i, theta):
         return np.full((len(x_i), len(theta)), np.inf)
+
+    def describe(self) -> str:
+        return "a semi-infinite slab"
 
     def as_dict(self) -> dict:
         return {"kind": self.kind}
@@ -93,6 +100,9 @@ class Diameter(ObjectExtent):
 
     def distance(self, x_i, theta):
         return np.full((len(x_i), len(theta)), self.size)
+
+    def describe(self) -> str:
+        return f"a {self.size:.3g} mm object"
 
     def as_dict(self) -> dict:
         return {"kind": self.kind, "size_mm": self.size}
@@ -130,6 +140,10 @@ class Rectangle(ObjectExtent):
         tx = np.where(cos == 0, np.inf, tx)
         ty = np.where(sin == 0, np.inf, ty)
         return np.maximum(np.minimum(tx, ty), 0.0)  # a point outside the rectangle: all beyond it
+
+    def describe(self) -> str:
+        w, h = self.hi - self.lo
+        return f"a {w:.3g} x {h:.3g} mm sample"
 
     def as_dict(self) -> dict:
         return {"kind": self.kind, "lo": self.lo.tolist(), "hi": self.hi.tolist()}
