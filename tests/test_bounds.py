@@ -226,3 +226,30 @@ def test_jensens_materials_are_semi_infinite_slabs(tmp_path):
     path = save_model(model, tmp_path / "dipole_fits.model.zip")
     assert read_header(path)["object"] == {"extent": {"kind": "semi-infinite"}}
     assert runner.invoke(app, ["info", str(path)]).exit_code == 0
+
+
+def test_the_readme_fit_example_writes_a_valid_model(tmp_path):
+    """The README's command-line session (`acquire planar --material marble --grid 8 --photons 10000`, then
+    `fit --model iso`): before the bounds were right, `fit` warned of 11 unphysical points."""
+    data = tmp_path / "m.zarr"
+    args = [
+        "acquire",
+        "planar",
+        "--material",
+        "marble",
+        "--out",
+        str(data),
+        "--grid",
+        "8",
+        "--photons",
+        "10000",
+    ]
+    res = runner.invoke(app, args)
+    assert res.exit_code == 0, res.output
+    for kind in ("iso", "aniso"):
+        out = tmp_path / f"{kind}.model.zip"
+        res = runner.invoke(app, ["fit", str(data), "--model", kind, "--out", str(out)])
+        assert res.exit_code == 0, res.output
+        assert "not physical" not in res.output, res.output
+        res = runner.invoke(app, ["info", str(out)])
+        assert res.exit_code == 0, res.output
