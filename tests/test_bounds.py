@@ -232,18 +232,7 @@ def test_the_readme_fit_example_writes_a_valid_model(tmp_path):
     """The README's command-line session (`acquire planar --material marble --grid 8 --photons 10000`, then
     `fit --model iso`): before the bounds were right, `fit` warned of 11 unphysical points."""
     data = tmp_path / "m.zarr"
-    args = [
-        "acquire",
-        "planar",
-        "--material",
-        "marble",
-        "--out",
-        str(data),
-        "--grid",
-        "8",
-        "--photons",
-        "10000",
-    ]
+    args = "acquire planar --material marble --grid 8 --photons 10000".split() + ["--out", str(data)]
     res = runner.invoke(app, args)
     assert res.exit_code == 0, res.output
     for kind in ("iso", "aniso"):
