@@ -241,8 +241,8 @@ def _warn_unphysical(path: Path) -> list[int]:
     if bad:
         err_console.print(
             f"[yellow]warning:[/] {len(bad)} incident points are not physical (total reflectance up to "
-            f"{physics['max_total_reflectance']:.3g}, energy radius up to "
-            f"{physics['max_energy_radius_mm']:.3g} mm on a {physics['size_mm']:.3g} mm object): "
+            f"{physics['max_total_reflectance']:.3g}, up to {100 * physics.get('max_beyond_object', 0):.3g}% "
+            f"of a point's energy beyond {physics.get('object', 'the object')}): "
             f"{bad[:10]}{'…' if len(bad) > 10 else ''}; see `translucency info {path}`"
         )
     return bad
