@@ -239,7 +239,7 @@ def fit_planar(
         raise TranslucencyError(f"chunk: must be >= 1 point, got {chunk_points}")
     # whole blocks of the pooled cold starts, so that the fit does not depend on the chunking
     chunk_points = POOL_POINTS * -(-int(chunk_points) // POOL_POINTS)
-    m = int(n_directions) if model == "aniso" else 1
+    m = int(n_directions) if FAMILIES[model].directional else 1
     n = int(n_terms)
     shared = FAMILIES[model].shared_colour  # the exponential families have the colour scale
     C = 1 if (colour == "shared" and shared) else 3
