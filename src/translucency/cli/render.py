@@ -14,11 +14,6 @@ from .. import resources
 from .._validate import TranslucencyError, check_option
 from ..io.model_file import load_model, read_header
 from ..io.outputs import claim_folder
-from ..render import MAX_PAIRS, default_radius
-from ..render.camera import Camera
-from ..render.figure import figure2
-from ..render.lights import parse_light
-from ..render.object import boundary_eta, object_of_model, volume_of_dataset
 from ._common import json_option, max_memory_option, overwrite_option, quiet_option, user_errors
 from ._run import Run
 
@@ -55,6 +50,12 @@ def render(
     as_json: bool = json_option(),
 ):
     """Relight a fitted object: irradiance per vertex, sparse transport, a picture through Mitsuba (EXR + PNG)."""  # noqa: E501 — Typer lists the docstring verbatim as the command's one-line help; a line break would show in `translucency --help`
+    from ..render import MAX_PAIRS, default_radius  # heavy: Mitsuba, Numba, trimesh load only to render
+    from ..render.camera import Camera
+    from ..render.figure import figure2
+    from ..render.lights import parse_light
+    from ..render.object import boundary_eta, object_of_model, volume_of_dataset
+
     check_option("--spp", spp, lo=1)
     check_option("--radius", radius, lo=1e-6, hi=1e9)  # 1 nm to 1000 km (the far field divides by r²)
     for value in size:

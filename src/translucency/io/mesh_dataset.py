@@ -25,9 +25,9 @@ from __future__ import annotations
 import json
 import warnings
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
-import trimesh
 import zarr
 from zarr.codecs import BloscCodec
 
@@ -35,6 +35,9 @@ from .._validate import TranslucencyError
 from ._store import ChunkedStore
 from .dataset import summary_of_store
 from .outputs import reopen_or_clear
+
+if TYPE_CHECKING:  # the annotations only: trimesh loads where a mesh is built
+    import trimesh
 
 HEADER_KEY = "translucency_mesh_dataset"
 FORMAT = "translucency-mesh-dataset"
@@ -78,6 +81,8 @@ class MeshDataset(ChunkedStore):
 
     def mesh(self) -> trimesh.Trimesh:
         """The object's surface (mm) as stored, vertices in their stored order."""
+        import trimesh  # heavy: trimesh loads only where the surface is used (not for info or a fit)
+
         return trimesh.Trimesh(self["vertices"].astype(np.float64), self["faces"], process=False)
 
 
