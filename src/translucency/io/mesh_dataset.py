@@ -28,8 +28,6 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
-import zarr
-from zarr.codecs import BloscCodec
 
 from .._validate import TranslucencyError
 from ._store import ChunkedStore
@@ -102,6 +100,8 @@ def open_mesh_dataset(path, *, writable: bool = False) -> MeshDataset:
     path = Path(path)
     if not path.exists():
         raise TranslucencyError(f"{path}: no such mesh data set")
+    import zarr  # heavy: Zarr loads where a store is read or written, not for --help
+
     try:
         group = zarr.open_group(str(path), mode="r+" if writable else "r")
         header = dict(group.attrs).get(HEADER_KEY)
@@ -188,6 +188,9 @@ def create_mesh_dataset(
         return old
     P, V = len(incident), len(mesh.vertices)
     n_chunks = -(-P // chunk_points)
+    import zarr  # heavy: Zarr loads where a store is read or written, not for --help
+    from zarr.codecs import BloscCodec
+
     root = zarr.create_group(
         str(path), attributes={HEADER_KEY: header}, overwrite=False
     )  # never clears a folder
