@@ -1,4 +1,4 @@
-"""Start-up time of the command line: ``translucency --help``, ``translucency info`` and ``import translucency``.
+"""Start-up of the command line: ``translucency --help``, ``translucency info`` and ``import translucency``.
 
 Each command runs in a fresh interpreter, several times; the table gives the median wall time and the
 median CPU time (user + system of the child) of each.  Wall time depends on how busy the machine is, CPU
