@@ -251,3 +251,14 @@ def test_bad_light_or_exposure_is_one_line_and_writes_nothing(ball_model, tmp_pa
     lines = [ln for ln in res.output.strip().splitlines() if ln.strip()]
     assert res.exit_code == 2 and len(lines) == 1 and lines[0].startswith("error:"), res.output
     assert named in lines[0] and not out.exists(), res.output
+
+
+def test_the_help_states_the_default_distance_of_the_constant():
+    """``render --help`` writes the default distance as text (the command module stays cheap to import):
+    it must be the one :data:`DEFAULT_DISTANCE` places lights at."""
+    from typer.testing import CliRunner
+
+    from translucency.cli.app import app
+
+    text = " ".join(CliRunner().invoke(app, ["render", "--help"], terminal_width=400).output.split())
+    assert f"default {DEFAULT_DISTANCE:g}x" in text

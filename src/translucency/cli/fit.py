@@ -11,9 +11,6 @@ import typer
 
 from .. import resources
 from .._validate import TranslucencyError, check_option
-from ..cluster import parse_scheduler
-from ..fit import FAMILIES, FIT_BLOCK, check_fit_options, fit_mesh, fit_planar
-from ..fit.planar import default_chunk_points
 from ..io.dataset import dataset_identity, open_dataset
 from ..io.mesh_dataset import is_mesh_dataset, open_mesh_dataset
 from ..io.model_file import read_header, save_model
@@ -92,6 +89,10 @@ def fit(
 
     An interrupted fit resumes from OUT.partial.npz when run again with the same arguments.
     """
+    from ..cluster import parse_scheduler  # heavy: the fitter loads Dask, SciPy and Numba only when it runs
+    from ..fit import FAMILIES, FIT_BLOCK, check_fit_options, fit_mesh, fit_planar
+    from ..fit.planar import default_chunk_points
+
     parse_scheduler(scheduler)  # a bad value or an unreachable cluster: one line, before work
     check_option("--rounds", rounds, lo=1)
     check_option("--exclusion", exclusion, lo=0)

@@ -12,12 +12,6 @@ from .. import resources
 from .._validate import TranslucencyError, check_option
 from ..io.model_file import load_model, read_header
 from ..io.outputs import claim_folder
-from ..render import MAX_PAIRS, default_radius
-from ..render.camera import Camera, view_direction
-from ..render.figure import figure2
-from ..render.lights import DEFAULT_DISTANCE, Placement, parse_light, place_light
-from ..render.object import boundary_eta, object_of_model, volume_of_dataset
-from ..render.tonemap import parse_exposure
 from ._common import json_option, max_memory_option, overwrite_option, quiet_option, user_errors
 from ._run import Run
 
@@ -43,7 +37,7 @@ def render(
         "point@AZ,EL[,DIST[,I]] | spot@AZ,EL[,DIST[,CUTOFF[,I]]] (aimed at the centre) | "
         "directional@AZ,EL[,E] (coming FROM AZ,EL): AZ degrees from +x towards +y, EL degrees above the "
         "xy plane, around the object's centre; DIST in mm or object sizes with x (2x; size = the "
-        f"bounding box's diagonal; default {DEFAULT_DISTANCE:g}x); AZ,EL may be camera (from the "
+        "bounding box's diagonal; default 1.5x); AZ,EL may be camera (from the "
         "camera's side) or back (behind the object). Without I or E: 1e4 W/sr, 1 W/mm^2.",
     ),
     view: str = typer.Option(
@@ -80,6 +74,13 @@ def render(
     as_json: bool = json_option(),
 ):
     """Relight a fitted object: irradiance per vertex, sparse transport, a picture through Mitsuba (EXR + PNG)."""  # noqa: E501 — Typer lists the docstring verbatim as the command's one-line help; a line break would show in `translucency --help`
+    from ..render import MAX_PAIRS, default_radius  # heavy: Mitsuba, Numba, trimesh load only to render
+    from ..render.camera import Camera, view_direction
+    from ..render.figure import figure2
+    from ..render.lights import Placement, parse_light, place_light
+    from ..render.object import boundary_eta, object_of_model, volume_of_dataset
+    from ..render.tonemap import parse_exposure
+
     check_option("--spp", spp, lo=1)
     chosen_exposure = parse_exposure(exposure, name="--exposure")
     relative = [parse_light(t) for t in light]  # the text checked; placed once the object is known

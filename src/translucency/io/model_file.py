@@ -54,8 +54,6 @@ import zipfile
 from pathlib import Path
 
 import numpy as np
-import zarr
-from zarr.codecs import BloscCodec
 
 from .._validate import TranslucencyError
 from .._version import __version__
@@ -245,6 +243,8 @@ def _overflow_message(key: str, cast: np.ndarray, dtype: str, model: Reflectance
 
 def _write_store(path: Path, header: dict, arrays: dict[str, np.ndarray]) -> None:
     """Pack a header and arrays into a zipped Zarr v3 store at ``path``, atomically."""
+    import zarr  # heavy: Zarr loads where a store is read or written, not for --help
+    from zarr.codecs import BloscCodec
 
     with atomic_path(path) as tmp:
         tmp.unlink()  # ZipStore creates the archive itself
@@ -359,6 +359,7 @@ def read_header(path) -> dict:
 
 
 def _open(path: Path):
+    import zarr  # heavy: Zarr loads where a store is read or written, not for --help
 
     if not path.exists():
         raise ModelFileError(f"{path}: no such file")
