@@ -32,6 +32,7 @@ import zarr
 from zarr.codecs import BloscCodec
 
 from .._validate import TranslucencyError
+from ..geometry import object_bounds
 from ._store import ChunkedStore
 from .dataset import summary_of_store
 from .outputs import reopen_or_clear
@@ -213,13 +214,17 @@ def create_mesh_dataset(
 
 
 def describe_mesh(ds: MeshDataset) -> dict:
-    """A JSON-friendly summary for ``translucency info``."""
+    """What ``translucency info`` reports of a mesh data set (JSON-ready: docs/json.md), with the object's
+    bounds and centre in mm (where a light or a camera goes)."""
     h = ds.header
+    vertices = np.asarray(ds.group["vertices"][...], dtype=np.float64)
     return summary_of_store(
         ds.path,
         h,
         ds["chunk_done"],
         ds.damaged_chunks(),
-        mesh=f"{h['n_vertices']:,} vertices, {ds.group['faces'].shape[0]:,} faces",
-        **{"index matched": h.get("request", {}).get("index_matched")},
+        n_vertices=int(h["n_vertices"]),
+        n_faces=int(ds.group["faces"].shape[0]),
+        index_matched=h.get("request", {}).get("index_matched"),
+        **object_bounds(vertices),
     )
