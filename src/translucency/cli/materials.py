@@ -7,7 +7,7 @@ from rich.table import Table
 
 from .._validate import check_option
 from ..model import MATERIALS, dipole_total_reflectance
-from ._common import console, finish, json_option, user_errors
+from ._common import finish, json_option, user_errors
 
 
 @user_errors
