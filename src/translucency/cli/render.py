@@ -119,6 +119,10 @@ def render(
     table = Table(title=f"render of {model.name}", show_header=False)
     for k, v in res.items():
         table.add_row(k, f"{v:.4g}" if isinstance(v, float) else str(v))
-    run.finish(
-        as_json, {"command": "render", "model": model, "images": out, **res}, [table, f"images: {out}"]
-    )
+    summary = {"command": "render", "model": model, "images": out, **res, "light": _light_record(lights[0])}
+    run.finish(as_json, summary, [table, f"images: {out}"])
+
+
+def _light_record(light) -> dict:
+    """A light as JSON: its kind (point, directional, spot, environment) and its parameters."""
+    return {"kind": type(light).__name__.removesuffix("Light").lower(), **dataclasses.asdict(light)}
