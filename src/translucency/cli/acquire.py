@@ -10,12 +10,20 @@ import typer
 
 from .. import resources
 from .._validate import TranslucencyError, check_option
-from ..acquire import PlanarSetup, acquire_planar, estimate_seconds, load_volume, make_sample, probe_walk
+from ..acquire import (
+    GENERATORS,
+    PlanarSetup,
+    acquire_planar,
+    estimate_seconds,
+    load_volume,
+    make_sample,
+    probe_walk,
+)
 from ..acquire.mesh import acquire_mesh, object_volume
 from ..acquire.objects import make_pig
 from ..cluster import parse_scheduler
 from ..io.dataset import open_dataset
-from ..io.mesh import load_mesh
+from ..io.mesh import check_mesh_file, load_mesh
 from ..io.mesh_dataset import open_mesh_dataset
 from ..io.outputs import claim_folder, claim_output
 from ..rig.photographs import VirtualCamera, photograph_sample
@@ -30,6 +38,9 @@ from ._common import (
     user_errors,
 )
 from ._run import Run, bytes_at
+
+#: the sample generators, as --help lists them (the one list make_sample refuses others with)
+SAMPLES = ", ".join(GENERATORS) + " (<name>: one of `translucency materials`)"
 
 app = typer.Typer(
     help="Virtual DISCO: simulate measurements by photon transport (Mitsuba 3 / Dr.Jit).",
@@ -47,7 +58,7 @@ def acquire_photographs_cmd(
         None,
         "--material",
         "-m",
-        help="Sample generator: homogeneous:<name>, marble, apple-slice, skin, fibers.",
+        help=f"Sample generator: {SAMPLES}.",
     ),
     volume: Path = typer.Option(None, "--volume", help="A user's volume (.npz, as acquire planar)."),
     grid: int = typer.Option(2, "--grid", help="Incident points per axis (grid x grid)."),
@@ -105,7 +116,7 @@ def acquire_planar_cmd(
         None,
         "--material",
         "-m",
-        help="Sample generator: homogeneous:<name>, marble, apple-slice, skin, fibers.",
+        help=f"Sample generator: {SAMPLES}.",
     ),
     volume: Path = typer.Option(
         None, "--volume", help="A user's volume: .npz with sigma_s, sigma_a (Z,Y,X,3) in 1/mm, voxel_mm."
@@ -243,7 +254,7 @@ def acquire_mesh_cmd(
         None,
         "--material",
         "-m",
-        help="Filling: homogeneous:<name>, marble (default), apple-slice, skin, fibers (object space).",
+        help=f"Filling (in object space): {SAMPLES}; default marble.",
     ),
     volume: Path = typer.Option(
         None,
@@ -282,6 +293,8 @@ def acquire_mesh_cmd(
     run = Run("acquire mesh", max_memory=max_memory, quiet=quiet)
     if material is not None and volume is not None:
         raise TranslucencyError("give one of --material NAME or --volume FILE.npz, not both")
+    if mesh is not None:
+        check_mesh_file(mesh, "--mesh")  # a folder or a missing file: named before the output is judged
     claim_output(out, "mesh data set", overwrite=overwrite, inputs=[mesh, volume], reuse=True)
     obj = load_mesh(mesh, scale_mm=scale, up=up) if mesh is not None else make_pig()
 

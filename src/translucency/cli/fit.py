@@ -35,13 +35,16 @@ MESH_FIT_CHUNK = 32
 
 @user_errors
 def fit(
-    data: Path = typer.Argument(..., help="A planar data set (.zarr directory)."),
+    data: Path = typer.Argument(
+        ...,
+        help="A planar or a mesh data set (.zarr directory, from acquire planar|mesh or import images).",
+    ),
     out: Path = typer.Option(..., "--out", "-o", help="Model file to write (.model.zip)."),
     model: str = typer.Option(
         "iso",
         "--model",
-        help="iso | aniso (the paper's) | dipole | burley | pbd (photon beam diffusion) | ddipole "
-        "(directional dipole at normal incidence).",
+        help="iso | aniso (the paper's; planar data sets only) | dipole | burley | pbd (photon beam "
+        "diffusion) | ddipole (directional dipole at normal incidence).",
     ),
     terms: str = typer.Option(
         "3", "--terms", "-n", help="Exponential terms n per profile (1-4), or auto (held-out choice)."
@@ -88,7 +91,7 @@ def fit(
     quiet: bool = quiet_option(),
     as_json: bool = json_option(),
 ):
-    """Fit a model per incident point, with the modulation texture alpha, to a planar data set.
+    """Fit a model per incident point, with the modulation texture alpha, to a planar or a mesh data set.
 
     An interrupted fit resumes from OUT.partial.npz when run again with the same arguments.
     """
@@ -105,6 +108,12 @@ def fit(
     on_mesh = is_mesh_dataset(data)
     if on_mesh:
         colour = colour or "shared"
+        if model in FAMILIES and FAMILIES[model].directional:
+            raise TranslucencyError(
+                f"--model {model}: the anisotropic model is for planar data sets; {data} is a mesh data set, "
+                "where the isotropic model is fitted per vertex (r = |x_o - x_i|, as in the paper): use "
+                "--model iso"
+            )
         if terms == "auto":
             raise TranslucencyError("--terms: 'auto' selects on planar data only; give n for a mesh fit")
         if weighting != "poisson":

@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from .._plotting import pyplot
+from .._validate import plain
 from ..io.atomic import atomic_path, write_json
 from ..mitsuba import mesh_scene
 from .camera import Camera
@@ -86,7 +87,7 @@ def figure2(
         "prepare_s": t_prepare,
         "relight_s": t_relight,
         "draw_s": t_draw,
-        "light": repr(light),
+        "light": plain(light),
         "eta": eta,
     }
     if volume is None:

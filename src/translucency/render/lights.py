@@ -165,7 +165,7 @@ def parse_light(text: str):
         return EnvironmentLight(v[0])
     raise TranslucencyError(
         "light: expected point:x,y,z[,I], directional:dx,dy,dz[,E], "
-        f"spot:x,y,z,tx,ty,tz,cutoff_deg[,I] or env:L, got {text!r}"
+        f"spot:x,y,z,tx,ty,tz,cutoff_deg[,I], env:L or env:MAP.exr[,scale], got {text!r}"
     )
 
 
