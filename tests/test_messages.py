@@ -8,6 +8,8 @@ import pytest
 import trimesh
 from typer.testing import CliRunner
 
+from helpers import random_exponential_model
+from translucency import save_model
 from translucency._validate import TranslucencyError, plain
 from translucency.acquire import GENERATORS
 from translucency.cli.app import app
@@ -135,3 +137,57 @@ def test_an_output_folder_with_its_article(tmp_path):
     (tmp_path / "rep" / "index.html").write_text("<html></html>")
     res = runner.invoke(app, ["demo", "--out", str(tmp_path / "rep")])
     assert "an output folder written by translucency" in res.output and " a output" not in res.output
+
+
+# -- a newcomer's wrong kinds: each named for what it is, with what to do instead ---------------------
+@pytest.fixture
+def kinds(tmp_path, rng, ball_dataset):
+    """A model file, a mesh data set, a mesh file and a volume, by name."""
+    model = save_model(random_exponential_model(rng, n_points=2), tmp_path / "m.model.zip")
+    trimesh.creation.icosphere(1, radius=4.0).export(tmp_path / "ball.obj")
+    np.savez(tmp_path / "vol.npz", sigma_s=np.ones((2, 2, 2, 3)), sigma_a=np.ones((2, 2, 2, 3)), voxel_mm=1.0)
+    return {
+        "model": model,
+        "mesh data": ball_dataset,
+        "mesh": tmp_path / "ball.obj",
+        "volume": tmp_path / "vol.npz",
+    }
+
+
+@pytest.mark.parametrize(
+    ("args", "expected"),
+    [
+        (
+            ["fit", "{model}", "-o", "{tmp}/x.model.zip"],
+            "m.model.zip: is a model file, not a data set; give a data",
+        ),
+        (
+            ["fit", "{mesh}", "-o", "{tmp}/x.model.zip"],
+            "is a mesh file, not a data set; make a data set of it with",
+        ),
+        (["fit", "{mesh data}", "-o", "{tmp}/x.zarr"], "--out {tmp}/x.zarr: names a data set (.zarr)"),
+        (["info", "{mesh}"], "is a mesh file, not a model file or a data set"),
+        (["info", "{tmp}"], "a folder, but not a translucency data set (it holds no zarr.json)"),
+        (["evaluate", "{mesh data}", "{model}"], "swapped? evaluate takes MODEL DATA"),
+        (["evaluate", "{model}", "{model}"], "is a model file, not a data set"),
+        (["evaluate", "{model}", "{mesh data}", "--compare", "{mesh data}"], "--compare"),
+        (["evaluate", "{model}", "{mesh data}", "--truth", "{model}"], "--truth"),
+        (["render", "{mesh data}"], "is a mesh data set, not a model file; fit a model to it with"),
+        (
+            ["acquire", "planar", "--volume", "{mesh}", "--out", "{tmp}/v.zarr"],
+            "a mesh is the object's surface",
+        ),
+        (
+            ["acquire", "mesh", "--mesh", "{mesh data}", "--out", "{tmp}/v.zarr"],
+            "is a mesh data set, not a mesh",
+        ),
+        (["acquire", "mesh", "--volume", "{model}", "--out", "{tmp}/v.zarr"], "--volume"),
+    ],
+)
+def test_a_path_of_another_kind_is_named(kinds, tmp_path, args, expected):
+    """Before: `not a readable Zarr data set (GroupNotFoundError)`, `not a zip archive` and the like."""
+    fill = {**{k: str(v) for k, v in kinds.items()}, "tmp": str(tmp_path)}
+    line = error_line([a.format(**fill) for a in args])
+    assert expected.format(**fill) in line, line
+    assert "GroupNotFoundError" not in line and "zip archive" not in line
+    assert not (tmp_path / "v.zarr").exists() and not (tmp_path / "x.model.zip").exists()

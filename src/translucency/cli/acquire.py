@@ -23,6 +23,7 @@ from ..acquire.mesh import acquire_mesh, object_volume
 from ..acquire.objects import make_pig
 from ..cluster import parse_scheduler
 from ..io.dataset import open_dataset
+from ..io.inputs import expect_input
 from ..io.mesh import check_mesh_file, load_mesh
 from ..io.mesh_dataset import open_mesh_dataset
 from ..io.outputs import claim_folder, claim_output
@@ -90,6 +91,7 @@ def acquire_photographs_cmd(
         check_option("--resolution", v, lo=8, hi=8192)
     if (material is None) == (volume is None):
         raise TranslucencyError("give exactly one of --material NAME or --volume FILE.npz")
+    expect_input(volume, ("volume file",), "--volume")
     claim_folder(out, overwrite=overwrite, inputs=[volume])
     vol = load_volume(volume) if volume is not None else make_sample(material, size, voxel, seed=seed)
     W, H, _ = vol.size_mm
@@ -171,6 +173,7 @@ def acquire_planar_cmd(
     run = Run("acquire planar", max_memory=max_memory, quiet=quiet)
     if (material is None) == (volume is None):
         raise TranslucencyError("give exactly one of --material NAME or --volume FILE.npz")
+    expect_input(volume, ("volume file",), "--volume")
     if dtype not in ("float32", "float16"):
         raise TranslucencyError(f"--dtype: expected float32 or float16, got {dtype!r}")
 
@@ -293,6 +296,8 @@ def acquire_mesh_cmd(
     run = Run("acquire mesh", max_memory=max_memory, quiet=quiet)
     if material is not None and volume is not None:
         raise TranslucencyError("give one of --material NAME or --volume FILE.npz, not both")
+    expect_input(volume, ("volume file",), "--volume")
+    expect_input(mesh, ("mesh file",), "--mesh")
     if mesh is not None:
         check_mesh_file(mesh, "--mesh")  # a folder or a missing file: named before the output is judged
     claim_output(out, "mesh data set", overwrite=overwrite, inputs=[mesh, volume], reuse=True)

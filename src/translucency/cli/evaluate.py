@@ -15,6 +15,7 @@ from ..cluster import parse_scheduler
 from ..evaluate.report import model_label, write_report
 from ..io.atomic import write_json
 from ..io.dataset import dataset_identity, open_dataset
+from ..io.inputs import DATA_SETS, expect_input, what_is
 from ..io.mesh_dataset import is_mesh_dataset, open_mesh_dataset
 from ..io.model_file import load_model, read_header
 from ..io.outputs import claim_folder, claim_output
@@ -61,6 +62,15 @@ def evaluate(
     """Relative L2 errors (overall, per distance band, energy-weighted), error maps, profiles, HTML report."""
     parse_scheduler(scheduler)  # a bad value or an unreachable cluster: one line, before work
 
+    if what_is(model) in DATA_SETS and what_is(data) == "model file":
+        raise TranslucencyError(
+            f"{model}: is a data set and {data} a model file: swapped? evaluate takes MODEL DATA "
+            f"(translucency evaluate {data} {model})"
+        )
+    for path, option in [(model, None), *((p, "--compare") for p in compare or [])]:
+        expect_input(path, ("model file",), option)
+    expect_input(data, DATA_SETS)
+    expect_input(truth, DATA_SETS, "--truth")
     run = Run("evaluate", max_memory=max_memory, quiet=quiet)
     models, flagged, exclusion, metas = {}, {}, {}, {}
     for path in [model, *(compare or [])]:

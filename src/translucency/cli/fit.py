@@ -15,6 +15,7 @@ from ..cluster import parse_scheduler
 from ..fit import FAMILIES, FIT_BLOCK, check_fit_options, fit_mesh, fit_planar
 from ..fit.planar import default_chunk_points
 from ..io.dataset import dataset_identity, open_dataset
+from ..io.inputs import DATA_SETS, expect_input
 from ..io.mesh_dataset import is_mesh_dataset, open_mesh_dataset
 from ..io.model_file import read_header, save_model
 from ..io.outputs import claim_output
@@ -101,6 +102,11 @@ def fit(
     check_option("--chunk", chunk, lo=1)
     check_option("--alpha-radius", alpha_radius, lo=0)
     terms, directions = _count_or_auto("--terms", terms), _count_or_auto("--directions", directions)
+    expect_input(data, DATA_SETS)  # a model or a mesh file where the data set belongs: say so
+    if out.name.endswith(".zarr"):
+        raise TranslucencyError(
+            f"--out {out}: names a data set (.zarr); fit writes a model file: give NAME.model.zip"
+        )
     run = Run("fit", max_memory=max_memory, quiet=quiet, timer=f"fit {model}")
 
     claim_output(out, "model file", overwrite=overwrite, inputs=[data], option="--out")

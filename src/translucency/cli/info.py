@@ -15,6 +15,7 @@ from rich.table import Table
 
 from ..geometry import object_bounds
 from ..io.dataset import describe, open_dataset
+from ..io.inputs import expect_input
 from ..io.mesh_dataset import describe_mesh, is_mesh_dataset, open_mesh_dataset
 from ..io.model_file import ModelFileError, load_model, read_header
 from ..model import check_physics
@@ -44,6 +45,7 @@ def info(
 
 def record(path: Path) -> dict:
     """``info``'s record of ``path``: a model file, a planar or a mesh data set."""
+    expect_input(path, ("model file", "planar data set", "mesh data set"))
     if path.is_dir():
         if is_mesh_dataset(path):
             return {

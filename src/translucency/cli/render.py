@@ -12,6 +12,7 @@ from rich.table import Table
 
 from .. import resources
 from .._validate import TranslucencyError, check_option
+from ..io.inputs import expect_input
 from ..io.model_file import load_model, read_header
 from ..io.outputs import claim_folder
 from ..render import MAX_PAIRS, default_radius
@@ -61,6 +62,7 @@ def render(
         check_option("--size", value, lo=1, hi=16384)
     run = Run("render", max_memory=max_memory, quiet=quiet)
 
+    expect_input(model, ("model file",))  # a data set or a mesh file where the model belongs: say so
     m = load_model(model)
     header = read_header(model)
     if m.geometry != "mesh":

@@ -238,6 +238,8 @@ def open_dataset(path, *, writable: bool = False) -> PlanarDataset:
     path = Path(path)
     if not path.exists():
         raise TranslucencyError(f"{path}: no such data set")
+    if path.is_dir() and not (path / "zarr.json").is_file():
+        raise TranslucencyError(f"{path}: a folder, but not a translucency data set (it holds no zarr.json)")
     try:
         root = zarr.open_group(str(path), mode="r+" if writable else "r")
         header = dict(root.attrs).get(HEADER_KEY)

@@ -98,6 +98,8 @@ def open_mesh_dataset(path, *, writable: bool = False) -> MeshDataset:
     path = Path(path)
     if not path.exists():
         raise TranslucencyError(f"{path}: no such mesh data set")
+    if path.is_dir() and not (path / "zarr.json").is_file():
+        raise TranslucencyError(f"{path}: a folder, but not a translucency data set (it holds no zarr.json)")
     try:
         group = zarr.open_group(str(path), mode="r+" if writable else "r")
         header = dict(group.attrs).get(HEADER_KEY)
