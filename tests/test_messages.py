@@ -101,11 +101,16 @@ def test_numbers_in_messages_are_plain():
     assert "np." not in plain(light) and "array" not in plain(np.arange(3.0))
 
 
-def test_point_light_inside_the_object_is_named_plainly(ball_dataset, tmp_path):
-    model = tmp_path / "b.model.zip"
-    assert (
-        runner.invoke(app, ["fit", str(ball_dataset), "-o", str(model), "--rounds", "1", "-q"]).exit_code == 0
-    )
+@pytest.fixture(scope="module")
+def ball_model(ball_dataset):
+    model = ball_dataset.parent / "b.model.zip"
+    res = runner.invoke(app, ["fit", str(ball_dataset), "-o", str(model), "--rounds", "1", "-q"])
+    assert res.exit_code == 0, res.output
+    return model
+
+
+def test_point_light_inside_the_object_is_named_plainly(ball_model, tmp_path):
+    model = ball_model
     line = error_line(["render", model, "--light", "point:-1,0,0.5,100", "--out", tmp_path / "img", "-q"])
     assert "the point light at (-1, 0, 0.5) mm is inside the object" in line, line
     assert not (tmp_path / "img" / "ours.png").exists()
@@ -191,3 +196,21 @@ def test_a_path_of_another_kind_is_named(kinds, tmp_path, args, expected):
     assert expected.format(**fill) in line, line
     assert "GroupNotFoundError" not in line and "zip archive" not in line
     assert not (tmp_path / "v.zarr").exists() and not (tmp_path / "x.model.zip").exists()
+
+
+@pytest.mark.parametrize(
+    ("args", "start"),
+    [
+        (["fit", "{mesh data}", "-o", "{tmp}/x.model.zip", "--terms", "9"], "error: --terms: "),
+        (["fit", "{mesh data}", "-o", "{tmp}/x.model.zip", "--colour", "rgb"], "error: --colour: "),
+        (
+            ["acquire", "planar", "--material", "homogeneous:wood", "--out", "{tmp}/v.zarr"],
+            "error: --material: ",
+        ),
+        (["render", "{mesh model}", "--light", "point:1,2", "--out", "{tmp}/img"], "error: --light: "),
+    ],
+)
+def test_library_messages_name_the_flag(kinds, ball_model, tmp_path, args, start):
+    """`terms: n must be …`, `light: expected …`: the command line names its own flag."""
+    fill = {**{k: str(v) for k, v in kinds.items()}, "mesh model": str(ball_model), "tmp": str(tmp_path)}
+    assert error_line([a.format(**fill) for a in args]).startswith(start)
