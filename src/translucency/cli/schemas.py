@@ -224,6 +224,11 @@ RENDER = record(
             "direction, target in mm; intensity W/sr, irradiance W/mm^2, radiance W/(mm^2 sr)).",
         ),
         "eta": field("number", "Relative index of refraction at the surface."),
+        "rel_rmse": field(
+            ["number", "null"], "Relative RMSE of ours against the reference (with --reference)."
+        ),
+        "flip_mean_object": field("number", "Mean FLIP over the object's pixels (with --reference)."),
+        "flip_mean_image": field("number", "Mean FLIP over the image (with --reference)."),
         "exposure": field("number", "Exposure of the PNGs (with --reference)."),
         "regions": field("object", "Errors per region of the picture (with --reference)."),
         "reference_s": field("number", "Path tracing the reference.", "s"),
@@ -235,6 +240,9 @@ RENDER = record(
     },
     # with --reference: the comparison's numbers (render/compare.py), each a number
     optional=(
+        "rel_rmse",
+        "flip_mean_object",
+        "flip_mean_image",
         "exposure",
         "regions",
         "reference_s",
