@@ -99,6 +99,7 @@ def test_numbers_in_messages_are_plain():
     assert isinstance(light, DirectionalLight)
     assert plain(light) == "DirectionalLight(direction=(0.2673, 0.5345, -0.8018), irradiance=1)"
     assert "np." not in plain(light) and "array" not in plain(np.arange(3.0))
+    assert "np." not in repr(light)  # render's summary and figure2.json show the light as its repr
 
 
 @pytest.fixture(scope="module")

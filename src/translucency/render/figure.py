@@ -13,7 +13,6 @@ from pathlib import Path
 import numpy as np
 
 from .._plotting import pyplot
-from .._validate import plain
 from ..io.atomic import atomic_path, write_json
 from ..mitsuba import mesh_scene
 from .camera import Camera
@@ -87,7 +86,7 @@ def figure2(
         "prepare_s": t_prepare,
         "relight_s": t_relight,
         "draw_s": t_draw,
-        "light": plain(light),
+        "light": repr(light),
         "eta": eta,
     }
     if volume is None:

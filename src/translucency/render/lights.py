@@ -158,7 +158,9 @@ def parse_light(text: str):
         d = np.asarray(v[:3])
         if not np.linalg.norm(d) > 0:
             raise TranslucencyError("light: a directional light needs a non-zero direction")
-        return DirectionalLight(tuple(d / np.linalg.norm(d)), *(v[3:] or []))
+        return DirectionalLight(
+            tuple(float(x) for x in d / np.linalg.norm(d)), *(v[3:] or [])
+        )  # plain floats
     if kind == "spot" and len(v) in (7, 8):
         return SpotLight(tuple(v[:3]), tuple(v[3:6]), *v[6:])
     if kind == "env" and len(v) == 1 and v[0] >= 0:
