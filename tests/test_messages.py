@@ -172,6 +172,8 @@ def kinds(tmp_path, rng, ball_dataset):
             "is a mesh file, not a data set; make a data set of it with",
         ),
         (["fit", "{mesh data}", "-o", "{tmp}/x.zarr"], "--out {tmp}/x.zarr: names a data set (.zarr)"),
+        (["acquire", "planar", "--material", "marble", "--out", "{tmp}/x.model.zip"], "names a model file"),
+        (["demo", "--out", "{tmp}/x.zarr"], "--out {tmp}/x.zarr: names a data set (.zarr)"),
         (["info", "{mesh}"], "is a mesh file, not a model file or a data set"),
         (["info", "{tmp}"], "a folder, but not a translucency data set (it holds no zarr.json)"),
         (["evaluate", "{mesh data}", "{model}"], "swapped? evaluate takes MODEL DATA"),

@@ -103,10 +103,6 @@ def fit(
     check_option("--alpha-radius", alpha_radius, lo=0)
     terms, directions = _count_or_auto("--terms", terms), _count_or_auto("--directions", directions)
     expect_input(data, DATA_SETS)  # a model or a mesh file where the data set belongs: say so
-    if out.name.endswith(".zarr"):
-        raise TranslucencyError(
-            f"--out {out}: names a data set (.zarr); fit writes a model file: give NAME.model.zip"
-        )
     run = Run("fit", max_memory=max_memory, quiet=quiet, timer=f"fit {model}")
 
     claim_output(out, "model file", overwrite=overwrite, inputs=[data], option="--out")

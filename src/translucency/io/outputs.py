@@ -139,6 +139,23 @@ def check_writable(path, option: str | None = "out") -> None:
     os.rmdir(probe)
 
 
+#: the name endings of the tool's files, and the kinds that must not carry them
+_SUFFIXES = {
+    ".zarr": ("model file", "output folder", "json summary"),
+    ".model.zip": _FOLDER_KINDS + ("json summary",),
+}
+
+
+def _check_name(path: Path, kind: str, option: str) -> None:
+    """Refuse an output named like another kind (a model file ``x.zarr``, a data set ``x.model.zip``)."""
+    for suffix, kinds in _SUFFIXES.items():
+        if path.name.endswith(suffix) and kind in kinds:
+            named = "a data set" if suffix == ".zarr" else "a model file"
+            raise TranslucencyError(
+                f"{option} {path}: names {named} ({suffix}), but this writes {_a(kind)}; give another name"
+            )
+
+
 def claim_output(
     path, kind: str, *, overwrite: bool, inputs=(), option: str = "out", reuse: bool = False
 ) -> bool:
@@ -175,6 +192,7 @@ def claim_output(
         raise ValueError(f"kind must be one of {KINDS}, got {kind!r}")
     path = Path(path)
     check_writable(path, option)
+    _check_name(path, kind, option)
     target = path.resolve()
     cwd = Path.cwd().resolve()
     if _within(cwd, target):
