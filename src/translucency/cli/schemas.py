@@ -140,13 +140,13 @@ FIT = record(
 _BANDS = "all (every valid pair), near (< 1 mm), mid (1-4 mm), far (> 4 mm); null where a band is empty"
 _BY_BAND = record(
     f"By distance band: {_BANDS}.",
-    {k: field(["number", "null"], f"{k} band.") for k in ("all", "near", "mid", "far")},
+    {k: field(["number", "null"], f"{k} band.", "fraction") for k in ("all", "near", "mid", "far")},
 )
 _ERRORS = {
-    "rel_l2": field("number", "Relative L2 error over every valid pair (definition.rel_l2)."),
-    "rel_l2_near": field(["number", "null"], "The same over r < 1 mm."),
-    "rel_l2_mid": field(["number", "null"], "The same over 1 mm <= r < 4 mm."),
-    "rel_l2_far": field(["number", "null"], "The same over r >= 4 mm."),
+    "rel_l2": field("number", "Relative L2 error over every valid pair (definition.rel_l2).", "fraction"),
+    "rel_l2_near": field(["number", "null"], "The same over r < 1 mm.", "fraction"),
+    "rel_l2_mid": field(["number", "null"], "The same over 1 mm <= r < 4 mm.", "fraction"),
+    "rel_l2_far": field(["number", "null"], "The same over r >= 4 mm.", "fraction"),
     "noise_floor": _BY_BAND,
     "beyond_noise": record(
         "The error left after the truth's own noise, by band; null in-sample.",
@@ -155,11 +155,14 @@ _ERRORS = {
     ),
     "energy_error": record(
         "Relative error of each point's energy, by band, over the window and in total.",
-        {k: field(["number", "null"], f"{k}.") for k in ("near", "mid", "far", "window", "total")},
+        {
+            k: field(["number", "null"], f"{k}.", "fraction")
+            for k in ("near", "mid", "far", "window", "total")
+        },
     ),
     "energy_noise": record(
         "The reference's noise of those energies.",
-        {k: field(["number", "null"], f"{k}.") for k in ("near", "mid", "far", "window")},
+        {k: field(["number", "null"], f"{k}.", "fraction") for k in ("near", "mid", "far", "window")},
     ),
     "per_point": record(
         "Per-incident-point relative error.",
@@ -450,8 +453,8 @@ NaN and infinity as `null`. `evaluate --json-out PATH` writes the same object to
 `evaluate --json PATH` still works, with a deprecation warning). Errors are one `error:` line on stderr,
 exit status 2.
 
-Below, each command's keys, their types and units. `a.b` is key `b` inside object `a`; `a.*` any key of
-an object keyed by names; `[]` an array's items. This page is generated from
+Below, each command's keys, their types and units ("fraction": 0.05 is 5 %). `a.b` is key `b` inside
+object `a`; `a.*` any key of an object keyed by names. This page is generated from
 `src/translucency/cli/schemas.py` (`python -m translucency.cli.schemas > docs/json.md`), and
 `tests/test_json.py` checks every command's actual output against it.
 """
