@@ -28,8 +28,12 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
+from ..io.outputs import claim_folder, release_output
 from ..resources import Need, TimeEstimate, check_resources, estimate_time, memory_limit, record_time
-from ._common import finish, info, progress
+from ._common import err_console, finish, info, progress
+
+#: the runs under way in this process (the innermost last): :func:`interrupted` and :func:`failed` ask them
+_ACTIVE: list[Run] = []
 
 
 def bytes_at(path: Path) -> int:
@@ -64,6 +68,26 @@ class Run:
         self.units: dict | None = None
         self.timing: TimeEstimate | None = None
         self.t0: float | None = None
+        #: outputs this run created, removed again if it fails: (path, the entries there before or None)
+        self.created: list[tuple[Path, set | None]] = []
+        #: what an interrupted run keeps and how to resume it (a callable giving one line), if anything
+        self.kept: Callable[[], str] | None = None
+        _ACTIVE[:] = [r for r in _ACTIVE if r.command != command] + [self]
+
+    def claim_folder(self, path: Path, **kwargs) -> Path:
+        """:func:`translucency.io.outputs.claim_folder`, and remember what this run adds there: a run that
+        fails or is interrupted removes it again (only what it added, never what was there before)."""
+        path = Path(path)
+        before = {p.name for p in path.iterdir()} if path.is_dir() else None
+        claim_folder(path, **kwargs)
+        self.created.append((path, before))
+        return path
+
+    def abandon(self) -> None:
+        """Remove what this run added to its output folders (a failed or interrupted run leaves nothing)."""
+        for path, before in reversed(self.created):
+            release_output(path, before)
+        self.created.clear()
 
     def check(self, need: Need, out: Path | None = None, *, resumed: bool = False) -> Need:
         """Refuse ``need`` beyond ``--max-memory`` or the free disk where ``out`` goes (``resumed``: the
@@ -111,7 +135,32 @@ class Run:
     def finish(self, as_json: bool, summary: dict, lines=()) -> None:
         """The summary: ``summary`` with the estimates and the seconds (where it states none of its own)
         as one JSON object (``--json``), or the result ``lines``."""
+        self.created.clear()  # done: the outputs stay
+        if self in _ACTIVE:
+            _ACTIVE.remove(self)
         extra = {"estimate": self.need.as_dict(), "time_estimate": self.timing.as_dict()}
         summary = {**summary, **{k: v for k, v in extra.items() if k not in summary}}
         summary.setdefault("seconds", self.seconds())
         finish(as_json, self.quiet, summary, lines)
+
+
+def failed() -> None:
+    """A command failed (a one-line error or a crash): the runs under way remove what they added."""
+    while _ACTIVE:
+        _ACTIVE.pop().abandon()
+
+
+def interrupted() -> None:
+    """Ctrl-C: one line saying what is kept and how to resume (or that nothing is kept)."""
+    notes = []
+    while _ACTIVE:
+        run = _ACTIVE.pop()
+        run.abandon()
+        if run.kept is not None:
+            try:
+                notes.append(run.kept())
+            except Exception:  # noqa: BLE001 — the note reads the output; an unreadable one keeps nothing said
+                pass
+    err_console.print(
+        f"[bold red]interrupted:[/] {'; '.join(notes) or 'nothing written'}", highlight=False, soft_wrap=True
+    )

@@ -1,7 +1,7 @@
 """The object of a per-vertex model: its mesh, its volume (for the reference) and its boundary η.
 
 :func:`object_of_model` rebuilds the mesh of a model (from the model itself, or from its data set for
-older files); :func:`volume_of_dataset` the generated filling of a mesh data set; :func:`boundary_eta`
+older files); :func:`volume_of_dataset` the filling of a mesh data set (generated, or a user's file); :func:`boundary_eta`
 the index of the boundary it was acquired behind.
 """
 
@@ -13,7 +13,8 @@ import numpy as np
 import trimesh
 
 from .._validate import TranslucencyError
-from ..acquire.mesh import object_volume
+from ..acquire import load_volume
+from ..acquire.mesh import filling_record, object_volume
 from ..io.mesh_dataset import open_mesh_dataset
 
 
@@ -40,8 +41,24 @@ def object_of_model(model, header: dict):
 
 
 def volume_of_dataset(mesh, header):
-    """The generated filling of a mesh data set, rebuilt from its description."""
+    """The filling of a mesh data set: rebuilt from its description (a generated one), or read again from
+    the user's file it was acquired from, if that file is still there unchanged (``header["filling"]``)."""
     d = header.get("sample", {})
+    if d.get("generator") == "file":
+        record = header.get("filling")
+        if not isinstance(record, dict) or "sha256" not in record:
+            raise TranslucencyError(
+                f"data set: acquired from the user's filling {d.get('path', '?')}, whose path and hash "
+                "were not recorded (older data set); re-acquire it for a reference"
+            )
+        path = Path(record["path"])
+        if not path.is_file():
+            raise TranslucencyError(f"{path}: the filling this object was acquired from is gone; no reference")
+        if filling_record(path)["sha256"] != record["sha256"]:
+            raise TranslucencyError(
+                f"{path}: the filling changed since this object was acquired (SHA-256 differs); no reference"
+            )
+        return load_volume(path)
     if "generator" not in d or "voxel_mm" not in header.get("request", {}).get("volume_grid", {}):
         raise TranslucencyError("data set: its filling cannot be rebuilt (not generated here); no reference")
     grid = header["request"]["volume_grid"]
