@@ -67,7 +67,7 @@ class Run:
         self.need: Need | None = None
         self.units: dict | None = None
         self.timing: TimeEstimate | None = None
-        self.t0: float | None = None
+        self.t0 = time.perf_counter()  # the clock: from the command's start (its preparations count)
         #: outputs this run created, removed again if it fails: (path, the entries there before or None)
         self.created: list[tuple[Path, set | None]] = []
         #: what an interrupted run keeps and how to resume it (a callable giving one line), if anything
@@ -107,16 +107,10 @@ class Run:
         """An information line on stderr, unless ``--quiet``."""
         info(self.quiet, text)
 
-    def start(self) -> None:
-        """Start the clock before :meth:`work` (preparations that belong to the timed work)."""
-        self.t0 = time.perf_counter()
-
     @contextlib.contextmanager
     def work(self, description: str | None = None, *, total=None, fresh: bool = True):
-        """Start the clock (and a progress bar named ``description``, none if None); on success, record
-        the seconds in this machine's calibration unless the run reused earlier work (``fresh``)."""
-        if self.t0 is None:
-            self.start()
+        """A progress bar named ``description`` (none if None); on success, record the seconds since the
+        command started in this machine's calibration unless the run reused earlier work (``fresh``)."""
         if description is None:
             work = Work(update=lambda **fields: None, fresh=fresh)
             yield work
@@ -129,7 +123,7 @@ class Run:
             record_time(self.timer, self.units, time.perf_counter() - self.t0)
 
     def seconds(self) -> float:
-        """Seconds since the work started (rounded to a millisecond, as the summaries state them)."""
+        """Seconds since the command started (rounded to a millisecond, as the summaries state them)."""
         return round(time.perf_counter() - self.t0, 3)
 
     def finish(self, as_json: bool, summary: dict, lines=()) -> None:

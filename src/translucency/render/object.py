@@ -1,8 +1,9 @@
 """The object of a per-vertex model: its mesh, its volume (for the reference) and its boundary η.
 
 :func:`object_of_model` rebuilds the mesh of a model (from the model itself, or from its data set for
-older files); :func:`volume_of_dataset` the filling of a mesh data set (generated, or a user's file); :func:`boundary_eta`
-the index of the boundary it was acquired behind.
+older files); :func:`volume_of_dataset` the filling of a mesh data set (generated, or a user's file);
+:func:`boundary_eta` the index of the boundary it was acquired behind; :func:`check_light_outside` refuses
+a light inside the object before any work.
 """
 
 from __future__ import annotations
@@ -53,7 +54,9 @@ def volume_of_dataset(mesh, header):
             )
         path = Path(record["path"])
         if not path.is_file():
-            raise TranslucencyError(f"{path}: the filling this object was acquired from is gone; no reference")
+            raise TranslucencyError(
+                f"{path}: the filling this object was acquired from is gone; no reference"
+            )
         if filling_record(path)["sha256"] != record["sha256"]:
             raise TranslucencyError(
                 f"{path}: the filling changed since this object was acquired (SHA-256 differs); no reference"
@@ -65,6 +68,33 @@ def volume_of_dataset(mesh, header):
     return object_volume(
         d["generator"], mesh, grid["voxel_mm"], g=header.get("g", 0.0), seed=d.get("seed", 0)
     )
+
+
+def check_light_outside(mesh, light) -> None:
+    """Refuse, in one line, a point or spot light inside the closed ``mesh`` — before any work.
+
+    The generalised winding number of the surface around the light's position (the solid angle of every
+    triangle seen from there, Van Oosterom and Strackee's formula, summed over 4π) is 1 inside a
+    closed surface and 0 outside, whatever the orientation of its triangles.
+    """
+    position = getattr(light, "position", None)
+    if position is None:  # directional and environment lights come from outside
+        return
+    p = np.asarray(position, dtype=np.float64)
+    a, b, c = (
+        np.asarray(mesh.vertices, dtype=np.float64)[np.asarray(mesh.faces)[:, k]] - p for k in range(3)
+    )
+    la, lb, lc = (np.linalg.norm(x, axis=1) for x in (a, b, c))
+    det = np.einsum("ij,ij->i", a, np.cross(b, c))
+    dot = lambda x, y: np.einsum("ij,ij->i", x, y)  # noqa: E731
+    denom = la * lb * lc + dot(a, b) * lc + dot(b, c) * la + dot(c, a) * lb
+    winding = 2.0 * np.arctan2(det, denom).sum() / (4.0 * np.pi)
+    if abs(winding) > 0.5:
+        raise TranslucencyError(
+            f"light: the {type(light).__name__.removesuffix('Light').lower()} light at "
+            f"{tuple(float(v) for v in p)} mm is inside the object (bounds "
+            f"{np.round(mesh.bounds[0], 1).tolist()} to {np.round(mesh.bounds[1], 1).tolist()} mm)"
+        )
 
 
 def boundary_eta(header) -> float:

@@ -2,14 +2,19 @@ r"""Time before work: how long a command will take on this machine, and its cali
 
 Every command that works prints "about N s" before it starts: the seconds per unit of work of
 :data:`TIME_TERMS` (measured on the development machine) times this machine's factor for the command
-— a probe of the machine's speed at first, then the median of its own latest runs here
-(:func:`record_time`), cached in :func:`timing_file`.
+— the median of its own latest runs here of a similar size (:func:`record_time`, within
+:data:`SIMILAR_SIZE` of this run's formula seconds), cached in :func:`timing_file`.  Without such runs
+(a first run on this machine, or work of another size) the factor comes from a probe of the machine's
+speed and the estimate says it is uncalibrated: a noisy probe, a material that walks faster or slower
+than the formula's, Mitsuba compiling its kernels into an empty ``~/.drjit`` — none of these is
+known before a run here.  The clock runs from the command's start (its preparations: reading the
+mesh, generating the filling, building scenes) to the end of its work.
 
 Examples
 --------
->>> est = TimeEstimate(90.0, "from a probe of this machine's speed")
+>>> est = TimeEstimate(90.0, "calibrated on this machine by 3 earlier runs")
 >>> est.text()
-"about 90 s (from a probe of this machine's speed)"
+'about 90 s (calibrated on this machine by 3 earlier runs)'
 """
 
 from __future__ import annotations
@@ -34,8 +39,16 @@ TIME_TERMS = {
     # walk on the volume (translucency.acquire.estimate_seconds at one step a second); points: each point's
     # window and its writes.  Before a first run, the probe's own seconds a step set the factor.
     "acquire planar": {"overhead": 0.4, "points": 0.015, "photon_steps": 2.7e-7, "pixels": 2e-6},
-    # photons: points x photons x 3 channels; point_vertices: each point's tally over the mesh
-    "acquire mesh": {"overhead": 0.8, "points": 0.05, "photons": 1.5e-5, "point_vertices": 2e-7},
+    # photons: points x photons x 3 channels; point_vertices: each point's tally over the mesh;
+    # vertices: reading and repairing the mesh; voxels: generating the filling
+    "acquire mesh": {
+        "overhead": 0.8,
+        "points": 0.05,
+        "photons": 1.5e-5,
+        "point_vertices": 2e-7,
+        "vertices": 2.5e-5,
+        "voxels": 1e-6,
+    },
     # "fit <family>": each model family states its own (``Family.time_terms``, registered by
     # translucency.fit.families through :func:`register_terms`)
     # point_pixels: points x window pixels x data sets (2 with --truth); model_pixels: the same per model;
@@ -63,8 +76,16 @@ def register_terms(terms: dict) -> None:
 
 #: seconds the machine probe took on the development machine
 PROBE_REFERENCE_S = 0.45
+#: the cache's key of the probe's seconds (a new key whenever the probe's work changes: a cached value
+#: of another probe would scale every first estimate by the wrong factor)
+PROBE_KEY = "probe_v2_s"
 #: how many of a command's latest runs calibrate it
 CALIBRATION_RUNS = 5
+#: runs whose formula seconds lie within this factor of a new run's calibrate it (a run 20x smaller is
+#: dominated by other terms than a large one: its factor says little about it)
+SIMILAR_SIZE = 8.0
+#: what an estimate without a calibrating run says
+UNCALIBRATED = "uncalibrated"
 
 
 @dataclass
@@ -145,10 +166,11 @@ def estimate_time(command: str, units: dict, first: tuple[float, str] | None = N
     """The time ``command`` will take on this machine for ``units`` of work (keys of :data:`TIME_TERMS`).
 
     The formula's rates (measured on the development machine) times this machine's factor for the
-    command: the median of actual/formula over its latest :data:`CALIBRATION_RUNS` runs here
-    (:func:`record_time`), or, before the first run, ``first`` (a factor and where it came from: the
-    command's own probe of its work, as ``acquire planar``'s timed walk) or else the ratio of a 0.45 s
-    probe of the machine's speed to the development machine's (cached in :func:`timing_file`).
+    command: the median of actual/formula over its latest :data:`CALIBRATION_RUNS` runs here whose
+    formula seconds are within :data:`SIMILAR_SIZE` of this one's (:func:`record_time`), or, without
+    such runs, ``first`` (a factor and where it came from: the command's own probe of its work, as
+    ``acquire planar``'s timed walk) or else the ratio of a 0.45 s probe of the machine's speed to the
+    development machine's (cached in :func:`timing_file`) — an estimate that says it is uncalibrated.
 
     Examples
     --------
@@ -157,19 +179,42 @@ def estimate_time(command: str, units: dict, first: tuple[float, str] | None = N
     """
     raw = _raw_seconds(command, units)
     entry = _read_timing()
-    ratios = [r for r in entry.get("runs", {}).get(command, []) if isinstance(r, (int, float)) and r > 0]
-    if ratios:
-        ratios = sorted(ratios[-CALIBRATION_RUNS:])
+    runs = _runs(entry, command)
+    similar = [(abs(math.log(size / raw)), ratio) for size, ratio in runs if raw > 0]
+    similar = [r for d, r in sorted(similar[-4 * CALIBRATION_RUNS :]) if d <= math.log(SIMILAR_SIZE)]
+    if similar:
+        ratios = sorted(similar[:CALIBRATION_RUNS])
         factor = ratios[len(ratios) // 2]
-        runs = f"{len(ratios)} earlier run{'s' if len(ratios) > 1 else ''}"
-        return TimeEstimate(raw * factor, f"calibrated on this machine by {runs}")
+        n = f"{len(ratios)} earlier run{'s' if len(ratios) > 1 else ''}"
+        return TimeEstimate(raw * factor, f"calibrated on this machine by {n}")
+    why = "first run here" if not runs else "earlier runs here were of another size"
     if first is not None and math.isfinite(first[0]) and first[0] > 0:
         return TimeEstimate(raw * first[0], first[1])
-    probe = entry.get("probe_s")
+    probe = entry.get(PROBE_KEY)
     if not isinstance(probe, (int, float)) or not probe > 0:
         probe = _probe_seconds()
-        _write_timing({**entry, "probe_s": probe})
-    return TimeEstimate(raw * probe / PROBE_REFERENCE_S, "from a probe of this machine's speed")
+        _write_timing({**entry, PROBE_KEY: probe})
+    cold = "; Mitsuba compiles its kernels once" if _kernel_cache_cold() else ""
+    source = f"from a probe of this machine's speed; {UNCALIBRATED}: {why}{cold}"
+    return TimeEstimate(raw * probe / PROBE_REFERENCE_S, source)
+
+
+def _runs(entry: dict, command: str) -> list[tuple[float, float]]:
+    """(formula seconds, actual/formula) of the command's recorded runs (oldest first)."""
+    runs = entry.get("runs") if isinstance(entry.get("runs"), dict) else {}
+    kept = []
+    for r in runs.get(command, []) if isinstance(runs.get(command), list) else []:
+        if isinstance(r, list) and len(r) == 2 and all(isinstance(v, (int, float)) and v > 0 for v in r):
+            kept.append((float(r[0]), float(r[1])))  # runs of an older cache (bare factors) have no size
+    return kept
+
+
+def _kernel_cache_cold() -> bool:
+    """Whether Dr.Jit's kernel cache (``~/.drjit``) is empty: a first run compiles every kernel."""
+    try:
+        return not any((Path.home() / ".drjit").iterdir())
+    except OSError:
+        return True
 
 
 def record_time(command: str, units: dict, seconds: float) -> None:
@@ -179,8 +224,8 @@ def record_time(command: str, units: dict, seconds: float) -> None:
         return
     entry = _read_timing()
     runs = entry.get("runs") if isinstance(entry.get("runs"), dict) else {}
-    kept = [r for r in runs.get(command, []) if isinstance(r, (int, float))][-(CALIBRATION_RUNS - 1) :]
-    runs[command] = kept + [seconds / raw]
+    kept = [list(r) for r in _runs(entry, command)][-(4 * CALIBRATION_RUNS - 1) :]
+    runs[command] = kept + [[raw, seconds / raw]]
     _write_timing({**entry, "runs": runs})
 
 
@@ -197,9 +242,16 @@ def planar_acquisition_units(*, points: int, photon_steps: float, pixels: int) -
     return {"points": points, "photon_steps": photon_steps, "pixels": pixels}
 
 
-def mesh_acquisition_units(*, points: int, photons: int, vertices: int) -> dict:
-    """``acquire mesh``: P points, N photons a point and channel, V vertices."""
-    return {"points": points, "photons": 3 * points * photons, "point_vertices": points * vertices}
+def mesh_acquisition_units(*, points: int, photons: int, vertices: int, voxels: float = 0) -> dict:
+    """``acquire mesh``: P points (those left to acquire), N photons a point and channel, V vertices, the
+    voxels of a generated filling (0 for a user's)."""
+    return {
+        "points": points,
+        "photons": 3 * points * photons,
+        "point_vertices": points * vertices,
+        "vertices": vertices,
+        "voxels": voxels,
+    }
 
 
 def fit_units(*, points: int, pixels: int, rounds: int, candidates: int = 1) -> dict:
