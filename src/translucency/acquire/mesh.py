@@ -78,12 +78,7 @@ def acquire_mesh(
     if photons < 1:
         raise TranslucencyError(f"photons: must be >= 1, got {photons}")
     parse_scheduler(scheduler)  # a bad option is one line before any work
-    need = np.asarray(mesh.extents) - np.asarray(volume.size_mm)
-    if (need > 1e-6).any():
-        raise TranslucencyError(
-            f"volume: {volume.size_mm} mm does not cover the mesh's bounding box "
-            f"{tuple(np.round(mesh.extents, 2))} mm"
-        )
+    check_filling(mesh, volume)
     V = len(mesh.vertices)
     incident = farthest_points(np.asarray(mesh.vertices), n_points)
     P = len(incident)
@@ -144,6 +139,16 @@ def acquire_mesh(
                     if progress:
                         progress(finished, P)
         return Path(out)
+
+
+def check_filling(mesh, volume: Volume) -> None:
+    """Refuse, in one line, a filling that does not cover the mesh's bounding box (before any work)."""
+    need = np.asarray(mesh.extents) - np.asarray(volume.size_mm)
+    if (need > 1e-6).any():
+        raise TranslucencyError(
+            f"volume: {tuple(float(v) for v in volume.size_mm)} mm does not cover the mesh's bounding box "
+            f"{tuple(float(v) for v in np.round(mesh.extents, 2))} mm"
+        )
 
 
 def filling_record(path) -> dict:

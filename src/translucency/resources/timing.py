@@ -84,6 +84,9 @@ CALIBRATION_RUNS = 5
 #: runs whose formula seconds lie within this factor of a new run's calibrate it (a run 20x smaller is
 #: dominated by other terms than a large one: its factor says little about it)
 SIMILAR_SIZE = 8.0
+#: the cache's key of the recorded runs, [formula seconds, actual/formula] each (a key of its own: the bare
+#: factors of older versions, without their size, stay under "runs" and are not read)
+RUNS_KEY = "sized_runs"
 #: what an estimate without a calibrating run says
 UNCALIBRATED = "uncalibrated"
 
@@ -201,11 +204,11 @@ def estimate_time(command: str, units: dict, first: tuple[float, str] | None = N
 
 def _runs(entry: dict, command: str) -> list[tuple[float, float]]:
     """(formula seconds, actual/formula) of the command's recorded runs (oldest first)."""
-    runs = entry.get("runs") if isinstance(entry.get("runs"), dict) else {}
+    runs = entry.get(RUNS_KEY) if isinstance(entry.get(RUNS_KEY), dict) else {}
     kept = []
     for r in runs.get(command, []) if isinstance(runs.get(command), list) else []:
         if isinstance(r, list) and len(r) == 2 and all(isinstance(v, (int, float)) and v > 0 for v in r):
-            kept.append((float(r[0]), float(r[1])))  # runs of an older cache (bare factors) have no size
+            kept.append((float(r[0]), float(r[1])))
     return kept
 
 
@@ -223,10 +226,10 @@ def record_time(command: str, units: dict, seconds: float) -> None:
     if not (raw > 0 and math.isfinite(seconds) and seconds > 0):
         return
     entry = _read_timing()
-    runs = entry.get("runs") if isinstance(entry.get("runs"), dict) else {}
+    runs = entry.get(RUNS_KEY) if isinstance(entry.get(RUNS_KEY), dict) else {}
     kept = [list(r) for r in _runs(entry, command)][-(4 * CALIBRATION_RUNS - 1) :]
     runs[command] = kept + [[raw, seconds / raw]]
-    _write_timing({**entry, "runs": runs})
+    _write_timing({**entry, RUNS_KEY: runs})
 
 
 def probe_factor(command: str, term: str, seconds_per_unit: float) -> float:
