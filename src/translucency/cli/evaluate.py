@@ -16,7 +16,7 @@ from ..evaluate.report import model_label, write_report
 from ..io.dataset import dataset_identity, open_dataset
 from ..io.mesh_dataset import is_mesh_dataset, open_mesh_dataset
 from ..io.model_file import load_model, read_header
-from ..io.outputs import claim_folder, claim_output
+from ..io.outputs import claim_output
 from ._common import max_memory_option, overwrite_option, quiet_option, scheduler_option, user_errors, warn
 from ._run import Run
 
@@ -25,7 +25,12 @@ from ._run import Run
 def evaluate(
     model: Path = typer.Argument(..., help="The model file to evaluate (.model.zip)."),
     data: Path = typer.Argument(..., help="The planar data set it was fitted to (.zarr directory)."),
-    report: Path = typer.Option(Path("report"), "--report", help="Directory for the figures and index.html."),
+    report: Path = typer.Option(
+        None,
+        "--report",
+        help="Directory for the figures and index.html (default: beside the model, MODEL.report/ — "
+        "iso.model.zip gives iso.report/).",
+    ),
     json_out: Path = typer.Option(
         None,
         "--json",
@@ -51,6 +56,7 @@ def evaluate(
     parse_scheduler(scheduler)  # a bad value or an unreachable cluster: one line, before work
 
     run = Run("evaluate", max_memory=max_memory, quiet=quiet)
+    report = report_beside(model) if report is None else report
     to_stdout = json_out is not None and str(json_out) == "-"
     json_out = None if to_stdout else json_out
     models, flagged, exclusion, metas = {}, {}, {}, {}
@@ -86,7 +92,7 @@ def evaluate(
     inputs = [model, data, *(compare or []), truth]
     if json_out is not None:
         claim_output(json_out, "json summary", overwrite=overwrite, inputs=inputs, option="--json")
-    claim_folder(report, overwrite=overwrite, inputs=inputs, option="--report")
+    run.claim_folder(report, overwrite=overwrite, inputs=inputs, option="--report")
     units = resources.timing.evaluation_units(points=ds.n_points, pixels=H * W, params=params, datasets=d)
     timing = run.time(units)
     run.info(f"{len(models)} model(s) on {ds.n_points} points x {H} x {W} pixels; time {timing.text()}")
@@ -131,6 +137,12 @@ def evaluate(
     }
     summary["seconds"] = run.seconds()
     run.finish(to_stdout, summary, [table, f"report: {report / 'index.html'}"])
+
+
+def report_beside(model: Path) -> Path:
+    """The default report folder of ``model``: beside it, its name with ``.report`` for ``.model.zip``."""
+    name = model.name.removesuffix(".zip").removesuffix(".model") or model.name
+    return model.with_name(name + ".report")
 
 
 def _identity_of_model(meta: dict):
