@@ -18,6 +18,7 @@ from ..render.camera import Camera
 from ..render.figure import figure2
 from ..render.lights import parse_light
 from ..render.object import boundary_eta, check_light_outside, object_of_model, volume_of_dataset
+from ..render.reference import check_reference
 from ._common import json_option, max_memory_option, overwrite_option, quiet_option, user_errors
 from ._run import Run
 
@@ -81,7 +82,9 @@ def render(
         )
     mesh, dheader = object_of_model(m, header)
     check_light_outside(mesh, lights[0])
-    vol = volume_of_dataset(mesh, dheader) if reference else None  # a filling gone or changed: one line
+    if reference:  # a light volpath cannot render, a filling gone or changed: one line, before any work
+        check_reference(lights[0], boundary_eta(dheader))
+    vol = volume_of_dataset(mesh, dheader) if reference else None
     V = len(mesh.vertices)
     # the default radius: the model's 99 % energy radius, at most what a share of the memory holds
     budget = resources.memory.transport_budget(run.limit)
