@@ -275,3 +275,35 @@ def test_evaluate_writes_its_report_beside_the_model_unless_asked(tmp_path, monk
     monkeypatch.setattr(evaluate_cli, "write_report", failing)
     res = runner.invoke(app, ["evaluate", "iso.model.zip", str(data), "--report", "new"])
     assert res.exit_code == 2 and not (tmp_path / "new").exists()  # a failed evaluate leaves nothing
+
+
+def test_a_first_run_with_cold_kernel_caches_adds_its_compiling(tmp_path, monkeypatch):
+    units = {"vertices": 1e3, "pairs": 1e5}
+    warm = timing.estimate_time("render", units)
+    cold = timing.estimate_time("render", units, cold=True)
+    first = timing.TIME_TERMS["render"]["first_run"]
+    assert cold.seconds == pytest.approx(warm.seconds * (1 + first / timing._raw_seconds("render", units)))
+    assert "compiling kernels on a first run" in cold.source and "compiling" not in warm.source
+    timing.record_time("render", units, 3 * (timing._raw_seconds("render", units) + first), cold=True)
+    assert timing.estimate_time("render", units).seconds == pytest.approx(
+        3 * timing._raw_seconds("render", units)
+    )
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "numba"))  # an empty Numba cache: cold
+    (tmp_path / "numba").mkdir()
+    assert timing.kernel_caches_cold()
+    (tmp_path / "numba" / "transport.f-448.nbi").write_bytes(b"")
+    monkeypatch.setenv("HOME", str(tmp_path))
+    (tmp_path / ".drjit").mkdir()
+    assert timing.kernel_caches_cold()  # Dr.Jit's cache is empty
+    (tmp_path / ".drjit" / "k.llvm.v6.bin").write_bytes(b"")
+    assert not timing.kernel_caches_cold()
+
+
+def test_the_estimate_states_the_start_up_it_already_took():
+    est = timing.TimeEstimate(10.0, "calibrated on this machine by 2 earlier runs", startup=5.0)
+    assert (
+        est.text()
+        == "about 15 s in all (5 s of it starting up; calibrated on this machine by 2 earlier runs)"
+    )
+    assert est.as_dict()["startup_seconds"] == 5.0 and est.as_dict()["seconds"] == 10.0
+    assert timing.process_seconds() > 0

@@ -22,6 +22,7 @@ A new working command::
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import functools
 import time
 from collections.abc import Callable
@@ -30,6 +31,7 @@ from pathlib import Path
 
 from ..io.outputs import claim_folder, release_output
 from ..resources import Need, TimeEstimate, check_resources, estimate_time, memory_limit, record_time
+from ..resources.timing import kernel_caches_cold, process_seconds
 from ._common import err_console, finish, info, progress
 
 #: the runs under way in this process (the innermost last): :func:`interrupted` and :func:`failed` ask them
@@ -67,7 +69,9 @@ class Run:
         self.need: Need | None = None
         self.units: dict | None = None
         self.timing: TimeEstimate | None = None
+        self.cold = False
         self.t0 = time.perf_counter()  # the clock: from the command's start (its preparations count)
+        self.startup = process_seconds()  # the imports before it: said with the estimate, not calibrated
         #: outputs this run created, removed again if it fails: (path, the entries there before or None)
         self.created: list[tuple[Path, set | None]] = []
         #: what an interrupted run keeps and how to resume it (a callable giving one line), if anything
@@ -100,7 +104,9 @@ class Run:
     def time(self, units: dict, first: tuple[float, str] | None = None) -> TimeEstimate:
         """The time estimate of ``units`` of work (``first``: a factor before this machine's first run)."""
         self.units = units
-        self.timing = estimate_time(self.timer, units, first)
+        self.cold = kernel_caches_cold()  # a first run compiles the kernels later runs load
+        estimate = estimate_time(self.timer, units, first, cold=self.cold)
+        self.timing = dataclasses.replace(estimate, startup=self.startup)
         return self.timing
 
     def info(self, text: str) -> None:
@@ -120,7 +126,7 @@ class Run:
                 work = Work(update=functools.partial(bar.update, task), fresh=fresh)
                 yield work
         if work.fresh:
-            record_time(self.timer, self.units, time.perf_counter() - self.t0)
+            record_time(self.timer, self.units, time.perf_counter() - self.t0, cold=self.cold)
 
     def seconds(self) -> float:
         """Seconds since the command started (rounded to a millisecond, as the summaries state them)."""

@@ -48,6 +48,7 @@ TIME_TERMS = {
         "point_vertices": 2e-7,
         "vertices": 2.5e-5,
         "voxels": 1e-6,
+        "first_run": 1.5,
     },
     # "fit <family>": each model family states its own (``Family.time_terms``, registered by
     # translucency.fit.families through :func:`register_terms`)
@@ -60,8 +61,17 @@ TIME_TERMS = {
         "param_pixels": 3e-8,
         "models": 0.5,
     },
-    # pairs: vertex pairs of the transport; samples: picture pixels x 16; reference_samples: 2 x pixels x spp
-    "render": {"overhead": 1.5, "vertices": 2e-4, "pairs": 5e-7, "samples": 3e-7, "reference_samples": 2e-6},
+    # pairs: vertex pairs of the transport; samples: picture pixels x 16; reference_samples: 2 x pixels x spp.
+    # first_run: the seconds a run adds while the kernel caches are cold (a fresh clone: Numba compiles
+    # the transport's kernels, measured 8-10 s here; Dr.Jit its own into an empty ~/.drjit, 1-2 s)
+    "render": {
+        "overhead": 1.5,
+        "vertices": 2e-4,
+        "pairs": 5e-7,
+        "samples": 3e-7,
+        "reference_samples": 2e-6,
+        "first_run": 9.0,
+    },
 }
 
 
@@ -97,14 +107,34 @@ class TimeEstimate:
 
     seconds: float
     source: str
+    #: seconds the process had already spent starting (imports) when the estimate was made: shown in the
+    #: text, which states the whole command's time (what a user measures), not counted in ``seconds``
+    startup: float = 0.0
 
     def text(self) -> str:
-        s = self.seconds
-        amount = f"{s:.0f} s" if s < 120 else f"{s / 60:.0f} min" if s < 7200 else f"{s / 3600:.1f} h"
-        return f"about {amount} ({self.source})"
+        if self.startup < 1.0:
+            return f"about {_amount(self.seconds)} ({self.source})"
+        total = _amount(self.seconds + self.startup)
+        return f"about {total} in all ({self.startup:.0f} s of it starting up; {self.source})"
 
     def as_dict(self) -> dict:
-        return {"seconds": round(self.seconds, 3), "source": self.source}
+        out = {"seconds": round(self.seconds, 3), "source": self.source}
+        return {**out, "startup_seconds": round(self.startup, 3)} if self.startup else out
+
+
+def _amount(s: float) -> str:
+    return f"{s:.0f} s" if s < 120 else f"{s / 60:.0f} min" if s < 7200 else f"{s / 3600:.1f} h"
+
+
+def process_seconds() -> float:
+    """Seconds since this process started (Linux: from ``/proc``; 0 where that is not known)."""
+    try:
+        after_name = Path("/proc/self/stat").read_text().rsplit(")", 1)[1].split()
+        started = int(after_name[19]) / os.sysconf("SC_CLK_TCK")  # field 22: start time after boot
+        uptime = float(Path("/proc/uptime").read_text().split()[0])
+    except (OSError, ValueError, IndexError, AttributeError):
+        return 0.0
+    return max(0.0, uptime - started)
 
 
 def timing_file() -> Path:
@@ -165,7 +195,27 @@ def _raw_seconds(command: str, units: dict) -> float:
     return terms.get("overhead", 0.0) + sum(terms[k] * float(v) for k, v in units.items())
 
 
-def estimate_time(command: str, units: dict, first: tuple[float, str] | None = None) -> TimeEstimate:
+def kernel_caches_cold() -> bool:
+    """Whether a run now compiles kernels that later runs load: Dr.Jit's cache (``~/.drjit``) is empty,
+    or Numba has cached none of the package's functions (beside its modules, or in ``NUMBA_CACHE_DIR``)."""
+    try:
+        drjit_cold = not any((Path.home() / ".drjit").iterdir())
+    except OSError:
+        drjit_cold = True
+    where = os.environ.get("NUMBA_CACHE_DIR")
+    root = Path(where) if where else Path(__file__).resolve().parents[1]  # the package: its __pycache__
+    numba_cold = next(root.rglob("*.nbi"), None) is None
+    return drjit_cold or numba_cold
+
+
+def _first_run(command: str, cold: bool) -> float:
+    """The seconds of compiling kernels that a run of ``command`` adds while the caches are ``cold``."""
+    return TIME_TERMS[command].get("first_run", 0.0) if cold else 0.0
+
+
+def estimate_time(
+    command: str, units: dict, first: tuple[float, str] | None = None, *, cold: bool = False
+) -> TimeEstimate:
     """The time ``command`` will take on this machine for ``units`` of work (keys of :data:`TIME_TERMS`).
 
     The formula's rates (measured on the development machine) times this machine's factor for the
@@ -181,6 +231,7 @@ def estimate_time(command: str, units: dict, first: tuple[float, str] | None = N
     'about 42 s (calibrated on this machine by 3 earlier runs)'
     """
     raw = _raw_seconds(command, units)
+    compiling = _first_run(command, cold)
     entry = _read_timing()
     runs = _runs(entry, command)
     similar = [(abs(math.log(size / raw)), ratio) for size, ratio in runs if raw > 0]
@@ -189,17 +240,21 @@ def estimate_time(command: str, units: dict, first: tuple[float, str] | None = N
         ratios = sorted(similar[:CALIBRATION_RUNS])
         factor = ratios[len(ratios) // 2]
         n = f"{len(ratios)} earlier run{'s' if len(ratios) > 1 else ''}"
-        return TimeEstimate(raw * factor, f"calibrated on this machine by {n}")
+        source = f"calibrated on this machine by {n}"
+        return TimeEstimate((raw + compiling) * factor, source + _compiling(compiling))
     why = "first run here" if not runs else "earlier runs here were of another size"
     if first is not None and math.isfinite(first[0]) and first[0] > 0:
-        return TimeEstimate(raw * first[0], first[1])
+        return TimeEstimate((raw + compiling) * first[0], first[1] + _compiling(compiling))
     probe = entry.get(PROBE_KEY)
     if not isinstance(probe, (int, float)) or not probe > 0:
         probe = _probe_seconds()
         _write_timing({**entry, PROBE_KEY: probe})
-    cold = "; Mitsuba compiles its kernels once" if _kernel_cache_cold() else ""
-    source = f"from a probe of this machine's speed; {UNCALIBRATED}: {why}{cold}"
-    return TimeEstimate(raw * probe / PROBE_REFERENCE_S, source)
+    source = f"from a probe of this machine's speed; {UNCALIBRATED}: {why}{_compiling(compiling)}"
+    return TimeEstimate((raw + compiling) * probe / PROBE_REFERENCE_S, source)
+
+
+def _compiling(seconds: float) -> str:
+    return f"; with about {seconds:.0f} s of compiling kernels on a first run" if seconds else ""
 
 
 def _runs(entry: dict, command: str) -> list[tuple[float, float]]:
@@ -212,17 +267,10 @@ def _runs(entry: dict, command: str) -> list[tuple[float, float]]:
     return kept
 
 
-def _kernel_cache_cold() -> bool:
-    """Whether Dr.Jit's kernel cache (``~/.drjit``) is empty: a first run compiles every kernel."""
-    try:
-        return not any((Path.home() / ".drjit").iterdir())
-    except OSError:
-        return True
-
-
-def record_time(command: str, units: dict, seconds: float) -> None:
-    """Calibrate ``command`` on this machine with the ``seconds`` a run of ``units`` really took."""
-    raw = _raw_seconds(command, units)
+def record_time(command: str, units: dict, seconds: float, *, cold: bool = False) -> None:
+    """Calibrate ``command`` on this machine with the ``seconds`` a run of ``units`` really took (``cold``:
+    the run compiled its kernels: their :data:`TIME_TERMS` ``first_run`` seconds are part of it)."""
+    raw = _raw_seconds(command, units) + _first_run(command, cold)
     if not (raw > 0 and math.isfinite(seconds) and seconds > 0):
         return
     entry = _read_timing()
