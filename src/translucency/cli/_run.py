@@ -29,6 +29,9 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
+import numpy as np
+import typer
+
 from ..io.outputs import claim_folder, release_output
 from ..resources import Need, TimeEstimate, check_resources, estimate_time, memory_limit, record_time
 from ..resources.timing import kernel_caches_cold, process_seconds
@@ -157,10 +160,37 @@ def interrupted() -> None:
         run = _ACTIVE.pop()
         run.abandon()
         if run.kept is not None:
-            try:
-                notes.append(run.kept())
-            except Exception:  # noqa: BLE001 — the note reads the output; an unreadable one keeps nothing said
-                pass
+            notes.append(_note(run.kept))
+    _say_interrupted(notes)
+
+
+@contextlib.contextmanager
+def keeping(kept: Callable[[], str]):
+    """A block of work outside a :class:`Run` whose Ctrl-C says ``kept()`` (one line, exit status 130)."""
+    try:
+        yield
+    except KeyboardInterrupt:
+        _say_interrupted([_note(kept)])
+        raise typer.Exit(130) from None
+
+
+def kept_chunks(out: Path, opener) -> str:
+    """What an interrupted chunked write keeps at ``out`` (a data set ``opener`` reads) and how to go on."""
+    try:
+        done = np.asarray(opener(out).group["chunk_done"][...], dtype=bool)
+    except Exception:  # noqa: BLE001 — nothing readable written yet
+        return "nothing kept; re-run the same command to start again"
+    return f"{int(done.sum())}/{len(done)} chunks kept in {out}; re-run the same command to resume"
+
+
+def _note(kept: Callable[[], str]) -> str:
+    try:
+        return kept()
+    except Exception:  # noqa: BLE001 — the note reads the output; an unreadable one is said as such
+        return "what was written could not be read back"
+
+
+def _say_interrupted(notes: list[str]) -> None:
     err_console.print(
         f"[bold red]interrupted:[/] {'; '.join(notes) or 'nothing written'}", highlight=False, soft_wrap=True
     )

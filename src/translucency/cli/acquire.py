@@ -32,7 +32,7 @@ from ._common import (
     scheduler_option,
     user_errors,
 )
-from ._run import Run, bytes_at
+from ._run import Run, bytes_at, kept_chunks
 
 app = typer.Typer(
     help="Virtual DISCO: simulate measurements by photon transport (Mitsuba 3 / Dr.Jit).",
@@ -207,7 +207,7 @@ def acquire_planar_cmd(
     )
     first = resources.timing.probe_factor("acquire planar", "photon_steps", walk.seconds_per_step)
     timing = run.time(units, (first, "from a probe of the walk on this sample"))
-    run.kept = lambda: _kept(out, open_dataset)
+    run.kept = lambda: kept_chunks(out, open_dataset)
     run.info(
         f"{_resuming(state)}{round(share * P)} incident points x {photons:,} photons x 3 channels on a "
         f"{' x '.join(f'{v:g}' for v in vol.size_mm)} mm slab; time {timing.text()}, "
@@ -319,7 +319,7 @@ def acquire_mesh_cmd(
     left = points if state is None else state.points_left
     units = resources.timing.mesh_acquisition_units(points=left, photons=photons, vertices=V, voxels=voxels)
     timing = run.time(units)
-    run.kept = lambda: _kept(out, open_mesh_dataset)
+    run.kept = lambda: kept_chunks(out, open_mesh_dataset)
     run.info(
         f"{_resuming(state)}{left} incident points x {photons:,} photons x 3 channels on a mesh of "
         f"{V:,} vertices, {' x '.join(f'{v:.1f}' for v in obj.extents)} mm; "
@@ -402,12 +402,3 @@ def _resuming(state: Resumed | None) -> str:
     if state.points_left == 0:
         return f"nothing left to acquire ({state.chunks}/{state.chunks} chunks done): "
     return f"resuming ({state.done}/{state.chunks} chunks done, kept): the "
-
-
-def _kept(out: Path, opener) -> str:
-    """What an interrupted acquisition keeps at ``out`` and how to go on."""
-    try:
-        done, _ = _chunks_of(opener(out))
-    except Exception:  # noqa: BLE001 — nothing readable written yet
-        return "nothing kept; re-run the same command to start again"
-    return f"{int(done.sum())}/{len(done)} chunks kept in {out}; re-run the same command to resume"
