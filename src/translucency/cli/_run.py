@@ -1,17 +1,21 @@
 """The sequence every working command runs (``acquire planar|mesh``, ``fit``, ``evaluate``, ``render``).
 
-estimate its memory and disk (refused in one line beyond ``--max-memory`` or the free disk) → claim
-its output (the command's own call: a file or a folder, resumable or not) → estimate its time → work
+check what needs no work (options, inputs) → estimate its memory and disk (refused in one line beyond
+``--max-memory`` or the free disk) → claim its output (a folder through :meth:`Run.claim_folder`, left as
+it was if the command fails or is interrupted) → estimate its time (with the start-up already spent, and
+a resumed run's work left only) → work
 under a progress bar → teach this machine's calibration how long the work took → its summary (result
-lines, or one JSON object with the estimates and the seconds).
+lines, or one JSON object with the estimates and the seconds).  Ctrl-C ends it with one line saying what
+is kept and how to resume (``Run.kept``), exit status 130.
 
 Examples
 --------
 A new working command::
 
-    run = Run("render", max_memory=max_memory, quiet=quiet)
+    run = Run("render", max_memory=max_memory, quiet=quiet)   # the clock starts
+    check_everything_that_needs_no_work(...)                  # options, inputs: one line, before all else
     run.check(resources.memory.rendering(...), out)
-    claim_folder(out, overwrite=overwrite)
+    run.claim_folder(out, overwrite=overwrite)  # removed again if the command fails or is interrupted
     timing = run.time(resources.timing.rendering_units(...))
     run.info(f"render ...; time {timing.text()}")
     with run.work("render", total=3) as work:
