@@ -299,11 +299,8 @@ def test_a_first_run_with_cold_kernel_caches_adds_its_compiling(tmp_path, monkey
     assert not timing.kernel_caches_cold()
 
 
-def test_the_estimate_states_the_start_up_it_already_took():
+def test_the_estimate_states_the_seconds_already_spent():
     est = timing.TimeEstimate(10.0, "calibrated on this machine by 2 earlier runs", startup=5.0)
-    assert (
-        est.text()
-        == "about 15 s in all (5 s of it starting up; calibrated on this machine by 2 earlier runs)"
-    )
+    assert est.text() == "about 15 s in all (5 s of it so far; calibrated on this machine by 2 earlier runs)"
     assert est.as_dict()["startup_seconds"] == 5.0 and est.as_dict()["seconds"] == 10.0
     assert timing.process_seconds() > 0

@@ -2,8 +2,8 @@
 
 check what needs no work (options, inputs) → estimate its memory and disk (refused in one line beyond
 ``--max-memory`` or the free disk) → claim its output (a folder through :meth:`Run.claim_folder`, left as
-it was if the command fails or is interrupted) → estimate its time (with the start-up already spent, and
-a resumed run's work left only) → work
+it was if the command fails or is interrupted) → estimate its time (of the work left: the seconds already
+spent starting up and preparing are stated with it) → work
 under a progress bar → teach this machine's calibration how long the work took → its summary (result
 lines, or one JSON object with the estimates and the seconds).  Ctrl-C ends it with one line saying what
 is kept and how to resume (``Run.kept``), exit status 130.
@@ -12,11 +12,11 @@ Examples
 --------
 A new working command::
 
-    run = Run("render", max_memory=max_memory, quiet=quiet)   # the clock starts
+    run = Run("render", max_memory=max_memory, quiet=quiet)
     check_everything_that_needs_no_work(...)                  # options, inputs: one line, before all else
     run.check(resources.memory.rendering(...), out)
     run.claim_folder(out, overwrite=overwrite)  # removed again if the command fails or is interrupted
-    timing = run.time(resources.timing.rendering_units(...))
+    timing = run.time(resources.timing.rendering_units(...))  # the clock starts
     run.info(f"render ...; time {timing.text()}")
     with run.work("render", total=3) as work:
         do_it(progress=lambda done, total, name: work.update(completed=done, item=name))
@@ -77,8 +77,7 @@ class Run:
         self.units: dict | None = None
         self.timing: TimeEstimate | None = None
         self.cold = False
-        self.t0 = time.perf_counter()  # the clock: from the command's start (its preparations count)
-        self.startup = process_seconds()  # the imports before it: said with the estimate, not calibrated
+        self.t0 = time.perf_counter()  # the clock, restarted by the estimate: what it estimates is timed
         #: outputs this run created, removed again if it fails: (path, the entries there before or None)
         self.created: list[tuple[Path, set | None]] = []
         #: what an interrupted run keeps and how to resume it (a callable giving one line), if anything
@@ -113,7 +112,9 @@ class Run:
         self.units = units
         self.cold = kernel_caches_cold()  # a first run compiles the kernels later runs load
         estimate = estimate_time(self.timer, units, first, cold=self.cold)
-        self.timing = dataclasses.replace(estimate, startup=self.startup)
+        # the seconds already spent (imports, reading inputs, generating samples) are said with it
+        self.timing = dataclasses.replace(estimate, startup=process_seconds())
+        self.t0 = time.perf_counter()
         return self.timing
 
     def info(self, text: str) -> None:
@@ -123,7 +124,7 @@ class Run:
     @contextlib.contextmanager
     def work(self, description: str | None = None, *, total=None, fresh: bool = True):
         """A progress bar named ``description`` (none if None); on success, record the seconds since the
-        command started in this machine's calibration unless the run reused earlier work (``fresh``)."""
+        estimate in this machine's calibration unless the run reused earlier work (``fresh``)."""
         if description is None:
             work = Work(update=lambda **fields: None, fresh=fresh)
             yield work
@@ -136,7 +137,7 @@ class Run:
             record_time(self.timer, self.units, time.perf_counter() - self.t0, cold=self.cold)
 
     def seconds(self) -> float:
-        """Seconds since the command started (rounded to a millisecond, as the summaries state them)."""
+        """Seconds since the estimate (rounded to a millisecond, as the summaries state them)."""
         return round(time.perf_counter() - self.t0, 3)
 
     def finish(self, as_json: bool, summary: dict, lines=()) -> None:

@@ -307,17 +307,15 @@ def acquire_mesh_cmd(
 
     if volume is not None:
         vol = load_volume(volume)
-        voxels = 0.0  # read, not generated
         estimate = need(vol.sigma_s.size / 3)
     else:  # before the filling is generated
-        voxels = resources.memory.object_voxels(obj.extents, voxel)
-        estimate = need(voxels)
+        estimate = need(resources.memory.object_voxels(obj.extents, voxel))
         vol = object_volume(material or "marble", obj, voxel, g=g, seed=seed)
     check_filling(obj, vol)
     same = {"n_points": points, "photons": photons, "seed": seed, "chunk": chunk, "vertices": V}
     state = _resumable(out, open_mesh_dataset, lambda request: _matches(request, same))
     left = points if state is None else state.points_left
-    units = resources.timing.mesh_acquisition_units(points=left, photons=photons, vertices=V, voxels=voxels)
+    units = resources.timing.mesh_acquisition_units(points=left, photons=photons, vertices=V)
     timing = run.time(units)
     run.kept = lambda: kept_chunks(out, open_mesh_dataset)
     run.info(

@@ -249,18 +249,18 @@ def _refuse_damaged(ds) -> None:
     """One line for an unfinished data set (an interrupted acquisition) or one with missing or
     undecodable chunks (``info`` lists them; re-running the acquisition with the same arguments
     finishes it, or repairs exactly those)."""
-    done = np.asarray(ds.group["chunk_done"][...], dtype=bool)
-    if not done.all():
-        raise TranslucencyError(
-            f"{ds.path}: unfinished acquisition ({int(done.sum())}/{len(done)} chunks done); re-run the "
-            "same `translucency acquire` command to finish it, then fit"
-        )
     damaged = ds.damaged_chunks()
     if damaged:
         listed = ", ".join(f"{k!r} chunks {v}" for k, v in damaged.items())
         raise TranslucencyError(
             f"{ds.path}: damaged data set ({listed} missing or undecodable); the acquisition is unfinished: "
             "re-run it with the same arguments to repair those chunks"
+        )
+    done = np.asarray(ds.group["chunk_done"][...], dtype=bool)  # decodes: checked with the damage above
+    if not done.all():
+        raise TranslucencyError(
+            f"{ds.path}: unfinished acquisition ({int(done.sum())}/{len(done)} chunks done); re-run the "
+            "same `translucency acquire` command to finish it, then fit"
         )
 
 

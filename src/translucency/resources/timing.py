@@ -7,8 +7,8 @@ Every command that works prints "about N s" before it starts: the seconds per un
 (a first run on this machine, or work of another size) the factor comes from a probe of the machine's
 speed and the estimate says it is uncalibrated: a noisy probe, a material that walks faster or slower
 than the formula's, Mitsuba compiling its kernels into an empty ``~/.drjit`` — none of these is
-known before a run here.  The clock runs from the command's start (its preparations: reading the
-mesh, generating the filling, building scenes) to the end of its work.
+known before a run here.  The clock runs from the estimate to the end of the work; the seconds the
+command had spent before it (imports, reading the mesh, generating the filling) are stated beside it.
 
 Examples
 --------
@@ -40,14 +40,12 @@ TIME_TERMS = {
     # window and its writes.  Before a first run, the probe's own seconds a step set the factor.
     "acquire planar": {"overhead": 0.4, "points": 0.015, "photon_steps": 2.7e-7, "pixels": 2e-6},
     # photons: points x photons x 3 channels; point_vertices: each point's tally over the mesh;
-    # vertices: reading and repairing the mesh; voxels: generating the filling
+    # first_run: an empty ~/.drjit (Dr.Jit compiles the walk's kernels)
     "acquire mesh": {
         "overhead": 0.8,
         "points": 0.05,
         "photons": 1.5e-5,
         "point_vertices": 2e-7,
-        "vertices": 2.5e-5,
-        "voxels": 1e-6,
         "first_run": 1.5,
     },
     # "fit <family>": each model family states its own (``Family.time_terms``, registered by
@@ -107,15 +105,16 @@ class TimeEstimate:
 
     seconds: float
     source: str
-    #: seconds the process had already spent starting (imports) when the estimate was made: shown in the
-    #: text, which states the whole command's time (what a user measures), not counted in ``seconds``
+    #: seconds the process had already spent when the estimate was made (imports, reading the inputs,
+    #: generating a sample): shown in the text, which states the whole command's time (what a user
+    #: measures), not counted in ``seconds``
     startup: float = 0.0
 
     def text(self) -> str:
         if self.startup < 1.0:
             return f"about {_amount(self.seconds)} ({self.source})"
         total = _amount(self.seconds + self.startup)
-        return f"about {total} in all ({self.startup:.0f} s of it starting up; {self.source})"
+        return f"about {total} in all ({self.startup:.0f} s of it so far; {self.source})"
 
     def as_dict(self) -> dict:
         out = {"seconds": round(self.seconds, 3), "source": self.source}
@@ -293,16 +292,9 @@ def planar_acquisition_units(*, points: int, photon_steps: float, pixels: int) -
     return {"points": points, "photon_steps": photon_steps, "pixels": pixels}
 
 
-def mesh_acquisition_units(*, points: int, photons: int, vertices: int, voxels: float = 0) -> dict:
-    """``acquire mesh``: P points (those left to acquire), N photons a point and channel, V vertices, the
-    voxels of a generated filling (0 for a user's)."""
-    return {
-        "points": points,
-        "photons": 3 * points * photons,
-        "point_vertices": points * vertices,
-        "vertices": vertices,
-        "voxels": voxels,
-    }
+def mesh_acquisition_units(*, points: int, photons: int, vertices: int) -> dict:
+    """``acquire mesh``: P points (those left to acquire), N photons a point and channel, V vertices."""
+    return {"points": points, "photons": 3 * points * photons, "point_vertices": points * vertices}
 
 
 def fit_units(*, points: int, pixels: int, rounds: int, candidates: int = 1) -> dict:
