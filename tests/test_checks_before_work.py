@@ -176,7 +176,10 @@ def test_a_stale_probe_of_an_older_version_is_not_used():
     units = {"vertices": 1e4, "pairs": 1e7}
     est = timing.estimate_time("render", units)  # neither the old probe nor the size-less factors
     assert "uncalibrated" in est.source
-    assert est.seconds > 0.05 * timing._raw_seconds("render", units)
+    probe = json.loads(path.read_text())[timing._machine()][timing.PROBE_KEY]  # probed afresh
+    raw = timing._raw_seconds("render", units)
+    assert est.seconds == pytest.approx(raw * probe / timing.PROBE_REFERENCE_S)
+    assert est.seconds != pytest.approx(raw * 1e-3 / timing.PROBE_REFERENCE_S)
 
 
 # -- Ctrl-C and resuming ----------------------------------------------------------------------------------
