@@ -86,7 +86,7 @@ def test_planar_acquisition_and_fit_estimates_within_2x(tmp_path):
 
     calibrated(evaluations)
     cache = json.loads(resources.timing_file().read_text())
-    (runs,) = [entry["runs"] for entry in cache.values()]
+    (runs,) = [entry[resources.RUNS_KEY] for entry in cache.values()]
     assert len(runs["acquire planar"]) >= 2 and len(runs["fit iso"]) >= 2 and len(runs["evaluate"]) >= 2
 
 

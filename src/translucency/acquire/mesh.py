@@ -19,6 +19,7 @@ chunk by chunk.  Same arguments resume; other arguments are refused unless
 
 from __future__ import annotations
 
+import hashlib
 import json
 from collections.abc import Callable
 from pathlib import Path
@@ -77,12 +78,7 @@ def acquire_mesh(
     if photons < 1:
         raise TranslucencyError(f"photons: must be >= 1, got {photons}")
     parse_scheduler(scheduler)  # a bad option is one line before any work
-    need = np.asarray(mesh.extents) - np.asarray(volume.size_mm)
-    if (need > 1e-6).any():
-        raise TranslucencyError(
-            f"volume: {plain(volume.size_mm)} mm does not cover the mesh's bounding box "
-            f"{plain(mesh.extents)} mm"
-        )
+    check_filling(mesh, volume)
     V = len(mesh.vertices)
     incident = farthest_points(np.asarray(mesh.vertices), n_points)
     P = len(incident)
@@ -115,6 +111,8 @@ def acquire_mesh(
         "software": {"translucency": __version__},
         "request": request,
     }
+    if volume.description.get("generator") == "file":  # a user's filling: where it is and what it was
+        header["filling"] = filling_record(volume.description["path"])
     with output_lock(out):  # one writer at a time
         ds = create_mesh_dataset(
             out, header, mesh, area, incident, chunk_points=chunk_points, overwrite=overwrite, inputs=inputs
@@ -141,6 +139,27 @@ def acquire_mesh(
                     if progress:
                         progress(finished, P)
         return Path(out)
+
+
+def check_filling(mesh, volume: Volume) -> None:
+    """Refuse, in one line, a filling that does not cover the mesh's bounding box (before any work)."""
+    need = np.asarray(mesh.extents) - np.asarray(volume.size_mm)
+    if (need > 1e-6).any():
+        raise TranslucencyError(
+            f"volume: {plain(volume.size_mm)} mm does not cover the mesh's bounding box "
+            f"{plain(mesh.extents)} mm"
+        )
+
+
+def filling_record(path) -> dict:
+    """A user's filling file as a data set records it: its absolute ``path`` and ``sha256`` (so that the
+    reference of a model acquired from it can be rendered while the file is unchanged)."""
+    path = Path(path).resolve()
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        while block := f.read(1 << 22):
+            h.update(block)
+    return {"path": str(path), "sha256": h.hexdigest()}
 
 
 #: per process: (mesh, its Mitsuba scene) of the acquisition running there

@@ -28,6 +28,8 @@ def user_errors(func):
     def one_line(message, category, *args, **kwargs):
         warn(cli_words(" ".join(str(message).split())))
 
+    from . import _run  # _run imports this module: the runs under way are asked at call time
+
     @functools.wraps(func)
     def wrapper(*args, **kwargs):
         try:
@@ -35,8 +37,17 @@ def user_errors(func):
                 warnings.showwarning = one_line
                 return func(*args, **kwargs)
         except TranslucencyError as exc:
+            _run.failed()  # a failed run leaves nothing behind
             err_console.print(f"[bold red]error:[/] {cli_words(str(exc))}", highlight=False, soft_wrap=True)
             raise typer.Exit(2) from None
+        except KeyboardInterrupt:
+            _run.interrupted()  # what is kept and how to resume, in one line
+            raise typer.Exit(130) from None
+        except (typer.Exit, typer.Abort):
+            raise
+        except Exception:
+            _run.failed()
+            raise
 
     return wrapper
 

@@ -3,7 +3,10 @@ DISCO: a planar sample, a 3D object) and a virtual rig's photographs for ``trans
 
 from __future__ import annotations
 
+import dataclasses
+import json
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 import typer
@@ -25,7 +28,7 @@ from ._common import (
     scheduler_option,
     user_errors,
 )
-from ._run import Run, bytes_at
+from ._run import Run, bytes_at, kept_chunks
 
 #: the sample generators, as --help lists them (the one list make_sample refuses others with)
 SAMPLES = ", ".join(GENERATORS) + " (<name>: one of `translucency materials`)"
@@ -208,20 +211,24 @@ def acquire_planar_cmd(
     )
     setup.check(vol)
     walk = probe_walk(vol, setup)  # a short trace of this volume: its steps per photon, this machine's speed
+    P = grid * grid
+    state = _resumable(out, open_dataset, lambda request: request.get("setup") == _jsonable(setup))
+    share = 1.0 if state is None else state.points_left / P  # what is left of the work
     units = resources.timing.planar_acquisition_units(
-        points=grid * grid,
-        photon_steps=estimate_seconds(vol, setup, steps_per_second=1.0, probe=walk),
-        pixels=grid * grid * setup.window_pixels() ** 2,
+        points=round(share * P),
+        photon_steps=share * estimate_seconds(vol, setup, steps_per_second=1.0, probe=walk),
+        pixels=round(share * P) * setup.window_pixels() ** 2,
     )
-    fresh = bytes_at(out) == 0
     first = resources.timing.probe_factor("acquire planar", "photon_steps", walk.seconds_per_step)
     timing = run.time(units, (first, "from a probe of the walk on this sample"))
+    run.kept = lambda: kept_chunks(out, open_dataset)
     run.info(
-        f"{grid * grid} incident points x {photons:,} photons x 3 channels on a "
+        f"{_resuming(state)}{round(share * P)} incident points x {photons:,} photons x 3 channels on a "
         f"{' x '.join(f'{v:g}' for v in vol.size_mm)} mm slab; time {timing.text()}, "
         f"memory ~{estimate.memory / 2**20:,.0f} MiB",
     )
-    with run.work("acquire", total=grid * grid, fresh=fresh) as work:
+    with run.work("acquire", total=P, fresh=state is None and bytes_at(out) == 0) as work:
+        work.update(completed=P - round(share * P), item="points")
         acquire_planar(
             vol,
             setup,
@@ -285,7 +292,7 @@ def acquire_mesh_cmd(
 ):
     """Pencil beams at surface points of a 3D object; exits tallied per vertex (R_d in mm^-2)."""
     from ..acquire import load_volume  # heavy: Mitsuba, Dask, trimesh and scikit-image load only when it runs
-    from ..acquire.mesh import acquire_mesh, object_volume
+    from ..acquire.mesh import acquire_mesh, check_filling, object_volume
     from ..acquire.objects import make_pig
     from ..cluster import parse_scheduler
     from ..io.mesh import check_mesh_file, load_mesh
@@ -299,6 +306,8 @@ def acquire_mesh_cmd(
     check_option("--scale", scale, lo=0, open_lo=True)
     check_option("--voxel", voxel, lo=0, open_lo=True)
 
+    if up not in ("z", "y", "x"):  # an option: before the mesh is read
+        raise TranslucencyError(f"--up: expected one of z, y, x, got {up!r}")
     run = Run("acquire mesh", max_memory=max_memory, quiet=quiet)
     if material is not None and volume is not None:
         raise TranslucencyError("give one of --material NAME or --volume FILE.npz, not both")
@@ -308,15 +317,15 @@ def acquire_mesh_cmd(
         check_mesh_file(mesh, "--mesh")  # a folder or a missing file: named before the output is judged
     claim_output(out, "mesh data set", overwrite=overwrite, inputs=[mesh, volume], reuse=True)
     obj = load_mesh(mesh, scale_mm=scale, up=up) if mesh is not None else make_pig()
+    V = len(obj.vertices)
+    if points > V:  # before any estimate: the incident points are vertices of the mesh
+        raise TranslucencyError(
+            f"--points: need 1 to {V:,} incident points (the mesh's vertices), got {points:,}"
+        )
 
     def need(voxels):
         n = resources.memory.mesh_acquisition(
-            vertices=len(obj.vertices),
-            faces=len(obj.faces),
-            points=min(points, len(obj.vertices)),
-            photons=photons,
-            chunk=chunk,
-            voxels=voxels,
+            vertices=V, faces=len(obj.faces), points=points, photons=photons, chunk=chunk, voxels=voxels
         )
         return run.check(n, out, resumed=True)  # a resumed acquisition keeps what is there
 
@@ -326,16 +335,20 @@ def acquire_mesh_cmd(
     else:  # before the filling is generated
         estimate = need(resources.memory.object_voxels(obj.extents, voxel))
         vol = object_volume(material or "marble", obj, voxel, g=g, seed=seed)
-    P = min(points, len(obj.vertices))
-    units = resources.timing.mesh_acquisition_units(points=P, photons=photons, vertices=len(obj.vertices))
-    fresh = bytes_at(out) == 0
+    check_filling(obj, vol)
+    same = {"n_points": points, "photons": photons, "seed": seed, "chunk": chunk, "vertices": V}
+    state = _resumable(out, open_mesh_dataset, lambda request: _matches(request, same))
+    left = points if state is None else state.points_left
+    units = resources.timing.mesh_acquisition_units(points=left, photons=photons, vertices=V)
     timing = run.time(units)
+    run.kept = lambda: kept_chunks(out, open_mesh_dataset)
     run.info(
-        f"{points} incident points x {photons:,} photons x 3 channels on a mesh of "
-        f"{len(obj.vertices):,} vertices, {' x '.join(f'{v:.1f}' for v in obj.extents)} mm; "
+        f"{_resuming(state)}{left} incident points x {photons:,} photons x 3 channels on a mesh of "
+        f"{V:,} vertices, {' x '.join(f'{v:.1f}' for v in obj.extents)} mm; "
         f"time {timing.text()}, memory ~{estimate.memory / 2**20:,.0f} MiB",
     )
-    with run.work("acquire", total=points, fresh=fresh) as work:
+    with run.work("acquire", total=points, fresh=state is None and bytes_at(out) == 0) as work:
+        work.update(completed=points - left, item="points")
         acquire_mesh(
             obj,
             vol,
@@ -362,3 +375,52 @@ def acquire_mesh_cmd(
         "seconds": run.seconds(),
     }
     run.finish(as_json, summary, [f"mesh data set: {out}"])
+
+
+# -- resuming -------------------------------------------------------------------------------------------
+class Resumed(NamedTuple):
+    """A data set an acquisition resumes: its chunks done, of how many, and the points left to acquire."""
+
+    done: int
+    chunks: int
+    points_left: int
+
+
+def _chunks_of(ds) -> tuple[np.ndarray, np.ndarray]:
+    """The done flags of a data set's chunks and the points of each."""
+    done = np.asarray(ds.group["chunk_done"][...], dtype=bool)
+    k, P = ds.chunk_points, ds.n_points
+    return done, np.array([min(P, (c + 1) * k) - c * k for c in range(len(done))])
+
+
+def _resumable(out: Path, opener, same) -> Resumed | None:
+    """The data set at ``out`` that this acquisition resumes (made with the same arguments: ``same`` of its
+    header's request), or None when it starts afresh."""
+    try:
+        ds = opener(out)
+        if not same(ds.header.get("request", {})):
+            return None
+        done, points = _chunks_of(ds)
+    except Exception:  # noqa: BLE001 — no data set, or one that cannot be read: a fresh start (checked later)
+        return None
+    if not done.any():
+        return None
+    return Resumed(int(done.sum()), len(done), int(points[~done].sum()))
+
+
+def _matches(request: dict, same: dict) -> bool:
+    return all(request.get(k) == v for k, v in same.items())
+
+
+def _jsonable(setup) -> dict:
+    """The setup as its data set's request records it (JSON)."""
+    return json.loads(json.dumps(dataclasses.asdict(setup)))
+
+
+def _resuming(state: Resumed | None) -> str:
+    """The start of the information line of a resumed acquisition."""
+    if state is None:
+        return ""
+    if state.points_left == 0:
+        return f"nothing left to acquire ({state.chunks}/{state.chunks} chunks done): "
+    return f"resuming ({state.done}/{state.chunks} chunks done, kept): the "

@@ -16,7 +16,7 @@ from ..io.dataset import dataset_identity, open_dataset
 from ..io.inputs import DATA_SETS, expect_input, what_is
 from ..io.mesh_dataset import is_mesh_dataset, open_mesh_dataset
 from ..io.model_file import load_model, read_header
-from ..io.outputs import claim_folder, claim_output
+from ..io.outputs import claim_output
 from ._common import (
     json_option,
     jsonable,
@@ -34,7 +34,12 @@ from ._run import Run
 def evaluate(
     model: Path = typer.Argument(..., help="The model file to evaluate (.model.zip)."),
     data: Path = typer.Argument(..., help="The planar data set it was fitted to (.zarr directory)."),
-    report: Path = typer.Option(Path("report"), "--report", help="Directory for the figures and index.html."),
+    report: Path = typer.Option(
+        None,
+        "--report",
+        help="Directory for the figures and index.html (default: beside the model, MODEL.report/ — "
+        "iso.model.zip gives iso.report/).",
+    ),
     as_json: bool = json_option(),
     json_out: Path = typer.Option(
         None,
@@ -73,6 +78,7 @@ def evaluate(
     expect_input(data, DATA_SETS)
     expect_input(truth, DATA_SETS, "--truth")
     run = Run("evaluate", max_memory=max_memory, quiet=quiet)
+    report = report_beside(model) if report is None else report
     models, flagged, exclusion, metas = {}, {}, {}, {}
     for path in [model, *(compare or [])]:
         m = load_model(path)
@@ -106,7 +112,7 @@ def evaluate(
     inputs = [model, data, *(compare or []), truth]
     if json_out is not None:
         claim_output(json_out, "json summary", overwrite=overwrite, inputs=inputs, option="--json-out")
-    claim_folder(report, overwrite=overwrite, inputs=inputs, option="--report")
+    run.claim_folder(report, overwrite=overwrite, inputs=inputs, option="--report")
     units = resources.timing.evaluation_units(points=ds.n_points, pixels=H * W, params=params, datasets=d)
     timing = run.time(units)
     run.info(f"{len(models)} model(s) on {ds.n_points} points x {H} x {W} pixels; time {timing.text()}")
@@ -203,6 +209,12 @@ def _former_json(command, args: list[str]) -> list[str]:
             out += ["--json-out", after]
         i += 2
     return out
+
+
+def report_beside(model: Path) -> Path:
+    """The default report folder of ``model``: beside it, its name with ``.report`` for ``.model.zip``."""
+    name = model.name.removesuffix(".zip").removesuffix(".model") or model.name
+    return model.with_name(name + ".report")
 
 
 def _identity_of_model(meta: dict):

@@ -166,11 +166,23 @@ def fit(
         )
         run.check(need, out)
         ckpt = out.with_name(out.name + ".partial.npz")
+        done = _rounds_done(ckpt)  # a checkpoint of an interrupted fit: only the rounds left are estimated
         units = resources.timing.fit_units(
-            points=ds.n_points, pixels=H * W, rounds=rounds, candidates=_candidates(terms, directions)
+            points=ds.n_points,
+            pixels=H * W,
+            rounds=max(1, rounds - (done or 0)),
+            candidates=_candidates(terms, directions),
         )
         timing = run.time(units)
-        run.info(f"fit {model} on {ds.n_points} incident points x {H * W:,} pixels; time {timing.text()}")
+        run.kept = lambda: (
+            f"the fit's state is kept in {ckpt}; re-run the same command to resume"
+            if ckpt.exists()
+            else "nothing kept (the fit saves its state after its first chunk)"
+        )
+        resuming = "" if done is None else f"resuming from {ckpt} ({done}/{rounds} rounds done): "
+        run.info(
+            f"{resuming}fit {model} on {ds.n_points} incident points x {H * W:,} pixels; time {timing.text()}"
+        )
         with run.work(f"fit {model}", fresh=not ckpt.exists()) as work:
             result = fit_planar(
                 ds,
@@ -234,15 +246,33 @@ def _count_or_auto(option: str, value: str):
         raise TranslucencyError(f"{option}: expected a whole number or 'auto', got {value!r}") from None
 
 
+def _rounds_done(ckpt: Path) -> int | None:
+    """Rounds an interrupted fit finished, from its checkpoint (None: no readable checkpoint)."""
+    if not ckpt.is_file():
+        return None
+    try:
+        with np.load(ckpt) as z:
+            return int(np.asarray(z["round"]).ravel()[0])
+    except Exception:  # noqa: BLE001 — an unreadable checkpoint is not used (the fit starts afresh)
+        return None
+
+
 def _refuse_damaged(ds) -> None:
-    """One line for a data set with missing or undecodable chunks (``info`` lists them; re-running the
-    acquisition with the same arguments repairs exactly those)."""
+    """One line for an unfinished data set (an interrupted acquisition) or one with missing or
+    undecodable chunks (``info`` lists them; re-running the acquisition with the same arguments
+    finishes it, or repairs exactly those)."""
     damaged = ds.damaged_chunks()
     if damaged:
         listed = ", ".join(f"{k!r} chunks {v}" for k, v in damaged.items())
         raise TranslucencyError(
             f"{ds.path}: damaged data set ({listed} missing or undecodable); the acquisition is unfinished: "
             "re-run it with the same arguments to repair those chunks"
+        )
+    done = np.asarray(ds.group["chunk_done"][...], dtype=bool)  # decodes: checked with the damage above
+    if not done.all():
+        raise TranslucencyError(
+            f"{ds.path}: unfinished acquisition ({int(done.sum())}/{len(done)} chunks done); re-run the "
+            "same `translucency acquire` command to finish it, then fit"
         )
 
 

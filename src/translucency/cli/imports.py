@@ -9,8 +9,10 @@ import numpy as np
 import typer
 
 from .._validate import TranslucencyError, check_option
+from ..io.dataset import open_dataset
 from ..io.outputs import claim_output
 from ._common import console, scheduler_option, user_errors
+from ._run import keeping, kept_chunks
 
 app = typer.Typer(
     help="Import measurements of a real rig as data sets the fitter reads.", no_args_is_help=True
@@ -148,17 +150,18 @@ def import_images_cmd(
         dtype=dtype,
         beam_rms=beam_rms,
     )
-    ds = import_images(
-        folder,
-        positions,
-        calib,
-        out,
-        setup,
-        overwrite=overwrite,
-        inputs=[calibration, *(v[2] for v in views)],
-        views=other_views,
-        scheduler=scheduler,
-    )
+    with keeping(lambda: kept_chunks(out, open_dataset)):  # Ctrl-C: the chunks kept, and how to resume
+        ds = import_images(
+            folder,
+            positions,
+            calib,
+            out,
+            setup,
+            overwrite=overwrite,
+            inputs=[calibration, *(v[2] for v in views)],
+            views=other_views,
+            scheduler=scheduler,
+        )
     rms = calib.source.get("rms_px")
     console.print(
         f"data set: {out} ({ds.n_points} points, windows {ds.window[0]} x {ds.window[1]} at {ds.pitch} mm"

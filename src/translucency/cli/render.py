@@ -13,7 +13,6 @@ from .. import resources
 from .._validate import TranslucencyError, check_option
 from ..io.inputs import expect_input
 from ..io.model_file import load_model, read_header
-from ..io.outputs import claim_folder
 from ._common import json_option, max_memory_option, overwrite_option, quiet_option, user_errors
 from ._run import Run
 
@@ -68,7 +67,8 @@ def render(
         None,
         "--radius",
         help="Near radius of the transport, mm: pairs within it summed exactly, those beyond it through the "
-        "hierarchical far field (default: the 99% energy radius, or less where the pairs would not fit).",
+        "hierarchical far field (default: the 99% energy radius, or less where the pairs would not fit in a "
+        "quarter of --max-memory or of the machine's memory). A smaller radius lowers the memory.",
     ),
     overwrite: bool = overwrite_option(),
     max_memory: str = max_memory_option(),
@@ -80,7 +80,8 @@ def render(
     from ..render.camera import Camera, view_direction
     from ..render.figure import figure2
     from ..render.lights import Placement, parse_light, place_light
-    from ..render.object import boundary_eta, object_of_model, volume_of_dataset
+    from ..render.object import boundary_eta, check_light_outside, object_of_model, volume_of_dataset
+    from ..render.reference import check_reference
     from ..render.tonemap import parse_exposure
 
     check_option("--spp", spp, lo=1)
@@ -92,7 +93,8 @@ def render(
     for value in size:
         check_option("--size", value, lo=1, hi=16384)
     run = Run("render", max_memory=max_memory, quiet=quiet)
-
+    # the options first (no file read), then the model and what it implies, then the output, then work
+    direction = view_direction(view, "--view")
     expect_input(model, ("model file",))  # a data set or a mesh file where the model belongs: say so
     m = load_model(model)
     header = read_header(model)
@@ -101,11 +103,16 @@ def render(
             f"{model}: a planar model; render needs a per-vertex model of a mesh data set"
         )
     mesh, dheader = object_of_model(m, header)
-    direction = view_direction(view, "--view")
     placement = Placement.of(mesh, direction)
     lights = [place_light(lit, placement) for lit in relative]
+    check_light_outside(mesh, lights[0])
+    if reference:  # a light volpath cannot render, a filling gone or changed: one line, before any work
+        check_reference(lights[0], boundary_eta(dheader))
+    vol = volume_of_dataset(mesh, dheader) if reference else None
     V = len(mesh.vertices)
-    rad = default_radius(m, mesh) if radius is None else float(radius)  # the transport's, for the estimates
+    # the default radius: the model's 99 % energy radius, at most what a share of the memory holds
+    budget = resources.memory.transport_budget(run.limit)
+    rad = default_radius(m, mesh, max_pairs=min(MAX_PAIRS, 2 * budget)) if radius is None else float(radius)
     picture = dict(
         vertices=V,
         surface_mm2=float(mesh.area),
@@ -116,14 +123,17 @@ def render(
         spp_reference=spp,
         max_pairs=MAX_PAIRS,
     )
-    run.check(resources.memory.rendering(**picture), out)
-    claim_folder(out, overwrite=overwrite, inputs=[model, header.get("meta", {}).get("dataset") or None])
+    need = run.check(resources.memory.rendering(**picture), out)
+    run.claim_folder(out, overwrite=overwrite, inputs=[model, header.get("meta", {}).get("dataset") or None])
     timing = run.time(resources.timing.rendering_units(**picture))
-    run.info(f"render of {V:,} vertices at {size[0]} x {size[1]}; time {timing.text()}")
+    what, _, flags = need.what.partition(": ")  # "the transport: --radius"
+    run.info(
+        f"render of {V:,} vertices at {size[0]} x {size[1]}, transport radius {rad:.3g} mm; time "
+        f"{timing.text()}, memory ~{need.memory / 2**30:.2g} GiB (mostly {what}"
+        f"{f'; a smaller {flags} lowers it' if flags else ''})"
+    )
     run.info(f"{placement.describe()}; light {lights[0]!r}")
-    run.start()  # the camera and the reference's volume are part of the work
     cam = Camera.looking_at(mesh, direction, *size)
-    vol = volume_of_dataset(mesh, dheader) if reference else None
     steps = 4 if reference else 3
     with run.work("render", total=steps) as work:
         res = figure2(
@@ -134,7 +144,7 @@ def render(
             volume=vol,
             camera=cam,
             spp_reference=spp,
-            radius=radius,
+            radius=rad,
             eta=boundary_eta(dheader),
             exposure=chosen_exposure,
             progress=lambda done, total, name: work.update(completed=done, total=total, item=name),

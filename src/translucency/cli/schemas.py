@@ -74,7 +74,11 @@ TIME_ESTIMATE = record(
         "source": field(
             "string", "Where the estimate comes from (this machine's calibration, a probe, ...)."
         ),
+        "startup_seconds": field(
+            "number", "Seconds already spent before the estimate (imports, checks).", "s"
+        ),
     },
+    optional=("startup_seconds",),
 )
 _WORKING = {
     "estimate": ESTIMATE,

@@ -167,7 +167,8 @@ def load_mesh(path, *, scale_mm: float = 1.0, up: str = "z"):
     >>> round(float(load_mesh(p, scale_mm=1000).extents[0]), 3)
     20.0
     """
-
+    if up not in _UP:  # an option: checked before the file is read
+        raise TranslucencyError(f"up: expected one of {', '.join(_UP)}, got {up!r}")
     path = check_mesh_file(path)
     if not (np.isfinite(scale_mm) and scale_mm > 0):
         raise TranslucencyError(f"scale_mm: must be a positive number of mm per file unit, got {scale_mm}")
@@ -192,8 +193,6 @@ def load_mesh(path, *, scale_mm: float = 1.0, up: str = "z"):
             f"translucent objects are {PLAUSIBLE_MM[0]:g}–{PLAUSIBLE_MM[1]:g} mm — {hint}?",
             stacklevel=2,
         )
-    if up not in _UP:
-        raise TranslucencyError(f"up: expected one of {', '.join(_UP)}, got {up!r}")
     if up != "z":
         rotation = np.eye(4)
         rotation[:3, :3] = _UP[up]

@@ -17,7 +17,9 @@ and F triangles)::
 Header (JSON): ``format`` = "translucency-mesh-dataset", ``version`` = 1,
 ``units``, ``n_points``, ``n_vertices``, ``photons``, ``seed``, ``eta``, ``g``,
 ``sample`` (the filling's description), ``software`` and ``request`` (the
-arguments that define the data, compared on resume).
+arguments that define the data, compared on resume); for a user's filling file
+(``acquire mesh --volume``) also ``filling`` = {``path`` (absolute), ``sha256``}, so
+that the reference of a model fitted to it can be rendered while the file is unchanged.
 """
 
 from __future__ import annotations

@@ -315,6 +315,30 @@ def claim_folder(path, *, overwrite: bool, inputs=(), option: str = "out") -> Pa
     return path
 
 
+def release_output(path, before: set | None) -> None:
+    """Undo a claim of an output folder by a run that failed: remove what it added, nothing else.
+
+    ``before`` is the set of entry names the folder held when it was claimed (None: the folder did not
+    exist, so it goes whole, if it is still the tool's own).  Entries that were there before stay
+    (replaced files cannot be restored; they were the tool's own outputs, replaced with ``overwrite``).
+    """
+    path = Path(path)
+    if not path.is_dir() or path.is_symlink() or kind_of(path) != "output folder":
+        return
+    for child in path.iterdir():
+        if before is not None and child.name in before:
+            continue
+        if child.is_dir() and not child.is_symlink():
+            shutil.rmtree(child, ignore_errors=True)
+        else:
+            child.unlink(missing_ok=True)
+    if before is None:
+        try:
+            path.rmdir()
+        except OSError:  # something appeared there meanwhile: kept
+            pass
+
+
 @contextmanager
 def output_lock(path):
     """Hold ``.NAME.lock`` beside ``path`` while writing it: a second process is stopped in one line.

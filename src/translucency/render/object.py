@@ -1,8 +1,9 @@
 """The object of a per-vertex model: its mesh, its volume (for the reference) and its boundary η.
 
 :func:`object_of_model` rebuilds the mesh of a model (from the model itself, or from its data set for
-older files); :func:`volume_of_dataset` the generated filling of a mesh data set; :func:`boundary_eta`
-the index of the boundary it was acquired behind.
+older files); :func:`volume_of_dataset` the filling of a mesh data set (generated, or a user's file);
+:func:`boundary_eta` the index of the boundary it was acquired behind; :func:`check_light_outside` refuses
+a light inside the object before any work.
 """
 
 from __future__ import annotations
@@ -12,8 +13,9 @@ from pathlib import Path
 import numpy as np
 import trimesh
 
-from .._validate import TranslucencyError
-from ..acquire.mesh import object_volume
+from .._validate import TranslucencyError, plain
+from ..acquire import load_volume
+from ..acquire.mesh import filling_record, object_volume
 from ..io.mesh_dataset import open_mesh_dataset
 
 
@@ -40,14 +42,59 @@ def object_of_model(model, header: dict):
 
 
 def volume_of_dataset(mesh, header):
-    """The generated filling of a mesh data set, rebuilt from its description."""
+    """The filling of a mesh data set: rebuilt from its description (a generated one), or read again from
+    the user's file it was acquired from, if that file is still there unchanged (``header["filling"]``)."""
     d = header.get("sample", {})
+    if d.get("generator") == "file":
+        record = header.get("filling")
+        if not isinstance(record, dict) or "sha256" not in record:
+            raise TranslucencyError(
+                f"data set: acquired from the user's filling {d.get('path', '?')}, whose path and hash "
+                "were not recorded (older data set); re-acquire it for a reference"
+            )
+        path = Path(record["path"])
+        if not path.is_file():
+            raise TranslucencyError(
+                f"{path}: the filling this object was acquired from is gone; no reference"
+            )
+        if filling_record(path)["sha256"] != record["sha256"]:
+            raise TranslucencyError(
+                f"{path}: the filling changed since this object was acquired (SHA-256 differs); no reference"
+            )
+        return load_volume(path)
     if "generator" not in d or "voxel_mm" not in header.get("request", {}).get("volume_grid", {}):
         raise TranslucencyError("data set: its filling cannot be rebuilt (not generated here); no reference")
     grid = header["request"]["volume_grid"]
     return object_volume(
         d["generator"], mesh, grid["voxel_mm"], g=header.get("g", 0.0), seed=d.get("seed", 0)
     )
+
+
+def check_light_outside(mesh, light) -> None:
+    """Refuse, in one line, a point or spot light inside the closed ``mesh`` — before any work.
+
+    The generalised winding number of the surface around the light's position (the solid angle of every
+    triangle seen from there, Van Oosterom and Strackee's formula, summed over 4π) is 1 inside a
+    closed surface and 0 outside, whatever the orientation of its triangles.
+    """
+    position = getattr(light, "position", None)
+    if position is None:  # directional and environment lights come from outside
+        return
+    p = np.asarray(position, dtype=np.float64)
+    a, b, c = (
+        np.asarray(mesh.vertices, dtype=np.float64)[np.asarray(mesh.faces)[:, k]] - p for k in range(3)
+    )
+    la, lb, lc = (np.linalg.norm(x, axis=1) for x in (a, b, c))
+    det = np.einsum("ij,ij->i", a, np.cross(b, c))
+    dot = lambda x, y: np.einsum("ij,ij->i", x, y)  # noqa: E731
+    denom = la * lb * lc + dot(a, b) * lc + dot(b, c) * la + dot(c, a) * lb
+    winding = 2.0 * np.arctan2(det, denom).sum() / (4.0 * np.pi)
+    if abs(winding) > 0.5:
+        raise TranslucencyError(
+            f"light: the {type(light).__name__.removesuffix('Light').lower()} light at "
+            f"{plain(p)} mm is inside the object (bounds {plain(np.round(mesh.bounds[0], 1))} to "
+            f"{plain(np.round(mesh.bounds[1], 1))} mm)"
+        )
 
 
 def boundary_eta(header) -> float:

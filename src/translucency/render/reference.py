@@ -43,6 +43,19 @@ from .compare import rel_rmse
 from .lights import EnvironmentLight
 
 
+def check_reference(light, eta: float = 1.0) -> None:
+    """Refuse, in one line and before any work, a reference ``volpath`` cannot render: a dielectric
+    boundary (``eta`` ≠ 1) under a point, spot or directional light (module docstring)."""
+    if eta != 1.0 and not isinstance(light, EnvironmentLight):
+        raise TranslucencyError(
+            "reference: volpath cannot light a dielectric object with a point, spot or "
+            "directional light (a delta refraction); use an env light or an index-matched "
+            "data set"
+        )
+    if not hasattr(light, "emitter_dict"):
+        raise TranslucencyError(f"light: no reference for {plain(light)}")
+
+
 def render_reference(
     mesh, volume, light, camera: Camera, *, spp: int = 256, seed: int = 0, eta: float = 1.0
 ) -> tuple[np.ndarray, float]:
@@ -53,14 +66,7 @@ def render_reference(
     ``eta`` ≠ 1: a smooth dielectric boundary (environment lights only, see the module docstring).
     """
     mi = mitsuba()
-    if eta != 1.0 and not isinstance(light, EnvironmentLight):
-        raise TranslucencyError(
-            "reference: volpath cannot light a dielectric object with a point, spot or "
-            "directional light (a delta refraction); use an env light or an index-matched "
-            "data set"
-        )
-    if not hasattr(light, "emitter_dict"):
-        raise TranslucencyError(f"light: no reference for {plain(light)}")
+    check_reference(light, eta)
     emitter = light.emitter_dict()
     seconds = 0.0
     channels = []

@@ -2,14 +2,19 @@ r"""Time before work: how long a command will take on this machine, and its cali
 
 Every command that works prints "about N s" before it starts: the seconds per unit of work of
 :data:`TIME_TERMS` (measured on the development machine) times this machine's factor for the command
-— a probe of the machine's speed at first, then the median of its own latest runs here
-(:func:`record_time`), cached in :func:`timing_file`.
+— the median of its own latest runs here of a similar size (:func:`record_time`, within
+:data:`SIMILAR_SIZE` of this run's formula seconds), cached in :func:`timing_file`.  Without such runs
+(a first run on this machine, or work of another size) the factor comes from a probe of the machine's
+speed and the estimate says it is uncalibrated: a noisy probe, a material that walks faster or slower
+than the formula's, Mitsuba compiling its kernels into an empty ``~/.drjit`` — none of these is
+known before a run here.  The clock runs from the estimate to the end of the work; the seconds the
+command had spent before it (imports, reading the mesh, generating the filling) are stated beside it.
 
 Examples
 --------
->>> est = TimeEstimate(90.0, "from a probe of this machine's speed")
+>>> est = TimeEstimate(90.0, "calibrated on this machine by 3 earlier runs")
 >>> est.text()
-"about 90 s (from a probe of this machine's speed)"
+'about 90 s (calibrated on this machine by 3 earlier runs)'
 """
 
 from __future__ import annotations
@@ -34,8 +39,15 @@ TIME_TERMS = {
     # walk on the volume (translucency.acquire.estimate_seconds at one step a second); points: each point's
     # window and its writes.  Before a first run, the probe's own seconds a step set the factor.
     "acquire planar": {"overhead": 0.4, "points": 0.015, "photon_steps": 2.7e-7, "pixels": 2e-6},
-    # photons: points x photons x 3 channels; point_vertices: each point's tally over the mesh
-    "acquire mesh": {"overhead": 0.8, "points": 0.05, "photons": 1.5e-5, "point_vertices": 2e-7},
+    # photons: points x photons x 3 channels; point_vertices: each point's tally over the mesh;
+    # first_run: an empty ~/.drjit (Dr.Jit compiles the walk's kernels)
+    "acquire mesh": {
+        "overhead": 0.8,
+        "points": 0.05,
+        "photons": 1.5e-5,
+        "point_vertices": 2e-7,
+        "first_run": 1.5,
+    },
     # "fit <family>": each model family states its own (``Family.time_terms``, registered by
     # translucency.fit.families through :func:`register_terms`)
     # point_pixels: points x window pixels x data sets (2 with --truth); model_pixels: the same per model;
@@ -47,8 +59,17 @@ TIME_TERMS = {
         "param_pixels": 3e-8,
         "models": 0.5,
     },
-    # pairs: vertex pairs of the transport; samples: picture pixels x 16; reference_samples: 2 x pixels x spp
-    "render": {"overhead": 1.5, "vertices": 2e-4, "pairs": 5e-7, "samples": 3e-7, "reference_samples": 2e-6},
+    # pairs: vertex pairs of the transport; samples: picture pixels x 16; reference_samples: 2 x pixels x spp.
+    # first_run: the seconds a run adds while the kernel caches are cold (a fresh clone: Numba compiles
+    # the transport's kernels, measured 8-10 s here; Dr.Jit its own into an empty ~/.drjit, 1-2 s)
+    "render": {
+        "overhead": 1.5,
+        "vertices": 2e-4,
+        "pairs": 5e-7,
+        "samples": 3e-7,
+        "reference_samples": 2e-6,
+        "first_run": 9.0,
+    },
 }
 
 
@@ -63,8 +84,19 @@ def register_terms(terms: dict) -> None:
 
 #: seconds the machine probe took on the development machine
 PROBE_REFERENCE_S = 0.45
+#: the cache's key of the probe's seconds (a new key whenever the probe's work changes: a cached value
+#: of another probe would scale every first estimate by the wrong factor)
+PROBE_KEY = "probe_v2_s"
 #: how many of a command's latest runs calibrate it
 CALIBRATION_RUNS = 5
+#: runs whose formula seconds lie within this factor of a new run's calibrate it (a run 20x smaller is
+#: dominated by other terms than a large one: its factor says little about it)
+SIMILAR_SIZE = 8.0
+#: the cache's key of the recorded runs, [formula seconds, actual/formula] each (a key of its own: the bare
+#: factors of older versions, without their size, stay under "runs" and are not read)
+RUNS_KEY = "sized_runs"
+#: what an estimate without a calibrating run says
+UNCALIBRATED = "uncalibrated"
 
 
 @dataclass
@@ -73,14 +105,35 @@ class TimeEstimate:
 
     seconds: float
     source: str
+    #: seconds the process had already spent when the estimate was made (imports, reading the inputs,
+    #: generating a sample): shown in the text, which states the whole command's time (what a user
+    #: measures), not counted in ``seconds``
+    startup: float = 0.0
 
     def text(self) -> str:
-        s = self.seconds
-        amount = f"{s:.0f} s" if s < 120 else f"{s / 60:.0f} min" if s < 7200 else f"{s / 3600:.1f} h"
-        return f"about {amount} ({self.source})"
+        if self.startup < 1.0:
+            return f"about {_amount(self.seconds)} ({self.source})"
+        total = _amount(self.seconds + self.startup)
+        return f"about {total} in all ({self.startup:.0f} s of it so far; {self.source})"
 
     def as_dict(self) -> dict:
-        return {"seconds": round(self.seconds, 3), "source": self.source}
+        out = {"seconds": round(self.seconds, 3), "source": self.source}
+        return {**out, "startup_seconds": round(self.startup, 3)} if self.startup else out
+
+
+def _amount(s: float) -> str:
+    return f"{s:.0f} s" if s < 120 else f"{s / 60:.0f} min" if s < 7200 else f"{s / 3600:.1f} h"
+
+
+def process_seconds() -> float:
+    """Seconds since this process started (Linux: from ``/proc``; 0 where that is not known)."""
+    try:
+        after_name = Path("/proc/self/stat").read_text().rsplit(")", 1)[1].split()
+        started = int(after_name[19]) / os.sysconf("SC_CLK_TCK")  # field 22: start time after boot
+        uptime = float(Path("/proc/uptime").read_text().split()[0])
+    except (OSError, ValueError, IndexError, AttributeError):
+        return 0.0
+    return max(0.0, uptime - started)
 
 
 def timing_file() -> Path:
@@ -141,14 +194,35 @@ def _raw_seconds(command: str, units: dict) -> float:
     return terms.get("overhead", 0.0) + sum(terms[k] * float(v) for k, v in units.items())
 
 
-def estimate_time(command: str, units: dict, first: tuple[float, str] | None = None) -> TimeEstimate:
+def kernel_caches_cold() -> bool:
+    """Whether a run now compiles kernels that later runs load: Dr.Jit's cache (``~/.drjit``) is empty,
+    or Numba has cached none of the package's functions (beside its modules, or in ``NUMBA_CACHE_DIR``)."""
+    try:
+        drjit_cold = not any((Path.home() / ".drjit").iterdir())
+    except OSError:
+        drjit_cold = True
+    where = os.environ.get("NUMBA_CACHE_DIR")
+    root = Path(where) if where else Path(__file__).resolve().parents[1]  # the package: its __pycache__
+    numba_cold = next(root.rglob("*.nbi"), None) is None
+    return drjit_cold or numba_cold
+
+
+def _first_run(command: str, cold: bool) -> float:
+    """The seconds of compiling kernels that a run of ``command`` adds while the caches are ``cold``."""
+    return TIME_TERMS[command].get("first_run", 0.0) if cold else 0.0
+
+
+def estimate_time(
+    command: str, units: dict, first: tuple[float, str] | None = None, *, cold: bool = False
+) -> TimeEstimate:
     """The time ``command`` will take on this machine for ``units`` of work (keys of :data:`TIME_TERMS`).
 
     The formula's rates (measured on the development machine) times this machine's factor for the
-    command: the median of actual/formula over its latest :data:`CALIBRATION_RUNS` runs here
-    (:func:`record_time`), or, before the first run, ``first`` (a factor and where it came from: the
-    command's own probe of its work, as ``acquire planar``'s timed walk) or else the ratio of a 0.45 s
-    probe of the machine's speed to the development machine's (cached in :func:`timing_file`).
+    command: the median of actual/formula over its latest :data:`CALIBRATION_RUNS` runs here whose
+    formula seconds are within :data:`SIMILAR_SIZE` of this one's (:func:`record_time`), or, without
+    such runs, ``first`` (a factor and where it came from: the command's own probe of its work, as
+    ``acquire planar``'s timed walk) or else the ratio of a 0.45 s probe of the machine's speed to the
+    development machine's (cached in :func:`timing_file`) — an estimate that says it is uncalibrated.
 
     Examples
     --------
@@ -156,32 +230,53 @@ def estimate_time(command: str, units: dict, first: tuple[float, str] | None = N
     'about 42 s (calibrated on this machine by 3 earlier runs)'
     """
     raw = _raw_seconds(command, units)
+    compiling = _first_run(command, cold)
     entry = _read_timing()
-    ratios = [r for r in entry.get("runs", {}).get(command, []) if isinstance(r, (int, float)) and r > 0]
-    if ratios:
-        ratios = sorted(ratios[-CALIBRATION_RUNS:])
+    runs = _runs(entry, command)
+    similar = [(abs(math.log(size / raw)), ratio) for size, ratio in runs if raw > 0]
+    similar = [r for d, r in sorted(similar[-4 * CALIBRATION_RUNS :]) if d <= math.log(SIMILAR_SIZE)]
+    if similar:
+        ratios = sorted(similar[:CALIBRATION_RUNS])
         factor = ratios[len(ratios) // 2]
-        runs = f"{len(ratios)} earlier run{'s' if len(ratios) > 1 else ''}"
-        return TimeEstimate(raw * factor, f"calibrated on this machine by {runs}")
+        n = f"{len(ratios)} earlier run{'s' if len(ratios) > 1 else ''}"
+        source = f"calibrated on this machine by {n}"
+        return TimeEstimate((raw + compiling) * factor, source + _compiling(compiling))
+    why = "first run here" if not runs else "earlier runs here were of another size"
     if first is not None and math.isfinite(first[0]) and first[0] > 0:
-        return TimeEstimate(raw * first[0], first[1])
-    probe = entry.get("probe_s")
+        return TimeEstimate((raw + compiling) * first[0], first[1] + _compiling(compiling))
+    probe = entry.get(PROBE_KEY)
     if not isinstance(probe, (int, float)) or not probe > 0:
         probe = _probe_seconds()
-        _write_timing({**entry, "probe_s": probe})
-    return TimeEstimate(raw * probe / PROBE_REFERENCE_S, "from a probe of this machine's speed")
+        _write_timing({**entry, PROBE_KEY: probe})
+    source = f"from a probe of this machine's speed; {UNCALIBRATED}: {why}{_compiling(compiling)}"
+    return TimeEstimate((raw + compiling) * probe / PROBE_REFERENCE_S, source)
 
 
-def record_time(command: str, units: dict, seconds: float) -> None:
-    """Calibrate ``command`` on this machine with the ``seconds`` a run of ``units`` really took."""
-    raw = _raw_seconds(command, units)
+def _compiling(seconds: float) -> str:
+    return f"; with about {seconds:.0f} s of compiling kernels on a first run" if seconds else ""
+
+
+def _runs(entry: dict, command: str) -> list[tuple[float, float]]:
+    """(formula seconds, actual/formula) of the command's recorded runs (oldest first)."""
+    runs = entry.get(RUNS_KEY) if isinstance(entry.get(RUNS_KEY), dict) else {}
+    kept = []
+    for r in runs.get(command, []) if isinstance(runs.get(command), list) else []:
+        if isinstance(r, list) and len(r) == 2 and all(isinstance(v, (int, float)) and v > 0 for v in r):
+            kept.append((float(r[0]), float(r[1])))
+    return kept
+
+
+def record_time(command: str, units: dict, seconds: float, *, cold: bool = False) -> None:
+    """Calibrate ``command`` on this machine with the ``seconds`` a run of ``units`` really took (``cold``:
+    the run compiled its kernels: their :data:`TIME_TERMS` ``first_run`` seconds are part of it)."""
+    raw = _raw_seconds(command, units) + _first_run(command, cold)
     if not (raw > 0 and math.isfinite(seconds) and seconds > 0):
         return
     entry = _read_timing()
-    runs = entry.get("runs") if isinstance(entry.get("runs"), dict) else {}
-    kept = [r for r in runs.get(command, []) if isinstance(r, (int, float))][-(CALIBRATION_RUNS - 1) :]
-    runs[command] = kept + [seconds / raw]
-    _write_timing({**entry, "runs": runs})
+    runs = entry.get(RUNS_KEY) if isinstance(entry.get(RUNS_KEY), dict) else {}
+    kept = [list(r) for r in _runs(entry, command)][-(4 * CALIBRATION_RUNS - 1) :]
+    runs[command] = kept + [[raw, seconds / raw]]
+    _write_timing({**entry, RUNS_KEY: runs})
 
 
 def probe_factor(command: str, term: str, seconds_per_unit: float) -> float:
@@ -198,7 +293,7 @@ def planar_acquisition_units(*, points: int, photon_steps: float, pixels: int) -
 
 
 def mesh_acquisition_units(*, points: int, photons: int, vertices: int) -> dict:
-    """``acquire mesh``: P points, N photons a point and channel, V vertices."""
+    """``acquire mesh``: P points (those left to acquire), N photons a point and channel, V vertices."""
     return {"points": points, "photons": 3 * points * photons, "point_vertices": points * vertices}
 
 
