@@ -127,6 +127,32 @@ def check_same_points(data: MeshDataset, truth: MeshDataset) -> None:
         )
 
 
+def check_model_points(model, ds: MeshDataset) -> None:
+    """Refuse, in one line, a model that is not per-vertex, an unfinished data set, or a model whose
+    incident points are not the data set's incident vertices (naming the first that differs)."""
+    if getattr(model, "geometry", None) != "mesh":
+        raise TranslucencyError(
+            f"{ds.path}: a mesh data set; it evaluates per-vertex models (fit on a mesh data set), "
+            "not a planar model"
+        )
+    if not ds.complete():
+        raise TranslucencyError(f"{ds.path}: the acquisition is unfinished; resume it before evaluating")
+    incident = ds["incident"]
+    x_i = ds["vertices"].astype(np.float64)[incident]
+    if model.n_points != ds.n_points:
+        raise TranslucencyError(
+            f"{ds.path}: the model has {model.n_points} incident points, the data set {ds.n_points}; "
+            "evaluate a model on an acquisition of its own incident points"
+        )
+    off = np.flatnonzero(np.abs(model.x_i - x_i).max(axis=1) > 1e-4)
+    if off.size:
+        i = int(off[0])
+        raise TranslucencyError(
+            f"{ds.path}: the model's incident point {i} at {_mm(model.x_i[i])} is not the data set's "
+            f"(vertex {incident[i]} at {_mm(x_i[i])}); evaluate a model on an acquisition of its own points"
+        )
+
+
 def mesh_errors(
     model,
     dataset,
@@ -164,25 +190,9 @@ def mesh_errors(
     True
     """
     ds = dataset if isinstance(dataset, MeshDataset) else open_mesh_dataset(dataset)
-    if getattr(model, "geometry", None) != "mesh":
-        raise TranslucencyError(f"{ds.path}: a mesh data set; evaluate a per-vertex model on it")
-    if not ds.complete():
-        raise TranslucencyError(f"{ds.path}: the acquisition is unfinished; resume it before evaluating")
+    check_model_points(model, ds)
     vertices = ds["vertices"].astype(np.float64)
-    incident = ds["incident"]
-    x_i = vertices[incident]
-    if model.n_points != ds.n_points:
-        raise TranslucencyError(
-            f"{ds.path}: the model has {model.n_points} incident points, the data set {ds.n_points}; "
-            "evaluate a model on an acquisition of its own incident points"
-        )
-    off = np.flatnonzero(np.abs(model.x_i - x_i).max(axis=1) > 1e-4)
-    if off.size:
-        i = int(off[0])
-        raise TranslucencyError(
-            f"{ds.path}: the model's incident point {i} at {_mm(model.x_i[i])} is not the data set's "
-            f"(vertex {incident[i]} at {_mm(x_i[i])}); evaluate a model on an acquisition of its own points"
-        )
+    x_i = vertices[ds["incident"]]
     P, V = ds.n_points, len(vertices)
     area = ds["vertex_area"].astype(np.float64)
     exclusion = (
