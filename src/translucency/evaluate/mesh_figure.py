@@ -49,7 +49,7 @@ def plot_mesh_errors(errors: dict, vertices, faces, incident, out_path, *, held_
     corners = vertices[faces]  # (F, 3, 3)
     normal = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
     face_value = values[faces].mean(axis=1)  # NaN where a corner has no pair within map_radius
-    for k, (side, sign) in enumerate((("front, seen from −y", 1.0), ("back, seen from +y", -1.0))):
+    for k, (side, sign) in enumerate((("seen from −y", 1.0), ("seen from +y", -1.0))):
         axm = fig.add_subplot(grid[k + 1])
         seen = np.flatnonzero(sign * normal[:, 1] < 0)  # the triangles facing this viewer
         seen = seen[np.argsort(-sign * corners[seen, :, 1].mean(axis=1))]  # painter's order: nearest last
@@ -64,7 +64,7 @@ def plot_mesh_errors(errors: dict, vertices, faces, incident, out_path, *, held_
         axm.set_aspect("equal")
         axm.set_xlabel("x (mm)" if sign > 0 else "−x (mm)")
         axm.set_ylabel("z (mm)")
-        axm.set_title(f"{label}: error per vertex, {side}", fontsize=10)
+        axm.set_title(f"error per vertex, {side}\n{label}", fontsize=10)
     fig.colorbar(
         shade, ax=axm, shrink=0.85, label=f"relative error (%), pairs with r < {first.map_radius:g} mm"
     )
