@@ -191,13 +191,23 @@ def _page(s: dict) -> str:
     rows.append(
         f"<tr><td><i>{noise}</i></td>" + "".join(f"<td>{pct(nf[k])}</td>" for k in ("all", *BANDS)) + "</tr>"
     )
+    first = s["models"][s["model"]]
+    verdict = (
+        f"{html.escape(s['model'])}: {pct(first['rel_l2'])} overall against a noise floor of {pct(nf['all'])}"
+    )
+    if first.get("beyond_noise"):
+        verdict += (
+            f"; {pct(first['beyond_noise']['all'])} beyond the truth's noise, "
+            f"{pct(first['in_sample']['rel_l2'])} in-sample"
+        )
     defs = "".join(f"<dt>{html.escape(k)}</dt><dd>{html.escape(v)}</dd>" for k, v in s["definition"].items())
     return (
         "<!doctype html><html><head><meta charset='utf-8'><title>translucency: mesh evaluation</title>"
         "<style>body{font-family:sans-serif;max-width:1400px;margin:1em auto}td,th{padding:2px 10px;"
         "text-align:right;white-space:nowrap}td:first-child{text-align:left}img{max-width:100%}</style>"
         f"</head><body><h1>Per-vertex models on {html.escape(str(s['dataset']))}</h1>"
-        f"<p>Relative L2 error of R_d per pair of incident vertex and vertex, against {against}.</p>"
+        f"<p>Relative L2 error of R_d per pair of incident vertex and vertex, against {against}. "
+        f"{verdict}.</p>"
         f"<table><tr>{head}</tr>{''.join(rows)}</table>"
         "<p><img src='mesh_errors.png' alt='error against distance and per vertex'></p>"
         f"<dl>{defs}</dl><p><small>{html.escape(s['written_by'])}, {html.escape(s['date'])}: "
