@@ -9,3 +9,12 @@ def model_label(model) -> str:
         return model.kind
     shape = "iso" if model.n_directions == 1 else f"aniso m={model.n_directions}"
     return f"{shape} n={model.n_terms}" + (" (shared colour)" if model.colour == "shared" else "")
+
+
+def labelled_models(models) -> dict:
+    """``models`` as a dict label -> model: a dict as given; a model or a sequence of them by
+    :func:`model_label`."""
+    if isinstance(models, dict):
+        return models
+    models = list(models) if isinstance(models, (list, tuple)) else [models]
+    return {model_label(m): m for m in models}

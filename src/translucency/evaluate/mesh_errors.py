@@ -42,7 +42,7 @@ import numpy as np
 from .._validate import TranslucencyError
 from ..fit.mesh import mean_edge_length, read_pairs
 from ..io.mesh_dataset import MeshDataset, open_mesh_dataset
-from .errors import BANDS, beyond
+from .errors import BANDS, PlanarErrors, beyond
 
 #: ring edges (mm) of the error-against-distance curve; 1 and 4 mm are the bands' edges
 DISTANCE_EDGES = np.array(
@@ -75,18 +75,8 @@ class MeshErrors:
     def summary(self) -> dict:
         """The JSON fields of ``translucency evaluate`` on a mesh data set (NaN for an empty band: the
         files pass through :func:`.errors.finite_or_null`)."""
-        out = {"rel_l2": self.rel_l2}
-        out.update({f"rel_l2_{b}": v for b, v in self.bands.items()})
-        out["noise_floor"] = self.noise
-        out["beyond_noise"] = self.beyond_noise
-        out["energy_error"] = self.energy
-        out["energy_noise"] = self.energy_noise
-        pp = self.per_point[np.isfinite(self.per_point)]
-        out["per_point"] = {
-            "median": float(np.median(pp)) if pp.size else None,
-            "p95": float(np.quantile(pp, 0.95)) if pp.size else None,
-            "values": self.per_point.tolist(),
-        }
+        out = PlanarErrors.summary(self)  # the planar errors' fields: the same names, the same meaning
+        out["per_point"]["values"] = self.per_point.tolist()
         out["exclusion_mm"] = self.exclusion_mm
         out["by_distance"] = {k: np.asarray(v).tolist() for k, v in self.distance.items()}
         return out

@@ -28,7 +28,7 @@ from ..io.atomic import write_json
 from ..io.mesh_dataset import MeshDataset, open_mesh_dataset
 from ..model.bounds import check_physics
 from .errors import BANDS, finite_or_null
-from .labels import model_label
+from .labels import labelled_models
 from .mesh_errors import check_same_points, mesh_errors
 from .mesh_figure import plot_mesh_errors
 from .summary import _relative
@@ -89,9 +89,7 @@ def write_mesh_report(
         The JSON summary; an empty band's numbers are NaN here and null in the files.
     """
     ds = dataset if isinstance(dataset, MeshDataset) else open_mesh_dataset(dataset)
-    if not isinstance(models, dict):
-        models = list(models) if isinstance(models, (list, tuple)) else [models]
-        models = {model_label(m): m for m in models}
+    models = labelled_models(models)
     flagged, exclusion = flagged or {}, exclusion or {}
     if truth is not None:
         truth = truth if isinstance(truth, MeshDataset) else open_mesh_dataset(truth)
