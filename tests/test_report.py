@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -230,3 +231,192 @@ def test_the_embedded_data_come_with_an_independent_truth():
     assert (x_i[points[:2], 1] < band).all() and (x_i[points[2:], 1] > band).all()
     size = sum(f.stat().st_size for f in DATA_DIR.rglob("*") if f.is_file())
     assert size < 25 * 2**20
+
+
+# -- issue 22, item 6: a report that explains itself ------------------------------------------------------
+
+
+@pytest.fixture
+def figures(monkeypatch):
+    """The report's figures by file name, drawn and kept open instead of written."""
+    from translucency._plotting import pyplot
+    from translucency.evaluate import error_maps, model_maps, profile_figure, relight
+
+    caught = {}
+
+    def keep(fig, path, **_):
+        fig.canvas.draw()
+        caught[Path(path).name] = fig
+
+    for module in (error_maps, model_maps, profile_figure, relight):
+        monkeypatch.setattr(module, "save_figure", keep, raising=False)
+    yield caught
+    for fig in caught.values():
+        pyplot().close(fig)
+
+
+def _texts(fig) -> str:
+    from matplotlib.text import Text
+
+    return "\n".join(t.get_text() for t in fig.findobj(Text))
+
+
+def _overprinted(fig) -> list:
+    """Pairs of titles and axis labels of different axes (colour bars included) whose boxes overlap."""
+    renderer = fig.canvas.get_renderer()
+    labels = [
+        [t for t in (ax.title, ax.xaxis.label, ax.yaxis.label) if t.get_visible() and t.get_text()]
+        for ax in fig.axes
+    ]
+    hits = []
+    for i, mine in enumerate(labels):
+        for theirs in labels[i + 1 :]:
+            for t in mine:
+                for u in theirs:
+                    if t.get_window_extent(renderer).overlaps(u.get_window_extent(renderer)):
+                        hits.append((t.get_text(), u.get_text()))
+    return hits
+
+
+def _three_models(tmp_path):
+    x_i = _grid_points(3)
+    true_model = _aniso(x_i, np.pi / 2)
+    fitted, _ = _data(tmp_path / "fitted.zarr", true_model, 0.2, seed=6)
+    truth, _ = _data(tmp_path / "truth.zarr", true_model, 0.05, seed=7)
+    dip = DipoleModel(x_i, [[0.01] * 3] * 9, [[1.0] * 3] * 9, 1.3, PlanarAlpha.uniform((40, 40), pitch=0.25))
+    return {"aniso": true_model, "iso": _iso(x_i), "dipole": dip}, fitted, truth
+
+
+def test_in_sample_report_names_the_datas_own_noise(tmp_path, figures):
+    """Without a truth no caption, colour bar or legend speaks of a truth's noise: the noise shown is the
+    fitted data's own; the summary says the numbers are in-sample and how to get held-out ones."""
+    models, fitted, _ = _three_models(tmp_path)
+    s = write_report(models, fitted, tmp_path / "rep", command="c")
+    for name in ("error_maps.png", "profiles.png"):
+        text = _texts(figures[name])
+        assert "truth" not in text, name
+        assert "the data's own noise" in text, name
+    page = (tmp_path / "rep" / "index.html").read_text()
+    assert "truth's noise" not in page and "truth's own" not in page
+    assert "±1σ band of the data's own noise" in page and "<th>the data's own noise</th>" in page
+    assert s["summary"].startswith("In-sample") and "evaluate --truth" in s["summary"]
+    assert "earn their parameters" in s["summary"]  # ... cannot be read from in-sample numbers
+
+
+def test_held_out_report_keeps_the_truths_noise(tmp_path, figures):
+    models, fitted, truth = _three_models(tmp_path)
+    write_report(models, fitted, tmp_path / "rep", truth=truth, command="c")
+    assert "the truth's noise" in _texts(figures["error_maps.png"])
+    assert "the truth's noise (±1σ)" in _texts(figures["profiles.png"])
+    page = (tmp_path / "rep" / "index.html").read_text()
+    assert "±1σ band of the truth's noise" in page and "beyond the truth's noise" in page
+
+
+def test_the_summary_says_which_model_wins_and_is_in_report_json(tmp_path):
+    """The summary at the top of the page and in report.json: the true (anisotropic) model wins held out,
+    against the truth's noise floor, its directions earn their parameters; no other report.json value
+    changes (the same keys as before, plus "summary")."""
+    models, fitted, truth = _three_models(tmp_path)
+    out = tmp_path / "rep"
+    s = write_report(models, fitted, out, truth=truth, command="c")
+    on_disk = json.loads((out / "report.json").read_text())
+    assert on_disk["summary"] == s["summary"] and isinstance(s["summary"], str)
+    before = {"written_by", "command_line", "date", "dataset", "truth", "paths", "evaluated_against", "model"}
+    before |= {"rel_l2", "rel_l2_near", "rel_l2_mid", "rel_l2_far", "noise_floor", "beyond_noise"}
+    before |= {"energy_error", "energy_noise", "per_point", "flagged_points", "physics", "in_sample"}
+    before |= {"bands_mm", "models", "profile_points", "fine_profiles", "definition"}
+    assert set(on_disk) == before | {"summary"}
+    text = s["summary"]
+    floor = s["models"]["aniso"]["noise_floor"]["all"]
+    assert text.startswith("Held out, against an independent acquisition: aniso is closest to the truth")
+    assert f"a noise floor of {100 * floor:.2f} %" in text
+    assert "The anisotropic model's directions earn their parameters" in text
+    assert "Physics checks" in text
+    page = (out / "index.html").read_text()
+    assert page.index('<p class="summary"') < page.index("<h2>Errors</h2>")
+    assert "td{white-space:nowrap}" in page and "\u00a0%</td>" in page  # a cell's number and % stay together
+
+
+def _fake(kind="exponential", m=1, points=4):
+    from types import SimpleNamespace
+
+    terms = np.zeros((points, 3, m, 2))
+    return SimpleNamespace(kind=kind, n_directions=m, n_points=points, c=terms, d=terms)
+
+
+def _numbers(rel, floor, beyond, over=(), out=(), flagged=()):
+    physics = {"over_albedo": list(over), "beyond_object": list(out), "max_total_reflectance": 1.2}
+    return {
+        "rel_l2": rel,
+        "noise_floor": {"all": floor},
+        "beyond_noise": None if beyond is None else {"all": beyond},
+        "physics": physics,
+        "flagged_points": list(flagged),
+    }
+
+
+@pytest.mark.parametrize(
+    ("beyond_aniso", "verdict"),
+    [
+        (0.05, "earn their parameters: beyond the noise aniso's error is 38 % below iso's"),
+        (0.076, "gain little for their parameters: beyond the noise aniso's error is 5 % below iso's"),
+        (0.09, "do not earn their parameters: beyond the noise aniso's error is 12 % above iso's"),
+    ],
+)
+def test_the_summary_weighs_the_directions_against_their_parameters(beyond_aniso, verdict):
+    from translucency.evaluate.conclusion import conclusion
+
+    models = {"aniso": _fake(m=8), "iso": _fake(), "dipole": _fake("dipole")}
+    rel = float(np.hypot(beyond_aniso, 0.06))
+    per_model = {
+        "aniso": _numbers(rel, 0.06, beyond_aniso, over=[1]),
+        "iso": _numbers(0.1, 0.06, 0.08),
+        "dipole": _numbers(0.2, 0.06, 0.19, out=[0, 1]),
+    }
+    text = conclusion(per_model, models, held_out=True, n_points=4)
+    assert verdict in text and "with 96 coefficients per point against 12" in text
+    assert "more light out than in (total reflectance > 1) at 1 point of aniso (up to 1.2)" in text
+    assert "99.9 % energy radius beyond the sample at 2 points of dipole; iso passes every check" in text
+
+
+def test_the_in_sample_summary_does_not_claim_a_winner_it_cannot_know():
+    from translucency.evaluate.conclusion import conclusion
+
+    models = {"iso": _fake(), "aniso": _fake(m=8)}
+    per_model = {"iso": _numbers(0.12, 0.11, None, flagged=[2]), "aniso": _numbers(0.115, 0.11, None)}
+    text = conclusion(per_model, models, held_out=False, n_points=4)
+    assert text.startswith("In-sample, against the data the models were fitted to (no independent truth")
+    assert "aniso scores lowest, 11.50 %" in text and "the data's own noise alone gives 11.00 %" in text
+    assert "truth's" not in text and "beyond" not in text.split("Physics")[0]
+    assert "every model reflects at most the light it receives" in text
+    assert "Points the fits flagged, left out of the errors: iso 1." in text
+
+
+def test_error_map_titles_clear_the_row_above(tmp_path, figures):
+    """No title or axis label of one panel (or colour bar) runs into another's, with and without a truth:
+    the lower rows' titles used to sit on the upper rows' 'x [mm]'."""
+    models, fitted, truth = _three_models(tmp_path)
+    write_report(models, fitted, tmp_path / "held-out", truth=truth, command="c")
+    assert len(figures["error_maps.png"].axes) == 3 * 3 + 3  # three rows, a colour bar each
+    for name in ("error_maps.png", "error_ratios.png", "profiles.png"):
+        assert _overprinted(figures[name]) == [], name
+    write_report(models, fitted, tmp_path / "in-sample", command="c")
+    for name in ("error_maps.png", "error_ratios.png"):
+        assert _overprinted(figures[name]) == [], name
+
+
+def test_relight_figure_has_colour_bars_and_a_labelled_profile(tmp_path, figures):
+    from translucency.evaluate.relight import plot_relighting
+
+    rng = np.random.default_rng(3)
+    reference = rng.uniform(0.5, 1.0, (20, 24, 3))
+    preds = {"iso": reference * 1.05, "dipole": reference * 0.9}
+    errors = plot_relighting(reference, preds, [0.0, 6.0, 0.0, 5.0], tmp_path / "relight.png")
+    assert errors["iso"] == pytest.approx(0.05)
+    fig = figures["relight.png"]
+    bars = [ax for ax in fig.axes if ax.get_label() == "<colorbar>"]
+    assert len(bars) == 2  # the exitance of reference and models; their differences
+    assert "W mm" in bars[0].get_ylabel() and "bright level" in bars[1].get_ylabel()
+    profile = fig.axes[len(preds) + 1]  # the lower row's first panel
+    assert profile.get_title() == "profile across the middle rows" and "W mm" in profile.get_ylabel()
+    assert _overprinted(fig) == []

@@ -10,7 +10,7 @@ from rich.table import Table
 
 from .. import resources
 from .._validate import TranslucencyError
-from ..evaluate.labels import model_label
+from ..evaluate.labels import model_label, noise_label
 from ..evaluate.mesh_errors import check_model_points, check_same_points
 from ..evaluate.mesh_report import write_mesh_report
 from ..io.dataset import dataset_identity
@@ -117,7 +117,7 @@ def evaluate_mesh(
         table.add_row(name, *cells)
     nf = summary["noise_floor"]
     table.add_row(
-        "[dim]the truth's noise[/]" if truth else "[dim]noise of the data[/]",
+        f"[dim]{noise_label(truth is not None)}[/]",
         *(f"[dim]{100 * nf[k]:.2f} %[/]" for k in ("all", "near", "mid", "far")),
     )
     run.finish(

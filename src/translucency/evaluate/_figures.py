@@ -11,9 +11,10 @@ from ..io.atomic import atomic_path
 from .directions import spread_directions
 
 
-def save_figure(fig, path: Path) -> None:
+def save_figure(fig, path: Path, *, dpi: int = 110) -> None:
+    """Write ``fig`` to ``path`` (PNG, whole or not at all) and close it."""
     with atomic_path(path) as tmp:
-        fig.savefig(tmp, dpi=110)
+        fig.savefig(tmp, dpi=dpi)
     pyplot().close(fig)
 
 
@@ -71,3 +72,20 @@ def mark_noise(cbar, values: np.ndarray) -> None:
     lo, med, hi = (float(np.clip(t, vmin, vmax)) for t in np.quantile(v, [0.1, 0.5, 0.9]))
     cbar.ax.axhspan(lo, hi, color="cyan", alpha=0.3, lw=0)
     cbar.ax.axhline(med, color="cyan", lw=2.5)
+
+
+def log_ticks(cbar, *, percent: bool = True) -> None:
+    """Plain labels on a logarithmic colour bar: per cent (``0.1`` → ``10 %``) or the number (``3``), at
+    the powers of ten and at 2, 3 and 5 times them."""
+    from matplotlib.ticker import FuncFormatter  # matplotlib is loaded by the figure's pyplot()
+
+    def label(v, _pos):
+        if v <= 0:
+            return ""
+        mantissa = v / 10 ** np.floor(np.log10(v) + 1e-9)
+        if min(abs(mantissa - k) for k in (1, 2, 3, 5)) > 1e-6:
+            return ""
+        return f"{100 * v:.3g} %" if percent else f"{v:.3g}"
+
+    cbar.ax.yaxis.set_major_formatter(FuncFormatter(label))
+    cbar.ax.yaxis.set_minor_formatter(FuncFormatter(label))

@@ -7,26 +7,35 @@ from pathlib import Path
 import numpy as np
 
 from .._plotting import pyplot
-from ._figures import draw_directions, mark_noise, point_map, save_figure
+from ._figures import draw_directions, log_ticks, mark_noise, point_map, save_figure
 from .errors import PlanarErrors
+from .labels import noise_label
 
 
 def plot_error_maps(
-    errors: dict[str, PlanarErrors], x_i: np.ndarray, path, models: dict | None = None
+    errors: dict[str, PlanarErrors],
+    x_i: np.ndarray,
+    path,
+    models: dict | None = None,
+    *,
+    held_out: bool | None = None,
 ) -> None:
     """Figure 1 (right): relative error per outgoing pixel (raw, and beyond the reference's noise) and per
     incident point; one logarithmic colour scale per row set by the data (2nd–99th percentile over every
     model), shared across models, with the reference's noise marked on the colour bar; for anisotropic
-    models the fitted spreading directions are drawn over the per-point map."""
+    models the fitted spreading directions are drawn over the per-point map.  ``held_out``: whether the
+    reference is an independent truth (default: whether the errors beyond its noise are there), which
+    names the noise on the colour bars."""
     plt = pyplot()
     from matplotlib.colors import LogNorm  # matplotlib is loaded by pyplot() above
 
     names = list(errors)
     has_noise = all(e.per_pixel_beyond is not None for e in errors.values())
+    noise_name = noise_label(has_noise if held_out is None else held_out)
     rows = ["per_pixel", "per_pixel_beyond", "per_point"] if has_noise else ["per_pixel", "per_point"]
     titles = {
         "per_pixel": "per outgoing pixel (pairs r < {r:g} mm)",
-        "per_pixel_beyond": "per pixel, beyond the truth's noise",
+        "per_pixel_beyond": f"per pixel, beyond {noise_name}",
         "per_point": "per incident point, rel_l2 {e:.1f} %",
     }
 
@@ -45,8 +54,12 @@ def plot_error_maps(
     keys = ["per_pixel", "per_pixel_beyond"] if has_noise else ["per_pixel"]
     pixel_norm = norm_of(keys, "per_pixel_noise")
     point_norm = norm_of(["per_point"], "per_point_noise")
-    fig, axes = plt.subplots(
-        len(rows), len(names), figsize=(3.7 * len(names) + 1.6, 3.5 * len(rows)), squeeze=False
+    fig, axes = plt.subplots(  # constrained: titles, axis labels and colour bars do not overlap
+        len(rows),
+        len(names),
+        figsize=(3.7 * len(names) + 1.6, 3.5 * len(rows)),
+        squeeze=False,
+        layout="constrained",
     )
     lo, hi = x_i.min(axis=0) - 1.0, x_i.max(axis=0) + 1.0  # the scanned area
     cmap = pyplot().get_cmap("magma").with_extremes(under="black", bad="0.85")
@@ -85,8 +98,9 @@ def plot_error_maps(
         label = "relative L2 error" + (" (black: within noise)" if key.endswith("beyond") else "")
         finite = None if noise is None else np.ravel(noise)[np.isfinite(np.ravel(noise))]
         if finite is not None and finite.size:
-            label += f"\ncyan: truth's noise, median {100 * np.median(finite):.1f} %"
+            label += f"\ncyan: {noise_name}, median {100 * np.median(finite):.1f} %"
         cb = fig.colorbar(mappables[key], ax=axes[row].tolist(), shrink=0.85, extend="both", label=label)
+        log_ticks(cb)
         if finite is not None:
             mark_noise(cb, finite)
     save_figure(fig, Path(path))
@@ -104,7 +118,11 @@ def plot_error_ratios(
     base = names[0]
     others = names[1:]
     fig, axes = plt.subplots(
-        1, max(len(others), 1), figsize=(4.0 * max(len(others), 1) + 1.2, 3.9), squeeze=False
+        1,
+        max(len(others), 1),
+        figsize=(4.0 * max(len(others), 1) + 1.2, 3.9),
+        squeeze=False,
+        layout="constrained",
     )
     norm = LogNorm(1 / 3, 3)
     im = None
@@ -112,12 +130,17 @@ def plot_error_ratios(
         with np.errstate(divide="ignore", invalid="ignore"):
             ratio = errors[name].per_point / errors[base].per_point
         im = point_map(ax, x_i, ratio, cmap="RdBu_r", norm=norm)
+        if ax is not axes[0][0]:
+            ax.set_ylabel("")
         med = np.nanmedian(ratio) if np.isfinite(ratio).any() else np.nan
         ax.set_title(f"{name} / {base}, per incident point\n(median {med:.2f})", fontsize=9)
         if models is not None and getattr(models[name], "n_directions", 1) > 1:
             draw_directions(ax, models[name], x_i, colour="k")
     if im is not None:
-        fig.colorbar(im, ax=axes[0].tolist(), shrink=0.85, extend="both", label=f"relative error / {base}'s")
+        cb = fig.colorbar(
+            im, ax=axes[0].tolist(), shrink=0.85, extend="both", label=f"relative error / {base}'s"
+        )
+        log_ticks(cb, percent=False)
     else:
         axes[0][0].set_visible(False)
     save_figure(fig, Path(path))

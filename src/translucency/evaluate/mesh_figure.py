@@ -7,6 +7,7 @@ from pathlib import Path
 import numpy as np
 
 from .._plotting import pyplot
+from .labels import noise_label
 
 
 def plot_mesh_errors(errors: dict, vertices, faces, incident, out_path, *, held_out: bool) -> Path:
@@ -33,7 +34,7 @@ def plot_mesh_errors(errors: dict, vertices, faces, incident, out_path, *, held_
     mid = np.sqrt(np.maximum(edges[:-1], edges[1] / 2) * edges[1:])  # geometric ring centres, mm
     for name, e in errors.items():
         ax.plot(mid, 100 * e.distance["rel_l2"], "o-", ms=3, label=name)
-    ax.plot(mid, 100 * first.distance["noise"], "k--", lw=1, label=f"noise of {reference}")
+    ax.plot(mid, 100 * first.distance["noise"], "k--", lw=1, label=noise_label(held_out))
     for b in (1.0, 4.0):
         ax.axvline(b, color="0.8", lw=0.8, zorder=0)
     ax.set_xscale("log")

@@ -28,7 +28,7 @@ from ..io.atomic import write_json
 from ..io.mesh_dataset import MeshDataset, open_mesh_dataset
 from ..model.bounds import check_physics
 from .errors import BANDS, finite_or_null
-from .labels import labelled_models
+from .labels import labelled_models, noise_label
 from .mesh_errors import check_same_points, mesh_errors
 from .mesh_figure import plot_mesh_errors
 from .summary import _relative
@@ -185,7 +185,7 @@ def _page(s: dict) -> str:
                 "<tr><td>&nbsp;in-sample</td>" + "".join(f"<td>{pct(v)}</td>" for v in cells) + "</tr>"
             )
     nf = s["noise_floor"]
-    noise = "the truth's noise" if s["truth"] else "noise of the fitted data"
+    noise = noise_label(s["truth"] is not None)
     rows.append(
         f"<tr><td><i>{noise}</i></td>" + "".join(f"<td>{pct(nf[k])}</td>" for k in ("all", *BANDS)) + "</tr>"
     )

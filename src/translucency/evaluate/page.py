@@ -9,10 +9,12 @@ import numpy as np
 
 from ..io.atomic import atomic_path
 from ..io.dataset import PlanarDataset
+from .labels import noise_label
 
 
 def _percent(v) -> str:
-    return "–" if v is None or not np.isfinite(v) else f"{100 * v:.2f} %"
+    """A table cell's percentage; a no-break space keeps the number and its unit on one line."""
+    return "–" if v is None or not np.isfinite(v) else f"{100 * v:.2f}\u00a0%"
 
 
 def write_page(path: Path, ds: PlanarDataset, summary: dict, extra: list) -> None:
@@ -45,7 +47,7 @@ def write_page(path: Path, ds: PlanarDataset, summary: dict, extra: list) -> Non
     if held_out:
         noise_cells += f"<td>{_percent(first['in_sample']['noise_floor']['all'])}</td>"
     noise_cells += "<td></td><td></td>"
-    noise_label = "the truth's own noise" if held_out else "measurement noise alone"
+    noise = noise_label(held_out)
     against = (
         f"an independent acquisition of the same sample and incident points "
         f"(<code>{html.escape(summary['truth'])}</code>); 'in-sample' is against the fitted data"
@@ -55,13 +57,20 @@ def write_page(path: Path, ds: PlanarDataset, summary: dict, extra: list) -> Non
     own_noise = "The last row's in-sample cell is the fitted data's own noise." if held_out else ""
     beyond_head = "<th>beyond noise, all</th><th>beyond noise, near</th>" if held_out else ""
     in_head = "<th>in-sample, all</th>" if held_out else ""
-    defs = "".join(
-        f"<li><b>{html.escape(k)}</b>: {html.escape(v)}</li>" for k, v in summary["definition"].items()
+    shown = (
+        summary["definition"].items()
+        if held_out
+        else (  # in-sample: no truth's noise, no held-out
+            (k, v) for k, v in summary["definition"].items() if k not in ("beyond_noise", "in_sample")
+        )
     )
+    defs = "".join(f"<li><b>{html.escape(k)}</b>: {html.escape(v)}</li>" for k, v in shown)
     figures = "".join(
         f'<figure><img src="{html.escape(f)}"><figcaption>{html.escape(c)}</figcaption></figure>'
         for f, c in extra
     )
+    residual = "model / truth − 1" if held_out else "model / data − 1"
+    beyond_row = ", the same beyond the truth's noise (black: within the noise)," if held_out else ""
     fine = summary.get("fine_profiles")
     fine_text = (
         ""
@@ -70,9 +79,13 @@ def write_page(path: Path, ds: PlanarDataset, summary: dict, extra: list) -> Non
         "per point and channel) against each model's ring means — the fits saw r ≥ the dotted line only."
     )
     page = f"""<!doctype html><html><head><meta charset="utf-8"><title>translucency report</title>
-<style>body{{font-family:sans-serif;max-width:1500px;margin:auto}} table{{border-collapse:collapse}}
-td,th{{border:1px solid #ccc;padding:4px 8px;text-align:right}} img{{max-width:100%}}</style></head><body>
+<style>body{{font-family:sans-serif;max-width:1500px;margin:auto;padding:0 12px}}
+table{{border-collapse:collapse}}
+td,th{{border:1px solid #ccc;padding:4px 8px;text-align:right}} td{{white-space:nowrap}}
+img{{max-width:100%}} .summary{{background:#f2f5f9;border-left:4px solid #3a7;padding:8px 12px}}</style>
+</head><body>
 <h1>Planar fit report</h1>
+<p class="summary" id="summary">{html.escape(summary.get("summary") or "")}</p>
 <p>{html.escape(summary["written_by"])}, {html.escape(summary["date"])}; command
 <code>{html.escape(summary["command_line"])}</code>. Paths are relative to this page's folder.</p>
 <p>Data set: <code>{html.escape(summary["dataset"])}</code> — {ds.n_points} incident points,
@@ -82,17 +95,17 @@ windows {ds.window[0]}×{ds.window[1]} px at {ds.pitch} mm.</p>
 {beyond_head}<th>energy, near</th><th>energy, mid</th><th>total reflectance per point</th>{in_head}
 <th>flagged points</th><th>unphysical points (ρ &gt; 1 or r<sub>99.9</sub> beyond the sample)</th></tr>
 {"".join(rows)}
-<tr><th>{noise_label}</th>{noise_cells}</tr></table>
+<tr><th>{noise}</th>{noise_cells}</tr></table>
 <p style="font-size:90%">{own_noise}</p>
 <ul style="font-size:90%">{defs}</ul>
 <figure><img src="profiles.png"><figcaption>Figure 1 (left): ring-averaged R_d around chosen incident points
-(green channel), log scale; beneath each, model / truth − 1 with the truth's ±1σ noise band (grey).{fine_text}
+(green channel), log scale; beneath each, {residual} with the ±1σ band of {noise} (grey).{fine_text}
 </figcaption></figure>
 <figure><img src="error_maps.png"><figcaption>Figure 1 (right): relative error per outgoing pixel (pairs
-within 4 mm), the same beyond the truth's noise (black: within the noise), and per incident point; one
-logarithmic colour scale per row, shared across models, set by the data; the truth's noise marked on each
-colour bar (cyan line: its median, cyan band: 10–90 %). Segments on an anisotropic model's map: its fitted
-direction of farthest spread, length ∝ (rms radius along / across − 1).</figcaption></figure>
+within 4 mm){beyond_row} and per incident point; one logarithmic colour scale per row, shared across
+models, set by the data; {noise} marked on each colour bar (cyan line: its median, cyan band: 10–90 %).
+Segments on an anisotropic model's map: its fitted direction of farthest spread, length ∝ (rms radius
+along / across − 1).</figcaption></figure>
 <figure><img src="error_ratios.png"><figcaption>Each model's error per incident point over the first
 model's (blue: lower, red: higher; the reference's noise is in both), with an anisotropic model's fitted
 directions.</figcaption></figure>

@@ -9,6 +9,7 @@ import numpy as np
 from .._plotting import pyplot
 from ..io.dataset import PlanarDataset
 from ._figures import save_figure
+from .labels import noise_label
 from .rings import model_rings, ring_stats
 
 
@@ -24,8 +25,8 @@ def default_points(n_points: int) -> list[int]:
     return sorted({min(p, n_points - 1) for p in picks})
 
 
-def _residual_axes(ax, r, noise, lim_from, label: str) -> None:
-    ax.fill_between(r, -noise, noise, color="0.8", lw=0, label="truth's noise (±1σ)")
+def _residual_axes(ax, r, noise, lim_from, label: str, noise_name: str) -> None:
+    ax.fill_between(r, -noise, noise, color="0.8", lw=0, label=f"{noise_name} (±1σ)")
     ax.axhline(0.0, color="k", lw=0.8)
     finite = np.concatenate([np.abs(v[np.isfinite(v)]) for v in lim_from] or [np.zeros(1)])
     lim = float(np.clip(1.15 * finite.max() if finite.size else 0.1, 0.05, 1.5))
@@ -85,7 +86,12 @@ def plot_profiles(
             resid.append(rel[r < 3.0])
         noise = np.where(ym > 0, ys / np.where(ym > 0, ym, 1.0), np.nan)
         _residual_axes(
-            res, r, noise, resid, "model / truth − 1" if fitted is not None else "model / data − 1"
+            res,
+            r,
+            noise,
+            resid,
+            "model / truth − 1" if fitted is not None else "model / data − 1",
+            noise_label(fitted is not None),
         )
         ax.set_title(f"x_i #{p} at ({x_i[p][0]:.2f}, {x_i[p][1]:.2f}) mm, {ds.pitch:g} mm pixels", fontsize=9)
         ax.set_ylabel("$R_d$ [mm$^{-2}$], " + "RGB"[channel])
@@ -135,7 +141,7 @@ def plot_profiles(
             fax.set_ylabel("$R_d$ [mm$^{-2}$], " + "RGB"[channel])
             fax.grid(alpha=0.3, which="both")
             fnoise = np.where(fy > 0, fs / np.where(fy > 0, fy, 1.0), np.nan)
-            _residual_axes(fres, rc, fnoise, fresid, "model / truth − 1")
+            _residual_axes(fres, rc, fnoise, fresid, "model / truth − 1", noise_label(True))
             fres.set_xlabel("r [mm]")
     axes[0][0].legend(fontsize=7)
     axes[1][0].legend(fontsize=7, loc="lower right")

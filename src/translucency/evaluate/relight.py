@@ -21,7 +21,7 @@ import numpy as np
 
 from .._plotting import pyplot
 from .._validate import TranslucencyError
-from ..io.atomic import atomic_path
+from ._figures import save_figure
 
 PATTERNS = ("edge", "stripe", "spot")
 
@@ -126,15 +126,22 @@ def relight(
 def plot_relighting(reference: np.ndarray, predictions: dict, extent, path, channel: int = 1) -> dict:
     """Reference | each model | relative difference, and a profile across the middle row.
 
+    The exitance B (W/mm² under the pattern's 1 W/mm² on lit cells) of the reference and every model on
+    one colour scale with its colour bar; the differences over the reference's bright level (its 90th
+    percentile) on one diverging scale with its colour bar.
+
     Returns the relative L2 error of each prediction (over the pixels where the reference is lit).
     """
     plt = pyplot()
 
     ref = reference[..., channel]
     n = len(predictions)
-    fig, axes = plt.subplots(2, n + 1, figsize=(3.8 * (n + 1), 7.0), squeeze=False)
+    rgb = "RGB"[channel]
+    fig, axes = plt.subplots(  # constrained: the colour bars take their room beside their row
+        2, n + 1, figsize=(3.8 * (n + 1) + 1.2, 7.0), squeeze=False, layout="constrained"
+    )
     vmax = float(np.quantile(ref, 0.995))
-    axes[0][0].imshow(ref, origin="lower", extent=extent, cmap="inferno", vmin=0, vmax=vmax)
+    shown = axes[0][0].imshow(ref, origin="lower", extent=extent, cmap="inferno", vmin=0, vmax=vmax)
     axes[0][0].set_title("photon transport (reference)", fontsize=9)
     errors = {}
     mid = ref.shape[0] // 2
@@ -144,21 +151,31 @@ def plot_relighting(reference: np.ndarray, predictions: dict, extent, path, chan
         + (extent[1] - extent[0]) / ref.shape[1] / 2
     )
     axes[1][0].semilogy(xs, ref[band].mean(0), "k.", ms=3, label="reference")
+    diff_im = None
     for j, (name, B) in enumerate(predictions.items(), start=1):
         pred = B[..., channel]
         errors[name] = float(np.linalg.norm(B - reference) / np.linalg.norm(reference))
         axes[0][j].imshow(pred, origin="lower", extent=extent, cmap="inferno", vmin=0, vmax=vmax)
         axes[0][j].set_title(f"{name} (rel_l2 {100 * errors[name]:.1f} %)", fontsize=9)
         diff = (pred - ref) / np.maximum(np.quantile(ref, 0.9), 1e-30)
-        im = axes[1][j].imshow(diff, origin="lower", extent=extent, cmap="coolwarm", vmin=-0.2, vmax=0.2)
+        diff_im = axes[1][j].imshow(diff, origin="lower", extent=extent, cmap="coolwarm", vmin=-0.2, vmax=0.2)
         axes[1][j].set_title(f"({name} − reference) / bright level", fontsize=9)
-        fig.colorbar(im, ax=axes[1][j], shrink=0.7)
         axes[1][0].semilogy(xs, pred[band].mean(0), "-", lw=1.5, label=name)
+    for ax in axes.ravel():
+        ax.set_xlabel("x [mm]")
+    for row in axes:
+        row[0].set_ylabel("y [mm]")
+    fig.colorbar(shown, ax=axes[0].tolist(), shrink=0.85, label=f"exitance B, {rgb} [W mm$^{{-2}}$]")
+    if diff_im is not None:
+        fig.colorbar(
+            diff_im,
+            ax=axes[1][1:].tolist(),
+            shrink=0.85,
+            extend="both",
+            label="(model − reference) / bright level",
+        )
     axes[1][0].set_title("profile across the middle rows", fontsize=9)
-    axes[1][0].set_xlabel("x [mm]")
+    axes[1][0].set_ylabel(f"exitance B, {rgb} [W mm$^{{-2}}$]")
     axes[1][0].legend(fontsize=7)
-    fig.tight_layout()
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, dpi=100)
-    plt.close(fig)
+    save_figure(fig, Path(path), dpi=100)
     return errors

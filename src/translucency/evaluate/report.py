@@ -11,12 +11,13 @@ writes, into a directory:
 ``alpha.png``        the modulation texture α of every model;
 ``params.png``       maps of the first model's parameters over the incident points;
 ``report.json``      rel_l2 overall and per band (near < 1 mm, mid 1–4 mm, far > 4 mm),
-                     noise floors, flagged points, per model;
-``index.html``       all of it side by side.
+                     noise floors, flagged points, per model, and ``summary``: what to conclude
+                     from them, in a few sentences;
+``index.html``       the summary on top, then all of it side by side.
 
 This module puts the report together; the figures are drawn in :mod:`.profile_figure`,
-:mod:`.error_maps` and :mod:`.model_maps`, the numbers summed up in :mod:`.summary` and the page
-written in :mod:`.page`.
+:mod:`.error_maps` and :mod:`.model_maps`, the numbers summed up in :mod:`.summary` (the summary's
+sentences in :mod:`.conclusion`) and the page written in :mod:`.page`.
 """
 
 from __future__ import annotations
@@ -136,7 +137,7 @@ def write_report(
         fine=fine if truth is not None else None,
         exclusion=exclusion,
     )
-    plot_error_maps(errors, ds["x_i"], out_dir / "error_maps.png", models=models)
+    plot_error_maps(errors, ds["x_i"], out_dir / "error_maps.png", models=models, held_out=truth is not None)
     plot_error_ratios(errors, ds["x_i"], out_dir / "error_ratios.png", models=models)
     plot_alpha(models, out_dir / "alpha.png")
     plot_parameters(models, out_dir / "params.png")

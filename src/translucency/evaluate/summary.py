@@ -12,6 +12,7 @@ import numpy as np
 
 from .._version import __version__
 from ..model.bounds import check_physics
+from .conclusion import conclusion
 from .errors import BANDS
 
 #: what each number of the report means (report.json "definition", the HTML page)
@@ -56,7 +57,8 @@ def report_summary(
     """The report's summary (``report.json`` before NaN become null): every model's errors
     (:meth:`~translucency.evaluate.errors.PlanarErrors.summary`, held-out when ``held_out`` is given, with
     the in-sample numbers beside them), flagged points and physics check, with the provenance of the
-    report (version, command line, date, data paths relative to ``out_dir``) and :data:`DEFINITIONS`."""
+    report (version, command line, date, data paths relative to ``out_dir``), :data:`DEFINITIONS` and
+    ``"summary"``: the conclusion in a few sentences (:func:`.conclusion.conclusion`)."""
     errors = held_out or in_sample
     first = next(iter(models))
     per_model = {}
@@ -81,6 +83,7 @@ def report_summary(
         "truth": None if truth is None else _relative(truth.path, out_dir),
         "paths": "relative to this report's folder",
         "evaluated_against": "truth (independent acquisition)" if truth is not None else "the fitted data",
+        "summary": conclusion(per_model, models, held_out=held_out is not None, n_points=dataset.n_points),
         "model": first,
         **per_model[first],
         "bands_mm": {k: [lo, hi if np.isfinite(hi) else None] for k, (lo, hi) in BANDS.items()},

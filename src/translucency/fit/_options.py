@@ -19,7 +19,8 @@ __all__ = [
     "check_fit_options",
 ]
 
-#: the model families' names: isotropic and anisotropic sums of exponentials, and the baselines
+#: the built-in model families' names: isotropic and anisotropic sums of exponentials, and the baselines
+#: (:data:`FAMILIES` is the registry: a family registered later is a choice too)
 KINDS = tuple(FAMILIES)
 #: the weightings: w⁻² = αP/(N p²) (the model's Poisson variance), or (ρ αP)² + αP/(N p²)
 WEIGHTINGS = ("poisson", "relative")
@@ -95,8 +96,8 @@ def check_fit_options(
     weighting: str = "poisson",
 ) -> None:
     """Refuse bad fit options with one line naming the option (before any work)."""
-    if model not in KINDS:
-        raise TranslucencyError(f"model: expected one of {', '.join(KINDS)}, got {model!r}")
+    if model not in FAMILIES:
+        raise TranslucencyError(f"model: expected one of {', '.join(FAMILIES)}, got {model!r}")
     if n_terms != "auto" and not 1 <= _as_count(n_terms) <= 4:
         raise TranslucencyError(f"terms: n must be between 1 and 4 or 'auto', got {n_terms!r}")
     directional = FAMILIES[model].directional

@@ -1,6 +1,6 @@
 """The model families of the fit, one object per family behind one protocol (:class:`Family`).
 
-A new family is one module here (a :class:`Family` subclass) and one line in :data:`FAMILIES`
+A new family is one module here (a :class:`Family` subclass) and one :func:`register` line below
 (with its import); a new kind of model also needs its model class in :mod:`translucency.model`
 (with its storage, :data:`translucency.model.MODEL_KINDS`).
 """
@@ -14,20 +14,23 @@ from .dipole import DipoleFamily
 from .iso import IsoFamily
 from .pbd import PBDFamily
 
-#: the model families by name, in the order the CLI lists them
-FAMILIES: dict[str, Family] = {
-    f.name: f
-    for f in (
-        IsoFamily(),
-        AnisoFamily(),
-        DipoleFamily(),
-        BurleyFamily(),
-        PBDFamily(),
-        DirectionalDipoleFamily(),
-    )
-}
+#: the model families by name, in the order the CLI lists them (filled by :func:`register`)
+FAMILIES: dict[str, Family] = {}
 
-# each family's seconds per point-pixel for the time estimate of ``translucency fit --model NAME``
-register_terms({f"fit {name}": family.time_terms for name, family in FAMILIES.items()})
 
-__all__ = ["AUTO_DIRECTIONS", "AUTO_TERMS", "FAMILIES", "Family"]
+def register(family: Family) -> Family:
+    """Make ``family`` a choice of ``fit`` (``--model NAME``, ``model=NAME``): add it to :data:`FAMILIES`
+    and its seconds per point-pixel to the time estimates of ``translucency fit --model NAME``."""
+    FAMILIES[family.name] = family
+    register_terms({f"fit {family.name}": family.time_terms})
+    return family
+
+
+register(IsoFamily())
+register(AnisoFamily())
+register(DipoleFamily())
+register(BurleyFamily())
+register(PBDFamily())
+register(DirectionalDipoleFamily())
+
+__all__ = ["AUTO_DIRECTIONS", "AUTO_TERMS", "FAMILIES", "Family", "register"]
