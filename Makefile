@@ -34,6 +34,7 @@ bench: $(STAMP)
 	$(PY) benchmarks/tally_vs_volpath.py
 	$(PY) benchmarks/fit_speed.py
 	$(PY) benchmarks/render_speed.py
+	$(PY) benchmarks/startup.py
 
 clean:
 	rm -rf $(VENV) $(OUT) .pytest_cache .hypothesis

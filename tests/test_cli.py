@@ -133,6 +133,21 @@ def test_demo_fits_the_embedded_measurement(demo_out):
     assert rep["model"] in rep["models"] and rep["rel_l2"] == rep["models"][rep["model"]]["rel_l2"]
 
 
+def test_every_model_file_of_the_demo_is_valid(demo_out):
+    """`info` calls every model file the demo writes valid (exit 0): the planar fits on the data set's
+    32 mm sample, the pig's per-vertex model, and Jensen's materials as semi-infinite slabs."""
+    files = sorted((demo_out / "fits").glob("*.model.zip")) + [demo_out / "dipole_fits.model.zip"]
+    assert {p.name.removesuffix(".model.zip") for p in files} == {
+        "iso", "aniso", "dipole", "burley", "pig_iso", "dipole_fits"
+    }  # fmt: skip
+    for path in files:
+        res = runner.invoke(app, ["info", str(path)])
+        assert res.exit_code == 0, (path.name, res.output)
+    rep = json.loads((demo_out / "report" / "report.json").read_text())
+    for label, row in rep["models"].items():  # the report lists no unphysical point either
+        assert row["physics"]["over_albedo"] == [] and row["physics"]["beyond_object"] == [], label
+
+
 def _png_size(path):
     """(width, height) of a PNG file whose every chunk checks out (its CRCs, its end)."""
     from PIL import Image  # Pillow comes with matplotlib

@@ -391,7 +391,7 @@ def _rendered_finite(out: Path) -> None:
 
     pixels = np.asarray(mitsuba().Bitmap(str(out / "ours.exr")))
     assert np.isfinite(pixels).all() and (pixels >= 0).all()
-    _strict_json((out / "figure2.json").read_text())
+    _strict_json((out / "render.json").read_text())
 
 
 def _map_with(path: Path, how: str) -> Path:

@@ -114,7 +114,7 @@ def test_a_model_renders_after_its_data_set_is_deleted(ball_fit, tmp_path):
     shutil.rmtree(copy)
     res = runner.invoke(app, ["render", str(path), "--out", str(tmp_path / "r"), "--size", "48", "36"])
     assert res.exit_code == 0, res.output
-    assert json.loads((tmp_path / "r" / "figure2.json").read_text())["vertices"] == len(ball.vertices)
+    assert json.loads((tmp_path / "r" / "render.json").read_text())["vertices"] == len(ball.vertices)
     assert (tmp_path / "r" / "ours.exr").stat().st_size > 500
 
 

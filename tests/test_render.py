@@ -180,9 +180,9 @@ def test_fit_and_render_cli_on_a_mesh(tmp_path):
     assert res.exit_code == 0, res.output
     import json
 
-    fig = json.loads((tmp_path / "r" / "figure2.json").read_text())
+    fig = json.loads((tmp_path / "r" / "render.json").read_text())
     assert fig["rel_rmse"] < 1.0 and 0 <= fig["flip_mean_object"] < 0.8
-    for name in ("ours.exr", "ours.png", "reference.exr", "figure2.png"):
+    for name in ("ours.exr", "ours.png", "reference.exr", "render.png"):
         assert (tmp_path / "r" / name).stat().st_size > 500
     bad = runner.invoke(app, ["render", str(model), "--light", "point:0,0,0"])
     assert bad.exit_code == 2 and "inside the object" in bad.output

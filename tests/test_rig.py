@@ -132,13 +132,14 @@ def test_homography_from_marked_points_and_refusals(rng):
     H = CAMERA.homography()
     xy = rng.uniform(0, 10, (9, 2))
     est, rms = homography_from_points(xy, H.to_image(xy))
-    assert rms < 1e-6 and homography_error(est, H, xy) < 1e-6
+    # exact up to the float32 OpenCV computes in: ~1e-5 px of rounding on coordinates of ~200 px
+    assert rms < 5e-5 and homography_error(est, H, xy) < 5e-5
     noisy, rms = homography_from_points(xy, H.to_image(xy) + rng.normal(0, 0.2, (9, 2)))
     assert 0.05 < rms < 0.3 and homography_error(noisy, H, [[5, 5]]) < 0.5
     with pytest.raises(TranslucencyError, match="at least 4"):
         homography_from_points(xy[:3], H.to_image(xy[:3]))
     line = np.stack([np.arange(5.0), np.arange(5.0)], 1)
-    with pytest.raises(TranslucencyError, match="degenerate"):
+    with pytest.raises(TranslucencyError, match="all 5 marked points lie on one line"):
         homography_from_points(line, H.to_image(line))
     with pytest.raises(TranslucencyError, match="singular"):
         Homography.from_matrix([[1, 2, 3], [2, 4, 6], [0, 0, 1]])
@@ -155,7 +156,7 @@ def test_homography_from_a_checkerboard_photograph():
             inside = (q >= 0).all(1) & (q < 7).all(1)
             img += (((q.sum(1) % 2) == 0) & inside).reshape(u.shape) * 0.25
     est, rms = homography_from_checkerboard(img, (6, 6), 1.0, origin_mm=(3.0, 3.0))
-    assert rms < 0.5 and homography_error(est, H, [[3, 3], [8, 8], [5.5, 5.5]]) < 0.5
+    assert rms < 0.25 and homography_error(est, H, [[3, 3], [8, 8], [5.5, 5.5]]) < 0.25
 
 
 # -- the exact synthetic import ------------------------------------------------------------------------
@@ -398,7 +399,7 @@ def _refusal(tmp_path, break_it, match):
 
 @pytest.mark.parametrize(
     "case",
-    ["missing", "counts", "singular", "sizes", "nan", "points"],
+    ["missing", "counts", "singular", "sizes", "nan", "points", "three_on_a_line"],
 )
 def test_bad_input_is_refused_in_one_line(tmp_path, case):
     def missing(folder, tmp, cal):
@@ -426,13 +427,19 @@ def test_bad_input_is_refused_in_one_line(tmp_path, case):
             "image_px": [[0, 0], [1, 1], [2, 2], [3, 3]],
         }
 
+    def three_on_a_line(folder, tmp, cal):  # once accepted, fitting "to 0.000 px rms"
+        del cal["homography"]
+        xy = np.array([[3.0, 3.0], [5.0, 5.0], [7.0, 7.0], [3.0, 8.0]])
+        cal["points"] = {"sample_mm": xy.tolist(), "image_px": CAMERA.homography().to_image(xy).tolist()}
+
     match = {
         "missing": "shot_1.pfm is missing",
         "counts": "2 laser positions but 3 images",
         "singular": "singular",
         "sizes": "12 x 10 pixels among images of 240 x 200",
         "nan": "row 7, column 9, channel 1",
-        "points": "degenerate",
+        "points": "all 4 marked points lie on one line",
+        "three_on_a_line": "points: marked points 1, 2, 3 lie on one line in the sample plane",
     }[case]
     _refusal(tmp_path, locals()[case], match)
 

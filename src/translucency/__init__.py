@@ -18,20 +18,25 @@ modules (``from translucency.fit import fit_planar``).
 import sys as _sys
 import types as _types
 
-from . import data
 from ._validate import TranslucencyError
 from ._version import __version__
-from .io.model_file import ModelFileError, load_model, save_model
 from .mitsuba import prepare_libllvm as _prepare_libllvm
-from .model import (
-    MATERIALS,
-    BurleyModel,
-    DipoleModel,
-    ExponentialModel,
-    PlanarAlpha,
-    VertexAlpha,
-    material,
-)
+
+#: the names loaded from their modules when first used, so that ``import translucency`` (and with it every
+#: command's ``--help``) stays cheap: Zarr and the model classes load only for those who use them
+_LAZY = {
+    "data": "data",  # the module itself: the embedded data sets
+    "ModelFileError": "io.model_file",
+    "load_model": "io.model_file",
+    "save_model": "io.model_file",
+    "MATERIALS": "model",
+    "BurleyModel": "model",
+    "DipoleModel": "model",
+    "ExponentialModel": "model",
+    "PlanarAlpha": "model",
+    "VertexAlpha": "model",
+    "material": "model",
+}
 
 #: the workflow's functions, loaded from :mod:`translucency.workflow` when first used
 _WORKFLOW = (
@@ -69,9 +74,15 @@ def __getattr__(name: str):
         from . import workflow  # heavy: the stages load Dask, Matplotlib and Mitsuba's wrappers
 
         value = getattr(workflow, name)
-        globals()[name] = value
-        return value
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    elif name in _LAZY:
+        import importlib  # only when a lazy name is first used
+
+        module = importlib.import_module(f".{_LAZY[name]}", __name__)
+        value = module if _LAZY[name] == name else getattr(module, name)
+    else:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    globals()[name] = value
+    return value
 
 
 def __dir__():

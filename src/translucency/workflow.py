@@ -34,7 +34,9 @@ from .io.mesh_dataset import MeshDataset, is_mesh_dataset, open_mesh_dataset
 from .io.model_file import load_model, read_header
 from .io.outputs import claim_folder
 from .render import Camera, parse_light
+from .render.camera import view_direction
 from .render.figure import figure2
+from .render.lights import Placement, place_light
 from .render.object import boundary_eta, object_of_model, volume_of_dataset
 from .rig import ImportSetup, load_calibration
 from .rig import import_images as _import_images
@@ -583,24 +585,8 @@ class Rendering:
 
     picture: np.ndarray  # (H, W, 3) linear radiance, our model's
     reference: np.ndarray | None  # (H, W, 3) Mitsuba volpath of the filling, or None
-    numbers: dict  # figure2.json: timings, and with a reference FLIP, relative RMSE, regions
-    folder: Path | None  # where ours.exr/.png (and the reference, figure2.png) are; None: not kept
-
-
-def _camera(mesh, view, size) -> Camera:
-    """The camera of ``translucency render``: on the object's centre from direction ``view``."""
-    try:
-        direction = np.asarray(view, dtype=np.float64).reshape(3)
-    except (TypeError, ValueError):
-        direction = np.zeros(3)
-    if not np.isfinite(direction).all() or not np.abs(direction).max() > 0:
-        raise TranslucencyError(f"view: expected three finite numbers x, y, z not all zero, got {view!r}")
-    direction = direction / np.abs(direction).max()  # 1e308 or 1e-320: no overflow, no 0
-    direction /= np.linalg.norm(direction)
-    cam = Camera.looking_at(mesh, direction, *size)
-    if abs(direction[2]) > 0.999:  # looking straight up or down: the image's up is +y, not +z
-        cam = dataclasses.replace(cam, up=(0.0, 1.0, 0.0))
-    return cam
+    numbers: dict  # render.json: timings, and with a reference FLIP, relative RMSE, regions
+    folder: Path | None  # where ours.exr/.png (and the reference, render.png) are; None: not kept
 
 
 def render(
@@ -625,7 +611,7 @@ def render(
     model : FitResult, ReflectanceModel or path
         A per-vertex model (a fit on a mesh data set) that carries its mesh.
     out : str or Path, optional
-        Folder for ``ours.exr/.png`` (and ``reference.exr/.png``, ``figure2.png``, ``figure2.json``);
+        Folder for ``ours.exr/.png`` (and ``reference.exr/.png``, ``render.png``, ``render.json``);
         default: none kept, the pictures are only returned.
     light : str or light
         ``point:x,y,z[,I]``, ``directional:dx,dy,dz[,E]``, ``spot:…``, ``env:L``, ``env:MAP.exr``
@@ -667,10 +653,11 @@ def render(
     if getattr(fitted, "geometry", None) != "mesh":
         raise TranslucencyError("model: a planar model; render needs a per-vertex model of a mesh data set")
     mesh, acquisition = object_of_model(fitted, {"meta": record})
-    lit = parse_light(light) if isinstance(light, str) else light
+    direction = view_direction(view)
+    lit = place_light(parse_light(light) if isinstance(light, str) else light, Placement.of(mesh, direction))
     if not hasattr(lit, "emitter_dict"):
         raise TranslucencyError(f"light: expected a light or its text (point:x,y,z,I …), got {light!r}")
-    camera = _camera(mesh, view, size)
+    camera = Camera.looking_at(mesh, direction, *size)
     volume = volume_of_dataset(mesh, acquisition) if reference else None
     inputs = [model] if isinstance(model, (str, os.PathLike)) else []
     with tempfile.TemporaryDirectory(prefix="translucency-render-") as scratch:

@@ -10,15 +10,9 @@ import typer
 
 from .. import resources
 from .._validate import TranslucencyError, check_option
-from ..acquire import PlanarSetup, acquire_planar, estimate_seconds, load_volume, make_sample, probe_walk
-from ..acquire.mesh import acquire_mesh, object_volume
-from ..acquire.objects import make_pig
-from ..cluster import parse_scheduler
 from ..io.dataset import open_dataset
-from ..io.mesh import load_mesh
 from ..io.mesh_dataset import open_mesh_dataset
 from ..io.outputs import claim_folder, claim_output
-from ..rig.photographs import VirtualCamera, photograph_sample
 from ._common import (
     console,
     dataset_overwrite_option,
@@ -72,6 +66,9 @@ def acquire_photographs_cmd(
 ):
     """Photograph a virtual sample with Mitsuba 3 (narrow beam per point, oblique perspective camera,
     sensor noise, dark offset, vignetting, saturation): a lab's hand-over for `translucency import images`."""
+    from ..acquire import PlanarSetup, load_volume, make_sample  # heavy: Mitsuba loads only when it runs
+    from ..rig.photographs import VirtualCamera, photograph_sample
+
     check_option("--grid", grid, lo=1, hi=64)
     check_option("--spp", spp, lo=1)
     check_option("--fov", fov, lo=1, hi=120)
@@ -142,6 +139,16 @@ def acquire_planar_cmd(
     as_json: bool = json_option(),
 ):
     """Scan a pencil beam over a planar sample and record R_d around each incident point."""
+    from ..acquire import (  # heavy: Mitsuba, Dask and SciPy load only when an acquisition runs
+        PlanarSetup,
+        acquire_planar,
+        estimate_seconds,
+        load_volume,
+        make_sample,
+        probe_walk,
+    )
+    from ..cluster import parse_scheduler
+
     parse_scheduler(scheduler)  # a bad value or an unreachable cluster: one line, before work
     check_option("--photons", photons, lo=1)
     check_option("--seed", seed, lo=0)
@@ -270,6 +277,12 @@ def acquire_mesh_cmd(
     as_json: bool = json_option(),
 ):
     """Pencil beams at surface points of a 3D object; exits tallied per vertex (R_d in mm^-2)."""
+    from ..acquire import load_volume  # heavy: Mitsuba, Dask, trimesh and scikit-image load only when it runs
+    from ..acquire.mesh import acquire_mesh, object_volume
+    from ..acquire.objects import make_pig
+    from ..cluster import parse_scheduler
+    from ..io.mesh import load_mesh
+
     parse_scheduler(scheduler)  # a bad value or an unreachable cluster: one line, before work
     check_option("--photons", photons, lo=1)
     check_option("--seed", seed, lo=0)

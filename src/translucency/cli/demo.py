@@ -8,7 +8,6 @@ from pathlib import Path
 import typer
 
 from ..model import MATERIALS
-from ..pipeline import DEMO_FITS, run_demo
 from ._common import console, overwrite_option, progress, user_errors
 
 
@@ -20,6 +19,7 @@ def demo(
 ):
     """The main job on the embedded default data: baselines per material, then planar fits
     (iso, aniso, dipole, Burley) with alpha and the Figure 1 report."""
+    from ..pipeline import DEMO_FITS, run_demo  # heavy: the main job loads every stage and Mitsuba
 
     with progress() as bar:
         task = bar.add_task("demo", total=len(MATERIALS) + len(DEMO_FITS) + 3, item="")

@@ -12,8 +12,6 @@ from rich.table import Table
 
 from .. import resources
 from .._validate import TranslucencyError
-from ..cluster import parse_scheduler
-from ..evaluate.report import model_label, write_report
 from ..io.dataset import dataset_identity, open_dataset
 from ..io.mesh_dataset import is_mesh_dataset, open_mesh_dataset
 from ..io.model_file import load_model, read_header
@@ -55,6 +53,9 @@ def evaluate(
 ):
     """Relative L2 errors (overall, per distance band, energy-weighted), error maps, profiles, HTML report: a
     planar model on its planar data set, or a per-vertex model on its mesh data set."""
+    from ..cluster import parse_scheduler  # heavy: Dask and Matplotlib load only when an evaluation runs
+    from ..evaluate.report import model_label, write_report
+
     parse_scheduler(scheduler)  # a bad value or an unreachable cluster: one line, before work
 
     run = Run("evaluate", max_memory=max_memory, quiet=quiet)

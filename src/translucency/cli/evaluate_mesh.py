@@ -10,9 +10,6 @@ from rich.table import Table
 
 from .. import resources
 from .._validate import TranslucencyError
-from ..evaluate.labels import model_label, noise_label
-from ..evaluate.mesh_errors import check_model_points, check_same_points
-from ..evaluate.mesh_report import write_mesh_report
 from ..io.dataset import dataset_identity
 from ..io.mesh_dataset import is_mesh_dataset, open_mesh_dataset
 from ..io.model_file import load_model, read_header
@@ -42,6 +39,11 @@ def evaluate_mesh(
     scheduler: str,
 ) -> None:
     """``evaluate MODEL MESH.zarr [--truth OTHER.zarr]``: every check before any output, then the report."""
+    # heavy: the stages (SciPy, trimesh, Matplotlib) load only when an evaluation runs, not for --help
+    from ..evaluate.labels import model_label, noise_label
+    from ..evaluate.mesh_errors import check_model_points, check_same_points
+    from ..evaluate.mesh_report import write_mesh_report
+
     if points is not None:
         raise TranslucencyError("--points: profiles are drawn for planar data sets; a mesh report has none")
     if scheduler not in (None, "threads"):

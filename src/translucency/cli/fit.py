@@ -11,9 +11,6 @@ import typer
 
 from .. import resources
 from .._validate import TranslucencyError, check_option
-from ..cluster import parse_scheduler
-from ..fit import FAMILIES, FIT_BLOCK, check_fit_options, fit_mesh, fit_planar
-from ..fit.planar import default_chunk_points
 from ..io.dataset import dataset_identity, open_dataset
 from ..io.mesh_dataset import is_mesh_dataset, open_mesh_dataset
 from ..io.model_file import read_header, save_model
@@ -92,6 +89,10 @@ def fit(
 
     An interrupted fit resumes from OUT.partial.npz when run again with the same arguments.
     """
+    from ..cluster import parse_scheduler  # heavy: the fitter loads Dask, SciPy and Numba only when it runs
+    from ..fit import FAMILIES, FIT_BLOCK, check_fit_options, fit_mesh, fit_planar
+    from ..fit.planar import default_chunk_points
+
     parse_scheduler(scheduler)  # a bad value or an unreachable cluster: one line, before work
     check_option("--rounds", rounds, lo=1)
     check_option("--exclusion", exclusion, lo=0)
@@ -241,8 +242,8 @@ def _warn_unphysical(path: Path) -> list[int]:
     if bad:
         err_console.print(
             f"[yellow]warning:[/] {len(bad)} incident points are not physical (total reflectance up to "
-            f"{physics['max_total_reflectance']:.3g}, energy radius up to "
-            f"{physics['max_energy_radius_mm']:.3g} mm on a {physics['size_mm']:.3g} mm object): "
+            f"{physics['max_total_reflectance']:.3g}, up to {100 * physics.get('max_beyond_object', 0):.3g}% "
+            f"of a point's energy beyond {physics.get('object', 'the object')}): "
             f"{bad[:10]}{'…' if len(bad) > 10 else ''}; see `translucency info {path}`"
         )
     return bad

@@ -9,10 +9,7 @@ import numpy as np
 import typer
 
 from .._validate import TranslucencyError, check_option
-from ..cluster import parse_scheduler
 from ..io.outputs import claim_output
-from ..rig.calibration import load_calibration
-from ..rig.importer import ImportSetup, import_images
 from ._common import console, scheduler_option, user_errors
 
 app = typer.Typer(
@@ -95,6 +92,10 @@ def import_images_cmd(
     scheduler: str = scheduler_option(),
 ):
     """Import HDR photographs of a scanned laser spot (with the camera calibration) as a planar data set."""
+    from ..cluster import parse_scheduler  # heavy: Dask, SciPy and scikit-image load only when it runs
+    from ..rig.calibration import load_calibration
+    from ..rig.importer import ImportSetup, import_images
+
     parse_scheduler(scheduler)  # a bad value or an unreachable cluster: one line, before work
     for name, value in (("--pitch", pitch), ("--window", window)):
         check_option(name, value, lo=0, open_lo=True)

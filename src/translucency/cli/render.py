@@ -3,10 +3,8 @@ through Mitsuba (EXR + PNG), and with ``--reference`` the path-traced reference 
 
 from __future__ import annotations
 
-import dataclasses
 from pathlib import Path
 
-import numpy as np
 import typer
 from rich.table import Table
 
@@ -14,13 +12,11 @@ from .. import resources
 from .._validate import TranslucencyError, check_option
 from ..io.model_file import load_model, read_header
 from ..io.outputs import claim_folder
-from ..render import MAX_PAIRS, default_radius
-from ..render.camera import Camera
-from ..render.figure import figure2
-from ..render.lights import parse_light
-from ..render.object import boundary_eta, object_of_model, volume_of_dataset
 from ._common import json_option, max_memory_option, overwrite_option, quiet_option, user_errors
 from ._run import Run
+
+#: the light of a render when none is given: above and in front of the default view, in mm
+DEFAULT_LIGHT = "point:60,-80,120,2e4"
 
 
 @user_errors
@@ -30,13 +26,36 @@ def render(
         Path("render"), "--out", "-o", help="Directory for ours.exr/.png (and the reference)."
     ),
     light: list[str] = typer.Option(
-        None,
+        [DEFAULT_LIGHT],
         "--light",
-        help="point:x,y,z[,I] | directional:dx,dy,dz[,E] | spot:x,y,z,tx,ty,tz,cutoff_deg[,I] | env:L | "
-        "env:MAP.exr[,scale] (mm, W/sr, W/mm^2, W/(mm^2 sr)).",
+        metavar="LIGHT",
+        help="In the object's frame (mm, +z up; the render prints the object's centre and size): "
+        "point:x,y,z[,I] (at x,y,z; I in W/sr) | spot:x,y,z,tx,ty,tz,cutoff[,I] (at x,y,z aimed at "
+        "tx,ty,tz, cone half-angle in degrees) | directional:dx,dy,dz[,E] (dx,dy,dz: the direction the "
+        "light TRAVELS, 0,0,-1 shines down; E in W/mm^2) | env:L (a constant sky, W/(mm^2 sr)) | "
+        "env:MAP.exr[,scale] (a latitude-longitude map, its +Y turned to +z). Relative to the object: "
+        "point@AZ,EL[,DIST[,I]] | spot@AZ,EL[,DIST[,CUTOFF[,I]]] (aimed at the centre) | "
+        "directional@AZ,EL[,E] (coming FROM AZ,EL): AZ degrees from +x towards +y, EL degrees above the "
+        "xy plane, around the object's centre; DIST in mm or object sizes with x (2x; size = the "
+        "bounding box's diagonal; default 1.5x); AZ,EL may be camera (from the "
+        "camera's side) or back (behind the object). Without I or E: 1e4 W/sr, 1 W/mm^2.",
     ),
     view: str = typer.Option(
-        "1,-1.6,0.7", "--view", help="Camera direction from the object's centre, x,y,z."
+        "1,-1.6,0.7",
+        "--view",
+        metavar="X,Y,Z",
+        help="Direction from the object's centre towards the camera, x,y,z in the object's frame "
+        "(+z up); the camera looks at the centre from 1.9 object sizes.",
+    ),
+    exposure: str = typer.Option(
+        "fixed",
+        "--exposure",
+        metavar="HOW",
+        help="Exposure of the PNGs: fixed (from the object and the light's power alone, the same for "
+        "every render of this object under lights of one power), fixed+STOPS / fixed-STOPS (brighter / "
+        "darker by that many stops), auto (per picture: its brightest 1% at 0.8) or a factor on the "
+        "linear radiance (the 'exposure' render.json states, to match another render). The EXRs are "
+        "linear whatever the exposure.",
     ),
     size: tuple[int, int] = typer.Option((320, 240), "--size", help="Image width and height in pixels."),
     reference: bool = typer.Option(
@@ -55,7 +74,18 @@ def render(
     as_json: bool = json_option(),
 ):
     """Relight a fitted object: irradiance per vertex, sparse transport, a picture through Mitsuba (EXR + PNG)."""  # noqa: E501 — Typer lists the docstring verbatim as the command's one-line help; a line break would show in `translucency --help`
+    from ..render import MAX_PAIRS, default_radius  # heavy: Mitsuba, Numba, trimesh load only to render
+    from ..render.camera import Camera, view_direction
+    from ..render.figure import figure2
+    from ..render.lights import Placement, parse_light, place_light
+    from ..render.object import boundary_eta, object_of_model, volume_of_dataset
+    from ..render.tonemap import parse_exposure
+
     check_option("--spp", spp, lo=1)
+    chosen_exposure = parse_exposure(exposure, name="--exposure")
+    relative = [parse_light(t) for t in light]  # the text checked; placed once the object is known
+    if len(relative) > 1:
+        raise TranslucencyError("--light: one light per render for now (run once per light)")
     check_option("--radius", radius, lo=1e-6, hi=1e9)  # 1 nm to 1000 km (the far field divides by r²)
     for value in size:
         check_option("--size", value, lo=1, hi=16384)
@@ -68,17 +98,9 @@ def render(
             f"{model}: a planar model; render needs a per-vertex model of a mesh data set"
         )
     mesh, dheader = object_of_model(m, header)
-    try:
-        direction = [float(v) for v in view.split(",")]
-    except ValueError:
-        direction = []
-    if len(direction) != 3 or not np.isfinite(direction).all() or not np.abs(direction).max() > 0:
-        raise TranslucencyError(f"--view: expected three finite numbers x,y,z not all zero, got {view!r}")
-    direction = np.asarray(direction) / np.abs(direction).max()  # 1e308 or 1e-320: no overflow, no 0
-    direction /= np.linalg.norm(direction)
-    lights = [parse_light(t) for t in (light or ["point:60,-80,120,2e4"])]
-    if len(lights) > 1:
-        raise TranslucencyError("--light: one light per render for now (run once per light)")
+    direction = view_direction(view, "--view")
+    placement = Placement.of(mesh, direction)
+    lights = [place_light(lit, placement) for lit in relative]
     V = len(mesh.vertices)
     rad = default_radius(m, mesh) if radius is None else float(radius)  # the transport's, for the estimates
     picture = dict(
@@ -95,10 +117,9 @@ def render(
     claim_folder(out, overwrite=overwrite, inputs=[model, header.get("meta", {}).get("dataset") or None])
     timing = run.time(resources.timing.rendering_units(**picture))
     run.info(f"render of {V:,} vertices at {size[0]} x {size[1]}; time {timing.text()}")
+    run.info(f"{placement.describe()}; light {lights[0]!r}")
     run.start()  # the camera and the reference's volume are part of the work
     cam = Camera.looking_at(mesh, direction, *size)
-    if abs(direction[2]) > 0.999:  # looking straight up or down: the image's up is +y, not +z
-        cam = dataclasses.replace(cam, up=(0.0, 1.0, 0.0))
     vol = volume_of_dataset(mesh, dheader) if reference else None
     steps = 4 if reference else 3
     with run.work("render", total=steps) as work:
@@ -112,6 +133,7 @@ def render(
             spp_reference=spp,
             radius=radius,
             eta=boundary_eta(dheader),
+            exposure=chosen_exposure,
             progress=lambda done, total, name: work.update(completed=done, total=total, item=name),
         )
         work.update(completed=steps, item="done")

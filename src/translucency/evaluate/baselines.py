@@ -26,8 +26,11 @@ import numpy as np
 
 from .._plotting import pyplot
 from ..fit.profile import ProfileFit, fit_burley_profile, fit_exponential_profile
+from ..model.alpha import PlanarAlpha
 from ..model.burley import burley_energy_within, burley_R, burley_shape
 from ..model.dipole import dipole_R_d, dipole_total_reflectance
+from ..model.exponential import ExponentialModel
+from ..model.extent import SemiInfinite
 from ..model.materials import Material
 
 CHANNELS = ("R", "G", "B")
@@ -95,6 +98,30 @@ def material_profiles(mat: Material, r=None, n_terms: int = 3) -> MaterialProfil
     fits = [fit_exponential_profile(r, dipole[:, c], n_terms) for c in range(3)]
     expo = np.stack([f(r) for f in fits], axis=1)
     return MaterialProfiles(mat, r, dipole, burley, expo, fits, total, A, s)
+
+
+def fits_model(profiles: list[MaterialProfiles]) -> ExponentialModel:
+    """The exponential fits of ``profiles`` as one per-channel model (C = 3, m = 1): one incident point
+    per material, 1 mm apart along x.
+
+    Jensen's coefficients describe semi-infinite slabs: the model's object is one
+    (:class:`~translucency.model.extent.SemiInfinite`), so the physical bounds place no edge under its
+    profiles (a skim-milk profile reaches beyond 100 mm).
+
+    Examples
+    --------
+    >>> from translucency.model import MATERIALS
+    >>> m = fits_model([material_profiles(MATERIALS["marble"])])
+    >>> m.n_points, m.extent.kind
+    (1, 'semi-infinite')
+    """
+    n = len(profiles)
+    c = np.array([[[f.c] for f in p.fits] for p in profiles])  # (N, 3, 1, n)
+    d = np.array([[[f.d] for f in p.fits] for p in profiles])
+    x_i = np.stack([np.arange(n, dtype=float), np.zeros(n)], axis=1)
+    model = ExponentialModel(x_i, c, d, PlanarAlpha.uniform((1, n), origin=(-0.5, -0.5), pitch=1.0))
+    model.extent = SemiInfinite()
+    return model
 
 
 def plot_profiles(profiles: list[MaterialProfiles], path, channel: int = 1) -> None:

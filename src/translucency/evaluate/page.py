@@ -93,7 +93,7 @@ windows {ds.window[0]}×{ds.window[1]} px at {ds.pitch} mm.</p>
 <h2>Errors</h2><p>Against {against}. Relative, RGB summed.</p>
 <table><tr><th>model</th><th>all</th><th>near &lt; 1 mm</th><th>mid 1–4 mm</th><th>far &gt; 4 mm</th>
 {beyond_head}<th>energy, near</th><th>energy, mid</th><th>total reflectance per point</th>{in_head}
-<th>flagged points</th><th>unphysical points (ρ &gt; 1 or r<sub>99.9</sub> beyond the sample)</th></tr>
+<th>flagged points</th><th>unphysical points (ρ &gt; 1 or over half the energy beyond the sample)</th></tr>
 {"".join(rows)}
 <tr><th>{noise}</th>{noise_cells}</tr></table>
 <p style="font-size:90%">{own_noise}</p>

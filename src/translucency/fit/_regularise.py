@@ -31,7 +31,9 @@ are fitted as they are.
 :math:`2\pi\sum_k c_k/a_k^2` exceeds what the point can reflect (1, or a photon
 tally's measured total + 20 %) is refitted with narrower rates
 (:func:`bound_totals`): its excess lies where the window does not look, beyond
-its edge or inside its first pixel.
+its edge or inside its first pixel.  The anisotropic directions, fitted from
+that bounded profile, are held to the same bound by their blend's total
+(:func:`bound_directions`).
 """
 
 from __future__ import annotations
@@ -115,6 +117,12 @@ def regularise(ctx: FitContext, state: FitState, sl: slice, ch: Chunk, W, Y, n_c
 TAIL_STEPS = (1.5, 2.0, 3.0, 4.0, 6.0, 8.0)
 
 
+def row_bounds(ctx: FitContext, ch: Chunk) -> np.ndarray:
+    """(k, C) the most total reflectance of each point's colour rows (``ch.total_bound``: per channel for
+    C = 3; red for the shared colour's one row, C = 1)."""
+    return ch.total_bound if ctx.C == 3 else ch.total_bound[:, :1]
+
+
 def bound_totals(ctx: FitContext, ch: Chunk, c, a, W, Y):
     r"""Refit, narrower, the isotropic profiles (rows of c, a: (k·C, n); W, Y their grouped data) whose
     total :math:`2\pi \sum_k c_k / a_k^2` exceeds the source's bound (``total_bound``: 1, and a tally's
@@ -128,12 +136,10 @@ def bound_totals(ctx: FitContext, ch: Chunk, c, a, W, Y):
     is untouched.  The anisotropic directions are not bounded themselves: they are tied to this bounded
     isotropic fit (:func:`regularise`).
     """
-    bound = ch.total_bound
-    if bound is None:
+    if ch.total_bound is None:
         return c, a
     c, a = c.copy(), a.copy()
-    # the bound of each row: per channel (C = 3); red for the shared colour's one row (C = 1)
-    bound_row = bound.reshape(-1) if ctx.C == 3 else bound[:, 0]
+    bound_row = row_bounds(ctx, ch).reshape(-1)
     noisy_row = np.repeat(ch.noisy, ctx.C)  # noise-free profiles determine their own tails
 
     def total(rows):
@@ -163,3 +169,34 @@ def bound_totals(ctx: FitContext, ch: Chunk, c, a, W, Y):
         c[bad[lower]], a[bad[lower]] = cc[lower], aa[lower]
         bad = bad[total(bad) > bound_row[bad]]
     return c, a
+
+
+def bound_directions(ctx: FitContext, ch: Chunk, c, a):
+    r"""Lower the directions of every noisy (point, colour row) whose blend's total
+    :math:`(2\pi/m) \sum_l \sum_k c_{lk} / a_{lk}^2` exceeds the source's bound (the one
+    :func:`bound_totals` keeps the isotropic fit to) to it; returns c (k, C, m, n).
+
+    The anchors tie each direction's head and tail to the bounded isotropic fit, but the directions'
+    own slow terms can still integrate, beyond the window, to more than the point can reflect.  The
+    excess is taken from where it lies: the slowest term of every direction (terms are sorted steepest
+    first) is scaled by one factor over the directions; where those terms alone cannot carry it, every
+    term is scaled by a common factor.  Both keep the ratios between the directions.
+    """
+    if ch.total_bound is None:
+        return c
+    m = c.shape[2]
+    energy = (2 * np.pi / m) * c / a**2  # (k, C, m, n): each term's share of the blend's total
+    total = energy.sum(axis=(2, 3))
+    bound = row_bounds(ctx, ch)
+    over = (total > bound) & ch.noisy[:, None]  # noise-free profiles determine their own tails
+    if not over.any():
+        return c
+    slow = energy[..., -1].sum(axis=2)  # (k, C): the slowest terms' energy
+    rest = total - slow
+    tail = over & (rest <= bound) & (slow > 0)  # the slow terms alone can carry the excess
+    c = c.copy()
+    f_tail = np.where(tail, (bound - rest) / np.where(tail, slow, 1.0), 1.0)
+    c[..., -1] *= f_tail[:, :, None]
+    common = over & ~tail
+    f_all = np.where(common, bound / np.where(common, total, 1.0), 1.0)
+    return c * f_all[:, :, None, None]

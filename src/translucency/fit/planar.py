@@ -62,7 +62,7 @@ from scipy.ndimage import correlate
 from .._validate import TranslucencyError
 from ..geometry import SampleGrid, window_geometry
 from ..io.dataset import PlanarDataset, open_dataset
-from ..model import PlanarAlpha
+from ..model import PlanarAlpha, Rectangle
 from ._chunk import POOL_POINTS
 from ._options import AUTO_DIRECTIONS, AUTO_TERMS, FitContext, FitResult, check_fit_options
 from ._rounds import alternate
@@ -239,7 +239,7 @@ def fit_planar(
         raise TranslucencyError(f"chunk: must be >= 1 point, got {chunk_points}")
     # whole blocks of the pooled cold starts, so that the fit does not depend on the chunking
     chunk_points = POOL_POINTS * -(-int(chunk_points) // POOL_POINTS)
-    m = int(n_directions) if model == "aniso" else 1
+    m = int(n_directions) if FAMILIES[model].directional else 1
     n = int(n_terms)
     shared = FAMILIES[model].shared_colour  # the exponential families have the colour scale
     C = 1 if (colour == "shared" and shared) else 3
@@ -296,7 +296,7 @@ def fit_planar(
         x_i=x_i,
         cache_left=cache_mb * 2**20,
     )
-    return alternate(
+    result = alternate(
         ctx,
         options,
         request,
@@ -309,6 +309,25 @@ def fit_planar(
         t0=t0,
         scheduler=scheduler,
     )
+    # the energy guard's bound on the model returned (after α's last normalisation), and what the
+    # physical bounds need (model/bounds.py): the sample the windows lie on, the tally's photons
+    bound = np.where(source.noisy_points()[:, None], source.total_bound(0, ds.n_points), np.inf)
+    scaled = FAMILIES[model].keep_totals(result.model, bound)  # noise-free profiles keep their own tails
+    if scaled.size:
+        result.options["scaled_to_total_bound"] = scaled.tolist()
+    result.model.extent = sample_extent(ds)
+    result.model.tally_photons = int(photons) if photons and source.tally_total else None
+    return result
+
+
+def sample_extent(ds: PlanarDataset) -> Rectangle | None:
+    """The top face of the sample a planar data set was acquired on: [0, W] × [0, H] mm from its header's
+    ``sample.size_mm`` (an acquisition's slab); None where the header does not say (imported data: the
+    bounds take α's support)."""
+    size = (ds.header.get("sample") or {}).get("size_mm")
+    if not size or len(size) < 2 or not all(np.isfinite(float(v)) and float(v) > 0 for v in size[:2]):
+        return None
+    return Rectangle((0.0, 0.0), (float(size[0]), float(size[1])))
 
 
 class _PlanarSource:
@@ -345,6 +364,18 @@ class _PlanarSource:
             ok = np.isfinite(measured) & (measured > 0)
             bound = np.where(ok, np.minimum(bound, (1 + TOTAL_TOLERANCE) * measured), bound)
         return bound
+
+    def noisy_points(self) -> np.ndarray:
+        """(P,) bool: the point's window has noise — a photon count, or a variance somewhere (the windows
+        the energy guard bounds; noise-free ones, a simulation's exact profiles, determine their tails)."""
+        if self.poisson > 0:
+            return np.ones(self.ds.n_points, dtype=bool)
+        out = np.zeros(self.ds.n_points, dtype=bool)
+        for s in range(0, self.ds.n_points, self.stored_points):
+            e = min(s + self.stored_points, self.ds.n_points)
+            var = self.ds.read("variance", s, e).astype(np.float64).reshape(e - s, -1)
+            out[s:e] = np.nansum(np.maximum(var, 0.0), axis=1) > 0
+        return out
 
     def read(self, ctx: FitContext, s: int, e: int):
         """y (k, J, 3), var or None, valid (k, J), r, θ (1|k, J), pixel (k, J), and the Poisson factor

@@ -32,8 +32,6 @@ import warnings
 from pathlib import Path
 
 import numpy as np
-import zarr
-from zarr.codecs import BloscCodec
 
 from .._validate import TranslucencyError, as_float_array
 from .._version import __version__
@@ -107,6 +105,9 @@ def create_dataset(path, header: dict, *, overwrite: bool = False, inputs=(), re
     k = header["chunk_points"]
     n_chunks = -(-P // k)
     dtype = header["dtype"]
+    import zarr  # heavy: Zarr loads where a store is read or written, not for --help
+    from zarr.codecs import BloscCodec
+
     root = zarr.create_group(
         str(path), attributes={HEADER_KEY: header}, overwrite=False
     )  # never clears a folder
@@ -239,6 +240,8 @@ def open_dataset(path, *, writable: bool = False) -> PlanarDataset:
     path = Path(path)
     if not path.exists():
         raise TranslucencyError(f"{path}: no such data set")
+    import zarr  # heavy: Zarr loads where a store is read or written, not for --help
+
     try:
         root = zarr.open_group(str(path), mode="r+" if writable else "r")
         header = dict(root.attrs).get(HEADER_KEY)

@@ -25,16 +25,17 @@ from __future__ import annotations
 import json
 import warnings
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
-import trimesh
-import zarr
-from zarr.codecs import BloscCodec
 
 from .._validate import TranslucencyError
 from ._store import ChunkedStore
 from .dataset import summary_of_store
 from .outputs import reopen_or_clear
+
+if TYPE_CHECKING:  # the annotations only: trimesh loads where a mesh is built
+    import trimesh
 
 HEADER_KEY = "translucency_mesh_dataset"
 FORMAT = "translucency-mesh-dataset"
@@ -78,6 +79,8 @@ class MeshDataset(ChunkedStore):
 
     def mesh(self) -> trimesh.Trimesh:
         """The object's surface (mm) as stored, vertices in their stored order."""
+        import trimesh  # heavy: trimesh loads only where the surface is used (not for info or a fit)
+
         return trimesh.Trimesh(self["vertices"].astype(np.float64), self["faces"], process=False)
 
 
@@ -97,6 +100,8 @@ def open_mesh_dataset(path, *, writable: bool = False) -> MeshDataset:
     path = Path(path)
     if not path.exists():
         raise TranslucencyError(f"{path}: no such mesh data set")
+    import zarr  # heavy: Zarr loads where a store is read or written, not for --help
+
     try:
         group = zarr.open_group(str(path), mode="r+" if writable else "r")
         header = dict(group.attrs).get(HEADER_KEY)
@@ -183,6 +188,9 @@ def create_mesh_dataset(
         return old
     P, V = len(incident), len(mesh.vertices)
     n_chunks = -(-P // chunk_points)
+    import zarr  # heavy: Zarr loads where a store is read or written, not for --help
+    from zarr.codecs import BloscCodec
+
     root = zarr.create_group(
         str(path), attributes={HEADER_KEY: header}, overwrite=False
     )  # never clears a folder

@@ -23,10 +23,14 @@ Header (JSON): ``format`` = "translucency-model", ``version`` = 1, ``kind``
 ``dtype`` ("float32" | "float16"), ``units``, ``alpha`` ({origin, pitch} for
 planar), ``eta`` (dipole, pbd, ddipole), ``meta`` (free-form provenance; ``meta["flagged_points"]``
 lists the points an evaluation leaves out), ``unstorable`` (points whose fitted
-values did not fit in the storage type, stored inert and flagged), ``physics`` (the
-per-point bounds of :mod:`translucency.model.bounds`: the largest total
-reflectance and energy radius, the object's size and the indices of the points
-that break a bound), ``software`` and
+values did not fit in the storage type, stored inert and flagged), ``object`` (what
+the physical bounds need beyond the arrays, when known: ``extent``, the object
+the model describes (:mod:`translucency.model.extent`: a planar sample's
+rectangle, a semi-infinite slab), and ``tally_photons``, the photons per point
+of the tally it was fitted to), ``physics`` (the per-point bounds of
+:mod:`translucency.model.bounds`: the largest total reflectance, share of the
+energy beyond the object and energy radius, the bounds, the object's size and
+the indices of the points that break a bound), ``software`` and
 ``checksum``: the SHA-256 of every array's decoded bytes in a fixed order, so
 that corruption that survives decompression is still caught.
 
@@ -50,13 +54,12 @@ import zipfile
 from pathlib import Path
 
 import numpy as np
-import zarr
-from zarr.codecs import BloscCodec
 
 from .._validate import TranslucencyError
 from .._version import __version__
 from ..model import MODEL_KINDS, PlanarAlpha, ReflectanceModel, VertexAlpha
 from ..model.bounds import check_physics
+from ..model.extent import extent_from_dict
 from .atomic import atomic_path
 from .outputs import claim_output
 
@@ -240,6 +243,8 @@ def _overflow_message(key: str, cast: np.ndarray, dtype: str, model: Reflectance
 
 def _write_store(path: Path, header: dict, arrays: dict[str, np.ndarray]) -> None:
     """Pack a header and arrays into a zipped Zarr v3 store at ``path``, atomically."""
+    import zarr  # heavy: Zarr loads where a store is read or written, not for --help
+    from zarr.codecs import BloscCodec
 
     with atomic_path(path) as tmp:
         tmp.unlink()  # ZipStore creates the archive itself
@@ -273,11 +278,24 @@ def _header(model: ReflectanceModel, dtype: str, meta: dict | None, checksum: st
     if isinstance(model.alpha, PlanarAlpha):
         header["alpha"] = {"origin": [float(v) for v in model.alpha.origin], "pitch": model.alpha.pitch}
     header.update(model.header_fields())
+    record = _object_record(model)
+    if record:
+        header["object"] = record
     try:
         json.dumps(header)
     except TypeError as exc:
         raise TranslucencyError(f"meta: not JSON-serialisable ({exc})") from None
     return header
+
+
+def _object_record(model: ReflectanceModel) -> dict:
+    """The header's ``object`` field: what the physical bounds need beyond the arrays (empty: nothing)."""
+    record = {}
+    if model.extent is not None:
+        record["extent"] = model.extent.as_dict()
+    if model.tally_photons:
+        record["tally_photons"] = int(model.tally_photons)
+    return record
 
 
 # -- reading -------------------------------------------------------------------
@@ -295,6 +313,11 @@ def _from_arrays(arrays: dict[str, np.ndarray], header: dict) -> ReflectanceMode
         x_i, {name: arrays.get(f"params/{name}") for name in cls.STORED}, alpha, frame, header
     )
     _attach_surface(model, arrays)
+    record = header.get("object") or {}
+    if "extent" in record:
+        model.extent = extent_from_dict(record["extent"])
+    if record.get("tally_photons"):
+        model.tally_photons = int(record["tally_photons"])
     return model
 
 
@@ -336,6 +359,7 @@ def read_header(path) -> dict:
 
 
 def _open(path: Path):
+    import zarr  # heavy: Zarr loads where a store is read or written, not for --help
 
     if not path.exists():
         raise ModelFileError(f"{path}: no such file")

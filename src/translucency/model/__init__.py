@@ -11,13 +11,14 @@
 :func:`direction_weights`   w_l(θ), the anisotropic blend
 :data:`MATERIALS`           Jensen 2001 measured coefficients
 :data:`MODEL_KINDS`         the model classes by the kind a model file stores
-:func:`check_physics`       per-point bounds: total reflectance ≤ 1, energy radius within the object
+:func:`check_physics`       per-point bounds: total reflectance ≤ 1, energy beyond the object
+:class:`Rectangle`          the object a model describes (also ``Diameter``, ``SemiInfinite``)
 ==========================  =====================================================
 """
 
 from ._base import ReflectanceModel
 from .alpha import PlanarAlpha, VertexAlpha
-from .bounds import PhysicsCheck, check_physics, model_extent
+from .bounds import PhysicsCheck, check_physics, model_extent, object_extent
 from .burley import BurleyModel, burley_energy_within, burley_R, burley_shape
 from .dipole import (
     DipoleModel,
@@ -34,6 +35,7 @@ from .directional_dipole import (
 )
 from .directions import direction_angles, direction_weights
 from .exponential import ExponentialModel
+from .extent import Diameter, ObjectExtent, Rectangle, SemiInfinite, extent_from_dict
 from .materials import MATERIALS, Material, material
 from .pbd import PBDModel, fresnel_moment, pbd_coefficients, pbd_R_d, pbd_total_without_kappa
 
@@ -74,5 +76,11 @@ __all__ = [
     "material",
     "check_physics",
     "model_extent",
+    "object_extent",
     "PhysicsCheck",
+    "ObjectExtent",
+    "Rectangle",
+    "Diameter",
+    "SemiInfinite",
+    "extent_from_dict",
 ]

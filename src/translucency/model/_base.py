@@ -51,6 +51,13 @@ class ReflectanceModel(ABC):
     #: exitance Σ_v A_v R_d(x_i, v) per unit incident power.  The renderer takes the near field and each
     #: kernel's total from them (:func:`translucency.render.transport.transport_matrices`).
     measured: dict | None = None
+    #: the object the model describes (:mod:`translucency.model.extent`); None: α's support (a planar
+    #: sample at least as large as its windows, a mesh's bounding box).  The fitters set it from the data
+    #: set (a planar sample's size), a semi-infinite slab has none.
+    extent = None
+    #: photons per incident point of the photon tally the model was fitted to, if any: sets how far a
+    #: total reflectance may exceed 1 by noise (:mod:`translucency.model.bounds`)
+    tally_photons: int | None = None
 
     def __init__(self, x_i, alpha: Modulation, frame=None):
         x_i = as_float_array("x_i", x_i, ndim=2)
@@ -170,6 +177,20 @@ class ReflectanceModel(ABC):
         """:math:`\\int P_i\\, dA` over the plane for every incident point, shape (N, 3)."""
         i = np.arange(self.n_points)
         return self.energy_within(i, np.full(self.n_points, np.inf))
+
+    def energy_beyond(self, distance: np.ndarray) -> np.ndarray:
+        r"""Energy (without α) each profile places beyond an edge, shape (N, 3).
+
+        ``distance`` (N, T): the edge's distance (mm, inf: none) from x_i along the T angles
+        :math:`\theta_t = 2\pi (t + 1/2) / T` of the tangent frame.  For a radial profile the energy of the
+        wedge dθ beyond R(θ) is (ρ − E(R(θ))) dθ / 2π, E the energy within a disk
+        (:meth:`energy_within`): the mean over θ of ρ − E(R(θ)).
+        """
+        i = np.broadcast_to(np.arange(self.n_points)[:, None], distance.shape)
+        total = self.total_reflectance()[:, None, :]
+        finite = np.isfinite(distance)[..., None]
+        within = self.energy_within(i, np.where(finite[..., 0], distance, 0.0))
+        return np.where(finite, total - within, 0.0).mean(axis=1)
 
     def energy_radius(self, fraction: float = 0.999) -> np.ndarray:
         """Radius (mm) holding ``fraction`` of each point's energy, max over channels.

@@ -16,7 +16,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 from .._validate import TranslucencyError, as_float_array, check_nonnegative, check_positive
 
@@ -116,6 +115,8 @@ class VertexAlpha:
     def at(self, x_o: np.ndarray) -> np.ndarray:
         """:math:`\\alpha` of the vertex nearest to each point of shape (..., 3)."""
         if self._tree is None:
+            from scipy.spatial import cKDTree  # heavy: SciPy loads only where α is looked up on a mesh
+
             object.__setattr__(self, "_tree", cKDTree(self.vertices))
         x_o = np.asarray(x_o, dtype=np.float64)
         _, idx = self._tree.query(x_o.reshape(-1, 3))

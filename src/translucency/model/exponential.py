@@ -69,11 +69,11 @@ class ExponentialModel(ReflectanceModel):
     Examples
     --------
     >>> from translucency.model import PlanarAlpha
-    >>> c = np.array([[[[0.5, 0.1, 0.01]]]]); d = np.array([[[[-4.0, -1.0, -0.3]]]])
+    >>> c = np.array([[[[0.5, 0.1, 0.01]]]]); d = np.array([[[[-4.0, -1.5, -0.6]]]])
     >>> m = ExponentialModel([[0.0, 0.0]], c, d, PlanarAlpha.uniform((8, 8), (-2, -2), 0.5),
     ...                      s_g=[0.8], s_b=[0.6])
     >>> m.total_reflectance().round(4)   # 2π Σ c/d² × (1, s_g, s_b)
-    array([[1.5228, 1.2182, 0.9137]])
+    array([[0.6501, 0.5201, 0.3901]])
     """
 
     kind = "exponential"
@@ -199,6 +199,29 @@ class ExponentialModel(ReflectanceModel):
         i = np.asarray(i)
         radius = np.broadcast_to(np.asarray(radius, dtype=np.float64), i.shape)
         return self._term_energy(i, radius).sum(axis=(-1, -2)) * self.colour_scale[i]
+
+    def energy_beyond(self, distance: np.ndarray) -> np.ndarray:
+        r"""Energy of eq. (1) (without α) beyond an edge at ``distance`` (N, T) mm along the angles
+        θ_t = 2π(t + ½)/T, shape (N, 3) (see :meth:`ReflectanceModel.energy_beyond`).
+
+        Closed form in r: :math:`\int_R^\infty c e^{-a r} r\, dr = c\, e^{-aR}(1 + aR) / a^2` per term,
+        blended over the directions by :math:`w_l(\theta_t)` and averaged over θ (× 2π).
+        """
+        T = distance.shape[1]
+        w = direction_weights(TWO_PI * (np.arange(T) + 0.5) / T, self.n_directions)  # (T, m)
+        out = np.zeros((self.n_points, self.c.shape[1]))
+        for s in range(0, self.n_points, 64):  # blocks of points: (64, T, C, m, n) at a time
+            a, c = -self.d[s : s + 64, None], self.c[s : s + 64, None]
+            aR = np.minimum(a * distance[s : s + 64, :, None, None, None], 1e3)  # inf: no energy beyond
+            tail = np.sum(c * np.exp(-aR) * (1.0 + aR) / a**2, axis=-1)  # (k, T, C, m)
+            out[s : s + 64] = TWO_PI * np.einsum("ktcm,tm->kc", tail, w) / T
+        return out * self.colour_scale  # (N, C) broadcast over the channels, times (1, s_g, s_b)
+
+    def direction_totals(self) -> np.ndarray:
+        r"""Each direction's own total :math:`2\pi \sum_k c_{lk} / d_{lk}^2` (the total of a point whose
+        profile were direction l's all round), shape (N, 3, m); their mean over l is the total."""
+        own = TWO_PI * np.sum(self.c / self.d**2, axis=-1)  # (N, C, m)
+        return self._expand(own) * self.colour_scale[:, :, None]
 
     def energy_radius(self, fraction: float = 0.999) -> np.ndarray:
         """Truncation radius in mm: the largest, over channels *and directions*,

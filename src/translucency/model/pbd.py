@@ -58,7 +58,6 @@ from abc import abstractmethod
 from functools import lru_cache
 
 import numpy as np
-from numba import njit
 
 from .._validate import TranslucencyError
 from ._base import MediumStorage, ReflectanceModel, medium_parameters
@@ -150,9 +149,9 @@ def pbd_coefficients(sigma_a, sigma_s_prime, eta) -> dict:
     }
 
 
-@njit(cache=True, nogil=True)
 def _beam_kernel(r, sigma_a, sigma_s, C1, C2, eta, U, WU, kappa, multiple, single):  # pragma: no cover
-    """Σ over the beam nodes (optical depths U) of the MS and/or SS integrands, per element (Numba)."""
+    """Σ over the beam nodes (optical depths U) of the MS and/or SS integrands, per element (compiled by
+    Numba: :func:`_compiled_kernel`)."""
     out = np.zeros(r.size)
     t_crit = np.sqrt(max(eta * eta - 1.0, 0.0))
     n_in = 1.0 / eta  # relative index seen from inside
@@ -206,13 +205,21 @@ def _beam_kernel(r, sigma_a, sigma_s, C1, C2, eta, U, WU, kappa, multiple, singl
     return out
 
 
+@lru_cache(maxsize=1)
+def _compiled_kernel():
+    """:func:`_beam_kernel` compiled by Numba, on first use (a model file is read without Numba)."""
+    from numba import njit  # heavy: Numba loads only where a PBD or directional-dipole profile is evaluated
+
+    return njit(cache=True, nogil=True)(_beam_kernel)
+
+
 def _beam(r, sigma_a, sigma_s_prime, eta, *, kappa=True, multiple=True, single=True) -> np.ndarray:
     """Broadcast r (mm), σ_a, σ_s' (mm⁻¹) and run :func:`_beam_kernel` over the elements."""
     r, sa, ss = np.broadcast_arrays(*(np.asarray(v, dtype=np.float64) for v in (r, sigma_a, sigma_s_prime)))
     shape = r.shape
     C1, C2 = fresnel_moment(1, float(eta)), fresnel_moment(2, float(eta))
     flat = (np.ascontiguousarray(v).ravel() for v in (r, sa, ss))
-    out = _beam_kernel(*flat, C1, C2, float(eta), _TAU, _WU, kappa, multiple, single)
+    out = _compiled_kernel()(*flat, C1, C2, float(eta), _TAU, _WU, kappa, multiple, single)
     return out.reshape(shape)
 
 

@@ -16,17 +16,15 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-import numpy as np
-
 from ..data import default_dataset_path, default_fine_profiles_path, default_truth_path
-from ..evaluate.baselines import material_profiles, plot_profiles
+from ..evaluate.baselines import fits_model, material_profiles, plot_profiles
 from ..evaluate.report import write_report
 from ..fit.planar import fit_planar
 from ..io.atomic import atomic_path, write_json
 from ..io.dataset import open_dataset
 from ..io.model_file import save_model
 from ..io.outputs import claim_folder
-from ..model import MATERIALS, ExponentialModel, PlanarAlpha
+from ..model import MATERIALS
 from .default_data import demo_volume
 from .figure2 import run_figure2
 from .relight_check import relight_check
@@ -91,14 +89,9 @@ def run_demo(
     summary = {p.material.name: p.summary() for p in profiles}
     js = write_json(out_dir / "baselines.json", {"units": {"r": "mm", "R_d": "mm^-2"}, "materials": summary})
 
-    # the fits as one per-channel exponential model (C = 3, m = 1)
-    n = len(profiles)
-    c = np.array([[[f.c] for f in p.fits] for p in profiles])  # (N, 3, 1, n)
-    d = np.array([[[f.d] for f in p.fits] for p in profiles])
-    x_i = np.stack([np.arange(n, dtype=float), np.zeros(n)], axis=1)
-    model = ExponentialModel(x_i, c, d, PlanarAlpha.uniform((1, n), origin=(-0.5, -0.5), pitch=1.0))
+    # the fits as one per-channel exponential model (C = 3, m = 1) of semi-infinite slabs
     mpath = save_model(
-        model,
+        fits_model(profiles),
         out_dir / "dipole_fits.model.zip",
         overwrite=True,
         meta={"materials": list(MATERIALS), "source": "3-term fits of the Jensen 2001 dipole"},

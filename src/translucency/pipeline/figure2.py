@@ -63,7 +63,18 @@ def run_figure2(
         overwrite=overwrite,
         meta=fit.metadata(Path(data_path).resolve()),
     )
-    return figure2(fit.model, pig, light, report_dir, volume=volume, camera=camera, spp_reference=spp)
+    # Figure 2 exposes its pair at the reference's own level (auto) and keeps its names
+    return figure2(
+        fit.model,
+        pig,
+        light,
+        report_dir,
+        volume=volume,
+        camera=camera,
+        spp_reference=spp,
+        exposure="auto",
+        name="figure2",
+    )
 
 
 def write_figure2_reference(folder=None, *, spp: int = FIGURE2_REFERENCE_SPP, size=(160, 120)) -> dict:

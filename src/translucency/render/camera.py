@@ -6,7 +6,28 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .._validate import TranslucencyError
 from ..mitsuba import pinhole_sensor_dict
+
+
+def view_direction(view, name: str = "view") -> np.ndarray:
+    """The unit direction from the object's centre towards the camera, from three numbers (or their
+    ``x,y,z`` text); one line naming ``name`` when they are not three finite numbers, not all zero.
+
+    Examples
+    --------
+    >>> view_direction("0,0,2").tolist()
+    [0.0, 0.0, 1.0]
+    """
+    try:
+        parts = view.split(",") if isinstance(view, str) else view
+        direction = np.asarray([float(v) for v in parts], dtype=np.float64)
+    except (TypeError, ValueError):
+        direction = np.zeros(0)
+    if direction.shape != (3,) or not np.isfinite(direction).all() or not np.abs(direction).max() > 0:
+        raise TranslucencyError(f"{name}: expected three finite numbers x,y,z not all zero, got {view!r}")
+    direction = direction / np.abs(direction).max()  # 1e308 or 1e-320: no overflow, no 0
+    return direction / np.linalg.norm(direction)
 
 
 @dataclass(frozen=True)
@@ -25,7 +46,9 @@ class Camera:
         centre = mesh.bounds.mean(axis=0)
         d = np.asarray(direction, dtype=float) / np.linalg.norm(direction)
         dist = 1.9 * float(np.linalg.norm(mesh.extents))
-        return cls(tuple(centre + dist * d), tuple(centre), (0.0, 0.0, 1.0), 35.0, width, height)
+        # the image's up is +z, or +y when looking straight up or down
+        up = (0.0, 1.0, 0.0) if abs(d[2]) > 0.999 else (0.0, 0.0, 1.0)
+        return cls(tuple(centre + dist * d), tuple(centre), up, 35.0, width, height)
 
     def sensor_dict(self, spp: int) -> dict:
         """The Mitsuba ``perspective`` sensor of this camera (box filter, RGB film), ``spp`` samples a

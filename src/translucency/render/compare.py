@@ -16,7 +16,7 @@ from scipy.ndimage import binary_erosion
 from ..mitsuba import rays
 from .camera import Camera
 from .picture import VertexPicture
-from .tonemap import tonemap
+from .tonemap import auto_exposure, tonemap
 
 
 def rel_rmse(image: np.ndarray, reference: np.ndarray, mask: np.ndarray) -> float:
@@ -28,7 +28,7 @@ def rel_rmse(image: np.ndarray, reference: np.ndarray, mask: np.ndarray) -> floa
 def compare(reference: np.ndarray, ours: np.ndarray, mask: np.ndarray) -> dict:
     """Relative RMSE over the object's pixels and mean FLIP of the tone-mapped pair."""
     error = rel_rmse(ours, reference, mask)
-    exposure = 0.8 / max(float(np.quantile(reference[mask], 0.99)), 1e-30)
+    exposure = auto_exposure(reference, mask)
     ref_ldr, our_ldr = tonemap(reference, exposure), tonemap(ours, exposure)
     flip_map, mean_flip, _ = flip_evaluator.evaluate(
         ref_ldr.astype(np.float32), our_ldr.astype(np.float32), "LDR"

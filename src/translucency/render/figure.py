@@ -7,6 +7,7 @@ and the ``volpath`` reference (:mod:`.reference`) through one camera (:mod:`.cam
 
 from __future__ import annotations
 
+import math
 import time
 from pathlib import Path
 
@@ -17,9 +18,10 @@ from ..io.atomic import atomic_path, write_json
 from ..mitsuba import mesh_scene
 from .camera import Camera
 from .compare import compare, region_errors
+from .lights import DEFAULT_DISTANCE, Placement
 from .picture import VertexPicture, coverage
 from .reference import converged_reference
-from .tonemap import save_images, tonemap
+from .tonemap import Exposure, auto_exposure, parse_exposure, save_images, tonemap
 from .transport import exit_fresnel, relight_vertices, transport_matrices, vertex_irradiance
 
 
@@ -37,6 +39,8 @@ def figure2(
     spp: int = 16,
     reference_cache=True,
     progress=None,
+    exposure: Exposure | str = "fixed",
+    name: str = "render",
 ) -> dict:
     """Render ``model`` on ``mesh`` under ``light``; with ``volume`` also the reference and the comparison.
 
@@ -47,10 +51,16 @@ def figure2(
     ``spp_reference`` samples each, with its noise measured and cached
     (:func:`translucency.render.reference.converged_reference`; ``reference_cache`` as there).
     ``progress(done, total, step)`` is called as each step begins (transport, light, picture, reference).
+    ``exposure``: of the PNGs (:class:`~translucency.render.tonemap.Exposure` or its text: ``fixed``,
+    ``fixed+STOPS``, ``auto``, a factor); the FLIP comparison tone-maps the pair at the reference's auto
+    exposure whatever the pictures' (``flip_exposure`` in the summary where they differ).
 
-    Writes ``ours.exr/.png`` (and ``reference.exr/.png``, ``figure2.png``,
-    ``figure2.json``) into ``out_dir``; returns the numbers.
+    Writes ``ours.exr/.png`` (and ``reference.exr/.png`` and ``NAME.png``, reference | ours | FLIP) and
+    the summary ``NAME.json`` (``name``: ``render``; the paper's Figure 2 is ``figure2``) into
+    ``out_dir``; returns the numbers.  The summary states the exposure (``exposure``, the factor on the
+    linear radiance, and, unless it is ``auto``, ``exposure_rule``).
     """
+    exposure = parse_exposure(exposure) if isinstance(exposure, str) else exposure
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     camera = camera or Camera.looking_at(mesh)
@@ -90,9 +100,9 @@ def figure2(
         "eta": eta,
     }
     if volume is None:
-        exposure = 0.8 / max(float(np.quantile(ours[mask], 0.99)), 1e-30)
-        save_images(ours, out_dir / "ours", exposure)
-        write_json(out_dir / "figure2.json", out)
+        scale = _exposure(exposure, model, mesh, light, out, auto=lambda: auto_exposure(ours, mask))
+        save_images(ours, out_dir / "ours", scale)
+        write_json(out_dir / f"{name}.json", out)
         return out
     step(3, "volpath reference (2 renders, cached)")
     reference, ref_info = converged_reference(
@@ -113,12 +123,50 @@ def figure2(
             "speedup_vs_reference": t_ref / (t_prepare + t_relight + t_draw),
         }
     )
-    save_images(reference, out_dir / "reference", cmp["exposure"])
-    save_images(ours, out_dir / "ours", cmp["exposure"])
-    ldr = tonemap(reference, cmp["exposure"]), tonemap(ours, cmp["exposure"])
-    _plot(ldr, flip_map, mask, cmp, out_dir / "figure2.png")
-    write_json(out_dir / "figure2.json", out)
+    scale = _exposure(exposure, model, mesh, light, out, auto=lambda: cmp["exposure"])
+    if scale != cmp["exposure"]:
+        out["flip_exposure"] = cmp["exposure"]
+    save_images(reference, out_dir / "reference", scale)
+    save_images(ours, out_dir / "ours", scale)
+    ldr = tonemap(reference, scale), tonemap(ours, scale)
+    _plot(ldr, flip_map, mask, cmp, out_dir / f"{name}.png")
+    write_json(out_dir / f"{name}.json", out)
     return out
+
+
+def _exposure(exposure: Exposure, model, mesh, light, out: dict, auto) -> float:
+    """The PNGs' exposure factor, stated in ``out`` (``exposure``, and ``exposure_rule`` unless auto).
+
+    A fixed exposure needs the object's reflectance R — the median over incident points of the model's
+    total reflectance (mean of the channels) times the median α — and the light's irradiance E at the
+    relative lights' default distance (:data:`~translucency.render.lights.DEFAULT_DISTANCE` object sizes);
+    where either is not a finite positive number (a black light, a broken model) the picture is exposed
+    ``auto`` and the rule says why.
+    """
+    rule = None
+    if exposure.rule == "scale":
+        scale = float(exposure.scale)
+        rule = f"given: the factor {scale:g}"
+    elif exposure.rule == "fixed":
+        distance = DEFAULT_DISTANCE * Placement.of(mesh).size
+        with np.errstate(all="ignore"):
+            R = float(np.median(model.total_reflectance().mean(axis=1)) * np.median(model.alpha.values))
+            E = float(light.irradiance_scale(distance))
+        try:
+            scale = exposure.fixed(reflectance=R, irradiance=E) if R > 0 and E > 0 else math.nan
+        except (ZeroDivisionError, OverflowError):  # R E so small or large that the factor is no number
+            scale = math.nan
+        if math.isfinite(scale) and scale > 0:
+            rule = exposure.describe(reflectance=R, irradiance=E, distance=distance)
+        else:
+            scale = float(auto())
+            rule = f"auto: no fixed exposure for a reflectance of {R:.4g} under {E:.4g} W/mm^2"
+    else:
+        scale = float(auto())
+    out["exposure"] = scale
+    if rule is not None:
+        out["exposure_rule"] = rule
+    return scale
 
 
 def _plot(ldr, flip_map, mask, cmp, path) -> None:

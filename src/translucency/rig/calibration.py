@@ -1,18 +1,14 @@
-"""Camera calibration of a rig: the plane-to-image homography and the radiometric corrections.
+"""Camera calibration of a rig: the plane-to-image homography with the radiometric corrections.
 
-The sample's top face is the plane z = 0 with sample coordinates (x, y) in mm; a camera maps it to image
-pixels (u, v) (u to the right, v down; pixel [row, col] is centred at (u, v) = (col, row), the convention
-of scikit-image and OpenCV) by a homography
-
-.. math:: (u, v, 1)^T \\sim H\\, (x, y, 1)^T .
-
-:class:`Homography` holds H; it comes from a 3×3 matrix (:meth:`Homography.from_matrix`), from four or more
-marked points with known sample coordinates (:func:`homography_from_points`: the normalised direct linear
-transform, Hartley & Zisserman alg. 4.2, refined by Levenberg–Marquardt on the image distances), or from a
-photograph of a checkerboard lying on the sample plane (:func:`homography_from_checkerboard`).
+The geometry and its conventions (sample mm, image pixels with integer coordinates at pixel centres,
+H from sample to image) are :mod:`.homography`'s; H comes from a 3×3 matrix
+(:meth:`.Homography.from_matrix`), from four or more marked points with known sample coordinates
+(:func:`.homography_from_points`, OpenCV's ``findHomography``) — found in a photograph of bright
+markers by :func:`find_markers` and ordered by :func:`match_markers` — or from a photograph of a
+checkerboard lying on the sample plane (:func:`.homography_from_checkerboard`, OpenCV's corners).
 
 The area Jacobian :math:`|\\det \\partial(u, v)/\\partial(x, y)|` (pixels per mm²) of H is what turns a
-pixel's *flux* into a density on the sample (:meth:`Homography.pixels_per_mm2`).
+pixel's *flux* into a density on the sample (:meth:`.Homography.pixels_per_mm2`).
 
 :class:`Calibration` gathers H with the radiometric side: the scale (pixel value per unit exitance,
 i.e. per W mm⁻² of light leaving the sample, per second of exposure), a dark frame, a flat field and a
@@ -27,130 +23,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-from scipy.optimize import least_squares
 
-from .._validate import TranslucencyError, as_float_array
-
-
-@dataclass(frozen=True)
-class Homography:
-    """A plane-to-image homography: sample (x, y) in mm → image (u, v) in pixels.
-
-    Examples
-    --------
-    >>> h = Homography.from_matrix([[10, 0, 5], [0, 10, 7], [0, 0, 1]])
-    >>> h.to_image([[1.0, 2.0]]).tolist()
-    [[15.0, 27.0]]
-    >>> h.to_sample([[15.0, 27.0]]).tolist()
-    [[1.0, 2.0]]
-    >>> round(float(h.pixels_per_mm2([[0.0, 0.0]])[0]), 9)
-    100.0
-    """
-
-    matrix: np.ndarray
-
-    @classmethod
-    def from_matrix(cls, matrix, name: str = "homography") -> Homography:
-        """Check a 3×3 matrix (finite, well conditioned) and normalise it to H[2, 2] = 1 (or unit norm)."""
-        H = as_float_array(name, matrix, shape=(3, 3))
-        s = np.linalg.svd(H, compute_uv=False)
-        if not s[-1] > 1e-12 * s[0]:
-            raise TranslucencyError(f"{name}: the matrix is singular (singular values {s.tolist()})")
-        H = H / (H[2, 2] if abs(H[2, 2]) > 1e-12 * s[0] else np.linalg.norm(H))
-        return cls(H)
-
-    @property
-    def inverse(self) -> np.ndarray:
-        return np.linalg.inv(self.matrix)
-
-    def to_image(self, xy) -> np.ndarray:
-        """(N, 2) sample points, mm → (N, 2) image points (u, v), pixels."""
-        return _apply(self.matrix, xy)
-
-    def to_sample(self, uv) -> np.ndarray:
-        """(N, 2) image points (u, v), pixels → (N, 2) sample points, mm."""
-        return _apply(self.inverse, uv)
-
-    def pixels_per_mm2(self, xy) -> np.ndarray:
-        """Area Jacobian |det ∂(u, v)/∂(x, y)| at sample points (N,), pixels² per mm².
-
-        For :math:`w = h_3 \\cdot (x, y, 1)`: :math:`\\det J = \\det H / w^3` (H scaled so that the sign
-        of w is positive on the visible side).
-        """
-        xy = np.asarray(xy, dtype=np.float64).reshape(-1, 2)
-        w = self.matrix[2, 0] * xy[:, 0] + self.matrix[2, 1] * xy[:, 1] + self.matrix[2, 2]
-        return np.abs(np.linalg.det(self.matrix) / w**3)
-
-    def to_dict(self) -> dict:
-        return {"matrix": self.matrix.tolist()}
-
-
-def _apply(M: np.ndarray, pts) -> np.ndarray:
-    p = np.asarray(pts, dtype=np.float64).reshape(-1, 2)
-    x, y = p[:, 0], p[:, 1]  # element-wise: a (N, 2) @ (2, 3) product is ten times slower in NumPy
-    w = M[2, 0] * x + M[2, 1] * y + M[2, 2]
-    out = np.empty_like(p)
-    np.divide(M[0, 0] * x + M[0, 1] * y + M[0, 2], w, out=out[:, 0])
-    np.divide(M[1, 0] * x + M[1, 1] * y + M[1, 2], w, out=out[:, 1])
-    return out
-
-
-def _normaliser(p: np.ndarray) -> np.ndarray:
-    """Hartley's similarity: centroid to 0, mean distance √2."""
-    c = p.mean(axis=0)
-    d = np.sqrt(((p - c) ** 2).sum(axis=1)).mean()
-    s = np.sqrt(2) / d if d > 0 else 1.0
-    return np.array([[s, 0, -s * c[0]], [0, s, -s * c[1]], [0, 0, 1.0]])
-
-
-def homography_from_points(sample_mm, image_px, *, refine: bool = True) -> tuple[Homography, float]:
-    """Estimate H from N ≥ 4 marked points: sample coordinates (mm) and where they are in the image (px).
-
-    The normalised DLT, then (``refine``) Levenberg–Marquardt on the reprojection error in the image.
-
-    Returns
-    -------
-    Homography, float
-        H and the RMS reprojection error, pixels.
-
-    Examples
-    --------
-    >>> true = Homography.from_matrix([[20, 2, 40], [1, 18, 30], [0.001, 0.002, 1]])
-    >>> xy = np.array([[0, 0], [10, 0], [10, 10], [0, 10], [5, 5]], float)
-    >>> H, rms = homography_from_points(xy, true.to_image(xy))
-    >>> bool(np.allclose(H.matrix, true.matrix, atol=1e-6)), rms < 1e-6
-    (True, True)
-    """
-    xy = as_float_array("marked points (sample mm)", sample_mm, shape=(None, 2))
-    uv = as_float_array("marked points (image px)", image_px, shape=(None, 2))
-    if len(xy) != len(uv):
-        raise TranslucencyError(f"marked points: {len(xy)} sample points but {len(uv)} image points")
-    if len(xy) < 4:
-        raise TranslucencyError(f"marked points: need at least 4 to fix a homography, got {len(xy)}")
-    Tx, Tu = _normaliser(xy), _normaliser(uv)
-    a, b = _apply(Tx, xy), _apply(Tu, uv)
-    rows = []
-    for (x, y), (u, v) in zip(a, b):
-        rows.append([-x, -y, -1, 0, 0, 0, u * x, u * y, u])
-        rows.append([0, 0, 0, -x, -y, -1, v * x, v * y, v])
-    A = np.asarray(rows)
-    _, s, vt = np.linalg.svd(A)
-    if s[-2] < 1e-9 * s[0]:  # a second null direction: collinear or repeated points
-        raise TranslucencyError(
-            "marked points: degenerate (three or more on a line, or repeated); the homography is not fixed"
-        )
-    Hn = vt[-1].reshape(3, 3)
-    M = np.linalg.inv(Tu) @ Hn @ Tx
-    M = M / M[2, 2]
-    if refine and len(xy) > 4:
-
-        def resid(h):
-            return (_apply(np.append(h, 1.0).reshape(3, 3), xy) - uv).ravel()
-
-        M = np.append(least_squares(resid, M.ravel()[:8], method="lm").x, 1.0).reshape(3, 3)
-    H = Homography.from_matrix(M, "homography from marked points")
-    rms = float(np.sqrt(np.mean(np.sum((H.to_image(xy) - uv) ** 2, axis=1))))
-    return H, rms
+from .._validate import TranslucencyError
+from .checkerboard import homography_from_checkerboard
+from .homography import Homography, homography_from_points
 
 
 def find_markers(image: np.ndarray, n: int, *, threshold: float | None = None) -> np.ndarray:
@@ -186,80 +62,6 @@ def match_markers(sample_mm, found_px, guess: Homography | None = None) -> np.nd
         return uv[np.argmin(d, axis=1)]
     ang = lambda p: np.arctan2(p[:, 1] - p[:, 1].mean(), p[:, 0] - p[:, 0].mean())  # noqa: E731
     return uv[np.argsort(ang(uv))][np.argsort(np.argsort(ang(xy)))]
-
-
-def homography_from_checkerboard(
-    image: np.ndarray, inner: tuple[int, int], square_mm: float, origin_mm=(0.0, 0.0)
-) -> tuple[Homography, float]:
-    """H from a photograph of a checkerboard on the sample plane.
-
-    ``inner`` = (columns, rows) of inner corners; corner (i, j) lies at ``origin_mm + square_mm·(i, j)``.
-    Corners are found with Harris + sub-pixel refinement (scikit-image), kept where a small circle around
-    them crosses light and dark four times (X-corners, not the board's outer L-corners); the four
-    outermost give a first H, which orders all of them; the final H uses every corner.  A board looks
-    alike turned by 90° or 180°: the labelling chosen is the one seen from above (the sample's z axis
-    towards the camera) whose x axis runs most nearly left to right in the image.
-    """
-    from skimage.feature import corner_harris, corner_peaks, corner_subpix  # only for checkerboards
-
-    nx, ny = (int(v) for v in inner)
-    if nx < 2 or ny < 2:
-        raise TranslucencyError(f"checkerboard: need at least 2 x 2 inner corners, got {inner}")
-    grey = np.asarray(image, dtype=np.float64)
-    grey = grey.mean(axis=2) if grey.ndim == 3 else grey
-    grey = grey / (np.nanmax(grey) or 1.0)
-    resp = corner_harris(grey, sigma=2)
-    peaks = corner_peaks(resp, min_distance=5, threshold_rel=0.05)
-    if len(peaks) < nx * ny:
-        raise TranslucencyError(f"checkerboard: found {len(peaks)} corners, expected {nx * ny}")
-    sub = corner_subpix(grey, peaks, window_size=9)
-    sub = np.where(np.isfinite(sub), sub, peaks)
-    keep = np.array([_is_saddle(grey, p) for p in sub])  # X-corners of four squares, not a board's L-corners
-    sub, peaks = sub[keep], peaks[keep]
-    if len(sub) < nx * ny:
-        raise TranslucencyError(f"checkerboard: found {len(sub)} inner corners, expected {nx * ny}")
-    strength = resp[peaks[:, 0], peaks[:, 1]]
-    uv = sub[np.argsort(-strength)[: nx * ny], ::-1]
-    ii, jj = np.meshgrid(np.arange(nx), np.arange(ny))
-    grid = np.stack([ii.ravel(), jj.ravel()], axis=1).astype(float)
-    # outer corners: extremes of u + v and u − v (clockwise in the image from the top left)
-    s, d = uv.sum(1), uv[:, 0] - uv[:, 1]
-    quad = uv[[np.argmin(s), np.argmax(d), np.argmax(s), np.argmin(d)]]
-    corners = np.array([[0, 0], [nx - 1, 0], [nx - 1, ny - 1], [0, ny - 1]], float)
-    xy = np.asarray(origin_mm, float) + square_mm * grid
-    best = None
-    # a board is symmetric: of its 8 labellings keep those seen from above (a camera on the +z side sees the
-    # plane mirrored: det ∂(u,v)/∂(x,y) < 0) that fit every corner, and take the one whose x axis runs most
-    # nearly left to right in the image
-    for flip in (False, True):
-        for k in range(4):
-            order = np.roll(corners[::-1] if flip else corners, k, axis=0)
-            try:
-                first, _ = homography_from_points(order, quad, refine=False)
-            except TranslucencyError:
-                continue
-            ordered = match_markers(grid, uv, first)
-            if len(np.unique(ordered.round(6), axis=0)) < len(ordered):
-                continue
-            H, rms = homography_from_points(xy, ordered)
-            c = xy.mean(axis=0)
-            J = np.stack([H.to_image([c + [1e-3, 0]])[0], H.to_image([c + [0, 1e-3]])[0]], 1)
-            J = J - H.to_image([c])[0][:, None]
-            if np.linalg.det(J) < 0 and rms < 1.0 and (best is None or J[0, 0] > best[2]):
-                best = (H, rms, J[0, 0])
-    if best is None:
-        raise TranslucencyError("checkerboard: the corners found do not form the board's grid")
-    return best[0], best[1]
-
-
-def _is_saddle(grey: np.ndarray, rc, radius: float = 3.5) -> bool:
-    """Does a circle around (row, col) cross light and dark four times (an X-corner)?"""
-    a = np.linspace(0, 2 * np.pi, 24, endpoint=False)
-    r = np.clip(np.round(rc[0] + radius * np.sin(a)).astype(int), 0, grey.shape[0] - 1)
-    c = np.clip(np.round(rc[1] + radius * np.cos(a)).astype(int), 0, grey.shape[1] - 1)
-    ring = grey[r, c]
-    bright = ring > 0.5 * (ring.max() + ring.min())
-    return int(np.count_nonzero(bright != np.roll(bright, 1))) == 4
 
 
 @dataclass
@@ -431,13 +233,17 @@ def load_calibration(path) -> Calibration:
         p = spec["points"]
         if not isinstance(p, dict) or "sample_mm" not in p or "image_px" not in p:
             raise TranslucencyError(f"{path}: points needs sample_mm and image_px lists")
-        H, rms = homography_from_points(p["sample_mm"], p["image_px"])
+        H, rms = homography_from_points(p["sample_mm"], p["image_px"], name=f"{path}: points")
         source["rms_px"] = rms
     else:
         c = spec["checkerboard"]
         img = read_hdr(path.parent / c["image"])
         H, rms = homography_from_checkerboard(
-            img, tuple(c["inner"]), float(c["square_mm"]), c.get("origin_mm", (0, 0))
+            img,
+            tuple(c["inner"]),
+            float(c["square_mm"]),
+            c.get("origin_mm", (0, 0)),
+            name=f"{path}: checkerboard {c['image']}",
         )
         source["rms_px"] = rms
     frame = lambda key: None if spec.get(key) is None else read_hdr(path.parent / spec[key])  # noqa: E731

@@ -74,5 +74,16 @@ class Family:
         """The fitted reflectance model of the current state, with the source's α and frames."""
         raise NotImplementedError
 
+    def keep_totals(self, model: ReflectanceModel, bound: np.ndarray) -> np.ndarray:
+        """Scale down, in place, the amplitudes of the points of ``model`` whose total reflectance exceeds
+        ``bound`` (N, 3) in some channel, to the bound; returns those points' indices.
+
+        The fit's energy guard bounds each round's profiles, but α's normalisation to mean 1 moves its
+        scale into the amplitudes afterwards (:meth:`rescale`), and with few windows over a pixel that
+        factor is far from 1; this keeps the returned model within the bound.  Default: nothing to
+        scale (the physical baselines' totals follow from σ_a, σ_s' and are below 1 by construction).
+        """
+        return np.zeros(0, dtype=np.int64)
+
     def __repr__(self) -> str:
         return f"<{type(self).__name__} {self.name!r}>"

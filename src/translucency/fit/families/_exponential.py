@@ -125,6 +125,17 @@ class ExponentialFamily(Family):
     def rescale(self, state, mean):
         state.c[...] *= mean
 
+    def keep_totals(self, model, bound):
+        total = model.total_reflectance()  # (N, 3): the blend's total for m directions
+        over = total > bound
+        points = np.flatnonzero(over.any(axis=1))
+        if points.size:
+            ratio = np.where(over, bound / np.where(over, total, 1.0), 1.0)[points]
+            # the shared colour's one fall-off (C = 1) scales all three channels alike: by the smallest
+            factor = ratio.min(axis=1, keepdims=True) if model.c.shape[1] == 1 else ratio
+            model.c[points] *= factor[:, :, None, None]
+        return points
+
     def build(self, ctx, state, alpha, frame):
         d = -state.a
         if ctx.C == 1:

@@ -7,7 +7,8 @@ Every direction starts from the point's isotropic fit (its total bounded,
 coordinate descent: directions that share no pixel (even, then odd l) are
 fitted together, with the neighbours' contributions held fixed, their ring
 means shrunk towards the class's mean and anchored to the isotropic fit
-(:func:`translucency.fit._regularise.regularise`).
+(:func:`translucency.fit._regularise.regularise`); their blend's total is kept
+within the isotropic fit's bound (:func:`translucency.fit._regularise.bound_directions`).
 """
 
 from __future__ import annotations
@@ -15,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._pixels import at_pixels, grouped, hat
-from .._regularise import anchor_radii, bound_totals, regularise
+from .._regularise import anchor_radii, bound_directions, bound_totals, regularise
 from .._windows import Segments
 from ._exponential import ExponentialFamily, fit_cold, solve_exponentials
 
@@ -67,3 +68,5 @@ class AnisoFamily(ExponentialFamily):
                 rows = rows.ravel()
                 W_r, Y_r = regularise(ctx, state, sl, ch, W[rows], Y[rows], len(cls))
                 solve_exponentials(ctx, state, sl, ch, W_r, Y_r, rows, radii)
+        # the energy guard of the blend: the directions' total within the isotropic fit's bound
+        state.c[sl] = bound_directions(ctx, ch, state.c[sl], state.a[sl])
