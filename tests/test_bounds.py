@@ -69,7 +69,7 @@ def test_info_json_is_one_object_for_scripts(tmp_path, rng):
     res = runner.invoke(app, ["info", str(path), "--json"])
     assert res.exit_code == 0, res.output
     fields = json.loads(res.output)
-    assert fields["path"] == str(path) and fields["valid"].startswith("yes") and fields["n_points"] == 3
+    assert fields["path"] == str(path) and fields["valid"] is True and fields["n_points"] == 3
 
 
 # -- issue 22: what "the object" is, the share of the energy beyond it, the energy bound per family --------

@@ -163,7 +163,7 @@ def test_cli_evaluates_a_per_vertex_model_on_a_mesh_data_set(ball, tmp_path):
     res = runner.invoke(
         app,
         ["evaluate", str(model), str(data.path), "--truth", str(truth.path), "--report", str(tmp_path / "r")]
-        + ["--json", "-", "--quiet"],
+        + ["--json", "--quiet"],
     )
     assert res.exit_code == 0, res.output
     out = json.loads(res.stdout)

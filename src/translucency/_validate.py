@@ -7,11 +7,43 @@ line and exits with status 2; library callers can catch the exception.
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 
 
 class TranslucencyError(ValueError):
     """A user-facing error: one line that names what is wrong and where."""
+
+
+def plain(value, digits: int = 4) -> str:
+    """``value`` as a message shows it, without Python's internals (``np.float64(…)``, ``array(…)``):
+    numbers to ``digits`` significant digits, sequences and arrays as ``(x, y, z)``, a dataclass (a light)
+    as ``Name(field=value, …)``.
+
+    Examples
+    --------
+    >>> plain((np.float64(-5.0), np.float64(0.25), 120))
+    '(-5, 0.25, 120)'
+    >>> plain(np.array([1e-7, 2.0]))
+    '(1e-07, 2)'
+    """
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        fields = ", ".join(
+            f"{f.name}={plain(getattr(value, f.name), digits)}" for f in dataclasses.fields(value)
+        )
+        return f"{type(value).__name__}({fields})"
+    if isinstance(value, (str, bytes)) or value is None:
+        return str(value)
+    if isinstance(value, (bool, np.bool_)):
+        return str(bool(value))
+    if isinstance(value, (int, np.integer)):
+        return str(int(value))
+    if isinstance(value, (float, np.floating)):
+        return f"{float(value):.{digits}g}"
+    if isinstance(value, (tuple, list, np.ndarray)):
+        return "(" + ", ".join(plain(v, digits) for v in np.asarray(value, dtype=object).ravel()) + ")"
+    return str(value)
 
 
 def as_float_array(name: str, value, *, ndim: int | None = None, shape=None) -> np.ndarray:

@@ -6,7 +6,8 @@ r"""Geometry shared by the stages: sample grids and windows, tangent frames, ver
 * meshes: orthonormal tangent frames around normals (:func:`tangent_frames`),
   the area :math:`A_v` each vertex stands for (:func:`vertex_areas`) and the
   farthest-point choice of incident vertices (:func:`farthest_points`), used by
-  acquisition, fitting and rendering.
+  acquisition, fitting and rendering; an object's bounds and centre (:func:`object_bounds`), which
+  ``translucency info`` prints so that a user can place lights and cameras.
 
 Units: mm, mm², radians.
 """
@@ -108,3 +109,17 @@ def farthest_points(vertices: np.ndarray, k: int, start: int = 0) -> np.ndarray:
 def vertex_areas(mesh) -> np.ndarray:
     """A third of the area of the triangles around each vertex, mm²."""
     return np.bincount(mesh.faces.ravel(), np.repeat(mesh.area_faces / 3.0, 3), minlength=len(mesh.vertices))
+
+
+def object_bounds(vertices) -> dict:
+    """The axis-aligned bounds ``[[x, y, z]min, [x, y, z]max]`` of an object's vertices (V, 3) and their
+    centre, mm, as plain lists (JSON-ready).
+
+    Examples
+    --------
+    >>> object_bounds([[0, 0, 0], [2, 4, 6]])
+    {'bounds_mm': [[0.0, 0.0, 0.0], [2.0, 4.0, 6.0]], 'centre_mm': [1.0, 2.0, 3.0]}
+    """
+    v = np.asarray(vertices, dtype=np.float64).reshape(-1, 3)
+    lo, hi = v.min(axis=0), v.max(axis=0)
+    return {"bounds_mm": [lo.tolist(), hi.tolist()], "centre_mm": ((lo + hi) / 2).tolist()}

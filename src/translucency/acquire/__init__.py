@@ -3,20 +3,33 @@
 :func:`acquire_planar` scans a grid of pencil beams over a heterogeneous slab
 (:class:`Volume`, made by :func:`make_sample` or :func:`load_volume`) and
 writes a chunked, resumable data set (:mod:`translucency.io.dataset`).
+
+The names below load on first use (the walk, Dask and SciPy are heavy; the CLI's ``--help`` reads
+only :data:`GENERATORS`).
 """
 
-from .planar import PlanarSetup, WalkProbe, acquire_planar, estimate_seconds, probe_walk
-from .samples import GENERATORS, make_sample
-from .volume import Volume, load_volume
+from importlib import import_module
 
-__all__ = [
-    "PlanarSetup",
-    "acquire_planar",
-    "estimate_seconds",
-    "probe_walk",
-    "WalkProbe",
-    "GENERATORS",
-    "make_sample",
-    "Volume",
-    "load_volume",
-]
+from .names import GENERATORS
+
+#: name → the module of this package that defines it
+_LAZY = {
+    "PlanarSetup": ".planar",
+    "acquire_planar": ".planar",
+    "estimate_seconds": ".planar",
+    "probe_walk": ".planar",
+    "WalkProbe": ".planar",
+    "make_sample": ".samples",
+    "Volume": ".volume",
+    "load_volume": ".volume",
+}
+
+__all__ = [*_LAZY, "GENERATORS"]
+
+
+def __getattr__(name: str):
+    if name in _LAZY:
+        value = getattr(import_module(_LAZY[name], __name__), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

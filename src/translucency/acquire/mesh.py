@@ -26,7 +26,7 @@ from pathlib import Path
 import numpy as np
 import trimesh
 
-from .._validate import TranslucencyError
+from .._validate import TranslucencyError, plain
 from .._version import __version__
 from ..cluster import open_cluster, parse_scheduler
 from ..geometry import farthest_points, vertex_areas
@@ -80,8 +80,8 @@ def acquire_mesh(
     need = np.asarray(mesh.extents) - np.asarray(volume.size_mm)
     if (need > 1e-6).any():
         raise TranslucencyError(
-            f"volume: {volume.size_mm} mm does not cover the mesh's bounding box "
-            f"{tuple(np.round(mesh.extents, 2))} mm"
+            f"volume: {plain(volume.size_mm)} mm does not cover the mesh's bounding box "
+            f"{plain(mesh.extents)} mm"
         )
     V = len(mesh.vertices)
     incident = farthest_points(np.asarray(mesh.vertices), n_points)

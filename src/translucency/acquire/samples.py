@@ -24,9 +24,8 @@ from scipy.ndimage import gaussian_filter
 
 from .._validate import TranslucencyError
 from ..model.materials import ETA, MATERIALS, material
+from .names import GENERATORS
 from .volume import Volume
-
-GENERATORS = ("homogeneous:<name>", "marble", "apple-slice", "skin", "fibers", "banded", "layered")
 
 
 def _grid(size_mm, voxel_mm):

@@ -24,6 +24,15 @@ FLAGS = {
     "alpha_radius": "--alpha-radius",
     "batch_photons": "--batch",
     "max_memory": "--max-memory",
+    # options whose library name is the flag's word (``terms: …``, ``light: …``); not ``model``, which
+    # library messages also use for the model file
+    "terms": "--terms",
+    "directions": "--directions",
+    "colour": "--colour",
+    "weighting": "--weighting",
+    "material": "--material",
+    "light": "--light",
+    "points": "--points",
 }
 
 #: arguments that are also plain words ("out", "scale"): translated only where a message begins with

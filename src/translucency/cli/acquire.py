@@ -10,7 +10,9 @@ import typer
 
 from .. import resources
 from .._validate import TranslucencyError, check_option
+from ..acquire.names import GENERATORS
 from ..io.dataset import open_dataset
+from ..io.inputs import expect_input
 from ..io.mesh_dataset import open_mesh_dataset
 from ..io.outputs import claim_folder, claim_output
 from ._common import (
@@ -24,6 +26,9 @@ from ._common import (
     user_errors,
 )
 from ._run import Run, bytes_at
+
+#: the sample generators, as --help lists them (the one list make_sample refuses others with)
+SAMPLES = ", ".join(GENERATORS) + " (<name>: one of `translucency materials`)"
 
 app = typer.Typer(
     help="Virtual DISCO: simulate measurements by photon transport (Mitsuba 3 / Dr.Jit).",
@@ -41,7 +46,7 @@ def acquire_photographs_cmd(
         None,
         "--material",
         "-m",
-        help="Sample generator: homogeneous:<name>, marble, apple-slice, skin, fibers.",
+        help=f"Sample generator: {SAMPLES}.",
     ),
     volume: Path = typer.Option(None, "--volume", help="A user's volume (.npz, as acquire planar)."),
     grid: int = typer.Option(2, "--grid", help="Incident points per axis (grid x grid)."),
@@ -76,6 +81,7 @@ def acquire_photographs_cmd(
         check_option("--resolution", v, lo=8, hi=8192)
     if (material is None) == (volume is None):
         raise TranslucencyError("give exactly one of --material NAME or --volume FILE.npz")
+    expect_input(volume, ("volume file",), "--volume")
     claim_folder(out, overwrite=overwrite, inputs=[volume])
     vol = load_volume(volume) if volume is not None else make_sample(material, size, voxel, seed=seed)
     W, H, _ = vol.size_mm
@@ -102,7 +108,7 @@ def acquire_planar_cmd(
         None,
         "--material",
         "-m",
-        help="Sample generator: homogeneous:<name>, marble, apple-slice, skin, fibers.",
+        help=f"Sample generator: {SAMPLES}.",
     ),
     volume: Path = typer.Option(
         None, "--volume", help="A user's volume: .npz with sigma_s, sigma_a (Z,Y,X,3) in 1/mm, voxel_mm."
@@ -167,6 +173,7 @@ def acquire_planar_cmd(
     run = Run("acquire planar", max_memory=max_memory, quiet=quiet)
     if (material is None) == (volume is None):
         raise TranslucencyError("give exactly one of --material NAME or --volume FILE.npz")
+    expect_input(volume, ("volume file",), "--volume")
     if dtype not in ("float32", "float16"):
         raise TranslucencyError(f"--dtype: expected float32 or float16, got {dtype!r}")
 
@@ -250,7 +257,7 @@ def acquire_mesh_cmd(
         None,
         "--material",
         "-m",
-        help="Filling: homogeneous:<name>, marble (default), apple-slice, skin, fibers (object space).",
+        help=f"Filling (in object space): {SAMPLES}; default marble.",
     ),
     volume: Path = typer.Option(
         None,
@@ -281,7 +288,7 @@ def acquire_mesh_cmd(
     from ..acquire.mesh import acquire_mesh, object_volume
     from ..acquire.objects import make_pig
     from ..cluster import parse_scheduler
-    from ..io.mesh import load_mesh
+    from ..io.mesh import check_mesh_file, load_mesh
 
     parse_scheduler(scheduler)  # a bad value or an unreachable cluster: one line, before work
     check_option("--photons", photons, lo=1)
@@ -295,6 +302,10 @@ def acquire_mesh_cmd(
     run = Run("acquire mesh", max_memory=max_memory, quiet=quiet)
     if material is not None and volume is not None:
         raise TranslucencyError("give one of --material NAME or --volume FILE.npz, not both")
+    expect_input(volume, ("volume file",), "--volume")
+    expect_input(mesh, ("mesh file",), "--mesh")
+    if mesh is not None:
+        check_mesh_file(mesh, "--mesh")  # a folder or a missing file: named before the output is judged
     claim_output(out, "mesh data set", overwrite=overwrite, inputs=[mesh, volume], reuse=True)
     obj = load_mesh(mesh, scale_mm=scale, up=up) if mesh is not None else make_pig()
 

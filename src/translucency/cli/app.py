@@ -70,7 +70,7 @@ app.command("materials")(materials.materials)
 app.command("info")(info.info)
 app.command("fit")(fit.fit)
 app.command("render")(render.render)
-app.command("evaluate")(evaluate.evaluate)
+app.command("evaluate", cls=evaluate.EvaluateCommand)(evaluate.evaluate)
 app.add_typer(acquire.app, name="acquire")
 app.add_typer(imports.app, name="import")
 

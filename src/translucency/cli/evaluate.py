@@ -12,11 +12,22 @@ from rich.table import Table
 
 from .. import resources
 from .._validate import TranslucencyError
+from ..io.atomic import write_json
 from ..io.dataset import dataset_identity, open_dataset
+from ..io.inputs import DATA_SETS, expect_input, what_is
 from ..io.mesh_dataset import is_mesh_dataset, open_mesh_dataset
 from ..io.model_file import load_model, read_header
 from ..io.outputs import claim_folder, claim_output
-from ._common import max_memory_option, overwrite_option, quiet_option, scheduler_option, user_errors, warn
+from ._common import (
+    json_option,
+    jsonable,
+    max_memory_option,
+    overwrite_option,
+    quiet_option,
+    scheduler_option,
+    user_errors,
+    warn,
+)
 from ._run import Run
 from .evaluate_mesh import ACCEPTS, evaluate_mesh
 
@@ -30,11 +41,12 @@ def evaluate(
         "data set for a per-vertex model.",
     ),
     report: Path = typer.Option(Path("report"), "--report", help="Directory for the figures and index.html."),
+    as_json: bool = json_option(),
     json_out: Path = typer.Option(
         None,
-        "--json",
-        help="Write the error summary (rel_l2, rel_l2_near/mid/far) here; '-': print it as one JSON "
-        "object on stdout (for scripts).",
+        "--json-out",
+        help="Also write the summary (the object --json prints: rel_l2, rel_l2_near/mid/far, ...) to this "
+        "file. The former --json PATH still works, with a warning.",
     ),
     compare: list[Path] = typer.Option(
         None, "--compare", help="Other model files of the same data (repeatable)."
@@ -58,9 +70,16 @@ def evaluate(
 
     parse_scheduler(scheduler)  # a bad value or an unreachable cluster: one line, before work
 
+    if what_is(model) in DATA_SETS and what_is(data) == "model file":
+        raise TranslucencyError(
+            f"{model}: is a data set and {data} a model file: swapped? evaluate takes MODEL DATA "
+            f"(translucency evaluate {data} {model})"
+        )
+    for path, option in [(model, None), *((p, "--compare") for p in compare or [])]:
+        expect_input(path, ("model file",), option)
+    expect_input(data, DATA_SETS)
+    expect_input(truth, DATA_SETS, "--truth")
     run = Run("evaluate", max_memory=max_memory, quiet=quiet)
-    to_stdout = json_out is not None and str(json_out) == "-"
-    json_out = None if to_stdout else json_out
     if is_mesh_dataset(data):  # per-vertex models on a mesh data set
         evaluate_mesh(
             run,
@@ -68,7 +87,7 @@ def evaluate(
             data,
             report=report,
             json_out=json_out,
-            to_stdout=to_stdout,
+            to_stdout=as_json,
             compare=compare,
             points=points,
             truth=truth,
@@ -114,7 +133,7 @@ def evaluate(
     _warn_other_sample(metas, ds, truth)
     inputs = [model, data, *(compare or []), truth]
     if json_out is not None:
-        claim_output(json_out, "json summary", overwrite=overwrite, inputs=inputs, option="--json")
+        claim_output(json_out, "json summary", overwrite=overwrite, inputs=inputs, option="--json-out")
     claim_folder(report, overwrite=overwrite, inputs=inputs, option="--report")
     units = resources.timing.evaluation_units(points=ds.n_points, pixels=H * W, params=params, datasets=d)
     timing = run.time(units)
@@ -126,7 +145,6 @@ def evaluate(
             report,
             points=picks,
             flagged=flagged,
-            json_path=json_out,
             truth=truth,
             exclusion=exclusion,
             scheduler=scheduler,
@@ -157,9 +175,62 @@ def evaluate(
         "report": report / "index.html",
         **summary,
         "estimate": run.need.as_dict(),
+        "time_estimate": run.timing.as_dict(),
     }
     summary["seconds"] = run.seconds()
-    run.finish(to_stdout, summary, [table, f"report: {report / 'index.html'}"])
+    if json_out is not None:
+        write_json(json_out, jsonable(summary))
+    run.finish(as_json, summary, [table, f"report: {report / 'index.html'}"])
+
+
+class EvaluateCommand(typer.core.TyperCommand):
+    """``evaluate``'s command line: the former ``--json PATH`` is read as ``--json-out PATH`` and
+    ``--json -`` as ``--json``, each with a one-line deprecation warning."""
+
+    def parse_args(self, ctx, args):
+        return super().parse_args(ctx, _former_json(self, list(args)))
+
+
+def _former_json(command, args: list[str]) -> list[str]:
+    """``args`` with the former forms of ``--json`` rewritten: ``--json -``, ``--json=PATH`` and
+    ``--json PATH`` where PATH is a third positional word (the command takes two: MODEL DATA)."""
+    flags = {"--help"} | {
+        name for p in command.params if getattr(p, "is_flag", False) for name in (*p.opts, *p.secondary_opts)
+    }
+    arguments = sum(1 for p in command.params if p.param_type_name == "argument")
+    positional, i = [], 0
+    while i < len(args):  # the indices of the positional words (each option's value skipped)
+        word = args[i]
+        if word == "--":
+            positional += range(i + 1, len(args))
+            break
+        if word.startswith("-") and word != "-":
+            i += 1 if word in flags or "=" in word else 2
+            continue
+        positional.append(i)
+        i += 1
+    out, i = [], 0
+    while i < len(args):
+        word, after = args[i], args[i + 1] if i + 1 < len(args) else None
+        if word.startswith("--json="):
+            after, word = word.split("=", 1)[1], "--json"
+            i -= 1  # the value was part of this word
+        elif (
+            word != "--json"
+            or after is None
+            or not (after == "-" or (i + 1 in positional and len(positional) > arguments))
+        ):
+            out.append(word)
+            i += 1
+            continue
+        if after == "-":
+            warn("--json - is deprecated; --json alone prints the summary on stdout")
+            out.append("--json")
+        else:
+            warn("--json PATH is deprecated; use --json > PATH or --json-out PATH")
+            out += ["--json-out", after]
+        i += 2
+    return out
 
 
 def _identity_of_model(meta: dict):

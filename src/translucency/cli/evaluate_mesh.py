@@ -10,11 +10,12 @@ from rich.table import Table
 
 from .. import resources
 from .._validate import TranslucencyError
+from ..io.atomic import write_json
 from ..io.dataset import dataset_identity
 from ..io.mesh_dataset import is_mesh_dataset, open_mesh_dataset
 from ..io.model_file import load_model, read_header
 from ..io.outputs import claim_folder, claim_output
-from ._common import warn
+from ._common import jsonable, warn
 from ._run import Run
 
 #: what ``evaluate`` takes, for the lines that refuse a mismatch
@@ -91,7 +92,7 @@ def evaluate_mesh(
     )
     inputs = [model, data, *(compare or []), truth]
     if json_out is not None:
-        claim_output(json_out, "json summary", overwrite=overwrite, inputs=inputs, option="--json")
+        claim_output(json_out, "json summary", overwrite=overwrite, inputs=inputs, option="--json-out")
     claim_folder(report, overwrite=overwrite, inputs=inputs, option="--report")
     timing = run.time(
         resources.timing.mesh_evaluation_units(points=ds.n_points, vertices=V, models=len(models), datasets=d)
@@ -100,9 +101,7 @@ def evaluate_mesh(
         f"{len(models)} per-vertex model(s) on {ds.n_points} points x {V:,} vertices; time {timing.text()}"
     )
     with run.work():
-        summary = write_mesh_report(
-            models, ds, report, truth=other, flagged=flagged, exclusion=exclusion, json_path=json_out
-        )
+        summary = write_mesh_report(models, ds, report, truth=other, flagged=flagged, exclusion=exclusion)
     title = (
         f"relative L2 error against the truth {truth}"
         if truth
@@ -122,8 +121,14 @@ def evaluate_mesh(
         f"[dim]{noise_label(truth is not None)}[/]",
         *(f"[dim]{100 * nf[k]:.2f} %[/]" for k in ("all", "near", "mid", "far")),
     )
-    run.finish(
-        to_stdout,
-        {"command": "evaluate", "report": report / "index.html", **summary},
-        [table, f"report: {report / 'index.html'}"],
-    )
+    summary = {
+        "command": "evaluate",
+        "report": report / "index.html",
+        **summary,
+        "estimate": run.need.as_dict(),
+        "time_estimate": run.timing.as_dict(),
+    }
+    summary["seconds"] = run.seconds()
+    if json_out is not None:  # --json-out: the object --json prints
+        write_json(json_out, jsonable(summary))
+    run.finish(to_stdout, summary, [table, f"report: {report / 'index.html'}"])

@@ -12,6 +12,7 @@ import typer
 from .. import resources
 from .._validate import TranslucencyError, check_option
 from ..io.dataset import dataset_identity, open_dataset
+from ..io.inputs import DATA_SETS, expect_input
 from ..io.mesh_dataset import is_mesh_dataset, open_mesh_dataset
 from ..io.model_file import read_header, save_model
 from ..io.outputs import claim_output
@@ -32,13 +33,16 @@ MESH_FIT_CHUNK = 32
 
 @user_errors
 def fit(
-    data: Path = typer.Argument(..., help="A planar data set (.zarr directory)."),
+    data: Path = typer.Argument(
+        ...,
+        help="A planar or a mesh data set (.zarr directory, from acquire planar|mesh or import images).",
+    ),
     out: Path = typer.Option(..., "--out", "-o", help="Model file to write (.model.zip)."),
     model: str = typer.Option(
         "iso",
         "--model",
-        help="iso | aniso (the paper's) | dipole | burley | pbd (photon beam diffusion) | ddipole "
-        "(directional dipole at normal incidence).",
+        help="iso | aniso (the paper's; planar data sets only) | dipole | burley | pbd (photon beam "
+        "diffusion) | ddipole (directional dipole at normal incidence).",
     ),
     terms: str = typer.Option(
         "3", "--terms", "-n", help="Exponential terms n per profile (1-4), or auto (held-out choice)."
@@ -85,7 +89,7 @@ def fit(
     quiet: bool = quiet_option(),
     as_json: bool = json_option(),
 ):
-    """Fit a model per incident point, with the modulation texture alpha, to a planar data set.
+    """Fit a model per incident point, with the modulation texture alpha, to a planar or a mesh data set.
 
     An interrupted fit resumes from OUT.partial.npz when run again with the same arguments.
     """
@@ -99,6 +103,7 @@ def fit(
     check_option("--chunk", chunk, lo=1)
     check_option("--alpha-radius", alpha_radius, lo=0)
     terms, directions = _count_or_auto("--terms", terms), _count_or_auto("--directions", directions)
+    expect_input(data, DATA_SETS)  # a model or a mesh file where the data set belongs: say so
     run = Run("fit", max_memory=max_memory, quiet=quiet, timer=f"fit {model}")
 
     claim_output(out, "model file", overwrite=overwrite, inputs=[data], option="--out")
@@ -106,6 +111,12 @@ def fit(
     on_mesh = is_mesh_dataset(data)
     if on_mesh:
         colour = colour or "shared"
+        if model in FAMILIES and FAMILIES[model].directional:
+            raise TranslucencyError(
+                f"--model {model}: the anisotropic model is for planar data sets; {data} is a mesh data set, "
+                "where the isotropic model is fitted per vertex (r = |x_o - x_i|, as in the paper): use "
+                "--model iso"
+            )
         if terms == "auto":
             raise TranslucencyError("--terms: 'auto' selects on planar data only; give n for a mesh fit")
         if weighting != "poisson":

@@ -1,4 +1,8 @@
-"""``translucency info``: what a model file or a data set holds, its size on disk, whether it is valid."""
+"""``translucency info``: what a model file or a data set holds, its size on disk, whether it is valid.
+
+One record per path (:func:`record`, JSON-ready, its schema in :mod:`.schemas` and docs/json.md) and its
+display as a table (:func:`_rows`): ``--json`` prints the record, numbers as numbers, nothing cut.
+"""
 
 from __future__ import annotations
 
@@ -9,11 +13,16 @@ import numpy as np
 import typer
 from rich.table import Table
 
+from ..geometry import object_bounds
 from ..io.dataset import describe, open_dataset
+from ..io.inputs import expect_input
 from ..io.mesh_dataset import describe_mesh, is_mesh_dataset, open_mesh_dataset
 from ..io.model_file import ModelFileError, load_model, read_header
 from ..model import check_physics
-from ._common import console, user_errors
+from ._common import console, jsonable, user_errors
+
+#: the header fields of a model file that ``info`` lists, in order
+_MODEL_FIELDS = ("format", "version", "kind", "geometry", "n_points", "n_terms", "n_directions", "colour")
 
 
 @user_errors
@@ -22,63 +31,153 @@ def info(
     as_json: bool = typer.Option(False, "--json", help="Print the fields as one JSON object (for scripts)."),
 ):
     """Describe a model file or a data set: what it holds, its size on disk, whether it is valid."""
-    if path.is_dir():
-        ds = open_mesh_dataset(path) if is_mesh_dataset(path) else open_dataset(path)
-        _show(path, describe_mesh(ds) if is_mesh_dataset(path) else describe(ds), as_json)
-        return
-    fields, ok = _info_model(path)
-    _show(path, fields, as_json)
-    if not ok:
+    fields = record(path)
+    if as_json:
+        print(json.dumps(jsonable(fields), allow_nan=False, indent=2))  # plain: no wrapping
+    else:
+        table = Table(title=str(path), show_header=False)
+        for key, value in _rows(fields):
+            table.add_row(f"[bold]{key}[/]", value, style="red" if value.startswith("no") else None)
+        console.print(table)
+    if fields["what"] == "model" and not fields["valid"]:
         raise typer.Exit(1)
 
 
-def _show(path: Path, fields: dict, as_json: bool) -> None:
-    """The fields of ``info`` as a table, or as one JSON object on stdout."""
-    if as_json:
-        print(json.dumps({"path": str(path), **fields}, default=str, indent=2))  # plain: no wrapping
-        return
-    table = Table(title=str(path), show_header=False)
-    for key, value in fields.items():
-        table.add_row(f"[bold]{key}[/]", str(value), style="red" if str(value).startswith("no") else None)
-    console.print(table)
+def record(path: Path) -> dict:
+    """``info``'s record of ``path``: a model file, a planar or a mesh data set."""
+    expect_input(path, ("model file", "planar data set", "mesh data set"))
+    if path.is_dir():
+        if is_mesh_dataset(path):
+            return {
+                "command": "info",
+                "path": path,
+                "what": "mesh data set",
+                **describe_mesh(open_mesh_dataset(path)),
+            }
+        return {"command": "info", "path": path, "what": "planar data set", **describe(open_dataset(path))}
+    return {"command": "info", "path": path, "what": "model", **_model_record(path)}
 
 
-def _info_model(path: Path) -> tuple[dict, bool]:
-    """``info``'s fields of a model file, and whether it is valid (intact and physical)."""
-    size = path.stat().st_size if path.exists() else 0
+def _model_record(path: Path) -> dict:
+    """The record of a model file: its header, whether it is intact and physical, its ranges."""
     header = read_header(path)  # a ModelFileError is a TranslucencyError: one line, exit 2
-    fields = {"size on disk": f"{size:,} bytes ({size / 1e6:.3f} MB)"}
-    for key in (
-        "format",
-        "version",
-        "kind",
-        "geometry",
-        "n_points",
-        "n_terms",
-        "n_directions",
-        "colour",
-        "dtype",
-    ):
-        if key in header:
-            fields[key] = header[key]
-    if header.get("meta"):
-        fields["meta"] = ", ".join(f"{k}={v}" for k, v in header["meta"].items())[:300]
+    fields = {"size_bytes": path.stat().st_size}
+    fields.update({key: header[key] for key in (*_MODEL_FIELDS, "dtype") if key in header})
+    fields["meta"] = header.get("meta") or {}
     try:
         model = load_model(path)
     except ModelFileError as exc:
-        fields["valid"] = f"no — {exc}"
-        return fields, False
+        return {**fields, "valid": False, "intact": False, "problem": str(exc)}
     physics = check_physics(model)
-    fields["valid"] = (
-        "yes (shapes, dtypes, finiteness, eq. (2), checksum, physical bounds)"
-        if physics.ok
-        else "no — the file is intact, but the model is not physical"
-    )
-    fields["physical"] = physics.describe()
     values = model.alpha.values
-    fields["alpha"] = f"shape {model.alpha.shape}, range [{values.min():.3g}, {values.max():.3g}]"
-    fields["total R_d (R,G,B)"] = "mean " + " ".join(f"{v:.4g}" for v in physics.total.mean(axis=0))
-    fields["99.9% energy radius"] = (
-        f"{np.min(physics.radius):.3g} … {np.max(physics.radius):.3g} mm (object {physics.size_mm:.3g} mm)"
+    fields.update(
+        valid=bool(physics.ok),
+        intact=True,
+        problem=None if physics.ok else "the file is intact, but the model is not physical",
+        physical={"ok": bool(physics.ok), "description": physics.describe(), **physics.summary()},
+        alpha={"shape": list(model.alpha.shape), "min": float(values.min()), "max": float(values.max())},
+        total_reflectance_mean=physics.total.mean(axis=0).tolist(),
+        energy_radius_mm={"min": float(np.min(physics.radius)), "max": float(np.max(physics.radius))},
+        object_size_mm=float(physics.size_mm) if np.isfinite(physics.size_mm) else None,
+        object=physics.summary()["object"],
+        beyond_object_max=float(np.max(physics.beyond)) if len(physics.beyond) else 0.0,
+        beyond_object_bound=float(physics.beyond_bound),
     )
-    return fields, physics.ok
+    if model.geometry == "mesh":
+        fields.update(object_bounds(model.alpha.vertices))
+    return fields
+
+
+def _mm(v) -> str:
+    return ", ".join(f"{x:.4g}" for x in v)
+
+
+def _rows(fields: dict):
+    """(label, text) rows of the table a person reads; the record keeps every value in full."""
+    what = fields["what"]
+    size = fields["size_bytes"]
+    size_text = f"{size:,} bytes ({size / 1e6:.3f} MB)"
+    if "bounds_mm" in fields:
+        lo, hi = fields["bounds_mm"]
+        bounds = [
+            (
+                "bounds",
+                f"x {lo[0]:.4g} … {hi[0]:.4g}, y {lo[1]:.4g} … {hi[1]:.4g}, z {lo[2]:.4g} … {hi[2]:.4g} mm",
+            ),
+            ("centre", f"{_mm(fields['centre_mm'])} mm"),
+        ]
+    else:
+        bounds = []
+    if what != "model":
+        damaged = fields["damaged"]
+        rows = [
+            ("format", f"{fields['format']} v{fields['version']}"),
+            ("incident points", str(fields["n_points"])),
+        ]
+        if what == "planar data set":
+            h, w = fields["window_px"]
+            rows += [("window", f"{h} x {w} px at {fields['pitch_mm']} mm"), ("dtype", fields["dtype"])]
+        else:
+            rows += [
+                ("mesh", f"{fields['n_vertices']:,} vertices, {fields['n_faces']:,} faces"),
+                *bounds,
+                ("index matched", str(fields["index_matched"])),
+            ]
+        rows += [
+            (
+                "damaged",
+                ", ".join(f"{k} chunks {v}" for k, v in damaged.items())
+                or "none (every finished chunk present and decodable)",
+            ),
+            ("sample", _short(fields["sample"])),
+            ("photons per point", str(fields["photons"])),
+            ("seed", str(fields["seed"])),
+            ("complete", f"{fields['chunks_done']}/{fields['chunks']} chunks"),
+            ("size on disk", size_text),
+            ("software", json.dumps(fields["software"])),
+        ]
+        return rows
+    rows = [("size on disk", size_text)]
+    rows += [(key, str(fields[key])) for key in (*_MODEL_FIELDS, "dtype") if key in fields]
+    if fields["meta"]:
+        rows.append(("meta", _short(fields["meta"])))
+    if not fields["intact"]:
+        return [*rows, ("valid", f"no — {fields['problem']}")]
+    alpha = fields["alpha"]
+    checks = "shapes, dtypes, finiteness, eq. (2), checksum, physical bounds"
+    rows += [
+        ("valid", f"yes ({checks})" if fields["valid"] else f"no — {fields['problem']}"),
+        ("physical", fields["physical"]["description"]),
+        (
+            "alpha",
+            "shape {}, range [{:.3g}, {:.3g}]".format(tuple(alpha["shape"]), alpha["min"], alpha["max"]),
+        ),
+        ("total R_d (R,G,B)", "mean " + " ".join(f"{v:.4g}" for v in fields["total_reflectance_mean"])),
+        (
+            "beyond the object",
+            "no edge (a semi-infinite slab)"
+            if fields["object_size_mm"] is None
+            else f"up to {100 * fields['beyond_object_max']:.2g}% of a point's energy "
+            f"(bound {100 * fields['beyond_object_bound']:.0f}%)",
+        ),
+        (
+            "99.9% energy radius",
+            f"{fields['energy_radius_mm']['min']:.3g} … {fields['energy_radius_mm']['max']:.3g} mm "
+            f"(on {fields['object']})",
+        ),
+        *bounds,
+    ]
+    return rows
+
+
+def _short(value: dict, limit: int = 300) -> str:
+    """A nested record in one line for the table, cut at a whole entry (``--json`` shows all of it)."""
+    parts, used = [], 0
+    for key, v in value.items():
+        text = f"{key}={json.dumps(jsonable(v))}"
+        if used + len(text) > limit and parts:
+            parts.append("… (--json shows all)")
+            break
+        parts.append(text)
+        used += len(text) + 2
+    return ", ".join(parts)

@@ -3,6 +3,7 @@ through Mitsuba (EXR + PNG), and with ``--reference`` the path-traced reference 
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 
 import typer
@@ -10,6 +11,7 @@ from rich.table import Table
 
 from .. import resources
 from .._validate import TranslucencyError, check_option
+from ..io.inputs import expect_input
 from ..io.model_file import load_model, read_header
 from ..io.outputs import claim_folder
 from ._common import json_option, max_memory_option, overwrite_option, quiet_option, user_errors
@@ -91,6 +93,7 @@ def render(
         check_option("--size", value, lo=1, hi=16384)
     run = Run("render", max_memory=max_memory, quiet=quiet)
 
+    expect_input(model, ("model file",))  # a data set or a mesh file where the model belongs: say so
     m = load_model(model)
     header = read_header(model)
     if m.geometry != "mesh":
@@ -141,6 +144,10 @@ def render(
     table = Table(title=f"render of {model.name}", show_header=False)
     for k, v in res.items():
         table.add_row(k, f"{v:.4g}" if isinstance(v, float) else str(v))
-    run.finish(
-        as_json, {"command": "render", "model": model, "images": out, **res}, [table, f"images: {out}"]
-    )
+    summary = {"command": "render", "model": model, "images": out, **res, "light": _light_record(lights[0])}
+    run.finish(as_json, summary, [table, f"images: {out}"])
+
+
+def _light_record(light) -> dict:
+    """A light as JSON: its kind (point, directional, spot, environment) and its parameters."""
+    return {"kind": type(light).__name__.removesuffix("Light").lower(), **dataclasses.asdict(light)}

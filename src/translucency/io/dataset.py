@@ -27,7 +27,6 @@ and ``request``: the arguments that define the data, compared on resume.
 
 from __future__ import annotations
 
-import json
 import warnings
 from pathlib import Path
 
@@ -242,6 +241,8 @@ def open_dataset(path, *, writable: bool = False) -> PlanarDataset:
         raise TranslucencyError(f"{path}: no such data set")
     import zarr  # heavy: Zarr loads where a store is read or written, not for --help
 
+    if path.is_dir() and not (path / "zarr.json").is_file():
+        raise TranslucencyError(f"{path}: a folder, but not a translucency data set (it holds no zarr.json)")
     try:
         root = zarr.open_group(str(path), mode="r+" if writable else "r")
         header = dict(root.attrs).get(HEADER_KEY)
@@ -317,34 +318,37 @@ def dataset_identity(header: dict) -> dict:
 
 
 def summary_of_store(path: Path, header: dict, done: np.ndarray, damaged: dict, **fields) -> dict:
-    """The ``translucency info`` summary every data set shares — format, points, sample, photons, seed,
-    completion, size and software — with the kind's own ``fields`` and the ``damaged`` chunks
-    ({array: [chunk, ...]}, from ``damaged_chunks()``) in between."""
+    """The ``translucency info`` record every data set shares — format, points, sample, photons, seed,
+    completion, size (bytes) and software — with the kind's own ``fields`` and the ``damaged`` chunks
+    ({array: [chunk, ...]}, from ``damaged_chunks()``) in between; numbers as numbers, objects as objects."""
     size = sum(f.stat().st_size for f in Path(path).rglob("*") if f.is_file())
     acquisition = header.get("acquisition", header)  # planar headers nest it, mesh headers do not
     return {
-        "format": f"{header['format']} v{header['version']}",
-        "incident points": header["n_points"],
+        "format": header["format"],
+        "version": header["version"],
+        "n_points": header["n_points"],
         **fields,
-        "damaged": ", ".join(f"{k} chunks {v}" for k, v in damaged.items())
-        or "none (every finished chunk present and decodable)",
-        "sample": json.dumps(header.get("sample", {}))[:300],
-        "photons per point": acquisition.get("photons"),
+        "damaged": {str(k): [int(c) for c in v] for k, v in damaged.items()},
+        "sample": header.get("sample", {}),
+        "photons": acquisition.get("photons"),
         "seed": acquisition.get("seed"),
-        "complete": f"{int(done.sum())}/{done.size} chunks",
-        "size on disk": f"{size:,} bytes ({size / 1e6:.2f} MB)",
-        "software": json.dumps(header.get("software", {})),
+        "chunks_done": int(done.sum()),
+        "chunks": int(done.size),
+        "complete": bool(done.all()),
+        "size_bytes": size,
+        "software": header.get("software", {}),
     }
 
 
 def describe(ds: PlanarDataset) -> dict:
-    """A JSON-friendly summary for ``translucency info``."""
+    """What ``translucency info`` reports of a planar data set (JSON-ready: docs/json.md)."""
     h = ds.header
     return summary_of_store(
         ds.path,
         h,
         ds["chunk_done"],
         ds.damaged_chunks(),
-        window=f"{h['window'][0]} x {h['window'][1]} px at {h['pitch_mm']} mm",
+        window_px=[int(v) for v in h["window"]],
+        pitch_mm=float(h["pitch_mm"]),
         dtype=h["dtype"],
     )

@@ -79,6 +79,9 @@ def check_mesh(mesh, name: str = "mesh", *, max_hole: float = 0.5):
     mesh.merge_vertices(merge_tex=True, merge_norm=True)  # seams of a texture or normal map are one surface
     if not mesh.is_watertight:
         diagonal = float(np.linalg.norm(mesh.extents))
+        open_edges = len(trimesh.grouping.group_rows(mesh.edges_sorted, require_count=1))
+        shared = _edges_of_more_than_two(mesh)
+        n_faces = len(mesh.faces)
         try:
             perimeters = close_holes(mesh)
         except TranslucencyError:
@@ -90,18 +93,35 @@ def check_mesh(mesh, name: str = "mesh", *, max_hole: float = 0.5):
                 stacklevel=2,
             )
         else:
-            open_edges = len(trimesh.grouping.group_rows(mesh.edges_sorted, require_count=1))
+            what = [f"{open_edges} open edges"] if open_edges else []
+            what += [f"{shared} edges shared by more than two triangles"] if shared else []
+            if perimeters:
+                holes = f"{len(perimeters)} hole" + ("s" if len(perimeters) > 1 else "")
+                what.append(f"{holes}, up to {max(perimeters):.3g} mm around")
+            flat = " — a single triangle has no volume" if n_faces == 1 else ""
             raise TranslucencyError(
-                f"{name}: the surface is not closed ({open_edges} open or non-manifold edges"
-                + (f", holes up to {max(perimeters):.3g} mm around" if perimeters else "")
-                + "); light transport inside an object needs a watertight mesh"
+                f"{name}: the surface is not closed ({', '.join(what)}){flat}; light transport inside an "
+                "object needs a watertight mesh"
             )
     if not mesh.is_winding_consistent:
         trimesh.repair.fix_winding(mesh)
         warnings.warn(f"{name}: inconsistent triangle winding was fixed", stacklevel=2)
-    if mesh.volume < 0:
+    with np.errstate(invalid="ignore", divide="ignore"):  # a flat surface's centre of mass divides by 0
+        volume = float(mesh.volume)
+    if volume < 0:
         mesh.invert()
+    if not abs(volume) > 1e-9 * float(np.linalg.norm(mesh.extents)) ** 3:
+        raise TranslucencyError(
+            f"{name}: the surface is closed but encloses no volume (flat or folded onto itself); light "
+            "transport inside an object needs a solid"
+        )
     return mesh
+
+
+def _edges_of_more_than_two(mesh) -> int:
+    """Edges that more than two triangles share (non-manifold: no inside and outside there)."""
+    _, count = np.unique(np.asarray(mesh.edges_sorted), axis=0, return_counts=True)
+    return int((count > 2).sum())
 
 
 #: object sizes (bounding-box diagonal, mm) a scan is plausible for; outside, ``load_mesh`` warns about units
@@ -113,6 +133,18 @@ _UP = {
     "y": np.array([[1.0, 0, 0], [0, 0, -1], [0, 1, 0]]),  # +y → +z (x stays, z → −y)
     "x": np.array([[0, 0, -1.0], [0, 1, 0], [1, 0, 0]]),  # +x → +z
 }
+
+
+def check_mesh_file(path, option: str = "path") -> Path:
+    """``path`` as a Path when it is a file; one line naming ``option`` when it is missing or a folder."""
+    path = Path(path)
+    if path.is_dir():
+        raise TranslucencyError(
+            f"{option} {path}: is a folder, not a mesh file; give the file itself (OBJ, PLY, STL, ...)"
+        )
+    if not path.exists():
+        raise TranslucencyError(f"{option} {path}: no such mesh file")
+    return path
 
 
 def load_mesh(path, *, scale_mm: float = 1.0, up: str = "z"):
@@ -136,9 +168,7 @@ def load_mesh(path, *, scale_mm: float = 1.0, up: str = "z"):
     20.0
     """
 
-    path = Path(path)
-    if not path.exists():
-        raise TranslucencyError(f"{path}: no such mesh file")
+    path = check_mesh_file(path)
     if not (np.isfinite(scale_mm) and scale_mm > 0):
         raise TranslucencyError(f"scale_mm: must be a positive number of mm per file unit, got {scale_mm}")
     try:

@@ -30,6 +30,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from .._validate import TranslucencyError
+from ..geometry import object_bounds
 from ._store import ChunkedStore
 from .dataset import summary_of_store
 from .outputs import reopen_or_clear
@@ -102,6 +103,8 @@ def open_mesh_dataset(path, *, writable: bool = False) -> MeshDataset:
         raise TranslucencyError(f"{path}: no such mesh data set")
     import zarr  # heavy: Zarr loads where a store is read or written, not for --help
 
+    if path.is_dir() and not (path / "zarr.json").is_file():
+        raise TranslucencyError(f"{path}: a folder, but not a translucency data set (it holds no zarr.json)")
     try:
         group = zarr.open_group(str(path), mode="r+" if writable else "r")
         header = dict(group.attrs).get(HEADER_KEY)
@@ -221,13 +224,17 @@ def create_mesh_dataset(
 
 
 def describe_mesh(ds: MeshDataset) -> dict:
-    """A JSON-friendly summary for ``translucency info``."""
+    """What ``translucency info`` reports of a mesh data set (JSON-ready: docs/json.md), with the object's
+    bounds and centre in mm (where a light or a camera goes)."""
     h = ds.header
+    vertices = np.asarray(ds.group["vertices"][...], dtype=np.float64)
     return summary_of_store(
         ds.path,
         h,
         ds["chunk_done"],
         ds.damaged_chunks(),
-        mesh=f"{h['n_vertices']:,} vertices, {ds.group['faces'].shape[0]:,} faces",
-        **{"index matched": h.get("request", {}).get("index_matched")},
+        n_vertices=int(h["n_vertices"]),
+        n_faces=int(ds.group["faces"].shape[0]),
+        index_matched=h.get("request", {}).get("index_matched"),
+        **object_bounds(vertices),
     )

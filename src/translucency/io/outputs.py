@@ -34,9 +34,11 @@ out /.../thesis.tex: exists and is not a translucency model file
 
 from __future__ import annotations
 
+import errno
 import json
 import os
 import shutil
+import tempfile
 import warnings
 import zipfile
 from contextlib import contextmanager
@@ -55,6 +57,11 @@ KINDS = ("planar data set", "mesh data set", "model file", "output folder", "jso
 _DATASET_KEYS = {"planar data set": "translucency_dataset", "mesh data set": "translucency_mesh_dataset"}
 _MODEL_KEY = "translucency_model"
 _FOLDER_KINDS = ("planar data set", "mesh data set", "output folder")
+
+
+def _a(kind: str) -> str:
+    """``kind`` with its article: "a model file", "an output folder"."""
+    return ("an " if kind[0] in "aeiou" else "a ") + kind
 
 
 # -- recognising the tool's own outputs -------------------------------------------------------
@@ -108,6 +115,47 @@ def _within(inner: Path, outer: Path) -> bool:
     return inner == outer or outer in inner.parents
 
 
+def check_writable(path, option: str | None = "out") -> None:
+    """Refuse, in one line naming ``option`` and ``path``, an output whose folder cannot be written: the
+    nearest existing folder above ``path`` is a file, or creating an entry there fails (no permission, a
+    read-only or a system file system such as /proc). Tried with a folder created and removed at once."""
+    path = Path(path)
+    folder = path.absolute().parent
+    while not folder.exists() and folder != folder.parent:
+        folder = folder.parent
+    name = f"{option} {path}" if option else str(path)
+    if not folder.is_dir():
+        raise TranslucencyError(
+            f"{name}: {folder} is a file, not a folder; choose another path for the output"
+        )
+    try:
+        probe = tempfile.mkdtemp(prefix=".translucency-probe-", dir=folder)
+    except OSError as exc:
+        why = {errno.EACCES: "permission denied", errno.EPERM: "permission denied", errno.EROFS: "read-only"}
+        reason = why.get(exc.errno, "it takes no new files")
+        raise TranslucencyError(
+            f"{name}: the folder {folder} cannot be written ({reason}); choose a folder you can write to"
+        ) from None
+    os.rmdir(probe)
+
+
+#: the name endings of the tool's files, and the kinds that must not carry them
+_SUFFIXES = {
+    ".zarr": ("model file", "output folder", "json summary"),
+    ".model.zip": _FOLDER_KINDS + ("json summary",),
+}
+
+
+def _check_name(path: Path, kind: str, option: str) -> None:
+    """Refuse an output named like another kind (a model file ``x.zarr``, a data set ``x.model.zip``)."""
+    for suffix, kinds in _SUFFIXES.items():
+        if path.name.endswith(suffix) and kind in kinds:
+            named = "a data set" if suffix == ".zarr" else "a model file"
+            raise TranslucencyError(
+                f"{option} {path}: names {named} ({suffix}), but this writes {_a(kind)}; give another name"
+            )
+
+
 def claim_output(
     path, kind: str, *, overwrite: bool, inputs=(), option: str = "out", reuse: bool = False
 ) -> bool:
@@ -143,6 +191,8 @@ def claim_output(
     if kind not in KINDS:
         raise ValueError(f"kind must be one of {KINDS}, got {kind!r}")
     path = Path(path)
+    check_writable(path, option)
+    _check_name(path, kind, option)
     target = path.resolve()
     cwd = Path.cwd().resolve()
     if _within(cwd, target):
@@ -176,13 +226,13 @@ def claim_output(
     if found != kind:
         what = "a translucency " + found if found else "not a translucency " + kind
         if found:
-            what += f", not a {kind}"
+            what += f", not {_a(kind)}"
         raise TranslucencyError(
             f"{option} {path}: exists and is {what}; refusing to replace it — give a new path for the output"
         )
     if not overwrite and not reuse:
         raise TranslucencyError(
-            f"{option} {path}: a {kind} written by translucency is already there; "
+            f"{option} {path}: {_a(kind)} written by translucency is already there; "
             "choose another path or pass overwrite=True to replace it"
         )
     return True
@@ -233,7 +283,7 @@ def reopen_or_clear(
         return old
     if not overwrite:
         raise TranslucencyError(
-            f"{option} {path}: a {kind} made with other arguments is already there; "
+            f"{option} {path}: {_a(kind)} made with other arguments is already there; "
             "choose another path or pass overwrite=True to replace it"
         )
     remove_dataset(path)

@@ -34,7 +34,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .._validate import TranslucencyError
+from .._validate import TranslucencyError, plain
 from .._version import __version__
 from ..io.atomic import atomic_path, write_json
 from ..mitsuba import engine_versions, mitsuba, object_volpath_scene, pinhole_sensor_dict
@@ -60,7 +60,7 @@ def render_reference(
             "data set"
         )
     if not hasattr(light, "emitter_dict"):
-        raise TranslucencyError(f"light: no reference for {light!r}")
+        raise TranslucencyError(f"light: no reference for {plain(light)}")
     emitter = light.emitter_dict()
     seconds = 0.0
     channels = []

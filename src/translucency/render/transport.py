@@ -43,7 +43,7 @@ from numba import njit, prange
 from scipy.sparse.csgraph import dijkstra
 from scipy.spatial import cKDTree
 
-from .._validate import TranslucencyError
+from .._validate import TranslucencyError, plain
 from ..geometry import tangent_frames, vertex_areas
 from ..mitsuba import drjit, load_plugin, mitsuba, rays
 from ._far_field import FarField, far_field_operator
@@ -102,7 +102,7 @@ def vertex_irradiance(mesh, scene, light, eta: float = 1.0) -> np.ndarray:
             )
             > 0
         ):
-            raise TranslucencyError(f"light: the point light at {tuple(p)} mm is inside the object")
+            raise TranslucencyError(f"light: the point light at {plain(p)} mm is inside the object")
         to = p - v
         dist = np.linalg.norm(to, axis=1)
         w = to / dist[:, None]

@@ -36,6 +36,7 @@ from pathlib import Path
 import numpy as np
 
 from .._validate import TranslucencyError
+from ..io.outputs import check_writable
 
 MiB = 2**20
 GiB = 2**30
@@ -140,6 +141,7 @@ def check_resources(command: str, need: Need, max_memory: int | None, out=None) 
             f"{source} ({_size(limit)}); use smaller options or raise --max-memory"
         )
     if out is not None:
+        check_writable(out, option=None)  # a folder that takes no files is not a lack of disk space
         free = free_disk(out)
         if free is not None and need.disk > free:
             raise TranslucencyError(

@@ -1,0 +1,526 @@
+"""The JSON summaries of the commands (``--json``): one schema per command, the checker, the page.
+
+Each schema is JSON Schema (the subset :func:`check` reads: ``type``, ``properties``, ``required``,
+``additionalProperties``, ``items``, ``enum``) with two annotations of its own: ``unit`` (mm, bytes,
+seconds, ...) and ``description``.  The same data make docs/json.md (:func:`markdown`;
+``python -m translucency.cli.schemas > docs/json.md``) and the test that runs every command and checks
+its output against its schema (tests/test_json.py), so the page and the output cannot drift apart.
+
+Examples
+--------
+>>> check({"command": "materials", "eta": 1.3, "materials": {}}, SCHEMAS["materials"])
+[]
+>>> check({"command": "materials", "eta": "1.3", "materials": {}}, SCHEMAS["materials"])
+["eta: expected number, got str '1.3'"]
+"""
+
+from __future__ import annotations
+
+#: JSON type → the Python types that hold it (``bool`` is not a number here)
+_TYPES = {
+    "object": (dict,),
+    "array": (list,),
+    "string": (str,),
+    "integer": (int,),
+    "number": (int, float),
+    "boolean": (bool,),
+    "null": (type(None),),
+}
+
+
+def field(type_, description: str, unit: str | None = None, **more) -> dict:
+    """A leaf of a schema: its JSON type(s), what it is and its unit."""
+    out = {"type": type_, "description": description, **more}
+    if unit is not None:
+        out["unit"] = unit
+    return out
+
+
+def record(description: str, properties: dict, *, optional=(), nullable: bool = False, extra=None) -> dict:
+    """An object of known keys (all required but ``optional``); ``extra``: a schema every other key
+    follows (an object keyed by names, e.g. materials or models), else no other key is allowed."""
+    return {
+        "type": ["object", "null"] if nullable else "object",
+        "description": description,
+        "properties": properties,
+        "required": [k for k in properties if k not in optional],
+        "additionalProperties": False if extra is None else extra,
+    }
+
+
+def array(description: str, items: dict, unit: str | None = None, nullable: bool = False) -> dict:
+    return field(["array", "null"] if nullable else "array", description, unit, items=items)
+
+
+NUMBER = {"type": "number"}
+NUMBER_OR_NULL = {"type": ["number", "null"]}
+INTEGER = {"type": "integer"}
+RGB = array("red, green, blue", NUMBER)
+XYZ = array("x, y, z", NUMBER)
+
+# -- pieces several commands share --------------------------------------------------------------------
+ESTIMATE = record(
+    "What the command was estimated to need before it started.",
+    {
+        "memory_bytes": field("integer", "Peak memory.", "bytes"),
+        "disk_bytes": field("integer", "Disk space written.", "bytes"),
+        "dominated_by": field("string", "What the memory is mostly, and the option that lowers it."),
+    },
+)
+TIME_ESTIMATE = record(
+    "How long the command was estimated to take.",
+    {
+        "seconds": field("number", "Estimated time.", "s"),
+        "source": field(
+            "string", "Where the estimate comes from (this machine's calibration, a probe, ...)."
+        ),
+    },
+)
+_WORKING = {
+    "estimate": ESTIMATE,
+    "time_estimate": TIME_ESTIMATE,
+    "seconds": field("number", "Time the work took.", "s"),
+}
+BOUNDS = {
+    "bounds_mm": array("The object's axis-aligned bounds: [[x, y, z] min, [x, y, z] max].", XYZ, "mm"),
+    "centre_mm": field("array", "The centre of those bounds, x, y, z.", "mm", items=NUMBER),
+}
+
+
+def _command(name: str) -> dict:
+    return field("string", "The command.", enum=[name])
+
+
+# -- acquire ------------------------------------------------------------------------------------------
+_ACQUIRED = {
+    "out": field("string", "The data set written (a Zarr folder)."),
+    "points": field("integer", "Incident points."),
+    "photons": field("integer", "Photons per incident point and channel."),
+    "seed": field("integer", "Random seed of the photons."),
+    "complete": field("boolean", "Every chunk of points is acquired."),
+}
+ACQUIRE_PLANAR = record(
+    "`translucency acquire planar --json`: the planar data set written.",
+    {
+        "command": _command("acquire planar"),
+        **_ACQUIRED,
+        "window_pixels": array("Window height, width around each incident point.", INTEGER, "pixels"),
+        **_WORKING,
+    },
+)
+ACQUIRE_MESH = record(
+    "`translucency acquire mesh --json`: the mesh data set written.",
+    {
+        "command": _command("acquire mesh"),
+        **_ACQUIRED,
+        "vertices": field("integer", "Vertices of the mesh (the outgoing points)."),
+        **_WORKING,
+    },
+)
+
+# -- fit ----------------------------------------------------------------------------------------------
+FIT = record(
+    "`translucency fit --json`: the model file written.",
+    {
+        "command": _command("fit"),
+        "model": field("string", "The model file written (.model.zip)."),
+        "dataset": field("string", "The data set fitted (as given)."),
+        "kind": field("string", "Model family: exponential, dipole, burley, pbd, ddipole."),
+        "geometry": field("string", "planar or mesh.", enum=["planar", "mesh"]),
+        "n_points": field("integer", "Incident points of the model."),
+        "rounds": field("integer", "Alternation rounds run (parameters, then alpha)."),
+        "objective_per_round": array("The fit's objective after each round.", NUMBER),
+        "flagged_points": array("Incident points without usable data (planar fits).", INTEGER),
+        "unphysical_points": array("Incident points that break a physical bound (see `info`).", INTEGER),
+        **_WORKING,
+    },
+)
+
+# -- evaluate -----------------------------------------------------------------------------------------
+_BANDS = "all (every valid pair), near (< 1 mm), mid (1-4 mm), far (> 4 mm); null where a band is empty"
+_BY_BAND = record(
+    f"By distance band: {_BANDS}.",
+    {k: field(["number", "null"], f"{k} band.", "fraction") for k in ("all", "near", "mid", "far")},
+)
+_ERRORS = {
+    "rel_l2": field("number", "Relative L2 error over every valid pair (definition.rel_l2).", "fraction"),
+    "rel_l2_near": field(["number", "null"], "The same over r < 1 mm.", "fraction"),
+    "rel_l2_mid": field(["number", "null"], "The same over 1 mm <= r < 4 mm.", "fraction"),
+    "rel_l2_far": field(["number", "null"], "The same over r >= 4 mm.", "fraction"),
+    "noise_floor": _BY_BAND,
+    "beyond_noise": record(
+        "The error left after the truth's own noise, by band; null in-sample.",
+        _BY_BAND["properties"],
+        nullable=True,
+    ),
+    "energy_error": record(
+        "Relative error of each point's energy, by band, over the window and in total.",
+        {
+            k: field(["number", "null"], f"{k}.", "fraction")
+            for k in ("near", "mid", "far", "window", "total")
+        },
+    ),
+    "energy_noise": record(
+        "The reference's noise of those energies.",
+        {k: field(["number", "null"], f"{k}.", "fraction") for k in ("near", "mid", "far", "window")},
+    ),
+    "per_point": record(
+        "Per-incident-point relative error.",
+        {
+            "median": field(["number", "null"], "Median."),
+            "p95": field(["number", "null"], "95th percentile."),
+        },
+    ),
+    "flagged_points": array("Points the fit flagged (left out of the errors).", INTEGER),
+    "physics": field("object", "The model's physical check (as `info --json`'s `physical`, without ok)."),
+}
+_MODEL_ERRORS = record(
+    "One model's errors.",
+    {**_ERRORS, "in_sample": field("object", "The same numbers against the fitted data (with --truth).")},
+    optional=("in_sample",),
+)
+EVALUATE = record(
+    "`translucency evaluate --json` (and the file of `--json-out`): the errors of the first model at the "
+    "top, every model's under `models`. Paths are relative to the report's folder.",
+    {
+        "command": _command("evaluate"),
+        "report": field("string", "The report page written (index.html)."),
+        "written_by": field("string", "translucency and its version."),
+        "command_line": field("string", "The command line that wrote the report."),
+        "date": field("string", "When, ISO 8601 with the time zone."),
+        "dataset": field("string", "The data set evaluated, relative to the report's folder."),
+        "truth": field(["string", "null"], "The independent acquisition (--truth), or null."),
+        "paths": field("string", "What the paths are relative to."),
+        "evaluated_against": field("string", "The fitted data, or the truth."),
+        "model": field("string", "The label of the first model (its numbers are at the top)."),
+        **_MODEL_ERRORS["properties"],
+        "bands_mm": record(
+            "The distance bands, [from, to] (to null: no limit).",
+            {k: array(f"The {k} band.", NUMBER_OR_NULL, "mm") for k in ("near", "mid", "far")},
+        ),
+        "models": record("Every model's errors, by its label.", {}, extra=_MODEL_ERRORS),
+        "profile_points": array("Incident points of the profile figure.", INTEGER),
+        "fine_profiles": field(
+            ["object", "null"], "The truth's fine ring profiles (bin_mm, photons), or null."
+        ),
+        "definition": field("object", "What each number means, in words."),
+        "summary": field("string", "What the reader should conclude, in words, generated from the numbers."),
+        **_WORKING,
+    },
+    optional=("in_sample",),
+)
+
+# -- render -------------------------------------------------------------------------------------------
+RENDER = record(
+    "`translucency render --json`: the pictures written and how long each step took.",
+    {
+        "command": _command("render"),
+        "model": field("string", "The model file rendered."),
+        "images": field("string", "The folder of ours.exr/.png (and the reference's)."),
+        "vertices": field("integer", "Vertices of the object."),
+        "transport_nonzeros": field("integer", "Vertex pairs of the sparse transport."),
+        "prepare_s": field("number", "Building the transport.", "s"),
+        "relight_s": field("number", "Irradiance and relighting.", "s"),
+        "draw_s": field("number", "Drawing the picture.", "s"),
+        "light": field(
+            "object",
+            "The light: kind (point, directional, spot, environment) and its parameters (position, "
+            "direction, target in mm; intensity W/sr, irradiance W/mm^2, radiance W/(mm^2 sr)).",
+        ),
+        "eta": field("number", "Relative index of refraction at the surface."),
+        "rel_rmse": field(
+            ["number", "null"], "Relative RMSE of ours against the reference (with --reference)."
+        ),
+        "flip_mean_object": field("number", "Mean FLIP over the object's pixels (with --reference)."),
+        "flip_mean_image": field("number", "Mean FLIP over the image (with --reference)."),
+        "exposure": field("number", "Exposure of the PNGs: the linear scale before sRGB (--exposure)."),
+        "exposure_rule": field(
+            "string", "How the exposure was chosen (fixed: from the object and the light)."
+        ),
+        "flip_exposure": field(
+            "number", "The exposure FLIP compared at (the reference's own, with --reference)."
+        ),
+        "regions": field("object", "Errors per region of the picture (with --reference)."),
+        "reference_s": field("number", "Path tracing the reference.", "s"),
+        "reference_noise": field(["number", "null"], "The reference's own noise (with --reference)."),
+        "reference_cached": field("boolean", "The reference came from the cache."),
+        "reference_spp": field("integer", "Samples per pixel of the reference."),
+        "speedup_vs_reference": field("number", "Reference time over ours."),
+        **_WORKING,
+    },
+    # with --reference: the comparison's numbers (render/compare.py), each a number
+    optional=(
+        "rel_rmse",
+        "flip_mean_object",
+        "flip_mean_image",
+        "exposure_rule",
+        "flip_exposure",
+        "regions",
+        "reference_s",
+        "reference_noise",
+        "reference_cached",
+        "reference_spp",
+        "speedup_vs_reference",
+    ),
+    extra={"type": ["number", "null"], "description": "The comparison's numbers (with --reference)."},
+)
+
+# -- info ---------------------------------------------------------------------------------------------
+_INFO = {
+    "command": _command("info"),
+    "path": field("string", "The path described (as given)."),
+    "what": field("string", "What it is.", enum=["model", "planar data set", "mesh data set"]),
+    "format": field("string", "The file's format name."),
+    "version": field("integer", "The format's version."),
+    "n_points": field("integer", "Incident points."),
+    "size_bytes": field("integer", "Size on disk.", "bytes"),
+}
+INFO_MODEL = record(
+    "`translucency info MODEL.model.zip --json` (exit status 1 when not valid).",
+    {
+        **_INFO,
+        "what": field("string", "What it is.", enum=["model"]),
+        "kind": field("string", "Model family."),
+        "geometry": field("string", "planar or mesh.", enum=["planar", "mesh"]),
+        "n_terms": field("integer", "Exponential terms n (exponential models)."),
+        "n_directions": field("integer", "Directions m (exponential models; 1: isotropic)."),
+        "colour": field("string", "shared or per-channel (exponential models)."),
+        "dtype": field("string", "Storage of the parameters: float32 or float16."),
+        "meta": field(
+            "object", "What the fit recorded (data set, options, objective, acquisition), in full."
+        ),
+        "valid": field("boolean", "Intact (shapes, dtypes, finiteness, eq. (2), checksum) and physical."),
+        "intact": field("boolean", "The file reads back as written."),
+        "problem": field(["string", "null"], "Why it is not valid, or null."),
+        "physical": record(
+            "The physical bounds (model/bounds.py).",
+            {
+                "ok": field("boolean", "Every point within the bounds."),
+                "description": field("string", "The same in words."),
+            },
+            extra={"description": "The bounds' numbers (bounds, extremes, points that break them)."},
+        ),
+        "alpha": record(
+            "The modulation texture alpha.",
+            {
+                "shape": array("Its shape (pixels, or vertices).", INTEGER),
+                "min": field("number", "Smallest value."),
+                "max": field("number", "Largest value."),
+            },
+        ),
+        "total_reflectance_mean": field("array", "Mean total diffuse reflectance, R, G, B.", items=NUMBER),
+        "energy_radius_mm": record(
+            "Radius holding 99.9 % of each point's reflected energy, over the points.",
+            {"min": field("number", "Smallest.", "mm"), "max": field("number", "Largest.", "mm")},
+        ),
+        "object_size_mm": field(
+            ["number", "null"], "The object's size (bounding diagonal); null: a semi-infinite slab.", "mm"
+        ),
+        "object": field(["string", "null"], "What the object is (a W x H mm sample, a mesh, a slab)."),
+        "beyond_object_max": field(
+            "number", "The largest share of a point's energy beyond the object's edge."
+        ),
+        "beyond_object_bound": field("number", "The share beyond the edge a physical point stays within."),
+        **BOUNDS,
+    },
+    optional=(
+        "kind",
+        "geometry",
+        "n_terms",
+        "n_directions",
+        "colour",
+        "dtype",
+        "physical",
+        "alpha",
+        "total_reflectance_mean",
+        "energy_radius_mm",
+        "object_size_mm",
+        "object",
+        "beyond_object_max",
+        "beyond_object_bound",
+        *BOUNDS,
+    ),
+)
+_STORE = {
+    "damaged": field(
+        "object",
+        "Missing or undecodable chunks: {array: [chunk, ...]}; empty when none.",
+        additionalProperties=array("Chunk indices.", INTEGER),
+    ),
+    "sample": field("object", "The sample (or filling) as acquired, in full."),
+    "photons": field(["integer", "null"], "Photons per incident point and channel."),
+    "seed": field(["integer", "null"], "Random seed of the photons."),
+    "chunks_done": field("integer", "Chunks of points acquired."),
+    "chunks": field("integer", "Chunks of points in all."),
+    "complete": field("boolean", "Every chunk acquired."),
+    "software": field("object", "Versions of the software that wrote it."),
+}
+INFO_PLANAR = record(
+    "`translucency info PLANAR.zarr --json`.",
+    {
+        **_INFO,
+        "what": field("string", "What it is.", enum=["planar data set"]),
+        "window_px": array("Window height, width around each incident point.", INTEGER, "pixels"),
+        "pitch_mm": field("number", "Pixel size.", "mm"),
+        "dtype": field("string", "Storage of R_d: float32 or float16."),
+        **_STORE,
+    },
+)
+INFO_MESH = record(
+    "`translucency info MESH.zarr --json`.",
+    {
+        **_INFO,
+        "what": field("string", "What it is.", enum=["mesh data set"]),
+        "n_vertices": field("integer", "Vertices of the mesh."),
+        "n_faces": field("integer", "Triangles of the mesh."),
+        "index_matched": field(["boolean", "null"], "No Fresnel reflection at the surface."),
+        **BOUNDS,
+        **_STORE,
+    },
+)
+
+# -- materials ----------------------------------------------------------------------------------------
+MATERIALS = record(
+    "`translucency materials --json`: Jensen et al. 2001's measured materials.",
+    {
+        "command": _command("materials"),
+        "eta": field("number", "Relative index of refraction of the dipole's R_d (--eta)."),
+        "materials": record(
+            "By name.",
+            {},
+            extra=record(
+                "One material.",
+                {
+                    "sigma_s_prime": field(
+                        "array", "Reduced scattering coefficient, R, G, B.", "1/mm", items=NUMBER
+                    ),
+                    "sigma_a": field("array", "Absorption coefficient, R, G, B.", "1/mm", items=NUMBER),
+                    "R_d_dipole": field(
+                        "array", "The dipole's total diffuse reflectance at eta.", items=NUMBER
+                    ),
+                    "R_d_published": field("array", "Jensen's published R_d (2 digits).", items=NUMBER),
+                },
+            ),
+        ),
+    },
+)
+
+#: the schema of each command's ``--json`` output (``info``: one per kind of path, by its ``what``)
+SCHEMAS = {
+    "acquire planar": ACQUIRE_PLANAR,
+    "acquire mesh": ACQUIRE_MESH,
+    "fit": FIT,
+    "evaluate": EVALUATE,
+    "render": RENDER,
+    "info (model file)": INFO_MODEL,
+    "info (planar data set)": INFO_PLANAR,
+    "info (mesh data set)": INFO_MESH,
+    "materials": MATERIALS,
+}
+_INFO_BY_WHAT = {"model": INFO_MODEL, "planar data set": INFO_PLANAR, "mesh data set": INFO_MESH}
+
+
+def schema_of(summary: dict) -> dict:
+    """The schema a command's summary follows (by its ``command``, and ``info``'s by its ``what``)."""
+    if summary.get("command") == "info":
+        return _INFO_BY_WHAT[summary.get("what")]
+    return SCHEMAS[summary["command"]]
+
+
+def check(value, schema: dict, where: str = "") -> list[str]:
+    """Where ``value`` breaks ``schema``: one line each (empty: it follows it)."""
+    types = schema.get("type")
+    types = [types] if isinstance(types, str) else types
+    name = where or "(top)"
+    if types is not None and not any(_is(value, t) for t in types):
+        return [f"{name}: expected {' or '.join(types)}, got {type(value).__name__} {value!r}"[:200]]
+    if "enum" in schema and value not in schema["enum"]:
+        return [f"{name}: expected one of {schema['enum']}, got {value!r}"]
+    errors = []
+    if isinstance(value, dict):
+        props = schema.get("properties", {})
+        errors += [f"{where}.{k}: missing".lstrip(".") for k in schema.get("required", ()) if k not in value]
+        extra = schema.get("additionalProperties", True)
+        for key, v in value.items():
+            path = f"{where}.{key}" if where else key
+            if key in props:
+                errors += check(v, props[key], path)
+            elif extra is False:
+                errors.append(f"{path}: not documented (translucency/cli/schemas.py, docs/json.md)")
+            elif isinstance(extra, dict):
+                errors += check(v, extra, path)
+    if isinstance(value, list) and "items" in schema:
+        for i, v in enumerate(value):
+            errors += check(v, schema["items"], f"{where}[{i}]")
+    return errors
+
+
+def _is(value, type_: str) -> bool:
+    if isinstance(value, bool) and type_ in ("integer", "number"):
+        return False
+    return isinstance(value, _TYPES[type_])
+
+
+# -- docs/json.md -------------------------------------------------------------------------------------
+_INTRO = """\
+# JSON output of the commands
+
+Every command that takes `--json` prints one JSON object on stdout and nothing else there (progress and
+warnings go to stderr): numbers as numbers, booleans as booleans, objects as objects, nothing cut short;
+NaN and infinity as `null`. `evaluate --json-out PATH` writes the same object to a file (the former
+`evaluate --json PATH` still works, with a deprecation warning). Errors are one `error:` line on stderr,
+exit status 2.
+
+Below, each command's keys, their types and units ("fraction": 0.05 is 5 %). `a.b` is key `b` inside
+object `a`; `a.*` any key of an object keyed by names. This page is generated from
+`src/translucency/cli/schemas.py` (`python -m translucency.cli.schemas > docs/json.md`), and
+`tests/test_json.py` checks every command's actual output against it.
+"""
+
+
+def _type_text(schema: dict) -> str:
+    t = schema.get("type", "any")
+    t = " or ".join(t) if isinstance(t, list) else t
+    if "items" in schema and isinstance(schema["items"], dict) and "type" in schema["items"]:
+        inner = schema["items"]["type"]
+        t += f" of {' or '.join(inner) if isinstance(inner, list) else inner}"
+    if "enum" in schema:
+        t += ": " + ", ".join(f"`{v}`" for v in schema["enum"])
+    return t
+
+
+def _rows(schema: dict, prefix: str = ""):
+    for key, sub in schema.get("properties", {}).items():
+        name = f"{prefix}{key}"
+        optional = key not in schema.get("required", ())
+        yield name, _type_text(sub), sub.get("unit", ""), sub.get("description", ""), optional
+        if sub.get("properties") or isinstance(sub.get("additionalProperties"), dict):
+            yield from _rows(sub, f"{name}.")
+    extra = schema.get("additionalProperties")
+    if isinstance(extra, dict):
+        name = f"{prefix}*"
+        yield name, _type_text(extra), extra.get("unit", ""), extra.get("description", ""), True
+        if extra.get("properties"):
+            yield from _rows(extra, f"{name}.")
+
+
+def markdown() -> str:
+    """docs/json.md: every command's keys, types and units."""
+    lines = [_INTRO]
+    for name, schema in SCHEMAS.items():
+        lines += [
+            f"## {name}",
+            "",
+            schema["description"],
+            "",
+            "| key | type | unit | meaning |",
+            "|---|---|---|---|",
+        ]
+        for key, type_, unit, text, optional in _rows(schema):
+            lines.append(f"| `{key}` | {type_} | {unit} | {text}{' (optional)' if optional else ''} |")
+        lines.append("")
+    return "\n".join(lines)
+
+
+if __name__ == "__main__":  # pragma: no cover — writes docs/json.md
+    print(markdown(), end="")

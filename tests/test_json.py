@@ -1,0 +1,124 @@
+"""``--json`` that scripts can use: every command's output against its documented schema (docs/json.md),
+numbers as numbers, nothing cut; ``evaluate --json`` a flag like the others, its former path form kept."""
+
+import json
+from pathlib import Path
+
+import pytest
+import trimesh
+from typer.testing import CliRunner
+
+from translucency.cli.app import app
+from translucency.cli.schemas import SCHEMAS, check, markdown, schema_of
+
+runner = CliRunner()
+DOCS = Path(__file__).resolve().parents[1] / "docs" / "json.md"
+
+PLANAR = ["acquire", "planar", "--material", "marble", "--grid", "2", "--span", "2", "--photons", "300"]
+PLANAR += ["--size", "6", "6", "3", "--voxel", "0.5", "--window", "2", "--pitch", "0.5"]
+
+
+def _json(args) -> dict:
+    res = runner.invoke(app, [*map(str, args), "--json"])
+    assert res.exit_code in (0, 1), res.output  # info: 1 for a model that is not physical
+    return json.loads(res.stdout, parse_constant=lambda c: pytest.fail(f"{c} in JSON"))
+
+
+@pytest.fixture(scope="module")
+def outputs(tmp_path_factory):
+    """One output of every command that has --json (a tiny planar and a tiny mesh pipeline)."""
+    tmp = tmp_path_factory.mktemp("json")
+    trimesh.creation.icosphere(1, radius=4.0).export(tmp / "ball.ply")
+    out = {}
+    out["acquire planar"] = _json([*PLANAR, "--out", tmp / "a.zarr", "-q"])
+    out["acquire mesh"] = _json(
+        ["acquire", "mesh", "--mesh", tmp / "ball.ply", "--material", "homogeneous:marble", "--voxel", "1"]
+        + ["--points", "2", "--photons", "500", "--chunk", "2", "--out", tmp / "b.zarr", "-q"]
+    )
+    out["fit"] = _json(["fit", tmp / "a.zarr", "-o", tmp / "a.model.zip", "--rounds", "1", "-q"])
+    out["fit (mesh)"] = _json(["fit", tmp / "b.zarr", "-o", tmp / "b.model.zip", "--rounds", "1", "-q"])
+    out["evaluate"] = _json(["evaluate", tmp / "a.model.zip", tmp / "a.zarr", "--report", tmp / "rep", "-q"])
+    out["render"] = _json(["render", tmp / "b.model.zip", "--out", tmp / "img", "--size", "24", "16", "-q"])
+    for name in ("a.zarr", "b.zarr", "a.model.zip", "b.model.zip"):
+        out[f"info {name}"] = _json(["info", tmp / name])
+    out["materials"] = _json(["materials"])
+    out["tmp"] = tmp
+    return out
+
+
+NAMES = ["acquire planar", "acquire mesh", "fit", "fit (mesh)", "evaluate", "render", "materials"]
+NAMES += ["info a.zarr", "info b.zarr", "info a.model.zip", "info b.model.zip"]
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_output_follows_its_documented_schema(outputs, name):
+    summary = outputs[name]
+    assert check(summary, schema_of(summary)) == []
+
+
+def test_every_schema_is_exercised(outputs):
+    used = {id(schema_of(outputs[name])) for name in NAMES}
+    assert {name for name, s in SCHEMAS.items() if id(s) not in used} == set()
+
+
+def test_docs_page_is_the_schemas():
+    """docs/json.md is generated from translucency/cli/schemas.py: regenerate it when a schema changes."""
+    assert DOCS.read_text() == markdown(), "run: python -m translucency.cli.schemas > docs/json.md"
+
+
+def test_info_json_is_typed_and_whole(outputs):
+    """info --json: numbers as numbers, booleans as booleans, objects as objects, meta not cut short."""
+    planar, model = outputs["info a.zarr"], outputs["info a.model.zip"]
+    assert isinstance(planar["size_bytes"], int) and planar["size_bytes"] > 0
+    assert planar["complete"] is True and planar["damaged"] == {} and isinstance(planar["sample"], dict)
+    assert planar["window_px"] == [5, 5] and planar["pitch_mm"] == 0.5
+    assert isinstance(model["valid"], bool) and isinstance(model["physical"]["ok"], bool)
+    assert model["meta"]["fit"]["model"] == "iso" and isinstance(model["meta"]["objective_per_round"], list)
+    assert model["n_points"] == 4 and len(model["total_reflectance_mean"]) == 3
+
+
+def test_info_prints_the_bounds_of_a_mesh_object(outputs):
+    """info on a mesh data set and on a per-vertex model: the object's bounds and centre in mm (a light
+    or a camera is placed relative to them)."""
+    for name in ("b.zarr", "b.model.zip"):
+        fields = outputs[f"info {name}"]
+        lo, hi = fields["bounds_mm"]
+        assert lo == pytest.approx([-4, -4, -4], abs=0.01) and hi == pytest.approx([4, 4, 4], abs=0.01)
+        assert fields["centre_mm"] == pytest.approx([0, 0, 0], abs=0.01)
+        res = runner.invoke(app, ["info", str(outputs["tmp"] / name)], env={"COLUMNS": "200"})
+        assert "bounds" in res.output and "x -4 … 4, y -4 … 4, z -4 … 4 mm" in res.output, res.output
+        assert "centre" in res.output
+    assert "bounds_mm" not in outputs["info a.model.zip"]  # a planar sample has no object to place
+
+
+def test_render_json_names_the_light_as_an_object(outputs):
+    light = outputs["render"]["light"]
+    assert light["kind"] == "point" and light["position"] == [60.0, -80.0, 120.0]
+
+
+def test_materials_json(outputs):
+    marble = outputs["materials"]["materials"]["marble"]
+    assert marble["sigma_s_prime"] == [2.19, 2.62, 3.00] and len(marble["R_d_dipole"]) == 3
+
+
+def test_evaluate_json_is_a_flag_and_the_former_path_form_still_works(outputs):
+    """evaluate --json prints the summary on stdout like every other command; --json-out PATH writes the
+    same object; the former --json PATH (and --json -) still work, each with one deprecation line."""
+    tmp = outputs["tmp"]
+    args = ["evaluate", str(tmp / "a.model.zip"), str(tmp / "a.zarr"), "-q"]
+    res = runner.invoke(
+        app, [*args, "--report", str(tmp / "r1"), "--json", "--json-out", str(tmp / "x.json")]
+    )
+    assert res.exit_code == 0, res.output
+    assert json.loads(res.stdout)["rel_l2"] == json.loads((tmp / "x.json").read_text())["rel_l2"]
+    res = runner.invoke(app, [*args, "--report", str(tmp / "r2"), "--json", str(tmp / "old.json")])
+    assert res.exit_code == 0, res.output
+    assert res.stdout.strip() == ""  # the former form wrote the file only
+    assert res.stderr.strip() == "warning: --json PATH is deprecated; use --json > PATH or --json-out PATH"
+    assert check(json.loads((tmp / "old.json").read_text()), SCHEMAS["evaluate"]) == []
+    res = runner.invoke(app, ["evaluate", "--json", "-", *args[1:], "--report", str(tmp / "r3")])
+    assert res.exit_code == 0, res.output
+    assert json.loads(res.stdout)["command"] == "evaluate" and "deprecated" in res.stderr
+    res = runner.invoke(app, ["evaluate", "--json", *args[1:], "--report", str(tmp / "r4")])
+    assert res.exit_code == 0 and res.stderr == "", res.output  # the flag before the arguments
+    assert json.loads(res.stdout)["command"] == "evaluate"
