@@ -25,6 +25,7 @@ from .acquire import acquire_planar as _acquire_planar
 from .acquire.mesh import acquire_mesh as _acquire_mesh
 from .acquire.mesh import object_volume
 from .evaluate.errors import PlanarErrors, planar_errors
+from .evaluate.mesh_errors import MeshErrors, check_same_points, mesh_errors
 from .fit import FitResult, fit_mesh, fit_planar
 from .io.dataset import PlanarDataset, dataset_identity
 from .io.dataset import open_dataset as _open_planar
@@ -492,39 +493,44 @@ def evaluate(
     flagged=None,
     exclusion_mm: float | None = None,
     scheduler: str | None = "threads",
-) -> PlanarErrors:
-    """Relative L2 errors of a fitted model on a planar data set, or on its independent truth.
+) -> PlanarErrors | MeshErrors:
+    """Relative L2 errors of a fitted model on its data set, or on an independent truth.
 
-    Wraps :func:`translucency.evaluate.errors.planar_errors` (the numbers of ``translucency evaluate``;
-    the figures and the HTML report: :func:`translucency.evaluate.report.write_report`).
+    A planar model on a planar data set: :func:`translucency.evaluate.errors.planar_errors`; a per-vertex
+    model on a mesh data set: :func:`translucency.evaluate.mesh_errors.mesh_errors` (the numbers of
+    ``translucency evaluate``; the reports: :func:`translucency.evaluate.report.write_report`,
+    :func:`translucency.evaluate.mesh_report.write_mesh_report`).
 
     Parameters
     ----------
     model : FitResult, ReflectanceModel or path
-        The fit (its flagged points and exclusion radius are used), a planar model, or a model file
-        (the fit's record in it is used).
-    dataset : PlanarDataset or path
+        The fit (its flagged points and exclusion radius are used), a model, or a model file (the fit's
+        record in it is used).
+    dataset : PlanarDataset, MeshDataset or path
         The data set the model was fitted to.
-    truth : PlanarDataset or path, optional
+    truth : PlanarDataset, MeshDataset or path, optional
         An independent acquisition of the same incident points (another photon seed, usually more
-        photons): the errors are then held out, against the material rather than the fitted noise.
+        photons; on a mesh the same mesh and incident vertices): the errors are then held out, against
+        the material rather than the fitted noise.
     flagged : array of bool, optional
         Points to leave out (default: those the fit flagged).
     exclusion_mm : float, optional
-        Pairs closer than this are left out (default: the fit's, else one pixel).
+        Pairs closer than this are left out (default: the fit's, else one pixel / half the mean edge).
     scheduler : str, optional
-        Where the chunks are evaluated; the errors are the same.
+        Where the chunks of a planar evaluation run; the errors are the same.
 
     Returns
     -------
-    PlanarErrors
+    PlanarErrors or MeshErrors
         ``rel_l2`` (overall), ``bands`` (near < 1 mm, mid 1–4 mm, far > 4 mm), ``noise`` (the
-        reference's noise floor), ``energy``, ``beyond_noise`` and maps per point and pixel.
+        reference's noise floor), ``energy``, ``beyond_noise`` and the errors per point (and per pixel
+        or per vertex).
 
     Raises
     ------
     TranslucencyError
-        A mesh data set or model (planar errors only), or a model of other incident points.
+        A planar model with a mesh data set or the reverse, a model of other incident points, or a
+        truth of other incident points.
 
     Examples
     --------
@@ -535,20 +541,26 @@ def evaluate(
     0.103
     """
     fitted, record = _model_and_record("model", model)
-    if getattr(fitted, "geometry", "planar") != "planar":
-        raise TranslucencyError(
-            "model: a per-vertex model; evaluate computes planar errors (render it instead)"
-        )
     data = open_dataset(dataset) if isinstance(dataset, (str, os.PathLike)) else dataset
-    if not isinstance(data, PlanarDataset):
-        raise TranslucencyError(f"dataset: expected a planar data set or its path, got {type(data).__name__}")
+    if not isinstance(data, (PlanarDataset, MeshDataset)):
+        raise TranslucencyError(f"dataset: expected a data set or its path, got {type(data).__name__}")
+    geometry = getattr(fitted, "geometry", "planar")
+    wanted = "mesh" if isinstance(data, MeshDataset) else "planar"
+    if geometry != wanted:
+        raise TranslucencyError(
+            f"model: a {'per-vertex' if geometry == 'mesh' else 'planar'} model and a {wanted} data set; "
+            "evaluate takes a planar model with a planar data set, or a per-vertex model with a mesh data set"
+        )
     reference = data
     if truth is not None:
         reference = open_dataset(truth) if isinstance(truth, (str, os.PathLike)) else truth
-        if not isinstance(reference, PlanarDataset):
+        if not isinstance(reference, type(data)):
             raise TranslucencyError(
-                f"truth: expected a planar data set or its path, got {type(reference).__name__}"
+                f"truth: expected a {wanted} data set (as dataset) or its path, "
+                f"got {type(reference).__name__}"
             )
+        if isinstance(data, MeshDataset):
+            check_same_points(data, reference)
         if dataset_identity(reference.header) != dataset_identity(data.header):
             warnings.warn(
                 f"truth {reference.path}: measured another sample than {data.path}; "
@@ -561,6 +573,8 @@ def evaluate(
     if exclusion_mm is None:
         exclusion_mm = (record.get("fit") or {}).get("exclusion_mm")
     check_option("exclusion_mm", exclusion_mm, lo=0)
+    if isinstance(data, MeshDataset):
+        return mesh_errors(fitted, reference, flagged=flagged, exclusion_mm=exclusion_mm)
     return planar_errors(fitted, reference, flagged=flagged, exclusion_mm=exclusion_mm, scheduler=scheduler)
 
 

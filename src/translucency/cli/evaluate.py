@@ -1,5 +1,6 @@
 """``translucency evaluate``: a model's relative L2 errors on its data set (overall, per distance band,
-energy-weighted) or against an independent truth, error maps, profiles and the HTML report."""
+energy-weighted) or against an independent truth, error maps, profiles and the HTML report; a mesh data
+set goes to :mod:`.evaluate_mesh`."""
 
 from __future__ import annotations
 
@@ -28,12 +29,17 @@ from ._common import (
     warn,
 )
 from ._run import Run
+from .evaluate_mesh import ACCEPTS, evaluate_mesh
 
 
 @user_errors
 def evaluate(
     model: Path = typer.Argument(..., help="The model file to evaluate (.model.zip)."),
-    data: Path = typer.Argument(..., help="The planar data set it was fitted to (.zarr directory)."),
+    data: Path = typer.Argument(
+        ...,
+        help="The data set it was fitted to (.zarr directory): a planar data set for a planar model, a mesh "
+        "data set for a per-vertex model.",
+    ),
     report: Path = typer.Option(
         None,
         "--report",
@@ -54,15 +60,16 @@ def evaluate(
     truth: Path = typer.Option(
         None,
         "--truth",
-        help="An independent acquisition of the same incident points (another seed, more photons): "
-        "errors against it, with the in-sample errors beside.",
+        help="An independent acquisition of the same incident points (another seed, more photons; on a "
+        "mesh: the same mesh and --points): errors against it, with the in-sample errors beside.",
     ),
     overwrite: bool = overwrite_option(),
     scheduler: str = scheduler_option(),
     max_memory: str = max_memory_option(),
     quiet: bool = quiet_option(),
 ):
-    """Relative L2 errors (overall, per distance band, energy-weighted), error maps, profiles, HTML report."""
+    """Relative L2 errors (overall, per distance band, energy-weighted), error maps, profiles, HTML report: a
+    planar model on its planar data set, or a per-vertex model on its mesh data set."""
     from ..cluster import parse_scheduler  # heavy: Dask and Matplotlib load only when an evaluation runs
     from ..evaluate.report import model_label, write_report
 
@@ -79,9 +86,30 @@ def evaluate(
     expect_input(truth, DATA_SETS, "--truth")
     run = Run("evaluate", max_memory=max_memory, quiet=quiet)
     report = report_beside(model) if report is None else report
+    if is_mesh_dataset(data):  # per-vertex models on a mesh data set
+        evaluate_mesh(
+            run,
+            model,
+            data,
+            report=report,
+            json_out=json_out,
+            to_stdout=as_json,
+            compare=compare,
+            points=points,
+            truth=truth,
+            overwrite=overwrite,
+            scheduler=scheduler,
+        )
+        return
+    if truth is not None and is_mesh_dataset(truth):
+        raise TranslucencyError(f"--truth {truth}: a mesh data set, and {data} is planar; {ACCEPTS}")
     models, flagged, exclusion, metas = {}, {}, {}, {}
     for path in [model, *(compare or [])]:
         m = load_model(path)
+        if m.geometry != "planar":
+            raise TranslucencyError(
+                f"{path}: a per-vertex model, and {data} is not a mesh data set; {ACCEPTS}"
+            )
         meta = read_header(path).get("meta", {})
         metas[path] = meta if isinstance(meta, dict) else {}
         fl = meta.get("flagged_points", [])

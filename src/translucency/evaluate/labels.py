@@ -22,3 +22,12 @@ def noise_label(held_out: bool) -> str:
     ("the truth's noise", "the data's own noise")
     """
     return "the truth's noise" if held_out else "the data's own noise"
+
+
+def labelled_models(models) -> dict:
+    """``models`` as a dict label -> model: a dict as given; a model or a sequence of them by
+    :func:`model_label`."""
+    if isinstance(models, dict):
+        return models
+    models = list(models) if isinstance(models, (list, tuple)) else [models]
+    return {model_label(m): m for m in models}

@@ -52,9 +52,8 @@ class _MeshSource:
         self.frame = tangent_frames(np.asarray(group["normals"][...], dtype=np.float64)[self.incident])
         self.alpha_shape = (len(self.vertices),)
         self.stored_points = int(group["R_d"].chunks[0])  # incident points per chunk of the store
-        edges = np.asarray(group["faces"][...])
         v = self.vertices
-        self.pitch = float(np.mean(np.linalg.norm(v[edges[:, 0]] - v[edges[:, 1]], axis=1)))  # mean edge, mm
+        self.pitch = mean_edge_length(v, np.asarray(group["faces"][...]))  # mm
         # α's statistics pooled over a disc of alpha_radius (default ALPHA_RADIUS_EDGES edge lengths): a
         # vertex is lit by few incident points, and α from its own pairs alone is mostly photon noise
         rad = ALPHA_RADIUS_EDGES * self.pitch if alpha_radius is None else float(alpha_radius)
@@ -66,9 +65,7 @@ class _MeshSource:
         self.poisson = (1.0 / (photons * np.maximum(self.area, 1e-12)))[None, :, None].astype(np.float32)
 
     def read(self, ctx, s: int, e: int):
-        y = np.asarray(self.group["R_d"][s:e], dtype=np.float32)
-        r = np.linalg.norm(self.vertices[None] - ctx.x_i[s:e, None], axis=2)
-        valid = np.isfinite(y).all(axis=2) & (r >= ctx.exclusion)
+        y, r, valid = read_pairs(self.group, self.vertices, ctx.x_i, ctx.exclusion, s, e)
         pixel = np.broadcast_to(np.arange(len(self.vertices)), r.shape)
         return y, None, valid, r, np.zeros_like(r), pixel, self.poisson
 
@@ -77,6 +74,23 @@ class _MeshSource:
 
     def make_alpha(self, values: np.ndarray):
         return VertexAlpha(values.copy(), self.vertices)
+
+
+def read_pairs(group, vertices: np.ndarray, x_i: np.ndarray, exclusion: float, s: int, e: int):
+    """Rows ``s:e`` of a mesh data set's group as the fit reads them: the measured R_d (k, V, 3) float32
+    (mm⁻²), the Euclidean distance r = |v − x_i| (k, V) in mm, and the pairs that count (finite, r at least
+    ``exclusion``: the incident vertex's own tally is left out).  ``vertices`` (V, 3) and ``x_i`` (P, 3)
+    float64 mm.  The evaluation reads the pairs the same way (:mod:`translucency.evaluate.mesh_errors`)."""
+    y = np.asarray(group["R_d"][s:e], dtype=np.float32)
+    r = np.linalg.norm(vertices[None] - x_i[s:e, None], axis=2)
+    valid = np.isfinite(y).all(axis=2) & (r >= exclusion)
+    return y, r, valid
+
+
+def mean_edge_length(vertices: np.ndarray, faces: np.ndarray) -> float:
+    """Mean length (mm) of the first edge of every face: the mesh fit's pitch; its default exclusion
+    radius is half of it."""
+    return float(np.mean(np.linalg.norm(vertices[faces[:, 0]] - vertices[faces[:, 1]], axis=1)))
 
 
 def fit_mesh(

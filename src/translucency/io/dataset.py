@@ -249,6 +249,10 @@ def open_dataset(path, *, writable: bool = False) -> PlanarDataset:
     except Exception as exc:  # noqa: BLE001
         raise TranslucencyError(f"{path}: not a readable Zarr data set ({type(exc).__name__})") from None
     if not isinstance(header, dict) or header.get("format") != FORMAT:
+        from .mesh_dataset import is_mesh_dataset  # cycle: mesh_dataset imports this module
+
+        if is_mesh_dataset(path):
+            raise TranslucencyError(f"{path}: a mesh data set (acquire mesh), where a planar one is needed")
         raise TranslucencyError(f"{path}: not a translucency data set (no '{HEADER_KEY}' header)")
     if header.get("version") != VERSION:
         raise TranslucencyError(

@@ -299,6 +299,20 @@ def evaluation(*, points: int, pixels: int, params: list[int], datasets: int = 1
     return Need(BASE + sum(parts.values()), 4 * MiB * max(1, len(params)), max(parts, key=parts.get))
 
 
+def mesh_evaluation(*, points: int, vertices: int, faces: int, models: int, chunk: int = 16) -> Need:
+    r"""``evaluate`` on a mesh data set: P points of V vertices (F faces), ``models`` per-vertex models.
+
+    .. math:: M = M_0 + 400\,k V + 200\,(V + F) + 80\,\mathrm{MiB}
+
+    a chunk of k points read and evaluated at a time (R_d, the model's values, distances and the sums:
+    ≈ 400 bytes a pair), the surface and the per-vertex sums, and the figure.  Output: the figure, the
+    page and the JSON (≈ 2 MiB a model, the per-point errors listed).
+    """
+    pairs = min(chunk, points) * vertices
+    parts = {"a chunk of pairs": 400 * pairs, "the surface": 200 * (vertices + faces), "the figure": 80 * MiB}
+    return Need(BASE + sum(parts.values()), 2 * MiB * max(1, models), max(parts, key=parts.get))
+
+
 def rendering(
     *,
     vertices: int,

@@ -59,6 +59,8 @@ TIME_TERMS = {
         "param_pixels": 3e-8,
         "models": 0.5,
     },
+    # pairs: points x vertices x data sets x models of a mesh evaluation; models: each one's figure and sums
+    "evaluate mesh": {"overhead": 1.5, "pairs": 1.5e-6, "models": 1.0},
     # pairs: vertex pairs of the transport; samples: picture pixels x 16; reference_samples: 2 x pixels x spp.
     # first_run: the seconds a run adds while the kernel caches are cold (a fresh clone: Numba compiles
     # the transport's kernels, measured 8-10 s here; Dr.Jit its own into an empty ~/.drjit, 1-2 s)
@@ -311,6 +313,11 @@ def evaluation_units(*, points: int, pixels: int, params: list[int], datasets: i
         "param_pixels": sum(params) * points * pixels * d,
         "models": len(params),
     }
+
+
+def mesh_evaluation_units(*, points: int, vertices: int, models: int, datasets: int = 1) -> dict:
+    """``evaluate`` on a mesh data set: pairs = points x vertices x data sets (2: ``--truth``) x models."""
+    return {"pairs": points * vertices * datasets * models, "models": models}
 
 
 def rendering_units(
