@@ -38,6 +38,9 @@ def outputs(tmp_path_factory):
     out["fit"] = _json(["fit", tmp / "a.zarr", "-o", tmp / "a.model.zip", "--rounds", "1", "-q"])
     out["fit (mesh)"] = _json(["fit", tmp / "b.zarr", "-o", tmp / "b.model.zip", "--rounds", "1", "-q"])
     out["evaluate"] = _json(["evaluate", tmp / "a.model.zip", tmp / "a.zarr", "--report", tmp / "rep", "-q"])
+    out["evaluate (mesh)"] = _json(
+        ["evaluate", tmp / "b.model.zip", tmp / "b.zarr", "--report", tmp / "mrep", "-q"]
+    )
     out["render"] = _json(["render", tmp / "b.model.zip", "--out", tmp / "img", "--size", "24", "16", "-q"])
     for name in ("a.zarr", "b.zarr", "a.model.zip", "b.model.zip"):
         out[f"info {name}"] = _json(["info", tmp / name])
@@ -46,7 +49,16 @@ def outputs(tmp_path_factory):
     return out
 
 
-NAMES = ["acquire planar", "acquire mesh", "fit", "fit (mesh)", "evaluate", "render", "materials"]
+NAMES = [
+    "acquire planar",
+    "acquire mesh",
+    "fit",
+    "fit (mesh)",
+    "evaluate",
+    "evaluate (mesh)",
+    "render",
+    "materials",
+]
 NAMES += ["info a.zarr", "info b.zarr", "info a.model.zip", "info b.model.zip"]
 
 

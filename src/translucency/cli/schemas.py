@@ -214,6 +214,69 @@ EVALUATE = record(
     optional=("in_sample",),
 )
 
+# -- evaluate on a mesh data set ---------------------------------------------------------------------
+_SURFACE_BANDS = ("near", "mid", "far", "surface")
+_MESH_ERRORS = {
+    **{k: v for k, v in _ERRORS.items() if k not in ("energy_error", "energy_noise", "per_point")},
+    "energy_error": record(
+        "Relative error of each point's energy, by band and over the whole surface.",
+        {k: field(["number", "null"], f"{k}.", "fraction") for k in _SURFACE_BANDS},
+    ),
+    "energy_noise": record(
+        "The reference's noise of those energies.",
+        {k: field(["number", "null"], f"{k}.", "fraction") for k in _SURFACE_BANDS},
+    ),
+    "per_point": record(
+        "Per-incident-point relative error.",
+        {
+            "median": field(["number", "null"], "Median."),
+            "p95": field(["number", "null"], "95th percentile."),
+            "values": array("Each incident point's error (null where flagged).", NUMBER_OR_NULL, "fraction"),
+        },
+    ),
+    "exclusion_mm": field("number", "Pairs closer than this are left out (the own vertex's cell).", "mm"),
+    "by_distance": record(
+        "rel_l2 and the noise floor per ring of r, and the pairs in each ring.",
+        {
+            "edges_mm": array("The rings' edges.", NUMBER_OR_NULL, "mm"),
+            "rel_l2": array("Relative L2 error per ring.", NUMBER_OR_NULL, "fraction"),
+            "noise": array("The reference's noise floor per ring.", NUMBER_OR_NULL, "fraction"),
+            "pairs": array("Pairs per ring.", INTEGER),
+        },
+    ),
+}
+_MESH_MODEL_ERRORS = record(
+    "One model's errors.",
+    {
+        **_MESH_ERRORS,
+        "in_sample": field("object", "The same numbers against the fitted data (with --truth)."),
+    },
+    optional=("in_sample",),
+)
+EVALUATE_MESH = record(
+    "`translucency evaluate --json` on a mesh data set (per-vertex models): the same names as on a planar "
+    "data set, per pair (x_i, vertex); energies over the surface instead of the window.",
+    {
+        **{
+            k: v
+            for k, v in EVALUATE["properties"].items()
+            if k not in (*_ERRORS, "in_sample", "models", "profile_points", "fine_profiles")
+        },
+        "geometry": field("string", "mesh"),
+        "photons": record(
+            "Photons per incident point of the data set and of the truth.",
+            {
+                "dataset": field(["integer", "null"], "The data set's."),
+                "truth": field(["integer", "null"], "The truth's."),
+            },
+            optional=("truth",),
+        ),
+        **_MESH_ERRORS,
+        "models": record("Every model's errors, by its label.", {}, extra=_MESH_MODEL_ERRORS),
+    },
+    optional=("in_sample", "summary"),
+)
+
 # -- render -------------------------------------------------------------------------------------------
 RENDER = record(
     "`translucency render --json`: the pictures written and how long each step took.",
@@ -415,6 +478,7 @@ SCHEMAS = {
     "acquire mesh": ACQUIRE_MESH,
     "fit": FIT,
     "evaluate": EVALUATE,
+    "evaluate (mesh data set)": EVALUATE_MESH,
     "render": RENDER,
     "info (model file)": INFO_MODEL,
     "info (planar data set)": INFO_PLANAR,
@@ -428,6 +492,8 @@ def schema_of(summary: dict) -> dict:
     """The schema a command's summary follows (by its ``command``, and ``info``'s by its ``what``)."""
     if summary.get("command") == "info":
         return _INFO_BY_WHAT[summary.get("what")]
+    if summary.get("command") == "evaluate" and summary.get("geometry") == "mesh":
+        return EVALUATE_MESH
     return SCHEMAS[summary["command"]]
 
 

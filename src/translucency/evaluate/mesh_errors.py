@@ -79,6 +79,7 @@ class MeshErrors:
         out["per_point"]["values"] = self.per_point.tolist()
         out["exclusion_mm"] = self.exclusion_mm
         out["by_distance"] = {k: np.asarray(v).tolist() for k, v in self.distance.items()}
+        out["by_distance"]["pairs"] = [int(n) for n in self.distance["pairs"]]  # counts
         return out
 
 
