@@ -165,7 +165,7 @@ def _physics(per_model: dict, n_points: int) -> list[str]:
             clean.append(name)
     if not (over or beyond):
         out = [
-            "Physics checks: every model reflects at most the light it receives and keeps 99.9 % of its "
+            "Physics checks: every model reflects at most the light it receives and keeps most of its "
             "energy within the sample at every point."
         ]
     else:
@@ -173,7 +173,7 @@ def _physics(per_model: dict, n_points: int) -> list[str]:
         if over:
             parts.append(f"more light out than in (total reflectance > 1) at {', '.join(over)}")
         if beyond:
-            parts.append(f"99.9 % energy radius beyond the sample at {', '.join(beyond)}")
+            parts.append(f"over half of a point's energy beyond the sample at {', '.join(beyond)}")
         text = f"Physics checks (of {n_points} points): " + "; ".join(parts)
         if clean:
             text += f"; {', '.join(clean)} {'passes' if len(clean) == 1 else 'pass'} every check"
