@@ -376,7 +376,9 @@ def test_the_summary_weighs_the_directions_against_their_parameters(beyond_aniso
     text = conclusion(per_model, models, held_out=True, n_points=4)
     assert verdict in text and "with 96 coefficients per point against 12" in text
     assert "more light out than in (total reflectance > 1) at 1 point of aniso (up to 1.2)" in text
-    assert "over half of a point's energy beyond the sample at 2 points of dipole; iso passes every check" in text
+    assert (
+        "over half of a point's energy beyond the sample at 2 points of dipole; iso passes every check" in text
+    )
 
 
 def test_the_in_sample_summary_does_not_claim_a_winner_it_cannot_know():
