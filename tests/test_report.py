@@ -377,7 +377,8 @@ def test_the_summary_weighs_the_directions_against_their_parameters(beyond_aniso
     assert verdict in text and "with 96 coefficients per point against 12" in text
     assert "more light out than in (total reflectance > 1) at 1 point of aniso (up to 1.2)" in text
     assert (
-        "over half of a point's energy beyond the sample at 2 points of dipole; iso passes every check" in text
+        "over half of a point's energy beyond the sample at 2 points of dipole; iso passes every check"
+        in text
     )
 
 
