@@ -10,7 +10,7 @@ import numpy as np
 import typer
 
 from .. import resources
-from .._validate import TranslucencyError, check_option
+from .._validate import TranslucencyError, check_option, check_undamaged
 from ..io.dataset import dataset_identity, open_dataset
 from ..io.inputs import DATA_SETS, expect_input
 from ..io.mesh_dataset import is_mesh_dataset, open_mesh_dataset
@@ -261,13 +261,7 @@ def _refuse_damaged(ds) -> None:
     """One line for an unfinished data set (an interrupted acquisition) or one with missing or
     undecodable chunks (``info`` lists them; re-running the acquisition with the same arguments
     finishes it, or repairs exactly those)."""
-    damaged = ds.damaged_chunks()
-    if damaged:
-        listed = ", ".join(f"{k!r} chunks {v}" for k, v in damaged.items())
-        raise TranslucencyError(
-            f"{ds.path}: damaged data set ({listed} missing or undecodable); the acquisition is unfinished: "
-            "re-run it with the same arguments to repair those chunks"
-        )
+    check_undamaged(ds)
     done = np.asarray(ds.group["chunk_done"][...], dtype=bool)  # decodes: checked with the damage above
     if not done.all():
         raise TranslucencyError(

@@ -10,6 +10,7 @@ alternation (:mod:`translucency.fit._rounds`) and the chunk's work
 
 from __future__ import annotations
 
+from abc import ABC, abstractmethod
 from typing import TYPE_CHECKING, ClassVar
 
 import numpy as np
@@ -25,7 +26,7 @@ AUTO_TERMS = (1, 2, 3, 4)
 AUTO_DIRECTIONS = (1, 2, 4, 8, 16)
 
 
-class Family:
+class Family(ABC):
     """One model family of the fit: P_i(r) per incident point, fitted with α fixed.
 
     Attributes
@@ -49,30 +50,30 @@ class Family:
     keeps_alpha_scale: ClassVar[bool] = False
     time_terms: ClassVar[dict]
 
+    @abstractmethod
     def params_per_point(self, n_terms, n_directions, colour: str) -> int:
         """Stored parameters per incident point (``"auto"`` counts the largest candidate)."""
-        raise NotImplementedError
 
+    @abstractmethod
     def profiles(self, ctx: FitContext, params: Params | FitState, sl: slice, r_g: np.ndarray) -> np.ndarray:
         """Each point's profile at the group radii r_g (mm), (k, G, C, m), without α or colour scale."""
-        raise NotImplementedError
 
+    @abstractmethod
     def fit(self, ctx: FitContext, state: FitState, sl: slice, ch: Chunk, w2: np.ndarray) -> None:
         """One round's fit of points ``sl`` of the chunk ``ch`` with α fixed, weights ``w2`` (k, J, 3)."""
-        raise NotImplementedError
 
     def make_inert(self, state: FitState, bad: np.ndarray) -> None:
         """Parameters of zero reflectance at the points ``bad`` (no usable data)."""
         state.c[bad] = 0.0
         state.a[bad] = 1.0
 
+    @abstractmethod
     def rescale(self, state: FitState, mean: float) -> None:
         """Take the scale ``mean`` from α (normalised to mean 1) into the amplitudes: αP unchanged."""
-        raise NotImplementedError
 
+    @abstractmethod
     def build(self, ctx: FitContext, state: FitState, alpha, frame) -> ReflectanceModel:
         """The fitted reflectance model of the current state, with the source's α and frames."""
-        raise NotImplementedError
 
     def keep_totals(self, model: ReflectanceModel, bound: np.ndarray) -> np.ndarray:
         """Scale down, in place, the amplitudes of the points of ``model`` whose total reflectance exceeds

@@ -62,5 +62,9 @@ class PhysicalFamily(BaselineFamily):
     #: the model class built: ``model(x_i, sigma_a, sigma_s_prime, eta, alpha, frame=...)``
     model: ClassVar[type]
 
+    def rescale(self, state, mean):
+        """No free amplitude to take α's scale: the α step never asks (``keeps_alpha_scale``)."""
+        raise RuntimeError(f"{self.name}: α keeps its scale; the α step does not rescale this family")
+
     def build(self, ctx, state, alpha, frame):
         return self.model(ctx.x_i, state.p[:, :, 0], state.p[:, :, 1], ctx.eta, alpha, frame=frame)
