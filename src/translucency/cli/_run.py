@@ -36,10 +36,11 @@ from pathlib import Path
 import numpy as np
 import typer
 
+from ..io.atomic import write_json
 from ..io.outputs import claim_folder, release_output
 from ..resources import Need, TimeEstimate, check_resources, estimate_time, memory_limit, record_time
 from ..resources.timing import kernel_caches_cold, process_seconds
-from ._common import err_console, finish, info, progress
+from ._common import err_console, finish, info, jsonable, progress
 
 #: the runs under way in this process (the innermost last): :func:`interrupted` and :func:`failed` ask them
 _ACTIVE: list[Run] = []
@@ -139,6 +140,16 @@ class Run:
     def seconds(self) -> float:
         """Seconds since the estimate (rounded to a millisecond, as the summaries state them)."""
         return round(time.perf_counter() - self.t0, 3)
+
+    def finish_report(self, as_json: bool, summary: dict, report: Path, table, json_out=None) -> None:
+        """An evaluation's summary: the report's page first, written to ``json_out`` too when asked
+        (``--json-out``), then :meth:`finish` with the table and where the report is."""
+        summary = {"command": summary.get("command", "evaluate"), "report": report / "index.html", **summary}
+        summary = {**summary, "estimate": self.need.as_dict(), "time_estimate": self.timing.as_dict()}
+        summary["seconds"] = self.seconds()
+        if json_out is not None:  # --json-out: the object --json prints
+            write_json(json_out, jsonable(summary))
+        self.finish(as_json, summary, [table, f"report: {report / 'index.html'}"])
 
     def finish(self, as_json: bool, summary: dict, lines=()) -> None:
         """The summary: ``summary`` with the estimates and the seconds (where it states none of its own)

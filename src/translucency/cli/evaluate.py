@@ -12,7 +12,6 @@ from rich.table import Table
 
 from .. import resources
 from .._validate import TranslucencyError
-from ..io.atomic import write_json
 from ..io.dataset import dataset_identity, open_dataset
 from ..io.inputs import DATA_SETS, expect_input, what_is
 from ..io.mesh_dataset import is_mesh_dataset, open_mesh_dataset
@@ -20,7 +19,6 @@ from ..io.model_file import load_model, read_header
 from ..io.outputs import claim_output
 from ._common import (
     json_option,
-    jsonable,
     max_memory_option,
     overwrite_option,
     quiet_option,
@@ -71,6 +69,7 @@ def evaluate(
     """Relative L2 errors (overall, per distance band, energy-weighted), error maps, profiles, HTML report: a
     planar model on its planar data set, or a per-vertex model on its mesh data set."""
     from ..cluster import parse_scheduler  # heavy: Dask and Matplotlib load only when an evaluation runs
+    from ..evaluate.labels import noise_label
     from ..evaluate.report import model_label, write_report
 
     parse_scheduler(scheduler)  # a bad value or an unreachable cluster: one line, before work
@@ -173,20 +172,10 @@ def evaluate(
         table.add_row(name, *cells)
     nf = summary["noise_floor"]
     table.add_row(
-        "[dim]the truth's noise[/]" if truth else "[dim]noise alone[/]",
+        f"[dim]{noise_label(truth is not None)}[/]",
         *(f"[dim]{100 * nf[k]:.2f} %[/]" for k in ("all", "near", "mid", "far")),
     )
-    summary = {
-        "command": "evaluate",
-        "report": report / "index.html",
-        **summary,
-        "estimate": run.need.as_dict(),
-        "time_estimate": run.timing.as_dict(),
-    }
-    summary["seconds"] = run.seconds()
-    if json_out is not None:
-        write_json(json_out, jsonable(summary))
-    run.finish(as_json, summary, [table, f"report: {report / 'index.html'}"])
+    run.finish_report(as_json, {"command": "evaluate", **summary}, report, table, json_out)
 
 
 class EvaluateCommand(typer.core.TyperCommand):

@@ -10,12 +10,11 @@ from rich.table import Table
 
 from .. import resources
 from .._validate import TranslucencyError
-from ..io.atomic import write_json
 from ..io.dataset import dataset_identity
 from ..io.mesh_dataset import is_mesh_dataset, open_mesh_dataset
 from ..io.model_file import load_model, read_header
-from ..io.outputs import claim_folder, claim_output
-from ._common import jsonable, warn
+from ..io.outputs import claim_output
+from ._common import warn
 from ._run import Run
 
 #: what ``evaluate`` takes, for the lines that refuse a mismatch
@@ -93,7 +92,7 @@ def evaluate_mesh(
     inputs = [model, data, *(compare or []), truth]
     if json_out is not None:
         claim_output(json_out, "json summary", overwrite=overwrite, inputs=inputs, option="--json-out")
-    claim_folder(report, overwrite=overwrite, inputs=inputs, option="--report")
+    run.claim_folder(report, overwrite=overwrite, inputs=inputs, option="--report")
     timing = run.time(
         resources.timing.mesh_evaluation_units(points=ds.n_points, vertices=V, models=len(models), datasets=d)
     )
@@ -121,14 +120,4 @@ def evaluate_mesh(
         f"[dim]{noise_label(truth is not None)}[/]",
         *(f"[dim]{100 * nf[k]:.2f} %[/]" for k in ("all", "near", "mid", "far")),
     )
-    summary = {
-        "command": "evaluate",
-        "report": report / "index.html",
-        **summary,
-        "estimate": run.need.as_dict(),
-        "time_estimate": run.timing.as_dict(),
-    }
-    summary["seconds"] = run.seconds()
-    if json_out is not None:  # --json-out: the object --json prints
-        write_json(json_out, jsonable(summary))
-    run.finish(to_stdout, summary, [table, f"report: {report / 'index.html'}"])
+    run.finish_report(to_stdout, {"command": "evaluate", **summary}, report, table, json_out)
