@@ -8,6 +8,7 @@ derive from :class:`ChunkedStore`, each naming its arrays; their formats are the
 
 from __future__ import annotations
 
+from abc import ABC, abstractmethod
 from dataclasses import dataclass
 from pathlib import Path
 from typing import ClassVar
@@ -18,7 +19,7 @@ from .._validate import TranslucencyError
 
 
 @dataclass
-class ChunkedStore:
+class ChunkedStore(ABC):
     """An opened chunked store; arrays are read lazily from the Zarr group."""
 
     path: Path
@@ -37,9 +38,9 @@ class ChunkedStore:
         return int(self.header["n_points"])
 
     @property
+    @abstractmethod
     def chunk_points(self) -> int:
         """Incident points per chunk (per ``chunk_done`` flag)."""
-        raise NotImplementedError
 
     def __getitem__(self, key: str) -> np.ndarray:
         if key not in self.ARRAYS:

@@ -227,7 +227,7 @@ class ReflectanceModel(ABC):
     @classmethod
     def from_stored(cls, x_i, params: dict, alpha: Modulation, frame, header: dict) -> ReflectanceModel:
         """The model from a file's arrays: ``params`` by name (None where absent) and its header."""
-        raise NotImplementedError(f"{cls.__name__} cannot be read from a model file")
+        raise TypeError(f"{cls.__name__} declares no model-file storage: it cannot be read from a model file")
 
     @staticmethod
     def store_inert(params: dict, over: dict, points: list) -> bool:

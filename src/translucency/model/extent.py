@@ -20,40 +20,41 @@ model file's ``object`` header field).  Units: mm.
 from __future__ import annotations
 
 import math
+from abc import ABC, abstractmethod
 
 import numpy as np
 
 from .._validate import TranslucencyError
 
 
-class ObjectExtent:
+class ObjectExtent(ABC):
     """Protocol: the edge of the object a model describes, seen from its incident points."""
 
     #: the variant's name in a model file's header
     kind = "abstract"
 
     @property
+    @abstractmethod
     def size_mm(self) -> float:
         """The object's size: its diameter in mm (inf for a semi-infinite slab)."""
-        raise NotImplementedError
 
+    @abstractmethod
     def distance(self, x_i: np.ndarray, theta: np.ndarray) -> np.ndarray:
         """(N, T) distance (mm) from each incident point ``x_i`` (N, D) to the edge along the angles
         ``theta`` (T,) of its tangent plane; inf where there is no edge."""
-        raise NotImplementedError
 
+    @abstractmethod
     def describe(self) -> str:
         """The object in words, for a person ("a 32 x 32 mm sample")."""
-        raise NotImplementedError
 
+    @abstractmethod
     def as_dict(self) -> dict:
         """JSON-friendly record (the model file's ``object`` header field)."""
-        raise NotImplementedError
 
     @classmethod
+    @abstractmethod
     def from_dict(cls, record: dict) -> ObjectExtent:
         """The extent of a record :meth:`as_dict` wrote."""
-        raise NotImplementedError
 
     def __repr__(self) -> str:
         return f"<{type(self).__name__} {self.as_dict()}>"

@@ -8,6 +8,7 @@ their α keeps the scale (:class:`PhysicalFamily`).
 
 from __future__ import annotations
 
+from abc import abstractmethod
 from typing import ClassVar
 
 import numpy as np
@@ -24,9 +25,9 @@ class BaselineFamily(Family):
     starts: ClassVar[list]
 
     @staticmethod
+    @abstractmethod
     def R_d(r, p0, p1, eta):
         """The profile (mm⁻²) at r (mm) of parameters p0, p1 (broadcast) and refractive index η."""
-        raise NotImplementedError
 
     def params_per_point(self, n_terms, n_directions, colour):
         return 6

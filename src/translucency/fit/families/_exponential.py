@@ -11,6 +11,7 @@ fall-offs.
 
 from __future__ import annotations
 
+from abc import abstractmethod
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -118,9 +119,9 @@ class ExponentialFamily(Family):
         if ctx.C == 1:
             _fit_colour(ctx, state, sl, ch, w2)
 
+    @abstractmethod
     def fit_profiles(self, ctx: FitContext, state: FitState, sl: slice, ch: Chunk, w2) -> None:
         """The fall-offs (colour scale fixed), every (point, colour row[, direction]) by VarPro."""
-        raise NotImplementedError
 
     def rescale(self, state, mean):
         state.c[...] *= mean
