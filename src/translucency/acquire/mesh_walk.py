@@ -37,6 +37,7 @@ class MeshWalkResult:
     code: np.ndarray  # EXIT, ABSORBED, KILLED, or -1 for specular reflection at entry
     position: np.ndarray  # (n, 3) exit point for EXIT, mm
     face: np.ndarray  # (n,) triangle the photon left through (EXIT only)
+    direction: np.ndarray  # (n, 3) flight direction at the end (EXIT: the exit direction, outwards)
     steps: int
 
 
@@ -160,6 +161,11 @@ def mesh_random_walk(
     code_np = np.asarray(code).astype(np.int64)
     code_np[code_np == EXIT + 100] = -1
     position = np.stack([np.asarray(pos.x), np.asarray(pos.y), np.asarray(pos.z)], axis=1)
+    flight = np.stack([np.asarray(direction.x), np.asarray(direction.y), np.asarray(direction.z)], axis=1)
     return MeshWalkResult(
-        code=code_np, position=position, face=np.asarray(face).astype(np.int64), steps=int(dr.sum(steps)[0])
+        code=code_np,
+        position=position,
+        face=np.asarray(face).astype(np.int64),
+        direction=flight,
+        steps=int(dr.sum(steps)[0]),
     )

@@ -186,6 +186,31 @@ def perspective_camera_dict(
     }
 
 
+def perspective_to_world_dict(
+    to_world: np.ndarray, fov_deg: float, width: int, height: int, spp: int
+) -> dict:
+    """Mitsuba ``perspective`` sensor with a 4 × 4 ``to_world`` (Mitsuba's camera frame: left, up,
+    forward), horizontal field of view ``fov_deg``, an RGB ``hdrfilm`` with a box filter, ``spp`` samples
+    (a calibrated camera's, :meth:`translucency.rig.cameras.Camera.sensor_dict`)."""
+    mi = mitsuba()
+    return {
+        "type": "perspective",
+        "fov": float(fov_deg),
+        "fov_axis": "x",
+        "near_clip": 1e-2,
+        "far_clip": 1e5,
+        "to_world": mi.ScalarTransform4f(np.asarray(to_world, dtype=np.float64).tolist()),
+        "film": {
+            "type": "hdrfilm",
+            "width": int(width),
+            "height": int(height),
+            "rfilter": {"type": "box"},
+            "pixel_format": "rgb",
+        },
+        "sampler": {"type": "independent", "sample_count": int(spp)},
+    }
+
+
 def pinhole_sensor_dict(camera, spp: int) -> dict:
     """The ``perspective`` sensor of a pinhole ``camera`` (its ``origin``, ``target``, ``up`` in mm, ``fov``
     in degrees, ``width`` × ``height`` pixels; :class:`translucency.render.Camera`), ``spp`` samples a

@@ -34,27 +34,10 @@ def homography_from_checkerboard(
     +z side sees the plane mirrored, det ∂(u, v)/∂(x, y) < 0) with its x axis most nearly left to right
     in the image — put the board's origin accordingly.  Errors are one line prefixed by ``name``.
     """
-    import cv2  # heavy: OpenCV loads only where a calibration photograph is read
-
     nx, ny = (int(v) for v in inner)
-    if nx < 2 or ny < 2:
-        raise TranslucencyError(f"{name}: need at least 2 x 2 inner corners, got {inner}")
-    grey = np.asarray(image, dtype=np.float64)
-    grey = grey.mean(axis=2) if grey.ndim == 3 else grey
-    grey = np.where(np.isfinite(grey), grey, 0.0)
-    grey = np.clip(grey / (np.max(grey) or 1.0), 0.0, 1.0).astype(np.float32)
-    flags = cv2.CALIB_CB_NORMALIZE_IMAGE | cv2.CALIB_CB_EXHAUSTIVE
-    found, corners = cv2.findChessboardCornersSB(np.round(255 * grey).astype(np.uint8), (nx, ny), flags=flags)
-    if not found:
-        raise TranslucencyError(f"{name}: OpenCV finds no {nx} x {ny} grid of inner corners")
-    # OpenCV orders the corners row by row of the pattern, nx to a row; g = (i, j) in that labelling
+    uv = find_corners(image, (nx, ny), name=name)
     k = np.arange(nx * ny)
     g = np.stack([k % nx, k // nx], axis=1).astype(np.float64)
-    uv = corners.reshape(-1, 2).astype(np.float64)
-    spacing = np.linalg.norm(uv[:, None] - uv[None], axis=2)[~np.eye(len(uv), dtype=bool)].min()
-    half = int(np.clip(round(0.25 * spacing), 2, 10))  # a window of ~half a square: one corner in it
-    stop = (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_MAX_ITER, 50, 1e-4)
-    uv = cv2.cornerSubPix(grey, corners, (half, half), (-1, -1), stop).reshape(-1, 2).astype(np.float64)
     # the labelling: each symmetry A of the grid maps the centred indices g − c to A (g − c); the image's
     # Jacobian with respect to the new indices is J A⁻¹ = J Aᵀ
     c = 0.5 * np.array([nx - 1, ny - 1])
@@ -70,6 +53,30 @@ def homography_from_checkerboard(
             f"{name}: the corners found fit the board's grid to {rms:.2f} px rms only (> {MAX_RMS_PX:g})"
         )
     return H, rms
+
+
+def find_corners(image: np.ndarray, inner: tuple[int, int], *, name: str = "checkerboard") -> np.ndarray:
+    """The inner corners (nx·ny, 2) of a checkerboard photograph in pixels, in OpenCV's order (row by row
+    of the pattern, nx to a row), found by ``cv2.findChessboardCornersSB`` on the photograph scaled to 8
+    bits and refined by ``cv2.cornerSubPix`` on it in floating point."""
+    import cv2  # heavy: OpenCV loads only where a calibration photograph is read
+
+    nx, ny = (int(v) for v in inner)
+    if nx < 2 or ny < 2:
+        raise TranslucencyError(f"{name}: need at least 2 x 2 inner corners, got {inner}")
+    grey = np.asarray(image, dtype=np.float64)
+    grey = grey.mean(axis=2) if grey.ndim == 3 else grey
+    grey = np.where(np.isfinite(grey), grey, 0.0)
+    grey = np.clip(grey / (np.max(grey) or 1.0), 0.0, 1.0).astype(np.float32)
+    flags = cv2.CALIB_CB_NORMALIZE_IMAGE | cv2.CALIB_CB_EXHAUSTIVE
+    found, corners = cv2.findChessboardCornersSB(np.round(255 * grey).astype(np.uint8), (nx, ny), flags=flags)
+    if not found:
+        raise TranslucencyError(f"{name}: OpenCV finds no {nx} x {ny} grid of inner corners")
+    uv = corners.reshape(-1, 2).astype(np.float64)
+    spacing = np.linalg.norm(uv[:, None] - uv[None], axis=2)[~np.eye(len(uv), dtype=bool)].min()
+    half = int(np.clip(round(0.25 * spacing), 2, 10))  # a window of ~half a square: one corner in it
+    stop = (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_MAX_ITER, 50, 1e-4)
+    return cv2.cornerSubPix(grey, corners, (half, half), (-1, -1), stop).reshape(-1, 2).astype(np.float64)
 
 
 def _symmetries(square: bool) -> list[np.ndarray]:
