@@ -291,7 +291,7 @@ def test_uniform_map_is_the_constant_sky(ball, tmp_path):
 
 def test_fresnel_factors_against_closed_forms():
     from translucency.model import fresnel_diffuse_reflectance
-    from translucency.render.transport import diffuse_transmittance, fresnel_transmittance
+    from translucency.model.boundary import diffuse_transmittance, fresnel_transmittance
 
     eta = 1.3
     # normal incidence: 1 − ((η − 1)/(η + 1))²

@@ -79,11 +79,14 @@ class _MeshSource:
 def read_pairs(group, vertices: np.ndarray, x_i: np.ndarray, exclusion: float, s: int, e: int):
     """Rows ``s:e`` of a mesh data set's group as the fit reads them: the measured R_d (k, V, 3) float32
     (mm⁻²), the Euclidean distance r = |v − x_i| (k, V) in mm, and the pairs that count (finite, r at least
-    ``exclusion``: the incident vertex's own tally is left out).  ``vertices`` (V, 3) and ``x_i`` (P, 3)
-    float64 mm.  The evaluation reads the pairs the same way (:mod:`translucency.evaluate.mesh_errors`)."""
+    ``exclusion``: the incident vertex's own tally is left out; in a data set measured from photographs,
+    the pairs its ``flags`` mark as not measured).  ``vertices`` (V, 3) and ``x_i`` (P, 3) float64 mm.
+    The evaluation reads the pairs the same way (:mod:`translucency.evaluate.mesh_errors`)."""
     y = np.asarray(group["R_d"][s:e], dtype=np.float32)
     r = np.linalg.norm(vertices[None] - x_i[s:e, None], axis=2)
     valid = np.isfinite(y).all(axis=2) & (r >= exclusion)
+    if "flags" in group:
+        valid &= np.asarray(group["flags"][s:e]) == 0
     return y, r, valid
 
 

@@ -14,6 +14,14 @@ and F triangles)::
     specular      (P, 3) float32   Fresnel reflection at entry (fraction of the power), not in R_d
     chunk_done    (n_chunks,) bool written last for each chunk of points: resume marker
 
+A data set measured from photographs (``translucency import object``, header ``source`` =
+"photographs") also holds, chunked as R_d::
+
+    R_d_var       (P, V, 3) float32  the variance of each R_d, mm⁻⁴
+    flags         (P, V) uint8     why a pair was not measured (bits: 1 unseen and filled from its
+                                   neighbours, 2 saturated, 4 grazing, 8 inside the laser's spot);
+                                   the per-vertex fit leaves flagged pairs out
+
 Header (JSON): ``format`` = "translucency-mesh-dataset", ``version`` = 1,
 ``units``, ``n_points``, ``n_vertices``, ``photons``, ``seed``, ``eta``, ``g``,
 ``sample`` (the filling's description), ``software`` and ``request`` (the
@@ -134,6 +142,11 @@ def open_mesh_dataset(path, *, writable: bool = False) -> MeshDataset:
             raise TranslucencyError(f"{path}: missing or unreadable array {name!r}") from None
         if len(arr.shape) != len(shape) or any(w is not None and w != a for w, a in zip(shape, arr.shape)):
             raise TranslucencyError(f"{path}: array {name!r} has shape {tuple(arr.shape)}, expected {shape}")
+    for name, shape in (("R_d_var", (P, V, 3)), ("flags", (P, V))):  # a measured data set's (optional)
+        if name in group and tuple(group[name].shape) != shape:
+            raise TranslucencyError(
+                f"{path}: array {name!r} has shape {tuple(group[name].shape)}, expected {shape}"
+            )
     k = int(group["R_d"].chunks[0])
     if group["chunk_done"].shape[0] != -(-P // k):
         raise TranslucencyError(f"{path}: array 'chunk_done' does not match {P} points in chunks of {k}")
@@ -150,13 +163,15 @@ def create_mesh_dataset(
     chunk_points: int,
     overwrite: bool = False,
     inputs=(),
+    measured: bool = False,
 ) -> MeshDataset:
     """Create (or reopen for resuming) a mesh data set at ``path``.
 
     A data set with the same ``header["request"]`` is reopened so that finished
     chunks are kept; one made with other arguments is replaced only with
     ``overwrite``; anything else is never touched
-    (:func:`translucency.io.outputs.claim_output`).
+    (:func:`translucency.io.outputs.claim_output`).  ``measured``: also the arrays of a data set measured
+    from photographs, ``R_d_var`` and ``flags`` (module notes).
     """
     path = Path(path)
     old = reopen_or_clear(
@@ -221,6 +236,25 @@ def create_mesh_dataset(
     root.create_array(
         "specular", shape=(P, 3), dtype="float32", chunks=(chunk_points, 3), fill_value=0, config=every
     )
+    if measured:
+        root.create_array(
+            "R_d_var",
+            shape=(P, V, 3),
+            dtype="float32",
+            chunks=(chunk_points, V, 3),
+            compressors=comp,
+            fill_value=0,
+            config=every,
+        )
+        root.create_array(
+            "flags",
+            shape=(P, V),
+            dtype="uint8",
+            chunks=(chunk_points, V),
+            compressors=comp,
+            fill_value=0,
+            config=every,
+        )
     root.create_array("chunk_done", shape=(n_chunks,), dtype="bool", chunks=(1,), fill_value=False)
     return MeshDataset(path, header, root)
 

@@ -46,26 +46,9 @@ from scipy.spatial import cKDTree
 from .._validate import TranslucencyError, plain
 from ..geometry import tangent_frames, vertex_areas
 from ..mitsuba import drjit, load_plugin, mitsuba, rays
+from ..model.boundary import exit_factor, fresnel_transmittance
 from ._far_field import FarField, far_field_operator
 from .lights import EnvironmentLight, PointLight, SpotLight
-
-
-def fresnel_transmittance(cos_theta, eta: float) -> np.ndarray:
-    r"""Unpolarised Fresnel transmittance :math:`1 - F(\cos\theta, \eta)` from outside (Mitsuba's term)."""
-    cos_theta = np.asarray(cos_theta, dtype=np.float64)
-    if eta == 1.0:
-        return np.ones_like(cos_theta)
-    mi = mitsuba()
-    c = np.clip(cos_theta, 0.0, 1.0).ravel()
-    F = np.asarray(mi.fresnel(mi.Float(c.astype(np.float32)), mi.Float(float(eta)))[0], dtype=np.float64)
-    return (1.0 - F).reshape(cos_theta.shape)
-
-
-def diffuse_transmittance(eta: float, n: int = 512) -> float:
-    r""":math:`1 - F_{dr,e} = 2\int_0^1 F_t(\mu)\, \mu\, d\mu`: the cosine-weighted transmittance
-    from outside (midpoint rule)."""
-    mu = (np.arange(n) + 0.5) / n
-    return float(2.0 * np.mean(fresnel_transmittance(mu, eta) * mu))
 
 
 def exit_fresnel(mesh, viewpoint, eta: float) -> np.ndarray:
@@ -74,7 +57,7 @@ def exit_fresnel(mesh, viewpoint, eta: float) -> np.ndarray:
         return np.ones(len(mesh.vertices))
     to = np.asarray(viewpoint, dtype=np.float64) - np.asarray(mesh.vertices, dtype=np.float64)
     cos_o = np.einsum("vk,vk->v", to, np.asarray(mesh.vertex_normals)) / np.linalg.norm(to, axis=1)
-    return fresnel_transmittance(cos_o, eta) / diffuse_transmittance(eta)
+    return exit_factor(cos_o, eta)
 
 
 def vertex_irradiance(mesh, scene, light, eta: float = 1.0) -> np.ndarray:

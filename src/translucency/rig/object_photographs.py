@@ -1,0 +1,304 @@
+r"""A virtual object rig: Mitsuba 3 photographs of a filled mesh lit by a laser, from calibrated cameras.
+
+What a lab hands over for ``translucency import object`` (:mod:`.object_setup`), made without a lab:
+
+* **the object**: the mesh filled with a volume (one grey channel at a time), behind an index-matched
+  ``null`` boundary (:func:`translucency.mitsuba.scenes.object_volpath_scene`);
+* **the laser**: at each incident vertex :math:`x_i` (the farthest-point sample ``acquire mesh``
+  takes) a Mitsuba ``spot`` at :math:`x_i + D n_i` aimed along :math:`-n_i`, lighting a disc of
+  ``beam_radius_mm`` (its power from the spot's fall-off, :class:`.photographs.Beam`).  A *pencil* beam
+  cannot be rendered: camera paths inside the medium must reach the light by next-event estimation
+  through the boundary, and only those that scatter inside the beam's cylinder do; a 0.3 mm disc keeps
+  that chance workable at tens of samples per pixel, and the difference from a pencil is confined to
+  the spot (masked by ``spot_radius_mm``).  Point emitters along the beam line were tried and dropped:
+  their 1/d² contributions have infinite variance in a scattering medium (the renders came out 20–30 %
+  low at 1,024 samples per pixel), and they miss the light that leaves after one scattering;
+* **the cameras**: ``n_cameras`` distortion-free pinholes on a sphere around the object
+  (:class:`.cameras.Camera`), each photograph rendered twice with independent seeds (repeated
+  frames: their scatter is the photographs' Monte Carlo noise) plus one short exposure (for the
+  saturated spot), exposed by the sensor model of :class:`.photographs.Sensor` (gain, photon and read
+  noise, dark offset, vignetting, flat field, saturation) under a laser power that drifts from shot to
+  shot (recorded as a power monitor would);
+* **calibration**: each camera's pose as marked points (12 vertices it sees, their projections with
+  0.15 px of noise) and, if asked, checkerboard photographs for its intrinsics.
+
+``truth.json`` beside ``object.json`` records the true cameras (for tests; the import never reads it).
+Units: mm, W; radiance per W of laser power.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .._validate import TranslucencyError
+from ..geometry import farthest_points
+from ..io.atomic import atomic_path, write_json
+from ..mitsuba import SPOT_BEAM_FRACTION, mesh_scene, mitsuba, object_volpath_scene, rays, spot_dict
+from .cameras import Camera
+from .hdr import write_exr, write_pfm
+from .object_setup import FORMAT, VERSION
+from .photographs import Sensor
+from .surface_map import surface_map
+
+#: the short exposure's length relative to the long one (the spot unsaturated in it)
+SHORT_EXPOSURE = 0.02
+
+
+@dataclass(frozen=True)
+class LaserBeam:
+    """A spot ``distance_mm`` from the surface lighting a disc of ``radius_mm`` (Mitsuba's linear fall-off
+    from :data:`SPOT_BEAM_FRACTION` of the cutoff)."""
+
+    radius_mm: float = 0.3
+    distance_mm: float = 60.0
+
+    def cutoff_deg(self, distance_mm: float) -> float:
+        return float(np.degrees(np.arctan(self.radius_mm / distance_mm)))
+
+    def power(self, distance_mm: float) -> float:
+        """Power (W) per unit intensity (W/sr): 2π ∫ f(θ) sin θ dθ over the cone."""
+        tc = np.radians(self.cutoff_deg(distance_mm))
+        tw = SPOT_BEAM_FRACTION * tc
+        th = np.linspace(0.0, tc, 20001)
+        f = np.where(th <= tw, 1.0, (tc - th) / (tc - tw))
+        return float(2 * np.pi * np.trapezoid(f * np.sin(th), th))
+
+
+def cameras_around(mesh, n: int, width: int, height: int, *, fov_deg: float = 30.0, seed: int = 0) -> list:
+    """``n`` cameras on a sphere around the object (a Fibonacci spiral, slightly turned by ``seed``), each
+    looking at the bounding box's centre from where the object fills ~85 % of the narrower field."""
+    if n < 1:
+        raise TranslucencyError(f"cameras: need at least 1, got {n}")
+    centre = 0.5 * (mesh.bounds[0] + mesh.bounds[1])
+    radius = 0.5 * float(np.linalg.norm(mesh.extents))
+    half = np.radians(fov_deg) / 2 * min(1.0, height / width)
+    dist = radius / np.sin(0.85 * half)
+    k = np.arange(n) + 0.5
+    z = 1 - 2 * k / n * 0.9 - 0.05  # keep off the poles (the up hint)
+    phi = np.pi * (1 + 5**0.5) * k + 0.7 * seed
+    dirs = np.column_stack([np.sqrt(1 - z**2) * np.cos(phi), np.sqrt(1 - z**2) * np.sin(phi), z])
+    return [
+        Camera.looking_at(centre + dist * d, centre, width, height, fov_deg=fov_deg, name=f"cam{i}")
+        for i, d in enumerate(dirs)
+    ]
+
+
+def _beam_distance(scene, point, normal, beam: LaserBeam) -> float:
+    """How far from the surface the spot can sit without the object in the way (mm)."""
+    si = scene.ray_intersect(rays((point + 1e-3 * normal)[None], normal[None]))
+    t = float(np.asarray(si.t)[0]) if bool(np.asarray(si.is_valid())[0]) else np.inf
+    return float(min(beam.distance_mm, 0.9 * t))
+
+
+def render_shot(mesh, volume, camera: Camera, point, normal, beam: LaserBeam, *, spp: int, seed: int, scene):
+    """Radiance (H, W, 3) per W of laser power entering at ``point`` along −``normal``, one grey
+    ``volpath`` render per channel."""
+    mi = mitsuba()
+    D = _beam_distance(scene, point, normal, beam)
+    emitter = spot_dict(point + D * normal, point, beam.cutoff_deg(D), 1.0)
+    out = np.zeros((camera.height, camera.width, 3), np.float32)
+    for ch in range(3):
+        sc = object_volpath_scene(mesh, volume, ch, emitter, camera.sensor_dict(spp))
+        out[..., ch] = np.asarray(mi.render(sc, spp=int(spp), seed=int(seed) * 3 + ch))[..., ch]
+    return out / beam.power(D)
+
+
+def _marks(mesh, camera: Camera, rng, n: int = 12, noise_px: float = 0.15) -> dict:
+    """``n`` vertices the camera sees face-on, spread out, and where they project (plus noise)."""
+    m = surface_map(mesh, camera)
+    seen = np.flatnonzero((m.den > 0) & (m.mu_v > 0.5))
+    if len(seen) < n:
+        raise TranslucencyError(f"{camera.name}: sees fewer than {n} vertices to mark")
+    pick = seen[farthest_points(np.asarray(mesh.vertices)[seen], n)]
+    X = np.asarray(mesh.vertices, dtype=np.float64)[pick]
+    uv = camera.project(X) + noise_px * rng.standard_normal((n, 2))
+    return {"object_mm": X.tolist(), "image_px": uv.tolist()}
+
+
+def photograph_object(
+    mesh,
+    volume,
+    folder,
+    *,
+    n_points: int = 8,
+    cameras=None,
+    n_cameras: int = 6,
+    resolution: tuple[int, int] = (128, 128),
+    spp: int = 64,
+    seed: int = 0,
+    sensor: Sensor | None = None,
+    beam: LaserBeam | None = None,
+    image_format: str = "pfm",
+    checkerboards: bool = False,
+    spot_radius_mm: float = 0.5,
+    progress=None,
+) -> dict:
+    """Photograph ``volume`` inside ``mesh`` lit at ``n_points`` vertices; write a lab's hand-over.
+
+    Parameters
+    ----------
+    mesh : trimesh.Trimesh
+        The closed object, mm.
+    volume : Volume
+        Its filling over the mesh's bounding box (``acquire mesh``'s ``object_volume``); its η is
+        recorded as the medium's (the boundary is index-matched).
+    folder : path
+        Where ``object.json``, ``object.ply``, ``cam*/`` and ``shots/`` go (created).
+    cameras : list of Camera, optional
+        Default :func:`cameras_around` (``n_cameras`` at ``resolution`` = (width, height)).
+    spp : int
+        Samples per pixel of each of the two repeated frames.
+    sensor : Sensor, optional
+        The cameras' sensor; by default :class:`.photographs.Sensor` with its gain k set so that the
+        brightest 0.5 % of the first photograph saturate in the long exposure.
+
+    Returns
+    -------
+    dict
+        ``folder``, ``incident`` (vertex indices), ``cameras`` (the true ones), ``seconds``.
+    """
+    t0 = time.perf_counter()
+    if image_format not in ("pfm", "exr"):
+        raise TranslucencyError(f"format: pfm or exr, got {image_format!r}")
+    if spp < 1:
+        raise TranslucencyError(f"spp: must be >= 1, got {spp}")
+    k_auto = sensor is None
+    sensor = sensor or Sensor()
+    beam = beam or LaserBeam()
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    W, H = (int(v) for v in resolution)
+    cameras = cameras if cameras is not None else cameras_around(mesh, n_cameras, W, H, seed=seed)
+    rng = np.random.default_rng(seed)
+    scene = mesh_scene(mesh)
+    verts = np.asarray(mesh.vertices, dtype=np.float64)
+    normals = np.asarray(mesh.vertex_normals, dtype=np.float64)
+    incident = farthest_points(verts, n_points)
+    with atomic_path(folder / "object.ply") as tmp:
+        mesh.export(tmp, file_type="ply")
+    cam_entries = []
+    for i, c in enumerate(cameras):
+        (folder / c.name).mkdir(exist_ok=True)
+        dark, flat, _ = sensor.frames((c.height, c.width, 3), seed=i)
+        _write(folder / c.name / f"dark.{image_format}", dark)
+        _write(folder / c.name / f"flat.{image_format}", flat)
+        entry = {
+            "name": c.name,
+            "width": c.width,
+            "height": c.height,
+            "pose": {"marks": _marks(mesh, c, rng)},
+            "radiometry": {
+                "k": sensor.k,
+                "dark": f"{c.name}/dark.{image_format}",
+                "flat": f"{c.name}/flat.{image_format}",
+                "vignetting": list(sensor.vignetting),
+                "gain": sensor.gain,
+                "read_noise": sensor.read_noise,
+                "saturation": sensor.saturation,
+            },
+        }
+        if checkerboards:
+            from .targets import render_checkerboards  # the targets load where boards are photographed
+
+            names = []
+            for b, img in enumerate(render_checkerboards(c, (7, 5), 4.0 * np.linalg.norm(mesh.extents) / 80)):
+                name = f"{c.name}/board_{b:02d}.{image_format}"
+                _write(folder / name, img)
+                names.append(name)
+            entry["intrinsics"] = {
+                "checkerboards": names,
+                "inner": [7, 5],
+                "square_mm": 4.0 * float(np.linalg.norm(mesh.extents)) / 80,
+            }
+        else:
+            entry["intrinsics"] = {"K": c.K.tolist(), "dist": c.dist.tolist()}
+        cam_entries.append(entry)
+    (folder / "shots").mkdir(exist_ok=True)
+    shots = []
+    for j, v in enumerate(incident):
+        power = 1.0 + 0.1 * np.sin(1.3 * j)  # the laser drifts; a power monitor records it
+        images = {}
+        for i, c in enumerate(cameras):
+            frames = []
+            noise = seed * 7919 + 97 * j + 13 * i  # the sensor's noise of this shot and camera
+            for rep in range(2):  # repeated frames: independent renders
+                L = render_shot(
+                    mesh,
+                    volume,
+                    c,
+                    verts[v],
+                    normals[v],
+                    beam,
+                    spp=spp,
+                    seed=seed * 1000 + 2 * j + rep,
+                    scene=scene,
+                )
+                if k_auto:  # the first photograph sets the gain: its brightest 0.5 % saturate (the spot)
+                    lit = L[L > 0]
+                    k = 0.8 * sensor.saturation / float(np.percentile(lit, 99.5)) if lit.size else sensor.k
+                    sensor = Sensor(**{**sensor.__dict__, "k": k})
+                    for entry in cam_entries:
+                        entry["radiometry"]["k"] = k
+                    k_auto = False
+                raw = _expose(sensor, L * power, 1.0, noise + 3 * rep, i)
+                name = f"shots/{j:03d}_{c.name}_{'ab'[rep]}.{image_format}"
+                _write(folder / name, raw)
+                frames.append({"file": name, "exposure_s": 1.0})
+                if rep == 0:  # the short exposure, from the same radiance
+                    raw = _expose(sensor, L * power, SHORT_EXPOSURE, noise + 2, i)
+                    name = f"shots/{j:03d}_{c.name}_short.{image_format}"
+                    _write(folder / name, raw)
+                    frames.append({"file": name, "exposure_s": SHORT_EXPOSURE})
+            images[c.name] = frames
+        shots.append({"hit": {"point": verts[v].tolist()}, "power": power, "images": images})
+        if progress:
+            progress(j + 1, len(incident))
+    rig = {
+        "format": FORMAT,
+        "version": VERSION,
+        "mesh": {"file": "object.ply", "scale_mm": 1.0, "up": "z"},
+        "boundary": {"eta": 1.0, "medium_eta": float(volume.eta)},
+        "exit_law": "from-views" if len(cameras) >= 2 else "lambertian",
+        "grazing_deg": 75.0,
+        "spot_radius_mm": float(spot_radius_mm),
+        "min_coverage": 0.5,
+        "max_reprojection_px": 1.0,
+        "cameras": cam_entries,
+        "shots": shots,
+        "sample": {
+            "description": dict(volume.description),
+            "volume_grid": {"voxel_mm": volume.voxel_mm, "size_mm": list(volume.size_mm)},
+        },
+    }
+    write_json(folder / "object.json", rig)
+    write_json(
+        folder / "truth.json",
+        {"cameras": [dict(c.to_dict(), name=c.name) for c in cameras], "incident": incident.tolist()},
+    )
+    return {
+        "folder": str(folder),
+        "incident": incident.tolist(),
+        "cameras": cameras,
+        "seconds": time.perf_counter() - t0,
+    }
+
+
+def _expose(
+    sensor: Sensor, radiance: np.ndarray, exposure_s: float, seed: int, frames_seed: int
+) -> np.ndarray:
+    """Raw values of one exposure of ``radiance`` (W mm⁻² sr⁻¹) lasting ``exposure_s`` seconds, by the
+    camera whose dark frame and flat field are those of ``frames_seed``."""
+    timed = Sensor(**{**sensor.__dict__, "k": sensor.k * exposure_s})
+    return timed.expose(radiance, seed=seed, frames_seed=frames_seed)
+
+
+def _write(path: Path, image: np.ndarray) -> None:
+    with atomic_path(path) as tmp:
+        (write_pfm if path.suffix == ".pfm" else write_exr)(tmp, image)
+
+
+__all__ = ["LaserBeam", "cameras_around", "render_shot", "photograph_object"]

@@ -1,0 +1,288 @@
+"""An object rig's hand-over: the ``object.json`` a lab writes beside its photographs, read and checked.
+
+The file (every path relative to its folder; JSON schema in docs/object-rig.md)::
+
+    {"format": "translucency-object-rig", "version": 1,
+     "mesh": {"file": "scan.ply", "scale_mm": 1.0, "up": "z"},
+     "boundary": {"eta": 1.0},                      # 1: index-matched; > 1 a smooth dielectric
+     "exit_law": "from-views",                       # or "lambertian", "dielectric" (rig.exit_law)
+     "grazing_deg": 75, "spot_radius_mm": 0.5, "min_coverage": 0.5, "max_reprojection_px": 1.0,
+     "cameras": [{"name": "cam0", "width": 160, "height": 120,
+                  "intrinsics": {"K": [[...]], "dist": [...]}       # or {"checkerboards": [files],
+                                                                   #     "inner": [7, 5], "square_mm": 4}
+                  "pose": {"R": [[...]], "t": [...]}                # or {"rvec": [...], "t": [...]}, or
+                                                                   #    {"marks": {"object_mm": [[x, y, z]],
+                                                                   #               "image_px": [[u, v]]}}
+                  "radiometry": {"k": 5e6, "dark": "cam0/dark.pfm", "flat": "cam0/flat.pfm",
+                                 "vignetting": [k1, k2], "gain": 0.01, "read_noise": 0.02,
+                                 "saturation": 60.0}}],
+     "shots": [{"hit": {"vertex": 12} | {"point": [x, y, z]} | {"ray": {"origin": [...], "direction": [...]}},
+                "power": 1.0,
+                "images": {"cam0": [{"file": "shots/000_cam0_a.pfm", "exposure_s": 1.0}, ...]}}],
+     "sample": {...}}                                # optional: a virtual rig's filling, for its reference
+
+Radiometry (per camera): a raw pixel value Z of a frame of exposure t under laser power P gives the
+radiance per unit incident power
+
+    L = (Z − dark) / (k · t · vig(ρ) · flat) / P      [W mm⁻² sr⁻¹ per W]
+
+with ``flat`` normalised here to mean 1 (so k is the value per unit radiance per second of a pixel of
+mean response at the image centre) and vig(ρ) = 1 + k1 ρ² + k2 ρ⁴ (ρ from the image centre in
+half-diagonals).  The variance of Z is ``gain`` (Z − dark) + ``read_noise``² (photon and read noise).
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .._validate import TranslucencyError
+from .cameras import MAX_REPROJECTION_PX, Camera, calibrate_intrinsics, estimate_pose
+from .hdr import read_hdr
+
+FORMAT = "translucency-object-rig"
+VERSION = 1
+
+
+@dataclass(frozen=True)
+class Radiometry:
+    """A camera's radiometric calibration (module notes); frames are read where they are used."""
+
+    k: float
+    dark: Path | None
+    flat: Path | None
+    vignetting: tuple = ()
+    gain: float = 0.0
+    read_noise: float = 0.0
+    saturation: float = float("inf")
+
+
+@dataclass(frozen=True)
+class CameraSetup:
+    """One camera as the rig file gives it: its size, how to get K and the pose, its radiometry."""
+
+    name: str
+    width: int
+    height: int
+    intrinsics: dict
+    pose: dict
+    radiometry: Radiometry
+
+
+@dataclass(frozen=True)
+class Exposure:
+    file: Path
+    exposure_s: float
+
+
+@dataclass(frozen=True)
+class ObjectShot:
+    """One laser position: where it hit, its power (W) and each camera's frames."""
+
+    index: int
+    hit: dict
+    power: float
+    frames: dict  # camera name → list of Exposure
+
+
+@dataclass(frozen=True)
+class ObjectRig:
+    """A checked ``object.json``."""
+
+    path: Path
+    folder: Path
+    mesh_file: Path
+    scale_mm: float
+    up: str
+    eta: float
+    exit_law: str
+    grazing_deg: float
+    spot_radius_mm: float
+    min_coverage: float
+    max_reprojection_px: float
+    cameras: list
+    shots: list
+    sample: dict | None = None
+    raw: dict = field(default_factory=dict)
+
+    @property
+    def files(self) -> list[Path]:
+        """Every file the import reads (for the provenance and the never-overwrite check)."""
+        out = [self.mesh_file]
+        for cam in self.cameras:
+            out += [p for p in (cam.radiometry.dark, cam.radiometry.flat) if p is not None]
+            out += [self.folder / f for f in cam.intrinsics.get("checkerboards", [])]
+        for shot in self.shots:
+            out += [f.file for frames in shot.frames.values() for f in frames]
+        return out
+
+
+def _number(d: dict, key: str, where: str, default=None, *, positive=False) -> float:
+    value = d.get(key, default)
+    if value is None:
+        raise TranslucencyError(f"{where}: missing {key!r}")
+    try:
+        value = float(value)
+    except (TypeError, ValueError):
+        raise TranslucencyError(f"{where}: {key} must be a number, got {value!r}") from None
+    if not np.isfinite(value) or (positive and value <= 0):
+        raise TranslucencyError(f"{where}: {key} must be a {'positive' if positive else 'finite'} number")
+    return value
+
+
+def _file(folder: Path, name, where: str) -> Path:
+    if not isinstance(name, str) or not name:
+        raise TranslucencyError(f"{where}: expected a file name, got {name!r}")
+    path = folder / name
+    if not path.is_file():
+        raise TranslucencyError(f"{where}: {path}: no such file")
+    return path
+
+
+def read_object_rig(path) -> ObjectRig:
+    """Read and check ``object.json`` (module notes); every fault is one line naming the entry."""
+    path = Path(path)
+    if path.is_dir():
+        path = path / "object.json"
+    try:
+        raw = json.loads(path.read_text())
+    except OSError as exc:
+        raise TranslucencyError(f"{path}: cannot read ({exc.strerror})") from None
+    except ValueError as exc:
+        raise TranslucencyError(f"{path}: not JSON ({exc})") from None
+    if not isinstance(raw, dict) or raw.get("format") != FORMAT or raw.get("version") != VERSION:
+        raise TranslucencyError(f"{path}: not an object rig file ({FORMAT} v{VERSION})")
+    folder = path.parent
+    mesh = raw.get("mesh") or {}
+    mesh_file = _file(folder, mesh.get("file"), f"{path}: mesh")
+    eta = _number(raw.get("boundary") or {}, "eta", f"{path}: boundary", 1.0, positive=True)
+    if eta < 1.0:
+        raise TranslucencyError(f"{path}: boundary: eta must be >= 1 (the object's index over the air's)")
+    cams = raw.get("cameras")
+    if not isinstance(cams, list) or not cams:
+        raise TranslucencyError(f"{path}: cameras: expected a non-empty list")
+    cameras = []
+    for i, c in enumerate(cams):
+        name = str(c.get("name", f"camera{i}"))
+        where = f"{path}: camera {name}"
+        if any(cam.name == name for cam in cameras):
+            raise TranslucencyError(f"{where}: the name is used twice")
+        intr, pose, rad = c.get("intrinsics"), c.get("pose"), c.get("radiometry") or {}
+        if not isinstance(intr, dict) or not ({"K"} <= intr.keys() or {"checkerboards"} <= intr.keys()):
+            raise TranslucencyError(f"{where}: intrinsics: give K (and dist) or checkerboards")
+        for f in intr.get("checkerboards", []):
+            _file(folder, f, f"{where}: checkerboards")
+        if not isinstance(pose, dict) or not ({"t"} <= pose.keys() or {"marks"} <= pose.keys()):
+            raise TranslucencyError(f"{where}: pose: give R (or rvec) and t, or marks")
+        radiometry = Radiometry(
+            k=_number(rad, "k", f"{where}: radiometry", positive=True),
+            dark=_file(folder, rad["dark"], f"{where}: dark") if rad.get("dark") else None,
+            flat=_file(folder, rad["flat"], f"{where}: flat") if rad.get("flat") else None,
+            vignetting=tuple(float(v) for v in rad.get("vignetting", ())),
+            gain=_number(rad, "gain", f"{where}: radiometry", 0.0),
+            read_noise=_number(rad, "read_noise", f"{where}: radiometry", 0.0),
+            saturation=_number(rad, "saturation", f"{where}: radiometry", float("inf"), positive=True)
+            if rad.get("saturation") is not None
+            else float("inf"),
+        )
+        width = int(_number(c, "width", where, positive=True))
+        height = int(_number(c, "height", where, positive=True))
+        cameras.append(CameraSetup(name, width, height, intr, pose, radiometry))
+    names = {c.name for c in cameras}
+    shots_raw = raw.get("shots")
+    if not isinstance(shots_raw, list) or not shots_raw:
+        raise TranslucencyError(f"{path}: shots: expected a non-empty list")
+    shots = []
+    for j, s in enumerate(shots_raw):
+        where = f"{path}: shot {j}"
+        hit = s.get("hit")
+        if not isinstance(hit, dict) or len(hit.keys() & {"vertex", "point", "ray"}) != 1:
+            raise TranslucencyError(f"{where}: hit: give exactly one of vertex, point or ray")
+        power = _number(s, "power", where, positive=True)
+        images = s.get("images")
+        if not isinstance(images, dict) or not images:
+            raise TranslucencyError(f"{where}: images: expected {{camera: [frames]}}")
+        unknown = images.keys() - names
+        if unknown:
+            raise TranslucencyError(f"{where}: images of unknown camera {sorted(unknown)[0]!r}")
+        frames = {}
+        for cam, lst in images.items():
+            if not isinstance(lst, list) or not lst:
+                raise TranslucencyError(f"{where}: camera {cam}: expected a list of frames")
+            frames[cam] = [
+                Exposure(
+                    _file(folder, f.get("file") if isinstance(f, dict) else f, f"{where}: camera {cam}"),
+                    _number(f, "exposure_s", f"{where}: camera {cam}", 1.0, positive=True)
+                    if isinstance(f, dict)
+                    else 1.0,
+                )
+                for f in lst
+            ]
+        shots.append(ObjectShot(j, hit, power, frames))
+    law = str(raw.get("exit_law", "dielectric" if eta > 1.0 else "from-views"))
+    return ObjectRig(
+        path=path,
+        folder=folder,
+        mesh_file=mesh_file,
+        scale_mm=_number(mesh, "scale_mm", f"{path}: mesh", 1.0, positive=True),
+        up=str(mesh.get("up", "z")),
+        eta=eta,
+        exit_law=law,
+        grazing_deg=_number(raw, "grazing_deg", str(path), 75.0, positive=True),
+        spot_radius_mm=_number(raw, "spot_radius_mm", str(path), 0.0),
+        min_coverage=_number(raw, "min_coverage", str(path), 0.5, positive=True),
+        max_reprojection_px=_number(
+            raw, "max_reprojection_px", str(path), MAX_REPROJECTION_PX, positive=True
+        ),
+        cameras=cameras,
+        shots=shots,
+        sample=raw.get("sample"),
+        raw=raw,
+    )
+
+
+def calibrated_camera(setup: CameraSetup, folder: Path, max_rms_px: float) -> Camera:
+    """The camera of a rig entry: K given or by ``cv2.calibrateCamera`` from its checkerboards, the pose
+    given or by ``cv2.solvePnP`` from its marks; each refused above ``max_rms_px`` (px rms)."""
+    intr, pose, report = setup.intrinsics, setup.pose, {}
+    if "K" in intr:
+        K, dist = intr["K"], intr.get("dist")
+    else:
+        images = [read_hdr(folder / f) for f in intr["checkerboards"]]
+        for f, im in zip(intr["checkerboards"], images):
+            if im.shape[:2] != (setup.height, setup.width):
+                raise TranslucencyError(
+                    f"{setup.name}: checkerboard {f} is {im.shape[1]} x {im.shape[0]} px, the camera "
+                    f"{setup.width} x {setup.height}"
+                )
+        K, dist, rms = calibrate_intrinsics(
+            images,
+            tuple(intr.get("inner", (7, 5))),
+            float(intr.get("square_mm", 1.0)),
+            name=setup.name,
+            max_rms_px=max_rms_px,
+        )
+        report["intrinsics"] = rms
+    if "marks" in pose:
+        marks = pose["marks"]
+        base = Camera(K, dist, np.eye(3), [0.0, 0.0, 1.0], setup.width, setup.height, setup.name)
+        cam, rms = estimate_pose(base, marks.get("object_mm"), marks.get("image_px"), max_rms_px=max_rms_px)
+        report["pose"] = rms
+    else:
+        spec = {"K": K, "dist": dist, "width": setup.width, "height": setup.height, **pose}
+        cam = Camera.from_dict(spec, setup.name)
+    return Camera(cam.K, cam.dist, cam.R, cam.t, cam.width, cam.height, setup.name, report)
+
+
+__all__ = [
+    "ObjectRig",
+    "CameraSetup",
+    "ObjectShot",
+    "Exposure",
+    "Radiometry",
+    "read_object_rig",
+    "calibrated_camera",
+]
