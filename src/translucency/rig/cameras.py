@@ -12,7 +12,8 @@ Conventions, stated once for every coordinate of an object rig (docs/object-rig.
   image array is indexed ``[row, column]``.
 
 A :class:`Camera` projects (``cv2.projectPoints``) and casts a ray through each pixel centre
-(``cv2.undistortPoints``); :meth:`Camera.sensor_dict` gives the Mitsuba ``perspective`` sensor of a
+(``cv2.undistortPoints`` refined by Newton steps on the lens model, :meth:`Camera.undistort`), with the
+pixel's solid angle; :meth:`Camera.sensor_dict` gives the Mitsuba ``perspective`` sensor of a
 distortion-free camera with square pixels and the principal point at the film's centre
 (:math:`c_x = W/2 - 1/2`, since Mitsuba's pixel centres lie at half-integers), which is what the
 virtual rig renders with.  Mitsuba's camera frame is (left, up, forward), so its ``to_world`` is
@@ -184,6 +185,14 @@ class Camera:
         0.01 px off at an 80° field with k1 = −0.1), Newton steps on OpenCV's model (:func:`_lens`) the
         rest, to 1e-6 px.  A pixel the model cannot reach, or reaches only where it folds over, is
         refused in one line.
+
+        Examples
+        --------
+        >>> cam = Camera.looking_at((0.0, 0.0, 100.0), (0.0, 0.0, 0.0), 64, 48, fov_deg=30.0)
+        >>> cam = Camera(cam.K, [-0.1, 0.0, 0.0, 0.0, 0.0], cam.R, cam.t, 64, 48)
+        >>> xy, J = cam.undistort([[31.5, 23.5], [63.5, 23.5]])
+        >>> np.round(xy, 6).tolist()  # the edge: x (1 − 0.1 x²) = tan 15°
+        [[0.0, 0.0], [0.269916, 0.0]]
         """
         import cv2  # heavy: OpenCV loads only where a camera casts rays
 
@@ -192,21 +201,20 @@ class Camera:
             raise TranslucencyError(f"{self.name}: pixels to undistort must be finite")
         f, c = np.array([self.K[0, 0], self.K[1, 1]]), self.K[:2, 2]
         xy = cv2.undistortPoints(uv.reshape(-1, 1, 2), self.K, self.dist).reshape(-1, 2)
+        # Newton: xy ← xy − J⁻¹ r with r the miss (px) of the pixel xy maps to, J = ∂(u, v)/∂(x, y)
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
             for _ in range(_NEWTON_STEPS + 1):
                 xy_d, J = _lens(xy, self.dist)
-                r = xy_d - (uv - c) / f  # in normalised units
-                J = J * f[None, :, None]  # ∂(u, v)/∂(x, y)
-                miss = np.hypot(*(r * f).T)
+                r = xy_d * f + c - uv
+                J = J * f[None, :, None]
+                det = J[:, 0, 0] * J[:, 1, 1] - J[:, 0, 1] * J[:, 1, 0]
+                miss = np.hypot(r[:, 0], r[:, 1])
                 if (miss <= _ROUND_TRIP_PX).all():
                     break
-                det = J[:, 0, 0] * J[:, 1, 1] - J[:, 0, 1] * J[:, 1, 0]
-                r = r * f
                 step = np.column_stack(
                     [J[:, 1, 1] * r[:, 0] - J[:, 0, 1] * r[:, 1], J[:, 0, 0] * r[:, 1] - J[:, 1, 0] * r[:, 0]]
                 )
                 xy = xy - step / det[:, None]
-            det = J[:, 0, 0] * J[:, 1, 1] - J[:, 0, 1] * J[:, 1, 0]
         bad = ~((miss <= _ROUND_TRIP_PX) & (det > 0))
         if bad.any():
             k = int(np.argmax(bad))
