@@ -10,6 +10,7 @@ from ._engine import drjit, engine_versions, mitsuba, prepare_libllvm
 from .scenes import (
     NO_ROULETTE,
     SPOT_BEAM_FRACTION,
+    checkerboard_scene,
     load_plugin,
     load_with_mesh,
     look_at,
@@ -49,4 +50,5 @@ __all__ = [
     "object_volpath_scene",
     "slab_scene",
     "markers_scene",
+    "checkerboard_scene",
 ]

@@ -3,7 +3,8 @@
 One home for handing our data to Mitsuba 3 (every ``load_dict`` of the package is here), used by the
 acquisition (photon walks in a mesh), the renderer (shadow rays, :func:`vertex_radiance_scene` for our
 picture, :func:`object_volpath_scene` for the reference), the validation harness and the virtual rig
-(:func:`slab_scene`: the slab under ``volpath``; :func:`markers_scene`).  Units: mm, coefficients in mm⁻¹.
+(:func:`slab_scene`: the slab under ``volpath``; :func:`markers_scene` and :func:`checkerboard_scene`,
+its calibration targets).  Units: mm, coefficients in mm⁻¹.
 """
 
 from __future__ import annotations
@@ -321,3 +322,51 @@ def markers_scene(sensor: dict, markers_mm, radius_mm: float):
     for k, (x, y) in enumerate(np.asarray(markers_mm, float)):
         scene[f"marker{k}"] = marker_dict(x, y, radius_mm)
     return mitsuba().load_dict(scene)
+
+
+def checkerboard_scene(
+    sensor: dict,
+    board_to_world: np.ndarray,
+    inner: tuple[int, int],
+    square_mm: float,
+    pixels_per_square: int = 16,
+):
+    """A flat glowing checkerboard seen by ``sensor`` through the ``direct`` integrator (no light needed).
+
+    The board has (inner[0] + 1) × (inner[1] + 1) squares of side s = ``square_mm`` (mm); in the board's
+    own frame (mm) its inner corner (i, j) lies at (s i, s j, 0), so the squares reach one square beyond
+    the corner grid on every side, and the square (a, b) over x ∈ [s(a − 1), s a], y ∈ [s(b − 1), s b]
+    (0 ≤ a ≤ inner[0], 0 ≤ b ≤ inner[1]) is white (radiance 1) for a + b even, else black (0).
+    ``board_to_world`` (4 × 4) maps the board's frame to the scene's.  The board is a ``rectangle`` whose
+    surface is an area emitter of a nearest-neighbour bitmap, ``pixels_per_square`` texels to a square's
+    side; it glows on its +z side only.
+    """
+    mi = mitsuba()
+    nx, ny = (int(v) + 1 for v in inner)  # squares along the board's x and y
+    s = float(square_mm)
+    # texel [row, column] = square (b, a): the rectangle's v (texel rows) grows with the board's y
+    b, a = np.indices((ny, nx))
+    squares = ((a + b) % 2 == 0).astype(np.float32)
+    k = int(pixels_per_square)
+    texels = np.ascontiguousarray(np.repeat(np.repeat(squares, k, axis=0), k, axis=1)[..., None])
+    # the rectangle [−1, 1]² onto the squares' extent [−s, (nx − 1) s] × [−s, (ny − 1) s]
+    centre = [0.5 * s * (nx - 2), 0.5 * s * (ny - 2), 0.0]
+    to_world = (
+        mi.ScalarTransform4f(np.asarray(board_to_world, dtype=np.float64).tolist())
+        @ mi.ScalarTransform4f().translate(centre)
+        @ mi.ScalarTransform4f().scale([0.5 * s * nx, 0.5 * s * ny, 1.0])
+    )
+    pattern = {
+        "type": "bitmap",
+        "data": mi.TensorXf(texels),
+        "filter_type": "nearest",
+        "wrap_mode": "clamp",
+        "raw": True,
+    }
+    board = {
+        "type": "rectangle",
+        "to_world": to_world,
+        "bsdf": {"type": "diffuse", "reflectance": 0.0},
+        "emitter": {"type": "area", "radiance": pattern},
+    }
+    return mi.load_dict({"type": "scene", "integrator": {"type": "direct"}, "board": board, "camera": sensor})
