@@ -19,11 +19,13 @@ the normal is only 10–20° from +z (so s ≈ −0.3), πL is 0.61 M.  So π ×
 * :class:`Lambertian` — γ = 1 (a rough, white-diffusing surface, or for comparison only);
 * :class:`Dielectric` — :math:`\gamma = F_t(\mu)/(1 - F_{dr,e})` for a smooth boundary of index η,
   the law the renderer draws with (:mod:`translucency.model.boundary`);
-* :class:`FromViews` — :math:`\gamma = (1 + \beta_b\mu + \kappa_b s)/(1 + 2\beta_b/3)` with one
-  (β, κ) per band b of distance from the hit and channel (the κ term integrates to zero against μ, so
-  the normalisation holds), **estimated from the photographs themselves**: a vertex seen by two
-  cameras gives :math:`L_1 (1 + \beta\mu_2 + \kappa s_2) = L_2 (1 + \beta\mu_1 + \kappa s_1)`,
-  linear in (β, κ), so each band's pair is a weighted least-squares solve (:func:`fit_from_views`).
+* :class:`FromViews` — γ tabulated over directions (cells of μ and of the azimuth from the direction
+  away from the hit) per band of distance from the hit and channel, **estimated from the photographs
+  themselves**: a vertex seen by several cameras sees one exitance through several cells of the
+  table, so the table (normalised) and the exitances are fitted jointly (:func:`fit_from_views`).  A
+  linear law in μ and s was tried first and dropped: near the hit the light leaves strongly peaked
+  away from it (on the skin sphere, 1.5 mm from the hit, πL/M is 3.6 seen face-on leaning away from the
+  hit, 0.5 seen from the side and 0.3 leaning towards it: measured by photon walks and volpath alike).
 """
 
 from __future__ import annotations
@@ -44,9 +46,11 @@ MIN_PAIRS = 12
 
 
 class ExitLaw(ABC):
-    """The factor γ(μ, r) = π L / M of the exit (module notes)."""
+    """The factor γ(μ, s, r) = π L / M of the exit (module notes)."""
 
     name: str
+    #: whether γ depends on the slant and the distance from the hit (else only on μ)
+    needs_direction = False
 
     @abstractmethod
     def factor(self, mu: np.ndarray, s: np.ndarray, r: np.ndarray) -> np.ndarray:
@@ -91,40 +95,63 @@ class Dielectric(ExitLaw):
         return {"law": self.name, "eta": float(self.eta)}
 
 
+#: the table of :class:`FromViews`: cells in μ (uniform) and in the azimuth φ from the direction away from
+#: the hit (uniform over [0°, 180°]; the law is mirror-symmetric about the plane through the hit)
+MU_CELLS, PHI_CELLS = 4, 4
+
+
+def _cells(mu, s) -> np.ndarray:
+    """The table cell (flat index) of directions of cosine ``mu`` and slant ``s``."""
+    mu = np.clip(np.asarray(mu, dtype=np.float64), 0.0, 1.0)
+    sin = np.sqrt(np.maximum(1.0 - mu * mu, 1e-12))
+    phi = np.arccos(np.clip(np.asarray(s, dtype=np.float64) / sin, -1.0, 1.0))
+    i = np.minimum((mu * MU_CELLS).astype(np.int64), MU_CELLS - 1)
+    j = np.minimum((phi / np.pi * PHI_CELLS).astype(np.int64), PHI_CELLS - 1)
+    return i * PHI_CELLS + j
+
+
+def cell_weights() -> np.ndarray:
+    r""":math:`q_k = \int_{\text{cell } k} \mu\, d\omega` over the hemisphere (both mirror halves), so that
+    :math:`\sum_k \gamma_k q_k = \pi` is the law's normalisation."""
+    mu = np.linspace(0, 1, MU_CELLS + 1)
+    q_mu = 0.5 * np.diff(mu**2)  # ∫ μ dμ per μ cell
+    q_phi = np.full(PHI_CELLS, 2 * np.pi / PHI_CELLS)  # both halves: 2 × (π / cells)
+    return np.outer(q_mu, q_phi).ravel()
+
+
 @dataclass(frozen=True)
 class FromViews(ExitLaw):
-    """γ = (1 + β μ + κ s)/(1 + 2β/3) with (β, κ) per distance band (:data:`BAND_EDGES_MM`) and channel.
+    r"""γ tabulated over directions (:data:`MU_CELLS` × :data:`PHI_CELLS` cells of μ and of the azimuth
+    from the direction away from the hit) per distance band (:data:`BAND_EDGES_MM`) and channel, with
+    :math:`\sum_k \gamma_k q_k = \pi` (:func:`cell_weights`).
 
-    ``beta`` and ``kappa`` have shape (bands, 3); ``pairs`` says how many pairs of views each band was
-    estimated from.
+    ``table`` has shape (bands, cells, 3); ``views`` says how many vertex views each band was estimated
+    from.
 
     Examples
     --------
-    >>> law = FromViews(np.full((len(BAND_EDGES_MM), 3), 1.5), np.full((len(BAND_EDGES_MM), 3), 0.3))
-    >>> mu = (np.arange(2000) + 0.5) / 2000
-    >>> round(float(2 * np.mean(law.factor(mu, 0 * mu, 3.0 + 0 * mu)[:, 0] * mu)), 4)
+    >>> law = FromViews(np.ones((len(BAND_EDGES_MM), MU_CELLS * PHI_CELLS, 3)))   # Lambertian
+    >>> float(law.factor(np.array([0.3]), np.array([0.1]), np.array([2.0]))[0, 0])
     1.0
     """
 
-    beta: np.ndarray
-    kappa: np.ndarray
-    pairs: tuple = ()
+    table: np.ndarray
+    views: tuple = ()
     name: str = "from-views"
+    needs_direction = True
 
     def factor(self, mu, s, r):
-        mu, s = (np.asarray(a, dtype=np.float64)[..., None] for a in (mu, s))
-        band = _band(r)
-        b = np.asarray(self.beta, dtype=np.float64)[band]
-        k = np.asarray(self.kappa, dtype=np.float64)[band]
-        return np.maximum(1.0 + b * mu + k * s, 0.05) / (1.0 + 2.0 * b / 3.0)
+        return np.asarray(self.table, dtype=np.float64)[
+            np.clip(_band(r), 0, len(BAND_EDGES_MM) - 1), _cells(mu, s)
+        ]
 
     def describe(self) -> dict:
         return {
             "law": self.name,
             "band_edges_mm": list(BAND_EDGES_MM),
-            "beta": np.round(np.asarray(self.beta), 4).tolist(),
-            "kappa": np.round(np.asarray(self.kappa), 4).tolist(),
-            "pairs": list(self.pairs),
+            "cells": {"mu": MU_CELLS, "phi": PHI_CELLS},
+            "table": np.round(np.asarray(self.table), 4).tolist(),
+            "views": list(self.views),
         }
 
 
@@ -132,8 +159,21 @@ def _band(r) -> np.ndarray:
     return np.clip(np.searchsorted(BAND_EDGES_MM, np.asarray(r, dtype=np.float64), side="right") - 1, 0, None)
 
 
-def fit_from_views(L, var, mu, s, r, *, min_snr: float = 5.0, iterations: int = 30) -> FromViews:
-    r"""(β, κ) per distance band and channel from vertices seen by several cameras.
+def _neighbours() -> list[tuple[int, int]]:
+    """Pairs of adjacent cells of the table (the smoothness penalty's)."""
+    out = []
+    for i in range(MU_CELLS):
+        for j in range(PHI_CELLS):
+            k = i * PHI_CELLS + j
+            if i + 1 < MU_CELLS:
+                out.append((k, k + PHI_CELLS))
+            if j + 1 < PHI_CELLS:
+                out.append((k, k + 1))
+    return out
+
+
+def fit_from_views(L, var, mu, s, r, *, min_snr: float = 5.0, iterations: int = 40, smooth: float = 0.05):
+    r"""The tabulated law γ per distance band and channel from vertices seen by several cameras.
 
     Parameters
     ----------
@@ -145,48 +185,67 @@ def fit_from_views(L, var, mu, s, r, *, min_snr: float = 5.0, iterations: int = 
     r : ndarray, shape (N,)
         Each vertex's distance from its laser hit, mm.
 
-    The views of a vertex seen by two cameras or more, each above ``min_snr`` σ, are fitted jointly with
-    the vertex's exitance: :math:`\pi L_{vc} = M_v \gamma(\mu_{vc}, s_{vc})`, by alternating the
-    weighted least-squares :math:`M_v` for fixed (β, κ) and the linear least squares of
-    :math:`\pi L (1 + 2\beta/3) = M (1 + \beta\mu + \kappa s)` in (β, κ) for fixed M (weights
-    :math:`1/(\mathrm{Var}\,L + (0.02 L)^2)`), clipped to β ∈ [−0.9, 10], |κ| ≤ 1.5.  A band with fewer
-    than :data:`MIN_PAIRS` such vertices takes its nearest estimated band's values.
+    The views (above ``min_snr`` σ) of vertices seen by two cameras or more are fitted jointly with the
+    vertices' exitances, :math:`\pi L_{vc} = M_v \gamma_{k(vc)}`: alternately the weighted least-squares
+    :math:`M_v` for a fixed table, and the table for fixed M — a linear least-squares problem with the
+    normalisation :math:`\sum_k \gamma_k q_k = \pi` as a constraint (Lagrange) and a penalty
+    ``smooth`` × (the data's mean weight per cell) on differences of adjacent cells, which also fills
+    cells no view falls in (the grazing ones).  Weights :math:`1/(\mathrm{Var}\,L + (0.02 L)^2)`.  A band
+    with fewer than :data:`MIN_PAIRS` such vertices takes its nearest estimated band's table.
+
+    Returns
+    -------
+    FromViews
     """
     L, var, mu, s = (np.asarray(a, dtype=np.float64) for a in (L, var, mu, s))
-    bands = len(BAND_EDGES_MM)
+    bands, K = len(BAND_EDGES_MM), MU_CELLS * PHI_CELLS
     band = np.clip(_band(r), 0, bands - 1)
-    beta = np.zeros((bands, 3))
-    kappa = np.zeros((bands, 3))
+    q = cell_weights()
+    table = np.ones((bands, K, 3))
     with np.errstate(invalid="ignore", divide="ignore"):
-        good = np.isfinite(L) & (L / np.sqrt(var) >= min_snr)  # (C, N, 3)
-    views = good.all(axis=2)  # (C, N): a view good in every channel
+        good = np.isfinite(L) & (L / np.sqrt(var) >= min_snr)
+    views = good.all(axis=2)  # (C, N)
     multi = views.sum(axis=0) >= 2
     counts = np.bincount(band[multi], minlength=bands)
+    D = np.zeros((K, K))  # the smoothness penalty's matrix (a graph Laplacian)
+    for a, b in _neighbours():
+        D[a, a] += 1
+        D[b, b] += 1
+        D[a, b] -= 1
+        D[b, a] -= 1
+    cells = _cells(mu, s)  # (C, N)
     for b in range(bands):
         m = multi & (band == b)
         if m.sum() < MIN_PAIRS:
             continue
-        v = views[:, m]  # (C, n)
+        v = views[:, m]
+        k = cells[:, m]
         for ch in range(3):
-            Lc = np.where(v, L[:, m, ch], 0.0)
-            w = np.where(v, 1.0 / (np.nan_to_num(var[:, m, ch]) + (0.02 * Lc) ** 2 + 1e-300), 0.0)
-            mc, sc = mu[:, m], s[:, m]
-            be, ka = 0.0, 0.0
+            y = np.where(v, np.pi * L[:, m, ch], 0.0)
+            w = np.where(
+                v,
+                1.0
+                / (
+                    np.pi**2 * (np.nan_to_num(var[:, m, ch]) + (0.02 * np.where(v, L[:, m, ch], 0)) ** 2)
+                    + 1e-300
+                ),
+                0.0,
+            )
+            g = np.ones(K)
             for _ in range(iterations):
-                g = np.maximum(1 + be * mc + ka * sc, 0.05) / (1 + 2 * be / 3)
-                M = np.pi * (w * g * Lc).sum(0) / np.maximum((w * g * g).sum(0), 1e-300)  # (n,)
-                # π L (1 + 2β/3) − M (1 + βμ + κs) = 0, linear in (β, κ)
-                x1 = (2 * np.pi * Lc / 3 - M * mc)[v]
-                x2 = (-M * sc)[v]
-                y = -(np.pi * Lc - M)[v]
-                ww = w[v]  # Var e ≈ (π(1 + 2β/3))² Var L
-                A = np.array([[ww @ (x1 * x1), ww @ (x1 * x2)], [ww @ (x1 * x2), ww @ (x2 * x2)]])
-                try:
-                    be, ka = np.linalg.solve(A, np.array([ww @ (x1 * y), ww @ (x2 * y)]))
-                except np.linalg.LinAlgError:
-                    break
-                be, ka = float(np.clip(be, -0.9, 10.0)), float(np.clip(ka, -1.5, 1.5))
-            beta[b, ch], kappa[b, ch] = be, ka
+                gv = g[k]
+                M = (w * gv * y).sum(0) / np.maximum((w * gv * gv).sum(0), 1e-300)  # (n,)
+                # the table for fixed M: Σ w (y − M γ_k)² + λ γᵀ D γ, subject to qᵀ γ = π
+                diag = np.bincount(k[v], weights=(w * M * M)[v], minlength=K)
+                rhs = np.bincount(k[v], weights=(w * M * y)[v], minlength=K)
+                lam = smooth * diag[diag > 0].mean()
+                A = np.zeros((K + 1, K + 1))
+                A[:K, :K] = np.diag(diag) + lam * D
+                A[:K, K] = A[K, :K] = q
+                sol = np.linalg.lstsq(A, np.r_[rhs, np.pi], rcond=None)[0]
+                g = np.maximum(sol[:K], 0.01)
+                g *= np.pi / (q @ g)
+            table[b, :, ch] = g
     ok = counts >= MIN_PAIRS
     if not ok.any():
         raise TranslucencyError(
@@ -195,7 +254,7 @@ def fit_from_views(L, var, mu, s, r, *, min_snr: float = 5.0, iterations: int = 
         )
     idx = np.arange(bands)
     nearest = np.array([idx[ok][np.argmin(np.abs(idx[ok] - i))] for i in idx])
-    return FromViews(beta[nearest], kappa[nearest], tuple(int(c) for c in counts))
+    return FromViews(table[nearest], tuple(int(c) for c in counts))
 
 
 def law_named(name: str, eta: float = 1.0) -> ExitLaw | None:

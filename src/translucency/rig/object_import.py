@@ -49,7 +49,7 @@ from ..io.mesh_dataset import FORMAT, VERSION, create_mesh_dataset
 from ..io.outputs import output_lock
 from ..mitsuba import mesh_scene, rays
 from .cameras import Camera
-from .exit_law import Dielectric, ExitLaw, fit_from_views, law_named
+from .exit_law import Dielectric, ExitLaw, Lambertian, fit_from_views, law_named
 from .hdr import read_hdr
 from .object_setup import CameraSetup, ObjectRig, ObjectShot, calibrated_camera, read_object_rig
 from .provenance import sha256_file
@@ -72,8 +72,8 @@ class _Camera:
     camera: Camera
     map: SurfaceMap
     setup: CameraSetup
-    dark: np.ndarray  # (H·W, 3) raw value
-    gain: np.ndarray  # (H·W, 3): k · vig · flat — raw value per unit radiance per second
+    dark_u: np.ndarray  # (n, 3) float32 raw value at the pixels the map uses
+    gain_u: np.ndarray  # (n, 3) float32: k · vig · flat — raw value per unit radiance per second
 
 
 def import_object(
@@ -180,7 +180,7 @@ def import_object(
         finished = int(
             sum(min(P, (c + 1) * chunk_points) - c * chunk_points for c in range(len(done)) if done[c])
         )
-        neighbours = _neighbour_matrix(mesh)
+        fill = _Filler(mesh)
         every = {"write_empty_chunks": True}
         for c in range(len(done)):
             lo, hi = c * chunk_points, min(P, (c + 1) * chunk_points)
@@ -194,12 +194,11 @@ def import_object(
             for j in range(lo, hi):
                 shot = setup.shots[j]
                 r = np.linalg.norm(mesh.vertices - hits[j], axis=1)
-                per_cam, nbytes = _shot_cell_means(shot, cameras, setup)
+                per_cam, nbytes = _shot_cell_means(shot, cameras, setup, law, hits[j])
                 bytes_read += nbytes
-                slants = [_slant(mesh, c.camera, hits[j]) for c in cameras]
-                Rj, vj, fj = _fuse(per_cam, cameras, law, r, area, setup, slants)
+                Rj, vj, fj = _fuse(per_cam, cameras, area, setup)
                 fj[r <= setup.spot_radius_mm] |= SPOT
-                Rj = _fill(Rj, (fj & (UNSEEN | SATURATED)) != 0, neighbours)
+                Rj = fill(Rj, (fj & (UNSEEN | SATURATED)) != 0)
                 vj[~np.isfinite(vj)] = 0.0
                 R[j - lo], var[j - lo], flags[j - lo] = Rj, vj, fj
                 energy[j] = area @ Rj
@@ -256,15 +255,16 @@ def _frame_file(path: Path, shape, what: str) -> np.ndarray:
         )
     if not np.isfinite(image).all():
         raise TranslucencyError(f"{path}: {what} holds non-finite pixels")
-    return image.reshape(-1, 3).astype(np.float64)
+    return image.reshape(-1, 3)
 
 
 def _prepare_camera(setup: CameraSetup, rig: ObjectRig, mesh, scene) -> _Camera:
     camera = calibrated_camera(setup, rig.folder, rig.max_reprojection_px)
     shape = (setup.height, setup.width)
     rad = setup.radiometry
-    dark = _frame_file(rad.dark, shape, "dark frame") if rad.dark else np.zeros((shape[0] * shape[1], 3))
-    flat = _frame_file(rad.flat, shape, "flat field") if rad.flat else np.ones((shape[0] * shape[1], 3))
+    n_pix = shape[0] * shape[1]
+    dark = _frame_file(rad.dark, shape, "dark frame").astype(np.float64) if rad.dark else np.zeros((n_pix, 3))
+    flat = _frame_file(rad.flat, shape, "flat field").astype(np.float64) if rad.flat else np.ones((n_pix, 3))
     if (flat <= 0).any():
         raise TranslucencyError(f"{rad.flat}: flat field must be positive everywhere")
     flat = flat / flat.mean()  # normalised here: k is the response of a mean pixel
@@ -273,7 +273,7 @@ def _prepare_camera(setup: CameraSetup, rig: ObjectRig, mesh, scene) -> _Camera:
         raise TranslucencyError(f"camera {setup.name}: vignetting {plain(rad.vignetting)} is not positive")
     gain = rad.k * vig[:, None] * flat
     m = surface_map(mesh, camera, grazing_deg=rig.grazing_deg, scene=scene)
-    return _Camera(camera, m, setup, dark, gain)
+    return _Camera(camera, m, setup, dark[m.used].astype(np.float32), gain[m.used].astype(np.float32))
 
 
 def _check_mesh_seen(mesh, cameras: list[Camera], rig: ObjectRig) -> None:
@@ -364,47 +364,52 @@ def _closest_on_surface(mesh, tree, p: np.ndarray) -> tuple[np.ndarray, float]:
 
 
 def _radiance(shot: ObjectShot, cam: _Camera, rig: ObjectRig):
-    """One camera's frames of a shot as radiance per unit power (H·W, 3), its variance and the usable
-    pixels (module step 3); and the bytes read."""
+    """One camera's frames of a shot as radiance per unit power at the pixels its map uses (n, 3), its
+    variance and the usable pixels (n,) (module step 3); and the bytes read.  float32 throughout."""
     setup = cam.setup
     rad = setup.radiometry
     shape = (setup.height, setup.width)
     frames = shot.frames.get(setup.name, [])
-    num = np.zeros((shape[0] * shape[1], 3))
+    used = cam.map.used
+    dark, gain = cam.dark_u, cam.gain_u
+    num = np.zeros((len(used), 3), np.float32)
     wsum = np.zeros_like(num)
     var_model = np.zeros_like(num)
-    by_exposure: dict = {}
+    longest = max(f.exposure_s for f in frames)
+    rep_n = np.zeros(len(used), np.float32)  # repeated frames of the longest exposure: n, Σ L, Σ L²
+    rep_s = np.zeros_like(num)
+    rep_s2 = np.zeros_like(num)
     nbytes = 0
     for f in frames:
         raw = _frame_file(f.file, shape, "photograph")
         nbytes += raw.size * 4
+        raw = raw[used]
         ok = (raw < rad.saturation).all(axis=1)
-        signal = raw - cam.dark
-        scale = 1.0 / (cam.gain * f.exposure_s * shot.power)  # value → radiance per unit power
+        signal = raw - dark
+        scale = 1.0 / (gain * np.float32(f.exposure_s * shot.power))  # value → radiance per unit power
         L = signal * scale
-        w = f.exposure_s * ok[:, None]  # photon noise: weight ∝ exposure
+        w = np.float32(f.exposure_s) * ok[:, None]  # photon noise: weight ∝ exposure
         num += w * L
         wsum += w
-        var_model += w**2 * (rad.gain * np.maximum(signal, 0.0) + rad.read_noise**2) * scale**2
-        by_exposure.setdefault(f.exposure_s, []).append(np.where(ok[:, None], L, np.nan))
+        var_model += w * w * (rad.gain * np.maximum(signal, 0.0) + rad.read_noise**2) * scale * scale
+        if f.exposure_s == longest:
+            rep_n += ok
+            rep_s += ok[:, None] * L
+            rep_s2 += ok[:, None] * L * L
     usable = (wsum > 0).all(axis=1)
     with np.errstate(invalid="ignore", divide="ignore"):
         L = np.where(wsum > 0, num / wsum, 0.0)
-        var = np.where(wsum > 0, var_model / wsum**2, 0.0)
-    for t, stack in by_exposure.items():  # repeated frames: their own scatter of the mean
-        if len(stack) >= 2:
-            s = np.stack(stack)
-            n = np.isfinite(s).sum(axis=0)
-            with np.errstate(invalid="ignore", divide="ignore"):
-                scatter = np.nanvar(s, axis=0, ddof=1) / n
-            longest = t == max(by_exposure)
-            if longest:
-                var = np.where(np.isfinite(scatter) & (n >= 2), np.maximum(var, scatter), var)
+        var = np.where(wsum > 0, var_model / (wsum * wsum), 0.0)
+        n = rep_n[:, None]
+        scatter = (rep_s2 - rep_s * rep_s / n) / (n - 1) / n  # the scatter of the repeated frames' mean
+    var = np.where((n >= 2) & np.isfinite(scatter), np.maximum(var, scatter), var)
     return L, var, usable, nbytes
 
 
-def _shot_cell_means(shot: ObjectShot, cameras: list[_Camera], rig: ObjectRig):
-    """Per camera: (mean radiance (V, 3), its variance, usable weight (V,)) over each vertex's cell."""
+def _shot_cell_means(shot: ObjectShot, cameras: list[_Camera], rig: ObjectRig, law=None, hit=None):
+    """Per camera: (cell mean (V, 3), its variance, usable weight (V,), mean γ (V, 3)) of the radiance —
+    or, with ``law``, of the exitance πL/γ converted pixel by pixel (γ at each pixel's cosine, slant
+    and distance from ``hit``: the law varies across a cell near the hit)."""
     out = []
     nbytes = 0
     for cam in cameras:
@@ -413,11 +418,26 @@ def _shot_cell_means(shot: ObjectShot, cameras: list[_Camera], rig: ObjectRig):
             continue
         L, var, usable, nb = _radiance(shot, cam, rig)
         nbytes += nb
-        out.append(cam.map.cell_means(L, var, usable))
+        m = cam.map
+        if law is None:
+            out.append((*m.cell_means(L, var, usable), None))
+            continue
+        u = m.used
+        if law.needs_direction:  # the slant and the distance of every pixel used
+            r, slant = np.linalg.norm(m.position[u] - hit, axis=1), m.slant(hit, u)
+        else:
+            r = slant = np.zeros(len(u))
+        gamma = law.factor(m.mu[u], slant, r).astype(np.float32)  # (n, 3)
+        E, vE = np.float32(np.pi) * L / gamma, var * (np.float32(np.pi) / gamma) ** 2
+        if isinstance(law, Lambertian):
+            g_mean = np.ones((len(m.den), 3), np.float32)
+        else:
+            g_mean = m.cell_means(gamma, np.zeros_like(gamma), usable)[0]
+        out.append((*m.cell_means(E, vE, usable), g_mean))
     return out, nbytes
 
 
-def _fuse(per_cam, cameras: list[_Camera], law: ExitLaw, r, area, rig: ObjectRig, slants):
+def _fuse(per_cam, cameras: list[_Camera], area, rig: ObjectRig):
     """Exitance per vertex fused over cameras (module steps 4–5): R (V, 3), variance (V, 3), flags (V,)."""
     V = len(area)
     num = np.zeros((V, 3))
@@ -427,20 +447,18 @@ def _fuse(per_cam, cameras: list[_Camera], law: ExitLaw, r, area, rig: ObjectRig
     grazing = np.zeros(V, dtype=bool)
     saturated = np.zeros(V, dtype=bool)
     weights = []
-    for cam, cm, s in zip(cameras, per_cam, slants):
+    for cam, cm in zip(cameras, per_cam):
         if cm is None:
             continue
-        Lbar, vbar, used = cm
+        M, vM, used, gamma = cm
         m = cam.map
         grazing |= m.grazing
         seen = m.den / np.maximum(area, 1e-30) >= rig.min_coverage
         good = seen & (used / np.maximum(area, 1e-30) >= rig.min_coverage)
         saturated |= seen & ~good
-        gamma = law.factor(m.mu_v, s, r)  # (V, 3)
-        n_eff = np.divide(m.den**2, np.asarray(m.W2.sum(axis=1)).ravel(), out=np.zeros(V), where=m.den > 0)
-        w = np.where(good, n_eff * gamma.mean(axis=1), 0.0)
-        M = np.where(good[:, None], np.pi * np.nan_to_num(Lbar) / gamma, 0.0)
-        vM = np.where(good[:, None], np.nan_to_num(vbar) * (np.pi / gamma) ** 2, 0.0)
+        w = np.where(good, m.n_eff * np.nan_to_num(gamma).mean(axis=1), 0.0)
+        M = np.where(good[:, None], np.nan_to_num(M), 0.0)
+        vM = np.where(good[:, None], np.nan_to_num(vM), 0.0)
         num += w[:, None] * M
         den += w
         weights.append((w, vM))
@@ -483,6 +501,7 @@ def _law_from_views(rig: ObjectRig, cameras: list[_Camera], shots, mesh, hits, a
             if cm is None:
                 continue
             good = (cm[2] / np.maximum(area, 1e-30) >= rig.min_coverage) & (r > rig.spot_radius_mm)
+            good &= cam.map.den / np.maximum(area, 1e-30) >= 0.95  # views of the whole cell only
             L[k][good], v[k][good] = cm[0][good], cm[1][good]
             mu[k] = cam.map.mu_v
             sl[k] = _slant(mesh, cam.camera, hits[shot.index])
@@ -503,38 +522,44 @@ def _law_from_views(rig: ObjectRig, cameras: list[_Camera], shots, mesh, hits, a
 # -- filling, noise, provenance ----------------------------------------------------------------------------
 
 
-def _neighbour_matrix(mesh) -> sp.csr_matrix:
-    """Row-normalised vertex adjacency over the mesh's edges (V × V)."""
-    e = np.asarray(mesh.edges_unique)
-    V = len(mesh.vertices)
-    A = sp.coo_matrix((np.ones(2 * len(e)), (np.r_[e[:, 0], e[:, 1]], np.r_[e[:, 1], e[:, 0]])), shape=(V, V))
-    A = A.tocsr()
-    deg = np.asarray(A.sum(axis=1)).ravel()
-    return sp.diags(1.0 / np.maximum(deg, 1)) @ A
+class _Filler:
+    """The harmonic fill over the mesh graph: each missing value is the mean of its neighbours', the
+    measured held — :math:`(I - N_{UU}) x_U = N_{UK} x_K`, one sparse LU per set of missing vertices (the
+    unseen set is the same for every shot; it changes only where a shot saturates), kept for the next.
+    A component of the mesh with no measured vertex gets 0."""
 
+    def __init__(self, mesh):
+        from scipy.sparse.csgraph import connected_components  # heavy: SciPy's graphs load where filled
 
-def _fill(R: np.ndarray, missing: np.ndarray, neighbours: sp.csr_matrix) -> np.ndarray:
-    """Values at ``missing`` vertices as the harmonic fill from their measured neighbours over the mesh
-    graph: each missing value is the mean of its neighbours', the measured held — one sparse solve
-    :math:`(I - N_{UU}) x_U = N_{UK} x_K`.  A component with no measured vertex gets 0."""
-    from scipy.sparse.csgraph import (
-        connected_components,
-    )  # heavy: SciPy's graphs load where values are filled
-    from scipy.sparse.linalg import spsolve
+        e = np.asarray(mesh.edges_unique)
+        V = len(mesh.vertices)
+        rows, cols = np.r_[e[:, 0], e[:, 1]], np.r_[e[:, 1], e[:, 0]]
+        A = sp.coo_matrix((np.ones(len(rows)), (rows, cols)), shape=(V, V)).tocsr()
+        deg = np.asarray(A.sum(axis=1)).ravel()
+        self.N = (sp.diags(1.0 / np.maximum(deg, 1)) @ A).tocsr()  # row-normalised adjacency
+        self.components = connected_components(self.N, directed=False)[1]
+        self._cache: dict = {}
 
-    if not missing.any():
-        return R.astype(np.float32)
-    _, comp = connected_components(neighbours, directed=False)
-    has_known = np.zeros(comp.max() + 1, dtype=bool)
-    has_known[comp[~missing]] = True
-    U = np.flatnonzero(missing & has_known[comp])
-    K = np.flatnonzero(~missing)
-    x = np.where(missing[:, None], 0.0, R).astype(np.float64)
-    if len(U):
-        A = sp.identity(len(U), format="csc") - neighbours[U][:, U].tocsc()
-        b = neighbours[U][:, K] @ x[K]
-        x[U] = np.asarray(spsolve(A, b)).reshape(len(U), -1)
-    return x.astype(np.float32)
+    def __call__(self, R: np.ndarray, missing: np.ndarray) -> np.ndarray:
+        from scipy.sparse.linalg import splu  # heavy: SciPy's sparse LU loads where values are filled
+
+        if not missing.any():
+            return R.astype(np.float32)
+        key = np.packbits(missing).tobytes()
+        if key not in self._cache:
+            comp = self.components
+            has_known = np.zeros(comp.max() + 1, dtype=bool)
+            has_known[comp[~missing]] = True
+            U = np.flatnonzero(missing & has_known[comp])
+            K = np.flatnonzero(~missing)
+            NU = self.N[U]
+            lu = splu((sp.identity(len(U), format="csc") - NU[:, U]).tocsc()) if len(U) else None
+            self._cache = {key: (U, K, NU[:, K], lu)}  # one pattern kept: shots rarely alternate
+        U, K, NUK, lu = self._cache[key]
+        x = np.where(missing[:, None], 0.0, R).astype(np.float64)
+        if len(U):
+            x[U] = lu.solve(np.asarray(NUK @ x[K]))
+        return x.astype(np.float32)
 
 
 def _equivalent_photons(root, area, flags) -> float:

@@ -50,6 +50,10 @@ class SurfaceMap:
         The cosine of each pixel's view to the face normal (0 where the ray misses).
     position : ndarray, shape (H·W, 3)
         Where each pixel's ray hits (NaN where it misses), mm.
+    normal : ndarray, shape (H·W, 3)
+        The outward normal of the triangle it hits (NaN where it misses).
+    view : ndarray, shape (H·W, 3)
+        The unit direction from the hit towards the camera.
     den : ndarray, shape (V,)
         Σ_p W_vp: the part of each vertex's area the camera sees well, mm².
     grazing : ndarray of bool, shape (V,)
@@ -63,22 +67,50 @@ class SurfaceMap:
     W2: sp.csr_matrix
     mu: np.ndarray
     position: np.ndarray
+    normal: np.ndarray
+    view: np.ndarray
     den: np.ndarray
     grazing: np.ndarray
     mu_v: np.ndarray
+
+    def __post_init__(self):
+        self._used = np.flatnonzero(np.diff(self.W.tocsc().indptr) > 0)  # the columns W uses
+        self._Wu = self.W[:, self._used].tocsr()
+        self._W2u = self.W2[:, self._used].tocsr()
+        w2 = np.asarray(self.W2.sum(axis=1)).ravel()
+        #: each vertex's effective number of pixels (Σ W)² / Σ W² (0 where unseen)
+        self.n_eff = np.divide(self.den**2, w2, out=np.zeros_like(self.den), where=w2 > 0)
+
+    def slant(self, hit: np.ndarray, pixels=slice(None)) -> np.ndarray:
+        """s = ω·t̂ per pixel (of ``pixels``): the view towards the camera against the unit tangent
+        pointing away from the laser's ``hit`` (0 where the ray misses)."""
+        n = self.normal[pixels]
+        t = self.position[pixels] - hit
+        t -= np.einsum("ij,ij->i", t, n)[:, None] * n
+        t /= np.maximum(np.linalg.norm(t, axis=1, keepdims=True), 1e-12)
+        return np.nan_to_num(np.einsum("ij,ij->i", self.view[pixels], t))
 
     def coverage(self, area: np.ndarray) -> np.ndarray:
         """Σ_p W_vp / A_v: the fraction of each vertex's cell this camera measures."""
         return self.den / np.maximum(area, 1e-30)
 
+    @property
+    def used(self) -> np.ndarray:
+        """The pixels W uses (indices, row by row): only these need reading from a photograph."""
+        return self._used
+
     def cell_means(self, image: np.ndarray, variance: np.ndarray, usable: np.ndarray):
-        """Per-vertex means of a per-pixel quantity (H·W, 3) over the usable pixels (H·W,) and their
-        variances: (V, 3) each, NaN where no usable pixel covers the vertex; and the usable weight (V,)."""
-        ok = usable.astype(np.float64)
-        den = self.W @ ok
+        """Per-vertex means of a per-pixel quantity over the usable pixels, and their variances: (V, 3)
+        each, NaN where no usable pixel covers the vertex; and the usable weight (V,).  ``image``,
+        ``variance`` (n, 3) and ``usable`` (n,) hold either every pixel (n = H·W) or the used ones
+        (n = len(:attr:`used`))."""
+        if len(usable) != len(self._used):
+            image, variance, usable = image[self._used], variance[self._used], usable[self._used]
+        ok = usable.astype(image.dtype)
+        den = np.asarray(self._Wu @ ok, dtype=np.float64)
         with np.errstate(invalid="ignore", divide="ignore"):
-            mean = (self.W @ (image * ok[:, None])) / den[:, None]
-            var = (self.W2 @ (variance * ok[:, None])) / (den**2)[:, None]
+            mean = (self._Wu @ (image * ok[:, None])) / den[:, None]
+            var = (self._W2u @ (variance * ok[:, None])) / (den**2)[:, None]
         mean[den <= 0] = np.nan
         var[den <= 0] = np.nan
         return mean, var, den
@@ -114,6 +146,8 @@ def surface_map(mesh, camera: Camera, *, grazing_deg: float = GRAZING_DEG, scene
     mu_hit = -np.einsum("ij,ij->i", directions[hit], fn)
     position = np.full((n_pix, 3), np.nan)
     position[hit] = p
+    normal = np.full((n_pix, 3), np.nan)
+    normal[hit] = fn
     mu = np.zeros(n_pix)
     mu[hit] = np.clip(mu_hit, 0.0, 1.0)
     tri = faces[face]
@@ -138,7 +172,7 @@ def surface_map(mesh, camera: Camera, *, grazing_deg: float = GRAZING_DEG, scene
     grazing = touched & (den <= 0)
     with np.errstate(invalid="ignore", divide="ignore"):
         mu_v = np.where(den > 0, (W @ mu) / den, 0.0)
-    return SurfaceMap(camera, W, W2, mu, position, den, grazing, mu_v)
+    return SurfaceMap(camera, W, W2, mu, position, normal, -directions, den, grazing, mu_v)
 
 
 def projected_fraction(mesh, camera: Camera) -> float:

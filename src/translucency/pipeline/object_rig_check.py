@@ -1,0 +1,134 @@
+r"""The object rig end to end: virtual photographs → ``import object`` → the numbers of the tally.
+
+For one mesh and filling, :func:`object_rig_check`
+
+1. photographs the object twice with the virtual rig (:mod:`translucency.rig.object_photographs`,
+   render and sensor seeds 0 and 1: two independent acquisitions) and imports both
+   (:func:`translucency.rig.object_import.import_object`) — A and B;
+2. tallies the same object, filling and incident vertices with photons (``acquire mesh``,
+   index-matched: the photographs' boundary) — T, whose own noise is far below the photographs';
+3. compares per pair (x_i, v) over the pairs A measures (no flag) above 5 σ: the **recovery**
+   :math:`\operatorname{median}|A - T|/T` against the photographs' **noise floor**
+   :math:`\operatorname{median}|A - B|/(\sqrt2\, T)` (the error of one import, from two); and per shot
+   the **energy** :math:`\sum_v A_v R_d(x_i, v)` of A against T's;
+4. fits both per vertex (``fit_mesh``, isotropic) and renders both under one light against one
+   converged ``volpath`` reference (:func:`translucency.render.figure.figure2`): the photographs'
+   render error against the tally's.
+
+Units: mm; R_d in mm⁻².
+"""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import numpy as np
+
+from ..acquire.mesh import acquire_mesh
+from ..fit.mesh import fit_mesh
+from ..io.mesh_dataset import open_mesh_dataset
+from ..render import Camera, PointLight
+from ..render.figure import figure2
+from ..rig.object_import import import_object
+from ..rig.object_photographs import photograph_object
+
+
+def object_rig_check(
+    mesh,
+    volume,
+    folder,
+    *,
+    points: int = 4,
+    cameras: int = 8,
+    resolution=(96, 96),
+    spp: int = 128,
+    photons: int = 100_000,
+    light: PointLight | None = None,
+    reference_spp: int = 64,
+    render: bool = True,
+    progress=None,
+) -> dict:
+    """Run the check (module notes) in ``folder``; return its numbers (JSON-ready).
+
+    ``light``: the render's (default a point light up and to the side at 3 object sizes).
+    """
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    t0 = time.perf_counter()
+    say = progress or (lambda text: None)
+    imports = []
+    for seed in (0, 1):
+        say(f"photographs, seed {seed}")
+        photograph_object(
+            mesh,
+            volume,
+            folder / f"rig{seed}",
+            n_points=points,
+            n_cameras=cameras,
+            resolution=resolution,
+            spp=spp,
+            seed=seed,
+        )
+        say(f"import, seed {seed}")
+        imports.append(import_object(folder / f"rig{seed}", folder / f"photo{seed}.zarr", overwrite=True))
+    say("tally")
+    acquire_mesh(
+        mesh,
+        volume,
+        folder / "tally.zarr",
+        n_points=points,
+        photons=photons,
+        index_matched=True,
+        overwrite=True,
+    )
+    A, B, T = (open_mesh_dataset(folder / n) for n in ("photo0.zarr", "photo1.zarr", "tally.zarr"))
+    area = np.asarray(A["vertex_area"][...], dtype=np.float64)
+    Ra, Rb, Rt = (np.asarray(d["R_d"][...], dtype=np.float64) for d in (A, B, T))
+    va = np.asarray(A.group["R_d_var"][...], dtype=np.float64)
+    flags = np.asarray(A.group["flags"][...])
+    ok = (flags == 0)[..., None] & (Ra > 5 * np.sqrt(va)) & (Rt > 0)
+    energy = {k: np.einsum("pvk,v->pk", R, area) for k, R in (("photo", Ra), ("tally", Rt))}
+    out = {
+        "vertices": len(mesh.vertices),
+        "points": points,
+        "cameras": cameras,
+        "resolution": list(resolution),
+        "spp": spp,
+        "photons": photons,
+        "pairs_compared": int(ok.sum()),
+        "recovery": float(np.median(np.abs(Ra - Rt)[ok] / Rt[ok])),
+        "noise_floor": float(np.median(np.abs(Ra - Rb)[ok] / (np.sqrt(2) * Rt[ok]))),
+        "median_ratio": float(np.median(Ra[ok] / Rt[ok])),
+        "energy_photo": energy["photo"].tolist(),
+        "energy_tally": energy["tally"].tolist(),
+        "energy_ratio": (energy["photo"] / energy["tally"]).tolist(),
+        "energy_worst": float(np.max(np.abs(energy["photo"] / energy["tally"] - 1))),
+        "exit_law": imports[0]["exit_law"],
+        "import_seconds": imports[0]["seconds"],
+        "import_MB": imports[0]["bytes_read"] / 2**20,
+    }
+    if render:
+        size = float(np.linalg.norm(mesh.extents))
+        centre = 0.5 * (mesh.bounds[0] + mesh.bounds[1])
+        light = light or PointLight(tuple(centre + size * np.array([1.0, -1.3, 2.0])), 40.0 * size**2)
+        camera = Camera.looking_at(mesh, width=128, height=96)
+        for name, data in (("photo", folder / "photo0.zarr"), ("tally", folder / "tally.zarr")):
+            say(f"fit and render: {name}")
+            model = fit_mesh(data, "iso").model
+            res = figure2(
+                model,
+                mesh,
+                light,
+                folder / f"render_{name}",
+                volume=volume,
+                camera=camera,
+                spp_reference=reference_spp,
+                exposure="auto",
+                name=name,
+            )
+            out[f"render_{name}"] = {k: res[k] for k in ("rel_rmse", "flip_mean_object") if k in res}
+            out["reference_noise"] = res.get("reference_noise")
+        out["render_ratio"] = out["render_photo"]["rel_rmse"] / out["render_tally"]["rel_rmse"]
+    out["seconds"] = time.perf_counter() - t0
+    return out
