@@ -123,6 +123,13 @@ def _rows(fields: dict):
                 *bounds,
                 ("index matched", str(fields["index_matched"])),
             ]
+            if fields.get("source") == "photographs":
+                rows += [
+                    (
+                        "source",
+                        f"photographs, {len(fields['cameras'])} cameras, exit law {fields['exit_law']}",
+                    ),
+                ]
         rows += [
             (
                 "damaged",
@@ -130,7 +137,12 @@ def _rows(fields: dict):
                 or "none (every finished chunk present and decodable)",
             ),
             ("sample", _short(fields["sample"])),
-            ("photons per point", str(fields["photons"])),
+            (
+                "photons per point",
+                f"{fields['photons']:,.0f} (equivalent: the measured noise)"
+                if fields.get("source") == "photographs"
+                else str(fields["photons"]),
+            ),
             ("seed", str(fields["seed"])),
             ("complete", f"{fields['chunks_done']}/{fields['chunks']} chunks"),
             ("size on disk", size_text),

@@ -273,4 +273,20 @@ def describe_mesh(ds: MeshDataset) -> dict:
         n_faces=int(ds.group["faces"].shape[0]),
         index_matched=h.get("request", {}).get("index_matched"),
         **object_bounds(vertices),
+        **_photographs(h),
     )
+
+
+def _photographs(h: dict) -> dict:
+    """A data set measured from photographs: ``source``, its cameras (names and pose errors, px) and the
+    exit law; its ``photons`` are the equivalent count of the measured noise."""
+    if h.get("source") != "photographs":
+        return {}
+    p = h.get("photographs", {})
+    return {
+        "source": "photographs",
+        "cameras": [
+            {"name": c.get("name"), "reprojection_px": c.get("reprojection_px")} for c in p.get("cameras", [])
+        ],
+        "exit_law": (p.get("exit_law") or {}).get("law"),
+    }
