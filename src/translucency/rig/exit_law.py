@@ -23,7 +23,7 @@ the normal is only 10–20° from +z (so s ≈ −0.3), πL is 0.61 M.  So π ×
   (β, κ) per band b of distance from the hit and channel (the κ term integrates to zero against μ, so
   the normalisation holds), **estimated from the photographs themselves**: a vertex seen by two
   cameras gives :math:`L_1 (1 + \beta\mu_2 + \kappa s_2) = L_2 (1 + \beta\mu_1 + \kappa s_1)`,
-  linear in (β, κ), so each band's pair is a weighted least-squares solve (:func:`fit_from_views`).
+  so each band's pair is a weighted least-squares fit jointly with the vertices' M (:func:`fit_from_views`).
 """
 
 from __future__ import annotations
@@ -81,11 +81,10 @@ class Dielectric(ExitLaw):
     eta: float
     name: str = "dielectric"
 
-    def factor(self, mu, r):
-        mu = np.broadcast_to(
-            np.asarray(mu, dtype=np.float64), np.broadcast(np.asarray(mu), np.asarray(r)).shape
-        )
-        return exit_factor(mu, self.eta)
+    def factor(self, mu, s, r):
+        shape = np.broadcast(np.asarray(mu), np.asarray(s), np.asarray(r)).shape
+        mu = np.broadcast_to(np.asarray(mu, dtype=np.float64), shape)
+        return np.repeat(exit_factor(mu, self.eta)[..., None], 3, axis=-1)  # one law for every channel
 
     def describe(self) -> dict:
         return {"law": self.name, "eta": float(self.eta)}
@@ -147,8 +146,8 @@ def fit_from_views(L, var, mu, s, r, *, min_snr: float = 5.0, iterations: int = 
 
     The views of a vertex seen by two cameras or more, each above ``min_snr`` σ, are fitted jointly with
     the vertex's exitance: :math:`\pi L_{vc} = M_v \gamma(\mu_{vc}, s_{vc})`, by alternating the
-    weighted least-squares :math:`M_v` for fixed (β, κ) and the linear least squares of
-    :math:`\pi L (1 + 2\beta/3) = M (1 + \beta\mu + \kappa s)` in (β, κ) for fixed M (weights
+    weighted least-squares :math:`M_v` for fixed (β, κ) and a Gauss–Newton step of
+    :math:`\pi L = M \gamma(\mu, s; \beta, \kappa)` in (β, κ) for fixed M (weights
     :math:`1/(\mathrm{Var}\,L + (0.02 L)^2)`), clipped to β ∈ [−0.9, 10], |κ| ≤ 1.5.  A band with fewer
     than :data:`MIN_PAIRS` such vertices takes its nearest estimated band's values.
     """
@@ -173,19 +172,21 @@ def fit_from_views(L, var, mu, s, r, *, min_snr: float = 5.0, iterations: int = 
             mc, sc = mu[:, m], s[:, m]
             be, ka = 0.0, 0.0
             for _ in range(iterations):
-                g = np.maximum(1 + be * mc + ka * sc, 0.05) / (1 + 2 * be / 3)
+                d = 1 + 2 * be / 3
+                g = np.maximum(1 + be * mc + ka * sc, 0.05) / d
                 M = np.pi * (w * g * Lc).sum(0) / np.maximum((w * g * g).sum(0), 1e-300)  # (n,)
-                # π L (1 + 2β/3) − M (1 + βμ + κs) = 0, linear in (β, κ)
-                x1 = (2 * np.pi * Lc / 3 - M * mc)[v]
-                x2 = (-M * sc)[v]
-                y = -(np.pi * Lc - M)[v]
-                ww = w[v]  # Var e ≈ (π(1 + 2β/3))² Var L
-                A = np.array([[ww @ (x1 * x1), ww @ (x1 * x2)], [ww @ (x1 * x2), ww @ (x2 * x2)]])
+                # a Gauss–Newton step of the residual π L − M γ(μ, s; β, κ) in (β, κ): its Jacobian holds
+                # the model only (the measured L in a regressor would bias β towards 0 as noise grows)
+                e = (np.pi * Lc - M * g)[v]
+                j1 = (M * (mc - 2 * g / 3) / d)[v]  # ∂(M γ)/∂β
+                j2 = (M * sc / d)[v]  # ∂(M γ)/∂κ
+                ww = w[v]
+                A = np.array([[ww @ (j1 * j1), ww @ (j1 * j2)], [ww @ (j1 * j2), ww @ (j2 * j2)]])
                 try:
-                    be, ka = np.linalg.solve(A, np.array([ww @ (x1 * y), ww @ (x2 * y)]))
+                    step = np.linalg.solve(A, np.array([ww @ (j1 * e), ww @ (j2 * e)]))
                 except np.linalg.LinAlgError:
                     break
-                be, ka = float(np.clip(be, -0.9, 10.0)), float(np.clip(ka, -1.5, 1.5))
+                be, ka = float(np.clip(be + step[0], -0.9, 10.0)), float(np.clip(ka + step[1], -1.5, 1.5))
             beta[b, ch], kappa[b, ch] = be, ka
     ok = counts >= MIN_PAIRS
     if not ok.any():

@@ -64,6 +64,10 @@ MIN_PROJECTED = 0.5
 #: the farthest a laser hit given as a point may lie from the surface, in mean edge lengths
 HIT_TOLERANCE_EDGES = 0.5
 
+#: a camera's view of a cell is fused only where it covers at least this fraction of what the best
+#: camera covers: a view of part of a cell measures the mean over that part, not the cell's mean
+FUSED_COVERAGE = 0.9
+
 
 @dataclass
 class _Camera:
@@ -116,8 +120,9 @@ def import_object(
     scene = mesh_scene(mesh)
     area = vertex_areas(mesh)
     V = len(mesh.vertices)
-    cameras = [_prepare_camera(c, setup, mesh, scene) for c in setup.cameras]
-    _check_mesh_seen(mesh, [c.camera for c in cameras], setup)
+    posed = [calibrated_camera(c, setup.folder, setup.max_reprojection_px) for c in setup.cameras]
+    _check_mesh_seen(mesh, posed, setup)  # before the maps: a wrong mesh is named as such, not as a camera
+    cameras = [_prepare_camera(c, cam, setup, mesh, scene) for c, cam in zip(setup.cameras, posed)]
     incident, hits = _incident_vertices(setup, mesh, scene)
     P = len(incident)
     if fixed_law is None and len(cameras) < 2:
@@ -259,8 +264,7 @@ def _frame_file(path: Path, shape, what: str) -> np.ndarray:
     return image.reshape(-1, 3).astype(np.float64)
 
 
-def _prepare_camera(setup: CameraSetup, rig: ObjectRig, mesh, scene) -> _Camera:
-    camera = calibrated_camera(setup, rig.folder, rig.max_reprojection_px)
+def _prepare_camera(setup: CameraSetup, camera: Camera, rig: ObjectRig, mesh, scene) -> _Camera:
     shape = (setup.height, setup.width)
     rad = setup.radiometry
     dark = _frame_file(rad.dark, shape, "dark frame") if rad.dark else np.zeros((shape[0] * shape[1], 3))
@@ -283,7 +287,8 @@ def _check_mesh_seen(mesh, cameras: list[Camera], rig: ObjectRig) -> None:
     for cam in cameras:
         front = cam.depth(X) > 0
         uv = np.full((len(X), 2), -1e9)
-        uv[front] = cam.project(X[front])
+        if front.any():  # (OpenCV projects no empty set of points)
+            uv[front] = cam.project(X[front])
         ok = front & (uv[:, 0] >= -0.5) & (uv[:, 1] >= -0.5)
         ok &= (uv[:, 0] <= cam.width - 0.5) & (uv[:, 1] <= cam.height - 0.5)
         inside |= ok
@@ -291,7 +296,7 @@ def _check_mesh_seen(mesh, cameras: list[Camera], rig: ObjectRig) -> None:
     if fraction < MIN_PROJECTED or max(projected_fraction(mesh, c) for c in cameras) == 0.0:
         raise TranslucencyError(
             f"{rig.mesh_file}: only {100 * fraction:.0f} % of the mesh's vertices project into any camera's "
-            "image: is it the object the cameras saw (scale_mm, up, poses)?"
+            "image: is it the object the cameras saw (mesh.scale_mm, mesh.up, the poses)?"
         )
 
 
@@ -427,6 +432,10 @@ def _fuse(per_cam, cameras: list[_Camera], law: ExitLaw, r, area, rig: ObjectRig
     grazing = np.zeros(V, dtype=bool)
     saturated = np.zeros(V, dtype=bool)
     weights = []
+    best = np.zeros(V)  # the largest usable coverage of each cell by any camera
+    for cm in per_cam:
+        if cm is not None:
+            best = np.maximum(best, cm[2] / np.maximum(area, 1e-30))
     for cam, cm, s in zip(cameras, per_cam, slants):
         if cm is None:
             continue
@@ -434,13 +443,17 @@ def _fuse(per_cam, cameras: list[_Camera], law: ExitLaw, r, area, rig: ObjectRig
         m = cam.map
         grazing |= m.grazing
         seen = m.den / np.maximum(area, 1e-30) >= rig.min_coverage
-        good = seen & (used / np.maximum(area, 1e-30) >= rig.min_coverage)
+        cover = used / np.maximum(area, 1e-30)
+        good = seen & (cover >= rig.min_coverage)
         saturated |= seen & ~good
+        good &= cover >= FUSED_COVERAGE * np.minimum(best, 1.0)
         gamma = law.factor(m.mu_v, s, r)  # (V, 3)
         n_eff = np.divide(m.den**2, np.asarray(m.W2.sum(axis=1)).ravel(), out=np.zeros(V), where=m.den > 0)
         w = np.where(good, n_eff * gamma.mean(axis=1), 0.0)
-        M = np.where(good[:, None], np.pi * np.nan_to_num(Lbar) / gamma, 0.0)
-        vM = np.where(good[:, None], np.nan_to_num(vbar) * (np.pi / gamma) ** 2, 0.0)
+        # γ = 0 where a dielectric's view is unseen (μ = 0): those entries are masked
+        with np.errstate(invalid="ignore", divide="ignore"):
+            M = np.where(good[:, None], np.pi * np.nan_to_num(Lbar) / gamma, 0.0)
+            vM = np.where(good[:, None], np.nan_to_num(vbar) * (np.pi / gamma) ** 2, 0.0)
         num += w[:, None] * M
         den += w
         weights.append((w, vM))
