@@ -85,11 +85,9 @@ class Dielectric(ExitLaw):
     eta: float
     name: str = "dielectric"
 
-    def factor(self, mu, r):
-        mu = np.broadcast_to(
-            np.asarray(mu, dtype=np.float64), np.broadcast(np.asarray(mu), np.asarray(r)).shape
-        )
-        return exit_factor(mu, self.eta)
+    def factor(self, mu, s, r):
+        g = exit_factor(np.asarray(mu, dtype=np.float64), self.eta)
+        return np.repeat(g[..., None], 3, axis=-1)
 
     def describe(self) -> dict:
         return {"law": self.name, "eta": float(self.eta)}
@@ -159,20 +157,37 @@ def _band(r) -> np.ndarray:
     return np.clip(np.searchsorted(BAND_EDGES_MM, np.asarray(r, dtype=np.float64), side="right") - 1, 0, None)
 
 
-def _neighbours() -> list[tuple[int, int]]:
-    """Pairs of adjacent cells of the table (the smoothness penalty's)."""
-    out = []
+#: the fewest views a cell of the table is estimated from; one with fewer is extrapolated
+MIN_CELL_VIEWS = 20
+
+
+def _extrapolation(observed: np.ndarray) -> np.ndarray:
+    """E (cells × cells): each cell's value as a combination of the observed cells' — itself where
+    observed; below the lowest observed μ, linear in μ from the two cells above it (the grazing cells no
+    view falls in); elsewhere the mean of its observed neighbours, or of every observed cell."""
+    K = MU_CELLS * PHI_CELLS
+    E = np.zeros((K, K))
+    obs = observed.reshape(MU_CELLS, PHI_CELLS)
     for i in range(MU_CELLS):
         for j in range(PHI_CELLS):
             k = i * PHI_CELLS + j
-            if i + 1 < MU_CELLS:
-                out.append((k, k + PHI_CELLS))
-            if j + 1 < PHI_CELLS:
-                out.append((k, k + 1))
-    return out
+            if obs[i, j]:
+                E[k, k] = 1.0
+            elif i + 2 < MU_CELLS and obs[i + 1, j] and obs[i + 2, j]:
+                E[k, k + PHI_CELLS] = 2.0  # 2 γ(i+1) − γ(i+2): the line through the two cells above
+                E[k, k + 2 * PHI_CELLS] = -1.0
+            else:
+                near = [
+                    (a, c)
+                    for a, c in ((i - 1, j), (i + 1, j), (i, j - 1), (i, j + 1))
+                    if 0 <= a < MU_CELLS and 0 <= c < PHI_CELLS and obs[a, c]
+                ]
+                cells = [a * PHI_CELLS + c for a, c in near] or list(np.flatnonzero(observed))
+                E[k, cells] = 1.0 / len(cells)
+    return E
 
 
-def fit_from_views(L, var, mu, s, r, *, min_snr: float = 5.0, iterations: int = 40, smooth: float = 0.05):
+def fit_from_views(L, var, mu, s, r, *, min_snr: float = 5.0, iterations: int = 40):
     r"""The tabulated law γ per distance band and channel from vertices seen by several cameras.
 
     Parameters
@@ -187,11 +202,11 @@ def fit_from_views(L, var, mu, s, r, *, min_snr: float = 5.0, iterations: int = 
 
     The views (above ``min_snr`` σ) of vertices seen by two cameras or more are fitted jointly with the
     vertices' exitances, :math:`\pi L_{vc} = M_v \gamma_{k(vc)}`: alternately the weighted least-squares
-    :math:`M_v` for a fixed table, and the table for fixed M — a linear least-squares problem with the
-    normalisation :math:`\sum_k \gamma_k q_k = \pi` as a constraint (Lagrange) and a penalty
-    ``smooth`` × (the data's mean weight per cell) on differences of adjacent cells, which also fills
-    cells no view falls in (the grazing ones).  Weights :math:`1/(\mathrm{Var}\,L + (0.02 L)^2)`.  A band
-    with fewer than :data:`MIN_PAIRS` such vertices takes its nearest estimated band's table.
+    :math:`M_v` for a fixed table, and the table for fixed M — linear least squares over the cells with
+    :data:`MIN_CELL_VIEWS` views or more, the others extrapolated from them (:func:`_extrapolation`:
+    linearly in μ below the grazing cut), under the normalisation :math:`\sum_k \gamma_k q_k = \pi`
+    (a Lagrange constraint).  Weights :math:`1/(\mathrm{Var}\,L + (0.02 L)^2)`.  A band with fewer
+    than :data:`MIN_PAIRS` such vertices takes its nearest estimated band's table.
 
     Returns
     -------
@@ -207,12 +222,6 @@ def fit_from_views(L, var, mu, s, r, *, min_snr: float = 5.0, iterations: int = 
     views = good.all(axis=2)  # (C, N)
     multi = views.sum(axis=0) >= 2
     counts = np.bincount(band[multi], minlength=bands)
-    D = np.zeros((K, K))  # the smoothness penalty's matrix (a graph Laplacian)
-    for a, b in _neighbours():
-        D[a, a] += 1
-        D[b, b] += 1
-        D[a, b] -= 1
-        D[b, a] -= 1
     cells = _cells(mu, s)  # (C, N)
     for b in range(bands):
         m = multi & (band == b)
@@ -220,30 +229,33 @@ def fit_from_views(L, var, mu, s, r, *, min_snr: float = 5.0, iterations: int = 
             continue
         v = views[:, m]
         k = cells[:, m]
+        observed = np.bincount(k[v], minlength=K) >= MIN_CELL_VIEWS
+        if not observed.any():
+            continue
+        E = _extrapolation(observed)[:, observed]  # (K, n_obs): the table from its observed cells
+        qo = q @ E
         for ch in range(3):
             y = np.where(v, np.pi * L[:, m, ch], 0.0)
+            Lv = np.where(v, L[:, m, ch], 0.0)
             w = np.where(
-                v,
-                1.0
-                / (
-                    np.pi**2 * (np.nan_to_num(var[:, m, ch]) + (0.02 * np.where(v, L[:, m, ch], 0)) ** 2)
-                    + 1e-300
-                ),
-                0.0,
+                v, 1.0 / (np.pi**2 * (np.nan_to_num(var[:, m, ch]) + (0.02 * Lv) ** 2) + 1e-300), 0.0
             )
-            g = np.ones(K)
+            g = np.ones(K) * np.pi / q.sum()
             for _ in range(iterations):
                 gv = g[k]
                 M = (w * gv * y).sum(0) / np.maximum((w * gv * gv).sum(0), 1e-300)  # (n,)
-                # the table for fixed M: Σ w (y − M γ_k)² + λ γᵀ D γ, subject to qᵀ γ = π
-                diag = np.bincount(k[v], weights=(w * M * M)[v], minlength=K)
-                rhs = np.bincount(k[v], weights=(w * M * y)[v], minlength=K)
-                lam = smooth * diag[diag > 0].mean()
-                A = np.zeros((K + 1, K + 1))
-                A[:K, :K] = np.diag(diag) + lam * D
-                A[:K, K] = A[K, :K] = q
-                sol = np.linalg.lstsq(A, np.r_[rhs, np.pi], rcond=None)[0]
-                g = np.maximum(sol[:K], 0.01)
+                # the observed cells for fixed M: Σ w (y − M γ_k)², subject to qᵀ E γ_o = π
+                Mv = np.broadcast_to(M, k.shape)
+                sel = v & observed[k]
+                X = np.zeros((sel.sum(), observed.sum()))
+                X[np.arange(sel.sum()), np.searchsorted(np.flatnonzero(observed), k[sel])] = Mv[sel]
+                ww = w[sel]
+                A = np.zeros((observed.sum() + 1,) * 2)
+                A[:-1, :-1] = (X * ww[:, None]).T @ X
+                A[:-1, -1] = A[-1, :-1] = qo
+                rhs = np.r_[(X * ww[:, None]).T @ y[sel], np.pi]
+                go = np.linalg.lstsq(A, rhs, rcond=None)[0][:-1]
+                g = np.maximum(E @ go, 0.02)
                 g *= np.pi / (q @ g)
             table[b, :, ch] = g
     ok = counts >= MIN_PAIRS

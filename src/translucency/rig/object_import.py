@@ -45,8 +45,8 @@ import scipy.sparse as sp
 from .._validate import TranslucencyError, plain
 from .._version import __version__
 from ..geometry import vertex_areas
-from ..io.mesh_dataset import FORMAT, VERSION, create_mesh_dataset
-from ..io.outputs import output_lock
+from ..io.mesh_dataset import FORMAT, VERSION, create_mesh_dataset, open_mesh_dataset
+from ..io.outputs import output_lock, remove_dataset
 from ..mitsuba import mesh_scene, rays
 from .cameras import Camera
 from .exit_law import Dielectric, ExitLaw, Lambertian, fit_from_views, law_named
@@ -63,6 +63,10 @@ MIN_PROJECTED = 0.5
 
 #: the farthest a laser hit given as a point may lie from the surface, in mean edge lengths
 HIT_TOLERANCE_EDGES = 0.5
+
+#: a camera's view of a cell is fused only where it covers at least this fraction of what the best
+#: camera covers: a view of part of a cell measures the mean over that part, not the cell's mean
+FUSED_COVERAGE = 0.9
 
 
 @dataclass
@@ -116,8 +120,9 @@ def import_object(
     scene = mesh_scene(mesh)
     area = vertex_areas(mesh)
     V = len(mesh.vertices)
-    cameras = [_prepare_camera(c, setup, mesh, scene) for c in setup.cameras]
-    _check_mesh_seen(mesh, [c.camera for c in cameras], setup)
+    posed = [calibrated_camera(c, setup.folder, setup.max_reprojection_px) for c in setup.cameras]
+    _check_mesh_seen(mesh, posed, setup)  # before the maps: a wrong mesh is named as such, not as a camera
+    cameras = [_prepare_camera(c, cam, setup, mesh, scene) for c, cam in zip(setup.cameras, posed)]
     incident, hits = _incident_vertices(setup, mesh, scene)
     P = len(incident)
     if fixed_law is None and len(cameras) < 2:
@@ -163,58 +168,64 @@ def import_object(
     bytes_read = 0
     energy = np.zeros((P, 3))
     flag_counts = np.zeros(4, dtype=np.int64)
-    with output_lock(out):
-        ds = create_mesh_dataset(
-            out,
-            header,
-            mesh,
-            area,
-            incident,
-            chunk_points=chunk_points,
-            overwrite=overwrite,
-            inputs=setup.files,
-            measured=True,
-        )
-        root = ds.group
-        done = np.asarray(root["chunk_done"][...])
-        finished = int(
-            sum(min(P, (c + 1) * chunk_points) - c * chunk_points for c in range(len(done)) if done[c])
-        )
-        fill = _Filler(mesh)
-        every = {"write_empty_chunks": True}
-        for c in range(len(done)):
-            lo, hi = c * chunk_points, min(P, (c + 1) * chunk_points)
-            if done[c]:
-                R = np.asarray(root["R_d"][lo:hi], dtype=np.float64)
-                energy[lo:hi] = np.einsum("pvk,v->pk", R, area)
-                continue
-            R = np.zeros((hi - lo, V, 3), np.float32)
-            var = np.zeros((hi - lo, V, 3), np.float32)
-            flags = np.zeros((hi - lo, V), np.uint8)
-            for j in range(lo, hi):
-                shot = setup.shots[j]
-                r = np.linalg.norm(mesh.vertices - hits[j], axis=1)
-                per_cam, nbytes = _shot_cell_means(shot, cameras, setup, law, hits[j])
-                bytes_read += nbytes
-                Rj, vj, fj = _fuse(per_cam, cameras, area, setup)
-                fj[r <= setup.spot_radius_mm] |= SPOT
-                Rj = fill(Rj, (fj & (UNSEEN | SATURATED)) != 0)
-                vj[~np.isfinite(vj)] = 0.0
-                R[j - lo], var[j - lo], flags[j - lo] = Rj, vj, fj
-                energy[j] = area @ Rj
-            root["R_d"].with_config(every)[lo:hi] = R
-            root["R_d_var"].with_config(every)[lo:hi] = var
-            root["flags"].with_config(every)[lo:hi] = flags
-            root["specular"].with_config(every)[lo:hi] = np.zeros((hi - lo, 3), np.float32)
-            root["chunk_done"][c] = True
-            finished += hi - lo
-            if progress:
-                progress(finished, P)
-        flags_all = np.asarray(root["flags"][...])
-        for b, bit in enumerate((UNSEEN, SATURATED, GRAZING, SPOT)):
-            flag_counts[b] = int(((flags_all & bit) != 0).sum())
-        header["photons"] = _equivalent_photons(root, area, flags_all)
-        root.attrs.update({"translucency_mesh_dataset": header})
+    fresh = not Path(out).exists() or not any(Path(out).iterdir())  # a refused import removes what it made
+    try:
+        with output_lock(out):
+            ds = create_mesh_dataset(
+                out,
+                header,
+                mesh,
+                area,
+                incident,
+                chunk_points=chunk_points,
+                overwrite=overwrite,
+                inputs=setup.files,
+                measured=True,
+            )
+            root = ds.group
+            done = np.asarray(root["chunk_done"][...])
+            finished = int(
+                sum(min(P, (c + 1) * chunk_points) - c * chunk_points for c in range(len(done)) if done[c])
+            )
+            fill = _Filler(mesh)
+            every = {"write_empty_chunks": True}
+            for c in range(len(done)):
+                lo, hi = c * chunk_points, min(P, (c + 1) * chunk_points)
+                if done[c]:
+                    R = np.asarray(root["R_d"][lo:hi], dtype=np.float64)
+                    energy[lo:hi] = np.einsum("pvk,v->pk", R, area)
+                    continue
+                R = np.zeros((hi - lo, V, 3), np.float32)
+                var = np.zeros((hi - lo, V, 3), np.float32)
+                flags = np.zeros((hi - lo, V), np.uint8)
+                for j in range(lo, hi):
+                    shot = setup.shots[j]
+                    r = np.linalg.norm(mesh.vertices - hits[j], axis=1)
+                    per_cam, nbytes = _shot_cell_means(shot, cameras, setup, law, hits[j])
+                    bytes_read += nbytes
+                    Rj, vj, fj = _fuse(per_cam, cameras, area, setup)
+                    fj[r <= setup.spot_radius_mm] |= SPOT
+                    Rj = fill(Rj, (fj & (UNSEEN | SATURATED)) != 0)
+                    vj[~np.isfinite(vj)] = 0.0
+                    R[j - lo], var[j - lo], flags[j - lo] = Rj, vj, fj
+                    energy[j] = area @ Rj
+                root["R_d"].with_config(every)[lo:hi] = R
+                root["R_d_var"].with_config(every)[lo:hi] = var
+                root["flags"].with_config(every)[lo:hi] = flags
+                root["specular"].with_config(every)[lo:hi] = np.zeros((hi - lo, 3), np.float32)
+                root["chunk_done"][c] = True
+                finished += hi - lo
+                if progress:
+                    progress(finished, P)
+            flags_all = np.asarray(root["flags"][...])
+            for b, bit in enumerate((UNSEEN, SATURATED, GRAZING, SPOT)):
+                flag_counts[b] = int(((flags_all & bit) != 0).sum())
+            header["photons"] = _equivalent_photons(root, area, flags_all)
+            root.attrs.update({"translucency_mesh_dataset": header})
+    except (TranslucencyError, KeyboardInterrupt):
+        if fresh and Path(out).exists() and not _finished_any(out):
+            remove_dataset(out)
+        raise
     return {
         "path": str(out),
         "cameras": [
@@ -232,6 +243,14 @@ def import_object(
         "bytes_read": bytes_read,
         "incident": incident.tolist(),
     }
+
+
+def _finished_any(out) -> bool:
+    """Whether the data set at ``out`` holds a finished chunk (kept for resuming when interrupted)."""
+    try:
+        return bool(np.asarray(open_mesh_dataset(out)["chunk_done"][...]).any())
+    except TranslucencyError:
+        return False
 
 
 # -- cameras -----------------------------------------------------------------------------------------------
@@ -258,8 +277,7 @@ def _frame_file(path: Path, shape, what: str) -> np.ndarray:
     return image.reshape(-1, 3)
 
 
-def _prepare_camera(setup: CameraSetup, rig: ObjectRig, mesh, scene) -> _Camera:
-    camera = calibrated_camera(setup, rig.folder, rig.max_reprojection_px)
+def _prepare_camera(setup: CameraSetup, camera: Camera, rig: ObjectRig, mesh, scene) -> _Camera:
     shape = (setup.height, setup.width)
     rad = setup.radiometry
     n_pix = shape[0] * shape[1]
@@ -283,7 +301,8 @@ def _check_mesh_seen(mesh, cameras: list[Camera], rig: ObjectRig) -> None:
     for cam in cameras:
         front = cam.depth(X) > 0
         uv = np.full((len(X), 2), -1e9)
-        uv[front] = cam.project(X[front])
+        if front.any():  # (OpenCV projects no empty set of points)
+            uv[front] = cam.project(X[front])
         ok = front & (uv[:, 0] >= -0.5) & (uv[:, 1] >= -0.5)
         ok &= (uv[:, 0] <= cam.width - 0.5) & (uv[:, 1] <= cam.height - 0.5)
         inside |= ok
@@ -291,7 +310,7 @@ def _check_mesh_seen(mesh, cameras: list[Camera], rig: ObjectRig) -> None:
     if fraction < MIN_PROJECTED or max(projected_fraction(mesh, c) for c in cameras) == 0.0:
         raise TranslucencyError(
             f"{rig.mesh_file}: only {100 * fraction:.0f} % of the mesh's vertices project into any camera's "
-            "image: is it the object the cameras saw (scale_mm, up, poses)?"
+            "image: is it the object the cameras saw (mesh.scale_mm, mesh.up, the poses)?"
         )
 
 
@@ -447,6 +466,10 @@ def _fuse(per_cam, cameras: list[_Camera], area, rig: ObjectRig):
     grazing = np.zeros(V, dtype=bool)
     saturated = np.zeros(V, dtype=bool)
     weights = []
+    best = np.zeros(V)  # the largest usable coverage of each cell by any camera
+    for cm in per_cam:
+        if cm is not None:
+            best = np.maximum(best, cm[2] / np.maximum(area, 1e-30))
     for cam, cm in zip(cameras, per_cam):
         if cm is None:
             continue
@@ -454,8 +477,10 @@ def _fuse(per_cam, cameras: list[_Camera], area, rig: ObjectRig):
         m = cam.map
         grazing |= m.grazing
         seen = m.den / np.maximum(area, 1e-30) >= rig.min_coverage
-        good = seen & (used / np.maximum(area, 1e-30) >= rig.min_coverage)
+        cover = used / np.maximum(area, 1e-30)
+        good = seen & (cover >= rig.min_coverage)
         saturated |= seen & ~good
+        good &= cover >= FUSED_COVERAGE * np.minimum(best, 1.0)
         w = np.where(good, m.n_eff * np.nan_to_num(gamma).mean(axis=1), 0.0)
         M = np.where(good[:, None], np.nan_to_num(M), 0.0)
         vM = np.where(good[:, None], np.nan_to_num(vM), 0.0)

@@ -1,0 +1,522 @@
+"""Objects from a lab (``translucency import object``): the exit laws, the angular law fitted from views,
+the surface map against the tally's cell mean, the import end to end on synthetic photographs (an analytic
+exitance field photographed by known cameras and sensors, no rendering), and bad input in one line each.
+
+Every truth here is independent of the code under test: the hemisphere integral by quadrature, a known
+(β, κ) law, and the cell means ∫ φ_v M dA / ∫ φ_v dA by a fine subdivision of every triangle.
+"""
+
+import json
+import re
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pytest
+import trimesh
+from typer.testing import CliRunner
+
+from translucency._validate import TranslucencyError
+from translucency.cli.app import app
+from translucency.fit.mesh import read_pairs
+from translucency.geometry import vertex_areas
+from translucency.io.mesh import load_mesh
+from translucency.io.mesh_dataset import open_mesh_dataset
+from translucency.rig.cameras import Camera
+from translucency.rig.exit_law import (
+    BAND_EDGES_MM,
+    MIN_PAIRS,
+    MU_CELLS,
+    PHI_CELLS,
+    Dielectric,
+    FromViews,
+    Lambertian,
+    cell_weights,
+    fit_from_views,
+)
+from translucency.rig.hdr import write_pfm
+from translucency.rig.object_import import SPOT, UNSEEN, import_object
+from translucency.rig.surface_map import GRAZING_DEG, surface_map
+
+runner = CliRunner()
+
+
+# -- independent truths ------------------------------------------------------------------------------------
+
+
+def _sub_barycentrics(n: int) -> np.ndarray:
+    """Barycentric coordinates (n², 3) of the centroids of a triangle split into n² equal small ones."""
+    b = []
+    for i in range(n):
+        for j in range(n - i):
+            b.append(((i + 1 / 3) / n, (j + 1 / 3) / n))  # the upright small triangles
+            if i + j < n - 1:
+                b.append(((i + 2 / 3) / n, (j + 2 / 3) / n))  # the upside-down ones
+    b = np.array(b)
+    return np.column_stack([b, 1.0 - b.sum(axis=1)])
+
+
+def fine_cell_means(mesh, field, n: int = 12):
+    """∫ φ_v M dA / ∫ φ_v dA per vertex (V,) with φ_v the barycentric hat (midpoint rule on n² small
+    triangles per face), and ∫ M dA over the mesh (mm² × M)."""
+    verts, faces = np.asarray(mesh.vertices, np.float64), np.asarray(mesh.faces)
+    bary = _sub_barycentrics(n)
+    points = np.einsum("sk,fkd->fsd", bary, verts[faces])
+    value = field(points.reshape(-1, 3)).reshape(len(faces), len(bary))
+    dA = mesh.area_faces / len(bary)
+    num, den = np.zeros(len(verts)), np.zeros(len(verts))
+    for k in range(3):
+        np.add.at(num, faces[:, k], dA * (value * bary[:, k]).sum(axis=1))
+        np.add.at(den, faces[:, k], dA * bary[:, k].sum())
+    return num / den, float((value * dA[:, None]).sum())
+
+
+def exitance(hit):
+    """The analytic exitance per unit power around a hit, M(y) = exp(−|y − hit|/2)/8 (mm⁻²)."""
+    hit = np.asarray(hit, np.float64)
+    return lambda y: np.exp(-np.linalg.norm(y - hit, axis=1) / 2.0) / 8.0
+
+
+def vignetting(width, height, k1, k2):
+    """1 + k1 ρ² + k2 ρ⁴, ρ from the image centre in half-diagonals (object_setup's convention), (H, W)."""
+    v, u = np.mgrid[0:height, 0:width].astype(np.float64)
+    rho2 = ((u - (width - 1) / 2) ** 2 + (v - (height - 1) / 2) ** 2) / ((width**2 + height**2) / 4)
+    return 1.0 + k1 * rho2 + k2 * rho2**2
+
+
+# -- 1. exit laws ------------------------------------------------------------------------------------------
+
+
+def _hemisphere(law, r: float) -> np.ndarray:
+    """∫ γ μ dω over the hemisphere per channel (Gauss–Legendre in μ, midpoint in azimuth)."""
+    x, w = np.polynomial.legendre.leggauss(96)
+    mu, wmu = (x + 1) / 2, w / 2
+    phi = (np.arange(192) + 0.5) * 2 * np.pi / 192
+    M, P = np.meshgrid(mu, phi, indexing="ij")
+    s = np.sqrt(1 - M**2) * np.cos(P)
+    g = law.factor(M, s, np.full_like(M, r))  # (μ, φ, 3)
+    return np.einsum("ijk,i,i->k", g, mu, wmu) * (2 * np.pi / len(phi))
+
+
+def _peaked_table(strength: float, tilt: float) -> np.ndarray:
+    """A law peaked away from the hit, γ ∝ (1 + tilt μ) exp(strength s) averaged over each cell, as a
+    normalised table (bands, cells, 3) — the shape photon walks show near a laser's hit."""
+    q = cell_weights()
+    x, w = np.polynomial.legendre.leggauss(64)
+    table = np.zeros((MU_CELLS, PHI_CELLS))
+    for i in range(MU_CELLS):
+        for j in range(PHI_CELLS):
+            mu = (i + (x + 1) / 2) / MU_CELLS
+            phi = (j + (x + 1) / 2) / PHI_CELLS * np.pi
+            M, P = np.meshgrid(mu, phi, indexing="ij")
+            g = (1 + tilt * M) * np.exp(strength * np.sqrt(1 - M**2) * np.cos(P))
+            ww = np.outer(w, w) * M  # ∫ γ μ over the cell, per unit of the cell's (μ, φ) area
+            table[i, j] = (g * ww).sum() / ww.sum()
+    t = table.ravel()
+    t *= np.pi / (q @ t)
+    return np.broadcast_to(t[None, :, None], (len(BAND_EDGES_MM), len(t), 3)).copy()
+
+
+def test_exit_laws_are_normalised():
+    tables = [np.ones((len(BAND_EDGES_MM), MU_CELLS * PHI_CELLS, 3)), _peaked_table(1.5, 0.5)]
+    tables[0] *= np.pi / (cell_weights() @ tables[0][0, :, 0])
+    laws = [Lambertian(), Dielectric(1.3), Dielectric(1.5), *(FromViews(t) for t in tables)]
+    for law in laws:
+        for r in (0.5, 1.5, 3.0, 6.0, 12.0, 30.0):  # every band of FromViews
+            total = _hemisphere(law, r)
+            assert np.allclose(total, np.pi, rtol=1e-3), (law, r, total)
+    # the dielectric law is not Lambertian: bright face-on, dark at grazing
+    g = Dielectric(1.5).factor(np.array([1.0, 0.05]), np.zeros(2), np.zeros(2))
+    assert g.shape == (2, 3) and g[0, 0] > 1.05 and g[1, 0] < 0.5
+    # the peaked table is bright leaning away from the hit (s > 0) and dark leaning towards it
+    law = FromViews(tables[1])
+    away, towards = law.factor(np.array([0.5, 0.5]), np.array([0.8, -0.8]), np.array([1.0, 1.0]))[:, 0]
+    assert away > 3 * towards
+
+
+# -- 2. the angular law from views -------------------------------------------------------------------------
+
+
+def _views(rng, n, table, *, cameras=4, noise=0.04, seen=0.7):
+    """Synthetic cell means of ``n`` vertices in ``cameras`` views under FromViews(table), the views
+    short of the grazing angle as the import's are."""
+    truth = FromViews(table)
+    r = rng.uniform(0.0, 20.0, n)
+    mu = rng.uniform(np.cos(np.radians(GRAZING_DEG)), 1.0, (cameras, n))
+    s = np.sqrt(1 - mu**2) * np.cos(rng.uniform(0, 2 * np.pi, (cameras, n)))
+    M = np.exp(rng.normal(0.0, 0.7, n))[:, None] * np.array([1.0, 0.7, 0.4])  # (n, 3)
+    L_true = M[None] * truth.factor(mu, s, np.broadcast_to(r, mu.shape)) / np.pi
+    L = L_true * (1 + noise * rng.standard_normal(L_true.shape))
+    var = (noise * L_true) ** 2
+    hidden = rng.random((cameras, n)) > seen
+    L[hidden], var[hidden] = np.nan, np.nan
+    return L, var, mu, s, r
+
+
+def test_fit_from_views_recovers_a_known_law(rng):
+    table = _peaked_table(1.2, 0.8)
+    L, var, mu, s, r = _views(rng, 4000, table)
+    law = fit_from_views(L, var, mu, s, r)
+    counts = np.asarray(law.views)
+    enough = counts >= 100
+    assert enough.sum() >= 5, counts
+    q = cell_weights()
+    for b in np.flatnonzero(enough):
+        assert np.allclose(q @ law.table[b], np.pi, rtol=1e-9)  # normalised exactly
+        # the cells views fall in (μ above the grazing cut): within 8 % of the truth
+        seen = np.arange(MU_CELLS * PHI_CELLS) >= PHI_CELLS  # μ ≥ 0.25
+        err = np.abs(law.table[b][seen] / table[b][seen] - 1)
+        assert err.max() < 0.08, (b, err.max())
+    # what the import needs: the exitance recovered from one view, πL/γ, within the noise on average
+    M_hat = np.pi * L / law.factor(mu, s, np.broadcast_to(r, mu.shape))
+    M_true = np.pi * L / FromViews(table).factor(mu, s, np.broadcast_to(r, mu.shape))
+    ok = np.isfinite(M_hat)
+    assert abs(np.median(M_hat[ok] / M_true[ok]) - 1) < 0.02
+
+
+def test_fit_from_views_refuses_too_few_vertices_seen_twice(rng):
+    L, var, mu, s, r = _views(rng, 200, _peaked_table(1.0, 0.5), cameras=2, seen=1.0)
+    L[1, MIN_PAIRS - 1 :] = np.nan  # only MIN_PAIRS - 1 vertices seen by both cameras
+    with pytest.raises(TranslucencyError) as err:
+        fit_from_views(L, var, mu, s, r)
+    assert "\n" not in str(err.value) and str(MIN_PAIRS) in str(err.value)
+
+
+# -- 3. the surface map ------------------------------------------------------------------------------------
+
+
+def test_surface_map_gives_the_tally_cell_mean():
+    mesh = trimesh.creation.icosphere(3, radius=6.0)
+    verts = np.asarray(mesh.vertices)
+    area = vertex_areas(mesh)
+    eye = np.array([10.0, 5.0, 40.0])
+    cam = Camera.looking_at(eye, (0.0, 0.0, 0.0), 128, 128, fov_deg=22.0)
+    m = surface_map(mesh, cam)
+    x0 = verts[np.argmax(verts @ eye)]  # on the surface, facing the camera
+    field = exitance(x0)
+    hit = np.isfinite(m.position[:, 0])
+    Mp = np.zeros(len(hit))
+    Mp[hit] = field(m.position[hit])
+    image = np.repeat(Mp[:, None], 3, axis=1)
+    mean, var, den = m.cell_means(image, np.zeros_like(image), hit)
+    truth, _ = fine_cell_means(mesh, field, 16)
+    full = m.coverage(area) > 0.95
+    assert full.sum() > 100
+    err = mean[full, 0] / truth[full] - 1
+    assert np.abs(err).max() < 0.015 and np.median(np.abs(err)) < 0.002, np.abs(err).max()
+    assert np.allclose(den, m.den, rtol=1e-12)
+    # the far side is never seen; what is seen faces the camera, at no more than the grazing angle
+    assert m.den[np.argmin(verts @ eye)] == 0
+    seen = m.den > 0
+    towards = eye - verts[seen]
+    assert (np.einsum("ij,ij->i", towards, mesh.vertex_normals[seen]) > 0).all()
+    used = np.unique(m.W.tocoo().col)
+    assert (m.mu[used] > np.cos(np.radians(GRAZING_DEG))).all()
+    assert (m.mu[hit] > 0).all() and (m.mu[~hit] == 0).all()
+
+
+# -- 4. the import end to end on synthetic photographs -----------------------------------------------------
+
+SIZE = 96  # pixels, square
+K_GAIN, GAIN, READ_NOISE, SATURATION = 800.0, 0.01, 0.01, 1000.0
+VIGNETTING = (-0.2, 0.03)
+POWERS, EXPOSURES = (1.0, 0.6, 1.7), (1.0, 0.5, 2.0)
+COLOUR = np.array([1.0, 0.7, 0.45])  # the field's exitance per channel, relative
+
+
+@dataclass
+class SyntheticRig:
+    folder: Path
+    mesh: trimesh.Trimesh
+    cameras: list  # the true cameras
+    maps: list  # their surface maps
+    hits: list  # each shot's hit on the surface, mm
+    rig: dict  # object.json as written
+
+
+def _ray_to(mesh, face: int, point: np.ndarray) -> dict:
+    """A laser ray from outside that hits ``point`` on ``face`` obliquely."""
+    n = mesh.face_normals[face]
+    tangent = np.cross(n, [0.0, 0.0, 1.0])
+    tangent /= np.linalg.norm(tangent)
+    back = (n + 0.3 * tangent) / np.linalg.norm(n + 0.3 * tangent)
+    origin = point + 30.0 * back
+    return {"origin": origin.tolist(), "direction": (point - origin).tolist()}
+
+
+def write_rig(folder, *, eta=1.0, noise_seed=None, geometry_seed=1) -> SyntheticRig:
+    """A lab's folder for an icosphere (r = 6 mm) photographed by four cameras around it: K given, cam0's
+    pose by 12 marked vertices (0.1 px noise), the others' as R, t; dark frames, flat fields (not of mean 1),
+    vignetting; three shots (hit as vertex, point, ray) of different powers and exposures; each frame
+    raw = k t vig flat P L + dark with L = M(y_p) COLOUR γ(μ_p)/π (γ = 1, or the dielectric law of
+    ``eta``), and with ``noise_seed`` the sensor's photon and read noise."""
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    trimesh.creation.icosphere(3, radius=6.0).export(folder / "ball.ply")
+    mesh = load_mesh(folder / "ball.ply")  # as the importer reads it (the vertex order it uses)
+    verts, faces = np.asarray(mesh.vertices), np.asarray(mesh.faces)
+    rng = np.random.default_rng(geometry_seed)
+    noise = np.random.default_rng(noise_seed)
+    dirs = np.array([(1, 1, 1), (1, -1, -1), (-1, 1, -1), (-1, -1, 1)], np.float64) / np.sqrt(3)
+    cams = [
+        Camera.looking_at(40.0 * d, (0.0, 0.0, 0.0), SIZE, SIZE, fov_deg=22.0, name=f"cam{i}")
+        for i, d in enumerate(dirs)
+    ]
+    law = Dielectric(eta) if eta > 1 else Lambertian()
+    vig = vignetting(SIZE, SIZE, *VIGNETTING)[..., None]
+    entries, flats, darks, maps = [], [], [], []
+    for i, c in enumerate(cams):
+        (folder / c.name).mkdir(exist_ok=True)
+        flat = 1 + 0.05 * rng.standard_normal((SIZE, SIZE, 3))
+        flat /= flat.mean()  # the true relative response; the file holds it × 2.5
+        dark = 0.5 + 0.02 * rng.random((SIZE, SIZE, 3))
+        write_pfm(folder / c.name / "flat.pfm", 2.5 * flat)
+        write_pfm(folder / c.name / "dark.pfm", dark)
+        flats.append(flat)
+        darks.append(dark)
+        maps.append(surface_map(mesh, c))
+        entry = {
+            "name": c.name,
+            "width": SIZE,
+            "height": SIZE,
+            "intrinsics": {"K": c.K.tolist(), "dist": [0.0] * 5},
+            "pose": {"R": c.R.tolist(), "t": c.t.tolist()},
+            "radiometry": {
+                "k": K_GAIN,
+                "dark": f"{c.name}/dark.pfm",
+                "flat": f"{c.name}/flat.pfm",
+                "vignetting": list(VIGNETTING),
+                "gain": GAIN,
+                "read_noise": READ_NOISE,
+                "saturation": SATURATION,
+            },
+        }
+        if i == 0:
+            m = maps[0]
+            seen = np.flatnonzero((m.den > 0) & (m.mu_v > 0.5))
+            pick = seen[np.linspace(0, len(seen) - 1, 12).astype(int)]
+            uv = c.project(verts[pick]) + 0.1 * rng.standard_normal((12, 2))
+            entry["pose"] = {"marks": {"object_mm": verts[pick].tolist(), "image_px": uv.tolist()}}
+        entries.append(entry)
+    v0 = int(np.argmax(verts @ dirs[0]))
+    f1 = int(np.argmax(mesh.triangles_center @ dirs[1]))
+    f2 = int(np.argmax(mesh.triangles_center @ dirs[2]))
+    p1 = np.array([0.6, 0.25, 0.15]) @ verts[faces[f1]]  # off the centroid: one nearest vertex
+    p2 = np.array([0.2, 0.3, 0.5]) @ verts[faces[f2]]
+    hits = [verts[v0], p1, p2]
+    specs = [{"vertex": v0}, {"point": p1.tolist()}, {"ray": _ray_to(mesh, f2, p2)}]
+    (folder / "shots").mkdir(exist_ok=True)
+    shots = []
+    for j, (hit, power, t) in enumerate(zip(hits, POWERS, EXPOSURES)):
+        field = exitance(hit)
+        images = {}
+        for i, (c, m) in enumerate(zip(cams, maps)):
+            seen = np.isfinite(m.position[:, 0])
+            M = np.zeros(SIZE * SIZE)
+            M[seen] = field(m.position[seen])
+            L = (M[:, None] * COLOUR * law.factor(m.mu, 0 * m.mu, 0 * m.mu) / np.pi).reshape(SIZE, SIZE, 3)
+            signal = K_GAIN * t * vig * flats[i] * power * L
+            raw = signal + darks[i]
+            if noise_seed is not None:
+                raw = raw + np.sqrt(GAIN * signal + READ_NOISE**2) * noise.standard_normal(raw.shape)
+            name = f"shots/{j}_{c.name}.pfm"
+            write_pfm(folder / name, raw)
+            images[c.name] = [{"file": name, "exposure_s": t}]
+        shots.append({"hit": specs[j], "power": power, "images": images})
+    rig = {
+        "format": "translucency-object-rig",
+        "version": 1,
+        "mesh": {"file": "ball.ply", "scale_mm": 1.0, "up": "z"},
+        "boundary": {"eta": eta},
+        "exit_law": "dielectric" if eta > 1 else "lambertian",
+        "spot_radius_mm": 0.5,
+        "cameras": entries,
+        "shots": shots,
+    }
+    (folder / "object.json").write_text(json.dumps(rig))
+    return SyntheticRig(folder, mesh, cams, maps, hits, rig)
+
+
+def _read(out):
+    ds = open_mesh_dataset(out)
+    g = ds.group
+    return ds, np.asarray(g["R_d"][...]), np.asarray(g["R_d_var"][...]), np.asarray(g["flags"][...])
+
+
+@pytest.mark.parametrize("eta", [1.0, 1.4])
+def test_import_recovers_the_cell_means_of_an_analytic_field(tmp_path, eta):
+    rig = write_rig(tmp_path / "rig", eta=eta)
+    out = tmp_path / "ball.zarr"
+    if eta == 1.0:  # the library call, the law named
+        info = import_object(rig.folder, out, exit_law="lambertian")
+        assert info["exit_law"] == {"law": "lambertian"}
+        assert info["cameras"][0]["reprojection_px"]["pose"] < 0.3  # the pose from marks (0.1 px noise)
+    else:  # the command, the dielectric law of the boundary's η
+        res = runner.invoke(
+            app, ["import", "object", str(rig.folder / "object.json"), "--out", str(out), "--exit-law",
+                  "dielectric", "--quiet"])  # fmt: skip
+        assert res.exit_code == 0, res.output
+    ds, R, var, flags = _read(out)
+    mesh, verts = rig.mesh, np.asarray(rig.mesh.vertices)
+    area = vertex_areas(mesh)
+    assert R.shape == var.shape == (3, len(verts), 3) and flags.shape == (3, len(verts))
+    assert np.allclose(ds["vertices"], verts, atol=1e-5)
+    # each hit snapped to its nearest vertex (the first one is given as that vertex)
+    nearest = [int(np.argmin(np.linalg.norm(verts - h, axis=1))) for h in rig.hits]
+    assert ds["incident"].tolist() == nearest == [rig.rig["shots"][0]["hit"]["vertex"], *nearest[1:]]
+    posed = [Camera.from_dict(c, c["name"]) for c in ds.header["photographs"]["cameras"]]  # as imported
+    coverage = np.max([surface_map(mesh, c).coverage(area) for c in posed], axis=0)
+    for j, hit in enumerate(rig.hits):
+        truth, energy = fine_cell_means(mesh, exitance(hit))
+        whole = (coverage > 0.95) & (flags[j] == 0)
+        assert whole.sum() > 500
+        err = R[j, whole] / (truth[whole, None] * COLOUR) - 1
+        assert np.abs(err).max() < 0.02, (j, np.abs(err).max())
+        assert np.allclose(area @ R[j], energy * COLOUR, rtol=0.03), (j, area @ R[j], energy)
+        # the spot is flagged; cells no camera sees well are flagged, filled and finite
+        assert (flags[j][np.linalg.norm(verts - hit, axis=1) <= 0.5] & SPOT).all()
+        filled = (flags[j] & UNSEEN) != 0
+        assert filled.any() and np.array_equal(filled, coverage < 0.5)  # the rig's min_coverage
+        assert np.isfinite(R[j]).all()
+        measured = R[j][~filled]
+        assert (R[j][filled] >= 0).all() and (R[j][filled] <= measured.max(axis=0)).all()
+        assert (var[j][flags[j] == 0] > 0).all()
+    # `info` reads it, and the fit leaves the flagged pairs out
+    res = runner.invoke(app, ["info", str(out)], env={"COLUMNS": "200"})
+    assert res.exit_code == 0 and "translucency-mesh-dataset" in res.output, res.output
+    assert f"{len(verts)} vertices" in res.output and "photographs" in res.output, res.output
+    x_i = verts[np.asarray(ds["incident"])]
+    y, r, valid = read_pairs(ds.group, verts, x_i, 0.0, 0, 3)
+    assert np.array_equal(valid, flags == 0) and np.allclose(y, R)
+
+
+def test_import_variance_matches_the_scatter_of_two_imports(tmp_path):
+    outs = []
+    for seed in (11, 12):
+        rig = write_rig(tmp_path / f"rig{seed}", noise_seed=seed)
+        import_object(rig.folder, tmp_path / f"{seed}.zarr")
+        outs.append(_read(tmp_path / f"{seed}.zarr"))
+    (_, Ra, va, fa), (_, Rb, vb, fb) = outs
+    ok = (fa == 0) & (fb == 0)
+    ok = ok[..., None] & (va > 0) & (vb > 0) & (Ra > 5 * np.sqrt(va))
+    assert ok.sum() > 1000
+    z2 = (Ra - Rb)[ok] ** 2 / (va + vb)[ok]
+    assert 0.5 < z2.mean() < 2.0, z2.mean()
+
+
+# -- 5. bad input, one line each ---------------------------------------------------------------------------
+
+
+def _flat(text):
+    return " ".join(re.sub(r"[│╭╮╰╯─]", " ", text).split())
+
+
+def error_line(args) -> str:
+    """The one ``error:`` line of a refused command (exit status 2), no traceback."""
+    res = runner.invoke(app, [str(a) for a in args], env={"COLUMNS": "400"})
+    lines = [ln for ln in res.output.splitlines() if ln.startswith("error:")]
+    assert res.exit_code == 2 and len(lines) == 1, res.output
+    assert "Traceback" not in res.output and isinstance(res.exception, (SystemExit, type(None)))
+    return lines[0]
+
+
+@pytest.fixture(scope="module")
+def base_rig(tmp_path_factory):
+    return write_rig(tmp_path_factory.mktemp("base"))
+
+
+def _variant(base: SyntheticRig, name: str, edit) -> Path:
+    """A rig file beside the base one (sharing its mesh and images) with ``edit(rig)`` applied."""
+    rig = json.loads(json.dumps(base.rig))
+    edit(rig)
+    path = base.folder / f"{name}.json"
+    path.write_text(json.dumps(rig))
+    return path
+
+
+def _pose_away(rig):
+    c = Camera.looking_at((0.0, 0.0, 40.0), (0.0, 0.0, 80.0), SIZE, SIZE, fov_deg=22.0)
+    rig["cameras"][1]["pose"] = {"R": c.R.tolist(), "t": c.t.tolist()}
+
+
+def _bad_image(base, kind):
+    def edit(rig):
+        image = np.ones((SIZE, SIZE, 3), np.float32)
+        if kind == "size":
+            image = image[:, :-1]
+        else:
+            image[5, 7, 1] = np.nan
+        write_pfm(base.folder / f"shots/bad_{kind}.pfm", image)
+        rig["shots"][1]["images"]["cam2"][0]["file"] = f"shots/bad_{kind}.pfm"
+
+    return edit
+
+
+def _noisy_marks(rig):
+    marks = rig["cameras"][0]["pose"]["marks"]
+    uv = np.asarray(marks["image_px"]) + 5.0 * np.random.default_rng(3).standard_normal((12, 2))
+    marks["image_px"] = uv.tolist()
+
+
+CASES = {
+    "camera sees no vertex": (_pose_away, ["cam1", "sees no vertex"]),
+    "hit off the mesh": (
+        lambda rig: rig["shots"][1]["hit"].update(
+            point=(1.3 * np.asarray(rig["shots"][1]["hit"]["point"])).tolist()
+        ),
+        ["shot 1", "off the mesh"],
+    ),  # fmt: skip
+    "ray from inside": (
+        lambda rig: rig["shots"][2]["hit"].update(ray={"origin": [0, 0, 0], "direction": [-1, 1, -1]}),
+        ["shot 2", "back-facing"],
+    ),
+    "ray misses": (
+        lambda rig: rig["shots"][2]["hit"].update(ray={"origin": [30, 30, 30], "direction": [1, 0, 0]}),
+        ["shot 2", "misses"],
+    ),
+    "marks above the bound": (_noisy_marks, ["cam0", "px rms"]),
+    "marks and pixels of other counts": (
+        lambda rig: rig["cameras"][0]["pose"]["marks"]["image_px"].pop(),
+        ["cam0", "12 marked points but 11"],
+    ),
+    "mesh scaled": (
+        lambda rig: rig["mesh"].update(scale_mm=10.0),
+        ["ball.ply", "project into any camera", "mesh.scale_mm"],
+    ),
+    "unknown camera": (
+        lambda rig: rig["shots"][0]["images"].update(cam9=rig["shots"][0]["images"]["cam0"]),
+        ["shot 0", "unknown camera 'cam9'"],
+    ),
+    "wrong format": (lambda rig: rig.update(format="something-else"), ["not an object rig file"]),
+}
+
+
+@pytest.mark.parametrize("case", list(CASES))
+def test_bad_rig_is_refused_in_one_line(base_rig, tmp_path, case):
+    edit, words = CASES[case]
+    path = _variant(base_rig, case.replace(" ", "_"), edit)
+    line = _flat(error_line(["import", "object", path, "--out", tmp_path / "x.zarr", "--quiet"]))
+    for w in words:
+        assert w in line, line
+    assert "--scale" not in line, line  # a rig file's key, not a flag of this command
+    assert not (tmp_path / "x.zarr").exists()
+
+
+@pytest.mark.parametrize("kind", ["size", "nan"])
+def test_bad_photograph_is_refused_in_one_line(base_rig, tmp_path, kind):
+    path = _variant(base_rig, f"image_{kind}", _bad_image(base_rig, kind))
+    line = _flat(error_line(["import", "object", path, "--out", tmp_path / "x.zarr", "--quiet"]))
+    assert f"bad_{kind}.pfm" in line, line
+    assert ("95 x 96" in line) if kind == "size" else ("non-finite" in line), line
+
+
+def test_a_refused_import_leaves_no_output(base_rig, tmp_path):
+    path = _variant(base_rig, "image_nan_out", _bad_image(base_rig, "nan"))
+    error_line(["import", "object", path, "--out", tmp_path / "x.zarr", "--quiet"])
+    assert not (tmp_path / "x.zarr").exists()
+
+
+def test_rig_file_not_json_is_refused_in_one_line(tmp_path):
+    (tmp_path / "object.json").write_text("{not json")
+    line = _flat(error_line(["import", "object", tmp_path, "--out", tmp_path / "x.zarr"]))
+    assert "object.json" in line and "not JSON" in line, line
