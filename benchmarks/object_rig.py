@@ -41,7 +41,10 @@ def main(argv) -> None:
         mesh = load_mesh(argv[2], scale_mm=10.0)
     volume = object_volume(case.pop("material"), mesh, 0.5 if name != "pig" else 1.0, seed=1)
     folder = Path(argv[3]) if len(argv) > 3 else Path(tempfile.mkdtemp(prefix=f"object-rig-{name}-"))
-    out = object_rig_check(mesh, volume, folder, progress=lambda t: print(t, file=sys.stderr), **case)
+    reuse = "--reuse" in argv
+    out = object_rig_check(
+        mesh, volume, folder, reuse=reuse, progress=lambda t: print(t, file=sys.stderr), **case
+    )
     out["throughput_MB_s"] = out["import_MB"] / out["import_seconds"]
     out["case"] = name
     out.pop("exit_law")

@@ -47,11 +47,14 @@ def object_rig_check(
     light: PointLight | None = None,
     reference_spp: int = 64,
     render: bool = True,
+    reuse: bool = False,
     progress=None,
 ) -> dict:
     """Run the check (module notes) in ``folder``; return its numbers (JSON-ready).
 
-    ``light``: the render's (default a point light up and to the side at 3 object sizes).
+    ``light``: the render's (default a point light up and to the side at 3 object sizes).  ``reuse``:
+    keep photographs and the tally already in ``folder`` (made by an earlier check with the same
+    arguments) and only import, compare and render again.
     """
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
@@ -60,28 +63,30 @@ def object_rig_check(
     imports = []
     for seed in (0, 1):
         say(f"photographs, seed {seed}")
-        photograph_object(
-            mesh,
-            volume,
-            folder / f"rig{seed}",
-            n_points=points,
-            n_cameras=cameras,
-            resolution=resolution,
-            spp=spp,
-            seed=seed,
-        )
+        if not (reuse and (folder / f"rig{seed}" / "object.json").is_file()):
+            photograph_object(
+                mesh,
+                volume,
+                folder / f"rig{seed}",
+                n_points=points,
+                n_cameras=cameras,
+                resolution=resolution,
+                spp=spp,
+                seed=seed,
+            )
         say(f"import, seed {seed}")
         imports.append(import_object(folder / f"rig{seed}", folder / f"photo{seed}.zarr", overwrite=True))
     say("tally")
-    acquire_mesh(
-        mesh,
-        volume,
-        folder / "tally.zarr",
-        n_points=points,
-        photons=photons,
-        index_matched=True,
-        overwrite=True,
-    )
+    if not (reuse and (folder / "tally.zarr").is_dir()):
+        acquire_mesh(
+            mesh,
+            volume,
+            folder / "tally.zarr",
+            n_points=points,
+            photons=photons,
+            index_matched=True,
+            overwrite=True,
+        )
     A, B, T = (open_mesh_dataset(folder / n) for n in ("photo0.zarr", "photo1.zarr", "tally.zarr"))
     area = np.asarray(A["vertex_area"][...], dtype=np.float64)
     Ra, Rb, Rt = (np.asarray(d["R_d"][...], dtype=np.float64) for d in (A, B, T))

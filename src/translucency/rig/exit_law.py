@@ -19,13 +19,15 @@ the normal is only 10–20° from +z (so s ≈ −0.3), πL is 0.61 M.  So π ×
 * :class:`Lambertian` — γ = 1 (a rough, white-diffusing surface, or for comparison only);
 * :class:`Dielectric` — :math:`\gamma = F_t(\mu)/(1 - F_{dr,e})` for a smooth boundary of index η,
   the law the renderer draws with (:mod:`translucency.model.boundary`);
-* :class:`FromViews` — γ tabulated over directions (cells of μ and of the azimuth from the direction
-  away from the hit) per band of distance from the hit and channel, **estimated from the photographs
-  themselves**: a vertex seen by several cameras sees one exitance through several cells of the
-  table, so the table (normalised) and the exitances are fitted jointly (:func:`fit_from_views`).  A
-  linear law in μ and s was tried first and dropped: near the hit the light leaves strongly peaked
-  away from it (on the skin sphere, 1.5 mm from the hit, πL/M is 3.6 seen face-on leaning away from the
-  hit, 0.5 seen from the side and 0.3 leaning towards it: measured by photon walks and volpath alike).
+* :class:`FromViews` — :math:`\gamma = \pi (1 + a\mu) e^{\kappa s}/N(a, \kappa)`, a law peaked away
+  from the hit (κ > 0) and tilted towards the normal (a > 0), normalised, with one (a, κ) per band of
+  distance from the hit and channel, **estimated from the photographs themselves**: a vertex seen by
+  several cameras sees one exitance through several directions, so (a, κ) and the exitances are fitted
+  jointly (:func:`fit_from_views`, a grid search).  Tried and dropped: a law linear in μ and s (cannot
+  hold the peak: near the hit, on the skin sphere 1.5 mm away, πL/M is 3.6 seen face-on leaning away
+  from the hit, 0.5 from the side and 0.3 leaning towards it — photon walks and volpath alike), and a
+  table over 4 × 4 cells of directions (too coarse for the peak: the true law tabulated so converts
+  10–60 % off; and too many unknowns for a few views per vertex).
 """
 
 from __future__ import annotations
@@ -39,7 +41,7 @@ from .._validate import TranslucencyError
 from ..model.boundary import exit_factor
 
 #: distance bands (mm from the laser's hit) of :class:`FromViews`, the last one open
-BAND_EDGES_MM = (0.0, 1.0, 2.0, 4.0, 8.0, 16.0)
+BAND_EDGES_MM = (0.0, 2.0, 6.0)
 
 #: the fewest pairs of views a band's β is estimated from; a band with fewer takes its neighbour's
 MIN_PAIRS = 12
@@ -93,62 +95,52 @@ class Dielectric(ExitLaw):
         return {"law": self.name, "eta": float(self.eta)}
 
 
-#: the table of :class:`FromViews`: cells in μ (uniform) and in the azimuth φ from the direction away from
-#: the hit (uniform over [0°, 180°]; the law is mirror-symmetric about the plane through the hit)
-MU_CELLS, PHI_CELLS = 4, 4
-
-
-def _cells(mu, s) -> np.ndarray:
-    """The table cell (flat index) of directions of cosine ``mu`` and slant ``s``."""
-    mu = np.clip(np.asarray(mu, dtype=np.float64), 0.0, 1.0)
-    sin = np.sqrt(np.maximum(1.0 - mu * mu, 1e-12))
-    phi = np.arccos(np.clip(np.asarray(s, dtype=np.float64) / sin, -1.0, 1.0))
-    i = np.minimum((mu * MU_CELLS).astype(np.int64), MU_CELLS - 1)
-    j = np.minimum((phi / np.pi * PHI_CELLS).astype(np.int64), PHI_CELLS - 1)
-    return i * PHI_CELLS + j
-
-
-def cell_weights() -> np.ndarray:
-    r""":math:`q_k = \int_{\text{cell } k} \mu\, d\omega` over the hemisphere (both mirror halves), so that
-    :math:`\sum_k \gamma_k q_k = \pi` is the law's normalisation."""
-    mu = np.linspace(0, 1, MU_CELLS + 1)
-    q_mu = 0.5 * np.diff(mu**2)  # ∫ μ dμ per μ cell
-    q_phi = np.full(PHI_CELLS, 2 * np.pi / PHI_CELLS)  # both halves: 2 × (π / cells)
-    return np.outer(q_mu, q_phi).ravel()
+def _normalisation(a, kappa) -> np.ndarray:
+    r""":math:`N(a, \kappa) = \int_{H^2} (1 + a\mu)\, e^{\kappa s} \mu\, d\omega` with
+    :math:`s = \sin\theta\cos\varphi`: :math:`2\pi \int_0^1 (1 + a\mu) I_0(\kappa\sqrt{1-\mu^2})
+    \mu\, d\mu` (the azimuth's integral is the Bessel function I_0), by Gauss–Legendre in μ."""
+    x, w = np.polynomial.legendre.leggauss(48)
+    mu, wmu = (x + 1) / 2, w / 2
+    a, kappa = np.asarray(a, dtype=np.float64), np.asarray(kappa, dtype=np.float64)
+    i0 = np.i0(kappa[..., None] * np.sqrt(1 - mu**2))
+    return 2 * np.pi * ((1 + a[..., None] * mu) * i0 * mu * wmu).sum(axis=-1)
 
 
 @dataclass(frozen=True)
 class FromViews(ExitLaw):
-    r"""γ tabulated over directions (:data:`MU_CELLS` × :data:`PHI_CELLS` cells of μ and of the azimuth
-    from the direction away from the hit) per distance band (:data:`BAND_EDGES_MM`) and channel, with
-    :math:`\sum_k \gamma_k q_k = \pi` (:func:`cell_weights`).
+    r""":math:`\gamma = \pi (1 + a\mu)\, e^{\kappa s} / N(a, \kappa)` with (a, κ) per distance band
+    (:data:`BAND_EDGES_MM`) and channel; N (:func:`_normalisation`) makes
+    :math:`\int \gamma \mu\, d\omega = \pi`.  κ > 0: the light leans away from the hit.
 
-    ``table`` has shape (bands, cells, 3); ``views`` says how many vertex views each band was estimated
+    ``a`` and ``kappa`` have shape (bands, 3); ``views`` says how many vertices each band was estimated
     from.
 
     Examples
     --------
-    >>> law = FromViews(np.ones((len(BAND_EDGES_MM), MU_CELLS * PHI_CELLS, 3)))   # Lambertian
-    >>> float(law.factor(np.array([0.3]), np.array([0.1]), np.array([2.0]))[0, 0])
+    >>> zero = np.zeros((len(BAND_EDGES_MM), 3))
+    >>> round(float(FromViews(zero, zero).factor(np.array([0.3]), np.array([0.1]), np.array([2.0]))[0, 0]), 9)
     1.0
     """
 
-    table: np.ndarray
+    a: np.ndarray
+    kappa: np.ndarray
     views: tuple = ()
     name: str = "from-views"
     needs_direction = True
 
     def factor(self, mu, s, r):
-        return np.asarray(self.table, dtype=np.float64)[
-            np.clip(_band(r), 0, len(BAND_EDGES_MM) - 1), _cells(mu, s)
-        ]
+        band = np.clip(_band(r), 0, len(BAND_EDGES_MM) - 1)
+        a = np.asarray(self.a, dtype=np.float64)[band]
+        k = np.asarray(self.kappa, dtype=np.float64)[band]
+        mu, s = (np.asarray(x, dtype=np.float64)[..., None] for x in (mu, s))
+        return np.pi * (1 + a * mu) * np.exp(k * s) / _normalisation(a, k)
 
     def describe(self) -> dict:
         return {
             "law": self.name,
             "band_edges_mm": list(BAND_EDGES_MM),
-            "cells": {"mu": MU_CELLS, "phi": PHI_CELLS},
-            "table": np.round(np.asarray(self.table), 4).tolist(),
+            "a": np.round(np.asarray(self.a), 4).tolist(),
+            "kappa": np.round(np.asarray(self.kappa), 4).tolist(),
             "views": list(self.views),
         }
 
@@ -157,38 +149,13 @@ def _band(r) -> np.ndarray:
     return np.clip(np.searchsorted(BAND_EDGES_MM, np.asarray(r, dtype=np.float64), side="right") - 1, 0, None)
 
 
-#: the fewest views a cell of the table is estimated from; one with fewer is extrapolated
-MIN_CELL_VIEWS = 20
+#: the grid of (a, κ) :func:`fit_from_views` searches
+A_GRID = np.linspace(-0.8, 3.0, 20)
+KAPPA_GRID = np.linspace(-1.0, 4.0, 41)
 
 
-def _extrapolation(observed: np.ndarray) -> np.ndarray:
-    """E (cells × cells): each cell's value as a combination of the observed cells' — itself where
-    observed; below the lowest observed μ, linear in μ from the two cells above it (the grazing cells no
-    view falls in); elsewhere the mean of its observed neighbours, or of every observed cell."""
-    K = MU_CELLS * PHI_CELLS
-    E = np.zeros((K, K))
-    obs = observed.reshape(MU_CELLS, PHI_CELLS)
-    for i in range(MU_CELLS):
-        for j in range(PHI_CELLS):
-            k = i * PHI_CELLS + j
-            if obs[i, j]:
-                E[k, k] = 1.0
-            elif i + 2 < MU_CELLS and obs[i + 1, j] and obs[i + 2, j]:
-                E[k, k + PHI_CELLS] = 2.0  # 2 γ(i+1) − γ(i+2): the line through the two cells above
-                E[k, k + 2 * PHI_CELLS] = -1.0
-            else:
-                near = [
-                    (a, c)
-                    for a, c in ((i - 1, j), (i + 1, j), (i, j - 1), (i, j + 1))
-                    if 0 <= a < MU_CELLS and 0 <= c < PHI_CELLS and obs[a, c]
-                ]
-                cells = [a * PHI_CELLS + c for a, c in near] or list(np.flatnonzero(observed))
-                E[k, cells] = 1.0 / len(cells)
-    return E
-
-
-def fit_from_views(L, var, mu, s, r, *, min_snr: float = 5.0, iterations: int = 40):
-    r"""The tabulated law γ per distance band and channel from vertices seen by several cameras.
+def fit_from_views(L, var, mu, s, r, *, min_snr: float = 5.0) -> FromViews:
+    r"""(a, κ) per distance band and channel from vertices seen by several cameras.
 
     Parameters
     ----------
@@ -201,63 +168,45 @@ def fit_from_views(L, var, mu, s, r, *, min_snr: float = 5.0, iterations: int = 
         Each vertex's distance from its laser hit, mm.
 
     The views (above ``min_snr`` σ) of vertices seen by two cameras or more are fitted jointly with the
-    vertices' exitances, :math:`\pi L_{vc} = M_v \gamma_{k(vc)}`: alternately the weighted least-squares
-    :math:`M_v` for a fixed table, and the table for fixed M — linear least squares over the cells with
-    :data:`MIN_CELL_VIEWS` views or more, the others extrapolated from them (:func:`_extrapolation`:
-    linearly in μ below the grazing cut), under the normalisation :math:`\sum_k \gamma_k q_k = \pi`
-    (a Lagrange constraint).  Weights :math:`1/(\mathrm{Var}\,L + (0.02 L)^2)`.  A band with fewer
-    than :data:`MIN_PAIRS` such vertices takes its nearest estimated band's table.
-
-    Returns
-    -------
-    FromViews
+    vertices' exitances, :math:`\pi L_{vc} = M_v \gamma(\mu_{vc}, s_{vc})`: for each (a, κ) of the grid
+    (:data:`A_GRID` × :data:`KAPPA_GRID`) the weighted least-squares :math:`M_v` are closed-form, and the
+    (a, κ) of least :math:`\chi^2` is taken — a search, not a descent, since two or three views per
+    vertex leave the problem flat in places.  Weights :math:`1/(\mathrm{Var}\,L + (0.02 L)^2)`.  A band
+    with fewer than :data:`MIN_PAIRS` such vertices takes its nearest estimated band's values.
     """
-    L, var, mu, s = (np.asarray(a, dtype=np.float64) for a in (L, var, mu, s))
-    bands, K = len(BAND_EDGES_MM), MU_CELLS * PHI_CELLS
+    L, var, mu, s = (np.asarray(x, dtype=np.float64) for x in (L, var, mu, s))
+    bands = len(BAND_EDGES_MM)
     band = np.clip(_band(r), 0, bands - 1)
-    q = cell_weights()
-    table = np.ones((bands, K, 3))
+    a_out = np.zeros((bands, 3))
+    k_out = np.zeros((bands, 3))
     with np.errstate(invalid="ignore", divide="ignore"):
         good = np.isfinite(L) & (L / np.sqrt(var) >= min_snr)
     views = good.all(axis=2)  # (C, N)
     multi = views.sum(axis=0) >= 2
     counts = np.bincount(band[multi], minlength=bands)
-    cells = _cells(mu, s)  # (C, N)
+    A, Kg = np.meshgrid(A_GRID, KAPPA_GRID, indexing="ij")
+    norm = _normalisation(A, Kg)  # (na, nk)
     for b in range(bands):
         m = multi & (band == b)
         if m.sum() < MIN_PAIRS:
             continue
         v = views[:, m]
-        k = cells[:, m]
-        observed = np.bincount(k[v], minlength=K) >= MIN_CELL_VIEWS
-        if not observed.any():
-            continue
-        E = _extrapolation(observed)[:, observed]  # (K, n_obs): the table from its observed cells
-        qo = q @ E
+        mv, sv = mu[:, m][v], s[:, m][v]  # (n_views,)
+        col = np.broadcast_to(np.arange(m.sum()), v.shape)[v]  # the vertex of each view
+        # γ of every view under every (a, κ): (na, nk, n_views)
+        g = np.pi * (1 + A[..., None] * mv) * np.exp(Kg[..., None] * sv) / norm[..., None]
         for ch in range(3):
-            y = np.where(v, np.pi * L[:, m, ch], 0.0)
-            Lv = np.where(v, L[:, m, ch], 0.0)
-            w = np.where(
-                v, 1.0 / (np.pi**2 * (np.nan_to_num(var[:, m, ch]) + (0.02 * Lv) ** 2) + 1e-300), 0.0
-            )
-            g = np.ones(K) * np.pi / q.sum()
-            for _ in range(iterations):
-                gv = g[k]
-                M = (w * gv * y).sum(0) / np.maximum((w * gv * gv).sum(0), 1e-300)  # (n,)
-                # the observed cells for fixed M: Σ w (y − M γ_k)², subject to qᵀ E γ_o = π
-                Mv = np.broadcast_to(M, k.shape)
-                sel = v & observed[k]
-                X = np.zeros((sel.sum(), observed.sum()))
-                X[np.arange(sel.sum()), np.searchsorted(np.flatnonzero(observed), k[sel])] = Mv[sel]
-                ww = w[sel]
-                A = np.zeros((observed.sum() + 1,) * 2)
-                A[:-1, :-1] = (X * ww[:, None]).T @ X
-                A[:-1, -1] = A[-1, :-1] = qo
-                rhs = np.r_[(X * ww[:, None]).T @ y[sel], np.pi]
-                go = np.linalg.lstsq(A, rhs, rcond=None)[0][:-1]
-                g = np.maximum(E @ go, 0.02)
-                g *= np.pi / (q @ g)
-            table[b, :, ch] = g
+            y = np.pi * L[:, m, ch][v]
+            w = 1.0 / (np.pi**2 * (var[:, m, ch][v] + (0.02 * L[:, m, ch][v]) ** 2) + 1e-300)
+            n = m.sum()
+            num = np.zeros(g.shape[:2] + (n,))
+            den = np.zeros_like(num)
+            np.add.at(num, (slice(None), slice(None), col), w * g * y)  # Σ_c w γ y per vertex
+            np.add.at(den, (slice(None), slice(None), col), w * g * g)
+            M = num / np.maximum(den, 1e-300)
+            chi2 = (w * (y - M[..., col] * g) ** 2).sum(axis=-1)
+            i, j = np.unravel_index(np.argmin(chi2), chi2.shape)
+            a_out[b, ch], k_out[b, ch] = A_GRID[i], KAPPA_GRID[j]
     ok = counts >= MIN_PAIRS
     if not ok.any():
         raise TranslucencyError(
@@ -266,7 +215,7 @@ def fit_from_views(L, var, mu, s, r, *, min_snr: float = 5.0, iterations: int = 
         )
     idx = np.arange(bands)
     nearest = np.array([idx[ok][np.argmin(np.abs(idx[ok] - i))] for i in idx])
-    return FromViews(table[nearest], tuple(int(c) for c in counts))
+    return FromViews(a_out[nearest], k_out[nearest], tuple(int(c) for c in counts))
 
 
 def law_named(name: str, eta: float = 1.0) -> ExitLaw | None:
