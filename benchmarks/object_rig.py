@@ -4,6 +4,7 @@ energy and render error against the photon tally of the same object, with the im
     python benchmarks/object_rig.py sphere   # a 6 mm skin sphere (fast: a few minutes)
     python benchmarks/object_rig.py pig      # the main job's pig in marble
     python benchmarks/object_rig.py cow PATH/cow.obj
+    python benchmarks/object_rig.py torus        # a skin torus (not convex)
 
 Prints one JSON object per case (docs/object-rig.md quotes them).
 """
@@ -27,6 +28,7 @@ CASES = {
     "sphere": dict(material="homogeneous:skin1", points=4, cameras=8, resolution=(96, 96), spp=256),
     "pig": dict(material="marble", points=4, cameras=8, resolution=(128, 96), spp=128),
     "cow": dict(material="skin", points=4, cameras=8, resolution=(128, 96), spp=128),
+    "torus": dict(material="skin", points=4, cameras=8, resolution=(96, 96), spp=192),
 }
 
 
@@ -37,6 +39,10 @@ def main(argv) -> None:
         mesh = trimesh.creation.icosphere(subdivisions=4, radius=6.0)
     elif name == "pig":
         mesh = make_pig()
+    elif name == "torus":  # not convex: the import's visibility is tested where the object hides itself
+        mesh = trimesh.creation.torus(
+            major_radius=8.0, minor_radius=3.5, major_sections=96, minor_sections=48
+        )
     else:
         mesh = load_mesh(argv[2], scale_mm=10.0)
     volume = object_volume(case.pop("material"), mesh, 0.5 if name != "pig" else 1.0, seed=1)

@@ -1,0 +1,65 @@
+"""End to end (slow): photographs rendered by Mitsuba of a virtual object → ``import object`` → the same
+per-vertex data, energy and picture as the photon tally of the same object (issue 23).
+
+The photographs (:mod:`translucency.rig.object_photographs`) are Mitsuba's ``volpath``, the tally our
+photon walk: two independent estimators of one experiment.  The photographs' own noise floor is measured
+with a second, independent set of photographs (:mod:`translucency.pipeline.object_rig_check`).  Figures
+at larger settings: ``python benchmarks/object_rig.py sphere|torus|pig`` (docs/object-rig.md).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import trimesh
+
+from translucency.acquire.mesh import object_volume
+from translucency.pipeline.object_rig_check import object_rig_check
+
+pytestmark = pytest.mark.slow
+
+
+def _check(out: dict) -> None:
+    # per pair: the photographs recover the tally as closely as two sets of photographs agree
+    assert out["pairs_compared"] > 200, out
+    assert out["recovery"] <= 1.5 * out["noise_floor"], out
+    # the energy each laser shot puts into the object's exitance: median within 20 % of the tally's
+    ratio = np.asarray(out["energy_ratio"])
+    assert abs(np.median(ratio) - 1) < 0.2, ratio
+    if "render_ratio" in out:  # the picture from the photographs as good as the tally's, within 1.25x
+        assert out["render_ratio"] <= 1.25, out
+
+
+def test_sphere_of_skin_photographed_imported_and_rendered(tmp_path):
+    mesh = trimesh.creation.icosphere(subdivisions=3, radius=6.0)
+    volume = object_volume("homogeneous:skin1", mesh, 0.5, seed=1)
+    out = object_rig_check(
+        mesh,
+        volume,
+        tmp_path,
+        points=2,
+        cameras=6,
+        resolution=(64, 64),
+        spp=128,
+        photons=50_000,
+        reference_spp=32,
+    )
+    _check(out)
+
+
+def test_torus_of_layered_skin_photographed_and_imported(tmp_path):
+    """A second mesh (not convex: the object hides parts of itself) and a heterogeneous material."""
+    mesh = trimesh.creation.torus(major_radius=8.0, minor_radius=3.5, major_sections=64, minor_sections=24)
+    volume = object_volume("skin", mesh, 0.5, seed=1)
+    out = object_rig_check(
+        mesh,
+        volume,
+        tmp_path,
+        points=2,
+        cameras=6,
+        resolution=(72, 72),
+        spp=128,
+        photons=50_000,
+        render=False,
+    )
+    _check(out)
