@@ -24,6 +24,7 @@ FLAGS = {
     "alpha_radius": "--alpha-radius",
     "batch_photons": "--batch",
     "max_memory": "--max-memory",
+    "exit_law": "--exit-law",
     # options whose library name is the flag's word (``terms: …``, ``light: …``); not ``model``, which
     # library messages also use for the model file
     "terms": "--terms",

@@ -211,7 +211,7 @@ def fit_from_views(L, var, mu, s, r, *, min_snr: float = 5.0) -> FromViews:
     if not ok.any():
         raise TranslucencyError(
             f"exit law: fewer than {MIN_PAIRS} vertices are seen well by two cameras in any band of "
-            "distance; choose exit_law='lambertian' or 'dielectric', or add views"
+            "distance; choose exit_law='lambertian' or exit_law='dielectric', or add views"
         )
     idx = np.arange(bands)
     nearest = np.array([idx[ok][np.argmin(np.abs(idx[ok] - i))] for i in idx])
