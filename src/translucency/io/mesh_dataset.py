@@ -224,21 +224,9 @@ def create_mesh_dataset(
     ):
         root.create_array(name, data=data, compressors=comp, config={"write_empty_chunks": True})
     every = {"write_empty_chunks": True}  # every written chunk is a file: a missing one is damage
-    root.create_array(
-        "R_d",
-        shape=(P, V, 3),
-        dtype="float32",
-        chunks=(chunk_points, V, 3),
-        compressors=comp,
-        fill_value=0,
-        config=every,
-    )
-    root.create_array(
-        "specular", shape=(P, 3), dtype="float32", chunks=(chunk_points, 3), fill_value=0, config=every
-    )
-    if measured:
+    for name in ("R_d", "R_d_var") if measured else ("R_d",):  # (P, V, 3), chunked by points
         root.create_array(
-            "R_d_var",
+            name,
             shape=(P, V, 3),
             dtype="float32",
             chunks=(chunk_points, V, 3),
@@ -246,6 +234,10 @@ def create_mesh_dataset(
             fill_value=0,
             config=every,
         )
+    root.create_array(
+        "specular", shape=(P, 3), dtype="float32", chunks=(chunk_points, 3), fill_value=0, config=every
+    )
+    if measured:
         root.create_array(
             "flags",
             shape=(P, V),

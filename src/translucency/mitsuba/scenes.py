@@ -171,11 +171,17 @@ def perspective_camera_dict(
     Mitsuba's defaults (the renderer's :class:`translucency.render.Camera`).
     """
     clip = {} if far_clip is None else {"fov_axis": "x", "near_clip": 1e-2, "far_clip": float(far_clip)}
+    return _perspective(look_at(origin, target, up), fov_deg, width, height, spp, clip)
+
+
+def _perspective(to_world, fov_deg: float, width: int, height: int, spp: int, clip: dict) -> dict:
+    """A ``perspective`` sensor: ``to_world``, field of view, clipping ``clip``, an RGB ``hdrfilm`` of
+    ``width`` × ``height`` with a box filter, ``spp`` independent samples a pixel."""
     return {
         "type": "perspective",
         "fov": float(fov_deg),
         **clip,
-        "to_world": look_at(origin, target, up),
+        "to_world": to_world,
         "film": {
             "type": "hdrfilm",
             "width": int(width),
@@ -193,23 +199,9 @@ def perspective_to_world_dict(
     """Mitsuba ``perspective`` sensor with a 4 × 4 ``to_world`` (Mitsuba's camera frame: left, up,
     forward), horizontal field of view ``fov_deg``, an RGB ``hdrfilm`` with a box filter, ``spp`` samples
     (a calibrated camera's, :meth:`translucency.rig.cameras.Camera.sensor_dict`)."""
-    mi = mitsuba()
-    return {
-        "type": "perspective",
-        "fov": float(fov_deg),
-        "fov_axis": "x",
-        "near_clip": 1e-2,
-        "far_clip": 1e5,
-        "to_world": mi.ScalarTransform4f(np.asarray(to_world, dtype=np.float64).tolist()),
-        "film": {
-            "type": "hdrfilm",
-            "width": int(width),
-            "height": int(height),
-            "rfilter": {"type": "box"},
-            "pixel_format": "rgb",
-        },
-        "sampler": {"type": "independent", "sample_count": int(spp)},
-    }
+    to_world = mitsuba().ScalarTransform4f(np.asarray(to_world, dtype=np.float64).tolist())
+    clip = {"fov_axis": "x", "near_clip": 1e-2, "far_clip": 1e5}
+    return _perspective(to_world, fov_deg, width, height, spp, clip)
 
 
 def pinhole_sensor_dict(camera, spp: int) -> dict:

@@ -39,10 +39,10 @@ from ..geometry import farthest_points
 from ..io.atomic import atomic_path, write_json
 from ..mitsuba import SPOT_BEAM_FRACTION, mesh_scene, mitsuba, object_volpath_scene, rays, spot_dict
 from .cameras import Camera
-from .hdr import write_exr, write_pfm
 from .object_setup import FORMAT, VERSION
-from .photographs import Sensor
+from .photographs import Sensor, _write
 from .surface_map import surface_map
+from .targets import render_checkerboards
 
 #: the short exposure's length relative to the long one (the spot unsaturated in it)
 SHORT_EXPOSURE = 0.02
@@ -202,8 +202,6 @@ def photograph_object(
             },
         }
         if checkerboards:
-            from .targets import render_checkerboards  # the targets load where boards are photographed
-
             names = []
             for b, img in enumerate(render_checkerboards(c, (7, 5), 4.0 * np.linalg.norm(mesh.extents) / 80)):
                 name = f"{c.name}/board_{b:02d}.{image_format}"
@@ -294,11 +292,6 @@ def _expose(
     camera whose dark frame and flat field are those of ``frames_seed``."""
     timed = Sensor(**{**sensor.__dict__, "k": sensor.k * exposure_s})
     return timed.expose(radiance, seed=seed, frames_seed=frames_seed)
-
-
-def _write(path: Path, image: np.ndarray) -> None:
-    with atomic_path(path) as tmp:
-        (write_pfm if path.suffix == ".pfm" else write_exr)(tmp, image)
 
 
 __all__ = ["LaserBeam", "cameras_around", "render_shot", "photograph_object"]
