@@ -48,8 +48,9 @@ def main(argv) -> None:
     volume = object_volume(case.pop("material"), mesh, 0.5 if name != "pig" else 1.0, seed=1)
     folder = Path(argv[3]) if len(argv) > 3 else Path(tempfile.mkdtemp(prefix=f"object-rig-{name}-"))
     reuse = "--reuse" in argv
+    law = next((a.split("=", 1)[1] for a in argv if a.startswith("--exit-law=")), None)
     out = object_rig_check(
-        mesh, volume, folder, reuse=reuse, progress=lambda t: print(t, file=sys.stderr), **case
+        mesh, volume, folder, reuse=reuse, exit_law=law, progress=lambda t: print(t, file=sys.stderr), **case
     )
     out["throughput_MB_s"] = out["import_MB"] / out["import_seconds"]
     out["case"] = name

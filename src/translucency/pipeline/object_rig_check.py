@@ -48,13 +48,15 @@ def object_rig_check(
     reference_spp: int = 64,
     render: bool = True,
     reuse: bool = False,
+    exit_law: str | None = None,
     progress=None,
 ) -> dict:
     """Run the check (module notes) in ``folder``; return its numbers (JSON-ready).
 
     ``light``: the render's (default a point light up and to the side at 3 object sizes).  ``reuse``:
     keep photographs and the tally already in ``folder`` (made by an earlier check with the same
-    arguments) and only import, compare and render again.
+    arguments) and only import, compare and render again.  ``exit_law``: the import's (default the
+    rig file's, from-views).
     """
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
@@ -75,7 +77,11 @@ def object_rig_check(
                 seed=seed,
             )
         say(f"import, seed {seed}")
-        imports.append(import_object(folder / f"rig{seed}", folder / f"photo{seed}.zarr", overwrite=True))
+        imports.append(
+            import_object(
+                folder / f"rig{seed}", folder / f"photo{seed}.zarr", overwrite=True, exit_law=exit_law
+            )
+        )
     say("tally")
     if not (reuse and (folder / "tally.zarr").is_dir()):
         acquire_mesh(

@@ -36,6 +36,7 @@ from __future__ import annotations
 import json
 import os
 import time
+import warnings
 from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
@@ -62,6 +63,9 @@ UNSEEN, SATURATED, GRAZING, SPOT = 1, 2, 4, 8
 
 #: the least fraction of the mesh's vertices that must project into some camera's image
 MIN_PROJECTED = 0.5
+
+#: the laser shots the exit law is estimated from (the first ones)
+LAW_SHOTS = 16
 
 #: the farthest a laser hit given as a point may lie from the surface, in mean edge lengths
 HIT_TOLERANCE_EDGES = 0.5
@@ -133,8 +137,12 @@ def import_object(
             "give 'lambertian' or 'dielectric'"
         )
     law = fixed_law
-    if law is None:  # estimated from the first chunk of shots (reading them once more below)
-        law = _law_from_views(setup, cameras, setup.shots[: max(chunk_points, 8)], mesh, hits, area)
+    if law is None:  # estimated from the first shots (reading them once more below)
+        try:
+            law = _law_from_views(setup, cameras, setup.shots[:LAW_SHOTS], mesh, hits, area)
+        except TranslucencyError as exc:  # too few views of one vertex: say so, and take π L
+            warnings.warn(f"{setup.path}: {exc} — imported with the Lambertian law instead", stacklevel=2)
+            law = Lambertian()
     sample = setup.sample or {}
     request = {
         "rig": str(setup.path.resolve()),
