@@ -67,6 +67,9 @@ MIN_PROJECTED = 0.5
 #: the laser shots the exit law is estimated from (the first ones)
 LAW_SHOTS = 16
 
+#: the views the exit law is estimated from reach this close to grazing (degrees from the normal)
+LAW_GRAZING_DEG = 85.0
+
 #: the farthest a laser hit given as a point may lie from the surface, in mean edge lengths
 HIT_TOLERANCE_EDGES = 0.5
 
@@ -139,7 +142,12 @@ def import_object(
     law = fixed_law
     if law is None:  # estimated from the first shots (reading them once more below)
         try:
-            law = _law_from_views(setup, cameras, setup.shots[:LAW_SHOTS], mesh, hits, area)
+            # the law sees views closer to grazing than the data do: its normalisation needs them
+            law_cams = [
+                _prepare_camera(c, cam.camera, setup, mesh, scene, grazing_deg=LAW_GRAZING_DEG)
+                for c, cam in zip(setup.cameras, cameras)
+            ]
+            law = _law_from_views(setup, law_cams, setup.shots[:LAW_SHOTS], mesh, hits, area)
         except TranslucencyError as exc:  # too few views of one vertex: say so, and take π L
             warnings.warn(f"{setup.path}: {exc} — imported with the Lambertian law instead", stacklevel=2)
             law = Lambertian()
@@ -287,7 +295,9 @@ def _frame_file(path: Path, shape, what: str) -> np.ndarray:
     return image.reshape(-1, 3)
 
 
-def _prepare_camera(setup: CameraSetup, camera: Camera, rig: ObjectRig, mesh, scene) -> _Camera:
+def _prepare_camera(
+    setup: CameraSetup, camera: Camera, rig: ObjectRig, mesh, scene, grazing_deg=None
+) -> _Camera:
     shape = (setup.height, setup.width)
     rad = setup.radiometry
     n_pix = shape[0] * shape[1]
@@ -300,7 +310,7 @@ def _prepare_camera(setup: CameraSetup, camera: Camera, rig: ObjectRig, mesh, sc
     if (vig <= 0).any():
         raise TranslucencyError(f"camera {setup.name}: vignetting {plain(rad.vignetting)} is not positive")
     gain = rad.k * vig[:, None] * flat
-    m = surface_map(mesh, camera, grazing_deg=rig.grazing_deg, scene=scene)
+    m = surface_map(mesh, camera, grazing_deg=grazing_deg or rig.grazing_deg, scene=scene)
     return _Camera(camera, m, setup, dark[m.used].astype(np.float32), gain[m.used].astype(np.float32))
 
 
