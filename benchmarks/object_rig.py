@@ -26,7 +26,7 @@ from translucency.pipeline.object_rig_check import object_rig_check
 
 CASES = {
     "sphere": dict(material="homogeneous:skin1", points=4, cameras=8, resolution=(96, 96), spp=256),
-    "pig": dict(material="marble", points=4, cameras=8, resolution=(128, 96), spp=128),
+    "pig": dict(material="marble", points=4, cameras=6, resolution=(96, 72), spp=64),
     "cow": dict(material="skin", points=4, cameras=8, resolution=(128, 96), spp=128),
     "torus": dict(material="skin", points=4, cameras=8, resolution=(96, 96), spp=192),
 }
