@@ -154,7 +154,7 @@ def photograph_object(
         Samples per pixel of each of the two repeated frames.
     sensor : Sensor, optional
         The cameras' sensor; by default :class:`.photographs.Sensor` with its gain k set so that the
-        brightest 0.5 % of the first photograph saturate in the long exposure.
+        brightest 0.5 % of the first shot's brightest camera saturate in the long exposure.
 
     Returns
     -------
@@ -219,12 +219,10 @@ def photograph_object(
     shots = []
     for j, v in enumerate(incident):
         power = 1.0 + 0.1 * np.sin(1.3 * j)  # the laser drifts; a power monitor records it
-        images = {}
-        for i, c in enumerate(cameras):
-            frames = []
-            noise = seed * 7919 + 97 * j + 13 * i  # the sensor's noise of this shot and camera
-            for rep in range(2):  # repeated frames: independent renders
-                L = render_shot(
+        # repeated frames: two independent renders per camera
+        radiance = [
+            [
+                render_shot(
                     mesh,
                     volume,
                     c,
@@ -235,13 +233,22 @@ def photograph_object(
                     seed=seed * 1000 + 2 * j + rep,
                     scene=scene,
                 )
-                if k_auto:  # the first photograph sets the gain: its brightest 0.5 % saturate (the spot)
-                    lit = L[L > 0]
-                    k = 0.8 * sensor.saturation / float(np.percentile(lit, 99.5)) if lit.size else sensor.k
-                    sensor = Sensor(**{**sensor.__dict__, "k": k})
-                    for entry in cam_entries:
-                        entry["radiometry"]["k"] = k
-                    k_auto = False
+                for rep in range(2)
+            ]
+            for c in cameras
+        ]
+        if k_auto:  # the first shot sets the gain: the brightest 0.5 % of its brightest camera saturate
+            top = [float(np.percentile(L[L > 0], 99.5)) for L, _ in radiance if (L > 0).any()]
+            k = 0.8 * sensor.saturation / max(top) if top else sensor.k
+            sensor = Sensor(**{**sensor.__dict__, "k": k})
+            for entry in cam_entries:
+                entry["radiometry"]["k"] = k
+            k_auto = False
+        images = {}
+        for i, c in enumerate(cameras):
+            frames = []
+            noise = seed * 7919 + 97 * j + 13 * i  # the sensor's noise of this shot and camera
+            for rep, L in enumerate(radiance[i]):
                 raw = _expose(sensor, L * power, 1.0, noise + 3 * rep, i)
                 name = f"shots/{j:03d}_{c.name}_{'ab'[rep]}.{image_format}"
                 _write(folder / name, raw)
