@@ -464,6 +464,10 @@ CASES = {
         ["shot 0", "unknown camera 'cam9'"],
     ),
     "wrong format": (lambda rig: rig.update(format="something-else"), ["not an object rig file"]),
+    "negative scale": (
+        lambda rig: rig["mesh"].update(scale_mm=-1.0),
+        ["mesh: `scale_mm` must be a positive"],
+    ),
 }
 
 

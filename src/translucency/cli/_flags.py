@@ -42,8 +42,9 @@ _WORDS = {name for name in FLAGS if "_" not in name}
 
 # ``name=True`` → ``--flag``; ``name=VALUE`` → ``--flag VALUE`` (quotes of a string value dropped)
 _ASSIGNED = re.compile(r"(?<![\w./-])([a-z][a-z0-9_]*)=(True\b|'[^']*'|\"[^\"]*\"|[^\s,;:)]+)")
-# a bare argument with an underscore (``n_terms``), not part of a longer name or path
-_BARE = re.compile(r"(?<![\w./-])([a-z][a-z0-9]*(?:_[a-z0-9]+)+)(?![\w/=-]|\.\w)")
+# a bare argument with an underscore (``n_terms``), not part of a longer name or path, nor a file's field
+# in backquotes (`scale_mm` of a rig file)
+_BARE = re.compile(r"(?<![\w./`-])([a-z][a-z0-9]*(?:_[a-z0-9]+)+)(?![\w/=-]|\.\w)")
 # the argument a message begins with: ``out PATH: …`` or ``name: …``
 _LEADING = re.compile(r"^([a-z][a-z0-9_]*)(?=[ :])")
 

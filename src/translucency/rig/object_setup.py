@@ -121,15 +121,17 @@ class ObjectRig:
 
 
 def _number(d: dict, key: str, where: str, default=None, *, positive=False) -> float:
+    """The number at ``key`` of a rig file's entry ``where``; faults name the field in backquotes (a rig
+    file's field, not a Python argument the command line would translate to a flag)."""
     value = d.get(key, default)
     if value is None:
-        raise TranslucencyError(f"{where}: missing {key!r}")
+        raise TranslucencyError(f"{where}: missing `{key}`")
     try:
         value = float(value)
     except (TypeError, ValueError):
-        raise TranslucencyError(f"{where}: {key} must be a number, got {value!r}") from None
+        raise TranslucencyError(f"{where}: `{key}` must be a number, got {value!r}") from None
     if not np.isfinite(value) or (positive and value <= 0):
-        raise TranslucencyError(f"{where}: {key} must be a {'positive' if positive else 'finite'} number")
+        raise TranslucencyError(f"{where}: `{key}` must be a {'positive' if positive else 'finite'} number")
     return value
 
 
