@@ -56,7 +56,7 @@ from .exit_law import Dielectric, ExitLaw, Lambertian, fit_from_views, law_named
 from .hdr import read_hdr
 from .object_setup import CameraSetup, ObjectRig, ObjectShot, calibrated_camera, read_object_rig
 from .provenance import sha256_file
-from .surface_map import SurfaceMap, projected_fraction, surface_map
+from .surface_map import SurfaceMap, projects_inside, surface_map
 
 #: flag bits of ``flags`` (P, V) uint8
 UNSEEN, SATURATED, GRAZING, SPOT = 1, 2, 4, 8
@@ -316,18 +316,8 @@ def _prepare_camera(
 
 def _check_mesh_seen(mesh, cameras: list[Camera], rig: ObjectRig) -> None:
     """Refuse a mesh that is not the one the cameras saw: most vertices outside every image."""
-    X = np.asarray(mesh.vertices, dtype=np.float64)
-    inside = np.zeros(len(X), dtype=bool)
-    for cam in cameras:
-        front = cam.depth(X) > 0
-        uv = np.full((len(X), 2), -1e9)
-        if front.any():  # (OpenCV projects no empty set of points)
-            uv[front] = cam.project(X[front])
-        ok = front & (uv[:, 0] >= -0.5) & (uv[:, 1] >= -0.5)
-        ok &= (uv[:, 0] <= cam.width - 0.5) & (uv[:, 1] <= cam.height - 0.5)
-        inside |= ok
-    fraction = float(inside.mean())
-    if fraction < MIN_PROJECTED or max(projected_fraction(mesh, c) for c in cameras) == 0.0:
+    fraction = float(np.logical_or.reduce([projects_inside(mesh, cam) for cam in cameras]).mean())
+    if fraction < MIN_PROJECTED:
         raise TranslucencyError(
             f"{rig.mesh_file}: only {100 * fraction:.0f} % of the mesh's vertices project into any camera's "
             "image: is it the object the cameras saw (mesh.scale_mm, mesh.up, the poses)?"

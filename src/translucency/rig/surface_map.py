@@ -175,17 +175,17 @@ def surface_map(mesh, camera: Camera, *, grazing_deg: float = GRAZING_DEG, scene
     return SurfaceMap(camera, W, W2, mu, position, normal, -directions, den, grazing, mu_v)
 
 
-def projected_fraction(mesh, camera: Camera) -> float:
-    """The fraction of the mesh's vertices in front of ``camera`` that project inside its image — a
-    mesh that is not the one the camera saw has most vertices outside every image."""
+def projects_inside(mesh, camera: Camera) -> np.ndarray:
+    """Which vertices of ``mesh`` lie in front of ``camera`` and project inside its image (V,) — a mesh
+    that is not the one the cameras saw has most vertices outside every image."""
     X = np.asarray(mesh.vertices, dtype=np.float64)
-    front = camera.depth(X) > 0
-    if not front.any():
-        return 0.0
-    uv = camera.project(X[front])
-    inside = (uv[:, 0] >= -0.5) & (uv[:, 1] >= -0.5)
-    inside &= (uv[:, 0] <= camera.width - 0.5) & (uv[:, 1] <= camera.height - 0.5)
-    return float(inside.sum() / len(X))
+    inside = camera.depth(X) > 0
+    if inside.any():  # (OpenCV projects no empty set of points)
+        uv = camera.project(X[inside])
+        ok = (uv[:, 0] >= -0.5) & (uv[:, 1] >= -0.5)
+        ok &= (uv[:, 0] <= camera.width - 0.5) & (uv[:, 1] <= camera.height - 0.5)
+        inside[inside] = ok
+    return inside
 
 
-__all__ = ["SurfaceMap", "surface_map", "projected_fraction", "GRAZING_DEG"]
+__all__ = ["SurfaceMap", "surface_map", "projects_inside", "GRAZING_DEG"]
