@@ -2,6 +2,7 @@
 energy and render error against the photon tally of the same object, with the import's throughput.
 
     python benchmarks/object_rig.py sphere   # a 6 mm skin sphere (fast: a few minutes)
+    python benchmarks/object_rig.py sphere24 # the same sphere, 24 cameras (12 min)
     python benchmarks/object_rig.py pig      # the main job's pig in marble
     python benchmarks/object_rig.py cow PATH/cow.obj
     python benchmarks/object_rig.py torus        # a skin torus (not convex)
@@ -26,6 +27,8 @@ from translucency.pipeline.object_rig_check import object_rig_check
 
 CASES = {
     "sphere": dict(material="homogeneous:skin1", points=4, cameras=8, resolution=(96, 96), spp=256),
+    # the same sphere seen by a denser rig (each vertex by ~10 cameras): how the figures go with the views
+    "sphere24": dict(material="homogeneous:skin1", points=4, cameras=24, resolution=(96, 96), spp=128),
     "pig": dict(material="marble", points=4, cameras=6, resolution=(96, 72), spp=64),
     "cow": dict(material="skin", points=4, cameras=8, resolution=(128, 96), spp=128),
     "torus": dict(material="skin", points=4, cameras=8, resolution=(96, 96), spp=192),
@@ -35,7 +38,7 @@ CASES = {
 def main(argv) -> None:
     name = argv[1] if len(argv) > 1 else "sphere"
     case = dict(CASES[name])
-    if name == "sphere":
+    if name.startswith("sphere"):
         mesh = trimesh.creation.icosphere(subdivisions=4, radius=6.0)
     elif name == "pig":
         mesh = make_pig()

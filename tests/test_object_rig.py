@@ -62,9 +62,10 @@ def test_sphere_of_skin_photographed_and_imported(sphere):
 
 @pytest.mark.xfail(
     strict=False,
-    reason="the issue's target, not met yet: the render from photographs is 1.3-1.5x the tally path's error "
-    "with the exit law from the views (its scale, set by the grazing directions no camera sees, is 4-54 % "
-    "off per shot): docs/object-rig.md, section 7",
+    reason="the issue's target, met only with enough light in the photographs: the render from photographs "
+    "is 0.79x the tally path's error at 8 cameras x 256 spp and 1.11x at 24 x 128 (benchmarks/object_rig.py "
+    "sphere, sphere24), but 1.6x at this test's 6 x 128, whose noise floor (0.85) the fit inherits: "
+    "docs/object-rig.md, section 7",
 )
 def test_sphere_render_from_photographs_within_1_25x_of_the_tally(sphere):
     assert sphere["render_ratio"] <= 1.25, sphere

@@ -267,7 +267,7 @@ def photograph_object(
         "version": VERSION,
         "mesh": {"file": "object.ply", "scale_mm": 1.0, "up": "z"},
         "boundary": {"eta": 1.0, "medium_eta": float(volume.eta)},
-        "exit_law": "from-views" if len(cameras) >= 2 else "lambertian",
+        "exit_law": "lambertian",
         "grazing_deg": 75.0,
         "spot_radius_mm": float(spot_radius_mm),
         "min_coverage": 0.5,

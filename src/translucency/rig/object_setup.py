@@ -5,7 +5,7 @@ The file (every path relative to its folder; JSON schema in docs/object-rig.md):
     {"format": "translucency-object-rig", "version": 1,
      "mesh": {"file": "scan.ply", "scale_mm": 1.0, "up": "z"},
      "boundary": {"eta": 1.0},                      # 1: index-matched; > 1 a smooth dielectric
-     "exit_law": "from-views",                       # or "lambertian", "dielectric" (rig.exit_law)
+     "exit_law": "lambertian",                       # or "dielectric", "from-views" (rig.exit_law)
      "grazing_deg": 75, "spot_radius_mm": 0.5, "min_coverage": 0.5, "max_reprojection_px": 1.0,
      "cameras": [{"name": "cam0", "width": 160, "height": 120,
                   "intrinsics": {"K": [[...]], "dist": [...]}       # or {"checkerboards": [files],
@@ -224,7 +224,8 @@ def read_object_rig(path) -> ObjectRig:
                 for f in lst
             ]
         shots.append(ObjectShot(j, hit, power, frames))
-    law = str(raw.get("exit_law", "dielectric" if eta > 1.0 else "from-views"))
+    # default (measured, docs/object-rig.md §7): π L for index-matched, the diffusion law for a dielectric
+    law = str(raw.get("exit_law", "dielectric" if eta > 1.0 else "lambertian"))
     return ObjectRig(
         path=path,
         folder=folder,
