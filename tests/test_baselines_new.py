@@ -18,7 +18,7 @@ from translucency.model import (
     pbd_total_without_kappa,
 )
 from translucency.model.directional_dipole import directional_dipole_coefficients
-from translucency.model.pbd import pbd_multiple
+from translucency.model.pbd import fresnel_dielectric, pbd_multiple, pbd_single
 
 
 def test_fresnel_moments_match_published_fits():
@@ -209,6 +209,51 @@ def test_conservative_and_index_matched_limits():
         assert float(pbd_total_without_kappa(0.0, 2.0, eta)) == pytest.approx(1.0, abs=1e-12)
 
 
+def _pbrt_beam_ss(sigma_s, sigma_a, g, eta, r, n=200_000):
+    """pbrt-v4's ``BeamDiffusionSS`` (real σ_s, σ_a in mm⁻¹; Henyey–Greenstein of g), transcribed as
+    it is written, with n midpoints of the exponential instead of its 100."""
+    sigma_t = sigma_a + sigma_s
+    t_crit = r * np.sqrt(max(eta**2 - 1.0, 0.0))
+    t = t_crit - np.log1p(-(np.arange(n) + 0.5) / n) / sigma_t
+    d = np.sqrt(r * r + t * t)
+    cos_o = t / d
+    denom = 1 + g * g + 2 * g * cos_o
+    hg = (1 - g * g) / (4 * np.pi * denom * np.sqrt(denom))
+    T = 1.0 - fresnel_dielectric(cos_o, 1.0 / eta)
+    return float(np.mean(sigma_s / sigma_t * np.exp(-sigma_t * (d + t_crit)) / d**2 * hg * T * cos_o))
+
+
+@pytest.mark.parametrize("g", [0.0, 0.5, 0.8, -0.3])
+def test_pbd_single_scattering_takes_g_as_pbrt_does(g):
+    """The single-scattering term against pbrt-v4's: real σ_s = σ_s'/(1 − g) and the phase function.
+    (The isotropic term in reduced coefficients was 7.3x too high at r = 0.05 mm for g = 0.8, 6e3x at
+    0.73 mm.)"""
+    sigma_s, sigma_a, eta = 5.0, 0.05, 1.33
+    for r in (0.05, 0.2, 0.73, 2.0):
+        ref = _pbrt_beam_ss(sigma_s, sigma_a, g, eta, r)
+        ours = float(pbd_single(r, sigma_a, sigma_s * (1 - g), eta, g=g))
+        assert ours == pytest.approx(ref, rel=1e-4), (g, r)
+    # g enters only the single scattering: the diffusion is the same for the same σ_s'
+    r = np.array([0.1, 1.0, 3.0])
+    ms = pbd_multiple(r, sigma_a, 1.0, eta)
+    total = pbd_R_d(r, sigma_a, 1.0, eta, g=g) - pbd_single(r, sigma_a, 1.0, eta, g=g)
+    np.testing.assert_allclose(total, ms, rtol=1e-12)
+
+
+def test_pbd_model_keeps_g_through_its_file(tmp_path):
+    from translucency.io import load_model, save_model
+
+    alpha = PlanarAlpha(np.ones((2, 2)), (-1.0, -1.0), 1.0)
+    m = PBDModel([[0.0, 0.0]], [[0.05] * 3], [[1.0] * 3], 1.33, alpha, g=0.8)
+    save_model(m, tmp_path / "m.model.zip")
+    back = load_model(tmp_path / "m.model.zip")
+    assert back.g == 0.8
+    np.testing.assert_allclose(back.profile(0, [0.05, 0.7], 0.0), m.profile(0, [0.05, 0.7], 0.0))
+    iso = PBDModel([[0.0, 0.0]], [[0.05] * 3], [[1.0] * 3], 1.33, alpha)
+    # forward scattering makes the single bounce back rarer: less light near the hit
+    assert np.all(m.profile(0, [0.05], 0.0) < iso.profile(0, [0.05], 0.0))
+
+
 def test_models_refuse_bad_parameters():
     from translucency._validate import TranslucencyError
 
@@ -217,6 +262,8 @@ def test_models_refuse_bad_parameters():
         PBDModel([[0.0, 0.0]], [[0.01] * 3], [[0.0] * 3], 1.3, alpha)
     with pytest.raises(TranslucencyError, match="sigma_a"):
         DirectionalDipoleModel([[0.0, 0.0]], [[-0.01] * 3], [[1.0] * 3], 1.3, alpha)
+    with pytest.raises(TranslucencyError, match="g: the phase function"):
+        PBDModel([[0.0, 0.0]], [[0.01] * 3], [[1.0] * 3], 1.3, alpha, g=1.0)
 
 
 def test_fit_recovers_parameters_from_model_made_windows(tmp_path):

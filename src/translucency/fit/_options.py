@@ -139,6 +139,7 @@ class FitContext:
     balance: bool  # weight rings beyond 1 mm by 1 mm / r
     x_i: np.ndarray  # (P, 2|3) incident points, mm
     rate_bounds: tuple | None = None  # (lo, hi) of log a (a in mm⁻¹); None: what the radii resolve
+    g: float = 0.0  # the medium's mean cosine (PBD's single scattering), from the data set's header
     cache_left: float = 0.0  # bytes the data may still occupy in memory between rounds
     cache: dict = field(default_factory=dict)
     weighting: str = "poisson"  # one of WEIGHTINGS (module docstring)

@@ -200,6 +200,7 @@ def fit_mesh(
         exclusion=exclusion,
         rel_sigma=rel_sigma,
         eta=float(header.get("eta", 1.3)),
+        g=float(header.get("g", 0.0)),  # the medium's mean cosine where the data set knows it
         radius_step=source.pitch / 2,
         sweeps=1,
         balance=True,

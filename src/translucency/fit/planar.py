@@ -248,6 +248,7 @@ def fit_planar(
     grid = SampleGrid.covering(origin, pitch, ds.window)
     photons = ds.header.get("acquisition", {}).get("photons")
     eta = float(ds.header.get("sample", {}).get("eta", 1.3))
+    g = float(ds.header.get("sample", {}).get("g", 0.0))  # the medium's mean cosine, 0 where unknown
     options = {
         "model": model,
         "n_terms": n,
@@ -290,6 +291,7 @@ def fit_planar(
         rel_sigma=rel_sigma,
         weighting=weighting,
         eta=eta,
+        g=g,
         radius_step=step,
         sweeps=sweeps,
         balance=balance,

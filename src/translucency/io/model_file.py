@@ -21,7 +21,8 @@ Layout::
 Header (JSON): ``format`` = "translucency-model", ``version`` = 1, ``kind``
 ("exponential" | "dipole" | "burley" | "pbd" | "ddipole"), ``geometry`` ("planar" | "mesh"),
 ``dtype`` ("float32" | "float16"), ``units``, ``alpha`` ({origin, pitch} for
-planar), ``eta`` (dipole, pbd, ddipole), ``meta`` (free-form provenance; ``meta["flagged_points"]``
+planar), ``eta`` (dipole, pbd, ddipole), ``g`` (pbd: the medium's mean cosine, 0 when
+absent), ``meta`` (free-form provenance; ``meta["flagged_points"]``
 lists the points an evaluation leaves out), ``unstorable`` (points whose fitted
 values did not fit in the storage type, stored inert and flagged), ``object`` (what
 the physical bounds need beyond the arrays, when known: ``extent``, the object

@@ -30,12 +30,22 @@ refracted beam (weight :math:`\sigma_t' e^{-\sigma_t' t}`, albedo
 * Habel's correction :math:`\kappa = 1 - e^{-2\sigma_t'(d_r + t)}` (the source
   near the surface has not yet diffused);
 
-and the *single-scattering* term (pbrt's ``BeamDiffusionSS``) with an isotropic
-phase function (g = 0: the reduced coefficients stand in for the real ones),
-:math:`d = \sqrt{r^2 + t^2}`, :math:`\mu = t/d`, the Fresnel transmittance
-:math:`T = 1 - F_r(\mu)` and :math:`t_c = r\sqrt{\eta^2 - 1}` (shallower paths
-are totally reflected).  Both beam integrals run over the CDF of the
-exponential, :math:`u = 1 - e^{-\sigma_t' t}`, by Gauss–Legendre in
+and the *single-scattering* term (pbrt's ``BeamDiffusionSS``), which sees the
+*real* coefficients and the phase function: with the medium's mean cosine g,
+:math:`\sigma_s = \sigma_s'/(1 - g)`, :math:`\sigma_t = \sigma_a + \sigma_s`,
+
+.. math::
+
+   R_d^{SS}(r) = \int_{t_c}^\infty \sigma_s e^{-\sigma_t (t + d)}\,
+                 p_{HG}(\mu; g)\,\frac{T(\mu)\,\mu}{d^2}\,dt, \qquad
+   p_{HG}(\mu; g) = \frac{1}{4\pi}\frac{1 - g^2}{(1 + g^2 + 2 g \mu)^{3/2}},
+
+:math:`d = \sqrt{r^2 + t^2}`, :math:`\mu = t/d` (the light turns by π − arccos μ from the beam
+going down to the path going up, so g > 0 makes this single bounce back *rarer*), the Fresnel
+transmittance :math:`T = 1 - F_r(\mu)` and :math:`t_c = r\sqrt{\eta^2 - 1}` (shallower paths
+are totally reflected).  At g = 0 this is the isotropic term in the reduced coefficients.
+Both beam integrals run over the CDF of the exponential, :math:`u = 1 - e^{-\sigma_t' t}`,
+by Gauss–Legendre in
 :math:`w = u^{1/3}` (nodes crowd the surface, where the integrand peaks at
 small r); pbrt uses 100 midpoints in u.
 
@@ -149,9 +159,9 @@ def pbd_coefficients(sigma_a, sigma_s_prime, eta) -> dict:
     }
 
 
-def _beam_kernel(r, sigma_a, sigma_s, C1, C2, eta, U, WU, kappa, multiple, single):  # pragma: no cover
+def _beam_kernel(r, sigma_a, sigma_s, C1, C2, eta, g, U, WU, kappa, multiple, single):  # pragma: no cover
     """Σ over the beam nodes (optical depths U) of the MS and/or SS integrands, per element (compiled by
-    Numba: :func:`_compiled_kernel`)."""
+    Numba: :func:`_compiled_kernel`); ``sigma_s`` is σ_s', g the phase function's mean cosine."""
     out = np.zeros(r.size)
     t_crit = np.sqrt(max(eta * eta - 1.0, 0.0))
     n_in = 1.0 / eta  # relative index seen from inside
@@ -184,12 +194,15 @@ def _beam_kernel(r, sigma_a, sigma_s, C1, C2, eta, U, WU, kappa, multiple, singl
                 ms += WU[q] * f
             acc += rho * rho * ms
         if single:
+            # the real coefficients (mm⁻¹): σ_s = σ_s'/(1 − g), σ_t = σ_a + σ_s
+            ss_real = ss / (1.0 - g)
+            st_real = sa + ss_real
             rr = max(ri, 1e-12)
             t_c = rr * t_crit
             s_acc = 0.0
             for q in range(U.size):
                 # scattering depth t = t_c + s (mm), path d to x_o (mm), its cosine μ, Fresnel transmittance
-                t = t_c + U[q] / st
+                t = t_c + U[q] / st_real
                 d = np.sqrt(rr * rr + t * t)
                 mu = t / d
                 sin_t2 = (1.0 - mu * mu) / (n_in * n_in)
@@ -199,8 +212,10 @@ def _beam_kernel(r, sigma_a, sigma_s, C1, C2, eta, U, WU, kappa, multiple, singl
                 rs = (mu - n_in * cos_t) / (mu + n_in * cos_t)
                 rp = (n_in * mu - cos_t) / (n_in * mu + cos_t)
                 T = 1.0 - 0.5 * (rs * rs + rp * rp)
-                s_acc += WU[q] * np.exp(-st * (t_c + d)) * T * mu / (4.0 * np.pi * d * d)
-            acc += rho * s_acc
+                denom = 1.0 + g * g + 2.0 * g * mu
+                p_hg = (1.0 - g * g) / (4.0 * np.pi * denom * np.sqrt(denom))
+                s_acc += WU[q] * np.exp(-st_real * (t_c + d)) * p_hg * T * mu / (d * d)
+            acc += ss_real / st_real * s_acc
         out[e] = acc
     return out
 
@@ -213,13 +228,16 @@ def _compiled_kernel():
     return njit(cache=True, nogil=True)(_beam_kernel)
 
 
-def _beam(r, sigma_a, sigma_s_prime, eta, *, kappa=True, multiple=True, single=True) -> np.ndarray:
+def _beam(r, sigma_a, sigma_s_prime, eta, *, g=0.0, kappa=True, multiple=True, single=True) -> np.ndarray:
     """Broadcast r (mm), σ_a, σ_s' (mm⁻¹) and run :func:`_beam_kernel` over the elements."""
+    g = float(g)
+    if not -1.0 < g < 1.0:
+        raise TranslucencyError(f"g: the phase function's mean cosine must be in (-1, 1), got {g}")
     r, sa, ss = np.broadcast_arrays(*(np.asarray(v, dtype=np.float64) for v in (r, sigma_a, sigma_s_prime)))
     shape = r.shape
     C1, C2 = fresnel_moment(1, float(eta)), fresnel_moment(2, float(eta))
     flat = (np.ascontiguousarray(v).ravel() for v in (r, sa, ss))
-    out = _compiled_kernel()(*flat, C1, C2, float(eta), _TAU, _WU, kappa, multiple, single)
+    out = _compiled_kernel()(*flat, C1, C2, float(eta), g, _TAU, _WU, kappa, multiple, single)
     return out.reshape(shape)
 
 
@@ -228,22 +246,24 @@ def pbd_multiple(r, sigma_a, sigma_s_prime, eta, *, kappa: bool = True) -> np.nd
     return _beam(r, sigma_a, sigma_s_prime, eta, kappa=kappa, single=False)
 
 
-def pbd_single(r, sigma_a, sigma_s_prime, eta) -> np.ndarray:
-    """The single-scattering term :math:`R_d^{SS}(r)` in mm⁻² (isotropic phase function)."""
-    return _beam(r, sigma_a, sigma_s_prime, eta, multiple=False)
+def pbd_single(r, sigma_a, sigma_s_prime, eta, *, g: float = 0.0) -> np.ndarray:
+    """The single-scattering term :math:`R_d^{SS}(r)` in mm⁻² (Henyey–Greenstein phase function of
+    mean cosine g, the real σ_s = σ_s'/(1 − g))."""
+    return _beam(r, sigma_a, sigma_s_prime, eta, g=g, multiple=False)
 
 
-def pbd_R_d(r, sigma_a, sigma_s_prime, eta, *, single: bool = True) -> np.ndarray:
+def pbd_R_d(r, sigma_a, sigma_s_prime, eta, *, g: float = 0.0, single: bool = True) -> np.ndarray:
     """Photon beam diffusion :math:`R_d(r)` in mm⁻² at distance r (mm): multiple + single scattering.
 
-    Parameters broadcast against each other.
+    Parameters broadcast against each other; g (the medium's mean cosine) enters the single
+    scattering only (the diffusion sees σ_s' alone).
 
     Examples
     --------
     >>> round(float(pbd_R_d(1.0, 0.0021, 2.19, 1.3)), 4)   # marble, red, r = 1 mm
     0.0414
     """
-    return _beam(r, sigma_a, sigma_s_prime, eta, single=single)
+    return _beam(r, sigma_a, sigma_s_prime, eta, g=g, single=single)
 
 
 def pbd_total_without_kappa(sigma_a, sigma_s_prime, eta) -> np.ndarray:
@@ -343,6 +363,9 @@ class PBDModel(_TabulatedRadialModel):
         Relative index of refraction of the boundary.
     alpha : PlanarAlpha or VertexAlpha
         Modulation texture.
+    g : float, optional
+        The medium's mean cosine of scattering, in (−1, 1), shared by all points: the single-scattering
+        term's phase function and real σ_s = σ_s'/(1 − g) (0: isotropic, as files without g are read).
 
     Examples
     --------
@@ -355,5 +378,26 @@ class PBDModel(_TabulatedRadialModel):
 
     kind = "pbd"
 
+    def __init__(self, x_i, sigma_a, sigma_s_prime, eta: float, alpha: Modulation, *, frame=None, g=0.0):
+        super().__init__(x_i, sigma_a, sigma_s_prime, eta, alpha, frame=frame)
+        self.g = float(g)
+        if not -1.0 < self.g < 1.0:
+            raise TranslucencyError(f"g: the phase function's mean cosine must be in (-1, 1), got {g}")
+
+    def header_fields(self) -> dict:
+        return {"eta": self.eta, "g": self.g}
+
+    @classmethod
+    def from_stored(cls, x_i, params, alpha, frame, header):
+        return cls(
+            x_i,
+            params["sigma_a"],
+            params["sigma_s_prime"],
+            header["eta"],
+            alpha,
+            frame=frame,
+            g=header.get("g", 0.0),
+        )
+
     def _R(self, r, sigma_a, sigma_s_prime):
-        return pbd_R_d(r, sigma_a, sigma_s_prime, self.eta)
+        return pbd_R_d(r, sigma_a, sigma_s_prime, self.eta, g=self.g)

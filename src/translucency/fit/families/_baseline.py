@@ -32,18 +32,22 @@ class BaselineFamily(Family):
     def params_per_point(self, n_terms, n_directions, colour):
         return 6
 
+    def medium(self, ctx) -> dict:
+        """Keywords of :meth:`R_d` and of the model beyond η taken from the fit's medium (e.g. PBD's g)."""
+        return {}
+
     def profiles(self, ctx, params, sl, r_g):
         p = params.p[sl][:, None]  # (k, 1, 3, 2)
         r = r_g[None, :, None]
-        return self.R_d(r, p[..., 0], p[..., 1], ctx.eta)[..., None]
+        return self.R_d(r, p[..., 0], p[..., 1], ctx.eta, **self.medium(ctx))[..., None]
 
     def fit(self, ctx, state, sl, ch, w2):
         k = ch.y.shape[0]
         W, Y = grouped(ch.rings, ch.r_g.size, 3, w2, ch.alpha, ch.y)
-        eta = ctx.eta
+        eta, medium = ctx.eta, self.medium(ctx)
 
         def profile(r, p):  # R_d per row of p = (p0, p1)
-            return self.R_d(r[None, :], p[:, :1], p[:, 1:2], eta)
+            return self.R_d(r[None, :], p[:, :1], p[:, 1:2], eta, **medium)
 
         p = state.p[sl].reshape(-1, 2)
         ready = np.repeat(state.ready[sl], 3)
@@ -68,4 +72,5 @@ class PhysicalFamily(BaselineFamily):
         raise RuntimeError(f"{self.name}: α keeps its scale; the α step does not rescale this family")
 
     def build(self, ctx, state, alpha, frame):
-        return self.model(ctx.x_i, state.p[:, :, 0], state.p[:, :, 1], ctx.eta, alpha, frame=frame)
+        p = state.p
+        return self.model(ctx.x_i, p[:, :, 0], p[:, :, 1], ctx.eta, alpha, frame=frame, **self.medium(ctx))

@@ -12,3 +12,7 @@ class PBDFamily(PhysicalFamily):
     model = PBDModel
     R_d = staticmethod(pbd_R_d)
     time_terms = {"overhead": 0.3, "point_pixels": 7.4e-5}
+
+    def medium(self, ctx) -> dict:
+        """The single scattering's phase function: the data set's g (its medium's mean cosine)."""
+        return {"g": ctx.g}
