@@ -159,3 +159,51 @@ def test_skin_under_a_spot_renders_close_to_its_reference(tmp_path):
     cmp = compare(reference, ours, mask)
     assert cmp["rel_rmse"] < 0.25 + info["noise"], (cmp["rel_rmse"], info["noise"])
     assert ours[mask].mean() == pytest.approx(reference[mask].mean(), rel=0.1)
+
+
+def _ripple(mesh, x, sweeps=8):
+    """x over its mean of the neighbours within a few rings (graph smoothing), minus 1: the mesh-scale
+    ripple of a per-vertex field."""
+    e = mesh.edges_unique
+    V = len(mesh.vertices)
+    import scipy.sparse as sp
+
+    A = sp.coo_matrix((np.ones(2 * len(e)), (np.r_[e[:, 0], e[:, 1]], np.r_[e[:, 1], e[:, 0]])), shape=(V, V))
+    A = A.tocsr()
+    deg = np.asarray(A.sum(axis=1)).ravel()
+    smooth = np.asarray(x, dtype=np.float64).copy()
+    for _ in range(sweeps):
+        smooth = 0.5 * smooth + 0.5 * (A @ smooth) / deg
+    return x / smooth - 1.0
+
+
+def test_uniform_light_shows_no_rings_of_a_marching_cubes_mesh(tmp_path):
+    """Issue 24's rings: on a marching-cubes mesh the cell areas jump between neighbours (terraces), and a
+    transport balanced by columns only made each receiver's exitance jump with them (rings on the pig's
+    flank).  Under uniform irradiance a homogeneous ball's exitance is smooth: its ripple must stay at the
+    per-mille level and be unrelated to the cell areas; the unbalanced transport shows what is caught."""
+    from skimage.measure import marching_cubes
+
+    h = 0.5  # mm, the grid
+    ax = np.arange(-6.0, 6.0 + h, h)
+    X, Y, Z = np.meshgrid(ax, ax, ax, indexing="ij")
+    verts, faces, _, _ = marching_cubes(np.sqrt(X**2 + Y**2 + Z**2) - 5.0, level=0.0, spacing=(h,) * 3)
+    ball = trimesh.Trimesh(verts - 6.0, faces, process=True)
+    ball.update_faces(ball.nondegenerate_faces())
+    ball.remove_unreferenced_vertices()
+    if ball.volume < 0:
+        ball.invert()
+    vol = object_volume("homogeneous:marble", ball, 1.0)
+    data = acquire_mesh(ball, vol, tmp_path / "mc.zarr", n_points=8, photons=4000, index_matched=True)
+    model = fit_mesh(data, "iso").model
+    area = vertex_areas(ball)
+    assert np.std(_ripple(ball, area)) > 0.15  # the mesh has the terraces this test is about
+    one = np.ones(len(ball.vertices))
+    ripple = {}
+    for balanced in (True, False):
+        L = relight_vertices(transport_matrices(model, ball, balance_rows=balanced), one)[:, 1]
+        ripple[balanced] = _ripple(ball, L)
+    print({k: float(np.std(v)) for k, v in ripple.items()})  # the figures, with -s
+    assert np.std(ripple[True]) < 0.003, np.std(ripple[True])
+    assert abs(np.corrcoef(ripple[True], _ripple(ball, area))[0, 1]) < 0.3
+    assert np.std(ripple[False]) > 3 * np.std(ripple[True])  # the rings this test would see

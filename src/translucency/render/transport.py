@@ -230,6 +230,10 @@ def vertex_parameters(model, vertices, k: int = 4, weights=None):
 #: measured 240–330 bytes a pair; :func:`default_radius` stays below it and :func:`transport_matrices`
 #: refuses beyond it
 MAX_PAIRS = 2.5e7
+#: alternating column/row scalings of the measured near field (:func:`transport_matrices`, "rows")
+BALANCE_STEPS = 4
+#: a row's scaling stays within [1 / ROW_LIMIT, ROW_LIMIT]
+ROW_LIMIT = 2.0
 
 
 def default_radius(model, mesh, *, max_pairs: float = MAX_PAIRS) -> float:
@@ -266,6 +270,7 @@ def transport_matrices(
     max_pairs: float = MAX_PAIRS,
     far_field: bool = True,
     clusters: int | None = None,
+    balance_rows: bool = True,
 ):
     r"""The sparse transport T of the module docstring, as a :class:`Transport` (one matrix per
     channel, or one matrix and the colour scale for the shared-colour model).
@@ -286,6 +291,19 @@ def transport_matrices(
     and each column of the spread is scaled so that the kernel carries the measured total
     exitance whatever the local vertex density and the truncation radius.  (Both already hold α.)
     Without it the diagonal is the profile at ``r_min`` and columns are not rescaled.
+
+    **Rows** (``balance_rows``, with a measured near field).  The columns alone conserve each
+    source's energy, but what a *receiver* collects is a quadrature of the steep near profile over
+    its neighbours' cells, and on a mesh whose cell areas jump (marching cubes: ±35 % between
+    neighbours on the pig) it jumps with them — rings on a uniformly lit flank.  By reciprocity of
+    the diffuse transport, :math:`R_d(x_i, x_o) = R_d(x_o, x_i)`, a receiver under uniform irradiance
+    gathers what it would send as a source, so the rows have the same target as the columns:
+
+    .. math:: \sum_i T_{oi} = \frac{1}{\pi}(\mathrm{total}_o - A_o\,\mathrm{own}_o).
+
+    :math:`T_{oi} = x_o\,K_{oi}\,y_i` is balanced by alternating the two scalings (Sinkhorn;
+    ``BALANCE_STEPS``, the last step a column step so that every source's energy holds exactly;
+    the row factors x within [1/2, 2]); the far field, smooth, takes the column factors only.
 
     **Far field.**  The pairs beyond ``radius`` are not dropped: ``far_field`` (default) adds them
     hierarchically (:mod:`translucency.render._far_field`: ``clusters`` source clusters, K², default
@@ -355,12 +373,33 @@ def transport_matrices(
             # measured own area (kept apart, per channel); the spread of column i normalised to carry
             # 1 (shared colour: the scale below carries each channel's total_i − A_i own_i) or
             # total_i − A_i own_i itself (one matrix per channel)
-            spread = np.bincount(i, weights=area[o] * vals, minlength=V) * np.pi / area  # Σ_o A_o α_o P_i
-            if far is not None:  # near and far together carry the total
-                spread = spread + far.spread(ch, area)
-            target = np.ones(V) if shared else np.maximum(total[:, ch] - area * own[:, ch], 0.0)
-            factor = np.divide(target, spread, out=np.zeros(V), where=spread > 0)
-            vals = vals * factor[i]
+            tau = np.maximum(total - area[:, None] * own, 0.0)  # (V, 3) the spread's share of the total
+            target = np.ones(V) if shared else tau[:, ch]
+            # what rides with a uniform irradiance through this matrix, and the rows' target (reciprocity)
+            rides = tau.mean(axis=1) if shared else np.ones(V)
+            row_target = (tau.mean(axis=1) if shared else tau[:, ch]) / np.pi
+            far_spread = far.spread(ch, area) if far is not None else 0.0  # near and far carry the total
+            x = np.ones(V)  # row factors
+            for step in range(BALANCE_STEPS if balance_rows else 1):
+                # column step: Σ_o A_o T_oi = A_i/π · target_i
+                near = np.bincount(i, weights=area[o] * vals * x[o], minlength=V) * np.pi / area
+                spread = near + far_spread
+                factor = np.divide(target, spread, out=np.zeros(V), where=spread > 0)
+                if step == BALANCE_STEPS - 1 or not balance_rows:
+                    break
+                # row step: Σ_i T_oi rides_i = row_target_o, the far field's rows held as they are
+                near_row = np.bincount(o, weights=vals * (factor * rides)[i], minlength=V)
+                far_row = 0.0
+                if far is not None:
+                    X = np.repeat((factor * rides)[:, None], 3, axis=1).astype(np.float32)
+                    far_row = far.apply(X)[:, 0 if shared else ch]
+                want = row_target - far_row
+                x = np.clip(
+                    np.divide(want, near_row, out=np.ones(V), where=(near_row > 0) & (want > 0)),
+                    1.0 / ROW_LIMIT,
+                    ROW_LIMIT,
+                )
+            vals = vals * x[o] * factor[i]
             if far is not None:
                 far.normalise(ch, factor)
             diag = None  # the own area rides beside the matrix (Transport.own), per channel
