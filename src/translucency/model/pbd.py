@@ -228,11 +228,17 @@ def _compiled_kernel():
     return njit(cache=True, nogil=True)(_beam_kernel)
 
 
-def _beam(r, sigma_a, sigma_s_prime, eta, *, g=0.0, kappa=True, multiple=True, single=True) -> np.ndarray:
-    """Broadcast r (mm), σ_a, σ_s' (mm⁻¹) and run :func:`_beam_kernel` over the elements."""
+def mean_cosine(g) -> float:
+    """The phase function's mean cosine g as a float, checked to lie in (−1, 1)."""
     g = float(g)
     if not -1.0 < g < 1.0:
         raise TranslucencyError(f"g: the phase function's mean cosine must be in (-1, 1), got {g}")
+    return g
+
+
+def _beam(r, sigma_a, sigma_s_prime, eta, *, g=0.0, kappa=True, multiple=True, single=True) -> np.ndarray:
+    """Broadcast r (mm), σ_a, σ_s' (mm⁻¹) and run :func:`_beam_kernel` over the elements."""
+    g = mean_cosine(g)
     r, sa, ss = np.broadcast_arrays(*(np.asarray(v, dtype=np.float64) for v in (r, sigma_a, sigma_s_prime)))
     shape = r.shape
     C1, C2 = fresnel_moment(1, float(eta)), fresnel_moment(2, float(eta))
@@ -380,9 +386,7 @@ class PBDModel(_TabulatedRadialModel):
 
     def __init__(self, x_i, sigma_a, sigma_s_prime, eta: float, alpha: Modulation, *, frame=None, g=0.0):
         super().__init__(x_i, sigma_a, sigma_s_prime, eta, alpha, frame=frame)
-        self.g = float(g)
-        if not -1.0 < self.g < 1.0:
-            raise TranslucencyError(f"g: the phase function's mean cosine must be in (-1, 1), got {g}")
+        self.g = mean_cosine(g)
 
     def header_fields(self) -> dict:
         return {"eta": self.eta, "g": self.g}

@@ -359,6 +359,8 @@ def transport_matrices(
         if far_field
         else None
     )
+    # (V, 3) the spread's share of each vertex's measured total: the columns' (and rows') target
+    tau = None if own is None else np.maximum(total - area[:, None] * own, 0.0)
     mats = []
     for ch in range(1 if shared else 3):
         cc, dd = c[:, ch], d[:, ch]
@@ -373,7 +375,6 @@ def transport_matrices(
             # measured own area (kept apart, per channel); the spread of column i normalised to carry
             # 1 (shared colour: the scale below carries each channel's total_i − A_i own_i) or
             # total_i − A_i own_i itself (one matrix per channel)
-            tau = np.maximum(total - area[:, None] * own, 0.0)  # (V, 3) the spread's share of the total
             target = np.ones(V) if shared else tau[:, ch]
             # what rides with a uniform irradiance through this matrix, and the rows' target (reciprocity)
             rides = tau.mean(axis=1) if shared else np.ones(V)
@@ -410,7 +411,7 @@ def transport_matrices(
         mats.append(sp.csr_matrix((data.astype(np.float32), (rows, cols)), shape=(V, V)))
     if own is None:
         return Transport(matrices=mats, scale=s.astype(np.float32) if shared else None, far=far)
-    scale = np.maximum(total - area[:, None] * own, 0.0) if shared else None
+    scale = tau if shared else None
     return Transport(
         matrices=mats,
         scale=None if scale is None else scale.astype(np.float32),
