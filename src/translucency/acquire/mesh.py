@@ -28,10 +28,9 @@ import numpy as np
 import trimesh
 
 from .._validate import TranslucencyError, plain
-from .._version import __version__
 from ..cluster import open_cluster, parse_scheduler
 from ..geometry import farthest_points, vertex_areas
-from ..io.mesh_dataset import FORMAT, VERSION, create_mesh_dataset
+from ..io.mesh_dataset import create_mesh_dataset, mesh_header
 from ..io.outputs import output_lock
 from ..mitsuba import mesh_scene
 from .mesh_walk import EXIT, mesh_random_walk
@@ -97,20 +96,16 @@ def acquire_mesh(
     }
     request = json.loads(json.dumps(request))
     area = vertex_areas(mesh)
-    header = {
-        "format": FORMAT,
-        "version": VERSION,
-        "units": {"length": "mm", "R_d": "mm^-2"},
-        "n_points": P,
-        "n_vertices": V,
-        "photons": int(photons),
-        "seed": int(seed),
-        "eta": volume.eta,
-        "g": volume.g,
-        "sample": volume.description,
-        "software": {"translucency": __version__},
-        "request": request,
-    }
+    header = mesh_header(
+        n_points=P,
+        n_vertices=V,
+        photons=photons,
+        seed=seed,
+        eta=volume.eta,
+        g=volume.g,
+        sample=volume.description,
+        request=request,
+    )
     if volume.description.get("generator") == "file":  # a user's filling: where it is and what it was
         header["filling"] = filling_record(volume.description["path"])
     with output_lock(out):  # one writer at a time

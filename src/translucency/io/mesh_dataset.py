@@ -40,6 +40,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from .._validate import TranslucencyError
+from .._version import __version__
 from ..geometry import object_bounds
 from ._store import ChunkedStore
 from .dataset import summary_of_store
@@ -151,6 +152,30 @@ def open_mesh_dataset(path, *, writable: bool = False) -> MeshDataset:
     if group["chunk_done"].shape[0] != -(-P // k):
         raise TranslucencyError(f"{path}: array 'chunk_done' does not match {P} points in chunks of {k}")
     return MeshDataset(path, header, group)
+
+
+def mesh_header(
+    *, n_points: int, n_vertices: int, photons: int, seed: int, eta, g, sample, request, **more
+) -> dict:
+    """The header every mesh data set opens with (module notes), whoever wrote it — a photon tally
+    (``acquire mesh``) or photographs (``import object``) — with ``more`` fields after it.  ``eta``,
+    ``g``: the medium's index and mean cosine; ``sample``: its description; ``request``: what makes a
+    rerun resume (JSON)."""
+    return {
+        "format": FORMAT,
+        "version": VERSION,
+        "units": {"length": "mm", "R_d": "mm^-2"},
+        "n_points": int(n_points),
+        "n_vertices": int(n_vertices),
+        "photons": int(photons),
+        "seed": int(seed),
+        "eta": float(eta),
+        "g": float(g),
+        "sample": sample,
+        "software": {"translucency": __version__},
+        "request": request,
+        **more,
+    }
 
 
 def create_mesh_dataset(

@@ -46,9 +46,8 @@ import numpy as np
 import scipy.sparse as sp
 
 from .._validate import TranslucencyError, plain
-from .._version import __version__
 from ..geometry import vertex_areas
-from ..io.mesh_dataset import FORMAT, VERSION, create_mesh_dataset, open_mesh_dataset
+from ..io.mesh_dataset import create_mesh_dataset, mesh_header, open_mesh_dataset
 from ..io.outputs import output_lock, remove_dataset
 from ..mitsuba import mesh_scene, rays
 from .cameras import Camera
@@ -166,23 +165,19 @@ def import_object(
         "volume_grid": sample.get("volume_grid"),
     }
     request = json.loads(json.dumps(request))
-    header = {
-        "format": FORMAT,
-        "version": VERSION,
-        "units": {"length": "mm", "R_d": "mm^-2"},
-        "n_points": P,
-        "n_vertices": V,
-        "photons": 0,  # set from the measured noise once the data are in (the fit's weights)
-        "seed": 0,
+    header = mesh_header(
+        n_points=P,
+        n_vertices=V,
+        photons=0,  # set from the measured noise once the data are in (the fit's weights)
+        seed=0,
         # the medium's index (recorded apart when the boundary is index-matched, as `acquire mesh` does)
-        "eta": float((setup.raw.get("boundary") or {}).get("medium_eta", setup.eta)),
-        "g": float(sample.get("description", {}).get("g", 0.0)),
-        "sample": sample.get("description", {"source": "photographs"}),
-        "software": {"translucency": __version__},
-        "request": request,
-        "source": "photographs",
-        "photographs": _provenance(setup, cameras, hits, law),
-    }
+        eta=(setup.raw.get("boundary") or {}).get("medium_eta", setup.eta),
+        g=sample.get("description", {}).get("g", 0.0),
+        sample=sample.get("description", {"source": "photographs"}),
+        request=request,
+        source="photographs",
+        photographs=_provenance(setup, cameras, hits, law),
+    )
     bytes_read = 0
     energy = np.zeros((P, 3))
     flag_counts = np.zeros(4, dtype=np.int64)
