@@ -3,8 +3,11 @@
 Import them as ``from helpers import random_exponential_model`` (pytest puts tests/ on the path).
 """
 
+import re
+
 import numpy as np
 from hypothesis import HealthCheck, settings
+from typer.testing import CliRunner
 
 from translucency.geometry import tangent_frames
 from translucency.model import ExponentialModel, PlanarAlpha, VertexAlpha
@@ -74,3 +77,20 @@ def random_exponential_model(
         q, _ = np.linalg.qr(rng.normal(size=(n_points, 3, 3)))
         frame = np.transpose(q, (0, 2, 1)).astype(np.float32).astype(float)
     return ExponentialModel(x_i, f16(c), f16(d), alpha, s_g=f16(s_g), s_b=f16(s_b), frame=frame)
+
+
+def flat(text: str) -> str:
+    """Command output without the boxes' borders and line breaks: words separated by single spaces."""
+    return " ".join(re.sub(r"[│╭╮╰╯─]", " ", text).split())
+
+
+def error_line(args) -> str:
+    """The one ``error:`` line of a refused command (exit status 2): no traceback, no NumPy scalar reprs."""
+    from translucency.cli.app import app  # the CLI, for the tests that run it
+
+    res = CliRunner().invoke(app, [str(a) for a in args], env={"COLUMNS": "400"})
+    lines = [ln for ln in res.output.splitlines() if ln.startswith("error:")]
+    assert res.exit_code == 2 and len(lines) == 1, res.output
+    assert "Traceback" not in res.output and "np.float64" not in res.output
+    assert isinstance(res.exception, (SystemExit, type(None)))
+    return lines[0]

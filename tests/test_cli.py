@@ -8,7 +8,7 @@ import pytest
 import typer
 from typer.testing import CliRunner
 
-from helpers import random_exponential_model
+from helpers import flat, random_exponential_model
 from translucency import load_model, save_model
 from translucency.cli.app import app
 from translucency.io.dataset import dataset_identity, open_dataset
@@ -26,11 +26,6 @@ def _commands(command, path=()):
 COMMANDS = list(_commands(typer.main.get_command(app)))
 
 
-def _flat(text):
-    """Help text without the boxes' borders and line breaks: words separated by single spaces."""
-    return " ".join(re.sub(r"[│╭╮╰╯─]", " ", text).split())
-
-
 @pytest.mark.parametrize(
     ("path", "command"), COMMANDS, ids=[" ".join(p) or "translucency" for p, _ in COMMANDS]
 )
@@ -40,12 +35,12 @@ def test_help(path, command):
     res = runner.invoke(app, [*path, "--help"], env={"COLUMNS": "240"})
     assert res.exit_code == 0, res.output
     assert "Usage" in res.output and "Traceback" not in res.output
-    out = _flat(res.output)
+    out = flat(res.output)
     assert command.help, f"{path}: no description"
-    assert _flat(command.help.split("\n\n")[0]) in out, path
+    assert flat(command.help.split("\n\n")[0]) in out, path
     for param in command.params:
         assert param.help, f"{path}: {param.name} has no help text"
-        assert _flat(param.help) in out, (path, param.name)
+        assert flat(param.help) in out, (path, param.name)
         if param.param_type_name == "option":
             assert all(f" {name} " in f" {out} " for name in param.opts + param.secondary_opts), param.opts
     for name, sub in getattr(command, "commands", {}).items():

@@ -1,14 +1,12 @@
 """Messages that diagnose: each bad input a newcomer tries gets one line naming the real reason (exit
 status 2, nothing written), and numbers in messages are printed plainly."""
 
-import re
-
 import numpy as np
 import pytest
 import trimesh
 from typer.testing import CliRunner
 
-from helpers import random_exponential_model
+from helpers import error_line, flat, random_exponential_model
 from translucency import save_model
 from translucency._validate import TranslucencyError, plain
 from translucency.acquire import GENERATORS
@@ -18,19 +16,6 @@ from translucency.io.outputs import MARKER
 from translucency.render.lights import DirectionalLight, parse_light
 
 runner = CliRunner()
-
-
-def _flat(text):
-    return " ".join(re.sub(r"[│╭╮╰╯─]", " ", text).split())
-
-
-def error_line(args) -> str:
-    """The one ``error:`` line of a refused command (exit status 2)."""
-    res = runner.invoke(app, [str(a) for a in args], env={"COLUMNS": "400"})
-    lines = [ln for ln in res.output.splitlines() if ln.startswith("error:")]
-    assert res.exit_code == 2 and len(lines) == 1, res.output
-    assert "Traceback" not in res.output and "np.float64" not in res.output
-    return lines[0]
 
 
 @pytest.fixture(scope="module")
@@ -118,14 +103,14 @@ def test_point_light_inside_the_object_is_named_plainly(ball_model, tmp_path):
 
 
 def test_fit_help_names_mesh_data_sets():
-    out = _flat(runner.invoke(app, ["fit", "--help"], env={"COLUMNS": "240"}).output)
+    out = flat(runner.invoke(app, ["fit", "--help"], env={"COLUMNS": "240"}).output)
     assert "A planar or a mesh data set" in out and "planar data sets only" in out
 
 
 def test_every_sample_in_help_and_in_the_error_is_one_list(tmp_path):
     """`acquire planar --help` listed 5 samples, the error 7: both come from GENERATORS."""
     for command in (["acquire", "planar"], ["acquire", "mesh"], ["acquire", "photographs"]):
-        out = _flat(runner.invoke(app, [*command, "--help"], env={"COLUMNS": "400"}).output)
+        out = flat(runner.invoke(app, [*command, "--help"], env={"COLUMNS": "400"}).output)
         assert ", ".join(GENERATORS) in out, command
     line = error_line(["acquire", "planar", "--material", "wood", "--out", tmp_path / "w.zarr"])
     assert ", ".join(GENERATORS) in line

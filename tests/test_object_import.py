@@ -7,7 +7,6 @@ Every truth here is independent of the code under test: the hemisphere integral 
 """
 
 import json
-import re
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -16,6 +15,7 @@ import pytest
 import trimesh
 from typer.testing import CliRunner
 
+from helpers import error_line, flat
 from translucency._validate import TranslucencyError
 from translucency.cli.app import app
 from translucency.fit.mesh import read_pairs
@@ -383,19 +383,6 @@ def test_import_variance_matches_the_scatter_of_two_imports(tmp_path):
 # -- 5. bad input, one line each ---------------------------------------------------------------------------
 
 
-def _flat(text):
-    return " ".join(re.sub(r"[│╭╮╰╯─]", " ", text).split())
-
-
-def error_line(args) -> str:
-    """The one ``error:`` line of a refused command (exit status 2), no traceback."""
-    res = runner.invoke(app, [str(a) for a in args], env={"COLUMNS": "400"})
-    lines = [ln for ln in res.output.splitlines() if ln.startswith("error:")]
-    assert res.exit_code == 2 and len(lines) == 1, res.output
-    assert "Traceback" not in res.output and isinstance(res.exception, (SystemExit, type(None)))
-    return lines[0]
-
-
 @pytest.fixture(scope="module")
 def base_rig(tmp_path_factory):
     return write_rig(tmp_path_factory.mktemp("base"))
@@ -475,7 +462,7 @@ CASES = {
 def test_bad_rig_is_refused_in_one_line(base_rig, tmp_path, case):
     edit, words = CASES[case]
     path = _variant(base_rig, case.replace(" ", "_"), edit)
-    line = _flat(error_line(["import", "object", path, "--out", tmp_path / "x.zarr", "--quiet"]))
+    line = flat(error_line(["import", "object", path, "--out", tmp_path / "x.zarr", "--quiet"]))
     for w in words:
         assert w in line, line
     assert "--scale" not in line, line  # a rig file's key, not a flag of this command
@@ -485,7 +472,7 @@ def test_bad_rig_is_refused_in_one_line(base_rig, tmp_path, case):
 @pytest.mark.parametrize("kind", ["size", "nan"])
 def test_bad_photograph_is_refused_in_one_line(base_rig, tmp_path, kind):
     path = _variant(base_rig, f"image_{kind}", _bad_image(base_rig, kind))
-    line = _flat(error_line(["import", "object", path, "--out", tmp_path / "x.zarr", "--quiet"]))
+    line = flat(error_line(["import", "object", path, "--out", tmp_path / "x.zarr", "--quiet"]))
     assert f"bad_{kind}.pfm" in line, line
     assert ("95 x 96" in line) if kind == "size" else ("non-finite" in line), line
 
@@ -498,5 +485,5 @@ def test_a_refused_import_leaves_no_output(base_rig, tmp_path):
 
 def test_rig_file_not_json_is_refused_in_one_line(tmp_path):
     (tmp_path / "object.json").write_text("{not json")
-    line = _flat(error_line(["import", "object", tmp_path, "--out", tmp_path / "x.zarr"]))
+    line = flat(error_line(["import", "object", tmp_path, "--out", tmp_path / "x.zarr"]))
     assert "object.json" in line and "not JSON" in line, line
