@@ -2,7 +2,8 @@
 
 Each case acquires a mesh per vertex, fits the isotropic model and renders it beside the mean of two
 independent volpath renders (their noise measured; cached under ~/.cache/translucency), and prints the
-relative RMSE, FLIP, brightness and the error by region.  Meshes are the users' files, e.g.
+relative RMSE, FLIP, brightness and the error by region, once for each incidence law (``half-space``, the
+render's default, and ``normal``: :mod:`translucency.model.incidence`).  Meshes are the users' files, e.g.
 ``../shared/meshes``:
 
     python benchmarks/objects_table.py --meshes ../shared/meshes
@@ -25,6 +26,7 @@ from translucency.acquire.mesh import acquire_mesh, object_volume
 from translucency.fit.mesh import fit_mesh
 from translucency.io.mesh import load_mesh
 from translucency.mitsuba import mesh_scene
+from translucency.model.incidence import INCIDENCE_LAWS
 from translucency.render.camera import Camera
 from translucency.render.compare import compare, region_errors
 from translucency.render.lights import parse_light
@@ -62,26 +64,32 @@ def run_case(spec: str, meshes: Path, work: Path, spp: int, size) -> dict:
     camera = Camera.looking_at(mesh, [float(v) for v in view.split(",")], *size)
     mask = coverage(mesh, camera)
     scene = mesh_scene(mesh)
-    E = vertex_irradiance(mesh, scene, light)
-    ours = VertexPicture(mesh, camera, spp=16, light=light).draw(
-        relight_vertices(transport_matrices(fit.model, mesh), E)
-    )
+    T = transport_matrices(fit.model, mesh)
+    picture = VertexPicture(mesh, camera, spp=16, light=light)
     reference, info = converged_reference(mesh, volume, light, camera, mask, spp=spp)
-    cmp = compare(reference, ours, mask)
-    regions = region_errors(mesh, scene, camera, E, reference, ours, mask)
-    return {
+    row = {
         "case": name,
         "vertices": len(mesh.vertices),
         "extent_mm": float(np.linalg.norm(mesh.extents)),
-        "rel_rmse": cmp["rel_rmse"],
-        "flip": cmp["flip_mean_object"],
-        "brightness": float(ours[mask].mean() / reference[mask].mean()),
         "reference_noise": info["noise"],
         "reference_spp": spp,
         "acquire_fit_s": t_fit,
         "reference_s": info["seconds"],
-        "regions": {k: v["rel_rmse"] for k, v in regions.items()},
     }
+    # the render's default incidence law first, then the data's own normal incidence beside it
+    for law in INCIDENCE_LAWS:
+        E = vertex_irradiance(mesh, scene, light, incidence=T.incidence(law))
+        ours = picture.draw(relight_vertices(T, E))
+        cmp = compare(reference, ours, mask)
+        regions = region_errors(mesh, scene, camera, E, reference, ours, mask)
+        row[law] = {
+            "rel_rmse": cmp["rel_rmse"],
+            "flip": cmp["flip_mean_object"],
+            "brightness": float(ours[mask].mean() / reference[mask].mean()),
+            "regions": {k: v["rel_rmse"] for k, v in regions.items()},
+            "region_brightness": {k: v["brightness"] for k, v in regions.items()},
+        }
+    return row
 
 
 def main() -> int:
@@ -96,13 +104,18 @@ def main() -> int:
     for spec in args.case or CASES:
         row = run_case(spec, args.meshes, args.work, args.spp, tuple(args.size))
         rows.append(row)
-        worst = max(row["regions"].items(), key=lambda kv: kv[1] if np.isfinite(kv[1]) else -1)
-        print(
-            f"{row['case']:<28} rel RMSE {row['rel_rmse']:.3f}  FLIP {row['flip']:.3f}  brightness "
-            f"{row['brightness']:.3f}  reference noise {row['reference_noise']:.3f}  worst region {worst[0]} "
-            f"{worst[1]:.3f}",
-            flush=True,
-        )
+        for law in INCIDENCE_LAWS:
+            r = row[law]
+            worst = max(r["regions"].items(), key=lambda kv: kv[1] if np.isfinite(kv[1]) else -1)
+            print(
+                f"{row['case']:<28} {law:<10} rel RMSE {r['rel_rmse']:.3f}  FLIP {r['flip']:.3f}  brightness "
+                f"{r['brightness']:.3f}  reference noise {row['reference_noise']:.3f}  regions "
+                + " ".join(
+                    f"{k} {v:.3f} ({r['region_brightness'][k]:.2f}x)" for k, v in r["regions"].items()
+                )
+                + f"  (worst {worst[0]})",
+                flush=True,
+            )
     (args.work / "objects_table.json").write_text(json.dumps(rows, indent=2))
     print(f"written: {args.work / 'objects_table.json'}")
     return 0

@@ -70,6 +70,14 @@ def render(
         "hierarchical far field (default: the 99% energy radius, or less where the pairs would not fit in a "
         "quarter of --max-memory or of the machine's memory). A smaller radius lowers the memory.",
     ),
+    incidence: str = typer.Option(
+        "half-space",
+        "--incidence",
+        metavar="LAW",
+        help="How light arriving at an angle counts against the data's normal-incidence beams: 'half-space' "
+        "(Chandrasekhar's plane albedo per vertex from its measured total: oblique light comes back more; "
+        "index-matched objects) or 'normal' (every direction as measured).",
+    ),
     overwrite: bool = overwrite_option(),
     max_memory: str = max_memory_option(),
     quiet: bool = quiet_option(),
@@ -85,6 +93,10 @@ def render(
     from ..render.tonemap import parse_exposure
 
     check_option("--spp", spp, lo=1)
+    from ..model.incidence import INCIDENCE_LAWS  # numpy only
+
+    if incidence not in INCIDENCE_LAWS:
+        raise TranslucencyError(f"--incidence: {incidence!r} is not one of {', '.join(INCIDENCE_LAWS)}")
     chosen_exposure = parse_exposure(exposure, name="--exposure")
     relative = [parse_light(t) for t in light]  # the text checked; placed once the object is known
     if len(relative) > 1:
@@ -147,6 +159,7 @@ def render(
             radius=rad,
             eta=boundary_eta(dheader),
             exposure=chosen_exposure,
+            incidence=incidence,
             progress=lambda done, total, name: work.update(completed=done, total=total, item=name),
         )
         work.update(completed=steps, item="done")

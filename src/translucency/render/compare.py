@@ -52,7 +52,8 @@ def region_errors(
     Regions (pixels of the object; vertex properties drawn through the camera):
     ``thin`` (< 10 mm through the object along the normal), ``thick`` (> 25 mm), ``shadow edge``
     (vertices on either side of the lit/unlit boundary, one ring wide), ``unlit`` (no direct light),
-    ``silhouette`` (the outermost pixel ring of the object). Returns {region: {rel_rmse, pixels}}.
+    ``silhouette`` (the outermost pixel ring of the object). Returns {region: {rel_rmse, brightness,
+    pixels}}.
     """
     E = np.asarray(E, dtype=np.float64)
     lit = (E.sum(axis=1) if E.ndim == 2 else E) > 0
@@ -76,7 +77,12 @@ def region_errors(
         "silhouette": mask & ~binary_erosion(mask),
     }
     return {
-        name: {"rel_rmse": rel_rmse(ours, reference, sel), "pixels": int(sel.sum())}
+        name: {
+            "rel_rmse": rel_rmse(ours, reference, sel),
+            # the sign of the error: mean of ours over the reference's in the region (nan where empty)
+            "brightness": float(ours[sel].mean() / reference[sel].mean()) if sel.any() else float("nan"),
+            "pixels": int(sel.sum()),
+        }
         for name, sel in regions.items()
     }
 

@@ -41,6 +41,7 @@ def figure2(
     progress=None,
     exposure: Exposure | str = "fixed",
     name: str = "render",
+    incidence: str = "half-space",
 ) -> dict:
     """Render ``model`` on ``mesh`` under ``light``; with ``volume`` also the reference and the comparison.
 
@@ -51,6 +52,9 @@ def figure2(
     ``spp_reference`` samples each, with its noise measured and cached
     (:func:`translucency.render.reference.converged_reference`; ``reference_cache`` as there).
     ``progress(done, total, step)`` is called as each step begins (transport, light, picture, reference).
+    ``incidence``: how light arriving at an angle counts against the normal-incidence data
+    (:mod:`translucency.model.incidence`: ``half-space``, Chandrasekhar's plane albedo per vertex, or
+    ``normal``; a dielectric object or a model without measured totals gets ``normal``).
     ``exposure``: of the PNGs (:class:`~translucency.render.tonemap.Exposure` or its text: ``fixed``,
     ``fixed+STOPS``, ``auto``, a factor); the FLIP comparison tone-maps the pair at the reference's auto
     exposure whatever the pictures' (``flip_exposure`` in the summary where they differ).
@@ -78,7 +82,8 @@ def figure2(
     t_prepare = time.perf_counter() - t
     step(1, "irradiance and relight")
     t = time.perf_counter()
-    E = vertex_irradiance(mesh, scene, light, eta)
+    law = mats.incidence(incidence, eta)
+    E = vertex_irradiance(mesh, scene, light, eta, law)
     fresnel = exit_fresnel(mesh, camera.origin, eta)  # toward the camera (1 where η = 1)
     L = relight_vertices(mats, E) * fresnel[:, None]
     t_relight = time.perf_counter() - t
@@ -98,6 +103,7 @@ def figure2(
         "draw_s": t_draw,
         "light": repr(light),
         "eta": eta,
+        "incidence": law.name,
     }
     if volume is None:
         scale = _exposure(exposure, model, mesh, light, out, auto=lambda: auto_exposure(ours, mask))

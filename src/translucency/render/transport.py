@@ -31,6 +31,12 @@ angular shape of the transmission,
 :math:`L(\theta_o) = M\, F_t(\theta_o) / (\pi (1 - F_{dr,e}))`, normalised so
 that it integrates to M (:func:`exit_fresnel`).  Index-matched objects (η = 1)
 get neither factor.
+
+**Incidence.**  The data's beams arrive normally; light arriving at :math:`\theta_i` enters
+shallower and more of it comes back.  With an incidence law
+(:mod:`translucency.model.incidence`, ``half-space`` by default) each arriving direction is weighted
+by Chandrasekhar's :math:`F(\cos\theta_i; R_{1,v}) = R(\cos\theta_i)/R(1)` per vertex and channel,
+R_1 the vertex's measured total (:attr:`Transport.reflectance`), so the irradiance becomes (V, 3).
 """
 
 from __future__ import annotations
@@ -47,6 +53,7 @@ from .._validate import TranslucencyError, plain
 from ..geometry import tangent_frames, vertex_areas
 from ..mitsuba import drjit, load_plugin, mitsuba, rays
 from ..model.boundary import exit_factor, fresnel_transmittance
+from ..model.incidence import incidence_law
 from ._far_field import FarField, far_field_operator
 from .lights import EnvironmentLight, PointLight, SpotLight
 
@@ -60,18 +67,23 @@ def exit_fresnel(mesh, viewpoint, eta: float) -> np.ndarray:
     return exit_factor(cos_o, eta)
 
 
-def vertex_irradiance(mesh, scene, light, eta: float = 1.0) -> np.ndarray:
+def vertex_irradiance(mesh, scene, light, eta: float = 1.0, incidence=None) -> np.ndarray:
     r"""Irradiance E (W/mm²) at every vertex, with shadows (Mitsuba ``ray_test``).
 
-    (V,) for the grey lights, (V, 3) for an environment map.  With ``eta`` ≠ 1
+    (V,) for the grey lights, (V, 3) for an environment map or with an incidence law.  With ``eta`` ≠ 1
     each arriving direction is weighted by :math:`F_t(\theta_i)/F_t(0)` (module docstring).
+    ``incidence`` (:class:`~translucency.model.incidence.HalfSpaceIncidence`, or None / ``NormalIncidence``:
+    none) weights each arriving direction by how much more a point sends back of light arriving at
+    :math:`\theta_i` than of the normal incidence its data were measured with, per channel: the
+    *effective* irradiance :math:`\int L V \cos\theta_i\, F_v(\cos\theta_i)\, d\omega`
+    (:mod:`translucency.model.incidence`).
     Raises a one-line error for a point light inside the object.
     """
     mi = mitsuba()
     v = np.asarray(mesh.vertices, dtype=np.float64)
     n = np.asarray(mesh.vertex_normals, dtype=np.float64)
     if isinstance(light, EnvironmentLight):
-        return _environment_irradiance(mi, mesh, scene, light, eta)
+        return _environment_irradiance(mi, mesh, scene, light, eta, incidence)
     if isinstance(light, (PointLight, SpotLight)):
         p = np.asarray(light.position, dtype=np.float64)
         # inside a closed, outward-oriented surface a ray first meets a face from its back
@@ -101,16 +113,20 @@ def vertex_irradiance(mesh, scene, light, eta: float = 1.0) -> np.ndarray:
     eps = 1e-4 * float(np.max(mesh.extents))
     o = v + n * eps * 5
     blocked = np.asarray(scene.ray_test(rays(o, w, t_max - 10 * eps)))
-    E = E * fresnel_transmittance(np.einsum("vk,vk->v", w, n), eta) / fresnel_transmittance(1.0, eta)
-    return np.where(blocked | (E <= 0), 0.0, E)
+    cos_i = np.einsum("vk,vk->v", w, n)
+    E = E * fresnel_transmittance(cos_i, eta) / fresnel_transmittance(1.0, eta)
+    E = np.where(blocked | (E <= 0), 0.0, E)
+    F = None if incidence is None else incidence.factor(cos_i)  # (V, 3) or None
+    return E if F is None else E[:, None] * F
 
 
-def _environment_irradiance(mi, mesh, scene, light: EnvironmentLight, eta: float) -> np.ndarray:
-    r"""Estimate :math:`E = \int L(\omega) V(\omega) \cos\theta\, d\omega` with K rays per vertex.
+def _environment_irradiance(mi, mesh, scene, light: EnvironmentLight, eta: float, incidence) -> np.ndarray:
+    r"""Estimate :math:`E = \int L(\omega) V(\omega) \cos\theta\, F(\cos\theta)\, d\omega` with K rays
+    per vertex (F: the incidence law's factor, 1 without one).
 
-    Constant sky: cosine-weighted directions, :math:`E \approx \pi L \langle V \rangle`.
+    Constant sky: cosine-weighted directions, :math:`E \approx \pi L \langle V F \rangle`.
     Map: directions drawn by the ``envmap`` emitter in proportion to its luminance,
-    :math:`E \approx \langle (L/p)\, V \cos^+\theta \rangle` (RGB).
+    :math:`E \approx \langle (L/p)\, V \cos^+\theta\, F \rangle` (RGB).
     """
     v = np.asarray(mesh.vertices, dtype=np.float64)
     n = np.asarray(mesh.vertex_normals, dtype=np.float64)
@@ -140,7 +156,11 @@ def _environment_irradiance(mi, mesh, scene, light: EnvironmentLight, eta: float
     weight = (
         weight * (open_sky * fresnel_transmittance(cos_i, eta) / fresnel_transmittance(1.0, eta))[:, None]
     )
-    E = weight.reshape(len(v), K, -1).mean(axis=1)
+    weight = weight.reshape(len(v), K, -1)
+    F = None if incidence is None else incidence.factor(cos_i.reshape(len(v), K))  # (V, K, 3)
+    if F is not None:
+        return (weight * F).mean(axis=1)
+    E = weight.mean(axis=1)
     return E[:, 0] if light.filename is None else E
 
 
@@ -417,6 +437,7 @@ def transport_matrices(
         scale=None if scale is None else scale.astype(np.float32),
         own=(area[:, None] / np.pi * own).astype(np.float32),
         far=far,
+        reflectance=total,
     )
 
 
@@ -461,6 +482,11 @@ class Transport:
     scale: np.ndarray | None = None  # (V, 3) colour scale of the incident vertex (one matrix)
     own: np.ndarray | None = None  # (V, 3) A_i own_i / π: each vertex's own area, per channel (measured)
     far: FarField | None = None  # the pairs beyond the near radius (None: truncated, or none there)
+    reflectance: np.ndarray | None = None  # (V, 3) measured normal-incidence total reflectance, blended
+
+    def incidence(self, name: str = "half-space", eta: float = 1.0):
+        """The incidence law ``name`` for this object (:func:`translucency.model.incidence.incidence_law`)."""
+        return incidence_law(name, self.reflectance, eta)
 
     @property
     def nnz(self) -> int:

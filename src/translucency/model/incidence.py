@@ -1,0 +1,216 @@
+r"""How much of the light arriving at an angle a translucent body sends back: the incidence law.
+
+Data acquired with normally incident beams (the virtual DISCO, ``acquire mesh``, a lab's laser) measure
+each point's total diffuse reflectance at :math:`\mu_0 = \cos\theta_i = 1` only.  Light that arrives
+obliquely enters shallower and more of it comes back out: under a sky, where most light is oblique, a
+normal-incidence tally is too dark (skin: about 10 %), and a grazing point light on a curved flank too.
+
+For a semi-infinite medium behind an index-matched boundary with isotropic scattering of albedo
+:math:`a` (for g ≠ 0 the reduced albedo :math:`a' = \sigma_s' / (\sigma_s' + \sigma_a)` by similarity),
+the total reflectance for incidence :math:`\mu_0` — Chandrasekhar's plane albedo — is exact:
+
+.. math:: R(\mu_0) = 1 - H(\mu_0)\, \sqrt{1 - a},
+
+with Chandrasekhar's H-function of isotropic scattering, the solution of
+
+.. math:: \frac{1}{H(\mu)} = \sqrt{1 - a} + \frac{a}{2} \int_0^1 \frac{x\, H(x)}{\mu + x}\, dx
+
+(Chandrasekhar 1960, *Radiative Transfer*, eq. V.(10)-(11); Bosma & de Rooij 1983 for this form).  A
+point whose normal-incidence reflectance :math:`R_1` was measured gets the albedo with
+:math:`R(1) = R_1`, and the light arriving at :math:`\mu_0` is weighted by
+
+.. math:: F(\mu_0; R_1) = R(\mu_0) / R(1),
+
+which is 1 at normal incidence, grows toward grazing, and keeps :math:`R(\mu_0) \le 1` (reflectance
+bounded).  The renderer applies F per vertex and channel to the irradiance
+(:func:`translucency.render.transport.vertex_irradiance`); it holds for index-matched objects only — a
+dielectric boundary's internal reflection changes the law, and there only the Fresnel transmittance's
+ratio is applied.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import lru_cache
+
+import numpy as np
+
+from .._validate import TranslucencyError
+
+#: Gauss–Legendre nodes of the H-function's integral on [0, 1]
+H_NODES = 32
+#: the table's albedos: 1 − a from 1e-8 to 0.999, log-spaced
+_EPS = np.logspace(-8.0, np.log10(0.999), 241)
+#: the table's cosines of incidence, even in √μ (H rises steeply from μ = 0)
+_MU = np.linspace(0.0, 1.0, 101) ** 2
+
+
+def _nodes():
+    x, w = np.polynomial.legendre.leggauss(H_NODES)
+    return 0.5 * (x + 1.0), 0.5 * w
+
+
+def chandrasekhar_h(mu, albedo) -> np.ndarray:
+    r"""Chandrasekhar's H-function of isotropic scattering, :math:`H(\mu; a)`.
+
+    Solves the integral equation of the module docstring at 32 Gauss–Legendre nodes by Newton's method
+    (batched over albedos; quadratic convergence even near the conservative limit a → 1, where the plain
+    iteration stalls) and evaluates it at ``mu`` by the equation itself (Nyström).
+
+    Parameters
+    ----------
+    mu : array_like
+        Cosines in [0, 1].
+    albedo : array_like
+        Single-scattering albedos in [0, 1]; broadcast against ``mu``.
+
+    Returns
+    -------
+    ndarray
+        H, ≥ 1; H(0) = 1.
+
+    Examples
+    --------
+    >>> float(chandrasekhar_h(1.0, 1.0).round(3))  # the conservative case: 2.9078 (Chandrasekhar's table)
+    2.908
+    """
+    mu, albedo = np.broadcast_arrays(np.asarray(mu, np.float64), np.asarray(albedo, np.float64))
+    flat_a = albedo.ravel()
+    unique, inverse = np.unique(flat_a, return_inverse=True)
+    x, w = _nodes()
+    h = _h_at_nodes(unique)  # (A, N)
+    s = np.sqrt(np.maximum(1.0 - unique, 0.0))[inverse]
+    integral = 0.5 * unique[inverse, None] * (w * x * h[inverse]) / (mu.ravel()[:, None] + x)
+    return (1.0 / (s + integral.sum(axis=1))).reshape(mu.shape)
+
+
+def _h_at_nodes(albedo: np.ndarray) -> np.ndarray:
+    r"""H at the nodes for each albedo (A, N).
+
+    Newton on :math:`G_i(h) = h_i (s + \tfrac{a}{2}\sum_j M_{ij} h_j) - 1`, :math:`s = \sqrt{1-a}`.
+    """
+    x, w = _nodes()
+    M = w * x / (x[:, None] + x)  # M_ij = w_j x_j / (x_i + x_j)
+    a = albedo[:, None]
+    s = np.sqrt(np.maximum(1.0 - albedo, 0.0))[:, None]
+    h = (1.0 + 2.0 * x) / (1.0 + 2.0 * x * s)  # Hapke's approximation as the start
+    eye = np.eye(len(x))
+    for _ in range(60):
+        Mh = h @ M.T  # (A, N): Σ_j M_ij h_j
+        G = h * (s + 0.5 * a * Mh) - 1.0
+        if np.max(np.abs(G)) < 1e-13:
+            break
+        J = eye * (s + 0.5 * a * Mh)[:, :, None] + 0.5 * a[:, :, None] * h[:, :, None] * M
+        h = h - np.linalg.solve(J, G[:, :, None])[:, :, 0]
+    return h
+
+
+def plane_albedo(mu, albedo) -> np.ndarray:
+    r""":math:`R(\mu_0) = 1 - H(\mu_0; a) \sqrt{1-a}`: a half-space's total diffuse reflectance for light
+    incident at :math:`\mu_0` (index-matched boundary, isotropic scattering).
+
+    Examples
+    --------
+    >>> float(plane_albedo(1.0, 0.958).round(4))  # iadpython's adding-doubling gives 0.5635
+    0.5636
+    """
+    albedo = np.asarray(albedo, np.float64)
+    return 1.0 - chandrasekhar_h(mu, albedo) * np.sqrt(np.maximum(1.0 - albedo, 0.0))
+
+
+@lru_cache(maxsize=1)
+def _table():
+    """R(1) on the albedo grid (increasing as 1 − a falls) and F(μ; a) = R(μ)/R(1) on the grid (A, M)."""
+    a = 1.0 - _EPS
+    R = plane_albedo(_MU[None, :], a[:, None])  # (A, M)
+    return R[:, -1], R / R[:, -1:]
+
+
+def incidence_factor(mu, reflectance) -> np.ndarray:
+    r""":math:`F(\mu_0; R_1) = R(\mu_0)/R(1)` for a point whose normal-incidence total reflectance is R_1.
+
+    The albedo comes from inverting :math:`R(1) = R_1` (monotone); both steps interpolate a table over
+    1 − a (log-spaced, 10⁻⁸ … 0.999) and √μ (101 steps), accurate to 10⁻³.  R_1 is clipped to the
+    table's range (0.0005 … 0.9998); μ ≤ 0 (light from behind the tangent plane) gives 0.
+
+    Parameters
+    ----------
+    mu : array_like
+        Cosines of incidence.
+    reflectance : array_like
+        R_1 (dimensionless, in [0, 1)), broadcast against ``mu``.
+
+    Examples
+    --------
+    >>> f = incidence_factor([1.0, 0.5, 0.1], 0.5636)  # skin's blue: a = 0.958
+    >>> [round(float(v), 2) for v in f]
+    [1.0, 1.16, 1.34]
+    """
+    mu, R1 = np.broadcast_arrays(np.asarray(mu, np.float64), np.asarray(reflectance, np.float64))
+    R_normal, F = _table()
+    log_eps = np.log(_EPS)
+    # albedo (as log(1 − a)) from R_1: R_normal falls as log(1 − a) grows
+    q = np.interp(np.clip(R1, R_normal[-1], R_normal[0]), R_normal[::-1], log_eps[::-1])
+    # bilinear in (log(1 − a), √μ)
+    fa = np.clip((q - log_eps[0]) / (log_eps[1] - log_eps[0]), 0.0, len(_EPS) - 1.000001)
+    fm = np.sqrt(np.clip(mu, 0.0, 1.0)) * (len(_MU) - 1)
+    fm = np.minimum(fm, len(_MU) - 1.000001)
+    ia, im = fa.astype(int), fm.astype(int)
+    ta, tm = fa - ia, fm - im
+    out = (
+        (1 - ta) * (1 - tm) * F[ia, im]
+        + (1 - ta) * tm * F[ia, im + 1]
+        + ta * (1 - tm) * F[ia + 1, im]
+        + ta * tm * F[ia + 1, im + 1]
+    )
+    return np.where(mu > 0, out, 0.0)
+
+
+@dataclass(frozen=True)
+class NormalIncidence:
+    """The data's own law: every direction counts as the normal incidence the data were measured with."""
+
+    name = "normal"
+
+    def factor(self, cos_i: np.ndarray) -> np.ndarray | None:
+        """None: no factor (the irradiance stays as it is)."""
+        return None
+
+
+@dataclass(frozen=True)
+class HalfSpaceIncidence:
+    r"""Chandrasekhar's plane albedo per vertex: light arriving at :math:`\mu_0` weighted by
+    :math:`F(\mu_0; R_{1,v})` (module docstring), with R_1 the vertex's measured normal-incidence total.
+
+    Parameters
+    ----------
+    reflectance : ndarray, shape (V, 3)
+        Each vertex's normal-incidence total diffuse reflectance per channel.
+    """
+
+    reflectance: np.ndarray
+    name = "half-space"
+
+    def factor(self, cos_i: np.ndarray) -> np.ndarray:
+        """F per vertex and channel for cosines ``cos_i`` of shape (V,) or (V, K): (V, 3) or (V, K, 3)."""
+        cos_i = np.asarray(cos_i, np.float64)
+        R1 = self.reflectance if cos_i.ndim == 1 else self.reflectance[:, None, :]
+        return incidence_factor(cos_i[..., None], R1)
+
+
+#: the incidence laws by the name ``render --incidence`` takes
+INCIDENCE_LAWS = ("half-space", "normal")
+
+
+def incidence_law(name: str, reflectance, eta: float = 1.0):
+    """The law ``name`` (:data:`INCIDENCE_LAWS`) for an object with per-vertex normal-incidence totals
+    ``reflectance`` (V, 3) behind a boundary of index ``eta``.
+
+    ``half-space`` needs the totals and an index-matched boundary; where either is missing the law is
+    :class:`NormalIncidence` (a dielectric object keeps the Fresnel transmittance's ratio alone).
+    """
+    if name not in INCIDENCE_LAWS:
+        raise TranslucencyError(f"incidence: {name!r} is not one of {', '.join(INCIDENCE_LAWS)}")
+    if name == "normal" or reflectance is None or eta != 1.0:
+        return NormalIncidence()
+    return HalfSpaceIncidence(np.asarray(reflectance, np.float64))
