@@ -3,7 +3,8 @@
 Each case acquires a mesh per vertex, fits the isotropic model and renders it beside the mean of two
 independent volpath renders (their noise measured; cached under ~/.cache/translucency), and prints the
 relative RMSE, FLIP, brightness and the error by region, once for each incidence law (``half-space``, the
-render's default, and ``normal``: :mod:`translucency.model.incidence`).  Meshes are the users' files, e.g.
+render's default, in and out; ``half-space-in``, the irradiance only; ``normal``, the data's own:
+:mod:`translucency.model.incidence`).  Meshes are the users' files, e.g.
 ``../shared/meshes``:
 
     python benchmarks/objects_table.py --meshes ../shared/meshes
@@ -32,7 +33,12 @@ from translucency.render.compare import compare, region_errors
 from translucency.render.lights import parse_light
 from translucency.render.picture import VertexPicture, coverage
 from translucency.render.reference import converged_reference
-from translucency.render.transport import relight_vertices, transport_matrices, vertex_irradiance
+from translucency.render.transport import (
+    relight_vertices,
+    transport_matrices,
+    vertex_irradiance,
+    view_cosines,
+)
 
 CASES = [
     "cow-skin-spot:cow.obj:8:z:skin:128:4000:spot:-60,70,90,0,0,0,25,3e4:-1,1.2,0.6",
@@ -77,12 +83,16 @@ def run_case(spec: str, meshes: Path, work: Path, spp: int, size) -> dict:
         "reference_s": info["seconds"],
     }
     # the render's default incidence law first, then the data's own normal incidence beside it
-    for law in INCIDENCE_LAWS:
-        E = vertex_irradiance(mesh, scene, light, incidence=T.incidence(law))
-        ours = picture.draw(relight_vertices(T, E))
+    cos_o = view_cosines(mesh, camera.origin)
+    for name_of_law in INCIDENCE_LAWS:
+        law = T.incidence(name_of_law)
+        E = vertex_irradiance(mesh, scene, light, incidence=law)
+        L = relight_vertices(T, E)
+        exit_law = law.exit(cos_o)
+        ours = picture.draw(L if exit_law is None else L * exit_law)
         cmp = compare(reference, ours, mask)
         regions = region_errors(mesh, scene, camera, E, reference, ours, mask)
-        row[law] = {
+        row[name_of_law] = {
             "rel_rmse": cmp["rel_rmse"],
             "flip": cmp["flip_mean_object"],
             "brightness": float(ours[mask].mean() / reference[mask].mean()),
@@ -110,9 +120,7 @@ def main() -> int:
             print(
                 f"{row['case']:<28} {law:<10} rel RMSE {r['rel_rmse']:.3f}  FLIP {r['flip']:.3f}  brightness "
                 f"{r['brightness']:.3f}  reference noise {row['reference_noise']:.3f}  regions "
-                + " ".join(
-                    f"{k} {v:.3f} ({r['region_brightness'][k]:.2f}x)" for k, v in r["regions"].items()
-                )
+                + " ".join(f"{k} {v:.3f} ({r['region_brightness'][k]:.2f}x)" for k, v in r["regions"].items())
                 + f"  (worst {worst[0]})",
                 flush=True,
             )

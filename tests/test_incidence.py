@@ -14,6 +14,7 @@ from translucency.model.incidence import (
     HalfSpaceIncidence,
     NormalIncidence,
     chandrasekhar_h,
+    cosine_mean,
     incidence_factor,
     incidence_law,
     plane_albedo,
@@ -128,5 +129,32 @@ def test_law_choice_and_bad_names():
     assert isinstance(incidence_law("half-space", R1, 1.4), NormalIncidence)
     assert isinstance(incidence_law("half-space", None, 1.0), NormalIncidence)
     assert isinstance(incidence_law("normal", R1, 1.0), NormalIncidence)
-    with pytest.raises(TranslucencyError, match="incidence: 'oblique' is not one of half-space, normal"):
+    with pytest.raises(TranslucencyError, match="'oblique' is not one of half-space, half-space-in, normal"):
         incidence_law("oblique", R1)
+
+
+def test_exit_side_is_reciprocal_and_keeps_the_exitance():
+    """The exit factor F(μ_o)/⟨F⟩ integrates to 1 over the hemisphere (2∫ f μ dμ = 1: the exitance is kept),
+    and under a uniform sky gives exactly the half-space's reflected radiance L R(μ_o) = L R₁ F(μ_o)
+    (reciprocity); the irradiance-only ablation has no exit factor."""
+    R1 = np.array([[0.73, 0.56, 0.47], [0.9, 0.3, 0.05]])
+    law = HalfSpaceIncidence(R1)
+    x, w = _gauss(96)
+    f = np.stack([law.exit(np.full(2, mu)) for mu in x])  # (K, V, 3)
+    np.testing.assert_allclose(2 * np.einsum("k,kvc->vc", w * x, f), 1.0, atol=2e-3)
+    # under a uniform sky L: exitance M = R₁ · π L ⟨F⟩, so π L_out = M f must be π L R(μ_o)
+    mu = np.array([0.9, 0.2])
+    M = R1 * np.pi * cosine_mean(R1)
+    a = [[float(_albedo_of(r)) for r in row] for row in R1]
+    np.testing.assert_allclose(M * law.exit(mu) / np.pi, plane_albedo(mu[:, None], np.array(a)), rtol=3e-3)
+    assert HalfSpaceIncidence(R1, both_ways=False).exit(mu) is None and NormalIncidence().exit(mu) is None
+    assert incidence_law("half-space-in", R1).name == "half-space-in"
+
+
+def _albedo_of(R1: float) -> float:
+    """The albedo whose normal-incidence plane albedo is R1 (bisection on the closed form)."""
+    lo, hi = 0.0, 1.0
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if float(plane_albedo(1.0, mid)) < R1 else (lo, mid)
+    return 0.5 * (lo + hi)

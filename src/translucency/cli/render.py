@@ -75,8 +75,9 @@ def render(
         "--incidence",
         metavar="LAW",
         help="How light arriving at an angle counts against the data's normal-incidence beams: 'half-space' "
-        "(Chandrasekhar's plane albedo per vertex from its measured total: oblique light comes back more; "
-        "index-matched objects) or 'normal' (every direction as measured).",
+        "(Chandrasekhar's plane albedo per vertex from its measured total: oblique light comes back more, "
+        "and by reciprocity leaves more toward oblique views; index-matched objects), 'half-space-in' (the "
+        "light in only, a Lambertian exit) or 'normal' (every direction as measured).",
     ),
     overwrite: bool = overwrite_option(),
     max_memory: str = max_memory_option(),

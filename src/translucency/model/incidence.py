@@ -166,9 +166,18 @@ def incidence_factor(mu, reflectance) -> np.ndarray:
     return np.where(mu > 0, out, 0.0)
 
 
+def cosine_mean(reflectance) -> np.ndarray:
+    r""":math:`\langle F \rangle = 2 \int_0^1 F(\mu; R_1)\, \mu\, d\mu`: how much more a point sends back
+    under a uniform sky than its normal-incidence total says (32-point Gauss–Legendre)."""
+    x, w = _nodes()
+    R1 = np.asarray(reflectance, np.float64)
+    return 2.0 * np.einsum("k,...k->...", w * x, incidence_factor(x, R1[..., None]))
+
+
 @dataclass(frozen=True)
 class NormalIncidence:
-    """The data's own law: every direction counts as the normal incidence the data were measured with."""
+    """The data's own law: every direction counts as the normal incidence the data were measured with,
+    and the exit is Lambertian."""
 
     name = "normal"
 
@@ -176,20 +185,42 @@ class NormalIncidence:
         """None: no factor (the irradiance stays as it is)."""
         return None
 
+    def exit(self, cos_o: np.ndarray) -> np.ndarray | None:
+        """None: a Lambertian exit (π L = M)."""
+        return None
+
 
 @dataclass(frozen=True)
 class HalfSpaceIncidence:
     r"""Chandrasekhar's plane albedo per vertex: light arriving at :math:`\mu_0` weighted by
-    :math:`F(\mu_0; R_{1,v})` (module docstring), with R_1 the vertex's measured normal-incidence total.
+    :math:`F(\mu_0; R_{1,v})` (module docstring), with R_1 the vertex's measured normal-incidence total;
+    with ``both_ways`` the exit too, by reciprocity.
+
+    **Exit.**  The diffuse transport is reciprocal, :math:`S(x_i, \omega_i; x_o, \omega_o) =
+    S(x_o, \omega_o; x_i, \omega_i)`: a boundary that takes in :math:`F(\mu_i)` more of oblique light
+    sends out :math:`F(\mu_o)` more toward oblique views.  Under a uniform sky of radiance L a half-space
+    reflects exactly :math:`L\, R(\mu_o)` toward :math:`\mu_o`; the exit factor that gives this and keeps
+    the exitance M is
+
+    .. math:: \frac{\pi L(\mu_o)}{M} = \frac{F(\mu_o; R_1)}{\langle F \rangle}, \qquad
+              \langle F \rangle = 2 \int_0^1 F(\mu)\, \mu\, d\mu
+
+    (:func:`cosine_mean`): the limb brightens, a face-on view darkens by :math:`1/\langle F\rangle`.
 
     Parameters
     ----------
     reflectance : ndarray, shape (V, 3)
         Each vertex's normal-incidence total diffuse reflectance per channel.
+    both_ways : bool
+        Also the exit (default); False: the irradiance only (the ablation ``half-space-in``).
     """
 
     reflectance: np.ndarray
-    name = "half-space"
+    both_ways: bool = True
+
+    @property
+    def name(self) -> str:
+        return "half-space" if self.both_ways else "half-space-in"
 
     def factor(self, cos_i: np.ndarray) -> np.ndarray:
         """F per vertex and channel for cosines ``cos_i`` of shape (V,) or (V, K): (V, 3) or (V, K, 3)."""
@@ -197,20 +228,30 @@ class HalfSpaceIncidence:
         R1 = self.reflectance if cos_i.ndim == 1 else self.reflectance[:, None, :]
         return incidence_factor(cos_i[..., None], R1)
 
+    def exit(self, cos_o: np.ndarray) -> np.ndarray | None:
+        r""":math:`\pi L / M = F(\mu_o)/\langle F\rangle` per vertex and channel (V, 3) toward views at
+        ``cos_o`` (V,) (clipped to ≥ 10⁻³: a vertex seen edge-on is drawn with the grazing value);
+        None without ``both_ways``."""
+        if not self.both_ways:
+            return None
+        mu = np.clip(np.asarray(cos_o, np.float64), 1e-3, 1.0)
+        return incidence_factor(mu[:, None], self.reflectance) / cosine_mean(self.reflectance)
 
-#: the incidence laws by the name ``render --incidence`` takes
-INCIDENCE_LAWS = ("half-space", "normal")
+
+#: the incidence laws by the name ``render --incidence`` takes: the default, its ablation, the data's own
+INCIDENCE_LAWS = ("half-space", "half-space-in", "normal")
 
 
 def incidence_law(name: str, reflectance, eta: float = 1.0):
     """The law ``name`` (:data:`INCIDENCE_LAWS`) for an object with per-vertex normal-incidence totals
     ``reflectance`` (V, 3) behind a boundary of index ``eta``.
 
-    ``half-space`` needs the totals and an index-matched boundary; where either is missing the law is
-    :class:`NormalIncidence` (a dielectric object keeps the Fresnel transmittance's ratio alone).
+    ``half-space`` (in and out) and ``half-space-in`` (the irradiance only) need the totals and an
+    index-matched boundary; where either is missing the law is :class:`NormalIncidence` (a dielectric
+    object keeps the Fresnel transmittance's ratio alone).
     """
     if name not in INCIDENCE_LAWS:
         raise TranslucencyError(f"incidence: {name!r} is not one of {', '.join(INCIDENCE_LAWS)}")
     if name == "normal" or reflectance is None or eta != 1.0:
         return NormalIncidence()
-    return HalfSpaceIncidence(np.asarray(reflectance, np.float64))
+    return HalfSpaceIncidence(np.asarray(reflectance, np.float64), both_ways=name == "half-space")

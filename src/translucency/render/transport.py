@@ -58,13 +58,17 @@ from ._far_field import FarField, far_field_operator
 from .lights import EnvironmentLight, PointLight, SpotLight
 
 
+def view_cosines(mesh, viewpoint) -> np.ndarray:
+    r""":math:`\cos\theta_o` per vertex: its normal against the direction to ``viewpoint`` (mm)."""
+    to = np.asarray(viewpoint, dtype=np.float64) - np.asarray(mesh.vertices, dtype=np.float64)
+    return np.einsum("vk,vk->v", to, np.asarray(mesh.vertex_normals)) / np.linalg.norm(to, axis=1)
+
+
 def exit_fresnel(mesh, viewpoint, eta: float) -> np.ndarray:
     r"""Per-vertex factor :math:`F_t(\theta_o)/(1 - F_{dr,e})` toward ``viewpoint`` (1 where η = 1)."""
     if eta == 1.0:
         return np.ones(len(mesh.vertices))
-    to = np.asarray(viewpoint, dtype=np.float64) - np.asarray(mesh.vertices, dtype=np.float64)
-    cos_o = np.einsum("vk,vk->v", to, np.asarray(mesh.vertex_normals)) / np.linalg.norm(to, axis=1)
-    return exit_factor(cos_o, eta)
+    return exit_factor(view_cosines(mesh, viewpoint), eta)
 
 
 def vertex_irradiance(mesh, scene, light, eta: float = 1.0, incidence=None) -> np.ndarray:
