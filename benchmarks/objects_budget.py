@@ -49,6 +49,7 @@ from translucency.render.transport import (
     relight_vertices,
     transport_matrices,
     vertex_irradiance,
+    view_cosines,
 )
 
 CASE = "cow-skin-spot:cow.obj:8:z:skin:128:4000:spot:-60,70,90,0,0,0,25,3e4:-1,1.2,0.6"
@@ -121,6 +122,9 @@ def main() -> int:
     ap.add_argument("--spp", type=int, default=256, help="samples per pixel of each of the two references")
     ap.add_argument("--size", type=int, nargs=2, default=(128, 96))
     ap.add_argument("--work", type=Path, default=Path(tempfile.mkdtemp(prefix="objects_budget_")))
+    ap.add_argument(
+        "--incidence", default="half-space", help="the incidence law of every row (render --incidence)"
+    )
     args = ap.parse_args()
     args.work.mkdir(parents=True, exist_ok=True)
     name, file, scale, up, material, points, photons, kind, light, view = args.case.split(":")
@@ -133,7 +137,6 @@ def main() -> int:
     mask = coverage(mesh, camera)
     reference, info = converged_reference(mesh, volume, light, camera, mask, spp=args.spp)
     scene = mesh_scene(mesh)
-    E = vertex_irradiance(mesh, scene, light)
     picture = VertexPicture(mesh, camera, spp=16, light=light)
     area = vertex_areas(mesh)
 
@@ -152,7 +155,7 @@ def main() -> int:
     rows = []
 
     def row(label, L, what, pic=picture):
-        img = pic.draw(L)
+        img = pic.draw(L if exit_law is None else L * exit_law)
         cmp = compare(reference, img, mask)
         rows.append(
             {
@@ -173,6 +176,10 @@ def main() -> int:
     # the pipeline as `render` runs it
     fit = fit_mesh(acquire(P, N), "iso")
     model = fit.model
+    # every row under the same light in and out: the pipeline's incidence law (its measured totals)
+    law = transport_matrices(model, mesh).incidence(args.incidence)
+    E = vertex_irradiance(mesh, scene, light, incidence=law)
+    exit_law = law.exit(view_cosines(mesh, camera.origin))
     row("pipeline (render's default)", relight_vertices(transport_matrices(model, mesh), E), "all terms")
     saved = model.measured
     model.measured = None

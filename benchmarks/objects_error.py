@@ -22,13 +22,12 @@ from translucency.pipeline import FIGURE2_REFERENCE_SPP, figure2_scene
 from translucency.render.compare import compare
 from translucency.render.picture import VertexPicture, coverage
 from translucency.render.reference import converged_reference
-from translucency.render.transport import relight_vertices, transport_matrices, vertex_irradiance
+from translucency.render.transport import relight_object, transport_matrices
 
 
 def render(model, mesh, light, camera, scene):
-    T = transport_matrices(model, mesh)
-    E = vertex_irradiance(mesh, scene, light)
-    return VertexPicture(mesh, camera, spp=16).draw(relight_vertices(T, E))
+    L, _, _ = relight_object(transport_matrices(model, mesh), mesh, scene, light, camera.origin)
+    return VertexPicture(mesh, camera, spp=16).draw(L)
 
 
 def main() -> int:

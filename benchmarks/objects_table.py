@@ -33,12 +33,7 @@ from translucency.render.compare import compare, region_errors
 from translucency.render.lights import parse_light
 from translucency.render.picture import VertexPicture, coverage
 from translucency.render.reference import converged_reference
-from translucency.render.transport import (
-    relight_vertices,
-    transport_matrices,
-    vertex_irradiance,
-    view_cosines,
-)
+from translucency.render.transport import relight_object, transport_matrices
 
 CASES = [
     "cow-skin-spot:cow.obj:8:z:skin:128:4000:spot:-60,70,90,0,0,0,25,3e4:-1,1.2,0.6",
@@ -83,13 +78,9 @@ def run_case(spec: str, meshes: Path, work: Path, spp: int, size) -> dict:
         "reference_s": info["seconds"],
     }
     # the render's default incidence law first, then the data's own normal incidence beside it
-    cos_o = view_cosines(mesh, camera.origin)
     for name_of_law in INCIDENCE_LAWS:
-        law = T.incidence(name_of_law)
-        E = vertex_irradiance(mesh, scene, light, incidence=law)
-        L = relight_vertices(T, E)
-        exit_law = law.exit(cos_o)
-        ours = picture.draw(L if exit_law is None else L * exit_law)
+        L, E, _ = relight_object(T, mesh, scene, light, camera.origin, incidence=name_of_law)
+        ours = picture.draw(L)
         cmp = compare(reference, ours, mask)
         regions = region_errors(mesh, scene, camera, E, reference, ours, mask)
         row[name_of_law] = {

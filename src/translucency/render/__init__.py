@@ -14,7 +14,14 @@ from .object import boundary_eta, object_of_model, volume_of_dataset
 from .picture import VertexPicture, coverage, render_vertex_radiance
 from .reference import converged_reference, render_reference
 from .tonemap import save_images, tonemap
-from .transport import MAX_PAIRS, default_radius, relight_vertices, transport_matrices, vertex_irradiance
+from .transport import (
+    MAX_PAIRS,
+    default_radius,
+    relight_object,
+    relight_vertices,
+    transport_matrices,
+    vertex_irradiance,
+)
 
 __all__ = [
     "Camera",
@@ -38,6 +45,7 @@ __all__ = [
     "SpotLight",
     "PointLight",
     "parse_light",
+    "relight_object",
     "relight_vertices",
     "transport_matrices",
     "vertex_irradiance",

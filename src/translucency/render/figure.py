@@ -22,7 +22,7 @@ from .lights import DEFAULT_DISTANCE, Placement
 from .picture import VertexPicture, coverage
 from .reference import converged_reference
 from .tonemap import Exposure, auto_exposure, parse_exposure, save_images, tonemap
-from .transport import exit_fresnel, relight_vertices, transport_matrices, vertex_irradiance, view_cosines
+from .transport import relight_object, transport_matrices
 
 
 def figure2(
@@ -82,13 +82,7 @@ def figure2(
     t_prepare = time.perf_counter() - t
     step(1, "irradiance and relight")
     t = time.perf_counter()
-    law = mats.incidence(incidence, eta)
-    E = vertex_irradiance(mesh, scene, light, eta, law)
-    fresnel = exit_fresnel(mesh, camera.origin, eta)  # toward the camera (1 where η = 1)
-    L = relight_vertices(mats, E) * fresnel[:, None]
-    exit_law = law.exit(view_cosines(mesh, camera.origin))  # the incidence law's exit side (or None)
-    if exit_law is not None:
-        L = L * exit_law
+    L, E, law = relight_object(mats, mesh, scene, light, camera.origin, eta=eta, incidence=incidence)
     t_relight = time.perf_counter() - t
     step(2, "picture")
     t = time.perf_counter()

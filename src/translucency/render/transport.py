@@ -536,3 +536,31 @@ def relight_vertices(transport: Transport, E: np.ndarray) -> np.ndarray:
     if transport.far is not None:  # the pairs beyond the near radius, through the clusters
         out += transport.far.apply(X)
     return out
+
+
+def relight_object(
+    transport: Transport, mesh, scene, light, viewpoint, *, eta: float = 1.0, incidence: str = "half-space"
+):
+    r"""What the camera at ``viewpoint`` sees of every vertex under ``light``: radiance (V, 3), W/(mm² sr).
+
+    The whole chain once: the irradiance with shadows and the incidence law
+    (:func:`vertex_irradiance`, :mod:`translucency.model.incidence`), the transport
+    (:func:`relight_vertices`), the exit toward the camera — the boundary's Fresnel law
+    (:func:`exit_fresnel`, η ≠ 1) or the incidence law's reciprocal exit (η = 1).
+
+    Returns
+    -------
+    L : ndarray, shape (V, 3)
+    E : ndarray, shape (V,) or (V, 3)
+        The (effective) irradiance.
+    law : the incidence law used (its ``name`` goes into summaries).
+
+    Examples
+    --------
+    >>> L, E, law = relight_object(T, mesh, scene, light, camera.origin)  # doctest: +SKIP
+    """
+    law = transport.incidence(incidence, eta)
+    E = vertex_irradiance(mesh, scene, light, eta, law)
+    L = relight_vertices(transport, E) * exit_fresnel(mesh, viewpoint, eta)[:, None]
+    exit_law = law.exit(view_cosines(mesh, viewpoint))
+    return (L if exit_law is None else L * exit_law), E, law
