@@ -4,7 +4,8 @@ Each case acquires a mesh per vertex, fits the isotropic model and renders it be
 independent volpath renders (their noise measured; cached under ~/.cache/translucency), and prints the
 relative RMSE, FLIP, brightness and the error by region, once for each incidence law (``half-space``, the
 render's default, in and out; ``half-space-in``, the irradiance only; ``normal``, the data's own:
-:mod:`translucency.model.incidence`).  Meshes are the users' files, e.g.
+:mod:`translucency.model.incidence`), and the through-body extension beside them (``half-space+through``,
+:mod:`translucency.model.through`).  Meshes are the users' files, e.g.
 ``../shared/meshes``:
 
     python benchmarks/objects_table.py --meshes ../shared/meshes
@@ -77,9 +78,11 @@ def run_case(spec: str, meshes: Path, work: Path, spp: int, size) -> dict:
         "acquire_fit_s": t_fit,
         "reference_s": info["seconds"],
     }
-    # the render's default incidence law first, then the data's own normal incidence beside it
-    for name_of_law in INCIDENCE_LAWS:
-        L, E, _ = relight_object(T, mesh, scene, light, camera.origin, incidence=name_of_law)
+    # the paper's model under each incidence law, then the through-body extension (model/through.py)
+    variants = [(name_of_law, T, name_of_law) for name_of_law in INCIDENCE_LAWS]
+    variants.append(("half-space+through", transport_matrices(fit.model, mesh, through=True), "half-space"))
+    for name_of_law, transport, law in variants:
+        L, E, _ = relight_object(transport, mesh, scene, light, camera.origin, incidence=law)
         ours = picture.draw(L)
         cmp = compare(reference, ours, mask)
         regions = region_errors(mesh, scene, camera, E, reference, ours, mask)
@@ -105,7 +108,7 @@ def main() -> int:
     for spec in args.case or CASES:
         row = run_case(spec, args.meshes, args.work, args.spp, tuple(args.size))
         rows.append(row)
-        for law in INCIDENCE_LAWS:
+        for law in [*INCIDENCE_LAWS, "half-space+through"]:
             r = row[law]
             worst = max(r["regions"].items(), key=lambda kv: kv[1] if np.isfinite(kv[1]) else -1)
             print(

@@ -79,6 +79,12 @@ def render(
         "and by reciprocity leaves more toward oblique views; index-matched objects), 'half-space-in' (the "
         "light in only, a Lambertian exit) or 'normal' (every direction as measured).",
     ),
+    through: bool = typer.Option(
+        False,
+        "--through",
+        help="Use the model's through-body table (light between sides whose normals face apart, measured "
+        "against the fit): brighter back-lit objects, not better on every case (docs/objects.md).",
+    ),
     overwrite: bool = overwrite_option(),
     max_memory: str = max_memory_option(),
     quiet: bool = quiet_option(),
@@ -161,6 +167,7 @@ def render(
             eta=boundary_eta(dheader),
             exposure=chosen_exposure,
             incidence=incidence,
+            through=through,
             progress=lambda done, total, name: work.update(completed=done, total=total, item=name),
         )
         work.update(completed=steps, item="done")

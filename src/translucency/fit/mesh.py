@@ -225,6 +225,10 @@ def fit_mesh(
     # the model carries its surface and what was measured where the fit does not look (module docstring)
     result.model.faces = np.asarray(group["faces"][...], dtype=np.int64)
     result.model.measured = measured_near_field(ds, chunk_points)
+    # the light through the body, measured against the fitted profile (model/through.py): the extension
+    from .through import measure_through  # circular at the top: through.py reads pairs with read_pairs here
+
+    result.model.measured["through"] = measure_through(ds, result.model, exclusion=exclusion)
     # the photons per point: how far the physical bounds let a total exceed 1 by noise (model/bounds.py)
     result.model.tally_photons = int(header["photons"]) if header.get("photons") else None
     result.acquisition = header

@@ -13,6 +13,7 @@ Layout::
     mesh/faces            (F, 3) int32     mesh only, optional: the triangles (the model renders on its own)
     measured/own          (N, 3) float32   mesh only, optional: R_d over each incident vertex's own area, mm⁻²
     measured/total        (N, 3) float32   mesh only, optional: measured diffuse exitance per unit power
+    measured/through      (N, 4, 8, 3) f32 mesh only, optional: the through-body table (model/through.py)
     params/...            per kind (the model class's ``STORED``), dtype = header["dtype"]:
         exponential:  c, d (N, C, m, n) in mm⁻² and mm⁻¹; s_g, s_b (N,) when C = 1
         dipole, pbd, ddipole:  sigma_a, sigma_s_prime (N, 3) in mm⁻¹ (and ``eta`` in the header)
@@ -61,6 +62,7 @@ from .._version import __version__
 from ..model import MODEL_KINDS, PlanarAlpha, ReflectanceModel, VertexAlpha
 from ..model.bounds import check_physics
 from ..model.extent import extent_from_dict
+from ..model.through import COS_EDGES, R_EDGES
 from .atomic import atomic_path
 from .outputs import claim_output
 
@@ -78,6 +80,13 @@ class ModelFileError(TranslucencyError):
 
 
 # -- writing -------------------------------------------------------------------
+
+
+def _through_shape(model) -> tuple:
+    """The shape of a model's through-body table: (N, cos cells, r cells, 3)."""
+    return (model.n_points, len(COS_EDGES) - 1, len(R_EDGES) - 1, 3)
+
+
 def _model_arrays(model: ReflectanceModel, dtype: str, params: dict | None = None) -> dict[str, np.ndarray]:
     """Every array of the file, keyed by its path in the store, already cast."""
     if params is None:
@@ -336,11 +345,12 @@ def _attach_surface(model: ReflectanceModel, arrays: dict[str, np.ndarray]) -> N
         model.faces = faces.astype(np.int64)
     measured = {k.split("/", 1)[1]: v for k, v in arrays.items() if k.startswith("measured/")}
     if measured:
+        shapes = {"own": (model.n_points, 3), "total": (model.n_points, 3), "through": _through_shape(model)}
         for name, value in measured.items():
-            if name not in ("own", "total") or value.shape != (model.n_points, 3):
+            if name not in shapes or value.shape != shapes[name]:
                 raise TranslucencyError(
-                    f"measured/{name}: expected 'own' or 'total' of shape ({model.n_points}, 3), "
-                    f"got {value.shape}"
+                    f"measured/{name}: expected 'own' or 'total' of shape ({model.n_points}, 3) or 'through' "
+                    f"of shape {_through_shape(model)}, got {value.shape}"
                 )
             if not (np.isfinite(value).all() and (value >= 0).all()):
                 raise TranslucencyError(f"measured/{name}: values must be finite and >= 0")
@@ -425,7 +435,7 @@ def load_model(path) -> ReflectanceModel:
     required = _required(header)
     optional = [f"params/{p}" for p in MODEL_KINDS[header["kind"]].STORED if f"params/{p}" not in required]
     if header["geometry"] == "mesh":
-        optional += ["mesh/faces", "measured/own", "measured/total"]
+        optional += ["mesh/faces", "measured/own", "measured/total", "measured/through"]
     for key in required + optional:
         try:
             arr = root[key]

@@ -38,6 +38,7 @@ from numba import njit, prange
 from scipy.spatial import cKDTree
 
 from .._validate import TranslucencyError
+from ..model.through import through_factor
 
 #: opening criterion: a cluster of radius ρ at distance D is taken whole when ρ ≤ θ D
 THETA = 0.5
@@ -104,13 +105,16 @@ def default_clusters(V: int, surface: float, radius: float) -> int:
     return int(min(V, np.clip(K, 256, MAX_CLUSTERS)))
 
 
-def far_field_operator(model, *, v, area, alpha, weights, c, d, radius, surface, clusters=None):
+def far_field_operator(model, *, v, area, alpha, weights, c, d, radius, surface, clusters=None, through=None):
     r"""The far field of a transport with near radius ``radius`` (mm), before normalisation
     (:math:`b_i = A_i/\pi`); ``None`` when every pair of vertices lies within it.
 
     ``weights`` = (w, idx): each vertex's blend of incident points, ``c, d``: the blended profiles
     (V, C, T) (:func:`translucency.render.transport.vertex_parameters`), ``surface``: the mesh's area
-    (mm²), ``clusters``: K (default :func:`default_clusters`).
+    (mm²), ``clusters``: K (default :func:`default_clusters`).  ``through`` = (table (V, 4, 8, 3), normals
+    (V, 3)): the through-body table (:mod:`translucency.model.through`) at the cluster level — each
+    :math:`F_{OJ}` times cluster J's area-weighted mean table at the cosine between the seed's normal and
+    J's mean normal and at the distance from J's centroid; three channels then.
     """
     V = len(v)
     if clusters is not None and int(clusters) < 1:
@@ -155,6 +159,20 @@ def far_field_operator(model, *, v, area, alpha, weights, c, d, radius, surface,
             out=out,
         )
         F.append(out.astype(np.float32))
+    if through is not None:  # light through the body, cluster to seed
+        table, normals = through
+        n_J = np.stack([np.bincount(label, area * normals[:, j], K) for j in range(3)], 1)
+        n_J /= np.maximum(np.linalg.norm(n_J, axis=1, keepdims=True), 1e-12)
+        members = sp.csr_matrix((area, (label, np.arange(V))), shape=(K, V))  # A_i of J's members
+        t_J = (members @ table.reshape(V, -1)).reshape((K,) + table.shape[1:]) / area_J[:, None, None, None]
+        cos = (normals[seeds] @ n_J.T).ravel()  # (O, J)
+        dist = np.linalg.norm(p[:, None] - centroid[None], axis=2).ravel()
+        src = np.tile(np.arange(K), K)
+        F = [
+            F[min(ch, len(F) - 1)]
+            * through_factor(t_J[..., ch], src, cos, dist).reshape(K, K).astype(np.float32)
+            for ch in range(3)
+        ]
     B = sp.csr_matrix((area / np.pi, (label, np.arange(V))), shape=(K, V), dtype=np.float32)
     return FarField(
         W=mls_weights(v, p),

@@ -42,6 +42,7 @@ def figure2(
     exposure: Exposure | str = "fixed",
     name: str = "render",
     incidence: str = "half-space",
+    through: bool = False,
 ) -> dict:
     """Render ``model`` on ``mesh`` under ``light``; with ``volume`` also the reference and the comparison.
 
@@ -55,6 +56,8 @@ def figure2(
     ``incidence``: how light arriving at an angle counts against the normal-incidence data
     (:mod:`translucency.model.incidence`: ``half-space``, Chandrasekhar's plane albedo per vertex, or
     ``normal``; a dielectric object or a model without measured totals gets ``normal``).
+    ``through``: the model's through-body table in the transport (:mod:`translucency.model.through`; off:
+    the paper's model).
     ``exposure``: of the PNGs (:class:`~translucency.render.tonemap.Exposure` or its text: ``fixed``,
     ``fixed+STOPS``, ``auto``, a factor); the FLIP comparison tone-maps the pair at the reference's auto
     exposure whatever the pictures' (``flip_exposure`` in the summary where they differ).
@@ -77,7 +80,7 @@ def figure2(
     # the calls run down the stage once: transport, picture, reference, comparison, files
     step(0, "transport (once per object)")
     t = time.perf_counter()
-    mats = transport_matrices(model, mesh, radius=radius)
+    mats = transport_matrices(model, mesh, radius=radius, through=through)
     scene = mesh_scene(mesh)  # for shadow rays
     t_prepare = time.perf_counter() - t
     step(1, "irradiance and relight")
@@ -101,6 +104,7 @@ def figure2(
         "light": repr(light),
         "eta": eta,
         "incidence": law.name,
+        "through": bool(through and model.measured and "through" in model.measured),
     }
     if volume is None:
         scale = _exposure(exposure, model, mesh, light, out, auto=lambda: auto_exposure(ours, mask))

@@ -54,6 +54,7 @@ from ..geometry import tangent_frames, vertex_areas
 from ..mitsuba import drjit, load_plugin, mitsuba, rays
 from ..model.boundary import exit_factor, fresnel_transmittance
 from ..model.incidence import incidence_law
+from ..model.through import through_factor
 from ._far_field import FarField, far_field_operator
 from .lights import EnvironmentLight, PointLight, SpotLight
 
@@ -295,6 +296,7 @@ def transport_matrices(
     far_field: bool = True,
     clusters: int | None = None,
     balance_rows: bool = True,
+    through: bool = False,
 ):
     r"""The sparse transport T of the module docstring, as a :class:`Transport` (one matrix per
     channel, or one matrix and the colour scale for the shared-colour model).
@@ -328,6 +330,13 @@ def transport_matrices(
     :math:`T_{oi} = x_o\,K_{oi}\,y_i` is balanced by alternating the two scalings (Sinkhorn;
     ``BALANCE_STEPS``, the last step a column step so that every source's energy holds exactly;
     the row factors x within [1/2, 2]); the far field, smooth, takes the column factors only.
+
+    **Through the body** (``through``, a model whose fit measured the table
+    ``model.measured["through"]``, :mod:`translucency.model.through`).  Every pair's profile is multiplied
+    by the source's table at the pair's :math:`(n_i \cdot n_o, r)`, blended between incident points with
+    the profile weights, before the normalisations; the table is per channel, so the transport holds
+    three matrices even for a shared-colour model.  ``through=False`` (the default: the table does not win
+    on every case of the objects table, docs/objects.md) or a model without the table is the paper's model.
 
     **Far field.**  The pairs beyond ``radius`` are not dropped: ``far_field`` (default) adds them
     hierarchically (:mod:`translucency.render._far_field`: ``clusters`` source clusters, K², default
@@ -364,8 +373,16 @@ def transport_matrices(
         r_min = 0.5 * float(e.mean())
     r = np.maximum(r, r_min)
     alpha = model.alpha.values if len(model.alpha.values) == V else model.alpha.at(v)
+    # the through-body table blended to every vertex (V, 4, 8, 3), or None: the paper's model
+    table = None
+    if through and model.measured and "through" in model.measured:
+        w_b, idx_b = weights
+        table = np.einsum("vk,vkabc->vabc", w_b, model.measured["through"][idx_b])
     # shared colour (one fall-off, C = 1): T_λ = T · diag(s_λ) — one matrix, the scale goes with E
-    shared = c.shape[1] == 1
+    # (not with the through table: it is per channel)
+    shared = c.shape[1] == 1 and table is None
+    normals = np.asarray(mesh.vertex_normals, dtype=np.float64)
+    cos_io = np.einsum("mk,mk->m", normals[i], normals[o]) if table is not None else None
     # the pairs beyond rad: clusters and their K × K operator, b_i = A_i/π until normalised below
     far = (
         far_field_operator(
@@ -379,6 +396,7 @@ def transport_matrices(
             radius=rad,
             surface=float(mesh.area),
             clusters=clusters,
+            through=None if table is None else (table, normals),
         )
         if far_field
         else None
@@ -387,9 +405,11 @@ def transport_matrices(
     tau = None if own is None else np.maximum(total - area[:, None] * own, 0.0)
     mats = []
     for ch in range(1 if shared else 3):
-        cc, dd = c[:, ch], d[:, ch]
+        cc, dd = c[:, min(ch, c.shape[1] - 1)], d[:, min(ch, c.shape[1] - 1)]
         scale = 1.0 if shared else s[:, ch]
         prof = np.einsum("pn,pn->p", cc[i], np.exp(dd[i] * r[:, None])) * (scale if shared else scale[i])
+        if table is not None:  # light through the body: the source's table at (n_i · n_o, r)
+            prof = prof * through_factor(table[..., ch], i, cos_io, r)
         vals = area[i] / np.pi * alpha[o] * prof
         if own is None:
             # the light a vertex sends into its own area, at the profile's value at r_min like the
