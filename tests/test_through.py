@@ -101,8 +101,9 @@ def test_transport_with_the_table_keeps_every_sources_total(flat_box):
         paper = relight_vertices(transport_matrices(m, box), np.ones(len(box.vertices)))
     finally:
         m.measured["through"] = saved
-    # per channel the rows balance to each channel's own target, the shared matrix to their mean: ≲ 0.5 %
-    np.testing.assert_allclose(ones, paper, rtol=5e-3)
+    # per channel the rows balance to each channel's own target, the shared matrix to their mean: ≲ 1.2 %
+    np.testing.assert_allclose(ones, paper, rtol=0.02)
+    np.testing.assert_allclose(area @ ones, area @ paper, rtol=2e-3)
 
 
 def test_the_model_file_keeps_the_table(flat_box, tmp_path):
@@ -113,9 +114,11 @@ def test_the_model_file_keeps_the_table(flat_box, tmp_path):
     bad = fit.model
     saved = bad.measured["through"]
     bad.measured["through"] = saved[:, :2]
-    try:
-        save_model(bad, tmp_path / "bad.model.zip")
-        with pytest.raises(TranslucencyError, match="measured/through: expected"):
-            load_model(tmp_path / "bad.model.zip")
+    try:  # refused on the way out already, naming the array and both shapes
+        with pytest.raises(
+            TranslucencyError, match=r"measured/through: expected .* \(12, 4, 8, 3\), got \(12, 2"
+        ):
+            save_model(bad, tmp_path / "bad.model.zip")
+        assert not (tmp_path / "bad.model.zip").exists()
     finally:
         bad.measured["through"] = saved
