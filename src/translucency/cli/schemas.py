@@ -295,6 +295,12 @@ RENDER = record(
             "direction, target in mm; intensity W/sr, irradiance W/mm^2, radiance W/(mm^2 sr)).",
         ),
         "eta": field("number", "Relative index of refraction at the surface."),
+        "incidence": field(
+            "string",
+            "The incidence law used (half-space, half-space-in or normal: --incidence; normal where the "
+            "object is dielectric or the model carries no measured totals).",
+        ),
+        "through": field("boolean", "Whether the model's through-body table was used (--through)."),
         "rel_rmse": field(
             ["number", "null"], "Relative RMSE of ours against the reference (with --reference)."
         ),

@@ -228,7 +228,8 @@ def fit_mesh(
     # the light through the body, measured against the fitted profile (model/through.py): the extension
     from .through import measure_through  # circular at the top: through.py reads pairs with read_pairs here
 
-    result.model.measured["through"] = measure_through(ds, result.model, exclusion=exclusion)
+    if result.model.kind == "exponential":  # the paper's model (the baselines have no c, d to correct)
+        result.model.measured["through"] = measure_through(ds, result.model, exclusion=exclusion)
     # the photons per point: how far the physical bounds let a total exceed 1 by noise (model/bounds.py)
     result.model.tally_photons = int(header["photons"]) if header.get("photons") else None
     result.acquisition = header
