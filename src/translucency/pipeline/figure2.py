@@ -36,8 +36,13 @@ def run_figure2(
     spp: int = FIGURE2_REFERENCE_SPP,
     size=(160, 120),
     overwrite: bool = False,
+    extension_dir=None,
 ) -> dict:
     """Acquire the pig per vertex (index-matched, so that volpath can light it), fit, render, compare.
+
+    With ``extension_dir`` the same picture with the through-body extension
+    (:mod:`translucency.model.through`) is written there too (``figure2_through.png`` / ``.json``): the
+    paper's model stays Figure 2, the extension beside it.
 
     Writes the mesh data set to ``data_path`` (resumed, or reused, if it holds the same acquisition), the
     per-vertex model to ``model_path`` (replacing an earlier one with ``overwrite``) and Figure 2 into
@@ -64,7 +69,7 @@ def run_figure2(
         meta=fit.metadata(Path(data_path).resolve()),
     )
     # Figure 2 exposes its pair at the reference's own level (auto) and keeps its names
-    return figure2(
+    paper = figure2(
         fit.model,
         pig,
         light,
@@ -75,6 +80,20 @@ def run_figure2(
         exposure="auto",
         name="figure2",
     )
+    if extension_dir is not None:
+        figure2(
+            fit.model,
+            pig,
+            light,
+            extension_dir,
+            volume=volume,
+            camera=camera,
+            spp_reference=spp,
+            exposure="auto",
+            name="figure2_through",
+            through=True,
+        )
+    return paper
 
 
 def write_figure2_reference(folder=None, *, spp: int = FIGURE2_REFERENCE_SPP, size=(160, 120)) -> dict:

@@ -136,7 +136,8 @@ def figure2(
     save_images(reference, out_dir / "reference", scale)
     save_images(ours, out_dir / "ours", scale)
     ldr = tonemap(reference, scale), tonemap(ours, scale)
-    _plot(ldr, flip_map, mask, cmp, out_dir / f"{name}.png")
+    what = "fitted per-vertex model + through-body table" if out["through"] else "fitted per-vertex model"
+    _plot(ldr, flip_map, mask, cmp, out_dir / f"{name}.png", f"ours: {what}, sparse transport")
     write_json(out_dir / f"{name}.json", out)
     return out
 
@@ -176,7 +177,7 @@ def _exposure(exposure: Exposure, model, mesh, light, out: dict, auto) -> float:
     return scale
 
 
-def _plot(ldr, flip_map, mask, cmp, path) -> None:
+def _plot(ldr, flip_map, mask, cmp, path, title: str) -> None:
     """reference | ours | FLIP into ``path``; ``ldr``: the tone-mapped (reference, ours)."""
     plt = pyplot()
 
@@ -184,7 +185,7 @@ def _plot(ldr, flip_map, mask, cmp, path) -> None:
     ax[0].imshow(ldr[0])
     ax[0].set_title("reference: Mitsuba volpath of the volume", fontsize=9)
     ax[1].imshow(ldr[1])
-    ax[1].set_title("ours: fitted per-vertex model, sparse transport", fontsize=9)
+    ax[1].set_title(title, fontsize=9)
     im = ax[2].imshow(np.where(mask, flip_map, np.nan), cmap="magma", vmin=0, vmax=1)
     ax[2].set_title(
         f"FLIP (object mean {cmp['flip_mean_object']:.3f}); rel. RMSE {cmp['rel_rmse']:.2f}", fontsize=9
