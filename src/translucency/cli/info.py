@@ -82,6 +82,9 @@ def _model_record(path: Path) -> dict:
         object=physics.summary()["object"],
         beyond_object_max=float(np.max(physics.beyond)) if len(physics.beyond) else 0.0,
         beyond_object_bound=float(physics.beyond_bound),
+        # what the model carries beside the paper's parameters (the renderer's measured near field, the
+        # through-body table of model/through.py)
+        measured=sorted((model.measured or {}).keys()),
     )
     if model.geometry == "mesh":
         fields.update(object_bounds(model.alpha.vertices))
@@ -179,6 +182,14 @@ def _rows(fields: dict):
         ),
         *bounds,
     ]
+    if fields["measured"]:
+        rows.append(
+            (
+                "measured",
+                ", ".join(fields["measured"])
+                + (" (the through-body table: render --through)" if "through" in fields["measured"] else ""),
+            )
+        )
     return rows
 
 

@@ -394,6 +394,11 @@ INFO_MODEL = record(
             "number", "The largest share of a point's energy beyond the object's edge."
         ),
         "beyond_object_bound": field("number", "The share beyond the edge a physical point stays within."),
+        "measured": field(
+            "array",
+            "What a per-vertex model carries from its acquisition: own, total (the near field), through "
+            "(the through-body table, render --through); empty for planar models.",
+        ),
         **BOUNDS,
     },
     optional=(
@@ -411,6 +416,7 @@ INFO_MODEL = record(
         "object",
         "beyond_object_max",
         "beyond_object_bound",
+        "measured",
         *BOUNDS,
     ),
 )
