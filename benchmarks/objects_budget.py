@@ -177,10 +177,11 @@ def main() -> int:
     fit = fit_mesh(acquire(P, N), "iso")
     model = fit.model
     # every row under the same light in and out: the pipeline's incidence law (its measured totals)
-    law = transport_matrices(model, mesh).incidence(args.incidence)
+    T = transport_matrices(model, mesh)
+    law = T.incidence(args.incidence)
     E = vertex_irradiance(mesh, scene, light, incidence=law)
     exit_law = law.exit(view_cosines(mesh, camera.origin))
-    row("pipeline (render's default)", relight_vertices(transport_matrices(model, mesh), E), "all terms")
+    row("pipeline (render's default)", relight_vertices(T, E), "all terms")
     saved = model.measured
     model.measured = None
     row("  near field from the profile", relight_vertices(transport_matrices(model, mesh), E), "near field")

@@ -36,8 +36,8 @@ def main() -> int:
     area, inc = np.asarray(g["vertex_area"][...], float), np.asarray(g["incident"][...])
     R = np.asarray(g["R_d"][...], float)  # (P, V, 3)
     r = np.linalg.norm(v[None] - v[inc][:, None], axis=2)
-    prof = np.einsum("pn,pvn->pv", m.c[:, 0, 0], np.exp(m.d[:, 0, 0][:, None, :] * r[..., None]))
-    paper = prof[..., None] * m.colour_scale[:, None, :] * m.alpha.values[None, :, None]
+    i = np.broadcast_to(np.arange(len(inc))[:, None], r.shape)
+    paper = m.R_d(i, np.broadcast_to(v, r.shape + (3,)), alpha_o=np.broadcast_to(m.alpha.at(v), r.shape))
     cos = n[inc] @ n.T
     src = np.repeat(np.arange(len(inc)), len(v))
     k = np.stack(

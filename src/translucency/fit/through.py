@@ -41,21 +41,14 @@ def cell_energies(ds, model, *, exclusion: float | None = None, chunk_points: in
     Q = (len(COS_EDGES) - 1) * Br
     meas, mod = np.zeros((P, Q, 3)), np.zeros((P, Q, 3))
     x_i = v[incident]
-    alpha = model.alpha.values if len(model.alpha.values) == len(v) else model.alpha.at(v)
-    scale = model.colour_scale if model.c.shape[1] == 1 else np.ones((P, 3))
+    alpha_o = model.alpha.at(v)  # α per vertex (V,)
     for s in range(0, P, chunk_points):
-        y, r, valid = read_pairs(g, v, x_i, exclusion, s, min(s + chunk_points, P))
+        e = min(s + chunk_points, P)
+        y, r, valid = read_pairs(g, v, x_i, exclusion, s, e)
         k = len(y)
-        c, d = model.c[s : s + k, :, 0], model.d[s : s + k, :, 0]  # (k, C, n)
-        # the profile per channel (one shared fall-off, C = 1, or one per channel), (k, V, C)
-        prof = np.stack(
-            [
-                np.einsum("kn,kvn->kv", c[:, ch], np.exp(d[:, None, ch, :] * r[..., None]))
-                for ch in range(c.shape[1])
-            ],
-            axis=2,
-        )
-        R_model = prof * scale[s : s + k, None, :] * alpha[None, :, None]  # (k, V, 3) mm⁻²
+        # the model at the same pairs, α and the colour scale included (as the evaluation reads it)
+        i = np.broadcast_to(np.arange(s, e)[:, None], r.shape)
+        R_model = model.R_d(i, np.broadcast_to(v, (k, len(v), 3)), alpha_o=np.broadcast_to(alpha_o, r.shape))
         ic, ir = cells(n[incident[s : s + k]] @ n.T, r)
         for j in range(k):
             ok = valid[j]

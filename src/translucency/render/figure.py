@@ -104,7 +104,7 @@ def figure2(
         "light": repr(light),
         "eta": eta,
         "incidence": law.name,
-        "through": bool(through and model.measured and "through" in model.measured),
+        "through": mats.through,
     }
     if volume is None:
         scale = _exposure(exposure, model, mesh, light, out, auto=lambda: auto_exposure(ours, mask))

@@ -462,6 +462,7 @@ def transport_matrices(
         own=(area[:, None] / np.pi * own).astype(np.float32),
         far=far,
         reflectance=total,
+        through=table is not None,
     )
 
 
@@ -507,6 +508,7 @@ class Transport:
     own: np.ndarray | None = None  # (V, 3) A_i own_i / π: each vertex's own area, per channel (measured)
     far: FarField | None = None  # the pairs beyond the near radius (None: truncated, or none there)
     reflectance: np.ndarray | None = None  # (V, 3) measured normal-incidence total reflectance, blended
+    through: bool = False  # the model's through-body table is in the matrices (model/through.py)
 
     def incidence(self, name: str = "half-space", eta: float = 1.0):
         """The incidence law ``name`` for this object (:func:`translucency.model.incidence.incidence_law`)."""
