@@ -1,0 +1,152 @@
+r"""A fitted object in a scene: its per-vertex model, its mesh in the model's frame and in the scene's, its
+prepared transport, its boundary.
+
+The transport runs in the model's frame (mm, where :math:`R_d` was measured); the irradiance is gathered
+in the scene's frame at the same vertices (:class:`~translucency.scene.pose.Pose` carries one onto the
+other).  Per vertex the exitance is
+
+.. math:: M_v = \pi\,(T E)_v \qquad (\text{W per scene-unit}^2 \text{ for } E \text{ in W per scene-unit}^2),
+
+:math:`T` the sparse near field plus the far field of :func:`translucency.render.transport_matrices`, and
+it leaves with the exit law :math:`g_v(\mu)` of the object's boundary: a dielectric's
+:math:`F_t(\mu)/(1 - F_{dr,e})`, the half-space incidence law's :math:`F(\mu)/\langle F \rangle` (index-
+matched objects with measured totals), or Lambertian.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import trimesh
+
+from .._validate import TranslucencyError
+from ..io.inputs import expect_input
+from ..io.model_file import load_model, read_header
+from ..mitsuba import load_plugin
+from ..model.boundary import exit_factor
+from ..model.incidence import INCIDENCE_LAWS
+from ..render import boundary_eta, default_radius, object_of_model, relight_vertices, transport_matrices
+from .pose import Pose, pose_of
+from .surfaces import Glowing, exit_table
+
+
+def read_vertex_model(source, *, name: str):
+    """(model, header) of a per-vertex model file (or an already loaded model with ``header={}``);
+    one line for a file that is not one."""
+    if not isinstance(source, (str, Path)):
+        return source, {}
+    path = Path(source)
+    expect_input(path, ("model file",))
+    model = load_model(path)
+    if model.geometry != "mesh":
+        raise TranslucencyError(
+            f"{path}: a planar model; the scene's object '{name}' needs a per-vertex model (translucency fit "
+            "on a mesh data set)"
+        )
+    return model, read_header(path)
+
+
+def coat_of(eta: float, roughness: float):
+    """The boundary's Mitsuba BSDF: None (index-matched), a smooth ``dielectric`` or a ``roughdielectric``
+    (GGX, ``roughness`` = α) of index η against air."""
+    if eta == 1.0:
+        return None
+    if roughness > 0:
+        return load_plugin(
+            {"type": "roughdielectric", "int_ior": float(eta), "ext_ior": 1.0, "alpha": float(roughness)}
+        )
+    return load_plugin({"type": "dielectric", "int_ior": float(eta), "ext_ior": 1.0})
+
+
+@dataclass
+class FittedObject:
+    """One fitted object of a scene (module docstring): build it with :func:`fitted_object`."""
+
+    name: str
+    model: object
+    mesh: trimesh.Trimesh  # the model's mesh, model frame (mm)
+    eta: float
+    pose: Pose
+    shape: object  # the Mitsuba shape it is in the scene
+    transport: object  # translucency.render.transport.Transport
+    law: object  # the incidence law
+    coat: object = None
+    glowing: Glowing = field(init=False)
+
+    def __post_init__(self):
+        self.glowing = Glowing(
+            self.shape, self.vertices, np.asarray(self.mesh.faces), exit_law=self.exit_law(), coat=self.coat
+        )
+
+    @property
+    def vertices(self) -> np.ndarray:
+        """(V, 3) vertices in the scene."""
+        return self.pose.apply(self.mesh.vertices)
+
+    @property
+    def normals(self) -> np.ndarray:
+        """(V, 3) outward vertex normals in the scene."""
+        return self.pose.turn(self.mesh.vertex_normals)
+
+    def exitance(self, E: np.ndarray) -> np.ndarray:
+        r"""(V, 3) exitance :math:`M = \pi T E` for the effective irradiance ``E`` (V, 3)."""
+        return np.pi * relight_vertices(self.transport, E).astype(np.float64)
+
+    def exit_law(self) -> np.ndarray:
+        """(V, EXIT_NODES, 3) the exit's angular law g_v(μ) (module docstring)."""
+        V = len(self.mesh.vertices)
+        if self.eta != 1.0:
+            return exit_table(lambda mu: np.full((V, 3), float(exit_factor(mu, self.eta))))
+        table = exit_table(lambda mu: _or_ones(self.law.exit(np.full(V, max(mu, 1e-3))), V))
+        return table
+
+    def set_exitance(self, M: np.ndarray) -> None:
+        """Glow with exitance M (V, 3) from now on."""
+        self.glowing.exitance = np.asarray(M, dtype=np.float64)
+
+
+def _or_ones(g, V):
+    return np.ones((V, 3)) if g is None else g
+
+
+def fitted_object(
+    name: str,
+    source,
+    shape,
+    shape_vertices,
+    shape_faces,
+    *,
+    scene_unit_mm: float = 1.0,
+    incidence: str = "half-space",
+    radius: float | None = None,
+    roughness: float = 0.0,
+) -> FittedObject:
+    """The fitted object ``name``: the model ``source`` (a file or a loaded per-vertex model) placed as the
+    Mitsuba ``shape`` whose vertices and triangles are ``shape_vertices``, ``shape_faces``.
+
+    Refuses, in one line each, a model that is not per-vertex, a shape that is not the model's mesh or is
+    resized (:func:`~translucency.scene.pose.pose_of`), an unknown incidence law.
+    """
+    if incidence not in INCIDENCE_LAWS:
+        raise TranslucencyError(f"incidence: {incidence!r} is not one of {', '.join(INCIDENCE_LAWS)}")
+    model, header = read_vertex_model(source, name=name)
+    if getattr(model, "geometry", "mesh") != "mesh":
+        raise TranslucencyError(f"model of '{name}': a planar model; a scene needs a per-vertex model")
+    mesh, acquisition = object_of_model(model, header or {"meta": {"acquisition": {}}})
+    pose = pose_of(name, mesh.vertices, mesh.faces, shape_vertices, shape_faces, scene_unit_mm=scene_unit_mm)
+    eta = boundary_eta(acquisition)  # 1 (index-matched) for a loaded model without its header
+    rad = default_radius(model, mesh) if radius is None else float(radius)
+    transport = transport_matrices(model, mesh, radius=rad)
+    return FittedObject(
+        name=name,
+        model=model,
+        mesh=mesh,
+        eta=eta,
+        pose=pose,
+        shape=shape,
+        transport=transport,
+        law=transport.incidence(incidence, eta),
+        coat=coat_of(eta, roughness),
+    )

@@ -1,0 +1,189 @@
+r"""A user's Mitsuba scene with fitted translucent objects in it: prepared once, lit, rendered.
+
+Two passes, each a wavefront over every vertex of every fitted object:
+
+1. **light in** — the effective irradiance at each vertex from the whole scene
+   (:func:`~translucency.scene.irradiance.scene_irradiance`: every emitter with the shadows of every
+   shape, the indirect light of the other shapes, the glow of the fitted objects as it stands);
+2. **through the body** — the exitance :math:`M = \pi T E` of each object's prepared transport
+   (:class:`~translucency.scene.fitted.FittedObject`), which then glows
+   (:class:`~translucency.scene.surfaces.GlowingSurfaces`).
+
+The first pass sees the fitted objects dark; the second (``passes=2``, the default) sees them glowing
+from the first, so that an object lit by the light its neighbour or the floor under it sends back, and
+by itself across a concavity, is counted once more.  The picture is then path-traced through the scene's
+own sensor and film by :class:`~translucency.scene.integrator.integrator_class` (the fitted objects glow,
+reflect off their boundary, and light the other shapes).  A new light or camera costs the two passes
+and the picture; the transports are built once.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from .._validate import TranslucencyError
+from ..mitsuba import mitsuba
+from ..mitsuba.user_scenes import load_user_scene, mesh_buffers, segments_hit, shapes_by_id
+from .fitted import fitted_object
+from .integrator import STRATEGIES, integrator_class
+from .irradiance import scene_irradiance
+from .surfaces import GlowingSurfaces
+
+
+class FittedScene:
+    """A Mitsuba scene with fitted objects (module docstring).
+
+    Parameters
+    ----------
+    scene : str, Path, dict or mitsuba.Scene
+        A Mitsuba XML file, a scene dict, or a loaded scene.
+    models : dict
+        Shape id → per-vertex model file (or loaded model).  Each shape must be the model's mesh
+        (``translucency export MODEL --ply``) placed by its ``to_world``.
+    scene_unit_mm : float
+        Millimetres per scene unit (the models are in mm).
+    incidence : str
+        The incidence law of index-matched objects (:mod:`translucency.model.incidence`).
+    roughness : float
+        GGX α of a dielectric object's boundary (0: smooth).
+    samples : int
+        Irradiance samples per vertex and pass.
+    passes : int
+        Light-in / through-the-body passes (module docstring).
+    max_depth : int
+        Longest path (bounces) of the picture and of the irradiance's rays.
+
+    Examples
+    --------
+    >>> fs = FittedScene("scene.xml", {"pig": "pig.model.zip"})  # doctest: +SKIP
+    >>> fs.light()  # doctest: +SKIP
+    >>> image = fs.render(spp=16)  # doctest: +SKIP
+    """
+
+    def __init__(
+        self,
+        scene,
+        models: dict,
+        *,
+        scene_unit_mm: float = 1.0,
+        incidence: str = "half-space",
+        roughness: float = 0.0,
+        radius: float | None = None,
+        samples: int = 64,
+        passes: int = 2,
+        max_depth: int = 8,
+        strategy: str = "mis",
+        progress=None,
+    ):
+        mi = mitsuba()
+        if not models:
+            raise TranslucencyError("models: name at least one fitted object (shape id = model file)")
+        for option, value, lo in (("samples", samples, 1), ("passes", passes, 1), ("max_depth", max_depth, 1)):
+            if not isinstance(value, int) or value < lo:
+                raise TranslucencyError(f"{option}: must be an integer >= {lo}, got {value!r}")
+        if not scene_unit_mm > 0:
+            raise TranslucencyError(f"scene_unit_mm: must be > 0, got {scene_unit_mm!r}")
+        if strategy not in STRATEGIES:
+            raise TranslucencyError(f"strategy: {strategy!r} is not one of {', '.join(STRATEGIES)}")
+        self.source = scene
+        self.scene = scene if isinstance(scene, mi.Scene) else load_user_scene(scene)
+        self.samples, self.passes, self.max_depth = samples, passes, max_depth
+        shapes = shapes_by_id(self.scene)
+        self.objects = []
+        t = time.perf_counter()
+        for k, (name, source) in enumerate(models.items()):
+            if progress:
+                progress(k, len(models), f"transport of {name}")
+            shape = shapes.get(name)
+            if shape is None:
+                raise TranslucencyError(
+                    f"model {name}: the scene has no shape with id '{name}' (its shapes: "
+                    f"{', '.join(sorted(shapes)) or 'none'})"
+                )
+            if not shape.is_mesh():
+                raise TranslucencyError(f"shape '{name}': not a mesh; place the model's mesh (a ply) there")
+            if shape.is_emitter():
+                raise TranslucencyError(
+                    f"shape '{name}': carries an area emitter; a fitted object glows with its own exitance "
+                    "(remove the emitter)"
+                )
+            vertices, faces = mesh_buffers(shape)
+            self.objects.append(
+                fitted_object(
+                    name,
+                    source,
+                    shape,
+                    vertices,
+                    faces,
+                    scene_unit_mm=scene_unit_mm,
+                    incidence=incidence,
+                    radius=radius,
+                    roughness=roughness,
+                )
+            )
+        if not self.scene.emitters():
+            raise TranslucencyError(
+                "scene: no emitters (no light, no environment); nothing lights the fitted objects"
+            )
+        self._check_intersections()
+        self.glow = GlowingSurfaces([o.glowing for o in self.objects])
+        props = mi.Properties()
+        props["max_depth"], props["strategy"] = int(max_depth), str(strategy)
+        self.integrator = integrator_class()(props)
+        self.integrator.glow = self.glow
+        self.prepare_s = time.perf_counter() - t
+        self.irradiance = [None] * len(self.objects)
+
+    def _check_intersections(self) -> None:
+        """One line for a fitted object that crosses another shape (its edges against the scene)."""
+        shapes = list(self.scene.shapes())
+        for o in self.objects:
+            v = o.vertices
+            e = np.asarray(o.mesh.edges_unique)
+            hit = segments_hit(self.scene, v[e[:, 0]], v[e[:, 1]], skip=[o.shape])
+            if (hit >= 0).any():
+                other = shapes[int(hit[hit >= 0][0])].id()
+                raise TranslucencyError(
+                    f"shape '{o.name}': intersects shape '{other}' ({int((hit >= 0).sum())} of its edges "
+                    "cross it); move one of them"
+                )
+
+    def light(self, *, seed: int = 0) -> list[np.ndarray]:
+        """Run the passes (module docstring); every object glows with its new exitance.  Returns the last
+        pass's effective irradiance per object, (V, 3) each."""
+        for o in self.objects:
+            o.set_exitance(np.zeros((len(o.mesh.vertices), 3)))
+        self.glow.update()
+        for p in range(self.passes):
+            E = [
+                scene_irradiance(
+                    self.scene,
+                    self.glow,
+                    o.vertices,
+                    o.normals,
+                    samples=self.samples,
+                    seed=seed + 7919 * p + 104729 * k,
+                    incidence=None if o.law.name == "normal" else o.law,
+                    eta=o.eta,
+                    max_depth=self.max_depth,
+                )
+                for k, o in enumerate(self.objects)
+            ]
+            for o, e in zip(self.objects, E):
+                o.set_exitance(o.exitance(e))
+            self.glow.update()
+        self.irradiance = E
+        return E
+
+    def render(self, *, spp: int = 16, seed: int = 0, sensor: int = 0) -> np.ndarray:
+        """The picture (H, W, 3), linear RGB, through the scene's ``sensor`` (index), ``spp`` samples a
+        pixel; :meth:`light` first."""
+        mi = mitsuba()
+        if self.irradiance[0] is None:
+            self.light(seed=seed)
+        return np.asarray(
+            mi.render(self.scene, integrator=self.integrator, spp=int(spp), seed=int(seed), sensor=int(sensor)),
+            dtype=np.float64,
+        )[..., :3]

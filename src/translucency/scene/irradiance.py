@@ -1,0 +1,103 @@
+r"""The light arriving at a fitted object's vertices from the whole scene: every emitter, shadows of
+every shape, and the indirect light of the other shapes (and of the glowing objects themselves).
+
+Per vertex v (position :math:`x_v` in scene units, outward normal :math:`n_v`) the effective irradiance is
+
+.. math:: E_v = \int_{H^2} L_i(x_v, \omega)\, \cos\theta\, F_v(\cos\theta)\, T(\cos\theta)\, d\omega,
+
+:math:`L_i` the radiance arriving from the scene (:func:`translucency.scene.integrator.trace`),
+:math:`F_v` the incidence law's factor (:mod:`translucency.model.incidence`; 1 for the ``normal`` law)
+and :math:`T = F_t(\cos\theta)/F_t(1)` the dielectric boundary's transmittance against the data's normal
+beam (1 where index-matched, as :func:`translucency.render.transport.vertex_irradiance`).
+It is estimated with K samples per vertex and three strategies combined by multiple importance sampling
+(power heuristic): next-event estimation toward one Mitsuba emitter, toward one point of the glowing
+surfaces, and a cosine-distributed direction whose ray is traced through the scene:
+
+.. math:: \hat E_v = \frac{1}{K} \sum_{k} \sum_{s} w_s\, \frac{L_i(\omega_{ks}) \cos\theta_{ks}\,
+          F_v T}{p_s(\omega_{ks})}.
+
+The Dr.Jit kernel returns each sample's :math:`w_s L_i \cos / p_s` and cosine; the per-vertex, per-channel
+factor :math:`F_v T` is applied in NumPy (the incidence law is tabulated there).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..mitsuba import drjit, load_plugin, mitsuba
+from ..model.boundary import fresnel_transmittance
+from .integrator import _mis, trace
+
+
+def scene_irradiance(
+    scene,
+    glow,
+    points: np.ndarray,
+    normals: np.ndarray,
+    *,
+    samples: int = 64,
+    seed: int = 0,
+    incidence=None,
+    eta: float = 1.0,
+    max_depth: int = 8,
+    offset: float | None = None,
+) -> np.ndarray:
+    """Effective irradiance (V, 3) at ``points`` (V, 3) with outward ``normals`` (V, 3), scene units.
+
+    ``incidence``: the object's incidence law (``factor(cos (V, K)) -> (V, K, 3)`` or None);
+    ``eta``: its boundary (≠ 1: the Fresnel ratio); ``glow``: the fitted objects as they glow now
+    (:class:`~translucency.scene.surfaces.GlowingSurfaces`); ``offset``: how far above the surface the
+    rays start (default 5·10⁻⁴ of the points' extent).
+    """
+    mi, dr = mitsuba(), drjit()
+    points = np.asarray(points, dtype=np.float64)
+    normals = np.asarray(normals, dtype=np.float64)
+    V, K = len(points), int(samples)
+    if offset is None:
+        offset = 5e-4 * float(np.max(np.ptp(points, axis=0)) or 1.0)
+    N = V * K
+    sampler = load_plugin({"type": "independent", "sample_count": 1})
+    sampler.seed(seed, N)
+    v = dr.arange(mi.UInt32, N) // K
+    n = dr.gather(mi.Vector3f, mi.Float(normals.astype(np.float32).ravel()), v)
+    p = dr.gather(mi.Point3f, mi.Float((points + offset * normals).astype(np.float32).ravel()), v)
+    si = dr.zeros(mi.SurfaceInteraction3f, N)
+    si.p, si.n, si.sh_frame, si.t = p, n, mi.Frame3f(n), mi.Float(0.0)
+    si.wi = mi.Vector3f(0.0, 0.0, 1.0)
+    it = mi.Interaction3f(si)
+    active = dr.full(mi.Bool, True, N)
+    # 1. one Mitsuba emitter
+    ds, em_weight = scene.sample_emitter_direction(it, sampler.next_2d(), True, active)
+    cos_e = dr.dot(ds.d, n)
+    ok = (cos_e > 0) & (ds.pdf != 0)
+    w = dr.select(ds.delta, 1.0, _mis(ds.pdf, dr.maximum(cos_e, 0.0) * dr.inv_pi))
+    e_emitter = dr.select(ok, em_weight * w * cos_e, 0.0)
+    # 2. one point of the glowing surfaces (none glow before the first transport pass)
+    s1, s2 = sampler.next_1d(), sampler.next_2d()
+    e_glow, cos_g = dr.zeros(mi.Color3f, N), dr.zeros(mi.Float, N)
+    if glow.emitting:
+        d, dist, g_weight, g_pdf, valid = glow.sample(p, s1, s2, active)
+        cos_g = dr.dot(d, n)
+        ok = valid & (cos_g > 0)
+        ok &= ~scene.ray_test(it.spawn_ray_to(p + d * dist), ok)
+        w = _mis(g_pdf, dr.maximum(cos_g, 0.0) * dr.inv_pi)
+        e_glow = dr.select(ok, g_weight * w * cos_g, 0.0)
+    # 3. a cosine-distributed direction, its ray traced through the scene (hits weighted against 1 and 2)
+    local = mi.warp.square_to_cosine_hemisphere(sampler.next_2d())
+    cos_b = local.z
+    ray = it.spawn_ray(mi.Frame3f(n).to_world(local))
+    L = trace(
+        scene, sampler, glow, ray, mi.Color3f(1.0), it, cos_b * dr.inv_pi,
+        dr.full(mi.Bool, False, N), active & (cos_b > 0), max_depth=max_depth,
+    )
+    e_bsdf = L * dr.pi
+    dr.eval(e_emitter, cos_e, e_glow, cos_g, e_bsdf, cos_b)
+    E = np.zeros((V, 3))
+    for e, c in ((e_emitter, cos_e), (e_glow, cos_g), (e_bsdf, cos_b)):
+        e = np.asarray(e, dtype=np.float64).T.reshape(V, K, 3)  # Dr.Jit's (3, N) to (V, K, 3)
+        c = np.clip(np.asarray(c, dtype=np.float64).reshape(V, K), 0.0, 1.0)
+        factor = fresnel_transmittance(c, eta) / fresnel_transmittance(1.0, eta)
+        F = None if incidence is None else incidence.factor(c)
+        weight = factor[..., None] if F is None else factor[..., None] * F
+        E += (e * weight).mean(axis=1)
+    return E
