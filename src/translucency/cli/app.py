@@ -13,7 +13,7 @@ import sys
 import typer
 
 from .._version import __version__
-from . import acquire, acquire_object, demo, evaluate, fit, import_object, imports, info, materials, render
+from . import acquire, acquire_object, demo, evaluate, export, fit, import_object, imports, info, materials, render
 from ._common import console, err_console
 
 
@@ -71,6 +71,7 @@ app.command("info")(info.info)
 app.command("fit")(fit.fit)
 app.command("render")(render.render)
 app.command("evaluate", cls=evaluate.EvaluateCommand)(evaluate.evaluate)
+app.command("export")(export.export)
 acquire.app.command("object-photographs")(acquire_object.acquire_object_photographs_cmd)
 imports.app.command("object")(import_object.import_object_cmd)
 app.add_typer(acquire.app, name="acquire")

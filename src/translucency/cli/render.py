@@ -15,6 +15,7 @@ from ..io.inputs import expect_input
 from ..io.model_file import load_model, read_header
 from ._common import json_option, max_memory_option, overwrite_option, quiet_option, user_errors
 from ._run import Run
+from .render_scene import render_scene
 
 #: the light of a render when none is given: above and in front of the default view, in mm
 DEFAULT_LIGHT = "point:60,-80,120,2e4"
@@ -22,7 +23,9 @@ DEFAULT_LIGHT = "point:60,-80,120,2e4"
 
 @user_errors
 def render(
-    model: Path = typer.Argument(..., help="A per-vertex model file (translucency fit on a mesh data set)."),
+    model: Path = typer.Argument(
+        None, help="A per-vertex model file (translucency fit on a mesh data set); none with --scene."
+    ),
     out: Path = typer.Option(
         Path("render"), "--out", "-o", help="Directory for ours.exr/.png (and the reference)."
     ),
@@ -85,6 +88,32 @@ def render(
         help="Use the model's through-body table (light between sides whose normals face apart, measured "
         "against the fit): brighter back-lit objects, not better on every case (docs/objects.md).",
     ),
+    scene: Path = typer.Option(
+        None,
+        "--scene",
+        help="A Mitsuba 3 scene file (XML) to render the fitted objects in: its emitters, shapes, sensor "
+        "and film as they are; name the objects with --model (docs/objects.md, 'Your scene').",
+    ),
+    models: list[str] = typer.Option(
+        [],
+        "--model",
+        metavar="ID=FILE",
+        help="With --scene: the shape with this id is this per-vertex model (its mesh from 'translucency "
+        "export MODEL --ply', placed by to_world). Repeat for several objects.",
+    ),
+    scene_unit: float = typer.Option(1.0, "--scene-unit", help="With --scene: millimetres per scene unit."),
+    samples: int = typer.Option(
+        64, "--samples", help="With --scene: irradiance samples per vertex and pass (path-traced)."
+    ),
+    passes: int = typer.Option(
+        2, "--passes", help="With --scene: light-in / through-the-body passes (2: the scene lit by the objects "
+        "lights them back once)."
+    ),
+    max_depth: int = typer.Option(8, "--max-depth", help="With --scene: longest light path, bounces."),
+    roughness: float = typer.Option(
+        0.0, "--roughness", help="With --scene: GGX roughness of a dielectric object's boundary (0: smooth)."
+    ),
+    picture_spp: int = typer.Option(16, "--picture-spp", help="With --scene: samples per pixel of our picture."),
     overwrite: bool = overwrite_option(),
     max_memory: str = max_memory_option(),
     quiet: bool = quiet_option(),
@@ -104,6 +133,24 @@ def render(
 
     if incidence not in INCIDENCE_LAWS:
         raise TranslucencyError(f"--incidence: {incidence!r} is not one of {', '.join(INCIDENCE_LAWS)}")
+    if scene is not None:
+        if model is not None:
+            raise TranslucencyError(f"{model}: with --scene, name the objects with --model ID=FILE instead")
+        given = [f for f, v, d in (("--light", light, [DEFAULT_LIGHT]), ("--view", view, "1,-1.6,0.7"),
+                                    ("--size", tuple(size), (320, 240)), ("--through", through, False)) if v != d]
+        if given:
+            raise TranslucencyError(f"{given[0]}: the scene file says this (its emitters, sensor and film); "
+                                    "not with --scene")
+        return render_scene(
+            scene=scene, models=models, out=out, scene_unit=scene_unit, samples=samples, passes=passes,
+            max_depth=max_depth, roughness=roughness, picture_spp=picture_spp, incidence=incidence,
+            radius=radius, exposure=exposure, reference=reference, spp=spp, overwrite=overwrite,
+            max_memory=max_memory, quiet=quiet, as_json=as_json,
+        )
+    if models:
+        raise TranslucencyError("--model: names the objects of a --scene; give the scene file too")
+    if model is None:
+        raise TranslucencyError("render: give a per-vertex model file, or --scene SCENE.xml --model ID=FILE")
     chosen_exposure = parse_exposure(exposure, name="--exposure")
     relative = [parse_light(t) for t in light]  # the text checked; placed once the object is known
     if len(relative) > 1:

@@ -51,7 +51,9 @@ from .._version import __version__
 MARKER = ".translucency-output.json"
 
 #: what each kind of output is called in messages
-KINDS = ("planar data set", "mesh data set", "model file", "output folder", "json summary")
+KINDS = ("planar data set", "mesh data set", "model file", "output folder", "json summary", "mesh file")
+#: the line a PLY the tool wrote carries in its header (:func:`kind_of` reads it)
+PLY_COMMENT = "comment written_by translucency"
 
 # header keys of the stores (kept here so that this module imports no stage)
 _DATASET_KEYS = {"planar data set": "translucency_dataset", "mesh data set": "translucency_mesh_dataset"}
@@ -79,7 +81,7 @@ def kind_of(path) -> str | None:
 
     Reads only metadata: a data set's root ``zarr.json``, a model file's
     ``zarr.json`` inside its zip, an output folder's marker, a JSON file's
-    ``written_by`` field.
+    ``written_by`` field, a PLY's header comment (:data:`PLY_COMMENT`).
     """
     path = Path(path)
     try:
@@ -100,6 +102,10 @@ def kind_of(path) -> str | None:
                     if "zarr.json" in zf.namelist() and _MODEL_KEY in _zarr_attributes(zf.read("zarr.json")):
                         return "model file"
                 return None
+            if path.suffix == ".ply":
+                with open(path, "rb") as f:
+                    head = f.read(512)
+                return "mesh file" if PLY_COMMENT.encode() in head.split(b"end_header")[0] else None
             if path.suffix == ".json" and path.stat().st_size < 50_000_000:
                 obj = json.loads(path.read_text())
                 if isinstance(obj, dict) and str(obj.get("written_by", "")).startswith("translucency"):

@@ -36,16 +36,23 @@ def rays(origins: np.ndarray, directions: np.ndarray, maxt: np.ndarray | None = 
     return ray
 
 
-def write_ply(path: Path, vertices: np.ndarray, faces: np.ndarray, colour: np.ndarray | None = None) -> None:
+def write_ply(
+    path: Path,
+    vertices: np.ndarray,
+    faces: np.ndarray,
+    colour: np.ndarray | None = None,
+    comment: str | None = None,
+) -> None:
     """A binary PLY with float positions and (optionally) float r, g, b per vertex (Mitsuba's
-    vertex_color)."""
+    vertex_color); ``comment``: one header line (``comment ...``)."""
     props = "property float x\nproperty float y\nproperty float z\n"
     cols = [np.asarray(vertices)]
     if colour is not None:
         props += "property float r\nproperty float g\nproperty float b\n"
         cols.append(np.asarray(colour))
+    note = f"{comment}\n" if comment else ""
     head = (
-        f"ply\nformat binary_little_endian 1.0\nelement vertex {len(vertices)}\n{props}"
+        f"ply\nformat binary_little_endian 1.0\n{note}element vertex {len(vertices)}\n{props}"
         f"element face {len(faces)}\nproperty list uchar int vertex_indices\nend_header\n"
     )
     face = np.zeros(len(faces), dtype=[("n", "u1"), ("i", "<i4", 3)])
@@ -87,25 +94,30 @@ def _grid_dict(data_zyx: np.ndarray, to_world) -> dict:
     return {"type": "gridvolume", "data": mi.TensorXf(grid), "filter_type": "nearest", "to_world": to_world}
 
 
-def slab_medium_dict(volume, channel: int, top_corner=(0.0, 0.0, 0.0)) -> dict:
-    """Mitsuba ``heterogeneous`` medium equal to one channel of ``volume`` (grey, unscaled, mm⁻¹).
+def slab_medium_dict(
+    volume, channel: int, top_corner=(0.0, 0.0, 0.0), *, placed=None, unit_mm: float = 1.0
+) -> dict:
+    """Mitsuba ``heterogeneous`` medium equal to one channel of ``volume`` (grey, mm⁻¹).
 
     σ_t = σ_s + σ_a and the albedo σ_s/σ_t are nearest-neighbour grids; the
     phase function is Henyey–Greenstein with the volume's g.  The volume's box
     spans x from ``top_corner[0]``, y from ``top_corner[1]`` and z downwards
-    from ``top_corner[2]`` (slabs: the origin; objects: (lo.x, lo.y, hi.z)).
+    from ``top_corner[2]`` (slabs: the origin; objects: (lo.x, lo.y, hi.z)).  ``placed`` (4 × 4) carries
+    that box into a scene whose unit is ``unit_mm`` millimetres (the coefficients scaled to per scene unit).
     """
     mi = mitsuba()
     W, H, T = volume.size_mm
     x0, y0, z_top = (float(v) for v in top_corner)
     box = mi.ScalarTransform4f().translate([x0, y0, z_top - T]) @ mi.ScalarTransform4f().scale([W, H, T])
+    if placed is not None:
+        box = mi.ScalarTransform4f(np.asarray(placed, dtype=np.float64).tolist()) @ box
     sigma_t = volume.sigma_t[..., channel].astype(np.float64)
     albedo = np.divide(volume.sigma_s[..., channel], sigma_t, out=np.zeros_like(sigma_t), where=sigma_t > 0)
     return {
         "type": "heterogeneous",
         "sigma_t": _grid_dict(sigma_t, box),
         "albedo": _grid_dict(albedo, box),
-        "scale": 1.0,
+        "scale": float(unit_mm),
         "has_spectral_extinction": False,
         "phase": {"type": "hg", "g": volume.g},
     }

@@ -347,6 +347,28 @@ def rendering(
     return Need(BASE_MITSUBA + sum(parts.values()), disk, max(parts, key=parts.get))
 
 
+def scene_rendering(
+    *, pairs: float, paths: int, pixels: int, spp: int, reference: bool, spp_reference: int
+) -> Need:
+    r"""``render --scene``: the transports' vertex pairs, the irradiance's wavefront of ``paths`` paths
+    (vertices × samples), a picture of ``pixels`` at ``spp`` and, with the reference, its two renders.
+
+    .. math:: M = M_{mi} + 300\,p + 400\,P + 100\,W H s \;[+\, 100\,W H s_{ref}]
+
+    (a path of the wavefront holds its ray, throughput, interaction and sampler, about 400 bytes;
+    a camera sample about 100).  Output: three EXR + PNG pictures and the summary.
+    """
+    parts = {
+        "the transport: --radius": PAIR_BYTES * pairs,
+        "the irradiance: --samples": 400 * paths,
+        "the picture: --picture-spp": 100 * pixels * spp,
+    }
+    if reference:
+        parts["the reference: --spp"] = 100 * pixels * spp_reference
+    disk = pixels * 60 * (3 if reference else 1) + MiB
+    return Need(BASE_MITSUBA + sum(parts.values()), disk, max(parts, key=parts.get))
+
+
 #: bytes a vertex pair of the render transport holds at its peak (indices, distances, profile values, the
 #: CSR matrices; measured 330 for the 14.0 M pairs of a 34,839-vertex bunny: 4.56 GiB peak)
 PAIR_BYTES = 300

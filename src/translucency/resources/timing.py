@@ -72,6 +72,18 @@ TIME_TERMS = {
         "reference_samples": 2e-6,
         "first_run": 9.0,
     },
+    # render --scene: pairs of the transports; paths: vertices x samples x passes (path-traced irradiance);
+    # samples: picture pixels x spp; reference_samples: 2 x pixels x spp x 3 channels (volpath; the
+    # filling's albedo moves it by 10x, marble measured); first_run: Dr.Jit compiles the integrator
+    "render scene": {
+        "overhead": 2.0,
+        "vertices": 2e-4,
+        "pairs": 5e-7,
+        "paths": 1.5e-6,
+        "samples": 3e-7,
+        "reference_samples": 5e-5,
+        "first_run": 5.0,
+    },
 }
 
 

@@ -62,7 +62,8 @@ def coat_of(eta: float, roughness: float):
 
 @dataclass
 class FittedObject:
-    """One fitted object of a scene (module docstring): build it with :func:`fitted_object`."""
+    """One fitted object of a scene (module docstring): placed by :func:`fitted_object`, its transport
+    built by :meth:`prepare`."""
 
     name: str
     model: object
@@ -70,12 +71,20 @@ class FittedObject:
     eta: float
     pose: Pose
     shape: object  # the Mitsuba shape it is in the scene
-    transport: object  # translucency.render.transport.Transport
-    law: object  # the incidence law
+    incidence: str = "half-space"
     coat: object = None
-    glowing: Glowing = field(init=False)
+    acquisition: dict = field(default_factory=dict)  # the data set's header (the filling, for a reference)
+    scene_unit_mm: float = 1.0
+    transport: object = None  # translucency.render.transport.Transport, once prepared
+    law: object = None  # the incidence law, once prepared
+    glowing: Glowing = None  # the object as a light of the scene, once prepared
 
-    def __post_init__(self):
+    def prepare(self, radius: float | None = None) -> None:
+        """Build the transport (near radius ``radius`` mm, default the model's 99 % energy radius), the
+        incidence law and the glowing surface."""
+        rad = default_radius(self.model, self.mesh) if radius is None else float(radius)
+        self.transport = transport_matrices(self.model, self.mesh, radius=rad)
+        self.law = self.transport.incidence(self.incidence, self.eta)
         self.glowing = Glowing(
             self.shape, self.vertices, np.asarray(self.mesh.faces), exit_law=self.exit_law(), coat=self.coat
         )
@@ -99,8 +108,7 @@ class FittedObject:
         V = len(self.mesh.vertices)
         if self.eta != 1.0:
             return exit_table(lambda mu: np.full((V, 3), float(exit_factor(mu, self.eta))))
-        table = exit_table(lambda mu: _or_ones(self.law.exit(np.full(V, max(mu, 1e-3))), V))
-        return table
+        return exit_table(lambda mu: _or_ones(self.law.exit(np.full(V, max(mu, 1e-3))), V))
 
     def set_exitance(self, M: np.ndarray) -> None:
         """Glow with exitance M (V, 3) from now on."""
@@ -120,11 +128,11 @@ def fitted_object(
     *,
     scene_unit_mm: float = 1.0,
     incidence: str = "half-space",
-    radius: float | None = None,
     roughness: float = 0.0,
 ) -> FittedObject:
     """The fitted object ``name``: the model ``source`` (a file or a loaded per-vertex model) placed as the
-    Mitsuba ``shape`` whose vertices and triangles are ``shape_vertices``, ``shape_faces``.
+    Mitsuba ``shape`` whose vertices and triangles are ``shape_vertices``, ``shape_faces`` (its transport
+    not built yet: :meth:`FittedObject.prepare`).
 
     Refuses, in one line each, a model that is not per-vertex, a shape that is not the model's mesh or is
     resized (:func:`~translucency.scene.pose.pose_of`), an unknown incidence law.
@@ -137,8 +145,6 @@ def fitted_object(
     mesh, acquisition = object_of_model(model, header or {"meta": {"acquisition": {}}})
     pose = pose_of(name, mesh.vertices, mesh.faces, shape_vertices, shape_faces, scene_unit_mm=scene_unit_mm)
     eta = boundary_eta(acquisition)  # 1 (index-matched) for a loaded model without its header
-    rad = default_radius(model, mesh) if radius is None else float(radius)
-    transport = transport_matrices(model, mesh, radius=rad)
     return FittedObject(
         name=name,
         model=model,
@@ -146,7 +152,8 @@ def fitted_object(
         eta=eta,
         pose=pose,
         shape=shape,
-        transport=transport,
-        law=transport.incidence(incidence, eta),
+        incidence=incidence,
         coat=coat_of(eta, roughness),
+        acquisition=acquisition,
+        scene_unit_mm=float(scene_unit_mm),
     )

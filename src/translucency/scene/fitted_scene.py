@@ -58,6 +58,7 @@ class FittedScene:
     Examples
     --------
     >>> fs = FittedScene("scene.xml", {"pig": "pig.model.zip"})  # doctest: +SKIP
+    >>> fs.prepare()  # the transports, once  # doctest: +SKIP
     >>> fs.light()  # doctest: +SKIP
     >>> image = fs.render(spp=16)  # doctest: +SKIP
     """
@@ -70,12 +71,10 @@ class FittedScene:
         scene_unit_mm: float = 1.0,
         incidence: str = "half-space",
         roughness: float = 0.0,
-        radius: float | None = None,
         samples: int = 64,
         passes: int = 2,
         max_depth: int = 8,
         strategy: str = "mis",
-        progress=None,
     ):
         mi = mitsuba()
         if not models:
@@ -92,10 +91,7 @@ class FittedScene:
         self.samples, self.passes, self.max_depth = samples, passes, max_depth
         shapes = shapes_by_id(self.scene)
         self.objects = []
-        t = time.perf_counter()
-        for k, (name, source) in enumerate(models.items()):
-            if progress:
-                progress(k, len(models), f"transport of {name}")
+        for name, source in models.items():
             shape = shapes.get(name)
             if shape is None:
                 raise TranslucencyError(
@@ -119,7 +115,6 @@ class FittedScene:
                     faces,
                     scene_unit_mm=scene_unit_mm,
                     incidence=incidence,
-                    radius=radius,
                     roughness=roughness,
                 )
             )
@@ -128,13 +123,36 @@ class FittedScene:
                 "scene: no emitters (no light, no environment); nothing lights the fitted objects"
             )
         self._check_intersections()
+        self.strategy = strategy
+        self.glow = None  # prepare()
+        self.prepare_s = None
+        self.irradiance = [None] * len(self.objects)
+
+    def prepare(self, radius: float | None = None, progress=None) -> None:
+        """Build each object's transport (near radius ``radius`` mm; default each model's 99 % energy
+        radius) and the integrator: once per scene.  ``progress(k, n, name)`` before each object."""
+        mi = mitsuba()
+        t = time.perf_counter()
+        for k, o in enumerate(self.objects):
+            if progress:
+                progress(k, len(self.objects), o.name)
+            o.prepare(radius)
         self.glow = GlowingSurfaces([o.glowing for o in self.objects])
         props = mi.Properties()
-        props["max_depth"], props["strategy"] = int(max_depth), str(strategy)
+        props["max_depth"], props["strategy"] = int(self.max_depth), str(self.strategy)
         self.integrator = integrator_class()(props)
         self.integrator.glow = self.glow
         self.prepare_s = time.perf_counter() - t
-        self.irradiance = [None] * len(self.objects)
+
+    @property
+    def vertices(self) -> int:
+        """Vertices of all fitted objects."""
+        return sum(len(o.mesh.vertices) for o in self.objects)
+
+    @property
+    def film_size(self) -> tuple[int, int]:
+        """(width, height) of the first sensor's film, pixels."""
+        return tuple(int(v) for v in self.scene.sensors()[0].film().crop_size())
 
     def _check_intersections(self) -> None:
         """One line for a fitted object that crosses another shape (its edges against the scene)."""
@@ -153,6 +171,8 @@ class FittedScene:
     def light(self, *, seed: int = 0) -> list[np.ndarray]:
         """Run the passes (module docstring); every object glows with its new exitance.  Returns the last
         pass's effective irradiance per object, (V, 3) each."""
+        if self.glow is None:
+            self.prepare()
         for o in self.objects:
             o.set_exitance(np.zeros((len(o.mesh.vertices), 3)))
         self.glow.update()
@@ -177,12 +197,24 @@ class FittedScene:
         self.irradiance = E
         return E
 
-    def render(self, *, spp: int = 16, seed: int = 0, sensor: int = 0) -> np.ndarray:
+    def render(self, *, spp: int = 16, seed: int = 0, sensor: int = 0, glowing: bool = True) -> np.ndarray:
         """The picture (H, W, 3), linear RGB, through the scene's ``sensor`` (index), ``spp`` samples a
-        pixel; :meth:`light` first."""
+        pixel; :meth:`light` first.  ``glowing=False``: the fitted objects dark (their boundary's
+        reflection only), to see what light they bring to the rest."""
         mi = mitsuba()
         if self.irradiance[0] is None:
             self.light(seed=seed)
+        if not glowing:
+            kept = [o.glowing.exitance for o in self.objects]
+            for o in self.objects:
+                o.set_exitance(np.zeros_like(o.glowing.exitance))
+            self.glow.update()
+            try:
+                return self.render(spp=spp, seed=seed, sensor=sensor)
+            finally:
+                for o, M in zip(self.objects, kept):
+                    o.set_exitance(M)
+                self.glow.update()
         return np.asarray(
             mi.render(self.scene, integrator=self.integrator, spp=int(spp), seed=int(seed), sensor=int(sensor)),
             dtype=np.float64,

@@ -1,0 +1,67 @@
+r"""The path-traced reference of a scene with fitted objects: the same scene, file and camera, with each
+fitted object's volume in place of its glowing surface, rendered by Mitsuba's ``volpath``.
+
+Each fitted shape becomes a ``ply`` of the same triangles holding the heterogeneous medium of its data
+set's filling (:func:`translucency.render.volume_of_dataset`, carried by the object's pose) behind a
+``null`` boundary (index-matched) or a smooth ``dielectric`` of its η; the scene's own emitters, shapes
+and sensor are kept, the integrator is ``volpath`` without a depth limit and with Russian roulette only
+from depth :data:`RR_DEPTH`.  One grey channel of the media at a time, as
+:func:`translucency.render.render_reference` does.  A dielectric object reached by delta lights only
+(point, spot, directional) cannot be path-traced: a delta refraction is a path ``volpath`` cannot sample.
+
+:func:`converged_scene_reference` renders it twice with independent seeds and returns the mean and its
+measured noise over given pixels,
+:math:`\varepsilon = \lVert A - B \rVert / (2 \lVert (A + B)/2 \rVert)`.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from ..mitsuba import mitsuba, slab_medium_dict
+from ..mitsuba.user_scenes import user_scene_with_media
+from ..render import rel_rmse, volume_of_dataset
+
+#: Russian roulette in the reference only past this depth (the surfaces of the scene end most paths)
+RR_DEPTH = 1000
+
+
+def _media(fitted_scene, channel: int) -> dict:
+    out = {}
+    for o in fitted_scene.objects:
+        volume = volume_of_dataset(o.mesh, o.acquisition)
+        lo, hi = o.mesh.bounds
+        medium = slab_medium_dict(
+            volume, channel, (lo[0], lo[1], hi[2]), placed=o.pose.matrix, unit_mm=o.scene_unit_mm
+        )
+        boundary = {"type": "null"} if o.eta == 1.0 else {"type": "dielectric", "int_ior": float(o.eta), "ext_ior": 1.0}
+        out[o.name] = {"mesh": (o.vertices, np.asarray(o.mesh.faces)), "bsdf": boundary, "interior": medium}
+    return out
+
+
+def render_scene_reference(fitted_scene, *, spp: int = 64, seed: int = 0, sensor: int = 0):
+    """The reference picture (H, W, 3) of ``fitted_scene``'s scene (module docstring) and the seconds the
+    path tracing took."""
+    mi = mitsuba()
+    integrator = {"type": "volpath", "max_depth": -1, "rr_depth": RR_DEPTH}
+    seconds, channels = 0.0, []
+    for ch in range(3):
+        scene = user_scene_with_media(fitted_scene.source, _media(fitted_scene, ch), integrator)
+        t = time.perf_counter()
+        image = mi.render(scene, spp=int(spp), seed=3 * int(seed) + ch, sensor=int(sensor))
+        channels.append(np.asarray(image, dtype=np.float64)[..., ch])
+        seconds += time.perf_counter() - t
+    return np.stack(channels, axis=2), seconds
+
+
+def converged_scene_reference(fitted_scene, mask: np.ndarray, *, spp: int = 64, sensor: int = 0):
+    """The mean of two independent references and its measured noise over ``mask`` (module docstring).
+
+    Returns (image (H, W, 3), info: ``noise``, ``spp`` of each render, ``seconds``)."""
+    a, ta = render_scene_reference(fitted_scene, spp=spp, seed=0, sensor=sensor)
+    b, tb = render_scene_reference(fitted_scene, spp=spp, seed=1, sensor=sensor)
+    mean = 0.5 * (a + b)
+    noise = 0.5 * rel_rmse(a, b, mask) * float(np.sqrt(np.mean(b[mask] ** 2) / np.mean(mean[mask] ** 2)))
+    return mean, {"noise": noise, "spp": int(spp), "renders": 2, "seconds": ta + tb}
