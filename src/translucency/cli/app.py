@@ -13,7 +13,19 @@ import sys
 import typer
 
 from .._version import __version__
-from . import acquire, acquire_object, demo, evaluate, export, fit, import_object, imports, info, materials, render
+from . import (
+    acquire,
+    acquire_object,
+    demo,
+    evaluate,
+    export,
+    fit,
+    import_object,
+    imports,
+    info,
+    materials,
+    render,
+)
 from ._common import console, err_console
 
 

@@ -49,6 +49,12 @@ def export(
     finish(
         as_json,
         quiet,
-        {"command": "export", "model": model, "ply": ply, "vertices": len(mesh.vertices), "faces": len(mesh.faces)},
+        {
+            "command": "export",
+            "model": model,
+            "ply": ply,
+            "vertices": len(mesh.vertices),
+            "faces": len(mesh.faces),
+        },
         [f"mesh: {ply} ({len(mesh.vertices):,} vertices, {len(mesh.faces):,} triangles, mm)"],
     )

@@ -106,14 +106,18 @@ def render(
         64, "--samples", help="With --scene: irradiance samples per vertex and pass (path-traced)."
     ),
     passes: int = typer.Option(
-        2, "--passes", help="With --scene: light-in / through-the-body passes (2: the scene lit by the objects "
-        "lights them back once)."
+        2,
+        "--passes",
+        help="With --scene: light-in / through-the-body passes (2: the scene lit by the objects "
+        "lights them back once).",
     ),
     max_depth: int = typer.Option(8, "--max-depth", help="With --scene: longest light path, bounces."),
     roughness: float = typer.Option(
         0.0, "--roughness", help="With --scene: GGX roughness of a dielectric object's boundary (0: smooth)."
     ),
-    picture_spp: int = typer.Option(16, "--picture-spp", help="With --scene: samples per pixel of our picture."),
+    picture_spp: int = typer.Option(
+        16, "--picture-spp", help="With --scene: samples per pixel of our picture."
+    ),
     overwrite: bool = overwrite_option(),
     max_memory: str = max_memory_option(),
     quiet: bool = quiet_option(),
@@ -136,16 +140,39 @@ def render(
     if scene is not None:
         if model is not None:
             raise TranslucencyError(f"{model}: with --scene, name the objects with --model ID=FILE instead")
-        given = [f for f, v, d in (("--light", light, [DEFAULT_LIGHT]), ("--view", view, "1,-1.6,0.7"),
-                                    ("--size", tuple(size), (320, 240)), ("--through", through, False)) if v != d]
+        given = [
+            f
+            for f, v, d in (
+                ("--light", light, [DEFAULT_LIGHT]),
+                ("--view", view, "1,-1.6,0.7"),
+                ("--size", tuple(size), (320, 240)),
+                ("--through", through, False),
+            )
+            if v != d
+        ]
         if given:
-            raise TranslucencyError(f"{given[0]}: the scene file says this (its emitters, sensor and film); "
-                                    "not with --scene")
+            raise TranslucencyError(
+                f"{given[0]}: the scene file says this (its emitters, sensor and film); not with --scene"
+            )
         return render_scene(
-            scene=scene, models=models, out=out, scene_unit=scene_unit, samples=samples, passes=passes,
-            max_depth=max_depth, roughness=roughness, picture_spp=picture_spp, incidence=incidence,
-            radius=radius, exposure=exposure, reference=reference, spp=spp, overwrite=overwrite,
-            max_memory=max_memory, quiet=quiet, as_json=as_json,
+            scene=scene,
+            models=models,
+            out=out,
+            scene_unit=scene_unit,
+            samples=samples,
+            passes=passes,
+            max_depth=max_depth,
+            roughness=roughness,
+            picture_spp=picture_spp,
+            incidence=incidence,
+            radius=radius,
+            exposure=exposure,
+            reference=reference,
+            spp=spp,
+            overwrite=overwrite,
+            max_memory=max_memory,
+            quiet=quiet,
+            as_json=as_json,
         )
     if models:
         raise TranslucencyError("--model: names the objects of a --scene; give the scene file too")

@@ -23,12 +23,16 @@ def parse_models(texts: list[str]) -> dict[str, Path]:
     for text in texts:
         key, eq, path = text.partition("=")
         if not eq or not key.strip() or not path.strip():
-            raise TranslucencyError(f"--model {text!r}: expected ID=FILE (a shape id of the scene = a model file)")
+            raise TranslucencyError(
+                f"--model {text!r}: expected ID=FILE (a shape id of the scene = a model file)"
+            )
         if key.strip() in out:
             raise TranslucencyError(f"--model: the shape id {key.strip()!r} is given twice")
         out[key.strip()] = Path(path.strip())
     if not out:
-        raise TranslucencyError("--scene: name the fitted objects with --model ID=FILE (shape id = model file)")
+        raise TranslucencyError(
+            "--scene: name the fitted objects with --model ID=FILE (shape id = model file)"
+        )
     return out
 
 
@@ -56,10 +60,10 @@ def render_scene(
     """``render --scene``: prepare, light (two passes), draw, and with ``reference`` compare."""
     from ..render import MAX_PAIRS, default_radius  # heavy: Mitsuba, Numba, trimesh load only to render
     from ..render.tonemap import auto_exposure, parse_exposure, save_images, tonemap  # Mitsuba loads
+    from ..resources.memory import transport_pairs
     from ..scene import FittedScene
     from ..scene.compare import lit_pixels, object_pixels, scene_errors
     from ..scene.reference import converged_scene_reference
-    from ..resources.memory import transport_pairs
 
     pairs = parse_models(models)
     for option, value, lo in (
@@ -93,13 +97,20 @@ def render_scene(
         default_radius(o.model, o.mesh, max_pairs=MAX_PAIRS) if radius is None else radius for o in fs.objects
     ]
     pairs_total = sum(
-        transport_pairs(vertices=len(o.mesh.vertices), surface_mm2=float(o.mesh.area), radius_mm=r, max_pairs=MAX_PAIRS)
+        transport_pairs(
+            vertices=len(o.mesh.vertices), surface_mm2=float(o.mesh.area), radius_mm=r, max_pairs=MAX_PAIRS
+        )
         for o, r in zip(fs.objects, radii)
     )
     paths = fs.vertices * samples
     need = run.check(
         resources.memory.scene_rendering(
-            pairs=pairs_total, paths=paths, pixels=W * H, spp=picture_spp, reference=reference, spp_reference=spp
+            pairs=pairs_total,
+            paths=paths,
+            pixels=W * H,
+            spp=picture_spp,
+            reference=reference,
+            spp_reference=spp,
         ),
         out,
     )
@@ -153,7 +164,9 @@ def render_scene(
         if reference:
             step(4, "volpath reference (2 renders)")
             dark = fs.render(spp=picture_spp, glowing=False)
-            ref, info = converged_scene_reference(fs, objects if objects.any() else np.ones(objects.shape, bool), spp=spp)
+            ref, info = converged_scene_reference(
+                fs, objects if objects.any() else np.ones(objects.shape, bool), spp=spp
+            )
             errors = scene_errors(ref, ours, objects, lit_pixels(ours, dark, objects))
             flip_map = errors.pop("flip_map")
             summary.update(
@@ -197,7 +210,8 @@ def _plot(ref_ldr, our_ldr, flip_map, objects, errors, path) -> None:
     im = ax[2].imshow(shown, cmap="magma", vmin=0, vmax=1)
     o, lit = errors["object"], errors["lit"]
     lit_text = f"; lit by it {lit['rel_rmse']:.2f}" if lit.get("pixels") else ""
-    ax[2].set_title(f"FLIP over the objects {o.get('flip', float('nan')):.3f}; rel. RMSE {o.get('rel_rmse', float('nan')):.2f}{lit_text}", fontsize=9)
+    flip, rmse = o.get("flip", float("nan")), o.get("rel_rmse", float("nan"))
+    ax[2].set_title(f"FLIP over the objects {flip:.3f}; rel. RMSE {rmse:.2f}{lit_text}", fontsize=9)
     fig.colorbar(im, ax=ax[2], shrink=0.8)
     for a in ax:
         a.axis("off")

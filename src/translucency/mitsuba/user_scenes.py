@@ -36,7 +36,18 @@ _TAGS = {
     "path": "integrator",
 }
 #: integrator plugins a scene dict may hold (replaced in the reference)
-_INTEGRATORS = {"path", "volpath", "volpathmis", "direct", "prb", "prbvolpath", "aov", "moment", "depth", "ptracer"}
+_INTEGRATORS = {
+    "path",
+    "volpath",
+    "volpathmis",
+    "direct",
+    "prb",
+    "prbvolpath",
+    "aov",
+    "moment",
+    "depth",
+    "ptracer",
+}
 
 
 def _mitsuba_message(exc: Exception, source) -> str:
@@ -91,7 +102,7 @@ def segments_hit(scene, start: np.ndarray, end: np.ndarray, *, skip=(), margin: 
         return out
     shapes = scene.shapes()
     skip_ptrs = [mi.ShapePtr(s) for s in skip]
-    index = {id(s): k for k, s in enumerate(shapes)}
+    skip_ids = {s.id() for s in skip}
     todo = np.flatnonzero(keep)
     o = start[todo] + d[todo] * margin
     w = d[todo] / length[todo, None]
@@ -110,10 +121,10 @@ def segments_hit(scene, start: np.ndarray, end: np.ndarray, *, skip=(), margin: 
         for ptr in skip_ptrs:
             skipped |= np.asarray(si.shape == ptr)
         for k, shape in enumerate(shapes):
-            if any(shape is s for s in skip):
+            if shape.id() in skip_ids:
                 continue
             on = valid & ~skipped & np.asarray(si.shape == mi.ShapePtr(shape))
-            out[todo[on]] = index[id(shape)]
+            out[todo[on]] = k
         t = np.asarray(si.t, np.float64)
         again = valid & skipped
         step = np.where(again, t + 1e-5 * np.maximum(length[todo], 1e-9), 0.0)
@@ -170,9 +181,16 @@ def user_scene_with_media(source, replace: dict, integrator: dict):
         for key, what in replace.items():
             path = folder / f"{len(shapes)}.ply"
             write_ply(path, *what["mesh"])
-            shapes[key] = {"type": "ply", "filename": str(path), "bsdf": what["bsdf"], "interior": what["interior"]}
+            shapes[key] = {
+                "type": "ply",
+                "filename": str(path),
+                "bsdf": what["bsdf"],
+                "interior": what["interior"],
+            }
         if isinstance(source, dict):
-            scene = {k: v for k, v in source.items() if not (isinstance(v, dict) and v.get("type") in _INTEGRATORS)}
+            scene = {
+                k: v for k, v in source.items() if not (isinstance(v, dict) and v.get("type") in _INTEGRATORS)
+            }
             scene = copy.copy(scene)
             scene.update(shapes)
             scene["integrator"] = integrator

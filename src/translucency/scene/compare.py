@@ -31,7 +31,9 @@ def object_pixels(fitted_scene, sensor: int = 0) -> np.ndarray:
     return np.asarray(on, dtype=bool).reshape(H, W)
 
 
-def lit_pixels(ours: np.ndarray, dark: np.ndarray, objects: np.ndarray, share: float = LIT_SHARE) -> np.ndarray:
+def lit_pixels(
+    ours: np.ndarray, dark: np.ndarray, objects: np.ndarray, share: float = LIT_SHARE
+) -> np.ndarray:
     """(H, W) bool: off the objects, where the objects' light is at least ``share`` of our picture."""
     a, b = ours.sum(axis=2), dark.sum(axis=2)
     return ~objects & (a > 0) & (a - b >= share * a)
@@ -50,7 +52,11 @@ def scene_errors(reference: np.ndarray, ours: np.ndarray, objects: np.ndarray, l
             "pixels": int(mask.sum()),
         }
 
-    cmp = compare(reference, ours, objects) if objects.any() else {"flip_mean_object": float("nan"), "flip_map": None}
+    cmp = (
+        compare(reference, ours, objects)
+        if objects.any()
+        else {"flip_mean_object": float("nan"), "flip_map": None}
+    )
     out = {
         "object": {**part(objects), "flip": cmp["flip_mean_object"]},
         "lit": part(lit),

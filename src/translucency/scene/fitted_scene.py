@@ -79,7 +79,11 @@ class FittedScene:
         mi = mitsuba()
         if not models:
             raise TranslucencyError("models: name at least one fitted object (shape id = model file)")
-        for option, value, lo in (("samples", samples, 1), ("passes", passes, 1), ("max_depth", max_depth, 1)):
+        for option, value, lo in (
+            ("samples", samples, 1),
+            ("passes", passes, 1),
+            ("max_depth", max_depth, 1),
+        ):
             if not isinstance(value, int) or value < lo:
                 raise TranslucencyError(f"{option}: must be an integer >= {lo}, got {value!r}")
         if not scene_unit_mm > 0:
@@ -216,6 +220,8 @@ class FittedScene:
                     o.set_exitance(M)
                 self.glow.update()
         return np.asarray(
-            mi.render(self.scene, integrator=self.integrator, spp=int(spp), seed=int(seed), sensor=int(sensor)),
+            mi.render(
+                self.scene, integrator=self.integrator, spp=int(spp), seed=int(seed), sensor=int(sensor)
+            ),
             dtype=np.float64,
         )[..., :3]

@@ -87,8 +87,16 @@ def scene_irradiance(
     cos_b = local.z
     ray = it.spawn_ray(mi.Frame3f(n).to_world(local))
     L = trace(
-        scene, sampler, glow, ray, mi.Color3f(1.0), it, cos_b * dr.inv_pi,
-        dr.full(mi.Bool, False, N), active & (cos_b > 0), max_depth=max_depth,
+        scene,
+        sampler,
+        glow,
+        ray,
+        mi.Color3f(1.0),
+        it,
+        cos_b * dr.inv_pi,
+        dr.full(mi.Bool, False, N),
+        active & (cos_b > 0),
+        max_depth=max_depth,
     )
     e_bsdf = L * dr.pi
     dr.eval(e_emitter, cos_e, e_glow, cos_g, e_bsdf, cos_b)

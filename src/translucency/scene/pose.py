@@ -72,7 +72,9 @@ def similarity(source: np.ndarray, target: np.ndarray) -> Pose:
     return Pose(s, R, t, residual)
 
 
-def pose_of(name: str, model_vertices, model_faces, shape_vertices, shape_faces, *, scene_unit_mm=1.0) -> Pose:
+def pose_of(
+    name: str, model_vertices, model_faces, shape_vertices, shape_faces, *, scene_unit_mm=1.0
+) -> Pose:
     """The pose of the shape ``name`` as the model's mesh, or one line saying why it is not that mesh.
 
     ``scene_unit_mm``: how many millimetres one scene unit is (1: the scene is in mm).

@@ -36,7 +36,11 @@ def _media(fitted_scene, channel: int) -> dict:
         medium = slab_medium_dict(
             volume, channel, (lo[0], lo[1], hi[2]), placed=o.pose.matrix, unit_mm=o.scene_unit_mm
         )
-        boundary = {"type": "null"} if o.eta == 1.0 else {"type": "dielectric", "int_ior": float(o.eta), "ext_ior": 1.0}
+        boundary = (
+            {"type": "null"}
+            if o.eta == 1.0
+            else {"type": "dielectric", "int_ior": float(o.eta), "ext_ior": 1.0}
+        )
         out[o.name] = {"mesh": (o.vertices, np.asarray(o.mesh.faces)), "bsdf": boundary, "interior": medium}
     return out
 

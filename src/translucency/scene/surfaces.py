@@ -79,7 +79,9 @@ class GlowingSurfaces:
         self._positions = [mi.Float(np.asarray(o.vertices, np.float32).ravel()) for o in self.objects]
         counts = [len(o.faces) for o in self.objects]
         self._offsets = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
-        self._areas = np.concatenate([o.triangle_areas for o in self.objects]) if self.objects else np.zeros(0)
+        self._areas = (
+            np.concatenate([o.triangle_areas for o in self.objects]) if self.objects else np.zeros(0)
+        )
         self._dr = dr
         self.update()
 
@@ -181,7 +183,13 @@ class GlowingSurfaces:
         n_lanes = dr.width(sample1)
         zero3 = dr.zeros(mi.Vector3f, n_lanes)
         if not self.emitting:
-            return zero3, dr.zeros(mi.Float, n_lanes), dr.zeros(mi.Color3f, n_lanes), dr.zeros(mi.Float, n_lanes), dr.full(mi.Bool, False, n_lanes)
+            return (
+                zero3,
+                dr.zeros(mi.Float, n_lanes),
+                dr.zeros(mi.Color3f, n_lanes),
+                dr.zeros(mi.Float, n_lanes),
+                dr.full(mi.Bool, False, n_lanes),
+            )
         tri, pmf = self._distribution.sample_pmf(sample1, active)
         bary = mi.warp.square_to_uniform_triangle(sample2)
         b1, b2 = bary.x, bary.y
