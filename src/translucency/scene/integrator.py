@@ -162,9 +162,9 @@ def integrator_class():
         def __init__(self, props=None):
             props = props if props is not None else mi.Properties()
             super().__init__(props)
-            self.max_depth = int(props.get("max_depth", 8)) if props.has_property("max_depth") else 8
-            self.rr_depth = int(props.get("rr_depth", 5)) if props.has_property("rr_depth") else 5
-            self.strategy = str(props.get("strategy", "mis")) if props.has_property("strategy") else "mis"
+            self.max_depth = int(props["max_depth"]) if "max_depth" in props else 8
+            self.rr_depth = int(props["rr_depth"]) if "rr_depth" in props else 5
+            self.strategy = str(props["strategy"]) if "strategy" in props else "mis"
             self.glow = None
 
         def sample(self, scene, sampler, ray, medium=None, active=True):

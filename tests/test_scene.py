@@ -1,0 +1,342 @@
+"""Fitted objects in a user's Mitsuba scene (translucency.scene, render --scene, export --ply): the glowing
+surfaces sampled without bias (light sampling alone = BSDF sampling alone = the closed form of a
+Lambertian sphere), the irradiance at vertices against closed forms (a point light's I cos/d², a constant
+sky's πL, the furnace's geometric series), the pose, the reference and every bad input in one line."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+import trimesh
+from typer.testing import CliRunner
+
+from helpers import error_line
+from translucency import TranslucencyError
+from translucency.cli.app import app
+from translucency.mitsuba import mitsuba
+from translucency.mitsuba.user_scenes import load_user_scene, mesh_buffers, shapes_by_id
+from translucency.scene import FittedScene
+from translucency.scene.integrator import integrator_class
+from translucency.scene.irradiance import scene_irradiance
+from translucency.scene.pose import pose_of, similarity
+from translucency.scene.surfaces import Glowing, GlowingSurfaces
+
+runner = CliRunner()
+
+
+def _mesh(mesh):
+    """A Mitsuba mesh shape of a trimesh (for scene dicts)."""
+    mi = mitsuba()
+    m = mi.Mesh("object", len(mesh.vertices), len(mesh.faces), has_vertex_normals=False)
+    p = mi.traverse(m)
+    p["vertex_positions"] = mi.Float(np.asarray(mesh.vertices, np.float32).ravel())
+    p["faces"] = mi.UInt32(np.asarray(mesh.faces, np.uint32).ravel())
+    p.update()
+    return m
+
+
+def _glowing_scene(exitance_of, *, spp, strategy, size=(24, 18)):
+    """A glowing ball (radius 5 mm, centre 10 mm above a diffuse floor of albedo 0.5), seen from above."""
+    mi = mitsuba()
+    ball = trimesh.creation.icosphere(4, radius=5.0)
+    ball.apply_translation([0.0, 0.0, 10.0])
+    scene = load_user_scene(
+        {
+            "type": "scene",
+            "ball": _mesh(ball),
+            "floor": {
+                "type": "rectangle",
+                "to_world": mi.ScalarTransform4f().scale(60),
+                "bsdf": {"type": "diffuse", "reflectance": 0.5},
+            },
+            "camera": {
+                "type": "perspective",
+                "fov": 60,
+                "to_world": mi.ScalarTransform4f().look_at(
+                    origin=[0, -0.01, 80], target=[0, 0, 0], up=[0, 1, 0]
+                ),
+                "film": {"type": "hdrfilm", "width": size[0], "height": size[1], "rfilter": {"type": "box"}},
+            },
+        }
+    )
+    shape = shapes_by_id(scene)["ball"]
+    glow = GlowingSurfaces([Glowing(shape, ball.vertices, ball.faces, exitance=exitance_of(ball.vertices))])
+    props = mi.Properties()
+    props["strategy"] = strategy
+    integrator = integrator_class()(props)
+    integrator.glow = glow
+    image = np.asarray(mi.render(scene, integrator=integrator, spp=spp), dtype=np.float64)
+    # the floor point of every pixel centre (the camera looks straight down from 80 mm, 60° across)
+    W, H = size
+    half = np.tan(np.radians(30.0)) * 80.0
+    x = ((np.arange(W) + 0.5) / W * 2 - 1) * half
+    y = -((np.arange(H) + 0.5) / H * 2 - 1) * half * H / W
+    X, Y = np.meshgrid(x, y)
+    return image, X, Y
+
+
+def test_a_glowing_sphere_lights_the_floor_as_the_closed_form_with_either_sampling():
+    """A Lambertian sphere of exitance M (radius R, centre h above the floor) gives the floor
+    E = M R² cos θ / d² — the same as a point of intensity M R²: light sampling alone, BSDF sampling alone
+    and MIS agree with it (the floor's radiance is ρ E / π)."""
+    M, R, h = 2.0, 5.0, 10.0
+    pictures = {
+        s: _glowing_scene(lambda v: np.full((len(v), 3), M), spp=spp, strategy=s)
+        for s, spp in (("light", 64), ("bsdf", 1024), ("mis", 64))
+    }
+    _, X, Y = pictures["light"]
+    d2 = X**2 + Y**2 + h**2
+    expected = 0.5 / np.pi * M * R**2 * (h / np.sqrt(d2)) / d2
+    floor = X**2 + Y**2 > 8.0**2  # off the ball and its shadow
+    for strategy, (image, _, _) in pictures.items():
+        ratio = image[..., 0][floor].mean() / expected[floor].mean()
+        assert abs(ratio - 1) < (0.06 if strategy == "bsdf" else 0.02), (strategy, ratio)
+
+
+def test_spatially_varying_exitance_is_sampled_where_it_is():
+    """The trap of a mesh_attribute area emitter: exitance that varies over the surface must be sampled
+    at the point it belongs to.  One half of the sphere glows, the other not: light sampling alone and
+    BSDF sampling alone give the same floor (per side of the picture)."""
+    half = lambda v: np.where(v[:, :1] > 0, 3.0, 0.0) * np.ones((1, 3))  # noqa: E731 — +x half glows
+    light, X, _ = _glowing_scene(half, spp=64, strategy="light")
+    bsdf, _, _ = _glowing_scene(half, spp=2048, strategy="bsdf")
+    for side in (X > 8.0, X < -8.0):
+        a, b = light[..., 0][side].mean(), bsdf[..., 0][side].mean()
+        assert abs(a / b - 1) < 0.08, (a, b)
+    assert light[..., 0][X > 8].mean() > 5 * light[..., 0][X < -8].mean()  # the glowing side is brighter
+
+
+def _ball_scene(emitter: dict, extra: dict | None = None):
+    ball = trimesh.creation.icosphere(3, radius=5.0)
+    scene = load_user_scene({"type": "scene", "ball": _mesh(ball), "light": emitter, **(extra or {})})
+    shape = shapes_by_id(scene)["ball"]
+    return ball, scene, GlowingSurfaces([Glowing(shape, ball.vertices, ball.faces)])
+
+
+def test_irradiance_of_a_point_light_with_self_shadow():
+    ball, scene, glow = _ball_scene({"type": "point", "position": [0, 0, 40], "intensity": 100.0})
+    E = scene_irradiance(scene, glow, ball.vertices, ball.vertex_normals, samples=8)
+    to = np.array([0.0, 0.0, 40.0]) - ball.vertices
+    d = np.linalg.norm(to, axis=1)
+    expected = 100.0 * np.maximum(np.einsum("vk,vk->v", to / d[:, None], ball.vertex_normals), 0) / d**2
+    # exact but for the rays' start 5·10⁻⁴ object sizes above the surface (and float32)
+    assert np.allclose(E, expected[:, None], rtol=1e-3, atol=5e-5)
+
+
+def test_irradiance_under_a_constant_sky_is_pi_L():
+    ball, scene, glow = _ball_scene({"type": "constant", "radiance": 0.5})
+    E = scene_irradiance(scene, glow, ball.vertices, ball.vertex_normals, samples=256)
+    assert abs(E.mean() / (np.pi * 0.5) - 1) < 0.01
+    assert np.percentile(np.abs(E / (np.pi * 0.5) - 1), 95) < 0.12
+
+
+def test_irradiance_in_a_furnace_is_the_geometric_series():
+    """A tiny ball inside a closed sphere whose walls glow with L_e and reflect ρ (diffuse): with paths of
+    at most D segments, E = π L_e Σ_{k<D} ρ^k (the indirect light of the other shapes, MIS and roulette)."""
+    mi = mitsuba()
+    Le, rho, depth = 0.2, 0.6, 6
+    ball = trimesh.creation.icosphere(2, radius=0.05)
+    walls = {
+        "type": "sphere",
+        "radius": 50.0,
+        "flip_normals": True,
+        "bsdf": {"type": "diffuse", "reflectance": rho},
+        "emitter": {"type": "area", "radiance": Le},
+    }
+    scene = load_user_scene({"type": "scene", "ball": _mesh(ball), "walls": walls})
+    glow = GlowingSurfaces([Glowing(shapes_by_id(scene)["ball"], ball.vertices, ball.faces)])
+    E = scene_irradiance(scene, glow, ball.vertices, ball.vertex_normals, samples=512, max_depth=depth)
+    expected = np.pi * Le * (1 - rho**depth) / (1 - rho)
+    assert abs(E.mean() / expected - 1) < 0.02, (E.mean(), expected)
+    assert mi is not None
+
+
+def test_pose_recovers_a_placement_and_refuses_other_meshes():
+    rng = np.random.default_rng(1)
+    ball = trimesh.creation.icosphere(2, radius=5.0)
+    R = trimesh.transformations.random_rotation_matrix(rng.random(3))[:3, :3]
+    placed = 0.001 * ball.vertices @ R.T + [1.0, 2.0, 3.0]  # a scene in metres
+    pose = pose_of("b", ball.vertices, ball.faces, placed, ball.faces, scene_unit_mm=1000.0)
+    assert np.allclose(pose.rotation, R, atol=1e-9) and np.isclose(pose.scale, 0.001)
+    assert np.allclose(pose.apply(ball.vertices), placed, atol=1e-12)
+    with pytest.raises(TranslucencyError, match="scaled by 0.001 against the model.s millimetres"):
+        pose_of("b", ball.vertices, ball.faces, placed, ball.faces)  # a scene in mm: 1000x too small
+    with pytest.raises(TranslucencyError, match="does not match the model's mesh"):
+        bent = ball.vertices + rng.normal(0, 0.05, ball.vertices.shape)
+        pose_of("b", ball.vertices, ball.faces, bent, ball.faces)
+    with pytest.raises(TranslucencyError, match="162 vertices .* the model's mesh has 642"):
+        small = trimesh.creation.icosphere(2, radius=5.0)
+        pose_of(
+            "b",
+            trimesh.creation.icosphere(3).vertices,
+            trimesh.creation.icosphere(3).faces,
+            small.vertices,
+            small.faces,
+        )
+    assert np.isclose(similarity(ball.vertices, 2 * ball.vertices).scale, 2.0)
+
+
+# ---------------------------------------------------------------------------------------------------------
+# a fitted ball in a scene file, from the command line
+
+
+@pytest.fixture(scope="module")
+def fitted_ball(tmp_path_factory):
+    """A skin ball (6 mm, 642 vertices), acquired index-matched and fitted; its mesh exported."""
+    folder = tmp_path_factory.mktemp("fitted_ball")
+    mesh = folder / "ball.ply"
+    trimesh.creation.icosphere(3, radius=6.0).export(mesh)
+    data, model = folder / "ball.zarr", folder / "ball.model.zip"
+    args = ["acquire", "mesh", "--out", str(data), "--mesh", str(mesh), "--material", "homogeneous:skin1"]
+    args += ["--voxel", "1", "--points", "16", "--photons", "4000", "--index-matched", "--quiet"]
+    assert runner.invoke(app, args).exit_code == 0
+    assert runner.invoke(app, ["fit", str(data), "--out", str(model), "--quiet"]).exit_code == 0
+    res = runner.invoke(app, ["export", str(model), "--ply", str(folder / "object.ply")])
+    assert res.exit_code == 0, res.output
+    return folder, model
+
+
+SCENE = """<scene version="3.0.0">
+  <sensor type="perspective">
+    <float name="fov" value="45"/>
+    <transform name="to_world"><lookat origin="0, -40, 25" target="0, 0, 5" up="0, 0, 1"/></transform>
+    <film type="hdrfilm"><integer name="width" value="40"/><integer name="height" value="30"/>
+      <rfilter type="box"/></film>
+  </sensor>
+  <shape type="ply" id="ball">
+    <string name="filename" value="object.ply"/>
+    <transform name="to_world"><rotate z="1" angle="{angle}"/><translate x="2" z="{z}"/></transform>
+  </shape>
+  <shape type="rectangle" id="floor">
+    <transform name="to_world"><scale value="40"/></transform>
+    <bsdf type="diffuse"><rgb name="reflectance" value="0.5, 0.5, 0.5"/></bsdf>
+  </shape>
+  {light}
+</scene>
+"""
+LAMP = """<shape type="rectangle" id="lamp">
+    <transform name="to_world"><scale value="5"/><rotate x="1" angle="180"/><translate z="40"/></transform>
+    <emitter type="area"><rgb name="radiance" value="20, 20, 20"/></emitter>
+  </shape>"""
+
+
+def _write_scene(folder, name="scene.xml", *, angle=30, z=6.5, light=LAMP):
+    path = folder / name
+    path.write_text(SCENE.format(angle=angle, z=z, light=light))
+    return path
+
+
+def test_export_ply_is_the_models_mesh_as_mitsuba_reads_it(fitted_ball):
+    folder, model = fitted_ball
+    scene = load_user_scene(_write_scene(folder, angle=0, z=0))
+    vertices, faces = mesh_buffers(shapes_by_id(scene)["ball"])
+    from translucency.io.model_file import load_model
+
+    m = load_model(model)
+    assert np.array_equal(faces, m.faces) and np.allclose(vertices, m.alpha.vertices + [2.0, 0, 0], atol=1e-5)
+    assert "--overwrite" in error_line(["export", model, "--ply", folder / "object.ply"])
+    (folder / "mine.ply").write_text("not ours")
+    line = error_line(["export", model, "--ply", folder / "mine.ply", "--overwrite"])
+    assert "not a translucency mesh file" in line
+    assert (folder / "mine.ply").read_text() == "not ours"
+
+
+def test_render_scene_from_the_command_line_against_its_reference(fitted_ball):
+    """The ball on a floor under an area light: our picture, the volpath reference of the same scene (the
+    skin's volume in place), the comparison over the ball and over the floor it lights."""
+    folder, model = fitted_ball
+    scene = _write_scene(folder)
+    out = folder / "render"
+    args = ["render", "--scene", str(scene), "--model", f"ball={model}", "--out", str(out), "--reference"]
+    res = runner.invoke(app, args + ["--spp", "32", "--samples", "32"])
+    assert res.exit_code == 0, res.output
+    summary = json.loads((out / "scene.json").read_text())
+    for name in ("ours.exr", "ours.png", "reference.exr", "reference.png", "scene.png"):
+        assert (out / name).stat().st_size > 300
+    obj = summary["errors"]["object"]
+    assert obj["pixels"] > 50 and 0.85 < obj["brightness"] < 1.15, obj
+    assert obj["rel_rmse"] < 0.35 and obj["flip"] < 0.35, (obj, summary["reference_noise"])
+    assert summary["errors"]["rest"]["rel_rmse"] < 0.5
+
+
+def test_python_api_renders_a_scene_dict_with_two_objects(fitted_ball):
+    folder, model = fitted_ball
+    mi = mitsuba()
+    from translucency.io.model_file import load_model
+
+    m = load_model(model)
+    ball = trimesh.Trimesh(m.alpha.vertices, m.faces, process=False)
+    scene = {
+        "type": "scene",
+        "a": _mesh(ball.copy().apply_translation([-8.0, 0, 0])),
+        "b": _mesh(ball.copy().apply_translation([8.0, 0, 0])),
+        "sky": {"type": "constant", "radiance": 0.1},
+        "camera": {
+            "type": "perspective",
+            "fov": 50,
+            "to_world": mi.ScalarTransform4f().look_at(origin=[0, -50, 0], target=[0, 0, 0], up=[0, 0, 1]),
+            "film": {"type": "hdrfilm", "width": 32, "height": 24},
+        },
+    }
+    fs = FittedScene(scene, {"a": model, "b": model}, samples=16)
+    fs.light()
+    E_a, E_b = fs.irradiance
+    # each ball hides a little of the sky from the other, on the sides that face each other
+    facing = fs.objects[0].normals[:, 0] > 0.9
+    assert E_a[facing].mean() < 0.97 * E_a[fs.objects[0].normals[:, 0] < -0.9].mean()
+    image = fs.render(spp=4)
+    assert image.shape == (24, 32, 3) and np.isfinite(image).all()
+    left, right = image[:, :16].mean(), image[:, 16:].mean()
+    assert abs(left / right - 1) < 0.1  # the two mirror each other
+    assert np.allclose(E_b.mean(), E_a.mean(), rtol=0.05)
+
+
+@pytest.mark.parametrize(
+    "case, expected",
+    [
+        ("no such id", "model nope: the scene has no shape with id 'nope' (its shapes: ball, floor, lamp)"),
+        ("no emitters", "scene: no emitters"),
+        ("intersects", "shape 'ball': intersects shape 'floor'"),
+        ("parse error", 'scene.xml" failed: Start-end tags mismatch (line 3, col 3)'),
+        ("planar model", "a planar model; the scene's object 'ball' needs a per-vertex model"),
+        ("other mesh", "shape 'ball': 162 vertices and 320 triangles, but the model's mesh has 642"),
+        ("model twice", "--model: the shape id 'ball' is given twice"),
+        ("light given", "--light: the scene file says this"),
+    ],
+)
+def test_bad_scene_input_is_one_line(fitted_ball, tmp_path, case, expected):
+    folder, model = fitted_ball
+    scene = _write_scene(folder)
+    models = [f"ball={model}"]
+    extra: list[str] = []
+    if case == "no such id":
+        models = [f"nope={model}"]
+    elif case == "no emitters":
+        scene = _write_scene(folder, "dark.xml", light="")
+    elif case == "intersects":
+        scene = _write_scene(folder, "sunk.xml", z=3.0)
+    elif case == "parse error":
+        scene = tmp_path / "scene.xml"
+        scene.write_text("<scene version='3.0.0'>\n<shape type='ply'>\n</scene>\n")
+    elif case == "planar model":
+        from helpers import random_exponential_model
+        from translucency.io.model_file import save_model
+
+        planar = tmp_path / "planar.model.zip"
+        save_model(random_exponential_model(np.random.default_rng(0)), planar)
+        models = [f"ball={planar}"]
+    elif case == "other mesh":
+        trimesh.creation.icosphere(2, radius=6.0).export(tmp_path / "object.ply")
+        scene = _write_scene(tmp_path)
+    elif case == "model twice":
+        models = models * 2
+    elif case == "light given":
+        extra = ["--light", "point:0,0,50"]
+    args = ["render", "--scene", str(scene), "--out", str(tmp_path / "r")]
+    for m in models:
+        args += ["--model", m]
+    line = error_line(args + extra)
+    assert expected in line, line
+    assert not (tmp_path / "r").exists()  # refused before any output
