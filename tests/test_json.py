@@ -42,12 +42,37 @@ def outputs(tmp_path_factory):
         ["evaluate", tmp / "b.model.zip", tmp / "b.zarr", "--report", tmp / "mrep", "-q"]
     )
     out["render"] = _json(["render", tmp / "b.model.zip", "--out", tmp / "img", "--size", "24", "16", "-q"])
+    out["export"] = _json(["export", tmp / "b.model.zip", "--ply", tmp / "object.ply", "-q"])
+    (tmp / "scene.xml").write_text(SCENE)
+    out["render (scene)"] = _json(
+        [
+            "render",
+            "--scene",
+            tmp / "scene.xml",
+            "--model",
+            f"ball={tmp / 'b.model.zip'}",
+            "--out",
+            tmp / "scn",
+        ]
+        + ["--samples", "4", "--picture-spp", "2", "--reference", "--spp", "2", "-q"]
+    )
     for name in ("a.zarr", "b.zarr", "a.model.zip", "b.model.zip"):
         out[f"info {name}"] = _json(["info", tmp / name])
     out["materials"] = _json(["materials"])
     out["tmp"] = tmp
     return out
 
+
+#: a small scene around the mesh of b.model.zip (render --scene)
+SCENE = """<scene version="3.0.0">
+  <sensor type="perspective"><float name="fov" value="40"/>
+    <transform name="to_world"><lookat origin="0, -30, 10" target="0, 0, 0" up="0, 0, 1"/></transform>
+    <film type="hdrfilm"><integer name="width" value="16"/><integer name="height" value="12"/></film>
+  </sensor>
+  <shape type="ply" id="ball"><string name="filename" value="object.ply"/></shape>
+  <emitter type="constant"><rgb name="radiance" value="0.1, 0.1, 0.1"/></emitter>
+</scene>
+"""
 
 NAMES = [
     "acquire planar",
@@ -57,6 +82,8 @@ NAMES = [
     "evaluate",
     "evaluate (mesh)",
     "render",
+    "render (scene)",
+    "export",
     "materials",
 ]
 NAMES += ["info a.zarr", "info b.zarr", "info a.model.zip", "info b.model.zip"]

@@ -44,18 +44,21 @@ MAY_IMPORT: dict[str, frozenset[str]] = {
     "fit": _BASE | {"acquire"},
     "evaluate": _BASE | {"acquire", "fit"},
     "render": _BASE | {"acquire", "fit", "evaluate"},
+    # a user's Mitsuba scene with fitted objects in it: the render stage's transport inside a scene
+    "scene": _BASE | {"acquire", "fit", "evaluate", "render"},
     # a real rig: photographs → a planar data set as acquire writes it (acquire's place in the pipeline)
     "rig": _BASE,
     # cross-checks beside the pipeline (tests, benchmarks)
     "validate": _BASE | {"acquire", "fit", "evaluate", "render"},
     # on top: the workflow as functions (``translucency.fit(...)``), the main job, the commands,
     # ``python -m translucency`` and the façade
-    "workflow": _BASE | {"acquire", "fit", "evaluate", "render", "rig"},
-    "pipeline": _BASE | {"acquire", "fit", "evaluate", "render", "rig", "validate", "workflow"},
-    "cli": _BASE | {"acquire", "fit", "evaluate", "render", "rig", "validate", "workflow", "pipeline"},
+    "workflow": _BASE | {"acquire", "fit", "evaluate", "render", "scene", "rig"},
+    "pipeline": _BASE | {"acquire", "fit", "evaluate", "render", "scene", "rig", "validate", "workflow"},
+    "cli": _BASE
+    | {"acquire", "fit", "evaluate", "render", "scene", "rig", "validate", "workflow", "pipeline"},
     "__main__": frozenset({"cli"}),
     "translucency": _BASE
-    | {"acquire", "fit", "evaluate", "render", "rig", "validate", "workflow", "pipeline"},
+    | {"acquire", "fit", "evaluate", "render", "scene", "rig", "validate", "workflow", "pipeline"},
 }
 
 #: Mitsuba's calls that build a scene (or a part of one) from a description

@@ -340,3 +340,28 @@ def test_bad_scene_input_is_one_line(fitted_ball, tmp_path, case, expected):
     line = error_line(args + extra)
     assert expected in line, line
     assert not (tmp_path / "r").exists()  # refused before any output
+
+
+def test_a_scene_file_names_the_renderer_as_a_mitsuba_plugin(fitted_ball):
+    """``<integrator type="translucency">`` after register_mitsuba_plugin(): Mitsuba's own mi.render of
+    the XML gives the picture FittedScene gives (the same estimator; two seeds' noise apart)."""
+    import translucency as tl
+
+    folder, model = fitted_ball
+    tl.register_mitsuba_plugin()
+    mi = mitsuba()
+    text = SCENE.format(angle=30, z=6.5, light=LAMP).replace(
+        '<scene version="3.0.0">',
+        f'<scene version="3.0.0"><integrator type="translucency"><string name="models" value="ball={model}"/>'
+        '<integer name="samples" value="32"/></integrator>',
+    )
+    (folder / "plugin.xml").write_text(text)
+    plugin = np.asarray(mi.render(mi.load_file(str(folder / "plugin.xml")), spp=64), dtype=np.float64)
+    fs = FittedScene(_write_scene(folder), {"ball": model}, samples=32)
+    ours = fs.render(spp=64, seed=5)
+    assert abs(plugin.mean() / ours.mean() - 1) < 0.03
+    # a malformed models parameter: Mitsuba's error, with our line inside
+    bad = text.replace(f"ball={model}", "ball")
+    (folder / "bad_plugin.xml").write_text(bad)
+    with pytest.raises(Exception, match="models: expected id=FILE pairs"):
+        mi.load_file(str(folder / "bad_plugin.xml"))

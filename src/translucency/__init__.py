@@ -36,6 +36,8 @@ _LAZY = {
     "PlanarAlpha": "model",
     "VertexAlpha": "model",
     "material": "model",
+    "FittedScene": "scene",  # fitted objects in a user's Mitsuba scene
+    "register_mitsuba_plugin": "scene",  # <integrator type="translucency"> in a Mitsuba XML
 }
 
 #: the workflow's functions, loaded from :mod:`translucency.workflow` when first used
@@ -64,6 +66,8 @@ __all__ = [
     "MATERIALS",
     "material",
     "data",
+    "FittedScene",
+    "register_mitsuba_plugin",
     *_WORKFLOW,
     "__version__",
 ]

@@ -338,6 +338,60 @@ RENDER = record(
     extra={"type": ["number", "null"], "description": "The comparison's numbers (with --reference)."},
 )
 
+_SCENE_PART = record(
+    "Errors over one set of pixels.",
+    {
+        "rel_rmse": field("number", "Relative RMSE of ours against the reference."),
+        "brightness": field("number", "Mean of ours over the mean of the reference."),
+        "pixels": field("integer", "Pixels in the set."),
+        "flip": field("number", "Mean FLIP of the tone-mapped pair (objects only)."),
+    },
+    optional=("rel_rmse", "brightness", "flip"),
+)
+
+RENDER_SCENE = record(
+    "`translucency render --scene SCENE --model ID=FILE --json`: fitted objects in a Mitsuba scene.",
+    {
+        "command": _command("render"),
+        "scene": field("string", "The Mitsuba scene file."),
+        "models": field("object", "Shape id -> the model file it is."),
+        "images": field("string", "The folder of ours.exr/.png (and reference.exr/.png, scene.png)."),
+        "objects": field("object", "Per fitted object: vertices, eta, incidence (the law used)."),
+        "prepare_s": field("number", "Building the transports.", "s"),
+        "radius_mm": array("Each object's near radius of the transport.", NUMBER, "mm"),
+        "light_s": field("number", "The light-in and through-the-body passes.", "s"),
+        "draw_s": field("number", "Path tracing our picture.", "s"),
+        "passes": field("integer", "Light-in / through-the-body passes (--passes)."),
+        "samples": field("integer", "Irradiance samples per vertex and pass (--samples)."),
+        "picture_spp": field("integer", "Samples per pixel of our picture (--picture-spp)."),
+        "object_pixels": field("integer", "Pixels whose centre ray meets a fitted object."),
+        "exposure": field("number", "Exposure of the PNGs: the linear scale before sRGB."),
+        "errors": record(
+            "Ours against the reference (with --reference): over the objects, over the pixels they light, "
+            "over the rest of the picture.",
+            {"object": _SCENE_PART, "lit": _SCENE_PART, "rest": _SCENE_PART},
+        ),
+        "reference_noise": field("number", "The reference's own noise over the objects (with --reference)."),
+        "reference_spp": field("integer", "Samples per pixel of each of the reference's two renders."),
+        "reference_s": field("number", "Path tracing the reference.", "s"),
+        "speedup_vs_reference": field("number", "Reference time over our passes and picture."),
+        **_WORKING,
+    },
+    optional=("errors", "reference_noise", "reference_spp", "reference_s", "speedup_vs_reference"),
+)
+
+# -- export -------------------------------------------------------------------------------------------
+EXPORT = record(
+    "`translucency export MODEL --ply OUT --json`: what was written.",
+    {
+        "command": _command("export"),
+        "model": field("string", "The model file."),
+        "ply": field("string", "The mesh written (binary PLY, mm, the model's vertex order)."),
+        "vertices": field("integer", "Vertices of the mesh."),
+        "faces": field("integer", "Triangles of the mesh."),
+    },
+)
+
 # -- info ---------------------------------------------------------------------------------------------
 _INFO = {
     "command": _command("info"),
@@ -492,6 +546,8 @@ SCHEMAS = {
     "evaluate": EVALUATE,
     "evaluate (mesh data set)": EVALUATE_MESH,
     "render": RENDER,
+    "render (scene)": RENDER_SCENE,
+    "export": EXPORT,
     "info (model file)": INFO_MODEL,
     "info (planar data set)": INFO_PLANAR,
     "info (mesh data set)": INFO_MESH,
@@ -506,6 +562,8 @@ def schema_of(summary: dict) -> dict:
         return _INFO_BY_WHAT[summary.get("what")]
     if summary.get("command") == "evaluate" and summary.get("geometry") == "mesh":
         return EVALUATE_MESH
+    if summary.get("command") == "render" and "scene" in summary:
+        return RENDER_SCENE
     return SCHEMAS[summary["command"]]
 
 
