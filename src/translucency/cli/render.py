@@ -103,7 +103,7 @@ def render(
     ),
     scene_unit: float = typer.Option(1.0, "--scene-unit", help="With --scene: millimetres per scene unit."),
     samples: int = typer.Option(
-        64, "--samples", help="With --scene: irradiance samples per vertex and pass (path-traced)."
+        32, "--samples", help="With --scene: irradiance samples per vertex and pass (path-traced)."
     ),
     passes: int = typer.Option(
         2,

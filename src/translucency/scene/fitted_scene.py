@@ -71,7 +71,7 @@ class FittedScene:
         scene_unit_mm: float = 1.0,
         incidence: str = "half-space",
         roughness: float = 0.0,
-        samples: int = 64,
+        samples: int = 32,
         passes: int = 2,
         max_depth: int = 8,
         strategy: str = "mis",

@@ -28,6 +28,10 @@ from ..mitsuba import drjit, load_plugin, mitsuba
 from ..model.boundary import fresnel_transmittance
 from .integrator import _mis, trace
 
+#: the most paths one wavefront holds: larger ones are traced in batches of samples (a wavefront of a few
+#: million paths outgrows the caches and runs slower per path: measured 2.7 against 0.5 µs a path)
+WAVEFRONT = 1 << 19
+
 
 def scene_irradiance(
     scene,
@@ -35,7 +39,7 @@ def scene_irradiance(
     points: np.ndarray,
     normals: np.ndarray,
     *,
-    samples: int = 64,
+    samples: int = 32,
     seed: int = 0,
     incidence=None,
     eta: float = 1.0,
@@ -49,12 +53,27 @@ def scene_irradiance(
     (:class:`~translucency.scene.surfaces.GlowingSurfaces`); ``offset``: how far above the surface the
     rays start (default 5·10⁻⁴ of the points' extent).
     """
-    mi, dr = mitsuba(), drjit()
     points = np.asarray(points, dtype=np.float64)
     normals = np.asarray(normals, dtype=np.float64)
     V, K = len(points), int(samples)
     if offset is None:
         offset = 5e-4 * float(np.max(np.ptp(points, axis=0)) or 1.0)
+    # batches of samples, each a wavefront of at most WAVEFRONT paths (whole vertices' worth)
+    per_batch = max(1, min(K, WAVEFRONT // max(V, 1)))
+    E, done = np.zeros((V, 3)), 0
+    while done < K:
+        k = min(per_batch, K - done)
+        E += k * _irradiance_batch(
+            scene, glow, points, normals, k, (seed * 7919 + done) % 2**32, incidence, eta, max_depth, offset
+        )
+        done += k
+    return E / K
+
+
+def _irradiance_batch(scene, glow, points, normals, K, seed, incidence, eta, max_depth, offset):
+    """:func:`scene_irradiance` with K samples per vertex in one wavefront."""
+    mi, dr = mitsuba(), drjit()
+    V = len(points)
     N = V * K
     sampler = load_plugin({"type": "independent", "sample_count": 1})
     sampler.seed(seed, N)

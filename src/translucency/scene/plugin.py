@@ -24,7 +24,7 @@ picture (:mod:`translucency.scene.integrator`).
      - millimetres per scene unit
    * - ``samples``
      - integer
-     - 64
+     - 32
      - irradiance samples per vertex and pass
    * - ``passes``
      - integer
@@ -98,7 +98,7 @@ def register_mitsuba_plugin() -> None:
             self.models = _models(get("models", ""))
             self.options = {
                 "scene_unit_mm": float(get("scene_unit_mm", 1.0)),
-                "samples": int(get("samples", 64)),
+                "samples": int(get("samples", 32)),
                 "passes": int(get("passes", 2)),
                 "max_depth": int(get("max_depth", 8)),
                 "incidence": str(get("incidence", "half-space")),
