@@ -86,7 +86,12 @@ class FittedObject:
         self.transport = transport_matrices(self.model, self.mesh, radius=rad)
         self.law = self.transport.incidence(self.incidence, self.eta)
         self.glowing = Glowing(
-            self.shape, self.vertices, np.asarray(self.mesh.faces), exit_law=self.exit_law(), coat=self.coat
+            self.shape,
+            self.vertices,
+            np.asarray(self.mesh.faces),
+            exit_law=self.exit_law(),
+            coat=self.coat,
+            normals=self.normals,
         )
 
     @property

@@ -28,6 +28,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..mitsuba import drjit, mitsuba
+from .smooth import limited_gradients
 
 #: cosines at which each vertex's exit law is tabulated (uniform over [0, 1])
 EXIT_NODES = 17
@@ -44,6 +45,7 @@ class Glowing:
     exitance: np.ndarray = field(default=None)  # (V, 3) M per scene-unit² per unit irradiance's units
     exit_law: np.ndarray = field(default=None)  # (V, EXIT_NODES, 3): g_v(μ_j), μ_j = j / (EXIT_NODES − 1)
     coat: object = None  # the boundary's Mitsuba BSDF (dielectric or roughdielectric), None: index-matched
+    normals: np.ndarray = field(default=None)  # (V, 3) outward vertex normals (for the smooth drawing)
 
     def __post_init__(self):
         V = len(self.vertices)
@@ -70,25 +72,32 @@ class GlowingSurfaces:
     """Every fitted object of a scene as a light: radiance on hit, sampling and its density (module
     docstring).  Built from :class:`Glowing` records; :meth:`update` takes new exitances."""
 
-    def __init__(self, objects: list[Glowing]):
+    def __init__(self, objects: list[Glowing], *, smooth: bool = True):
         mi, dr = mitsuba(), drjit()
         self.objects = list(objects)
         self.pointers = [mi.ShapePtr(o.shape) for o in self.objects]
         self.coats = [None if o.coat is None else mi.BSDFPtr(o.coat) for o in self.objects]
         self._faces = [mi.UInt32(np.asarray(o.faces, np.uint32).ravel()) for o in self.objects]
         self._positions = [mi.Float(np.asarray(o.vertices, np.float32).ravel()) for o in self.objects]
+        self._normals = [
+            None if o.normals is None else mi.Float(np.asarray(o.normals, np.float32).ravel()) for o in self.objects
+        ]
         counts = [len(o.faces) for o in self.objects]
         self._offsets = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
         self._areas = (
             np.concatenate([o.triangle_areas for o in self.objects]) if self.objects else np.zeros(0)
         )
         self._dr = dr
+        self.smooth = smooth
         self.update()
 
     def update(self) -> None:
         """Take each object's current ``exitance`` and ``exit_law`` (after a new transport pass)."""
         mi = mitsuba()
         self._M = [mi.Float(np.maximum(o.exitance, 0.0).astype(np.float32).ravel()) for o in self.objects]
+        self._G = [
+            mi.Float(self._gradients(o).astype(np.float32).ravel()) if self.smooth else None for o in self.objects
+        ]
         self._g = [mi.Float(np.maximum(o.exit_law, 0.0).astype(np.float32).ravel()) for o in self.objects]
         # triangles drawn ∝ area × mean exitance (luminance); none: nothing to sample
         power = []
@@ -101,11 +110,24 @@ class GlowingSurfaces:
             mi.DiscreteDistribution(mi.Float(power.astype(np.float32))) if self.emitting else None
         )
 
+    @staticmethod
+    def _gradients(o: Glowing) -> np.ndarray:
+        """(V, 3, 3) the limited gradients of the exitance (:mod:`translucency.scene.smooth`)."""
+        if o.normals is None or not np.any(o.exitance):
+            return np.zeros((len(o.vertices), 3, 3))
+        return limited_gradients(o.vertices, o.faces, o.normals, o.exitance)
+
     # ------------------------------------------------------------------ evaluation on the surface
-    def _vertex_radiance(self, k: int, v, mu, active):
-        r""":math:`M_v\, g_v(\mu) / \pi` of object k at vertices ``v`` (UInt32) and cosines ``mu``."""
+    def _vertex_radiance(self, k: int, v, mu, active, x=None):
+        r""":math:`M_v\, g_v(\mu) / \pi` of object k at vertices ``v`` (UInt32) and cosines ``mu``; with
+        ``x`` (a point of a triangle of v) the exitance is v's limited linear reconstruction there."""
         mi, dr = mitsuba(), self._dr
         M = dr.gather(mi.Color3f, self._M[k], v, active)
+        if x is not None and self._G[k] is not None:
+            offset = x - dr.gather(mi.Point3f, self._positions[k], v, active)
+            for c in range(3):
+                grad = dr.gather(mi.Vector3f, self._G[k], 3 * v + c, active)
+                M[c] = dr.maximum(M[c] + dr.dot(grad, offset), 0.0)
         t = dr.clip(mu, 0.0, 1.0) * (EXIT_NODES - 1)
         j0 = dr.minimum(mi.UInt32(t), EXIT_NODES - 2)
         f = t - mi.Float(j0)
@@ -118,12 +140,19 @@ class GlowingSurfaces:
         return [dr.gather(mi.UInt32, self._faces[k], 3 * prim + j, active) for j in range(3)]
 
     def _interpolate(self, k: int, prim, b1, b2, mu, active):
-        """Radiance of object k at triangle ``prim``, barycentrics (1 − b1 − b2, b1, b2), cosine ``mu``."""
+        """Radiance of object k at triangle ``prim``, barycentrics (1 − b1 − b2, b1, b2), cosine ``mu``:
+        the three vertices' values blended linearly, or (``smooth``) their limited linear reconstructions
+        at the point (:mod:`translucency.scene.smooth`)."""
+        mi, dr = mitsuba(), self._dr
         v0, v1, v2 = self._triangle(k, prim, active)
+        x = None
+        if self.smooth:
+            p0, p1, p2 = (dr.gather(mi.Point3f, self._positions[k], v, active) for v in (v0, v1, v2))
+            x = (1.0 - b1 - b2) * p0 + b1 * p1 + b2 * p2
         return (
-            (1.0 - b1 - b2) * self._vertex_radiance(k, v0, mu, active)
-            + b1 * self._vertex_radiance(k, v1, mu, active)
-            + b2 * self._vertex_radiance(k, v2, mu, active)
+            (1.0 - b1 - b2) * self._vertex_radiance(k, v0, mu, active, x)
+            + b1 * self._vertex_radiance(k, v1, mu, active, x)
+            + b2 * self._vertex_radiance(k, v2, mu, active, x)
         )
 
     def hit(self, si, active):
@@ -136,12 +165,14 @@ class GlowingSurfaces:
 
     def radiance(self, si, ray_d, active):
         r"""Radiance toward :math:`-\omega` = ``-ray_d`` leaving the fitted object at ``si`` (0 off them and
-        from their inside)."""
+        from their inside).  The exit law's cosine is taken against the shading normal (the vertex normals
+        interpolated), so that the law does not jump at the mesh's edges."""
         mi, dr = mitsuba(), self._dr
         out = dr.zeros(mi.Color3f, dr.width(si.t))
-        mu = -dr.dot(si.n, ray_d)
+        outside = -dr.dot(si.n, ray_d) > 0
+        mu = dr.maximum(-dr.dot(si.sh_frame.n, ray_d), 0.0)
         for k, ptr in enumerate(self.pointers):
-            on = active & si.is_valid() & (si.shape == ptr) & (mu > 0)
+            on = active & si.is_valid() & (si.shape == ptr) & outside
             value = self._interpolate(k, si.prim_index, si.uv.x, si.uv.y, mu, on)
             out = dr.select(on, value, out)
         return out
@@ -206,7 +237,11 @@ class GlowingSurfaces:
             p = (1.0 - b1 - b2) * p0 + b1 * p1 + b2 * p2
             n = dr.normalize(dr.cross(p1 - p0, p2 - p0))
             d = ref_p - p
-            mu = dr.dot(n, dr.normalize(d))
+            shading = n
+            if self._normals[k] is not None:  # the exit law's cosine against the interpolated normal
+                n0, n1, n2 = (dr.gather(mi.Vector3f, self._normals[k], v, on) for v in (v0, v1, v2))
+                shading = dr.normalize((1.0 - b1 - b2) * n0 + b1 * n1 + b2 * n2)
+            mu = dr.maximum(dr.dot(shading, dr.normalize(d)), 0.0)
             value = self._interpolate(k, prim, b1, b2, mu, on)
             position = dr.select(on, p, position)
             normal = dr.select(on, n, normal)
