@@ -23,7 +23,7 @@ from __future__ import annotations
 import numpy as np
 
 
-def limited_gradients(vertices: np.ndarray, faces: np.ndarray, normals: np.ndarray, M: np.ndarray) -> np.ndarray:
+def limited_gradients(vertices, faces, normals, M) -> np.ndarray:
     """Per-vertex limited gradients (V, 3 channels, 3) of the exitance M (V, 3) (module docstring).
 
     Examples

@@ -61,6 +61,11 @@ class Glowing:
         return 0.5 * np.linalg.norm(np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), axis=1)
 
 
+def _floats(array):
+    """A NumPy array as a flat Dr.Jit ``Float`` (None stays None)."""
+    return None if array is None else mitsuba().Float(np.asarray(array, np.float32).ravel())
+
+
 def exit_table(law_at) -> np.ndarray:
     """The exit law tabulated at :data:`EXIT_NODES` cosines: ``law_at(mu)`` gives g (V, 3) for one
     cosine; returns (V, EXIT_NODES, 3)."""
@@ -79,9 +84,7 @@ class GlowingSurfaces:
         self.coats = [None if o.coat is None else mi.BSDFPtr(o.coat) for o in self.objects]
         self._faces = [mi.UInt32(np.asarray(o.faces, np.uint32).ravel()) for o in self.objects]
         self._positions = [mi.Float(np.asarray(o.vertices, np.float32).ravel()) for o in self.objects]
-        self._normals = [
-            None if o.normals is None else mi.Float(np.asarray(o.normals, np.float32).ravel()) for o in self.objects
-        ]
+        self._normals = [_floats(o.normals) for o in self.objects]
         counts = [len(o.faces) for o in self.objects]
         self._offsets = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
         self._areas = (
@@ -95,9 +98,7 @@ class GlowingSurfaces:
         """Take each object's current ``exitance`` and ``exit_law`` (after a new transport pass)."""
         mi = mitsuba()
         self._M = [mi.Float(np.maximum(o.exitance, 0.0).astype(np.float32).ravel()) for o in self.objects]
-        self._G = [
-            mi.Float(self._gradients(o).astype(np.float32).ravel()) if self.smooth else None for o in self.objects
-        ]
+        self._G = [_floats(self._gradients(o)) if self.smooth else None for o in self.objects]
         self._g = [mi.Float(np.maximum(o.exit_law, 0.0).astype(np.float32).ravel()) for o in self.objects]
         # triangles drawn ∝ area × mean exitance (luminance); none: nothing to sample
         power = []
