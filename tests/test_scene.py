@@ -365,3 +365,32 @@ def test_a_scene_file_names_the_renderer_as_a_mitsuba_plugin(fitted_ball):
     (folder / "bad_plugin.xml").write_text(bad)
     with pytest.raises(Exception, match="models: expected id=FILE pairs"):
         mi.load_file(str(folder / "bad_plugin.xml"))
+
+
+def _grid(n=9, size=10.0):
+    """A flat n x n vertex grid in the xy plane (triangulated), normals +z."""
+    x, y = np.meshgrid(np.linspace(0, size, n), np.linspace(0, size, n))
+    v = np.stack([x.ravel(), y.ravel(), np.zeros(n * n)], axis=1)
+    k = np.arange(n * n).reshape(n, n)
+    a, b, c, d = k[:-1, :-1].ravel(), k[:-1, 1:].ravel(), k[1:, :-1].ravel(), k[1:, 1:].ravel()
+    f = np.concatenate([np.stack([a, b, d], 1), np.stack([a, d, c], 1)])
+    return v, f, np.tile([0.0, 0.0, 1.0], (n * n, 1))
+
+
+def test_limited_reconstruction_is_exact_for_a_linear_field_and_never_overshoots():
+    from translucency.scene.smooth import limited_gradients
+
+    v, f, n = _grid()
+    slope = np.array([[0.3, -0.1, 0.0], [0.05, 0.2, 0.0], [0.0, 0.0, 0.0]])  # per channel, mm^-1
+    M = 5.0 + v @ slope.T
+    G = limited_gradients(v, f, n, M)
+    assert np.allclose(G, np.broadcast_to(slope, G.shape), atol=1e-9)  # the linear field itself
+    # a ramp between two plateaus (a soft shadow edge): every vertex's reconstruction at its neighbours
+    # stays within their values (no overshoot, no negative exitance), and the ramp keeps its slope
+    step = np.clip((v[:, :1] + 0.3 * v[:, 1:2] - 3.0) / 4.0, 0.0, 1.0) * np.ones((1, 3))
+    G = limited_gradients(v, f, n, step)
+    e = np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]])
+    e = np.concatenate([e, e[:, ::-1]])
+    reach = step[e[:, 0]] + np.einsum("ecx,ex->ec", G[e[:, 0]], v[e[:, 1]] - v[e[:, 0]])
+    assert reach.min() >= -1e-12 and reach.max() <= 1 + 1e-12
+    assert np.isclose(np.abs(G[..., 0]).max(), 0.25)  # inside the ramp: its slope, not switched off
