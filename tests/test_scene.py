@@ -394,3 +394,91 @@ def test_limited_reconstruction_is_exact_for_a_linear_field_and_never_overshoots
     reach = step[e[:, 0]] + np.einsum("ecx,ex->ec", G[e[:, 0]], v[e[:, 1]] - v[e[:, 0]])
     assert reach.min() >= -1e-12 and reach.max() <= 1 + 1e-12
     assert np.isclose(np.abs(G[..., 0]).max(), 0.25)  # inside the ramp: its slope, not switched off
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("case", ["pig", "cow", "spot"])
+def test_the_three_scenes_of_the_benchmark_against_volpath(tmp_path_factory, case):
+    """benchmarks/scenes.py's three scenes (a pig on a floor with an occluder's shadow, a cow in a Cornell
+    box, spot under an environment map beside a sphere) at 64 x 48 against a 2 x 32-spp volpath reference:
+    over the object within the reference's noise plus 0.15, brightness within 10 %."""
+    import importlib.util
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+    spec = importlib.util.spec_from_file_location("scenes_benchmark", root / "benchmarks" / "scenes.py")
+    scenes = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(scenes)
+    meshes = root.parent / "shared" / "meshes"
+    if case != "pig" and not meshes.is_dir():
+        pytest.skip("the shared meshes are not beside the checkout")
+    work = tmp_path_factory.getbasetemp() / "three_scenes"
+    work.mkdir(exist_ok=True)
+    row = scenes.run_case(case, work, meshes, (64, 48), 32, 32, None, 32)
+    obj = row["errors"]["object"]
+    assert obj["rel_rmse"] < row["reference_noise"] + 0.15, row
+    assert 0.9 < obj["brightness"] < 1.1, row
+
+
+def test_irradiance_of_spot_and_directional_lights():
+    """Mitsuba's spot (its falloff) and directional emitters through the scene's own sampling: E = I f cos/d²
+    and E cos θ, with the ball's own shadow."""
+    from translucency.mitsuba import spot_dict
+    from translucency.render.lights import SpotLight
+
+    spot = SpotLight((0.0, -30.0, 20.0), (0.0, 0.0, 0.0), 12.0, 500.0)
+    ball, scene, glow = _ball_scene(spot_dict(spot.position, spot.target, spot.cutoff_deg, spot.intensity))
+    E = scene_irradiance(scene, glow, ball.vertices, ball.vertex_normals, samples=4)
+    to = np.asarray(spot.position) - ball.vertices
+    d = np.linalg.norm(to, axis=1)
+    w = to / d[:, None]
+    cos = np.maximum(np.einsum("vk,vk->v", w, ball.vertex_normals), 0)
+    expected = spot.intensity * spot.falloff(-w) * cos / d**2
+    assert np.abs(E[:, 0] - expected).max() < 0.01 * expected.max()
+    assert (expected > 0).sum() > 20 and (expected == 0).sum() > 20  # inside and outside the cone
+    ball, scene, glow = _ball_scene({"type": "directional", "direction": [0.0, 0.6, -0.8], "irradiance": 2.0})
+    E = scene_irradiance(scene, glow, ball.vertices, ball.vertex_normals, samples=4)
+    expected = 2.0 * np.maximum(ball.vertex_normals @ -np.array([0.0, 0.6, -0.8]), 0)
+    assert np.abs(E[:, 0] - expected).max() < 0.01 * 2.0
+
+
+def test_a_dielectric_boundary_reflects_the_scene_by_fresnel():
+    """A dark fitted square behind a smooth dielectric coat (η = 1.5) facing the camera under a constant
+    sky L: the camera sees L R(0), R(0) = ((η − 1)/(η + 1))² = 0.04; with exitance M it adds
+    M F_t(1)/(π (1 − F_dr)) (the boundary's exit law)."""
+    from translucency.model.boundary import exit_factor
+    from translucency.scene.fitted import coat_of
+
+    mi = mitsuba()
+    square = trimesh.Trimesh([[-5, -5, 0], [5, -5, 0], [5, 5, 0], [-5, 5, 0]], [[0, 1, 2], [0, 2, 3]])
+    camera = {
+        "type": "perspective",
+        "fov": 10,
+        "to_world": mi.ScalarTransform4f().look_at(origin=[0, 0, 40], target=[0, 0, 0], up=[0, 1, 0]),
+        "film": {"type": "hdrfilm", "width": 8, "height": 8},
+    }
+    scene = load_user_scene(
+        {
+            "type": "scene",
+            "square": _mesh(square),
+            "sky": {"type": "constant", "radiance": 0.5},
+            "camera": camera,
+        }
+    )
+    for M in (0.0, 2.0):
+        normals = np.tile([0.0, 0.0, 1.0], (4, 1))
+        law = np.stack([np.full((4, 3), exit_factor(mu, 1.5)) for mu in np.linspace(0, 1, 17)], axis=1)
+        g = Glowing(
+            shapes_by_id(scene)["square"],
+            square.vertices,
+            square.faces,
+            exitance=np.full((4, 3), M),
+            exit_law=law,
+            coat=coat_of(1.5, 0.0),
+            normals=normals,
+        )
+        integrator = integrator_class()(mi.Properties())
+        integrator.glow = GlowingSurfaces([g])
+        image = np.asarray(mi.render(scene, integrator=integrator, spp=64), dtype=np.float64)
+        expected = 0.5 * 0.04 + M * float(exit_factor(1.0, 1.5)) / np.pi
+        assert np.allclose(image[2:6, 2:6], expected, rtol=0.01), (M, image[2:6, 2:6, 0], expected)

@@ -73,6 +73,17 @@ def trace(
     mi, dr = mitsuba(), drjit()
     n = dr.width(active)
     ctx = mi.BSDFContext()
+    reflect = mi.BSDFContext(mi.TransportMode.Radiance, mi.BSDFFlags.Reflection)
+    coated = any(c is not None for c in glow.coats)
+
+    def eval_pdf(bsdf, si, wo, ok, on_fitted):
+        """The BSDF and its density toward ``wo``: a fitted object's coat by its reflection alone."""
+        f, pdf = bsdf.eval_pdf(ctx, si, wo, ok & ~on_fitted)
+        if coated:
+            f_r, pdf_r = bsdf.eval_pdf(reflect, si, wo, ok & on_fitted)
+            f, pdf = dr.select(on_fitted, f_r, f), dr.select(on_fitted, pdf_r, pdf)
+        return f, pdf
+
     hits = strategy != "light"  # BSDF-sampled hits of lights count (with MIS unless "bsdf")
     nee = strategy != "bsdf"
     weigh = strategy == "mis"
@@ -110,7 +121,7 @@ def trace(
             ds, em_weight = scene.sample_emitter_direction(si, s2, True, smooth)
             wo = si.to_local(ds.d)
             ok = smooth & (ds.pdf != 0) & (~on_fitted | (mi.Frame3f.cos_theta(wo) > 0))
-            f, f_pdf = bsdf.eval_pdf(ctx, si, wo, ok)
+            f, f_pdf = eval_pdf(bsdf, si, wo, ok, on_fitted)
             w = dr.select(ds.delta, 1.0, _mis(ds.pdf, f_pdf)) if weigh else 1.0
             L = L + dr.select(ok, beta * w * f * em_weight, 0.0)
         s1g, s2g = sampler.next_1d(active), sampler.next_2d(active)
@@ -119,12 +130,16 @@ def trace(
             wo = si.to_local(d)
             ok = valid & (~on_fitted | (mi.Frame3f.cos_theta(wo) > 0))
             ok &= ~scene.ray_test(si.spawn_ray_to(si.p + d * dist), ok)
-            f, f_pdf = bsdf.eval_pdf(ctx, si, wo, ok)
+            f, f_pdf = eval_pdf(bsdf, si, wo, ok, on_fitted)
             w = _mis(g_pdf, f_pdf) if weigh else 1.0
             L = L + dr.select(ok, beta * w * f * g_weight, 0.0)
         # --- the next direction, by the BSDF
-        bs, bs_weight = bsdf.sample(ctx, si, sampler.next_1d(active), sampler.next_2d(active), go_on)
-        go_on &= ~(on_fitted & mi.has_flag(bs.sampled_type, mi.BSDFFlags.Transmission))
+        s1, s2 = sampler.next_1d(active), sampler.next_2d(active)
+        bs, bs_weight = bsdf.sample(ctx, si, s1, s2, go_on & ~on_fitted)
+        if coated:  # a coat samples its reflection alone, weighted by it (the transmission is the model's)
+            bs_r, weight_r = bsdf.sample(reflect, si, s1, s2, go_on & on_fitted)
+            bs = dr.select(on_fitted, bs_r, bs)
+            bs_weight = dr.select(on_fitted, weight_r, bs_weight)
         go_on &= bs.pdf > 0
         beta = dr.select(go_on, beta * bs_weight, beta)
         prev_si = dr.select(go_on, mi.Interaction3f(si), prev_si)
