@@ -55,17 +55,16 @@ def main() -> int:
         params = mi.traverse(fs.scene)
         sensor = next(k.removesuffix(".x_fov") for k in params.keys() if k.endswith(".x_fov"))
         cam_key, lamp_key, lamp_rgb = f"{sensor}.to_world", "lamp.to_world", "lamp.emitter.radiance.value"
-        camera0 = mi.ScalarTransform4f(params[cam_key])
-        lamp0 = mi.ScalarTransform4f(params[lamp_key])
+        camera0, lamp0 = type(params[cam_key])(params[cam_key]), type(params[lamp_key])(params[lamp_key])
         cams, lights = [], []
         for k in range(args.repeats + 1):
-            turn = mi.ScalarTransform4f().rotate([0, 0, 1], 10.0 * (k + 1))
+            turn = mi.Transform4f().rotate([0, 0, 1], 10.0 * (k + 1))
             params[cam_key] = turn @ camera0
             params.update()
             t = time.perf_counter()
             fs.render(spp=16, seed=k)
             cams.append(time.perf_counter() - t)
-            params[lamp_key] = mi.ScalarTransform4f().translate([5.0 * (k + 1), 0.0, 0.0]) @ lamp0
+            params[lamp_key] = mi.Transform4f().translate([5.0 * (k + 1), 0.0, 0.0]) @ lamp0
             params[lamp_rgb] = mi.Color3f(40.0, 40.0 - 3 * k, 40.0 - 6 * k)
             params.update()
             t = time.perf_counter()

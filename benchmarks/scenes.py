@@ -210,18 +210,11 @@ def run_case(
     dark = fs.render(spp=picture_spp, seed=1, glowing=False)
     objects = object_pixels(fs)
     lit = lit_pixels(ours, dark, objects)
-    a, t_a = render_scene_reference(fs, spp=spp_ref, seed=0)
-    b, t_b = render_scene_reference(fs, spp=spp_ref, seed=1)
-    reference = 0.5 * (a + b)
-    noise = (
-        0.5
-        * rel_rmse(a, b, objects)
-        * float(np.sqrt(np.mean(b[objects] ** 2) / np.mean(reference[objects] ** 2)))
-    )
+    reference, ref = _reference(fs, folder, spp_ref, objects)
+    noise, single, (t_a, t_b) = ref["noise"], ref["single"], ref["seconds"]
     errors = scene_errors(reference, ours, objects, lit)
     errors.pop("flip_map")
     # volpath at equal error (module docstring)
-    single = rel_rmse(a, reference, objects) * np.sqrt(2.0)  # one half's error against the truth
     e = errors["object"]["rel_rmse"]
     ours_true = float(np.sqrt(max(e**2 - noise**2, 1e-12)))
     s_star = max(spp_ref * (single / ours_true) ** 2, 1.0)

@@ -28,7 +28,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..mitsuba import drjit, mitsuba
-from .smooth import limited_gradients
+from .smooth import OneRing
 
 #: cosines at which each vertex's exit law is tabulated (uniform over [0, 1])
 EXIT_NODES = 17
@@ -92,13 +92,22 @@ class GlowingSurfaces:
         )
         self._dr = dr
         self.smooth = smooth
+        self._rings = [
+            OneRing(o.vertices, o.faces, o.normals) if smooth and o.normals is not None else None
+            for o in self.objects
+        ]
         self.update()
 
     def update(self) -> None:
         """Take each object's current ``exitance`` and ``exit_law`` (after a new transport pass)."""
         mi = mitsuba()
         self._M = [mi.Float(np.maximum(o.exitance, 0.0).astype(np.float32).ravel()) for o in self.objects]
-        self._G = [_floats(self._gradients(o)) if self.smooth else None for o in self.objects]
+        self._G = [
+            _floats(ring.gradients(o.exitance))
+            if self.smooth and ring is not None and np.any(o.exitance)
+            else None
+            for o, ring in zip(self.objects, self._rings)
+        ]
         self._g = [mi.Float(np.maximum(o.exit_law, 0.0).astype(np.float32).ravel()) for o in self.objects]
         # triangles drawn ∝ area × mean exitance (luminance); none: nothing to sample
         power = []
@@ -110,13 +119,6 @@ class GlowingSurfaces:
         self._distribution = (
             mi.DiscreteDistribution(mi.Float(power.astype(np.float32))) if self.emitting else None
         )
-
-    @staticmethod
-    def _gradients(o: Glowing) -> np.ndarray:
-        """(V, 3, 3) the limited gradients of the exitance (:mod:`translucency.scene.smooth`)."""
-        if o.normals is None or not np.any(o.exitance):
-            return np.zeros((len(o.vertices), 3, 3))
-        return limited_gradients(o.vertices, o.faces, o.normals, o.exitance)
 
     # ------------------------------------------------------------------ evaluation on the surface
     def _vertex_radiance(self, k: int, v, mu, active, x=None):
