@@ -19,7 +19,7 @@ import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from scenes import _model, scene_xml  # noqa: E402 — the benchmark's own scenes
+from scenes import _model, scene_folder  # noqa: E402 — the benchmark's own scenes
 from translucency.mitsuba import mitsuba  # noqa: E402
 from translucency.scene import FittedScene  # noqa: E402
 
@@ -32,21 +32,10 @@ def main() -> int:
     ap.add_argument("--repeats", type=int, default=5)
     args = ap.parse_args()
     mi = mitsuba()
-    folder = args.work / "pig-speed"
-    folder.mkdir(parents=True, exist_ok=True)
     model = _model("pig", args.work, args.meshes, args.pig_model)
-    (folder / "model.zip").unlink(missing_ok=True)
-    (folder / "model.zip").symlink_to(model.resolve())
-    import subprocess
-
-    subprocess.run(
-        [sys.executable, "-m", "translucency", "export", str(model), "--ply", str(folder / "object.ply")]
-        + ["--overwrite", "--quiet"],
-        check=True,
-    )
-    (folder / "scene.xml").write_text(scene_xml("pig", folder, (320, 240)))
+    scene = scene_folder("pig", args.work / "pig-speed", model, (320, 240))
     for samples in (16, 32):
-        fs = FittedScene(folder / "scene.xml", {"object": model}, samples=samples)
+        fs = FittedScene(scene, {"object": model}, samples=samples)
         t = time.perf_counter()
         fs.prepare()
         prepare = time.perf_counter() - t

@@ -181,19 +181,26 @@ def scene_xml(case: str, folder: Path, size) -> str:
     return f'<scene version="3.0.0">\n  {sensor}\n  {obj}{rest}\n</scene>\n'
 
 
-def run_case(
-    case: str, work: Path, meshes: Path, size, spp_ref: int, samples: int, pig_model, picture_spp: int = 64
-) -> dict:
-    mi = mitsuba()
-    folder = work / case
+def scene_folder(case: str, folder: Path, model: Path, size) -> Path:
+    """``folder`` with the case's scene: the model (linked), its mesh (``export --ply``) and
+    ``scene.xml`` at ``size``; returns the scene file."""
     folder.mkdir(parents=True, exist_ok=True)
-    model = _model(case, work, meshes, pig_model if case == "pig" else None)
     (folder / "model.zip").unlink(missing_ok=True)
     (folder / "model.zip").symlink_to(model.resolve())
     subprocess.run(
         TL + ["export", str(model), "--ply", str(folder / "object.ply"), "--overwrite", "--quiet"], check=True
     )
     (folder / "scene.xml").write_text(scene_xml(case, folder, size))
+    return folder / "scene.xml"
+
+
+def run_case(
+    case: str, work: Path, meshes: Path, size, spp_ref: int, samples: int, pig_model, picture_spp: int = 64
+) -> dict:
+    mi = mitsuba()
+    folder = work / case
+    model = _model(case, work, meshes, pig_model if case == "pig" else None)
+    scene_folder(case, folder, model, size)
     t = time.perf_counter()
     fs = FittedScene(folder / "scene.xml", {"object": model}, samples=samples)
     fs.prepare()

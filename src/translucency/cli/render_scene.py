@@ -12,7 +12,7 @@ from rich.table import Table
 
 from .. import resources
 from .._validate import TranslucencyError, check_option
-from ..io.atomic import atomic_path, write_json
+from ..io.atomic import write_json
 from ._common import jsonable
 from ._run import Run
 
@@ -198,24 +198,15 @@ def render_scene(
 
 def _plot(ref_ldr, our_ldr, flip_map, objects, errors, path) -> None:
     """reference | ours | FLIP over the objects into ``path``."""
-    from .._plotting import pyplot  # Matplotlib only for the figure
+    from ..render.figure import plot_comparison  # Matplotlib only for the figure
 
-    plt = pyplot()
-    fig, ax = plt.subplots(1, 3, figsize=(13, 3.8))
-    ax[0].imshow(ref_ldr)
-    ax[0].set_title("reference: Mitsuba volpath, the volumes in the scene", fontsize=9)
-    ax[1].imshow(our_ldr)
-    ax[1].set_title("ours: fitted models glowing in the scene", fontsize=9)
     shown = np.where(objects, flip_map, np.nan) if flip_map is not None else np.zeros(objects.shape)
-    im = ax[2].imshow(shown, cmap="magma", vmin=0, vmax=1)
     o, lit = errors["object"], errors["lit"]
     lit_text = f"; lit by it {lit['rel_rmse']:.2f}" if lit.get("pixels") else ""
     flip, rmse = o.get("flip", float("nan")), o.get("rel_rmse", float("nan"))
-    ax[2].set_title(f"FLIP over the objects {flip:.3f}; rel. RMSE {rmse:.2f}{lit_text}", fontsize=9)
-    fig.colorbar(im, ax=ax[2], shrink=0.8)
-    for a in ax:
-        a.axis("off")
-    fig.tight_layout()
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, dpi=110)
-    plt.close(fig)
+    titles = (
+        "reference: Mitsuba volpath, the volumes in the scene",
+        "ours: fitted models glowing in the scene",
+        f"FLIP over the objects {flip:.3f}; rel. RMSE {rmse:.2f}{lit_text}",
+    )
+    plot_comparison(ref_ldr, our_ldr, shown, path, titles)

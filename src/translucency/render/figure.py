@@ -177,19 +177,17 @@ def _exposure(exposure: Exposure, model, mesh, light, out: dict, auto) -> float:
     return scale
 
 
-def _plot(ldr, flip_map, mask, cmp, path, title: str) -> None:
-    """reference | ours | FLIP into ``path``; ``ldr``: the tone-mapped (reference, ours)."""
+def plot_comparison(ref_ldr, our_ldr, error_map, path, titles) -> None:
+    """reference | ours | an error map (0..1, NaN where not compared) side by side into ``path``;
+    ``titles``: the three panels' titles (also :mod:`translucency.cli.render_scene`'s figure)."""
     plt = pyplot()
 
     fig, ax = plt.subplots(1, 3, figsize=(13, 3.8))
-    ax[0].imshow(ldr[0])
-    ax[0].set_title("reference: Mitsuba volpath of the volume", fontsize=9)
-    ax[1].imshow(ldr[1])
-    ax[1].set_title(title, fontsize=9)
-    im = ax[2].imshow(np.where(mask, flip_map, np.nan), cmap="magma", vmin=0, vmax=1)
-    ax[2].set_title(
-        f"FLIP (object mean {cmp['flip_mean_object']:.3f}); rel. RMSE {cmp['rel_rmse']:.2f}", fontsize=9
-    )
+    ax[0].imshow(ref_ldr)
+    ax[1].imshow(our_ldr)
+    im = ax[2].imshow(error_map, cmap="magma", vmin=0, vmax=1)
+    for a, title in zip(ax, titles):
+        a.set_title(title, fontsize=9)
     fig.colorbar(im, ax=ax[2], shrink=0.8)
     for a in ax:
         a.axis("off")
@@ -197,3 +195,18 @@ def _plot(ldr, flip_map, mask, cmp, path, title: str) -> None:
     with atomic_path(path) as tmp:
         fig.savefig(tmp, dpi=110)
     plt.close(fig)
+
+
+def _plot(ldr, flip_map, mask, cmp, path, title: str) -> None:
+    """reference | ours | FLIP error into ``path``; ``ldr``: the tone-mapped (reference, ours)."""
+    plot_comparison(
+        ldr[0],
+        ldr[1],
+        np.where(mask, flip_map, np.nan),
+        path,
+        (
+            "reference: Mitsuba volpath of the volume",
+            title,
+            f"FLIP (object mean {cmp['flip_mean_object']:.3f}); rel. RMSE {cmp['rel_rmse']:.2f}",
+        ),
+    )
