@@ -42,7 +42,9 @@ def outputs(tmp_path_factory):
         ["evaluate", tmp / "b.model.zip", tmp / "b.zarr", "--report", tmp / "mrep", "-q"]
     )
     out["render"] = _json(["render", tmp / "b.model.zip", "--out", tmp / "img", "--size", "24", "16", "-q"])
-    out["export"] = _json(["export", tmp / "b.model.zip", "--ply", tmp / "object.ply", "-q"])
+    out["export"] = _json(
+        ["export", tmp / "b.model.zip", "--ply", tmp / "object.ply", "--gltf", tmp / "object.glb", "-q"]
+    )
     (tmp / "scene.xml").write_text(SCENE)
     out["render (scene)"] = _json(
         [

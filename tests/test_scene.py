@@ -482,3 +482,60 @@ def test_a_dielectric_boundary_reflects_the_scene_by_fresnel():
         image = np.asarray(mi.render(scene, integrator=integrator, spp=64), dtype=np.float64)
         expected = 0.5 * 0.04 + M * float(exit_factor(1.0, 1.5)) / np.pi
         assert np.allclose(image[2:6, 2:6], expected, rtol=0.01), (M, image[2:6, 2:6, 0], expected)
+
+
+def test_burley_reduction_matches_energy_and_mean_radius_and_states_its_error():
+    """A sum of exponentials reduced to Christensen–Burley: the same energy and mean radius (closed forms,
+    checked by quadrature), and the stated error is the quadrature's relative L2 distance."""
+    from scipy.integrate import quad
+
+    from translucency.model.burley import burley_of_exponentials, burley_R
+
+    c, d = np.array([0.4, 0.05]), np.array([-3.0, -0.7])
+    A, s, err = burley_of_exponentials(c, d, radii=4000)
+    R = lambda r: float(np.sum(c * np.exp(d * r)))  # noqa: E731
+    energy = quad(lambda r: 2 * np.pi * r * R(r), 0, np.inf)[0]
+    mean_r = quad(lambda r: 2 * np.pi * r * r * R(r), 0, np.inf)[0] / energy
+    assert np.isclose(A, energy, rtol=1e-9)
+    assert np.isclose(
+        quad(lambda r: 2 * np.pi * r * r * burley_R(r, A, s), 0, np.inf)[0] / A, mean_r, rtol=1e-6
+    )
+    top = 4 * mean_r  # the error: RMS over [0, 4 <r>] of the difference of the energies within r, over A
+
+    def within(f, r):
+        return quad(lambda x: 2 * np.pi * x * f(x), 0, r, limit=200)[0]
+
+    diff2 = quad(lambda r: (within(lambda x: burley_R(x, A, s), r) - within(R, r)) ** 2, 0, top, limit=100)[0]
+    assert np.isclose(err, np.sqrt(diff2 / top) / A, rtol=0.01)
+
+
+def test_export_gltf_carries_the_mesh_the_bake_and_the_burley_attributes(fitted_ball):
+    from translucency.io.gltf import read_glb
+    from translucency.io.model_file import load_model
+
+    folder, model = fitted_ball
+    out = folder / "ball.glb"
+    res = runner.invoke(
+        app, ["export", str(model), "--gltf", str(out), "--light", "directional:0,0,-1,1", "--json"]
+    )
+    assert res.exit_code == 0, res.output
+    summary = json.loads(res.stdout)
+    mesh, extras = read_glb(out)
+    m = load_model(model)
+    assert np.allclose(mesh.vertices, m.alpha.vertices, atol=1e-4) and np.array_equal(mesh.faces, m.faces)
+    attrs = mesh.vertex_attributes
+    for name in ("_ALBEDO", "_MFP_MM", "_BURLEY_S", "_REDUCTION_ERROR"):
+        assert attrs[name].shape == (len(m.alpha.vertices), 3) and np.isfinite(attrs[name]).all()
+    # the albedo at the incident vertices is the model's own total reflectance times alpha
+    from scipy.spatial import cKDTree
+
+    at = cKDTree(m.alpha.vertices).query(m.x_i)[1]
+    expected = m.total_reflectance() * m.alpha.values[at][:, None]
+    assert np.allclose(attrs["_ALBEDO"][at], expected, rtol=1e-3)
+    assert 0 < summary["reduction_error_median"] <= summary["reduction_error_p95"] < 1.5
+    # the bake: lit from above, the top is brighter than the bottom
+    colour = mesh.visual.vertex_colors[:, :3].astype(float).mean(axis=1)
+    z = mesh.vertices[:, 2]
+    assert colour[z > 3].mean() > 2 * colour[z < -3].mean()
+    assert extras["colour_scale"] > 0 and extras["units"]["positions"] == "m"
+    assert "--gltf" in error_line(["export", model, "--gltf", folder / "ball.gltf"])

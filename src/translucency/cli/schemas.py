@@ -382,14 +382,22 @@ RENDER_SCENE = record(
 
 # -- export -------------------------------------------------------------------------------------------
 EXPORT = record(
-    "`translucency export MODEL --ply OUT --json`: what was written.",
+    "`translucency export MODEL --ply OUT.ply --gltf OUT.glb --json`: what was written.",
     {
         "command": _command("export"),
         "model": field("string", "The model file."),
-        "ply": field("string", "The mesh written (binary PLY, mm, the model's vertex order)."),
+        "ply": field("string", "The mesh written (binary PLY, mm, the model's vertex order; --ply)."),
+        "gltf": field("string", "The glTF 2.0 binary written (--gltf)."),
+        "colour_scale": field("number", "COLOR_0 = radiance x this (--gltf).", "mm^2 sr / W"),
+        "reduction_error_median": field(
+            "number",
+            "Median over vertices and channels of the Christensen-Burley reduction's error (--gltf).",
+        ),
+        "reduction_error_p95": field("number", "Its 95th percentile (--gltf)."),
         "vertices": field("integer", "Vertices of the mesh."),
         "faces": field("integer", "Triangles of the mesh."),
     },
+    optional=("ply", "gltf", "colour_scale", "reduction_error_median", "reduction_error_p95"),
 )
 
 # -- info ---------------------------------------------------------------------------------------------
