@@ -38,11 +38,10 @@ from pathlib import Path
 import numpy as np
 
 from translucency.mitsuba import mitsuba
-from translucency.render import rel_rmse
 from translucency.render.tonemap import auto_exposure, save_images, tonemap
 from translucency.scene import FittedScene
 from translucency.scene.compare import lit_pixels, object_pixels, scene_errors
-from translucency.scene.reference import render_scene_reference
+from translucency.scene.reference import converged_scene_reference
 
 TL = [sys.executable, "-m", "translucency"]
 
@@ -197,7 +196,6 @@ def scene_folder(case: str, folder: Path, model: Path, size) -> Path:
 def run_case(
     case: str, work: Path, meshes: Path, size, spp_ref: int, samples: int, pig_model, picture_spp: int = 64
 ) -> dict:
-    mi = mitsuba()
     folder = work / case
     model = _model(case, work, meshes, pig_model if case == "pig" else None)
     scene_folder(case, folder, model, size)
@@ -247,7 +245,6 @@ def run_case(
         "speedup_equal_error": t_volpath / (t_light + t_draw),
     }
     (folder / f"{case}.json").write_text(json.dumps(row, indent=2))
-    assert mi is not None
     return row
 
 
@@ -261,16 +258,8 @@ def _reference(fs, folder: Path, spp_ref: int, objects):
         kept = json.loads(meta.read_text())
         if all(kept.get(k) == v for k, v in key.items()):
             return np.asarray(mi.Bitmap(str(folder / "reference.exr")), dtype=np.float64)[..., :3], kept
-    a, t_a = render_scene_reference(fs, spp=spp_ref, seed=0)
-    b, t_b = render_scene_reference(fs, spp=spp_ref, seed=1)
-    mean = 0.5 * (a + b)
-    scale = float(np.sqrt(np.mean(b[objects] ** 2) / np.mean(mean[objects] ** 2)))
-    info = {
-        **key,
-        "noise": 0.5 * rel_rmse(a, b, objects) * scale,
-        "single": rel_rmse(a, mean, objects) * np.sqrt(2.0),  # one half's error against the truth
-        "seconds": [t_a, t_b],
-    }
+    mean, ref = converged_scene_reference(fs, objects, spp=spp_ref)
+    info = {**key, "noise": ref["noise"], "single": ref["single"], "seconds": ref["seconds_each"]}
     mi.Bitmap(mean.astype(np.float32)).write(str(folder / "reference.exr"))
     meta.write_text(json.dumps(info, indent=2))
     return mean, info

@@ -130,7 +130,7 @@ def render_scene(
     with run.work("render", total=5 if reference else 4) as work:
         step = lambda k, name: work.update(completed=k, item=name)  # noqa: E731 — one line per step
         step(0, "transport (once per object)")
-        fs.prepare(None if radius is None else radius)
+        fs.prepare(radii)  # the radii the estimates were made with
         step(1, "light in, through the body")
         t1 = time.perf_counter()
         fs.light()
@@ -141,6 +141,7 @@ def render_scene(
         t_draw = time.perf_counter() - t1
         step(3, "comparison masks")
         objects = object_pixels(fs)
+        measured = objects if objects.any() else np.ones(objects.shape, bool)  # the pixels judged
         summary = {
             "command": "render",
             "scene": scene,
@@ -159,14 +160,12 @@ def render_scene(
             "picture_spp": picture_spp,
             "object_pixels": int(objects.sum()),
         }
-        auto = auto_exposure(ours, objects if objects.any() else np.ones(objects.shape, bool))
+        auto = auto_exposure(ours, measured)
         scale = auto if chosen.rule != "scale" else float(chosen.scale)
         if reference:
             step(4, "volpath reference (2 renders)")
             dark = fs.render(spp=picture_spp, glowing=False)
-            ref, info = converged_scene_reference(
-                fs, objects if objects.any() else np.ones(objects.shape, bool), spp=spp
-            )
+            ref, info = converged_scene_reference(fs, measured, spp=spp)
             errors = scene_errors(ref, ours, objects, lit_pixels(ours, dark, objects))
             flip_map = errors.pop("flip_map")
             summary.update(

@@ -132,15 +132,17 @@ class FittedScene:
         self.prepare_s = None
         self.irradiance = [None] * len(self.objects)
 
-    def prepare(self, radius: float | None = None, progress=None) -> None:
-        """Build each object's transport (near radius ``radius`` mm; default each model's 99 % energy
-        radius) and the integrator: once per scene.  ``progress(k, n, name)`` before each object."""
+    def prepare(self, radius=None, progress=None) -> None:
+        """Build each object's transport (near radius ``radius`` mm, one for all or one per object; default
+        each model's 99 % energy radius) and the integrator: once per scene.  ``progress(k, n, name)``
+        before each object."""
         mi = mitsuba()
         t = time.perf_counter()
-        for k, o in enumerate(self.objects):
+        radii = radius if isinstance(radius, (list, tuple)) else [radius] * len(self.objects)
+        for k, (o, r) in enumerate(zip(self.objects, radii)):
             if progress:
                 progress(k, len(self.objects), o.name)
-            o.prepare(radius)
+            o.prepare(r)
         self.glow = GlowingSurfaces([o.glowing for o in self.objects])
         props = mi.Properties()
         props["max_depth"], props["strategy"] = int(self.max_depth), str(self.strategy)
@@ -189,7 +191,7 @@ class FittedScene:
                     o.normals,
                     samples=self.samples,
                     seed=seed + 7919 * p + 104729 * k,
-                    incidence=None if o.law.name == "normal" else o.law,
+                    incidence=o.law,
                     eta=o.eta,
                     max_depth=self.max_depth,
                 )

@@ -22,7 +22,8 @@ import numpy as np
 
 from ..mitsuba import mitsuba, slab_medium_dict
 from ..mitsuba.user_scenes import user_scene_with_media
-from ..render import rel_rmse, volume_of_dataset
+from ..render import volume_of_dataset
+from ..render.reference import mean_of_halves
 
 #: Russian roulette in the reference only past this depth (the surfaces of the scene end most paths)
 RR_DEPTH = 1000
@@ -61,11 +62,13 @@ def render_scene_reference(fitted_scene, *, spp: int = 64, seed: int = 0, sensor
 
 
 def converged_scene_reference(fitted_scene, mask: np.ndarray, *, spp: int = 64, sensor: int = 0):
-    """The mean of two independent references and its measured noise over ``mask`` (module docstring).
+    """The mean of two independent references and its measured noise over ``mask`` (module docstring;
+    :func:`translucency.render.reference.mean_of_halves`).
 
-    Returns (image (H, W, 3), info: ``noise``, ``spp`` of each render, ``seconds``)."""
+    Returns (image (H, W, 3), info: ``noise``, ``single`` (one render's error), ``spp`` of each render,
+    ``seconds`` (both), ``seconds_each``)."""
     a, ta = render_scene_reference(fitted_scene, spp=spp, seed=0, sensor=sensor)
     b, tb = render_scene_reference(fitted_scene, spp=spp, seed=1, sensor=sensor)
-    mean = 0.5 * (a + b)
-    noise = 0.5 * rel_rmse(a, b, mask) * float(np.sqrt(np.mean(b[mask] ** 2) / np.mean(mean[mask] ** 2)))
-    return mean, {"noise": noise, "spp": int(spp), "renders": 2, "seconds": ta + tb}
+    mean, noise, single = mean_of_halves(a, b, mask)
+    info = {"noise": noise, "single": single, "spp": int(spp), "renders": 2, "seconds": ta + tb}
+    return mean, {**info, "seconds_each": [ta, tb]}

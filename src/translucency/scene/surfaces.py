@@ -90,6 +90,7 @@ class GlowingSurfaces:
         self._areas = (
             np.concatenate([o.triangle_areas for o in self.objects]) if self.objects else np.zeros(0)
         )
+        self._area_array = mi.Float(self._areas.astype(np.float32))
         self._dr = dr
         self.smooth = smooth
         self._rings = [
@@ -110,11 +111,11 @@ class GlowingSurfaces:
         ]
         self._g = [mi.Float(np.maximum(o.exit_law, 0.0).astype(np.float32).ravel()) for o in self.objects]
         # triangles drawn ∝ area × mean exitance (luminance); none: nothing to sample
-        power = []
-        for o in self.objects:
-            lum = np.asarray(o.exitance, np.float64) @ np.array([0.2126, 0.7152, 0.0722])
-            power.append(lum[o.faces].mean(axis=1) * o.triangle_areas)
-        power = np.concatenate(power) if power else np.zeros(0)
+        power = [
+            (np.asarray(o.exitance, np.float64) @ np.array([0.2126, 0.7152, 0.0722]))[o.faces].mean(axis=1)
+            for o in self.objects
+        ]
+        power = (np.concatenate(power) if power else np.zeros(0)) * self._areas
         self.emitting = bool(np.isfinite(power).all() and power.sum() > 0)
         self._distribution = (
             mi.DiscreteDistribution(mi.Float(power.astype(np.float32))) if self.emitting else None
@@ -142,16 +143,12 @@ class GlowingSurfaces:
         dr, mi = self._dr, mitsuba()
         return [dr.gather(mi.UInt32, self._faces[k], 3 * prim + j, active) for j in range(3)]
 
-    def _interpolate(self, k: int, prim, b1, b2, mu, active):
-        """Radiance of object k at triangle ``prim``, barycentrics (1 − b1 − b2, b1, b2), cosine ``mu``:
-        the three vertices' values blended linearly, or (``smooth``) their limited linear reconstructions
-        at the point (:mod:`translucency.scene.smooth`)."""
-        mi, dr = mitsuba(), self._dr
-        v0, v1, v2 = self._triangle(k, prim, active)
-        x = None
-        if self.smooth:
-            p0, p1, p2 = (dr.gather(mi.Point3f, self._positions[k], v, active) for v in (v0, v1, v2))
-            x = (1.0 - b1 - b2) * p0 + b1 * p1 + b2 * p2
+    def _interpolate(self, k: int, triangle, b1, b2, x, mu, active):
+        """Radiance of object k at the point ``x`` of the triangle with vertices ``triangle`` (three UInt32),
+        barycentrics (1 − b1 − b2, b1, b2), cosine ``mu``: the three vertices' values blended linearly, or
+        (``smooth``) their limited linear reconstructions at x (:mod:`translucency.scene.smooth`)."""
+        v0, v1, v2 = triangle
+        x = x if self.smooth else None
         return (
             (1.0 - b1 - b2) * self._vertex_radiance(k, v0, mu, active, x)
             + b1 * self._vertex_radiance(k, v1, mu, active, x)
@@ -176,7 +173,8 @@ class GlowingSurfaces:
         mu = dr.maximum(-dr.dot(si.sh_frame.n, ray_d), 0.0)
         for k, ptr in enumerate(self.pointers):
             on = active & si.is_valid() & (si.shape == ptr) & outside
-            value = self._interpolate(k, si.prim_index, si.uv.x, si.uv.y, mu, on)
+            triangle = self._triangle(k, si.prim_index, on)
+            value = self._interpolate(k, triangle, si.uv.x, si.uv.y, si.p, mu, on)
             out = dr.select(on, value, out)
         return out
 
@@ -198,12 +196,6 @@ class GlowingSurfaces:
             on &= area > 0
             out = dr.select(on, pmf / area * dist2 / dr.maximum(cos_x, 1e-7), out)
         return out
-
-    @property
-    def _area_array(self):
-        if not hasattr(self, "_area_cache"):
-            self._area_cache = mitsuba().Float(self._areas.astype(np.float32))
-        return self._area_cache
 
     def sample(self, ref_p, sample1, sample2, active):
         r"""A point of the glowing surfaces seen from ``ref_p``: returns (direction, distance, radiance
@@ -245,7 +237,7 @@ class GlowingSurfaces:
                 n0, n1, n2 = (dr.gather(mi.Vector3f, self._normals[k], v, on) for v in (v0, v1, v2))
                 shading = dr.normalize((1.0 - b1 - b2) * n0 + b1 * n1 + b2 * n2)
             mu = dr.maximum(dr.dot(shading, dr.normalize(d)), 0.0)
-            value = self._interpolate(k, prim, b1, b2, mu, on)
+            value = self._interpolate(k, (v0, v1, v2), b1, b2, p, mu, on)
             position = dr.select(on, p, position)
             normal = dr.select(on, n, normal)
             radiance = dr.select(on, value, radiance)
