@@ -46,19 +46,22 @@ MAY_IMPORT: dict[str, frozenset[str]] = {
     "render": _BASE | {"acquire", "fit", "evaluate"},
     # a user's Mitsuba scene with fitted objects in it: the render stage's transport inside a scene
     "scene": _BASE | {"acquire", "fit", "evaluate", "render"},
+    # looking at a fitted model: the page and the live viewer, on the render stage's transport and transfer
+    "view": _BASE | {"acquire", "fit", "evaluate", "render"},
     # a real rig: photographs → a planar data set as acquire writes it (acquire's place in the pipeline)
     "rig": _BASE,
     # cross-checks beside the pipeline (tests, benchmarks)
     "validate": _BASE | {"acquire", "fit", "evaluate", "render"},
     # on top: the workflow as functions (``translucency.fit(...)``), the main job, the commands,
     # ``python -m translucency`` and the façade
-    "workflow": _BASE | {"acquire", "fit", "evaluate", "render", "scene", "rig"},
-    "pipeline": _BASE | {"acquire", "fit", "evaluate", "render", "scene", "rig", "validate", "workflow"},
+    "workflow": _BASE | {"acquire", "fit", "evaluate", "render", "scene", "rig", "view"},
+    "pipeline": _BASE
+    | {"acquire", "fit", "evaluate", "render", "scene", "rig", "view", "validate", "workflow"},
     "cli": _BASE
-    | {"acquire", "fit", "evaluate", "render", "scene", "rig", "validate", "workflow", "pipeline"},
+    | {"acquire", "fit", "evaluate", "render", "scene", "rig", "view", "validate", "workflow", "pipeline"},
     "__main__": frozenset({"cli"}),
     "translucency": _BASE
-    | {"acquire", "fit", "evaluate", "render", "scene", "rig", "validate", "workflow", "pipeline"},
+    | {"acquire", "fit", "evaluate", "render", "scene", "rig", "view", "validate", "workflow", "pipeline"},
 }
 
 #: Mitsuba's calls that build a scene (or a part of one) from a description

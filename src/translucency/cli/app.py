@@ -25,6 +25,7 @@ from . import (
     info,
     materials,
     render,
+    view,
 )
 from ._common import console, err_console
 
@@ -84,6 +85,7 @@ app.command("fit")(fit.fit)
 app.command("render")(render.render)
 app.command("evaluate", cls=evaluate.EvaluateCommand)(evaluate.evaluate)
 app.command("export")(export.export)
+app.command("view")(view.view)
 acquire.app.command("object-photographs")(acquire_object.acquire_object_photographs_cmd)
 imports.app.command("object")(import_object.import_object_cmd)
 app.add_typer(acquire.app, name="acquire")

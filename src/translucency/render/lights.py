@@ -143,6 +143,19 @@ class EnvironmentLight:
             "to_world": mitsuba().ScalarTransform4f().rotate([1.0, 0.0, 0.0], 90.0),
         }
 
+    def radiance_at(self, directions: np.ndarray) -> np.ndarray:
+        """Radiance (N, 3), W/(mm² sr), arriving from unit ``directions`` (N, 3) (pointing to the sky):
+        the constant, or the map through Mitsuba's ``envmap`` (its orientation and filtering)."""
+        w = np.asarray(directions, dtype=np.float64)
+        if self.filename is None:
+            return np.full((len(w), 3), float(self.radiance))
+        mi = mitsuba()
+        emitter = load_plugin(self.emitter_dict())
+        si = mi.SurfaceInteraction3f()
+        si.wi = mi.Vector3f(*(np.ascontiguousarray(-w[:, j], dtype=np.float32) for j in range(3)))
+        value = emitter.eval(si)
+        return np.stack([np.asarray(value[j], dtype=np.float64) for j in range(3)], axis=1)
+
     def irradiance_scale(self, distance: float) -> float:
         """Irradiance (W/mm²) on an open surface (seeing half the sky) at any distance: π L, with L the
         map's mean radiance over the sphere (solid-angle weighted) times its scale."""

@@ -41,6 +41,7 @@ R_1 the vertex's measured total (:attr:`Transport.reflectance`), so the irradian
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -509,6 +510,7 @@ class Transport:
     far: FarField | None = None  # the pairs beyond the near radius (None: truncated, or none there)
     reflectance: np.ndarray | None = None  # (V, 3) measured normal-incidence total reflectance, blended
     through: bool = False  # the model's through-body table is in the matrices (model/through.py)
+    receivers: np.ndarray | None = None  # the vertices whose radiance it gives (None: all; :meth:`rows`)
 
     def incidence(self, name: str = "half-space", eta: float = 1.0):
         """The incidence law ``name`` for this object (:func:`translucency.model.incidence.incidence_law`)."""
@@ -518,6 +520,25 @@ class Transport:
     def nnz(self) -> int:
         """Stored pairs per channel."""
         return int(self.matrices[0].nnz)
+
+    def rows(self, receivers) -> Transport:
+        """The same transport giving the radiance of ``receivers`` (vertex indices) only: the rows of the
+        near matrices and of the far field's interpolation (a relight of a few vertices under a light
+        that lights them all)."""
+        r = np.asarray(receivers, dtype=np.int64)
+        far = None
+        if self.far is not None:
+            far = dataclasses.replace(
+                self.far, W=self.far.W[r], alpha=self.far.alpha[r], label=self.far.label[r]
+            )
+        return dataclasses.replace(
+            self,
+            matrices=[T[r] for T in self.matrices],
+            own=None if self.own is None else self.own[r],
+            reflectance=None if self.reflectance is None else self.reflectance[r],
+            far=far,
+            receivers=r,
+        )
 
 
 @njit(parallel=True, cache=True)
@@ -535,7 +556,8 @@ def _csr_times_rgb(indptr, indices, data, X, out):
 
 
 def relight_vertices(transport: Transport, E: np.ndarray) -> np.ndarray:
-    """Radiance per vertex (V, 3) for irradiance E (V,) or (V, 3): one sparse product, plus the far field.
+    """Radiance per vertex (V, 3) for irradiance E (V,) or (V, 3): one sparse product, plus the far field
+    (per receiving vertex, (R, 3), for a transport restricted by :meth:`Transport.rows`).
 
     With one shared matrix the three channels go through it together (the matrix is read once,
     rows on all cores, Numba); otherwise one SciPy product per channel.  The far field (if prepared)
@@ -543,6 +565,7 @@ def relight_vertices(transport: Transport, E: np.ndarray) -> np.ndarray:
     """
     E = np.asarray(E, dtype=np.float32)
     E = np.repeat(E[:, None], 3, axis=1) if E.ndim == 1 else E
+    rows = transport.matrices[0].shape[0]
     if transport.scale is None:  # one matrix per channel
         X = E
         out = np.stack([T @ E[:, ch] for ch, T in enumerate(transport.matrices)], axis=1)
@@ -550,11 +573,11 @@ def relight_vertices(transport: Transport, E: np.ndarray) -> np.ndarray:
         X, T, out = (
             np.ascontiguousarray(E * transport.scale),
             transport.matrices[0],
-            np.empty(E.shape, np.float32),
+            np.empty((rows, 3), np.float32),
         )
         _csr_times_rgb(T.indptr, T.indices, T.data, X, out)
-    if transport.own is not None:
-        out += transport.own * E
+    if transport.own is not None:  # the receivers' own area: their own irradiance
+        out += transport.own * (E if transport.receivers is None else E[transport.receivers])
     if transport.far is not None:  # the pairs beyond the near radius, through the clusters
         out += transport.far.apply(X)
     return out
