@@ -31,7 +31,7 @@ ratio is applied.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import lru_cache
+from functools import cached_property, lru_cache
 
 import numpy as np
 
@@ -147,12 +147,24 @@ def incidence_factor(mu, reflectance) -> np.ndarray:
     [1.0, 1.16, 1.34]
     """
     mu, R1 = np.broadcast_arrays(np.asarray(mu, np.float64), np.asarray(reflectance, np.float64))
-    R_normal, F = _table()
+    return _factor_at(albedo_coordinate(R1), mu)
+
+
+def albedo_coordinate(reflectance) -> np.ndarray:
+    """The table's albedo coordinate (fractional row) of each R_1: the costly half of
+    :func:`incidence_factor`, computed once per vertex by :class:`HalfSpaceIncidence`."""
+    R_normal, _ = _table()
     log_eps = np.log(_EPS)
     # albedo (as log(1 − a)) from R_1: R_normal falls as log(1 − a) grows
+    R1 = np.asarray(reflectance, np.float64)
     q = np.interp(np.clip(R1, R_normal[-1], R_normal[0]), R_normal[::-1], log_eps[::-1])
-    # bilinear in (log(1 − a), √μ)
-    fa = np.clip((q - log_eps[0]) / (log_eps[1] - log_eps[0]), 0.0, len(_EPS) - 1.000001)
+    return np.clip((q - log_eps[0]) / (log_eps[1] - log_eps[0]), 0.0, len(_EPS) - 1.000001)
+
+
+def _factor_at(fa: np.ndarray, mu: np.ndarray) -> np.ndarray:
+    """F at albedo coordinates ``fa`` and cosines ``mu`` (broadcast): bilinear in (log(1 − a), √μ)."""
+    _, F = _table()
+    fa, mu = np.broadcast_arrays(fa, np.asarray(mu, np.float64))
     fm = np.sqrt(np.clip(mu, 0.0, 1.0)) * (len(_MU) - 1)
     fm = np.minimum(fm, len(_MU) - 1.000001)
     ia, im = fa.astype(int), fm.astype(int)
@@ -189,6 +201,10 @@ class NormalIncidence:
         """None: a Lambertian exit (π L = M)."""
         return None
 
+    def at(self, vertices) -> NormalIncidence:
+        """The same law for a few of the vertices."""
+        return self
+
 
 @dataclass(frozen=True)
 class HalfSpaceIncidence:
@@ -222,11 +238,20 @@ class HalfSpaceIncidence:
     def name(self) -> str:
         return "half-space" if self.both_ways else "half-space-in"
 
+    @cached_property
+    def _albedo(self) -> np.ndarray:
+        """(V, 3) the table's albedo coordinate of each vertex and channel (:func:`albedo_coordinate`)."""
+        return albedo_coordinate(self.reflectance)
+
     def factor(self, cos_i: np.ndarray) -> np.ndarray:
         """F per vertex and channel for cosines ``cos_i`` of shape (V,) or (V, K): (V, 3) or (V, K, 3)."""
         cos_i = np.asarray(cos_i, np.float64)
-        R1 = self.reflectance if cos_i.ndim == 1 else self.reflectance[:, None, :]
-        return incidence_factor(cos_i[..., None], R1)
+        fa = self._albedo if cos_i.ndim == 1 else self._albedo[:, None, :]
+        return _factor_at(fa, cos_i[..., None])
+
+    def at(self, vertices) -> HalfSpaceIncidence:
+        """The same law for a few of the vertices (indices)."""
+        return HalfSpaceIncidence(self.reflectance[np.asarray(vertices)], both_ways=self.both_ways)
 
     def exit(self, cos_o: np.ndarray) -> np.ndarray | None:
         r""":math:`\pi L / M = F(\mu_o)/\langle F\rangle` per vertex and channel (V, 3) toward views at

@@ -116,7 +116,6 @@ def transfer_vectors(
     Y = sh.basis(omega, bands)  # (S, K)
     eps = 5e-4 * float(np.max(mesh.extents))
     origin = v + n * eps
-    F_nodes = _law_nodes(law, V)  # (V, M, 3) or None: the law per vertex at M cosines, interpolated below
     E = np.zeros((V, 3, K))
     per_batch = max(1, _RAYS_PER_BATCH // V)
     for s0 in range(0, directions, per_batch):
@@ -129,7 +128,8 @@ def transfer_vectors(
         if eta != 1.0:
             weight *= fresnel_transmittance(cos_vs, eta) / fresnel_transmittance(1.0, eta)
         w3 = np.zeros(cos_i.shape + (3,))
-        w3[vi, si] = weight[:, None] * (1.0 if F_nodes is None else _law_at(F_nodes, vi, cos_vs))
+        F = law.factor(cos_i)  # (V, b, 3) or None
+        w3[vi, si] = weight[:, None] * (1.0 if F is None else F[vi, si])
         E += np.matmul(w3.transpose(0, 2, 1), Y[s]) * (4.0 * math.pi / directions)  # (V, 3, K)
         if progress:
             progress(s.stop, directions)
@@ -144,19 +144,3 @@ def transfer_vectors(
         directions=directions,
     )
 
-
-#: the cosines the incidence law is tabulated at per vertex, even in √μ (the law rises steeply at μ → 0)
-_LAW_NODES = np.linspace(0.0, 1.0, 33) ** 2
-
-
-def _law_nodes(law, V: int):
-    """The incidence law's factor per vertex and channel at :data:`_LAW_NODES` (V, M, 3); None without one."""
-    return law.factor(np.broadcast_to(_LAW_NODES, (V, len(_LAW_NODES))))
-
-
-def _law_at(F_nodes: np.ndarray, vertex: np.ndarray, cos: np.ndarray) -> np.ndarray:
-    """The tabulated law (:func:`_law_nodes`) at ``cos`` for ``vertex``: linear in √μ between nodes."""
-    u = np.sqrt(np.clip(cos, 0.0, 1.0)) * (len(_LAW_NODES) - 1)
-    j = np.minimum(u.astype(np.int64), len(_LAW_NODES) - 2)
-    f = (u - j)[:, None]
-    return (1.0 - f) * F_nodes[vertex, j] + f * F_nodes[vertex, j + 1]

@@ -73,7 +73,7 @@ def exit_fresnel(mesh, viewpoint, eta: float) -> np.ndarray:
     return exit_factor(view_cosines(mesh, viewpoint), eta)
 
 
-def vertex_irradiance(mesh, scene, light, eta: float = 1.0, incidence=None) -> np.ndarray:
+def vertex_irradiance(mesh, scene, light, eta: float = 1.0, incidence=None, at=None) -> np.ndarray:
     r"""Irradiance E (W/mm²) at every vertex, with shadows (Mitsuba ``ray_test``).
 
     (V,) for the grey lights, (V, 3) for an environment map or with an incidence law.  With ``eta`` ≠ 1
@@ -83,13 +83,16 @@ def vertex_irradiance(mesh, scene, light, eta: float = 1.0, incidence=None) -> n
     :math:`\theta_i` than of the normal incidence its data were measured with, per channel: the
     *effective* irradiance :math:`\int L V \cos\theta_i\, F_v(\cos\theta_i)\, d\omega`
     (:mod:`translucency.model.incidence`).
+    ``at``: the vertices (indices) to compute it at (all by default; ``incidence`` then holds those).
     Raises a one-line error for a point light inside the object.
     """
     mi = mitsuba()
     v = np.asarray(mesh.vertices, dtype=np.float64)
     n = np.asarray(mesh.vertex_normals, dtype=np.float64)
+    if at is not None:
+        v, n = v[at], n[at]
     if isinstance(light, EnvironmentLight):
-        return _environment_irradiance(mi, mesh, scene, light, eta, incidence)
+        return _environment_irradiance(mi, v, n, float(np.max(mesh.extents)), scene, light, eta, incidence)
     if isinstance(light, (PointLight, SpotLight)):
         p = np.asarray(light.position, dtype=np.float64)
         # inside a closed, outward-oriented surface a ray first meets a face from its back
@@ -126,7 +129,7 @@ def vertex_irradiance(mesh, scene, light, eta: float = 1.0, incidence=None) -> n
     return E if F is None else E[:, None] * F
 
 
-def _environment_irradiance(mi, mesh, scene, light: EnvironmentLight, eta: float, incidence) -> np.ndarray:
+def _environment_irradiance(mi, v, n, extent, scene, light: EnvironmentLight, eta: float, incidence) -> np.ndarray:
     r"""Estimate :math:`E = \int L(\omega) V(\omega) \cos\theta\, F(\cos\theta)\, d\omega` with K rays
     per vertex (F: the incidence law's factor, 1 without one).
 
@@ -134,12 +137,10 @@ def _environment_irradiance(mi, mesh, scene, light: EnvironmentLight, eta: float
     Map: directions drawn by the ``envmap`` emitter in proportion to its luminance,
     :math:`E \approx \langle (L/p)\, V \cos^+\theta\, F \rangle` (RGB).
     """
-    v = np.asarray(mesh.vertices, dtype=np.float64)
-    n = np.asarray(mesh.vertex_normals, dtype=np.float64)
     K = int(light.samples)
     rng = np.random.default_rng(0)
     u1, u2 = rng.random((2, len(v), K))
-    o = np.repeat(v + n * 5e-4 * float(np.max(mesh.extents)), K, axis=0)
+    o = np.repeat(v + n * 5e-4 * extent, K, axis=0)
     if light.filename is None:
         r, phi = np.sqrt(u1), 2 * np.pi * u2
         local = np.stack([r * np.cos(phi), r * np.sin(phi), np.sqrt(1 - u1)], axis=-1)  # cosine-weighted
@@ -520,6 +521,40 @@ class Transport:
     def nnz(self) -> int:
         """Stored pairs per channel."""
         return int(self.matrices[0].nnz)
+
+    def coarse(self, vertices, receivers) -> Transport:
+        """A draft between a few vertices: the irradiance is given at ``receivers`` only (indices into the
+        mesh's ``vertices``, mm), each standing for the vertices nearest it (its cell); the radiance
+        comes back at the receivers.  The columns of every cell are summed once,
+        :math:`T'_{rj} = \sum_{i \in j} T_{ri}`, and a shared colour scale is taken per cell (its
+        mean) — a coarser quadrature of the same transport, for a light that moves (the full one when
+        it stops)."""
+        r = np.asarray(receivers, dtype=np.int64)
+        v = np.asarray(vertices, dtype=np.float64)
+        _, cell = cKDTree(v[r]).query(v)
+        P = sp.csr_matrix((np.ones(len(v), np.float32), (np.arange(len(v)), cell)), shape=(len(v), len(r)))
+        scale = None
+        if self.scale is not None:
+            count = np.bincount(cell, minlength=len(r))[:, None]
+            scale = (P.T @ self.scale.astype(np.float64) / np.maximum(count, 1)).astype(np.float32)
+        far = None
+        if self.far is not None:
+            far = dataclasses.replace(
+                self.far,
+                W=self.far.W[r],
+                alpha=self.far.alpha[r],
+                label=self.far.label[r],
+                B=[(B @ P).tocsr() for B in self.far.B],
+            )
+        return dataclasses.replace(
+            self,
+            matrices=[(T[r] @ P).tocsr() for T in self.matrices],
+            scale=scale,
+            own=None if self.own is None else self.own[r],
+            reflectance=None if self.reflectance is None else self.reflectance[r],
+            far=far,
+            receivers=None,
+        )
 
     def rows(self, receivers) -> Transport:
         """The same transport giving the radiance of ``receivers`` (vertex indices) only: the rows of the

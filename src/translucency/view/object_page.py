@@ -87,6 +87,7 @@ class ObjectView:
     dataset: object = None
     errors: dict = field(default_factory=dict)
     seconds: dict = field(default_factory=dict)
+    drafts: dict = field(default_factory=dict)  # coarse transports by their receivers (:meth:`relight`)
 
     @property
     def centre(self) -> np.ndarray:
@@ -115,12 +116,20 @@ class ObjectView:
             return SpotLight(position, tuple(self.centre), float(cutoff), self.point_intensity)
         raise ValueError(f"light kind {kind!r}")
 
-    def relight(self, light, transport=None) -> np.ndarray:
+    def relight(self, light, receivers=None) -> np.ndarray:
         """Radiance per vertex (V, 3) of a light, before the exit law (the page applies it): irradiance
-        with shadow rays, then the sparse transport (``transport``: this object's, or its rows for a few
-        vertices, :meth:`~translucency.render.transport.Transport.rows`)."""
-        E = vertex_irradiance(self.mesh, self.scene, light, self.eta, self.law)
-        return relight_vertices(self.transport if transport is None else transport, E)
+        with shadow rays, then the sparse transport.  With ``receivers`` (vertex indices) a draft at
+        those only: their irradiance through the transport coarsened to their cells
+        (:meth:`~translucency.render.transport.Transport.coarse`, prepared on the first call)."""
+        if receivers is None:
+            E = vertex_irradiance(self.mesh, self.scene, light, self.eta, self.law)
+            return relight_vertices(self.transport, E)
+        key = hash(np.asarray(receivers).tobytes())
+        if key not in self.drafts:
+            self.drafts[key] = (self.transport.coarse(self.mesh.vertices, receivers), self.law.at(receivers))
+        coarse, law = self.drafts[key]
+        E = vertex_irradiance(self.mesh, self.scene, light, self.eta, law, at=receivers)
+        return relight_vertices(coarse, E)
 
     def exit(self, viewpoint) -> np.ndarray:
         """The exit law toward ``viewpoint`` (V, 3), as the page computes it."""

@@ -14,6 +14,7 @@ from __future__ import annotations
 import errno
 import json
 import threading
+import time
 from http import HTTPStatus
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 
@@ -40,7 +41,6 @@ class ViewServer:
         }
         self.light_json: bytes | None = None
         self.view = None
-        self.draft = None  # the transport restricted to the reduced mesh's vertices
         self.step = "starting"
         self.error: str | None = None
         self.lock = threading.Lock()  # one relight at a time: each uses every core
@@ -69,8 +69,9 @@ class ViewServer:
         try:
             view = self._prepare(say)
             meta, arrays = view.light_data()
-            if self.lod_source is not None:
-                self.draft = view.transport.rows(self.lod_source)
+            if self.lod_source is not None:  # the draft's coarse transport, prepared before the first drag
+                say("the draft transport")
+                view.relight(view.light_at("directional", (0.0, 0.0, 1.0)), receivers=self.lod_source)
             self.view = view
             body = data_script(meta, arrays).removeprefix("window.TL_DATA = ").removesuffix(";\n")
             self.light_json = body.encode("ascii")
@@ -94,20 +95,25 @@ class ViewServer:
         if not 0.5 <= cutoff <= 89:
             raise ValueError("the spot's cone must be 0.5 to 89 degrees")
         light = view.light_at(kind, direction, distance, cutoff)
-        transport = self.draft if request.get("draft") and self.draft is not None else view.transport
+        receivers = self.lod_source if request.get("draft") else None
         with self.lock:
-            L = view.relight(light, transport)
+            L = view.relight(light, receivers)
         return np.asarray(L, np.float16).tobytes()
 
     def _handler(self):
         server = self
 
         class Handler(BaseHTTPRequestHandler):
+            protocol_version = "HTTP/1.1"  # keep the connection: a drag sends many requests
+            disable_nagle_algorithm = True  # headers and body as written (no 40 ms wait for an ACK)
+
             def log_message(self, *args):  # quiet: the command prints what matters
                 pass
 
-            def _send(self, status, body: bytes, kind: str):
+            def _send(self, status, body: bytes, kind: str, seconds: float | None = None):
                 self.send_response(status)
+                if seconds is not None:  # the server's share of an update (the page's stats show it)
+                    self.send_header("Server-Timing", f"relight;dur={1000 * seconds:.1f}")
                 self.send_header("Content-Type", kind)
                 self.send_header("Content-Length", str(len(body)))
                 self.send_header("Cache-Control", "no-store")
@@ -119,14 +125,11 @@ class ViewServer:
                 if path in server.files:
                     kind = "text/html; charset=utf-8" if path == "/" else "text/javascript; charset=utf-8"
                     return self._send(HTTPStatus.OK, server.files[path], kind)
-                if path == "/light.json":
+                if path == "/light.json":  # the relighting, or what is being done (the page polls)
                     if server.light_json is not None:
                         return self._send(HTTPStatus.OK, server.light_json, "application/json")
-                    text = f"failed: {server.error}" if server.error else f"preparing: {server.step}…"
-                    status = (
-                        HTTPStatus.INTERNAL_SERVER_ERROR if server.error else HTTPStatus.SERVICE_UNAVAILABLE
-                    )
-                    return self._send(status, text.encode("utf-8"), "text/plain; charset=utf-8")
+                    state = {"failed": server.error} if server.error else {"pending": f"preparing: {server.step}…"}
+                    return self._send(HTTPStatus.OK, json.dumps(state).encode("utf-8"), "application/json")
                 self._send(HTTPStatus.NOT_FOUND, b"not found", "text/plain")
 
             def do_POST(self):
@@ -138,10 +141,11 @@ class ViewServer:
                     size = int(self.headers.get("Content-Length", "0"))
                     if not 0 < size <= MAX_BODY:
                         raise ValueError("the request's body is empty or too long")
+                    t = time.perf_counter()
                     body = server.relight(json.loads(self.rfile.read(size)))
                 except (ValueError, TypeError) as exc:
                     return self._send(HTTPStatus.BAD_REQUEST, str(exc).encode("utf-8"), "text/plain")
-                self._send(HTTPStatus.OK, body, "application/octet-stream")
+                self._send(HTTPStatus.OK, body, "application/octet-stream", time.perf_counter() - t)
 
         return Handler
 

@@ -266,6 +266,7 @@
     if (meta.eta !== 1) $("specular-row").classList.remove("hidden");
     ready = true; $("status").textContent = meta.status || "";
     if (!kinds.includes("environment") && meta.env) kinds.splice(1, 0, "environment");
+    if (meta.live && state.show === meta.maps[0].key) { state.show = "radiance"; showChanged(); }
     syncControls();
     lightChanged();
   }
@@ -354,6 +355,9 @@
     for (const [id, key] of [["light-az", "az"], ["light-el", "el"], ["light-dist", "dist"], ["light-cutoff", "cutoff"],
       ["light-power", "power"], ["env-rot", "envRot"]]) $(id).value = light[key];
     $("show").value = state.show;
+    $("dist-row").classList.toggle("hidden", !pointish());
+    $("cutoff-row").classList.toggle("hidden", light.kind !== "spot");
+    $("env-row").classList.toggle("hidden", light.kind !== "environment");
   }
   const shows = [["radiance", "relit object"], ...meta.maps.map((m) => [m.key, m.name])];
   for (const [k, label] of shows) $("show").add(new Option(label, k));
@@ -402,7 +406,7 @@
   // ---- live relight (server: point and spot lights) -----------------------------------------
   // While the light moves the server relights the reduced mesh's vertices only (a draft: the same
   // physics on fewer receivers); once it settles, every vertex.
-  const stats = { frames: 0, updates: 0, drafts: 0, pending: false, inFlight: false, waiters: [], lastMesh: 0 };
+  const stats = { latency: [], frames: 0, updates: 0, drafts: 0, pending: false, inFlight: false, waiters: [], lastMesh: 0 };
   const direct = { full: null, draft: null };   // the light each radiance buffer holds
   const pointish = () => light.kind === "point" || light.kind === "spot";
   const moving = () => performance.now() - lastChange < SETTLE_MS;
@@ -412,26 +416,31 @@
     if (stats.inFlight) { stats.pending = true; return; }
     if (!pointish() || satisfied()) return;
     stats.inFlight = true; stats.pending = false;
-    const key = lightKey(), draft = moving() && meshes.length > 1;
+    const key = lightKey(), draft = moving() && meshes.length > 1, eventT = lastEvent;
     const body = JSON.stringify({ kind: light.kind, direction: lightDirection(), distance: light.dist, cutoff: light.cutoff, draft });
+    const sent = performance.now();
     fetch("relight", { method: "POST", body }).then((r) => {
       if (!r.ok) return r.text().then((t) => { throw new Error(t); });
+      const timing = /dur=([0-9.]+)/.exec(r.headers.get("Server-Timing") || "");
+      stats.serverMs = timing ? parseFloat(timing[1]) : null;
       return r.arrayBuffer();
     }).then((buf) => {
       const values = new Uint16Array(buf);
+      stats.fetchMs = performance.now() - sent;
       if (draft) { gl.bindBuffer(gl.ARRAY_BUFFER, meshes[1].buf.a_direct); gl.bufferSubData(gl.ARRAY_BUFFER, 0, values); stats.drafts++; }
       else { upload("a_direct", values, 3); direct.full = key; }
       direct.draft = key; stats.updates++; $("status").textContent = "";
-      draw();
+      shownEvent = eventT; draw();
     }).catch((e) => { $("status").textContent = "relight: " + e.message; })
       .finally(() => { stats.inFlight = false; if (stats.pending || !satisfied()) requestRelight(); });
   }
+  let lastEvent = 0, shownEvent = null;   // when the light last changed; the change a new buffer shows
   function lightChanged() {
+    lastEvent = performance.now();
     const distant = !pointish();
-    $("dist-row").classList.toggle("hidden", distant);
-    $("cutoff-row").classList.toggle("hidden", light.kind !== "spot");
-    $("env-row").classList.toggle("hidden", light.kind !== "environment");
-    moved();
+    syncControls();
+    // a point or spot light is drawn when the server's radiance for it comes (a frame before shows nothing new)
+    moved(distant || state.show !== "radiance" || !ready);
     requestRelight();
   }
 
@@ -439,9 +448,10 @@
   let queued = false, lastChange = -1e9, settleTimer = null;
   const SETTLE_MS = 250;  // the full mesh again this long after the last move
   function draw() { if (!queued) { queued = true; requestAnimationFrame(frame); } }
-  function moved() { // a light or camera change: the reduced mesh until things settle
+  function moved(redraw = true) { // a light or camera change: the reduced mesh until things settle
     lastChange = performance.now(); clearTimeout(settleTimer);
-    settleTimer = setTimeout(() => { draw(); requestRelight(); }, SETTLE_MS + 20); draw();
+    settleTimer = setTimeout(() => { draw(); requestRelight(); }, SETTLE_MS + 20);
+    if (redraw) draw();
   }
   function frame() {
     queued = false;
@@ -482,6 +492,7 @@
     stats.lastMesh = mesh.n;
     if (picked !== null) drawMarker();
     stats.frames++;
+    if (shownEvent !== null) { stats.latency.push(performance.now() - shownEvent); shownEvent = null; }
     const shown = mode !== 1 || (useLod ? direct.draft === key : direct.full === key);
     if (shown) { const ws = stats.waiters; stats.waiters = []; for (const f of ws) f(); }
   }
@@ -615,6 +626,20 @@
       });
     },
     setShow(key) { state.show = key; syncControls(); showChanged(); },
+    // a drag: the light turned a little every ``everyMs`` (as pointer events come) for ``ms``; returns the
+    // updates shown per second and each update's time from its event to its frame
+    drag(ms, everyMs = 16, step = 1) {
+      return new Promise((resolve) => {
+        const u0 = stats.updates, t0 = performance.now(); stats.latency = [];
+        const timer = setInterval(() => {
+          light.az = ((light.az + step + 180) % 360) - 180; syncControls(); lightChanged();
+          if (performance.now() - t0 > ms) {
+            clearInterval(timer);
+            resolve({ updates_per_s: (stats.updates - u0) / ((performance.now() - t0) / 1000), latency_ms: stats.latency.slice() });
+          }
+        }, everyMs);
+      });
+    },
     get ready() { return ready; },
     pickAt(x, y) { const v = pick(x, y); if (v !== null) { picked = v; plotProfile(v); draw(); } return v; },
     frame() { return new Promise((resolve) => { stats.waiters.push(() => { settle(); resolve(performance.now()); }); draw(); }); },
@@ -622,10 +647,13 @@
   syncControls(); showChanged();
   if (D.arrays.transfer) installLight({}, D.arrays);   // a page: everything is here
   else {                                               // served live: the relighting comes when prepared
+    state.show = meta.maps[0].key; syncControls(); showChanged();  // a map meanwhile
     $("status").textContent = meta.status || "preparing the relighting…";
-    const poll = () => fetch("light.json").then((r) => r.status === 200 ? r.json() : Promise.reject(r))
-      .then((j) => installLight(j.meta, j.arrays))
-      .catch((r) => { if (r && r.status === 503) r.text().then((t) => { $("status").textContent = t; }); setTimeout(poll, 700); });
+    const poll = () => fetch("light.json").then((r) => r.json()).then((j) => {
+      if (j.meta) installLight(j.meta, j.arrays);
+      else if (j.failed) $("status").textContent = "the relighting failed: " + j.failed;
+      else { $("status").textContent = j.pending; setTimeout(poll, 700); }
+    }).catch(() => setTimeout(poll, 1500));
     poll();
   }
 })();
