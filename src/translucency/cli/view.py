@@ -12,8 +12,12 @@ from pathlib import Path
 import typer
 
 from .._validate import TranslucencyError, check_option
+from ..io.dataset import open_dataset
 from ..io.inputs import expect_input
+from ..io.mesh_dataset import is_mesh_dataset, open_mesh_dataset
 from ..io.model_file import load_model, read_header
+from ..io.outputs import claim_folder, kind_of
+from ..view.page import write_page
 from ._common import finish, info, json_option, overwrite_option, quiet_option, user_errors
 
 #: the page's budget: the pig's page must stay below it (issue 26)
@@ -22,7 +26,9 @@ PAGE_BUDGET_MB = 20.0
 
 @user_errors
 def view(
-    model: Path = typer.Argument(..., help="A per-vertex model file (translucency fit on a mesh data set)."),
+    model: Path = typer.Argument(
+        ..., help="A model file: per-vertex (fit on a mesh data set) or planar (fit on a planar data set)."
+    ),
     export: Path = typer.Option(
         None,
         "--export",
@@ -46,13 +52,19 @@ def view(
         help="Bands of the light basis (spherical harmonics): bands^2 "
         "coefficients per vertex and channel; 2 to 5.",
     ),
+    truth: Path = typer.Option(
+        None,
+        "--truth",
+        help="A planar model's independent acquisition (another seed of the same points): its ring means "
+        "beside the data's in each point's profile.",
+    ),
     radius: float = typer.Option(
         None,
         "--radius",
         help="Near radius of the transport, mm (default as render's: the 99% energy radius).",
     ),
     seconds: float = typer.Option(
-        0.0, "--seconds", help="Serve this long, then stop (0: until Ctrl-C).", hidden=True
+        0.0, "--seconds", help="Serve this long, then stop (0: until Ctrl-C; for scripts and tests)."
     ),
     overwrite: bool = overwrite_option(),
     quiet: bool = quiet_option(),
@@ -73,10 +85,11 @@ def view(
     m = load_model(model)
     header = read_header(model)
     if m.geometry != "mesh":
-        raise TranslucencyError(
-            f"{model}: a planar model; view takes a per-vertex model of a mesh data set "
-            "(a planar model's maps and profiles: translucency evaluate)"
+        return _planar(
+            m, header, model, export, truth, bands, port, open_browser, seconds, overwrite, quiet, as_json
         )
+    if truth is not None:
+        raise TranslucencyError("--truth: for a planar model (a mesh model's profiles show its own data)")
     if export is not None:
         return _export(m, header, model, export, environment, bands, radius, overwrite, quiet, as_json)
     return _serve(m, header, model, port, open_browser, environment, bands, radius, seconds, quiet, as_json)
@@ -84,8 +97,7 @@ def view(
 
 def _prepare_args(m, header, model: Path):
     """(mesh, η, data set or None) of a model: its mesh, its boundary, its data set if still at hand."""
-    from ..io.mesh_dataset import is_mesh_dataset, open_mesh_dataset
-    from ..render import boundary_eta, object_of_model
+    from ..render import boundary_eta, object_of_model  # heavy: trimesh, Mitsuba, Numba load only to view
 
     mesh, acquisition = object_of_model(m, header)
     dataset = header.get("meta", {}).get("dataset") or ""
@@ -96,9 +108,7 @@ def _prepare_args(m, header, model: Path):
 
 
 def _export(m, header, model: Path, out: Path, environment, bands, radius, overwrite, quiet, as_json):
-    from ..io.outputs import claim_folder
-    from ..view.object_page import prepare_object
-    from ..view.page import write_page
+    from ..view.object_page import prepare_object  # heavy: the render stage (Mitsuba, Numba)
 
     claim_folder(out, overwrite=overwrite, inputs=[model], option="--export")
     mesh, eta, ds = _prepare_args(m, header, model)
@@ -139,8 +149,7 @@ def _export(m, header, model: Path, out: Path, environment, bands, radius, overw
 
 
 def _serve(m, header, model: Path, port, open_browser, environment, bands, radius, seconds, quiet, as_json):
-    from ..view.object_page import prepare_object, surface_data
-    from ..view.server import ViewServer
+    from ..view.object_page import prepare_object, surface_data  # heavy: the render stage
 
     mesh, eta, ds = _prepare_args(m, header, model)
     name = model.name.removesuffix(".model.zip")
@@ -160,16 +169,57 @@ def _serve(m, header, model: Path, port, open_browser, environment, bands, radiu
             progress=say,
         )
 
+    info(quiet, "the maps first; the relighting follows once the transport is prepared.")
+    _serve_until(_server(surface, prepare, port), model, open_browser, seconds, quiet, as_json)
+
+
+def _planar(
+    m, header, model: Path, export, truth, bands, port, open_browser, seconds, overwrite, quiet, as_json
+):
+    """A planar sample's page: written (``--export``) or served, all of it at once."""
+    from ..view.planar_page import planar_page_data  # heavy: the render stage's light basis (trimesh)
+
+    dataset = header.get("meta", {}).get("dataset") or ""
+    ds = open_dataset(dataset) if dataset and kind_of(dataset) == "planar data set" else None
+    if ds is not None and ds.n_points != m.n_points:
+        ds = None  # another acquisition than the one fitted: no measured rings
+    true = None
+    if truth is not None:
+        expect_input(truth, ("planar data set",), option="--truth")
+        true = open_dataset(truth)
+        if true.n_points != m.n_points or tuple(true.window) != (
+            tuple(ds.window) if ds else tuple(true.window)
+        ):
+            raise TranslucencyError(f"--truth {truth}: {true.n_points} points, the model has {m.n_points}")
+    name = model.name.removesuffix(".model.zip")
+    meta, arrays = planar_page_data(m, name=name, dataset=ds, truth=true, bands=bands)
+    if export is not None:
+        claim_folder(export, overwrite=overwrite, inputs=[model, truth], option="--export")
+        sizes = write_page(export, meta, arrays)
+        total_mb = sum(sizes.values()) / 1e6
+        summary = {"command": "view", "model": model, "page": export / "index.html", "page_mb": total_mb}
+        return finish(as_json, quiet, summary, [f"page: {export / 'index.html'} ({total_mb:.1f} MB)"])
+    _serve_until(_server((meta, arrays), None, port), model, open_browser, seconds, quiet, as_json)
+
+
+def _server(surface, prepare, port: int):
+    """The live viewer's server on ``port`` (or another, said), or one line why it cannot serve."""
+    from ..view.server import ViewServer  # the server (and its page) only where one is started
+
     try:
-        server = ViewServer(surface, prepare, port=port)
+        return ViewServer(surface, prepare, port=port)
     except OSError as exc:
         raise TranslucencyError(f"--port {port}: cannot serve there ({exc.strerror})") from None
+
+
+def _serve_until(server, model: Path, open_browser: bool, seconds: float, quiet: bool, as_json: bool) -> None:
+    """Serve, say where, open a browser (or say there is none), stop after ``seconds`` or at Ctrl-C."""
     if server.port_note:
         info(quiet, server.port_note)
     server.start()
     opened = open_browser and _open(server.url)
     info(quiet, f"viewer: {server.url}" + ("" if opened else "  (no browser opened: open this address)"))
-    info(quiet, "the maps first; the relighting follows once the transport is prepared. Ctrl-C stops.")
+    info(quiet, "Ctrl-C stops.")
     try:
         start = time.monotonic()
         while not seconds or time.monotonic() - start < seconds:
@@ -178,11 +228,7 @@ def _serve(m, header, model: Path, port, open_browser, environment, bands, radiu
         pass
     finally:
         server.stop()
-    finish(
-        as_json,
-        True,
-        {"command": "view", "model": model, "url": server.url, "ready": server.view is not None},
-    )
+    finish(as_json, True, {"command": "view", "model": model, "url": server.url})
 
 
 def _open(url: str) -> bool:

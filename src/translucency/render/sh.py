@@ -78,19 +78,19 @@ def _legendre(z: np.ndarray, bands: int) -> dict:
 
 
 def rotate_z(coefficients, gamma: float) -> np.ndarray:
-    r"""The coefficients (..., K) of a light turned about +z by ``gamma`` radians:
+    r"""The coefficients (K, ...) of a light turned about +z by ``gamma`` radians:
     :math:`L'(\varphi) = L(\varphi - \gamma)`, i.e. for each pair
     :math:`a = L_{l,m}, b = L_{l,-m}` (m > 0): :math:`a' = a\cos m\gamma - b\sin m\gamma`,
     :math:`b' = a\sin m\gamma + b\cos m\gamma`."""
     c = np.asarray(coefficients, dtype=np.float64)
-    bands = math.isqrt(c.shape[-1])
+    bands = math.isqrt(c.shape[0])
     out = c.copy()
     for l in range(1, bands):
         for m in range(1, l + 1):
-            a, b = c[..., l * (l + 1) + m], c[..., l * (l + 1) - m]
+            a, b = c[l * (l + 1) + m], c[l * (l + 1) - m]
             cg, sg = math.cos(m * gamma), math.sin(m * gamma)
-            out[..., l * (l + 1) + m] = a * cg - b * sg
-            out[..., l * (l + 1) - m] = a * sg + b * cg
+            out[l * (l + 1) + m] = a * cg - b * sg
+            out[l * (l + 1) - m] = a * sg + b * cg
     return out
 
 

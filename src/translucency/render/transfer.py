@@ -143,4 +143,3 @@ def transfer_vectors(
         bands=bands,
         directions=directions,
     )
-

@@ -129,7 +129,9 @@ def vertex_irradiance(mesh, scene, light, eta: float = 1.0, incidence=None, at=N
     return E if F is None else E[:, None] * F
 
 
-def _environment_irradiance(mi, v, n, extent, scene, light: EnvironmentLight, eta: float, incidence) -> np.ndarray:
+def _environment_irradiance(
+    mi, v, n, extent, scene, light: EnvironmentLight, eta: float, incidence
+) -> np.ndarray:
     r"""Estimate :math:`E = \int L(\omega) V(\omega) \cos\theta\, F(\cos\theta)\, d\omega` with K rays
     per vertex (F: the incidence law's factor, 1 without one).
 
@@ -523,7 +525,7 @@ class Transport:
         return int(self.matrices[0].nnz)
 
     def coarse(self, vertices, receivers) -> Transport:
-        """A draft between a few vertices: the irradiance is given at ``receivers`` only (indices into the
+        r"""A draft between a few vertices: the irradiance is given at ``receivers`` only (indices into the
         mesh's ``vertices``, mm), each standing for the vertices nearest it (its cell); the radiance
         comes back at the receivers.  The columns of every cell are summed once,
         :math:`T'_{rj} = \sum_{i \in j} T_{ri}`, and a shared colour scale is taken per cell (its

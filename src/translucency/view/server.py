@@ -27,7 +27,7 @@ MAX_BODY = 1 << 16
 
 
 class ViewServer:
-    """Serve ``surface`` = (meta, arrays) at once and the relighting once ``prepare()`` returns an
+    """Serve ``surface`` = (meta, arrays) at once and the relighting once ``prepare(say)`` returns an
     :class:`~translucency.view.object_page.ObjectView` (called in a thread; ``say(step)`` is told each
     step, and the page shows it)."""
 
@@ -54,9 +54,11 @@ class ViewServer:
         return f"http://{host}:{port}/"
 
     def start(self) -> None:
-        """Serve in a thread and prepare the relighting in another."""
+        """Serve in a thread and prepare the relighting in another (none to prepare: ``prepare`` None, the
+        page holds its relighting already, as a planar sample's does)."""
         threading.Thread(target=self.httpd.serve_forever, daemon=True).start()
-        threading.Thread(target=self._prepare_light, daemon=True).start()
+        if self._prepare is not None:
+            threading.Thread(target=self._prepare_light, daemon=True).start()
 
     def stop(self) -> None:
         self.httpd.shutdown()
@@ -128,7 +130,11 @@ class ViewServer:
                 if path == "/light.json":  # the relighting, or what is being done (the page polls)
                     if server.light_json is not None:
                         return self._send(HTTPStatus.OK, server.light_json, "application/json")
-                    state = {"failed": server.error} if server.error else {"pending": f"preparing: {server.step}…"}
+                    state = (
+                        {"failed": server.error}
+                        if server.error
+                        else {"pending": f"preparing: {server.step}…"}
+                    )
                     return self._send(HTTPStatus.OK, json.dumps(state).encode("utf-8"), "application/json")
                 self._send(HTTPStatus.NOT_FOUND, b"not found", "text/plain")
 

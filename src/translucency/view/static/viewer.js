@@ -345,7 +345,7 @@
     return inv; }
 
   // ---- state and controls ------------------------------------------------------------------
-  const kinds = meta.live ? ["directional", "point", "spot"] : ["directional"];
+  const kinds = meta.live && !meta.distant_only ? ["directional", "point", "spot"] : ["directional"];
   const light = Object.assign({ kind: "directional", az: 30, el: 35, dist: 1.5, cutoff: 20, power: 0, colour: [1, 1, 1], envRot: 0 }, meta.default_light || {});
   const state = { exposure: 0, show: "radiance", specular: false };
   function syncControls() { // the controls as the state says (after setLight, installLight)
@@ -544,6 +544,7 @@
   const profPoints = prof ? decode("profile_points") : null;     // (N, 3) float32
   const profModel = prof ? decode("profile_model") : null;       // (N, R, 3) float32, mm^-2
   const profData = prof && prof.measured ? decode("profile_measured") : null;
+  const profTruth = prof && prof.truth ? decode("profile_truth") : null;
   function nearestPoint(v) {
     let best = -1, bd = Infinity;
     for (let i = 0; i < prof.count; i++) { const d = Math.hypot(profPoints[3 * i] - position[3 * v],
@@ -557,7 +558,8 @@
     if (!prof) { $("profile-note").textContent = "This model carries no profiles."; return; }
     const [i, dist] = nearestPoint(v), R = prof.radii_mm.length, rr = prof.radii_mm;
     const vals = [];
-    for (let j = 0; j < R * 3; j++) { vals.push(profModel[i * R * 3 + j]); if (profData) vals.push(profData[i * R * 3 + j]); }
+    for (let j = 0; j < R * 3; j++) { vals.push(profModel[i * R * 3 + j]); if (profData) vals.push(profData[i * R * 3 + j]);
+      if (profTruth) vals.push(profTruth[i * R * 3 + j]); }
     const pos = vals.filter((x) => x > 0 && isFinite(x));
     const hi = Math.log10(Math.max(...pos)), lo = Math.max(Math.log10(Math.min(...pos)), hi - 6);
     const x0 = 70, y0 = 20, x1 = W - 14, y1 = H - 50;
@@ -579,9 +581,13 @@
       if (profData) { g.fillStyle = cols[c];
         for (let j = 0; j < R; j++) { const f = profData[(i * R + j) * 3 + c]; if (!(f > 0) || Y(f) > y1 || Y(f) < y0) continue;
           g.beginPath(); g.arc(X(rr[j]), Y(f), 4, 0, 2 * Math.PI); g.fill(); } }
+      if (profTruth) { g.strokeStyle = cols[c]; g.lineWidth = 1.5;
+        for (let j = 0; j < R; j++) { const f = profTruth[(i * R + j) * 3 + c]; if (!(f > 0) || Y(f) > y1 || Y(f) < y0) continue;
+          const x = X(rr[j]), y = Y(f); g.beginPath(); g.moveTo(x - 4, y - 4); g.lineTo(x + 4, y + 4); g.moveTo(x - 4, y + 4); g.lineTo(x + 4, y - 4); g.stroke(); } }
     }
     $("profile-note").textContent = `vertex ${v}: incident point ${i} (${dist.toFixed(1)} mm away); lines: the fit's ring means` +
-      (profData ? ", dots: the measured ring means" : " (the data set is not at hand: no measured rings)") + "; R, G, B.";
+      (profData ? ", dots: the measured ring means" : " (the data set is not at hand: no measured rings)") +
+      (profTruth ? ", crosses: the truth's (an independent acquisition)" : "") + "; R, G, B.";
   }
 
   // ---- mouse: orbit, light drag, zoom, click --------------------------------------------------

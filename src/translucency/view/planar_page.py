@@ -1,0 +1,175 @@
+r"""What the page shows of a planar model: the sample as a flat mesh, its maps, each incident point's
+profile against its data (and an independent truth), and the sample relit under a distant light.
+
+The sample is the modulation texture's grid (one vertex per α pixel, at most :data:`MAX_SIDE` a side),
+flat at z = 0 with +z up.  On a flat, index-matched sample nothing shadows anything and every incident
+point sees the same sky, so the transfer is exact in closed form: a light of coefficients :math:`L_k`
+gives each point the irradiance :math:`E = \sum_k L_k E^{(k)}`,
+:math:`E^{(k)} = \int Y_k(\omega) \cos^+\theta\, d\omega`, and the sample leaves
+:math:`B_o = a_o E` with :math:`a_o = \alpha(x_o)\, \rho(x_o) / \pi` — its response to a uniform
+irradiance, ρ the total diffuse reflectance of the nearest incident points (blended as the maps are).
+The page stores it in the per-vertex format of :mod:`.object_page` (the rest r = 0, :math:`\bar E = E^{(k)}`,
+local = a), so one page serves both.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from ..evaluate.rings import ring_stats
+from ..model.bounds import check_physics
+from ..render import sh
+from ..render.lights import EnvironmentLight
+from ..render.transfer import DEFAULT_BANDS, light_coefficients
+from .object_page import DEFAULT_LIGHT, EXIT_TABLE, IRRADIANCE, POINT_DISTANCE, TEXTURE_WIDTH
+
+#: the most vertices along a side of the sample's mesh
+MAX_SIDE = 192
+
+
+def planar_page_data(
+    model, *, name: str, dataset=None, truth=None, bands: int = DEFAULT_BANDS
+) -> tuple[dict, dict]:
+    """(meta, arrays) of the whole page of a planar ``model`` (module docstring); ``dataset``: the planar
+    data set it was fitted to (its windows' ring means), ``truth``: an independent acquisition of the same
+    points."""
+    alpha = model.alpha
+    H, W = alpha.shape
+    step = max(1, -(-max(H, W) // MAX_SIDE))
+    rows, cols = np.arange(0, H, step), np.arange(0, W, step)
+    xs = alpha.origin[0] + (cols + 0.5) * alpha.pitch
+    ys = alpha.origin[1] + (rows + 0.5) * alpha.pitch
+    X, Y = np.meshgrid(xs, ys)
+    xy = np.stack([X.ravel(), Y.ravel()], axis=1)
+    V = len(xy)
+    position = np.concatenate([xy, np.zeros((V, 1))], axis=1)
+    h, w = len(rows), len(cols)
+    idx = np.arange(V).reshape(h, w)
+    a, b, c, d = idx[:-1, :-1], idx[:-1, 1:], idx[1:, :-1], idx[1:, 1:]
+    faces = np.concatenate([np.stack([a, b, d], -1).reshape(-1, 3), np.stack([a, d, c], -1).reshape(-1, 3)])
+    # the maps: each vertex blends its 4 nearest incident points (inverse square distance)
+    k = min(4, model.n_points)
+    dist, near = cKDTree(model.x_i[:, :2]).query(xy, k=k)
+    dist, near = dist.reshape(V, k), near.reshape(V, k)
+    wts = 1.0 / np.maximum(dist, 1e-9) ** 2
+    wts /= wts.sum(axis=1, keepdims=True)
+    blend = lambda per_point: np.einsum("vk,vk...->v...", wts, np.asarray(per_point, np.float64)[near])  # noqa: E731
+    rho = blend(model.total_reflectance())  # (V, 3)
+    a_alpha = np.asarray(alpha.at(xy), np.float64)
+    check = check_physics(model)
+    maps_values = {
+        "map_alpha": ("modulation texture α", "", a_alpha),
+        "map_reflectance": ("total diffuse reflectance (mean of R, G, B)", "", rho.mean(axis=1)),
+        "map_radius": ("99 % energy radius", "mm", blend(model.energy_radius(0.99))),
+    }
+    arrays = {
+        "position": position.astype(np.float32),
+        "normal": np.tile(np.array([0.0, 0.0, 1.0], np.float16), (V, 1)),
+        "index": faces.astype(np.uint32),
+    }
+    maps = []
+    for key, (title, unit, v) in maps_values.items():
+        fin = v[np.isfinite(v)]
+        lo, hi = np.quantile(fin, [0.02, 0.98]) if fin.size else (0.0, 1.0)
+        arrays[key] = v.astype(np.float16)
+        maps.append(
+            {"key": key, "name": title, "unit": unit, "lo": float(lo), "hi": float(max(hi, lo + 1e-9))}
+        )
+    arrays["map_flags"] = check.flagged[near[:, 0]].astype(np.float16)
+    maps.append(
+        {
+            "key": "map_flags",
+            "name": "physics flags",
+            "unit": "",
+            "lo": 0.0,
+            "hi": 1.0,
+            "flags": True,
+            "legend": f"nearest incident point breaks a bound: {check.describe()}",
+        }  # fmt: skip
+    )
+    profiles = _profiles(model, dataset, truth, arrays)
+    # the relighting: r = 0, Ē = E^(k) (every point alike), local a = α ρ / π
+    K = bands * bands
+    lattice = sh.sphere_directions(4096)
+    Ek = sh.basis(lattice, bands).T @ np.maximum(lattice[:, 2], 0.0) * (4 * np.pi / len(lattice))  # (K,)
+    kq = -(-K // 4)
+    q = np.zeros((V, 4, kq * 4), np.int8)
+    q[:, 3, :K] = np.round(127.0 * Ek / np.max(np.abs(Ek))).astype(np.int8)
+    stride = 4 * kq
+    tex = np.zeros(-(-V * stride // TEXTURE_WIDTH) * TEXTURE_WIDTH * 4, np.int8)
+    tex[: q.size] = q.ravel()
+    local = np.clip(a_alpha[:, None] * rho / np.pi, 0.0, None)
+    arrays.update(
+        transfer=tex,
+        transfer_run=np.zeros((V, 3), np.float16),
+        irradiance_run=np.ones(V, np.float16),
+        local=local.astype(np.float16),
+    )
+    size = float(np.hypot(xs[-1] - xs[0], ys[-1] - ys[0])) or 1.0
+    environment = EnvironmentLight(IRRADIANCE / np.pi)
+    bright = float(np.quantile(local.max(axis=1), 0.99)) * IRRADIANCE
+    meta = {
+        "title": name,
+        "subtitle": f"planar sample, {H} x {W} α pixels of {alpha.pitch:g} mm, "
+        f"{model.n_points} incident points",
+        "vertices": V,
+        "faces": len(faces),
+        "centre": [float(xs.mean()), float(ys.mean()), 0.0],
+        "size": size,
+        "view": {"az": -90.0, "el": 60.0},
+        "default_light": {"kind": "directional", "az": DEFAULT_LIGHT[0], "el": 60.0, "dist": POINT_DISTANCE},
+        "maps": maps,
+        "profiles": profiles,
+        "directional_irradiance": IRRADIANCE,
+        "point_intensity": IRRADIANCE * (POINT_DISTANCE * size) ** 2,
+        "distant_only": True,
+        "bands": bands,
+        "stride": stride,
+        "kq": kq,
+        "texture_width": TEXTURE_WIDTH,
+        "transfer_scale": 0.0,
+        "irradiance_scale": float(np.max(np.abs(Ek))),
+        "exit_law": False,
+        "exit_table_size": EXIT_TABLE,
+        "eta": 1.0,
+        "exposure": 0.5 / bright if bright > 0 else 1.0,
+        "blur_mm": 0.0,
+        "env": {"coefficients": light_coefficients(environment, bands).tolist()},
+        "errors": {},
+        "about": "A flat, index-matched sample: nothing shadows, every point sees the same sky, so the "
+        "relit sample is α ρ / π times the irradiance (exact for the paper's model with a Lambertian exit).",
+        "live": False,
+    }
+    return meta, arrays
+
+
+def _profiles(model, dataset, truth, arrays: dict) -> dict | None:
+    """Ring means (one-pixel rings) of the fit's R_d in each incident point's window, of the data's and of
+    the truth's; without a data set, the fit's on rings of the α pitch out to its 99 % energy radius."""
+    N = model.n_points
+    if dataset is None:
+        pitch = float(model.alpha.pitch)
+        n = int(np.clip(np.max(model.energy_radius(0.99)) / pitch, 4, 64))
+        window = (2 * n + 1, 2 * n + 1)
+        origin = model.x_i[:, :2] - n * pitch - pitch / 2
+    else:
+        pitch, window = dataset.pitch, tuple(dataset.window)
+        origin = dataset["window_origin"].astype(np.float64)
+    fit, data, true = [], [], []
+    for i in range(N):
+        pred = model.R_d_window([i], origin[i : i + 1], pitch, window)[0]
+        r, m, _ = zip(*(ring_stats(pred[:, :, c], None, pitch) for c in range(3)))
+        fit.append(np.stack(m, axis=1))
+        for store, out in ((dataset, data), (truth, true)):
+            if store is not None:
+                win = np.asarray(store["R_d"][i], np.float64)
+                out.append(np.stack([ring_stats(win[:, :, c], None, pitch)[1] for c in range(3)], axis=1))
+    radii = np.asarray(r[0])
+    arrays["profile_points"] = np.concatenate([model.x_i[:, :2], np.zeros((N, 1))], axis=1).astype(np.float32)
+    arrays["profile_model"] = np.nan_to_num(np.stack(fit)).astype(np.float32)
+    if data:
+        arrays["profile_measured"] = np.nan_to_num(np.stack(data)).astype(np.float32)
+    if true:
+        arrays["profile_truth"] = np.nan_to_num(np.stack(true)).astype(np.float32)
+    return {"count": N, "radii_mm": radii.tolist(), "measured": bool(data), "truth": bool(true)}
