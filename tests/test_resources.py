@@ -61,6 +61,8 @@ def planar_args(out, **kw):
     return args + ["--out", str(out), "--quiet"], opts
 
 
+# slow (20 s): the fast suite keeps the estimate's other checks; make test-slow runs this one
+@pytest.mark.slow
 def test_estimates_follow_the_measured_peak(tmp_path):
     """A planar acquisition whose windows dominate (401² pixels, ≈ 0.6 GiB estimated), its fit, and a
     mesh acquisition whose photons dominate: each estimate within a factor of 2 of the measured peak."""

@@ -58,6 +58,8 @@ def calibrated(runs, attempts: int = 3) -> float:
             return within_2x(summary)
 
 
+# slow (19 s): test_planar_estimates_across_materials[scattering] keeps the time estimate in the fast suite
+@pytest.mark.slow
 def test_planar_acquisition_and_fit_estimates_within_2x(tmp_path):
     """A first run calibrates; a run of another size is then estimated within 2x of its wall time."""
 

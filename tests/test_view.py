@@ -406,3 +406,43 @@ def test_planar_model_page_and_its_relit_sample(tmp_path):
     res = runner.invoke(app, ["view", str(path), "--export", str(tmp_path / "page"), "-q"])
     assert res.exit_code == 0, res.output
     assert (tmp_path / "page" / "data.js").stat().st_size > 1000
+
+
+def test_gltf_opens_in_three_js(browser, small_model, tmp_path):
+    """The exported glTF loads in three.js: viser's client (three.js with three-stdlib's GLTFLoader) draws it
+    — the picture changes where the model stands — with no error in the console."""
+    import io
+
+    from PIL import Image
+
+    viser = pytest.importorskip("viser")
+    glb = tmp_path / "small.glb"
+    assert runner.invoke(app, ["export", str(small_model), "--gltf", str(glb), "-q"]).exit_code == 0
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    server = viser.ViserServer(host="127.0.0.1", port=port, verbose=False)
+    try:
+        server.initial_camera.position = (0.0, -0.6, 0.25)
+        server.initial_camera.look_at = (0.0, 0.0, 0.0)
+        page, errors = browser.new_page(viewport={"width": 640, "height": 480}), []
+        page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
+        page.on("pageerror", lambda e: errors.append(str(e)))
+        page.goto(f"http://127.0.0.1:{port}/")
+        page.wait_for_timeout(4000)
+
+        def picture():
+            return np.asarray(Image.open(io.BytesIO(page.screenshot())).convert("L"), dtype=np.float64)
+
+        empty = picture()
+        # metres: the 19 mm object drawn 20× larger to fill the view
+        server.scene.add_glb("/small", glb.read_bytes(), scale=20.0)
+        page.wait_for_timeout(3000)
+        drawn = picture()
+        Image.fromarray(drawn.astype(np.uint8)).save(tmp_path / "three.png")
+        changed = np.abs(drawn - empty)[160:, :300] > 20  # below the notice, left of the scene-tree panel
+        assert changed.sum() > 2000, changed.sum()
+        assert not errors, errors
+        page.close()
+    finally:
+        server.stop()

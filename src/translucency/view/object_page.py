@@ -66,7 +66,7 @@ IRRADIANCE = 1.0
 #: a point light's distance by default, object sizes (as ``render``'s relative lights)
 POINT_DISTANCE = 1.5
 #: triangles of the mesh drawn while things move (software WebGL draws ~0.5 M triangles a second on 2 cores)
-REDUCED_FACES = 12000
+REDUCED_FACES = 8000
 #: rings of the profiles: log-spaced radii
 PROFILE_RINGS = 24
 

@@ -129,7 +129,8 @@
         vec3 Eo = vec3(0.0);
         if (cl > 0.0) {
           // the shadow, softened over the light's spread inside the body (8 taps on a disk of u_blur)
-          vec4 pl = u_lightmvp * vec4(a_pos + n * u_offset, 1.0);
+          // offset along the normal, more at grazing light (no self-shadow of the mesh's small bumps there)
+          vec4 pl = u_lightmvp * vec4(a_pos + n * u_offset * (1.0 + 4.0 * (1.0 - cl)), 1.0);
           vec3 sc = pl.xyz * 0.5 + 0.5;
           float vis = 0.0;
           for (int t = 0; t < 8; t++) {
@@ -273,7 +274,7 @@
   gl.enable(gl.DEPTH_TEST); gl.enable(gl.CULL_FACE);
 
   // ---- the shadow map of a directional light: depth from the light, orthographic ----------------
-  const SHADOW = 1024;
+  const SHADOW = 512;  // texels a side: the light's spread (u_blur) softens the map's steps
   const shadowProg = gl.createProgram();
   gl.attachShader(shadowProg, shader(gl.VERTEX_SHADER, `#version 300 es
     layout(location = 0) in vec3 a_pos; uniform mat4 u_lightmvp; void main() { gl_Position = u_lightmvp * vec4(a_pos, 1.0); }`));
@@ -430,7 +431,8 @@
       if (draft) { gl.bindBuffer(gl.ARRAY_BUFFER, meshes[1].buf.a_direct); gl.bufferSubData(gl.ARRAY_BUFFER, 0, values); stats.drafts++; }
       else { upload("a_direct", values, 3); direct.full = key; }
       direct.draft = key; stats.updates++; $("status").textContent = "";
-      shownEvent = eventT; draw();
+      shownEvent = eventT;
+      if (!queued) frame(); // at once: waiting for the next animation frame would add up to 16 ms
     }).catch((e) => { $("status").textContent = "relight: " + e.message; })
       .finally(() => { stats.inFlight = false; if (stats.pending || !satisfied()) requestRelight(); });
   }
