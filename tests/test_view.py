@@ -440,8 +440,8 @@ def test_gltf_opens_in_three_js(browser, small_model, tmp_path):
         page.wait_for_timeout(3000)
         drawn = picture()
         Image.fromarray(drawn.astype(np.uint8)).save(tmp_path / "three.png")
-        changed = np.abs(drawn - empty)[160:, :300] > 20  # below the notice, left of the scene-tree panel
-        assert changed.sum() > 2000, changed.sum()
+        changed = np.abs(drawn - empty)[160:, :300] > 10  # below the notice, left of the scene-tree panel
+        assert changed.sum() > 1000, changed.sum()  # the ball alone covers about 7,000 pixels there
         assert not errors, errors
         page.close()
     finally:

@@ -37,6 +37,7 @@ def export_gltf(model, mesh, acquisition: dict, path, light_text: str) -> dict:
     extras = {
         "written_by": "translucency",
         "units": {"positions": "m", "_MFP_MM": "mm", "_BURLEY_S": "1/mm"},
+        "up": "+Y, our +z: (x, y, z) -> (x, z, -y)",
         "colour": "COLOR_0 = radiance x colour_scale (linear; Lambertian exit), clipped to 1",
         "colour_scale": scale,
         "light": light_text,

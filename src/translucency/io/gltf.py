@@ -1,8 +1,9 @@
 """A per-vertex object as glTF 2.0 binary (``.glb``): the mesh, a baked colour and per-vertex attributes
 a renderer can read — written and read by trimesh.
 
-glTF's unit is the metre: positions are written in metres (our millimetres × 10⁻³) and every length of an
-attribute says its unit in its name (``_MFP_MM``).  The colour is linear RGB (glTF's ``COLOR_0``) scaled
+glTF's unit is the metre and its up axis +Y: positions are written in metres (our millimetres × 10⁻³),
+our +z turned to glTF's +Y, :math:`(x, y, z) \mapsto (x, z, -y)` (Blender's and three.js's importers turn
+it back up), and every length of an attribute says its unit in its name (``_MFP_MM``).  The colour is linear RGB (glTF's ``COLOR_0``) scaled
 into [0, 1]; the scale back to radiance is in the file's ``extras`` (``translucency.colour_scale``).
 Custom attributes start with an underscore, as glTF requires (``_ALBEDO``, ``_MFP_MM``, ...).
 """
@@ -18,6 +19,8 @@ from .atomic import atomic_path
 
 #: glTF's unit (the metre) in our millimetres
 MM_PER_GLTF_UNIT = 1000.0
+#: our frame (+z up) to glTF's (+Y up): a rotation about x by −90°, (x, y, z) → (x, z, −y)
+Z_UP_TO_Y_UP = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, -1.0, 0.0]])
 
 
 def write_glb(path, vertices_mm, faces, colour, attributes: dict, extras: dict) -> None:
@@ -32,7 +35,7 @@ def write_glb(path, vertices_mm, faces, colour, attributes: dict, extras: dict) 
     colour = np.clip(np.asarray(colour, dtype=np.float64), 0.0, 1.0)
     rgba = np.concatenate([colour, np.ones((len(colour), 1))], axis=1)
     mesh = trimesh.Trimesh(
-        np.asarray(vertices_mm, dtype=np.float64) / MM_PER_GLTF_UNIT,
+        np.asarray(vertices_mm, dtype=np.float64) @ Z_UP_TO_Y_UP.T / MM_PER_GLTF_UNIT,
         np.asarray(faces),
         vertex_colors=np.round(rgba * 255).astype(np.uint8),
         process=False,
@@ -47,11 +50,11 @@ def write_glb(path, vertices_mm, faces, colour, attributes: dict, extras: dict) 
 
 
 def read_glb(path):
-    """(mesh in mm, extras) of a .glb written by :func:`write_glb` (its attributes in
+    """(mesh in mm, +z up, extras) of a .glb written by :func:`write_glb` (its attributes in
     ``mesh.vertex_attributes``, its colour in ``mesh.visual.vertex_colors``)."""
     import trimesh  # trimesh loads only to write or read meshes
 
     scene = trimesh.load(path, force="scene", process=False)
     mesh = next(iter(scene.geometry.values()))
-    mesh.vertices = mesh.vertices * MM_PER_GLTF_UNIT
+    mesh.vertices = np.asarray(mesh.vertices) @ Z_UP_TO_Y_UP * MM_PER_GLTF_UNIT  # back to +z up, mm
     return mesh, scene.metadata.get("translucency", {})

@@ -81,7 +81,8 @@ def kind_of(path) -> str | None:
 
     Reads only metadata: a data set's root ``zarr.json``, a model file's
     ``zarr.json`` inside its zip, an output folder's marker, a JSON file's
-    ``written_by`` field, a PLY's header comment (:data:`PLY_COMMENT`).
+    ``written_by`` field, a PLY's header comment (:data:`PLY_COMMENT`), a binary glTF's first scene's
+    ``extras["translucency"]["written_by"]`` (:mod:`translucency.io.gltf`).
     """
     path = Path(path)
     try:
@@ -106,6 +107,8 @@ def kind_of(path) -> str | None:
                 with open(path, "rb") as f:
                     head = f.read(512)
                 return "mesh file" if PLY_COMMENT.encode() in head.split(b"end_header")[0] else None
+            if path.suffix.lower() == ".glb":
+                return "mesh file" if _glb_written_here(path) else None
             if path.suffix == ".json" and path.stat().st_size < 50_000_000:
                 obj = json.loads(path.read_text())
                 if isinstance(obj, dict) and str(obj.get("written_by", "")).startswith("translucency"):
@@ -113,6 +116,26 @@ def kind_of(path) -> str | None:
     except (OSError, ValueError, zipfile.BadZipFile):
         return None
     return None
+
+
+def _glb_written_here(path: Path) -> bool:
+    """Whether a .glb's JSON chunk (the first, after the 12-byte header) names translucency as its writer."""
+    with open(path, "rb") as f:
+        head = f.read(20)
+        if len(head) < 20 or head[:4] != b"glTF" or head[16:20] != b"JSON":
+            return False
+        size = int.from_bytes(head[12:16], "little")
+        if size > 50_000_000:
+            return False
+        doc = json.loads(f.read(size))
+    scenes = doc.get("scenes") if isinstance(doc, dict) else None
+    extras = (
+        scenes[0].get("extras", {})
+        if isinstance(scenes, list) and scenes and isinstance(scenes[0], dict)
+        else {}
+    )
+    mark = extras.get("translucency") if isinstance(extras, dict) else None
+    return isinstance(mark, dict) and mark.get("written_by") == "translucency"
 
 
 # -- the guards -------------------------------------------------------------------------------
