@@ -6,8 +6,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from test_view import runner, small_model  # noqa: F401 — the fixture: a ball and a thin ear
 
+from test_view import runner, small_model  # noqa: F401 — the fixture: a ball and a thin ear
 from translucency.cli.app import app
 from translucency.io.gltf import read_glb
 
