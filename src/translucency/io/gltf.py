@@ -5,7 +5,8 @@ glTF's unit is the metre and its up axis +Y: positions are written in metres (ou
 our +z turned to glTF's +Y, :math:`(x, y, z) \mapsto (x, z, -y)` (Blender's and three.js's importers turn
 it back up), and every length of an attribute says its unit in its name (``_MFP_MM``).  The colour is
 linear RGB (glTF's ``COLOR_0``) scaled into [0, 1]; the scale back to radiance is in the file's
-``extras`` (``translucency.colour_scale``).  Custom attributes start with an underscore, as glTF requires (``_ALBEDO``, ``_MFP_MM``, ...).
+``extras`` (``translucency.colour_scale``).  Custom attributes start with an underscore, as glTF
+requires (``_ALBEDO``, ``_MFP_MM``, ...).
 """
 
 from __future__ import annotations
