@@ -107,23 +107,20 @@ def _prepare_args(m, header, model: Path):
     return mesh, boundary_eta(acquisition), ds
 
 
+def _light_options(model: Path, eta, ds, environment, bands, radius) -> dict:
+    """What :func:`~translucency.view.object_page.prepare_object` takes from the command's options."""
+    name = model.name.removesuffix(".model.zip")
+    return dict(eta=eta, environment=environment, bands=bands, radius=radius, dataset=ds, name=name)
+
+
 def _export(m, header, model: Path, out: Path, environment, bands, radius, overwrite, quiet, as_json):
     from ..view.object_page import prepare_object  # heavy: the render stage (Mitsuba, Numba)
 
     claim_folder(out, overwrite=overwrite, inputs=[model], option="--export")
     mesh, eta, ds = _prepare_args(m, header, model)
     t = time.perf_counter()
-    view = prepare_object(
-        m,
-        mesh,
-        eta=eta,
-        environment=environment,
-        bands=bands,
-        radius=radius,
-        dataset=ds,
-        name=model.name.removesuffix(".model.zip"),
-        progress=lambda step: info(quiet, f"{step}…"),
-    )
+    options = _light_options(model, eta, ds, environment, bands, radius)
+    view = prepare_object(m, mesh, **options, progress=lambda step: info(quiet, f"{step}…"))
     meta, arrays = view.page_data()
     sizes = write_page(out, meta, arrays)
     total_mb = sum(sizes.values()) / 1e6
@@ -156,18 +153,8 @@ def _serve(m, header, model: Path, port, open_browser, environment, bands, radiu
     surface = surface_data(m, mesh, name=name, dataset=ds)
 
     def prepare(say):
-        return prepare_object(
-            m,
-            mesh,
-            eta=eta,
-            environment=environment,
-            bands=bands,
-            radius=radius,
-            dataset=ds,
-            name=name,
-            check_error=False,
-            progress=say,
-        )
+        options = _light_options(model, eta, ds, environment, bands, radius)
+        return prepare_object(m, mesh, **options, check_error=False, progress=say)
 
     info(quiet, "the maps first; the relighting follows once the transport is prepared.")
     _serve_until(_server(surface, prepare, port), model, open_browser, seconds, quiet, as_json)

@@ -51,6 +51,7 @@ from ..render.transport import (
     vertex_irradiance,
     view_cosines,
 )
+from .maps import page_maps
 
 #: texels per row of the transfer texture (WebGL2 guarantees 2048 at least; 4096 everywhere we know)
 TEXTURE_WIDTH = 2048
@@ -418,27 +419,11 @@ def _maps(model, mesh, arrays: dict) -> list:
             np.asarray(model.alpha.at(np.asarray(mesh.vertices)), np.float64),
         ),
     }
-    out = []
-    for key, (name, unit, v) in values.items():
-        fin = v[np.isfinite(v)]
-        lo, hi = np.quantile(fin, [0.02, 0.98]) if fin.size else (0.0, 1.0)
-        arrays[key] = v.astype(np.float16)
-        out.append({"key": key, "name": name, "unit": unit, "lo": float(lo), "hi": float(max(hi, lo + 1e-9))})
-    flagged = check.flagged[idx[:, 0]]  # a vertex takes its nearest incident point's flags
-    arrays["map_flags"] = flagged.astype(np.float16)
-    out.append(
-        {
-            "key": "map_flags",
-            "name": "physics flags",
-            "unit": "",
-            "lo": 0.0,
-            "hi": 1.0,
-            "flags": True,
-            "legend": f"nearest incident point breaks a bound ({int(check.flagged.sum())} of "
-            f"{model.n_points} points): {check.describe()}",
-        }
+    legend = (
+        f"nearest incident point breaks a bound ({int(check.flagged.sum())} of {model.n_points} points): "
+        f"{check.describe()}"
     )
-    return out
+    return page_maps(values, check.flagged[idx[:, 0]], legend, arrays)  # a vertex: its nearest point's flags
 
 
 def _profiles(model, mesh, dataset, arrays: dict) -> dict:

@@ -22,6 +22,7 @@ from ..model.bounds import check_physics
 from ..render import sh
 from ..render.lights import EnvironmentLight
 from ..render.transfer import DEFAULT_BANDS, light_coefficients
+from .maps import page_maps
 from .object_page import DEFAULT_LIGHT, EXIT_TABLE, IRRADIANCE, POINT_DISTANCE, TEXTURE_WIDTH
 
 #: the most vertices along a side of the sample's mesh
@@ -68,26 +69,8 @@ def planar_page_data(
         "normal": np.tile(np.array([0.0, 0.0, 1.0], np.float16), (V, 1)),
         "index": faces.astype(np.uint32),
     }
-    maps = []
-    for key, (title, unit, v) in maps_values.items():
-        fin = v[np.isfinite(v)]
-        lo, hi = np.quantile(fin, [0.02, 0.98]) if fin.size else (0.0, 1.0)
-        arrays[key] = v.astype(np.float16)
-        maps.append(
-            {"key": key, "name": title, "unit": unit, "lo": float(lo), "hi": float(max(hi, lo + 1e-9))}
-        )
-    arrays["map_flags"] = check.flagged[near[:, 0]].astype(np.float16)
-    maps.append(
-        {
-            "key": "map_flags",
-            "name": "physics flags",
-            "unit": "",
-            "lo": 0.0,
-            "hi": 1.0,
-            "flags": True,
-            "legend": f"nearest incident point breaks a bound: {check.describe()}",
-        }  # fmt: skip
-    )
+    legend = f"nearest incident point breaks a bound: {check.describe()}"
+    maps = page_maps(maps_values, check.flagged[near[:, 0]], legend, arrays)
     profiles = _profiles(model, dataset, truth, arrays)
     # the relighting: r = 0, Ē = E^(k) (every point alike), local a = α ρ / π
     K = bands * bands
