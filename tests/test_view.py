@@ -446,3 +446,69 @@ def test_gltf_opens_in_three_js(browser, small_model, tmp_path):
         page.close()
     finally:
         server.stop()
+
+
+def _other_fit(small_model, tmp_path, seed: int):
+    """A second model on the small model's mesh (other profiles), saved."""
+    from translucency import save_model
+
+    mesh = _body_and_ear()
+    terms = (((1.0, 1.6), (0.05, 0.1)), ((0.3, 0.5), (0.005, 0.01)))
+    model = random_exponential_model(
+        np.random.default_rng(seed),
+        geometry="mesh",
+        mesh=mesh,
+        points=np.arange(0, len(mesh.vertices), 5),
+        terms=terms,
+    )
+    model.faces = np.asarray(mesh.faces)
+    return save_model(model, tmp_path / f"other{seed}.model.zip")
+
+
+def test_compare_needs_the_same_mesh(small_model, tmp_path):
+    from translucency import save_model
+
+    ball = trimesh.creation.icosphere(2, radius=5.0)
+    other = random_exponential_model(
+        np.random.default_rng(1), geometry="mesh", mesh=ball, points=np.arange(0, 162, 9)
+    )
+    other.faces = np.asarray(ball.faces)
+    path = save_model(other, tmp_path / "ball.model.zip")
+    res = runner.invoke(
+        app, ["view", str(small_model), "--compare", str(path), "--export", str(tmp_path / "p")]
+    )
+    assert res.exit_code == 2 and "another mesh" in res.output and "Traceback" not in res.output
+
+
+def test_two_models_side_by_side_and_their_difference_in_chromium(browser, small_model, tmp_path):
+    """--compare: model B, the two side by side and |B − A| / A; against itself the difference is nil."""
+    import io
+
+    from PIL import Image
+
+    other = _other_fit(small_model, tmp_path, 6)
+    means = {}
+    for name, b in (("other", other), ("itself", small_model)):
+        out = tmp_path / name
+        res = runner.invoke(app, ["view", str(small_model), "--compare", str(b), "--export", str(out), "-q"])
+        assert res.exit_code == 0, res.output
+        page, errors = _open(browser, (out / "index.html").as_uri())
+        page.evaluate("TL.cam.az = -90; TL.cam.el = 0; TL.setLight({kind: 'directional', az: -90, el: 30})")
+        page.evaluate("TL.setShow('compare_diff')")
+        page.wait_for_timeout(400)
+        page.evaluate("TL.frame()")
+        rgb = np.asarray(
+            Image.open(io.BytesIO(page.locator("#canvas").screenshot())).convert("RGB"), np.float64
+        )
+        obj = np.abs(rgb - np.array([29, 31, 33])).sum(axis=2) > 12
+        means[name] = float(rgb[obj].mean()) if obj.any() else 0.0  # viridis: brighter for larger differences
+        page.evaluate("TL.setShow('compare_side')")
+        page.wait_for_timeout(400)
+        page.evaluate("TL.frame()")
+        side = np.asarray(
+            Image.open(io.BytesIO(page.locator("#canvas").screenshot())).convert("L"), np.float64
+        )
+        assert (side > 40).sum() > 2000  # two objects drawn
+        assert not errors, errors
+        page.close()
+    assert means["other"] > means["itself"] + 10

@@ -52,6 +52,12 @@ def view(
         help="Bands of the light basis (spherical harmonics): bands^2 "
         "coefficients per vertex and channel; 2 to 5.",
     ),
+    compare: Path = typer.Option(
+        None,
+        "--compare",
+        help="A second per-vertex model of the same mesh (another fit, another family): shown beside the "
+        "first and as their difference |B - A| / A under the same directional or environment light.",
+    ),
     truth: Path = typer.Option(
         None,
         "--truth",
@@ -90,9 +96,12 @@ def view(
         )
     if truth is not None:
         raise TranslucencyError("--truth: for a planar model (a mesh model's profiles show its own data)")
+    other = _companion(compare, m, header) if compare is not None else None
     if export is not None:
-        return _export(m, header, model, export, environment, bands, radius, overwrite, quiet, as_json)
-    return _serve(m, header, model, port, open_browser, environment, bands, radius, seconds, quiet, as_json)
+        return _export(m, header, model, export, environment, bands, radius, overwrite, quiet, as_json, other)
+    return _serve(
+        m, header, model, port, open_browser, environment, bands, radius, seconds, quiet, as_json, other
+    )
 
 
 def _prepare_args(m, header, model: Path):
@@ -107,20 +116,52 @@ def _prepare_args(m, header, model: Path):
     return mesh, boundary_eta(acquisition), ds
 
 
+def _companion(path: Path, m, header) -> tuple:
+    """(path, model) of ``--compare``: a per-vertex model on the first one's mesh, or one line why not."""
+    import numpy as np  # the vertex check only
+
+    expect_input(path, ("model file",), option="--compare")
+    other = load_model(path)
+    if other.geometry != "mesh":
+        raise TranslucencyError(f"--compare {path}: a planar model; compare takes a per-vertex model")
+    a, b = np.asarray(m.alpha.vertices), np.asarray(other.alpha.vertices)
+    if a.shape != b.shape or not np.allclose(a, b, atol=1e-6 * float(np.ptp(a, axis=0).max())):
+        raise TranslucencyError(
+            f"--compare {path}: another mesh ({len(b):,} vertices against {len(a):,}); compare needs the same"
+        )
+    return path, other
+
+
 def _light_options(model: Path, eta, ds, environment, bands, radius) -> dict:
     """What :func:`~translucency.view.object_page.prepare_object` takes from the command's options."""
     name = model.name.removesuffix(".model.zip")
     return dict(eta=eta, environment=environment, bands=bands, radius=radius, dataset=ds, name=name)
 
 
-def _export(m, header, model: Path, out: Path, environment, bands, radius, overwrite, quiet, as_json):
+def _with_companion(view, other, mesh, eta, environment, bands, radius, check_error, say):
+    """``view`` with the ``--compare`` model prepared beside it (None: as it is)."""
+    if other is not None:
+        from ..view.object_page import prepare_object  # heavy: the render stage
+
+        path, model = other
+        options = _light_options(path, eta, None, environment, bands, radius)
+        say(f"{path.name}: the second model")
+        view.companion = prepare_object(model, mesh, **options, check_error=False, progress=say)
+    return view
+
+
+def _export(
+    m, header, model: Path, out: Path, environment, bands, radius, overwrite, quiet, as_json, other=None
+):
     from ..view.object_page import prepare_object  # heavy: the render stage (Mitsuba, Numba)
 
     claim_folder(out, overwrite=overwrite, inputs=[model], option="--export")
     mesh, eta, ds = _prepare_args(m, header, model)
     t = time.perf_counter()
     options = _light_options(model, eta, ds, environment, bands, radius)
-    view = prepare_object(m, mesh, **options, progress=lambda step: info(quiet, f"{step}…"))
+    say = lambda step: info(quiet, f"{step}…")  # noqa: E731
+    view = prepare_object(m, mesh, **options, progress=say)
+    view = _with_companion(view, other, mesh, eta, environment, bands, radius, False, say)
     meta, arrays = view.page_data()
     sizes = write_page(out, meta, arrays)
     total_mb = sum(sizes.values()) / 1e6
@@ -145,7 +186,20 @@ def _export(m, header, model: Path, out: Path, environment, bands, radius, overw
     finish(as_json, quiet, summary, lines)
 
 
-def _serve(m, header, model: Path, port, open_browser, environment, bands, radius, seconds, quiet, as_json):
+def _serve(
+    m,
+    header,
+    model: Path,
+    port,
+    open_browser,
+    environment,
+    bands,
+    radius,
+    seconds,
+    quiet,
+    as_json,
+    other=None,
+):
     from ..view.object_page import prepare_object, surface_data  # heavy: the render stage
 
     mesh, eta, ds = _prepare_args(m, header, model)
@@ -154,7 +208,8 @@ def _serve(m, header, model: Path, port, open_browser, environment, bands, radiu
 
     def prepare(say):
         options = _light_options(model, eta, ds, environment, bands, radius)
-        return prepare_object(m, mesh, **options, check_error=False, progress=say)
+        view = prepare_object(m, mesh, **options, check_error=False, progress=say)
+        return _with_companion(view, other, mesh, eta, environment, bands, radius, False, say)
 
     info(quiet, "the maps first; the relighting follows once the transport is prepared.")
     _serve_until(_server(surface, prepare, port), model, open_browser, seconds, quiet, as_json)

@@ -89,6 +89,7 @@ class ObjectView:
     errors: dict = field(default_factory=dict)
     seconds: dict = field(default_factory=dict)
     drafts: dict = field(default_factory=dict)  # coarse transports by their receivers (:meth:`relight`)
+    companion: ObjectView | None = None  # a second model of the same mesh, shown beside and against this one
 
     @property
     def centre(self) -> np.ndarray:
@@ -142,8 +143,20 @@ class ObjectView:
 
     def light_data(self) -> tuple[dict, dict]:
         """(meta, arrays) of the relighting: the transfer, the exit law, the sky, the exposure and the
-        errors (module docstring)."""
-        return _light_data(self)
+        errors (module docstring); with a :attr:`companion`, its transfer too (``b_``-prefixed arrays,
+        ``meta["compare"]``: the page shows it beside this one and their difference)."""
+        meta, arrays = _light_data(self)
+        if self.companion is not None:
+            other_meta, other = _light_data(self.companion)
+            arrays.update(
+                {f"b_{k}": other[k] for k in ("transfer", "transfer_run", "irradiance_run", "local")}
+            )
+            meta["compare"] = {
+                "name": self.companion.name,
+                "transfer_scale": other_meta["transfer_scale"],
+                "irradiance_scale": other_meta["irradiance_scale"],
+            }
+        return meta, arrays
 
     def page_data(self) -> tuple[dict, dict]:
         """(meta, arrays) of the whole static page: :func:`surface_data` and :meth:`light_data`."""

@@ -98,52 +98,66 @@
   precision highp float; precision highp int; precision highp sampler2D; precision highp sampler2DShadow;
   layout(location = 0) in vec3 a_pos;
   in vec3 a_normal; in vec3 a_r1; in vec3 a_invf; in vec3 a_direct; in float a_map; in uint a_vid;
-  in vec3 a_trun; in float a_erun; in vec3 a_local;
+  in vec3 a_trun; in float a_erun; in vec3 a_local; in vec3 b_trun; in float b_erun; in vec3 b_local;
   uniform mat4 u_mvp; uniform vec3 u_eye; uniform int u_mode; uniform int u_stride; uniform int u_texw;
   uniform sampler2D u_transfer; uniform float u_tscale; uniform float u_escale; uniform vec4 u_L[27]; uniform int u_kq;
   uniform sampler2D u_exit; uniform sampler2D u_in; uniform int u_exit_law; uniform vec3 u_tint;
   uniform int u_local; uniform vec3 u_Edir; uniform sampler2DShadow u_shadow; uniform mat4 u_lightmvp; uniform float u_offset; uniform float u_blur;
   uniform int u_spec; uniform vec3 u_lightdir; uniform vec3 u_lightpos; uniform int u_lightkind; uniform float u_f0;
   uniform float u_spec_e;
+  uniform sampler2D u_transfer_b; uniform float u_tscale_b; uniform float u_escale_b; uniform int u_model; uniform vec3 u_shift;
   out vec3 v_radiance; out float v_map;
-  vec4 T(int lin) { return texelFetch(u_transfer, ivec2(lin % u_texw, lin / u_texw), 0); }
   float law(sampler2D table, float mu, float r1) { return texture(table, vec2(mu, r1)).r; }
+  // the precomputed transfer of one model: B_c = sum_k L_{k,c} r_{k,c} + the local part (module comment)
+  vec3 prt(sampler2D tex, vec3 trun, float erun, vec3 loc, float tscale, float escale, vec3 n) {
+    int base = int(a_vid) * u_stride;
+    vec3 B = vec3(0.0), Ebar = vec3(0.0);
+    for (int j = 0; j < 9; j++) {
+      if (j >= u_kq) break;
+      vec4 t0 = texelFetch(tex, ivec2((base + j) % u_texw, (base + j) / u_texw), 0);
+      vec4 t1 = texelFetch(tex, ivec2((base + u_kq + j) % u_texw, (base + u_kq + j) / u_texw), 0);
+      vec4 t2 = texelFetch(tex, ivec2((base + 2 * u_kq + j) % u_texw, (base + 2 * u_kq + j) / u_texw), 0);
+      B += vec3(dot(t0, u_L[j]), dot(t1, u_L[9 + j]), dot(t2, u_L[18 + j]));
+      if (u_local == 0) {
+        vec4 e = texelFetch(tex, ivec2((base + 3 * u_kq + j) % u_texw, (base + 3 * u_kq + j) / u_texw), 0);
+        Ebar += vec3(dot(e, u_L[j]), dot(e, u_L[9 + j]), dot(e, u_L[18 + j]));
+      }
+    }
+    B *= trun * tscale;                 // the rest r = t - a Ebar through the basis
+    if (u_local == 0) B += loc * Ebar * erun * escale;   // the sky: a Ebar through it too
+    else {                              // a directional light: its local part exactly
+      float cl = dot(n, u_lightdir);
+      if (cl > 0.0) {
+        // the shadow, softened over the light's spread inside the body (8 taps on a disk of u_blur),
+        // offset along the normal, more at grazing light (no self-shadow of the mesh's small bumps there)
+        vec4 pl = u_lightmvp * vec4(a_pos + n * u_offset * (1.0 + 4.0 * (1.0 - cl)), 1.0);
+        vec3 sc = pl.xyz * 0.5 + 0.5;
+        float vis = 0.0;
+        for (int t = 0; t < 8; t++) {
+          float ang = 0.785398 * float(t) + 0.3, rad = u_blur * (t % 2 == 0 ? 1.0 : 0.5);
+          vis += texture(u_shadow, vec3(sc.xy + rad * vec2(cos(ang), sin(ang)), sc.z));
+        }
+        vis *= 0.125;
+        B += loc * u_Edir * cl * vis * vec3(law(u_in, cl, a_r1.r), law(u_in, cl, a_r1.g), law(u_in, cl, a_r1.b));
+      }
+    }
+    return max(B, 0.0);
+  }
   void main() {
-    gl_Position = u_mvp * vec4(a_pos, 1.0);
+    gl_Position = u_mvp * vec4(a_pos + u_shift, 1.0);
     vec3 n = normalize(a_normal);
     vec3 wo = normalize(u_eye - a_pos);
     float mu = clamp(dot(n, wo), 1e-3, 1.0);
     vec3 B = vec3(0.0);
-    if (u_mode == 0) {                  // precomputed transfer: B_c = sum_k L_{k,c} t_{k,c}, four k at a time
-      int base = int(a_vid) * u_stride;
-      vec3 Ebar = vec3(0.0);
-      for (int j = 0; j < 9; j++) {
-        if (j >= u_kq) break;
-        B += vec3(dot(T(base + j), u_L[j]), dot(T(base + u_kq + j), u_L[9 + j]), dot(T(base + 2 * u_kq + j), u_L[18 + j]));
-        if (u_local == 0) { vec4 e = T(base + 3 * u_kq + j); Ebar += vec3(dot(e, u_L[j]), dot(e, u_L[9 + j]), dot(e, u_L[18 + j])); }
-      }
-      B *= a_trun * u_tscale;           // the rest r = t - a Ebar through the basis
-      if (u_local == 0) B += a_local * Ebar * a_erun * u_escale;   // the sky: a Ebar through it too
-      else {                            // a directional light: its local part exactly
-        float cl = dot(n, u_lightdir);
-        vec3 Eo = vec3(0.0);
-        if (cl > 0.0) {
-          // the shadow, softened over the light's spread inside the body (8 taps on a disk of u_blur)
-          // offset along the normal, more at grazing light (no self-shadow of the mesh's small bumps there)
-          vec4 pl = u_lightmvp * vec4(a_pos + n * u_offset * (1.0 + 4.0 * (1.0 - cl)), 1.0);
-          vec3 sc = pl.xyz * 0.5 + 0.5;
-          float vis = 0.0;
-          for (int t = 0; t < 8; t++) {
-            float ang = 0.785398 * float(t) + 0.3, rad = u_blur * (t % 2 == 0 ? 1.0 : 0.5);
-            vis += texture(u_shadow, vec3(sc.xy + rad * vec2(cos(ang), sin(ang)), sc.z));
-          }
-          vis *= 0.125;
-          Eo = u_Edir * cl * vis * vec3(law(u_in, cl, a_r1.r), law(u_in, cl, a_r1.g), law(u_in, cl, a_r1.b));
-        }
-        B += a_local * Eo;
-      }
-      B = max(B, 0.0);
-    } else if (u_mode == 1) {           // radiance from the server (point, spot)
+    if (u_mode == 0 && u_model == 2) {  // the difference of two models: |B - A| / A, as a map
+      vec3 A = prt(u_transfer, a_trun, a_erun, a_local, u_tscale, u_escale, n);
+      vec3 Bb = prt(u_transfer_b, b_trun, b_erun, b_local, u_tscale_b, u_escale_b, n);
+      v_map = dot(abs(Bb - A), vec3(1.0)) / max(dot(A, vec3(1.0)), 1e-12);
+      v_radiance = vec3(0.0); return;
+    }
+    if (u_mode == 0) B = u_model == 1 ? prt(u_transfer_b, b_trun, b_erun, b_local, u_tscale_b, u_escale_b, n)
+                                      : prt(u_transfer, a_trun, a_erun, a_local, u_tscale, u_escale, n);
+    else if (u_mode == 1) {           // radiance from the server (point, spot)
       B = max(a_direct, 0.0) * u_tint;
     }
     if (u_exit_law == 1) {              // F(mu_o; R1) / <F>, per channel (or the boundary's exit)
@@ -164,7 +178,7 @@
   const FS = `#version 300 es
   precision highp float; precision highp int;
   in vec3 v_radiance; in float v_map;
-  uniform int u_mode; uniform float u_exposure; uniform vec2 u_range; uniform int u_flags;
+  uniform int u_mode; uniform float u_exposure; uniform vec2 u_range; uniform int u_flags; uniform int u_model;
   out vec4 colour;
   vec3 srgb(vec3 c) { c = clamp(c, 0.0, 1.0);
     return mix(12.92 * c, 1.055 * pow(c, vec3(1.0 / 2.4)) - 0.055, step(0.0031308, c)); }
@@ -179,7 +193,7 @@
     return c0 + t * (c1 + t * (c2 + t * (c3 + t * (c4 + t * (c5 + t * c6)))));
   }
   void main() {
-    if (u_mode == 2) {
+    if (u_mode == 2 || (u_mode == 0 && u_model == 2)) {
       if (u_flags == 1) { colour = vec4(v_map > 0.5 ? vec3(0.9, 0.2, 0.15) : vec3(0.55), 1.0); return; }
       float t = clamp((v_map - u_range.x) / max(u_range.y - u_range.x, 1e-12), 0.0, 1.0);
       colour = vec4(viridis(t), 1.0); return;
@@ -197,13 +211,14 @@
   if (!gl.getProgramParameter(prog, gl.LINK_STATUS)) throw new Error(gl.getProgramInfoLog(prog));
   gl.useProgram(prog);
   const U = {};
-  for (const name of ["u_blur", "u_escale", "u_in", "u_local", "u_Edir", "u_shadow", "u_lightmvp", "u_offset", "u_kq", "u_mvp", "u_eye", "u_mode", "u_stride", "u_texw", "u_transfer", "u_tscale", "u_L", "u_exit",
+  for (const name of ["u_transfer_b", "u_tscale_b", "u_escale_b", "u_model", "u_shift", "u_blur", "u_escale", "u_in", "u_local", "u_Edir", "u_shadow", "u_lightmvp", "u_offset", "u_kq", "u_mvp", "u_eye", "u_mode", "u_stride", "u_texw", "u_transfer", "u_tscale", "u_L", "u_exit",
     "u_exit_law", "u_tint", "u_exposure", "u_range", "u_flags", "u_spec", "u_lightdir", "u_lightpos",
     "u_lightkind", "u_f0", "u_spec_e"]) U[name] = gl.getUniformLocation(prog, name);
 
   // two meshes: the full one, and (large objects) a reduced one drawn while the light or camera moves;
   // a reduced vertex takes the attributes and the transfer of the full vertex nearest it (a_vid)
-  const perVertex = { a_normal: [normal, 3], a_r1: [null, 3], a_invf: [null, 3], a_trun: [null, 3], a_erun: [null, 1], a_local: [null, 3] };
+  const perVertex = { a_normal: [normal, 3], a_r1: [null, 3], a_invf: [null, 3], a_trun: [null, 3], a_erun: [null, 1], a_local: [null, 3],
+    b_trun: [null, 3], b_erun: [null, 1], b_local: [null, 3] };
   function gather(data, size, source) {
     if (!source) return data;
     const out = new data.constructor(source.length * size);
@@ -258,6 +273,17 @@
     for (const [attr, name, size] of [["a_r1", "r1", 3], ["a_invf", "inv_mean_f", 3], ["a_trun", "transfer_run", 3],
       ["a_erun", "irradiance_run", 1], ["a_local", "local", 3]]) if (arrays[name]) upload(attr, get(name), size);
     gl.uniform1i(U.u_transfer, 0); gl.uniform1i(U.u_exit, 1); gl.uniform1i(U.u_in, 2); gl.uniform1i(U.u_shadow, 3);
+    gl.uniform1i(U.u_transfer_b, 4);
+    if (arrays.b_transfer) { // a second model of the same mesh: beside this one, and their difference
+      const tb = get("b_transfer");
+      texture(4, meta.texture_width, tb.length / 4 / meta.texture_width, tb, "snorm");
+      gl.useProgram(prog);
+      for (const [attr, name, size] of [["b_trun", "b_transfer_run", 3], ["b_erun", "b_irradiance_run", 1], ["b_local", "b_local", 3]])
+        upload(attr, get(name), size);
+      gl.uniform1f(U.u_tscale_b, meta.compare.transfer_scale); gl.uniform1f(U.u_escale_b, meta.compare.irradiance_scale);
+      for (const [k, label] of [["compare_b", "model B: " + meta.compare.name], ["compare_diff", "difference |B - A| / A"],
+        ["compare_side", "A | B side by side"]]) $("show").add(new Option(label, k));
+    } else texture(4, 1, 1, new Int8Array(4), "snorm");
     gl.uniform1f(U.u_escale, meta.irradiance_scale);
     gl.uniform1i(U.u_stride, meta.stride); gl.uniform1i(U.u_kq, meta.kq); gl.uniform1i(U.u_texw, meta.texture_width);
     gl.uniform1f(U.u_tscale, meta.transfer_scale);
@@ -309,16 +335,17 @@
   // ---- camera: orbit about the object's centre, +z up ---------------------------------------
   const C = meta.centre, size = meta.size;
   const cam = { az: meta.view.az, el: meta.view.el, dist: 1.9 * size };
-  function eye() {
+  function eye() { // (further back while two models stand side by side)
     const a = cam.az * Math.PI / 180, e = cam.el * Math.PI / 180;
-    return [C[0] + cam.dist * Math.cos(e) * Math.cos(a), C[1] + cam.dist * Math.cos(e) * Math.sin(a), C[2] + cam.dist * Math.sin(e)];
+    const dist = cam.dist * (state.show === "compare_side" ? 1.8 : 1);
+    return [C[0] + dist * Math.cos(e) * Math.cos(a), C[1] + dist * Math.cos(e) * Math.sin(a), C[2] + dist * Math.sin(e)];
   }
   function mvp() {
     const E = eye(), f = norm(sub(C, E)), s = norm(cross(f, [0, 0, 1])), u = cross(s, f);
     const view = [s[0], u[0], -f[0], 0, s[1], u[1], -f[1], 0, s[2], u[2], -f[2], 0,
       -dot(s, E), -dot(u, E), dot(f, E), 1];
     const asp = canvas.width / canvas.height, fov = 30 * Math.PI / 180, t = 1 / Math.tan(fov / 2);
-    const near = cam.dist * 0.05, far = cam.dist * 4;
+    const near = cam.dist * 0.05, far = cam.dist * 8;
     const proj = [t / asp, 0, 0, 0, 0, t, 0, 0, 0, 0, (far + near) / (near - far), -1, 0, 0, 2 * far * near / (near - far), 0];
     return mul(proj, view);
   }
@@ -396,6 +423,9 @@
 
   function showChanged() {
     const m = meta.maps.find((x) => x.key === state.show);
+    if (state.show === "compare_diff") {
+      $("legend").innerHTML = "viridis from 0 to 0.5: |B - A| / A per vertex under this light (mean of R, G, B)"; draw(); return;
+    }
     if (m) {
       upload("a_map", decode(m.key), 1);
       $("legend").innerHTML = m.flags ? `<span style="color:#e63">red</span>: ${m.legend}` :
@@ -458,7 +488,8 @@
   function frame() {
     queued = false;
     const distant = !pointish();
-    const mode = state.show !== "radiance" || !ready ? 2 : distant ? 0 : 1;
+    const comparing = state.show.startsWith("compare_");  // distant lights only: point lights show A
+    const mode = (state.show !== "radiance" && !comparing) || !ready ? 2 : distant ? 0 : 1;
     const key = lightKey(), lod = meshes.length > 1;
     // the reduced mesh while things move, and while only a draft of this light is at hand
     const useLod = lod && (moving() || (mode === 1 && direct.full !== key && direct.draft === key));
@@ -485,11 +516,20 @@
     gl.uniform1f(U.u_exposure, meta.exposure * Math.pow(2, state.exposure));
     const m = meta.maps.find((x) => x.key === state.show);
     gl.uniform1i(U.u_flags, m && m.flags ? 1 : 0); if (m) gl.uniform2f(U.u_range, m.lo, m.hi);
+    const model = { compare_b: 1, compare_diff: 2 }[state.show] || 0;
+    gl.uniform1i(U.u_model, model); gl.uniform3f(U.u_shift, 0, 0, 0);
+    if (model === 2) gl.uniform2f(U.u_range, 0.0, 0.5);
     const spec = state.specular && meta.eta !== 1 && light.kind !== "environment";
     gl.uniform1i(U.u_spec, spec ? 1 : 0);
     gl.uniform3fv(U.u_lightdir, d); gl.uniform1i(U.u_lightkind, distant ? 0 : 1);
     gl.uniform3fv(U.u_lightpos, [C[0] + d[0] * light.dist * size, C[1] + d[1] * light.dist * size, C[2] + d[2] * light.dist * size]);
     gl.uniform1f(U.u_spec_e, light.kind === "directional" ? meta.directional_irradiance : meta.point_intensity / Math.pow(light.dist * size, 2));
+    if (state.show === "compare_side") { // A to the left, B to the right, as the camera sees them
+      const E = eye(), f = norm(sub(C, E)), r = norm(cross(f, [0, 0, 1])), d = 0.55 * size;
+      gl.uniform3f(U.u_shift, -d * r[0], -d * r[1], -d * r[2]); gl.uniform1i(U.u_model, 0);
+      gl.drawElements(gl.TRIANGLES, mesh.count, gl.UNSIGNED_INT, 0);
+      gl.uniform3f(U.u_shift, d * r[0], d * r[1], d * r[2]); gl.uniform1i(U.u_model, mode === 0 ? 1 : 0);
+    }
     gl.drawElements(gl.TRIANGLES, mesh.count, gl.UNSIGNED_INT, 0);
     stats.lastMesh = mesh.n;
     if (picked !== null) drawMarker();
