@@ -512,3 +512,30 @@ def test_two_models_side_by_side_and_their_difference_in_chromium(browser, small
         assert not errors, errors
         page.close()
     assert means["other"] > means["itself"] + 10
+
+
+def test_reference_error_map_beside_the_model(browser, small_model, tmp_path):
+    """--reference: a render folder's error map against its volpath reference (reference | ours | FLIP, as
+    render wrote it) and its numbers on the page; a folder without one is refused in one line."""
+    from PIL import Image
+
+    render = tmp_path / "render"
+    render.mkdir()
+    Image.new("RGB", (90, 30), (200, 40, 40)).save(render / "render.png")
+    summary = {"rel_rmse": 0.0612, "flip_mean_object": 0.072, "reference_noise": 0.043, "light": "point"}
+    (render / "render.json").write_text(json.dumps(summary))
+    out = tmp_path / "page"
+    res = runner.invoke(
+        app, ["view", str(small_model), "--reference", str(render), "--export", str(out), "-q"]
+    )
+    assert res.exit_code == 0, res.output
+    page, errors = _open(browser, (out / "index.html").as_uri())
+    assert page.evaluate("document.getElementById('reference-img').naturalWidth") == 90
+    assert "0.061" in page.locator("#reference-note").inner_text()
+    assert not errors, errors
+    page.close()
+    (render / "render.json").write_text(json.dumps({"light": "point"}))  # a render without a reference
+    res = runner.invoke(
+        app, ["view", str(small_model), "--reference", str(render), "--export", str(tmp_path / "q")]
+    )
+    assert res.exit_code == 2 and "--reference" in res.output and "Traceback" not in res.output

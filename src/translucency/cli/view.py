@@ -5,10 +5,13 @@ radiance transfer)."""
 
 from __future__ import annotations
 
+import base64
+import json
 import time
 import webbrowser
 from pathlib import Path
 
+import numpy as np
 import typer
 
 from .._validate import TranslucencyError, check_option
@@ -58,6 +61,12 @@ def view(
         help="A second per-vertex model of the same mesh (another fit, another family): shown beside the "
         "first and as their difference |B - A| / A under the same directional or environment light.",
     ),
+    reference: Path = typer.Option(
+        None,
+        "--reference",
+        help="A render folder with its path-traced reference (translucency render --reference, or the main "
+        "job's results/report): its error map (FLIP) and numbers beside the model.",
+    ),
     truth: Path = typer.Option(
         None,
         "--truth",
@@ -97,10 +106,36 @@ def view(
     if truth is not None:
         raise TranslucencyError("--truth: for a planar model (a mesh model's profiles show its own data)")
     other = _companion(compare, m, header) if compare is not None else None
+    reference_figure = _reference_figure(reference) if reference is not None else None
     if export is not None:
-        return _export(m, header, model, export, environment, bands, radius, overwrite, quiet, as_json, other)
+        return _export(
+            m,
+            header,
+            model,
+            export,
+            environment,
+            bands,
+            radius,
+            overwrite,
+            quiet,
+            as_json,
+            other,
+            reference_figure,
+        )
     return _serve(
-        m, header, model, port, open_browser, environment, bands, radius, seconds, quiet, as_json, other
+        m,
+        header,
+        model,
+        port,
+        open_browser,
+        environment,
+        bands,
+        radius,
+        seconds,
+        quiet,
+        as_json,
+        other,
+        reference_figure,
     )
 
 
@@ -116,9 +151,29 @@ def _prepare_args(m, header, model: Path):
     return mesh, boundary_eta(acquisition), ds
 
 
+def _reference_figure(folder: Path) -> dict:
+    """The error map of a render against its path-traced reference (``render.png``/``.json``, or the main
+    job's ``figure2.png``/``.json``) for the page, or one line why the folder holds none."""
+    for name in ("render", "figure2"):
+        png, summary = folder / f"{name}.png", folder / f"{name}.json"
+        if png.is_file() and summary.is_file():
+            numbers = json.loads(summary.read_text())
+            if "rel_rmse" not in numbers:
+                break
+            keep = ("rel_rmse", "flip_mean_object", "reference_noise", "reference_spp", "light")
+            return {
+                "png": base64.b64encode(png.read_bytes()).decode("ascii"),
+                "file": str(png),
+                **{k: numbers[k] for k in keep if k in numbers},
+            }
+    raise TranslucencyError(
+        f"--reference {folder}: no render with a reference there (render.png and render.json from "
+        "'translucency render --reference', or the main job's figure2.png and figure2.json)"
+    )
+
+
 def _companion(path: Path, m, header) -> tuple:
     """(path, model) of ``--compare``: a per-vertex model on the first one's mesh, or one line why not."""
-    import numpy as np  # the vertex check only
 
     expect_input(path, ("model file",), option="--compare")
     other = load_model(path)
@@ -151,7 +206,18 @@ def _with_companion(view, other, mesh, eta, environment, bands, radius, check_er
 
 
 def _export(
-    m, header, model: Path, out: Path, environment, bands, radius, overwrite, quiet, as_json, other=None
+    m,
+    header,
+    model: Path,
+    out: Path,
+    environment,
+    bands,
+    radius,
+    overwrite,
+    quiet,
+    as_json,
+    other=None,
+    figure=None,
 ):
     from ..view.object_page import prepare_object  # heavy: the render stage (Mitsuba, Numba)
 
@@ -163,6 +229,8 @@ def _export(
     view = prepare_object(m, mesh, **options, progress=say)
     view = _with_companion(view, other, mesh, eta, environment, bands, radius, False, say)
     meta, arrays = view.page_data()
+    if figure is not None:
+        meta["reference"] = figure
     sizes = write_page(out, meta, arrays)
     total_mb = sum(sizes.values()) / 1e6
     summary = {
@@ -199,12 +267,15 @@ def _serve(
     quiet,
     as_json,
     other=None,
+    figure=None,
 ):
     from ..view.object_page import prepare_object, surface_data  # heavy: the render stage
 
     mesh, eta, ds = _prepare_args(m, header, model)
     name = model.name.removesuffix(".model.zip")
     surface = surface_data(m, mesh, name=name, dataset=ds)
+    if figure is not None:
+        surface[0]["reference"] = figure
 
     def prepare(say):
         options = _light_options(model, eta, ds, environment, bands, radius)

@@ -390,6 +390,13 @@
   const shows = [["radiance", "relit object"], ...meta.maps.map((m) => [m.key, m.name])];
   for (const [k, label] of shows) $("show").add(new Option(label, k));
   $("title").textContent = meta.title; $("subtitle").textContent = meta.subtitle;
+  if (meta.reference) { // a render's error map against its volpath reference, as render wrote it
+    const r = meta.reference, f = (x) => (typeof x === "number" ? x.toFixed(3) : "–");
+    $("reference-img").src = "data:image/png;base64," + r.png;
+    $("reference-note").textContent = `reference | ours | FLIP, from ${r.file}: relative RMSE ${f(r.rel_rmse)}, ` +
+      `FLIP over the object ${f(r.flip_mean_object)} (the reference's own noise ${f(r.reference_noise)}); light ${r.light || "?"}.`;
+    $("reference").classList.remove("hidden");
+  }
   $("specular-row").classList.add("hidden");
   const bind = (id, key, f) => { const el = $(id); el.value = f ? f.to(light[key]) : light[key];
     el.addEventListener("input", () => { light[key] = f ? f.from(el.value) : parseFloat(el.value); lightChanged(); }); };
