@@ -100,55 +100,79 @@ def view(
     m = load_model(model)
     header = read_header(model)
     if m.geometry != "mesh":
-        return _planar(
-            m, header, model, export, truth, bands, port, open_browser, seconds, overwrite, quiet, as_json
-        )
+        meta, arrays = _planar(m, header, model, truth, bands)
+        if export is not None:
+            claim_folder(export, overwrite=overwrite, inputs=[model, truth], option="--export")
+            return _write(export, meta, arrays, {"model": model}, [], quiet, as_json)
+        return _serve_until(_server((meta, arrays), None, port), model, open_browser, seconds, quiet, as_json)
     if truth is not None:
         raise TranslucencyError("--truth: for a planar model (a mesh model's profiles show its own data)")
-    other = _companion(compare, m, header) if compare is not None else None
-    reference_figure = _reference_figure(reference) if reference is not None else None
-    if export is not None:
-        return _export(
-            m,
-            header,
-            model,
-            export,
-            environment,
-            bands,
-            radius,
-            overwrite,
-            quiet,
-            as_json,
-            other,
-            reference_figure,
+    other = _companion(compare, m) if compare is not None else None
+    figure = _reference_figure(reference) if reference is not None else None
+    if export is not None:  # claimed before any work
+        claim_folder(export, overwrite=overwrite, inputs=[model], option="--export")
+    from ..render import boundary_eta, object_of_model  # heavy: trimesh, Mitsuba, Numba load only to view
+    from ..view.object_page import prepare_object, surface_data  # heavy: the render stage
+
+    mesh, acquisition = object_of_model(m, header)
+    ds = _mesh_dataset(m, header)
+    options = dict(eta=boundary_eta(acquisition), environment=environment, bands=bands, radius=radius)
+
+    def prepare(say, check_error: bool):
+        """The model's view (and ``--compare``'s beside it): the transport and the transfer."""
+        view = prepare_object(
+            m, mesh, **options, dataset=ds, name=_name(model), check_error=check_error, progress=say
         )
-    return _serve(
-        m,
-        header,
-        model,
-        port,
-        open_browser,
-        environment,
-        bands,
-        radius,
-        seconds,
+        if other is not None:
+            say(f"{compare.name}: the second model")
+            view.companion = prepare_object(
+                other, mesh, **options, name=_name(compare), check_error=False, progress=say
+            )
+        return view
+
+    if export is None:
+        surface = surface_data(m, mesh, name=_name(model), dataset=ds)
+        if figure is not None:
+            surface[0]["reference"] = figure
+        info(quiet, "the maps first; the relighting follows once the transport is prepared.")
+        server = _server(surface, lambda say: prepare(say, False), port)
+        return _serve_until(server, model, open_browser, seconds, quiet, as_json)
+    t = time.perf_counter()
+    view = prepare(lambda step: info(quiet, f"{step}…"), True)
+    meta, arrays = view.page_data()
+    if figure is not None:
+        meta["reference"] = figure
+    summary = {
+        "model": model,
+        "vertices": len(mesh.vertices),
+        "bands": bands,
+        "error_vs_render": view.errors,
+        "seconds": time.perf_counter() - t,
+        **{f"{k}_s": v for k, v in view.seconds.items()},
+    }
+    errors = ", ".join(f"{k} {v:.3f}" for k, v in view.errors.items())
+    _write(
+        export,
+        meta,
+        arrays,
+        summary,
+        [f"relative RMSE against render for the same light: {errors}"],
         quiet,
         as_json,
-        other,
-        reference_figure,
     )
 
 
-def _prepare_args(m, header, model: Path):
-    """(mesh, η, data set or None) of a model: its mesh, its boundary, its data set if still at hand."""
-    from ..render import boundary_eta, object_of_model  # heavy: trimesh, Mitsuba, Numba load only to view
+def _name(model: Path) -> str:
+    """A model's name on the page: its file's, less ``.model.zip``."""
+    return model.name.removesuffix(".model.zip")
 
-    mesh, acquisition = object_of_model(m, header)
+
+def _mesh_dataset(m, header):
+    """The mesh data set a model was fitted to, if it is still at hand with the model's points (its measured
+    ring means), else None."""
     dataset = header.get("meta", {}).get("dataset") or ""
     ds = open_mesh_dataset(dataset) if dataset and is_mesh_dataset(dataset) else None
-    if ds is not None and int(ds.n_points) != m.n_points:
-        ds = None  # another acquisition than the one fitted: no measured rings
-    return mesh, boundary_eta(acquisition), ds
+    return ds if ds is not None and int(ds.n_points) == m.n_points else None
 
 
 def _reference_figure(folder: Path) -> dict:
@@ -172,9 +196,8 @@ def _reference_figure(folder: Path) -> dict:
     )
 
 
-def _companion(path: Path, m, header) -> tuple:
-    """(path, model) of ``--compare``: a per-vertex model on the first one's mesh, or one line why not."""
-
+def _companion(path: Path, m):
+    """The ``--compare`` model: a per-vertex model on the first one's mesh, or one line why not."""
     expect_input(path, ("model file",), option="--compare")
     other = load_model(path)
     if other.geometry != "mesh":
@@ -184,112 +207,11 @@ def _companion(path: Path, m, header) -> tuple:
         raise TranslucencyError(
             f"--compare {path}: another mesh ({len(b):,} vertices against {len(a):,}); compare needs the same"
         )
-    return path, other
+    return other
 
 
-def _light_options(model: Path, eta, ds, environment, bands, radius) -> dict:
-    """What :func:`~translucency.view.object_page.prepare_object` takes from the command's options."""
-    name = model.name.removesuffix(".model.zip")
-    return dict(eta=eta, environment=environment, bands=bands, radius=radius, dataset=ds, name=name)
-
-
-def _with_companion(view, other, mesh, eta, environment, bands, radius, check_error, say):
-    """``view`` with the ``--compare`` model prepared beside it (None: as it is)."""
-    if other is not None:
-        from ..view.object_page import prepare_object  # heavy: the render stage
-
-        path, model = other
-        options = _light_options(path, eta, None, environment, bands, radius)
-        say(f"{path.name}: the second model")
-        view.companion = prepare_object(model, mesh, **options, check_error=False, progress=say)
-    return view
-
-
-def _export(
-    m,
-    header,
-    model: Path,
-    out: Path,
-    environment,
-    bands,
-    radius,
-    overwrite,
-    quiet,
-    as_json,
-    other=None,
-    figure=None,
-):
-    from ..view.object_page import prepare_object  # heavy: the render stage (Mitsuba, Numba)
-
-    claim_folder(out, overwrite=overwrite, inputs=[model], option="--export")
-    mesh, eta, ds = _prepare_args(m, header, model)
-    t = time.perf_counter()
-    options = _light_options(model, eta, ds, environment, bands, radius)
-    say = lambda step: info(quiet, f"{step}…")  # noqa: E731
-    view = prepare_object(m, mesh, **options, progress=say)
-    view = _with_companion(view, other, mesh, eta, environment, bands, radius, False, say)
-    meta, arrays = view.page_data()
-    if figure is not None:
-        meta["reference"] = figure
-    sizes = write_page(out, meta, arrays)
-    total_mb = sum(sizes.values()) / 1e6
-    summary = {
-        "command": "view",
-        "model": model,
-        "page": out / "index.html",
-        "vertices": len(mesh.vertices),
-        "bands": bands,
-        "page_mb": total_mb,
-        "error_vs_render": view.errors,
-        "seconds": time.perf_counter() - t,
-        **{f"{k}_s": v for k, v in view.seconds.items()},
-    }
-    lines = [
-        f"page: {out / 'index.html'} ({total_mb:.1f} MB; open it in a browser, no server needed)",
-        "relative RMSE against render for the same light: "
-        + ", ".join(f"{k} {v:.3f}" for k, v in view.errors.items()),
-    ]
-    if total_mb > PAGE_BUDGET_MB:
-        lines.append(f"note: the page is over {PAGE_BUDGET_MB:g} MB; --bands 3 makes it smaller")
-    finish(as_json, quiet, summary, lines)
-
-
-def _serve(
-    m,
-    header,
-    model: Path,
-    port,
-    open_browser,
-    environment,
-    bands,
-    radius,
-    seconds,
-    quiet,
-    as_json,
-    other=None,
-    figure=None,
-):
-    from ..view.object_page import prepare_object, surface_data  # heavy: the render stage
-
-    mesh, eta, ds = _prepare_args(m, header, model)
-    name = model.name.removesuffix(".model.zip")
-    surface = surface_data(m, mesh, name=name, dataset=ds)
-    if figure is not None:
-        surface[0]["reference"] = figure
-
-    def prepare(say):
-        options = _light_options(model, eta, ds, environment, bands, radius)
-        view = prepare_object(m, mesh, **options, check_error=False, progress=say)
-        return _with_companion(view, other, mesh, eta, environment, bands, radius, False, say)
-
-    info(quiet, "the maps first; the relighting follows once the transport is prepared.")
-    _serve_until(_server(surface, prepare, port), model, open_browser, seconds, quiet, as_json)
-
-
-def _planar(
-    m, header, model: Path, export, truth, bands, port, open_browser, seconds, overwrite, quiet, as_json
-):
-    """A planar sample's page: written (``--export``) or served, all of it at once."""
+def _planar(m, header, model: Path, truth, bands):
+    """(meta, arrays) of a planar sample's page, all of it at once."""
     from ..view.planar_page import planar_page_data  # heavy: the render stage's light basis (trimesh)
 
     dataset = header.get("meta", {}).get("dataset") or ""
@@ -300,19 +222,24 @@ def _planar(
     if truth is not None:
         expect_input(truth, ("planar data set",), option="--truth")
         true = open_dataset(truth)
-        if true.n_points != m.n_points or tuple(true.window) != (
-            tuple(ds.window) if ds else tuple(true.window)
-        ):
+        if true.n_points != m.n_points or (ds is not None and tuple(true.window) != tuple(ds.window)):
             raise TranslucencyError(f"--truth {truth}: {true.n_points} points, the model has {m.n_points}")
-    name = model.name.removesuffix(".model.zip")
-    meta, arrays = planar_page_data(m, name=name, dataset=ds, truth=true, bands=bands)
-    if export is not None:
-        claim_folder(export, overwrite=overwrite, inputs=[model, truth], option="--export")
-        sizes = write_page(export, meta, arrays)
-        total_mb = sum(sizes.values()) / 1e6
-        summary = {"command": "view", "model": model, "page": export / "index.html", "page_mb": total_mb}
-        return finish(as_json, quiet, summary, [f"page: {export / 'index.html'} ({total_mb:.1f} MB)"])
-    _serve_until(_server((meta, arrays), None, port), model, open_browser, seconds, quiet, as_json)
+    return planar_page_data(m, name=_name(model), dataset=ds, truth=true, bands=bands)
+
+
+def _write(
+    out: Path, meta: dict, arrays: dict, summary: dict, lines: list, quiet: bool, as_json: bool
+) -> None:
+    """Write the page into ``out`` (claimed) and say where, how large, and ``lines``."""
+    total_mb = sum(write_page(out, meta, arrays).values()) / 1e6
+    summary = {"command": "view", **summary, "page": out / "index.html", "page_mb": total_mb}
+    lines = [
+        f"page: {out / 'index.html'} ({total_mb:.1f} MB; open it in a browser, no server needed)",
+        *lines,
+    ]
+    if total_mb > PAGE_BUDGET_MB:
+        lines.append(f"note: the page is over {PAGE_BUDGET_MB:g} MB; --bands 3 makes it smaller")
+    finish(as_json, quiet, summary, lines)
 
 
 def _server(surface, prepare, port: int):

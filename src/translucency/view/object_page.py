@@ -93,16 +93,17 @@ class ObjectView:
 
     @property
     def centre(self) -> np.ndarray:
+        """The middle of the object's bounding box (mm): lights and the camera turn about it."""
         return 0.5 * (self.mesh.bounds[0] + self.mesh.bounds[1])
 
     @property
     def size(self) -> float:
+        """The bounding box's diagonal (mm)."""
         return float(np.linalg.norm(self.mesh.extents))
 
     @property
     def point_intensity(self) -> float:
-        """I (W/sr) that gives the directional light's irradiance at the default distance."""
-        return IRRADIANCE * (POINT_DISTANCE * self.size) ** 2
+        return point_intensity(self.size)
 
     def light_at(self, kind: str, direction, distance: float = POINT_DISTANCE, cutoff: float = 20.0):
         """The light the page's controls describe: ``direction`` from the centre towards the light,
@@ -249,35 +250,77 @@ def transfer_errors(view: ObjectView, size=(160, 120)) -> dict:
 
 
 def _runs(transfer: Transfer) -> np.ndarray:
-    """(V, 4, K): the rest :math:`r = t - a \bar E` of each channel, then :math:`\bar E`."""
+    r"""(V, 4, K): the rest :math:`r = t - a \bar E` of each channel, then :math:`\bar E`."""
     t = transfer.coefficients.astype(np.float64)
     E = transfer.irradiance.astype(np.float64)
     rest = t - transfer.local.astype(np.float64)[:, None, :] * E[:, :, None]  # (V, K, 3)
     return np.concatenate([rest.transpose(0, 2, 1), E[:, None, :]], axis=1)
 
 
+def encode_transfer(transfer: Transfer) -> tuple[dict, dict]:
+    """(meta, arrays): the transfer as the page holds it, in 8 bits.
+
+    Per vertex four runs of ⌈K/4⌉ RGBA texels — the rest r = t − a Ē of R, G, B, then Ē
+    (:mod:`translucency.render.transfer`: sharp lights) — each value over its run's largest magnitude;
+    the runs' scales in float16 per vertex (``transfer_run``, ``irradiance_run``) over one global scale
+    each (``transfer_scale``, ``irradiance_scale``); ``local`` a in float16.  The page adds a Ē back for
+    the sky."""
+    runs = _runs(transfer)  # (V, 4, K)
+    V, _, K = runs.shape
+    run_scale = np.max(np.abs(runs), axis=2)  # (V, 4)
+    kq = -(-K // 4)
+    q = np.zeros((V, 4, kq * 4), dtype=np.int8)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        q[:, :, :K] = np.nan_to_num(np.round(127.0 * runs / run_scale[:, :, None]), nan=0.0).astype(np.int8)
+    rows = -(-q.size // (4 * TEXTURE_WIDTH))
+    tex = np.zeros(rows * TEXTURE_WIDTH * 4, dtype=np.int8)
+    tex[: q.size] = q.ravel()
+    scale_t = float(np.max(run_scale[:, :3])) or 1.0
+    scale_e = float(np.max(run_scale[:, 3])) or 1.0
+    arrays = {
+        "transfer": tex,
+        "transfer_run": (run_scale[:, :3] / scale_t).astype(np.float16),
+        "irradiance_run": (run_scale[:, 3] / scale_e).astype(np.float16),
+        "local": transfer.local.astype(np.float16),
+    }
+    meta = {
+        "bands": transfer.bands,
+        "stride": 4 * kq,
+        "kq": kq,
+        "texture_width": TEXTURE_WIDTH,
+        "transfer_scale": scale_t,
+        "irradiance_scale": scale_e,
+    }
+    return meta, arrays
+
+
 def quantised(transfer: Transfer) -> Transfer:
-    """The transfer as the page stores it: each run of K values (the rest of a channel, Ē) in 8 bits over
-    its largest magnitude, the runs' scales in float16 (:func:`_light_data`)."""
-    runs = _runs(transfer)
-    top = np.max(np.abs(runs), axis=2, keepdims=True)
-    scale = [float(np.max(top[:, :3])) or 1.0, float(np.max(top[:, 3])) or 1.0]
-    top16 = np.concatenate(
+    """The transfer as the page decodes it from :func:`encode_transfer` (8 bits, float16 scales)."""
+    meta, arrays = encode_transfer(transfer)
+    V, K, kq = len(transfer.local), transfer.bands**2, meta["kq"]
+    # 8-bit SNORM, read as the GPU reads it: q / 127
+    q = arrays["transfer"][: V * 4 * kq * 4].reshape(V, 4, kq * 4)[:, :, :K] / 127.0
+    run = np.concatenate(
         [
-            (top[:, :3] / scale[0]).astype(np.float16) * scale[0],
-            (top[:, 3:] / scale[1]).astype(np.float16) * scale[1],
+            arrays["transfer_run"].astype(np.float64) * meta["transfer_scale"],
+            arrays["irradiance_run"].astype(np.float64)[:, None] * meta["irradiance_scale"],
         ],
         axis=1,
-    ).astype(np.float64)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        q = np.nan_to_num(np.round(127.0 * runs / top), nan=0.0) / 127.0 * top16
-    local = transfer.local.astype(np.float16).astype(np.float64)
+    )
+    values = q * run[:, :, None]  # (V, 4, K)
+    local = arrays["local"].astype(np.float64)
     return dataclasses.replace(
         transfer,
-        coefficients=q[:, :3].transpose(0, 2, 1) + local[:, None, :] * q[:, 3][:, :, None],
-        irradiance=q[:, 3],
+        coefficients=values[:, :3].transpose(0, 2, 1) + local[:, None, :] * values[:, 3][:, :, None],
+        irradiance=values[:, 3],
         local=local,
     )
+
+
+def point_intensity(size: float) -> float:
+    """I (W/sr) of a point light that gives the directional light's irradiance at the default distance
+    from an object of ``size`` mm."""
+    return IRRADIANCE * (POINT_DISTANCE * size) ** 2
 
 
 def _unit(az: float, el: float) -> tuple:
@@ -315,35 +358,14 @@ def surface_data(model, mesh, *, name: str, dataset=None) -> tuple[dict, dict]:
         "maps": maps,
         "profiles": profiles,
         "directional_irradiance": IRRADIANCE,
-        "point_intensity": IRRADIANCE * (POINT_DISTANCE * float(np.linalg.norm(mesh.extents))) ** 2,
+        "point_intensity": point_intensity(float(np.linalg.norm(mesh.extents))),
     }
     return meta, arrays
 
 
 def _light_data(view: ObjectView) -> tuple[dict, dict]:
     transfer = view.transfer
-    V, K = len(view.mesh.vertices), transfer.bands**2
-    # the transfer in 8 bits: per vertex four runs of ⌈K/4⌉ RGBA texels — the rest r = t − a Ē of R, G,
-    # B, then Ē (render.transfer: sharp lights) — each value over its run's largest magnitude (the
-    # scales: float16 per vertex, over one global scale); the page adds a Ē back for the sky
-    runs = _runs(transfer)  # (V, 4, K)
-    run_scale = np.max(np.abs(runs), axis=2)  # (V, 4)
-    kq = -(-K // 4)
-    q = np.zeros((V, 4, kq * 4), dtype=np.int8)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        q[:, :, :K] = np.nan_to_num(np.round(127.0 * runs / run_scale[:, :, None]), nan=0.0).astype(np.int8)
-    stride = 4 * kq
-    rows = -(-V * stride // TEXTURE_WIDTH)
-    tex = np.zeros(rows * TEXTURE_WIDTH * 4, dtype=np.int8)
-    tex[: q.size] = q.ravel()
-    scale_t = float(np.max(run_scale[:, :3])) or 1.0
-    scale_e = float(np.max(run_scale[:, 3])) or 1.0
-    arrays = {
-        "transfer": tex,
-        "transfer_run": (run_scale[:, :3] / scale_t).astype(np.float16),
-        "irradiance_run": (run_scale[:, 3] / scale_e).astype(np.float16),
-        "local": transfer.local.astype(np.float16),
-    }
+    meta, arrays = encode_transfer(transfer)
     exit_law = _law_arrays(view, arrays)
     env = light_coefficients(view.environment, transfer.bands)
     # the exposure: the default light's picture at 0.5 for its brightest percent of vertices
@@ -354,13 +376,7 @@ def _light_data(view: ObjectView) -> tuple[dict, dict]:
             0.99,
         )
     )
-    meta = {
-        "bands": transfer.bands,
-        "stride": stride,
-        "kq": kq,
-        "texture_width": TEXTURE_WIDTH,
-        "transfer_scale": scale_t,
-        "irradiance_scale": scale_e,
+    meta |= {
         "exit_law": exit_law,
         "exit_table_size": EXIT_TABLE,
         "eta": view.eta,

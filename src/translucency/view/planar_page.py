@@ -21,9 +21,16 @@ from ..evaluate.rings import ring_stats
 from ..model.bounds import check_physics
 from ..render import sh
 from ..render.lights import EnvironmentLight
-from ..render.transfer import DEFAULT_BANDS, light_coefficients
+from ..render.transfer import DEFAULT_BANDS, Transfer, light_coefficients
 from .maps import page_maps
-from .object_page import DEFAULT_LIGHT, EXIT_TABLE, IRRADIANCE, POINT_DISTANCE, TEXTURE_WIDTH
+from .object_page import (
+    DEFAULT_LIGHT,
+    EXIT_TABLE,
+    IRRADIANCE,
+    POINT_DISTANCE,
+    encode_transfer,
+    point_intensity,
+)
 
 #: the most vertices along a side of the sample's mesh
 MAX_SIDE = 192
@@ -72,23 +79,19 @@ def planar_page_data(
     legend = f"nearest incident point breaks a bound: {check.describe()}"
     maps = page_maps(maps_values, check.flagged[near[:, 0]], legend, arrays)
     profiles = _profiles(model, dataset, truth, arrays)
-    # the relighting: r = 0, Ē = E^(k) (every point alike), local a = α ρ / π
-    K = bands * bands
+    # the relighting: every point alike, Ē = E^(k), local a = α ρ / π and t = a Ē (the rest r = 0)
     lattice = sh.sphere_directions(4096)
     Ek = sh.basis(lattice, bands).T @ np.maximum(lattice[:, 2], 0.0) * (4 * np.pi / len(lattice))  # (K,)
-    kq = -(-K // 4)
-    q = np.zeros((V, 4, kq * 4), np.int8)
-    q[:, 3, :K] = np.round(127.0 * Ek / np.max(np.abs(Ek))).astype(np.int8)
-    stride = 4 * kq
-    tex = np.zeros(-(-V * stride // TEXTURE_WIDTH) * TEXTURE_WIDTH * 4, np.int8)
-    tex[: q.size] = q.ravel()
     local = np.clip(a_alpha[:, None] * rho / np.pi, 0.0, None)
-    arrays.update(
-        transfer=tex,
-        transfer_run=np.zeros((V, 3), np.float16),
-        irradiance_run=np.ones(V, np.float16),
-        local=local.astype(np.float16),
+    transfer = Transfer(
+        coefficients=local[:, None, :] * Ek[None, :, None],
+        irradiance=np.broadcast_to(Ek, (V, len(Ek))),
+        local=local,
+        bands=bands,
+        directions=len(lattice),
     )
+    transfer_meta, transfer_arrays = encode_transfer(transfer)
+    arrays.update(transfer_arrays)
     size = float(np.hypot(xs[-1] - xs[0], ys[-1] - ys[0])) or 1.0
     environment = EnvironmentLight(IRRADIANCE / np.pi)
     bright = float(np.quantile(local.max(axis=1), 0.99)) * IRRADIANCE
@@ -105,14 +108,9 @@ def planar_page_data(
         "maps": maps,
         "profiles": profiles,
         "directional_irradiance": IRRADIANCE,
-        "point_intensity": IRRADIANCE * (POINT_DISTANCE * size) ** 2,
+        "point_intensity": point_intensity(size),
         "distant_only": True,
-        "bands": bands,
-        "stride": stride,
-        "kq": kq,
-        "texture_width": TEXTURE_WIDTH,
-        "transfer_scale": 0.0,
-        "irradiance_scale": float(np.max(np.abs(Ek))),
+        **transfer_meta,
         "exit_law": False,
         "exit_table_size": EXIT_TABLE,
         "eta": 1.0,
