@@ -539,24 +539,12 @@ class Transport:
         if self.scale is not None:
             count = np.bincount(cell, minlength=len(r))[:, None]
             scale = (P.T @ self.scale.astype(np.float64) / np.maximum(count, 1)).astype(np.float32)
-        far = None
-        if self.far is not None:
-            far = dataclasses.replace(
-                self.far,
-                W=self.far.W[r],
-                alpha=self.far.alpha[r],
-                label=self.far.label[r],
-                B=[(B @ P).tocsr() for B in self.far.B],
-            )
-        return dataclasses.replace(
-            self,
-            matrices=[(T[r] @ P).tocsr() for T in self.matrices],
-            scale=scale,
-            own=None if self.own is None else self.own[r],
-            reflectance=None if self.reflectance is None else self.reflectance[r],
-            far=far,
-            receivers=None,
-        )
+        sub = self.rows(r)  # the receivers' rows, then their columns summed per cell
+        far = sub.far
+        if far is not None:
+            far = dataclasses.replace(far, B=[(B @ P).tocsr() for B in far.B])
+        matrices = [(T @ P).tocsr() for T in sub.matrices]
+        return dataclasses.replace(sub, matrices=matrices, scale=scale, far=far, receivers=None)
 
     def rows(self, receivers) -> Transport:
         """The same transport giving the radiance of ``receivers`` (vertex indices) only: the rows of the
