@@ -35,7 +35,12 @@ def static_text(name: str) -> str:
 
 
 def data_script(meta: dict, arrays: dict) -> str:
-    """``window.TL_DATA = {meta, arrays}``: each array as little-endian bytes in base64."""
+    """``window.TL_DATA = {meta, arrays}`` (:func:`data_json`): the page's data as a script."""
+    return "window.TL_DATA = " + data_json(meta, arrays) + ";\n"
+
+
+def data_json(meta: dict, arrays: dict) -> str:
+    """``{meta, arrays}`` as JSON, each array as little-endian bytes in base64 with its dtype and shape."""
     out = {}
     for name, a in arrays.items():
         a = np.ascontiguousarray(a)
@@ -47,7 +52,7 @@ def data_script(meta: dict, arrays: dict) -> str:
             "shape": list(a.shape),
             "b64": base64.b64encode(a.astype(a.dtype.newbyteorder("<")).tobytes()).decode("ascii"),
         }
-    return "window.TL_DATA = " + json.dumps({"meta": meta, "arrays": out}, separators=(",", ":")) + ";\n"
+    return json.dumps({"meta": meta, "arrays": out}, separators=(",", ":"))
 
 
 def page_html(title: str, data_src: str = DATA, script_src: str = SCRIPT) -> str:

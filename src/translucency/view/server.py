@@ -20,7 +20,7 @@ from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 
 import numpy as np
 
-from .page import DATA, SCRIPT, data_script, page_html, static_text
+from .page import DATA, SCRIPT, data_json, data_script, page_html, static_text
 
 #: the largest request body read (a light is a few hundred bytes)
 MAX_BODY = 1 << 16
@@ -33,11 +33,11 @@ class ViewServer:
 
     def __init__(self, surface: tuple[dict, dict], prepare, *, host: str = "127.0.0.1", port: int = 8080):
         meta, arrays = surface
-        self.meta = {**meta, "live": True, "status": "preparing the relighting…"}
+        live = {**meta, "live": True, "status": "preparing the relighting…"}
         self.files = {
             "/": page_html(meta.get("title", "model")).encode("utf-8"),
             "/" + SCRIPT: static_text("viewer.js").encode("utf-8"),
-            "/" + DATA: data_script(self.meta, arrays).encode("ascii"),
+            "/" + DATA: data_script(live, arrays).encode("ascii"),
         }
         self.light_json: bytes | None = None
         self.view = None
@@ -75,8 +75,7 @@ class ViewServer:
                 say("the draft transport")
                 view.relight(view.light_at("directional", (0.0, 0.0, 1.0)), receivers=self.lod_source)
             self.view = view
-            body = data_script(meta, arrays).removeprefix("window.TL_DATA = ").removesuffix(";\n")
-            self.light_json = body.encode("ascii")
+            self.light_json = data_json(meta, arrays).encode("ascii")
             self.step = "ready"
         except Exception as exc:  # noqa: BLE001 — any failure of the preparation is shown on the page
             self.error = f"{type(exc).__name__}: {exc}"
