@@ -55,11 +55,11 @@ _RAYS_PER_BATCH = 1 << 22
 
 @dataclass(frozen=True, kw_only=True)
 class Transfer:
-    """Each vertex's transfer vector: radiance (V, K, 3) per unit coefficient of the light basis.
+    r"""Each vertex's transfer vector: radiance (V, K, 3) per unit coefficient of the light basis.
 
     ``coefficients[o, k, c]`` is :math:`t_{o,k}` of channel c, W/(mm² sr) of radiance per W/(mm² sr) of
     the basis function :math:`Y_k`'s weight; ``irradiance[o, k]``: :math:`\bar E^{(k)}_o`, the vertex's own
-    irradiance per unit weight (mean of the channels); ``local[o, c]``: :math:`a_o = \\sum_i T_{oi}`, sr⁻¹;
+    irradiance per unit weight (mean of the channels); ``local[o, c]``: :math:`a_o = \sum_i T_{oi}`, sr⁻¹;
     ``bands``: K = bands².
     """
 
