@@ -28,12 +28,6 @@
     const T = { int8: Int8Array, float32: Float32Array, float16: Uint16Array, uint32: Uint32Array, uint8: Uint8Array, uint16: Uint16Array }[a.dtype];
     return new T(bytes.buffer);
   }
-  const half = (h) => { // float16 bits -> number (CPU side: profiles, picking)
-    const s = h & 0x8000 ? -1 : 1, e = (h >> 10) & 0x1f, f = h & 0x3ff;
-    if (e === 0) return s * Math.pow(2, -14) * (f / 1024);
-    if (e === 31) return f ? NaN : s * Infinity;
-    return s * Math.pow(2, e - 15) * (1 + f / 1024);
-  };
   const toHalf = (() => { // number -> float16 bits (the exit table when none is stored)
     const f32 = new Float32Array(1), u32 = new Uint32Array(f32.buffer);
     return (v) => {
