@@ -151,17 +151,15 @@ def live_viewer(p, model: Path) -> dict:
 
 def server_side(model: Path) -> dict:
     """The full relight per light (baseline) against the draft on the reduced mesh, in this process."""
-    from scipy.spatial import cKDTree
 
     from translucency.io.model_file import load_model, read_header
     from translucency.render import object_of_model
-    from translucency.view.object_page import REDUCED_FACES, prepare_object
+    from translucency.view.object_page import prepare_object, reduced_mesh
 
     m = load_model(model)
     mesh, _ = object_of_model(m, read_header(model))
     view = prepare_object(m, mesh, check_error=False)
-    reduced = mesh.simplify_quadric_decimation(face_count=REDUCED_FACES)
-    _, receivers = cKDTree(mesh.vertices).query(reduced.vertices)
+    _, receivers = reduced_mesh(mesh)  # the page's own reduced mesh
     view.relight(view.light_at("point", (1, 0, 1)), receivers=receivers)  # the draft's transport, once
     full, draft, err = [], [], []
     for az in np.linspace(0, 330, 12):

@@ -390,14 +390,24 @@ def _light_data(view: ObjectView) -> tuple[dict, dict]:
     return meta, arrays
 
 
-def _reduced_mesh(mesh, arrays: dict) -> None:
-    """The mesh drawn while the light or the camera moves, for objects of more than :data:`REDUCED_FACES`
-    triangles: a quadric decimation (``fast_simplification`` through trimesh), each of its vertices
-    taking the attributes and the transfer of the full mesh's vertex nearest it (``lod_source``)."""
+def reduced_mesh(mesh):
+    """(reduced mesh, source) — the mesh drawn while the light or the camera moves: a quadric decimation
+    to :data:`REDUCED_FACES` triangles (``fast_simplification`` through trimesh), each of its vertices
+    standing for the full mesh's vertex nearest it (``source``, whose attributes, transfer and draft
+    relight it takes); None for a mesh no larger."""
     if len(mesh.faces) <= REDUCED_FACES:
-        return
+        return None
     reduced = mesh.simplify_quadric_decimation(face_count=REDUCED_FACES)
     _, source = cKDTree(np.asarray(mesh.vertices)).query(np.asarray(reduced.vertices))
+    return reduced, source
+
+
+def _reduced_mesh(mesh, arrays: dict) -> None:
+    """The reduced mesh's arrays for the page (``lod_position``, ``lod_index``, ``lod_source``)."""
+    found = reduced_mesh(mesh)
+    if found is None:
+        return
+    reduced, source = found
     arrays["lod_position"] = np.asarray(reduced.vertices, np.float32)
     arrays["lod_index"] = np.asarray(reduced.faces, np.uint32)
     arrays["lod_source"] = np.asarray(source, np.uint32)
