@@ -6,6 +6,7 @@ import os
 import re
 import subprocess
 import sys
+import types
 from pathlib import Path
 
 import numpy as np
@@ -44,7 +45,7 @@ def test_readme_session_prints_the_held_out_error_of_translucency_evaluate(tmp_p
     assert cli["evaluated_against"].startswith("truth")
     assert printed == f"held-out error: {100 * cli['rel_l2']:.2f} %"
     # and the API gives the command's numbers exactly on that file
-    again = tl.evaluate(model, tl.data.default_dataset(), truth=truth)
+    again = tl.evaluate_model(model, tl.data.default_dataset(), truth=truth)
     assert again.rel_l2 == cli["rel_l2"]
     assert again.bands["near"] == cli["rel_l2_near"] and again.bands["far"] == cli["rel_l2_far"]
     assert abs(again.rel_l2 - namespace["errors"].rel_l2) < 1e-5  # float32 storage of the parameters
@@ -72,18 +73,23 @@ def test_import_is_light_and_keeps_the_engine_private():
     assert flags.split()[1] == "True"  # Dr.Jit's libLLVM is still chosen when translucency is imported
 
 
-def test_stage_modules_do_not_replace_the_functions():
+def test_functions_and_stages_have_names_of_their_own():
     import translucency.evaluate.errors  # noqa: F401 — the stages, imported after the functions
     import translucency.fit.planar  # noqa: F401
     import translucency.render.figure  # noqa: F401
 
-    for name in ("fit", "evaluate", "render", "open_dataset", "acquire_planar", "acquire_mesh"):
-        assert callable(getattr(tl, name)) and getattr(tl, name).__module__ == "translucency.workflow"
+    functions = ("fit_model", "evaluate_model", "render_model", "render_scene", "open_dataset")
+    for name in (*functions, "acquire_planar", "acquire_mesh", "import_images"):
+        assert callable(getattr(tl, name)) and getattr(tl, name).__module__.startswith(
+            "translucency.workflow."
+        )
         assert getattr(tl, name).__doc__ and "Examples" in getattr(tl, name).__doc__
-    # the stage stays importable; only the attribute chain ``translucency.fit.planar`` is the function's
-    assert sys.modules["translucency.fit"].fit_planar is sys.modules["translucency.fit.planar"].fit_planar
-    api = {"acquire_planar", "acquire_mesh", "open_dataset", "fit", "evaluate", "render", "import_images"}
-    assert api <= set(dir(tl)) and api <= set(tl.__all__)
+    # a stage is its package, a function is a verb with its object: importing one never hides the other
+    for stage in ("fit", "evaluate", "render"):
+        assert isinstance(getattr(tl, stage), types.ModuleType)
+        assert getattr(tl, stage) is sys.modules[f"translucency.{stage}"]
+    assert set(functions) <= set(dir(tl)) and set(functions) <= set(tl.__all__)
+    assert not {"fit", "evaluate", "render"} & set(tl.__all__)
     assert not {"prepare_libllvm", "sys", "types"} & set(dir(tl))
 
 
@@ -106,13 +112,13 @@ def test_library_errors_name_python_arguments(tmp_path):
     assert "pass --overwrite to replace it" in cli_words(str(exc.value))
     data = tl.data.default_dataset()
     for call, message in [
-        (lambda: tl.fit(data, n_terms="three"), "n_terms: expected a whole number or 'auto'"),
-        (lambda: tl.fit(data, max_rounds=0), "max_rounds: must be >= 1, got 0"),
-        (lambda: tl.fit(data, rounds=2), "rounds: not an option of fit on a planar data set"),
-        (lambda: tl.fit(data, exclusion_mm=float("nan")), "exclusion_mm: must be a finite number"),
-        (lambda: tl.evaluate(model, data, truth=5), "truth: expected a planar data set"),
-        (lambda: tl.render(model, size=(0, 10)), "size: must be >= 1, got 0"),
-        (lambda: tl.render(model), "model: a planar model; render needs a per-vertex model"),
+        (lambda: tl.fit_model(data, n_terms="three"), "n_terms: expected a whole number or 'auto'"),
+        (lambda: tl.fit_model(data, max_rounds=0), "max_rounds: must be >= 1, got 0"),
+        (lambda: tl.fit_model(data, rounds=2), "rounds: not an option of fit on a planar data set"),
+        (lambda: tl.fit_model(data, exclusion_mm=float("nan")), "exclusion_mm: must be a finite number"),
+        (lambda: tl.evaluate_model(model, data, truth=5), "truth: expected a planar data set"),
+        (lambda: tl.render_model(model, size=(0, 10)), "size: must be >= 1, got 0"),
+        (lambda: tl.render_model(model), "model: a planar model; render needs a per-vertex model"),
         (lambda: tl.acquire_planar("no-such.npz", tmp_path / "d.zarr"), "no-such.npz"),
         (lambda: tl.acquire_planar(object(), tmp_path / "d.zarr"), "sample: expected a Volume"),
         (lambda: tl.import_images(tmp_path, "p.csv", None, tmp_path / "o.zarr", pitchh=1), "pitchh: not a"),
@@ -150,10 +156,10 @@ def test_fit_dispatches_on_the_data_set(tmp_path):
     ds = write_dataset(
         tmp_path / "d.zarr", [[2.0, 2.0]], [[0.0, 0.0]], rng.uniform(0.01, 0.1, (1, 16, 16, 3)), 0.25
     )
-    result = tl.fit(ds.path, max_rounds=1)
+    result = tl.fit_model(ds.path, max_rounds=1)
     assert result.model.geometry == "planar" and result.model.n_points == 1
-    errors = tl.evaluate(result, ds)
-    assert np.isfinite(errors.rel_l2) and errors.rel_l2 == tl.evaluate(result.model, ds.path).rel_l2
+    errors = tl.evaluate_model(result, ds)
+    assert np.isfinite(errors.rel_l2) and errors.rel_l2 == tl.evaluate_model(result.model, ds.path).rel_l2
 
 
 def test_acquire_fit_and_render_an_object(tmp_path):
@@ -171,19 +177,19 @@ def test_acquire_fit_and_render_an_object(tmp_path):
     )
     assert type(ds).__name__ == "MeshDataset" and ds.n_points == 4
     assert type(tl.open_dataset(ds.path)).__name__ == "MeshDataset"
-    result = tl.fit(ds, max_rounds=1)
+    result = tl.fit_model(ds, max_rounds=1)
     assert result.model.geometry == "mesh" and result.model.n_points == 4
-    shown = tl.render(result, size=(16, 12))
+    shown = tl.render_model(result, size=(16, 12))
     assert shown.picture.shape == (12, 16, 3) and np.isfinite(shown.picture).all() and shown.picture.max() > 0
     assert (
         shown.folder is None and shown.reference is None and shown.numbers["vertices"] == len(ball.vertices)
     )
-    kept = tl.render(result, tmp_path / "r", size=(16, 12))
+    kept = tl.render_model(result, tmp_path / "r", size=(16, 12))
     assert kept.folder == tmp_path / "r" and (tmp_path / "r" / "ours.exr").is_file()
     np.testing.assert_array_equal(kept.picture, shown.picture)
     with pytest.raises(tl.TranslucencyError, match="pass overwrite=True"):
-        tl.render(result, tmp_path / "r", size=(16, 12))
-    errors = tl.evaluate(result, ds)  # per-vertex errors (tests/test_evaluate_mesh.py)
+        tl.render_model(result, tmp_path / "r", size=(16, 12))
+    errors = tl.evaluate_model(result, ds)  # per-vertex errors (tests/test_evaluate_mesh.py)
     assert type(errors).__name__ == "MeshErrors" and np.isfinite(errors.rel_l2)
 
 
@@ -195,4 +201,4 @@ def test_acquire_planar_then_fit(tmp_path):
     assert ds.n_points == 1 and ds.window == (9, 9) and ds.header["acquisition"]["photons"] == 100
     with pytest.raises(tl.TranslucencyError, match="pass overwrite=True"):
         tl.acquire_planar(slab, tmp_path / "d.zarr", grid=1, span=0.0, window=2.0, photons=200)
-    assert tl.fit(tmp_path / "d.zarr", max_rounds=1).model.n_points == 1
+    assert tl.fit_model(tmp_path / "d.zarr", max_rounds=1).model.n_points == 1

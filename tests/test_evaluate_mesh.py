@@ -29,15 +29,15 @@ def ball(tmp_path_factory):
     kw = {"voxel_mm": 1.0, "points": 4, "photons": 3000, "index_matched": True}
     data = tl.acquire_mesh(mesh, folder / "ball.zarr", "homogeneous:marble", seed=0, **kw)
     truth = tl.acquire_mesh(mesh, folder / "ball_seed1.zarr", "homogeneous:marble", seed=1, **kw)
-    fit = tl.fit(data, max_rounds=2)
+    fit = tl.fit_model(data, max_rounds=2)
     save_model(fit.model, folder / "ball.model.zip", meta=fit.metadata(data.path))
     return data, truth, fit, folder
 
 
 def test_held_out_error_is_above_the_noise_and_below_a_wrong_model(ball):
     data, truth, fit, _ = ball
-    held = tl.evaluate(fit, data, truth=truth)
-    in_sample = tl.evaluate(fit, data)
+    held = tl.evaluate_model(fit, data, truth=truth)
+    in_sample = tl.evaluate_model(fit, data)
     assert np.isfinite(held.rel_l2) and all(np.isfinite(held.bands[b]) for b in ("near", "mid"))
     # the truth's noise is independent of the model: its error cannot fall far below that floor
     assert held.rel_l2 >= 0.8 * held.noise["all"] > 0
@@ -45,7 +45,7 @@ def test_held_out_error_is_above_the_noise_and_below_a_wrong_model(ball):
     assert held.rel_l2 != in_sample.rel_l2
     wrong = copy.deepcopy(fit.model)
     wrong.c = wrong.c * 2.0  # twice the light everywhere
-    bad = tl.evaluate(wrong, data, truth=truth, exclusion_mm=fit.options["exclusion_mm"])
+    bad = tl.evaluate_model(wrong, data, truth=truth, exclusion_mm=fit.options["exclusion_mm"])
     # ||2M - T|| = ||(M - T) + M|| and ||M|| / ||T|| lie within 1 ± e (e the fit's error): 1 - 2e .. 1 + 2e
     e = held.rel_l2
     assert 1 - 2 * e <= bad.rel_l2 <= 1 + 2 * e
@@ -167,7 +167,7 @@ def test_cli_evaluates_a_per_vertex_model_on_a_mesh_data_set(ball, tmp_path):
     )
     assert res.exit_code == 0, res.output
     out = json.loads(res.stdout)
-    held = tl.evaluate(fit, data, truth=truth)
+    held = tl.evaluate_model(fit, data, truth=truth)
     assert out["rel_l2"] == pytest.approx(held.rel_l2) and out["in_sample"]["rel_l2"] > 0
     assert (tmp_path / "r" / "report.json").is_file()
 
@@ -188,4 +188,4 @@ def test_cli_refuses_mismatched_kinds_in_one_line(ball, tmp_path, rng, planar_sc
         assert "evaluate takes a planar model with a planar data set" in " ".join(res.output.split())
         assert not (tmp_path / "never").exists()
     with pytest.raises(tl.TranslucencyError, match="^model: a planar model and a mesh data set; evaluate"):
-        tl.evaluate(planar, data)
+        tl.evaluate_model(planar, data)

@@ -8,15 +8,13 @@ The workflow as functions (:mod:`translucency.workflow`, loaded on first use)::
 
     import translucency as tl
     data = tl.data.default_dataset()
-    result = tl.fit(data, "iso")
-    print(tl.evaluate(result, data, truth=tl.data.default_truth()).rel_l2)
+    fitting = tl.fit_model(data, "iso")
+    print(tl.evaluate_model(fitting.result, data, truth=tl.data.default_truth()).rel_l2)
 
-``tl.fit``, ``tl.evaluate`` and ``tl.render`` are the functions; their stages stay importable as
-modules (``from translucency.fit import fit_planar``).
+The functions are verbs with their object (``fit_model``, ``evaluate_model``, ``render_model``); the
+stages are the packages (``translucency.fit``, ``translucency.evaluate``, ``translucency.render``): one
+name, one meaning.
 """
-
-import sys as _sys
-import types as _types
 
 from ._validate import TranslucencyError
 from ._version import __version__
@@ -45,12 +43,15 @@ _WORKFLOW = (
     "acquire_planar",
     "acquire_mesh",
     "open_dataset",
-    "fit",
-    "evaluate",
-    "render",
+    "fit_model",
+    "evaluate_model",
+    "render_model",
+    "render_scene",
     "import_images",
     "make_sample",
+    "Fitting",
     "Rendering",
+    "SceneRendering",
 )
 
 __all__ = [
@@ -93,15 +94,4 @@ def __dir__():
     return sorted({*__all__, *(k for k in globals() if not k.startswith("_"))})
 
 
-class _Package(_types.ModuleType):
-    """The package's module: importing the stage ``translucency.fit`` (``.evaluate``, ``.render``) does
-    not replace the function of that name here (the stage stays in ``sys.modules`` and importable)."""
-
-    def __setattr__(self, name, value):
-        if name in _WORKFLOW and isinstance(value, _types.ModuleType):
-            return
-        super().__setattr__(name, value)
-
-
-_sys.modules[__name__].__class__ = _Package
 _prepare_libllvm()  # before any import of Mitsuba or Dr.Jit in this process (theirs or ours)

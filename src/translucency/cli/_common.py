@@ -5,16 +5,14 @@ from __future__ import annotations
 
 import functools
 import json
-import math
 import warnings
-from pathlib import Path
 
-import numpy as np
 import typer
 from rich.console import Console
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 
 from .._validate import TranslucencyError
+from ..io.records import jsonable
 from ._flags import cli_words
 
 console = Console()
@@ -128,23 +126,6 @@ def overwrite_option():
 
 
 # -- the end of a working command ---------------------------------------------------------------------
-def jsonable(value):
-    """``value`` with every NaN or infinity as null (strict JSON), tuples and paths as lists and strings."""
-    if isinstance(value, dict):
-        return {str(k): jsonable(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [jsonable(v) for v in value]
-    if isinstance(value, (np.floating, float)):
-        return float(value) if math.isfinite(value) else None
-    if isinstance(value, np.integer):
-        return int(value)
-    if isinstance(value, np.ndarray):
-        return jsonable(value.tolist())
-    if isinstance(value, Path):
-        return str(value)
-    return value
-
-
 def finish(as_json: bool, quiet: bool, summary: dict, lines=()) -> None:
     """The end of a working command: one JSON object on stdout (``--json``), or its result lines."""
     if as_json:

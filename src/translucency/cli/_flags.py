@@ -25,6 +25,11 @@ FLAGS = {
     "batch_photons": "--batch",
     "max_memory": "--max-memory",
     "exit_law": "--exit-law",
+    "family": "--model",
+    "float16": "--float16",
+    "max_depth": "--max-depth",
+    "picture_spp": "--picture-spp",
+    "scene_unit": "--scene-unit",
     # options whose library name is the flag's word (``terms: …``, ``light: …``); not ``model``, which
     # library messages also use for the model file
     "terms": "--terms",
@@ -34,6 +39,15 @@ FLAGS = {
     "material": "--material",
     "light": "--light",
     "points": "--points",
+    "spp": "--spp",
+    "radius": "--radius",
+    "size": "--size",
+    "view": "--view",
+    "exposure": "--exposure",
+    "incidence": "--incidence",
+    "samples": "--samples",
+    "passes": "--passes",
+    "roughness": "--roughness",
 }
 
 #: arguments that are also plain words ("out", "scale"): translated only where a message begins with

@@ -3,22 +3,20 @@ through Mitsuba (EXR + PNG), and with ``--reference`` the path-traced reference 
 
 from __future__ import annotations
 
-import dataclasses
 from pathlib import Path
 
 import typer
 from rich.table import Table
 
-from .. import resources
-from .._validate import TranslucencyError, check_option
-from ..io.inputs import expect_input
-from ..io.model_file import load_model, read_header
-from ._common import json_option, max_memory_option, overwrite_option, quiet_option, user_errors
-from ._run import Run
-from .render_scene import render_scene
+from .._validate import TranslucencyError
+from ._common import finish, json_option, max_memory_option, overwrite_option, quiet_option, user_errors
+from ._run import RichReporter
 
-#: the light of a render when none is given: above and in front of the default view, in mm
+#: the light of a render when none is given (the library's ``DEFAULT_LIGHT``, stated here so that
+#: ``--help`` loads no renderer)
 DEFAULT_LIGHT = "point:60,-80,120,2e4"
+#: the camera direction and picture size when none is given (the library's defaults)
+DEFAULT_VIEW, DEFAULT_SIZE = "1,-1.6,0.7", (320, 240)
 
 
 @user_errors
@@ -45,7 +43,7 @@ def render(
         "camera's side) or back (behind the object). Without I or E: 1e4 W/sr, 1 W/mm^2.",
     ),
     view: str = typer.Option(
-        "1,-1.6,0.7",
+        DEFAULT_VIEW,
         "--view",
         metavar="X,Y,Z",
         help="Direction from the object's centre towards the camera, x,y,z in the object's frame "
@@ -61,7 +59,7 @@ def render(
         "linear radiance (the 'exposure' render.json states, to match another render). The EXRs are "
         "linear whatever the exposure.",
     ),
-    size: tuple[int, int] = typer.Option((320, 240), "--size", help="Image width and height in pixels."),
+    size: tuple[int, int] = typer.Option(DEFAULT_SIZE, "--size", help="Image width and height in pixels."),
     reference: bool = typer.Option(
         False, "--reference", help="Also path-trace the reference (Mitsuba volpath) and compare."
     ),
@@ -124,40 +122,18 @@ def render(
     as_json: bool = json_option(),
 ):
     """Relight a fitted object: irradiance per vertex, sparse transport, a picture through Mitsuba (EXR + PNG)."""  # noqa: E501 — Typer lists the docstring verbatim as the command's one-line help; a line break would show in `translucency --help`
-    from ..render import MAX_PAIRS, default_radius  # heavy: Mitsuba, Numba, trimesh load only to render
-    from ..render.camera import Camera, view_direction
-    from ..render.figure import figure2
-    from ..render.lights import Placement, parse_light, place_light
-    from ..render.object import boundary_eta, check_light_outside, object_of_model, volume_of_dataset
-    from ..render.reference import check_reference
-    from ..render.tonemap import parse_exposure
+    from ..workflow.rendering import (
+        render_model,
+        render_scene,
+    )  # heavy: Mitsuba, Numba, trimesh load only to render
 
-    check_option("--spp", spp, lo=1)
-    from ..model.incidence import INCIDENCE_LAWS  # numpy only
-
-    if incidence not in INCIDENCE_LAWS:
-        raise TranslucencyError(f"--incidence: {incidence!r} is not one of {', '.join(INCIDENCE_LAWS)}")
+    reporter = RichReporter(quiet)
     if scene is not None:
-        if model is not None:
-            raise TranslucencyError(f"{model}: with --scene, name the objects with --model ID=FILE instead")
-        given = [
-            f
-            for f, v, d in (
-                ("--light", light, [DEFAULT_LIGHT]),
-                ("--view", view, "1,-1.6,0.7"),
-                ("--size", tuple(size), (320, 240)),
-                ("--through", through, False),
-            )
-            if v != d
-        ]
-        if given:
-            raise TranslucencyError(
-                f"{given[0]}: the scene file says this (its emitters, sensor and film); not with --scene"
-            )
-        return render_scene(
-            scene=scene,
-            models=models,
-            out=out,
+        _refuse_object_options(model, light, view, size, through)
+        shot = render_scene(
+            scene,
+            parse_models(models),
+            out,
             scene_unit=scene_unit,
             samples=samples,
             passes=passes,
@@ -171,88 +147,88 @@ def render(
             spp=spp,
             overwrite=overwrite,
             max_memory=max_memory,
-            quiet=quiet,
-            as_json=as_json,
+            reporter=reporter,
         )
+        finish(as_json, quiet, shot.summary, [_scene_table(scene, shot.summary, reference), f"images: {out}"])
+        return
     if models:
         raise TranslucencyError("--model: names the objects of a --scene; give the scene file too")
     if model is None:
         raise TranslucencyError("render: give a per-vertex model file, or --scene SCENE.xml --model ID=FILE")
-    chosen_exposure = parse_exposure(exposure, name="--exposure")
-    relative = [parse_light(t) for t in light]  # the text checked; placed once the object is known
-    if len(relative) > 1:
+    if len(light) > 1:
         raise TranslucencyError("--light: one light per render for now (run once per light)")
-    check_option("--radius", radius, lo=1e-6, hi=1e9)  # 1 nm to 1000 km (the far field divides by r²)
-    for value in size:
-        check_option("--size", value, lo=1, hi=16384)
-    run = Run("render", max_memory=max_memory, quiet=quiet)
-    # the options first (no file read), then the model and what it implies, then the output, then work
-    direction = view_direction(view, "--view")
-    expect_input(model, ("model file",))  # a data set or a mesh file where the model belongs: say so
-    m = load_model(model)
-    header = read_header(model)
-    if m.geometry != "mesh":
-        raise TranslucencyError(
-            f"{model}: a planar model; render needs a per-vertex model of a mesh data set"
-        )
-    mesh, dheader = object_of_model(m, header)
-    placement = Placement.of(mesh, direction)
-    lights = [place_light(lit, placement) for lit in relative]
-    check_light_outside(mesh, lights[0])
-    if reference:  # a light volpath cannot render, a filling gone or changed: one line, before any work
-        check_reference(lights[0], boundary_eta(dheader))
-    vol = volume_of_dataset(mesh, dheader) if reference else None
-    V = len(mesh.vertices)
-    # the default radius: the model's 99 % energy radius, at most what a share of the memory holds
-    budget = resources.memory.transport_budget(run.limit)
-    rad = default_radius(m, mesh, max_pairs=min(MAX_PAIRS, 2 * budget)) if radius is None else float(radius)
-    picture = dict(
-        vertices=V,
-        surface_mm2=float(mesh.area),
-        radius_mm=rad,
-        width=size[0],
-        height=size[1],
+    rendering = render_model(
+        model,
+        out,
+        light=light[0],
+        view=view,
+        size=size,
+        exposure=exposure,
         reference=reference,
-        spp_reference=spp,
-        max_pairs=MAX_PAIRS,
+        spp=spp,
+        radius=radius,
+        incidence=incidence,
+        through=through,
+        overwrite=overwrite,
+        max_memory=max_memory,
+        reporter=reporter,
     )
-    need = run.check(resources.memory.rendering(**picture), out)
-    run.claim_folder(out, overwrite=overwrite, inputs=[model, header.get("meta", {}).get("dataset") or None])
-    timing = run.time(resources.timing.rendering_units(**picture))
-    what, _, flags = need.what.partition(": ")  # "the transport: --radius"
-    run.info(
-        f"render of {V:,} vertices at {size[0]} x {size[1]}, transport radius {rad:.3g} mm; time "
-        f"{timing.text()}, memory ~{need.memory / 2**30:.2g} GiB (mostly {what}"
-        f"{f'; a smaller {flags} lowers it' if flags else ''})"
-    )
-    run.info(f"{placement.describe()}; light {lights[0]!r}")
-    cam = Camera.looking_at(mesh, direction, *size)
-    steps = 4 if reference else 3
-    with run.work("render", total=steps) as work:
-        res = figure2(
-            m,
-            mesh,
-            lights[0],
-            out,
-            volume=vol,
-            camera=cam,
-            spp_reference=spp,
-            radius=rad,
-            eta=boundary_eta(dheader),
-            exposure=chosen_exposure,
-            incidence=incidence,
-            through=through,
-            progress=lambda done, total, name: work.update(completed=done, total=total, item=name),
-        )
-        work.update(completed=steps, item="done")
-        work.fresh = not res.get("reference_cached", False)
     table = Table(title=f"render of {model.name}", show_header=False)
-    for k, v in res.items():
+    for k, v in rendering.numbers.items():
         table.add_row(k, f"{v:.4g}" if isinstance(v, float) else str(v))
-    summary = {"command": "render", "model": model, "images": out, **res, "light": _light_record(lights[0])}
-    run.finish(as_json, summary, [table, f"images: {out}"])
+    finish(as_json, quiet, rendering.summary, [table, f"images: {out}"])
 
 
-def _light_record(light) -> dict:
-    """A light as JSON: its kind (point, directional, spot, environment) and its parameters."""
-    return {"kind": type(light).__name__.removesuffix("Light").lower(), **dataclasses.asdict(light)}
+def _refuse_object_options(model, light, view, size, through) -> None:
+    """With --scene the scene file says where the light and the camera are: one line for an option that
+    would be ignored."""
+    if model is not None:
+        raise TranslucencyError(f"{model}: with --scene, name the objects with --model ID=FILE instead")
+    given = [
+        f
+        for f, v, d in (
+            ("--light", light, [DEFAULT_LIGHT]),
+            ("--view", view, DEFAULT_VIEW),
+            ("--size", tuple(size), DEFAULT_SIZE),
+            ("--through", through, False),
+        )
+        if v != d
+    ]
+    if given:
+        raise TranslucencyError(
+            f"{given[0]}: the scene file says this (its emitters, sensor and film); not with --scene"
+        )
+
+
+def parse_models(texts: list[str]) -> dict[str, Path]:
+    """``ID=FILE`` pairs (``--model``) as {id: path}; one line for a malformed or repeated one."""
+    out: dict[str, Path] = {}
+    for text in texts:
+        key, eq, path = text.partition("=")
+        if not eq or not key.strip() or not path.strip():
+            raise TranslucencyError(
+                f"--model {text!r}: expected ID=FILE (a shape id of the scene = a model file)"
+            )
+        if key.strip() in out:
+            raise TranslucencyError(f"--model: the shape id {key.strip()!r} is given twice")
+        out[key.strip()] = Path(path.strip())
+    if not out:
+        raise TranslucencyError(
+            "--scene: name the fitted objects with --model ID=FILE (shape id = model file)"
+        )
+    return out
+
+
+def _scene_table(scene: Path, summary: dict, reference: bool) -> Table:
+    """The scene render's numbers: times, pixels, and with a reference the errors per region."""
+    table = Table(title=f"render of {scene.name}", show_header=False)
+    for key in ("prepare_s", "light_s", "draw_s", "object_pixels"):
+        table.add_row(key, f"{summary[key]:.4g}")
+    if reference:
+        for part in ("object", "lit", "rest"):
+            e = summary["errors"][part]
+            if e.get("pixels"):
+                table.add_row(f"{part}: rel. RMSE", f"{e['rel_rmse']:.4g} ({e['pixels']:,} px)")
+        table.add_row("object: FLIP", f"{summary['errors']['object']['flip']:.4g}")
+        table.add_row("reference noise", f"{summary['reference_noise']:.4g}")
+    return table

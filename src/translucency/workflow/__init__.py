@@ -1,0 +1,58 @@
+"""The library runs every stage: one function per thing a user does, the same for Python and the command
+line.
+
+Each function checks its arguments at the boundary (a mistake is one
+:class:`~translucency.TranslucencyError` line naming the Python argument), estimates its memory and time
+before any work (:mod:`.run`), claims its outputs (never replacing what translucency did not write),
+works under a :class:`~.run.Reporter` (silent by default; the command line draws progress bars) and
+returns what it made with the summary the command prints.
+
+=========================  ==========================================  ============================
+module                     functions                                   command
+=========================  ==========================================  ============================
+:mod:`.datasets`           :func:`open_dataset`                        ``info DATA``
+:mod:`.acquiring`          :func:`acquire_planar`, :func:`acquire_mesh`  ``acquire planar|mesh``
+:mod:`.importing`          :func:`import_images`                       ``import images``
+:mod:`.fitting`            :func:`fit_model`                           ``fit``
+:mod:`.evaluating`         :func:`evaluate_model`                      ``evaluate``
+:mod:`.rendering`          :func:`render_model`, :func:`render_scene`  ``render``, ``render --scene``
+=========================  ==========================================  ============================
+
+The modules load on first use of one of their names (the stages load Dask, Matplotlib and Mitsuba's
+wrappers), so that :mod:`.run` stays cheap for the command line's start-up.  Units: mm, R_d in mm⁻²,
+linear RGB.
+"""
+
+import importlib
+
+#: public name → the module of this package that defines it (loaded on first use)
+_HOMES = {
+    "open_dataset": "datasets",
+    "acquire_planar": "acquiring",
+    "acquire_mesh": "acquiring",
+    "make_sample": "acquiring",
+    "import_images": "importing",
+    "Fitting": "fitting",
+    "fit_model": "fitting",
+    "evaluate_model": "evaluating",
+    "Rendering": "rendering",
+    "SceneRendering": "rendering",
+    "render_model": "rendering",
+    "render_scene": "rendering",
+    "Reporter": "run",
+    "Run": "run",
+}
+
+__all__ = sorted(_HOMES)
+
+
+def __getattr__(name: str):
+    if name not in _HOMES:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(f".{_HOMES[name]}", __name__), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__():
+    return sorted({*__all__, *(k for k in globals() if not k.startswith("_"))})
