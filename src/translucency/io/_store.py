@@ -166,16 +166,16 @@ def open_store(path, kinds: tuple[type[ChunkedStore], ...], *, writable: bool = 
     except Exception as exc:  # noqa: BLE001 — any decoding fault becomes one line
         raise TranslucencyError(f"{path}: not a readable Zarr data set ({type(exc).__name__})") from None
     wanted = kinds[0].KIND if len(kinds) == 1 else "data set"
-    for kind in kinds:
-        header = attrs.get(kind.HEADER_KEY)
-        if isinstance(header, dict) and header.get("format") == kind.FORMAT:
-            break
-    else:
+    kind = next((k for k in kinds if isinstance(attrs.get(k.HEADER_KEY), dict)), None)
+    if kind is None:
         other = [k for k, key in DATASET_KEYS.items() if isinstance(attrs.get(key), dict)]
         if other:
             raise TranslucencyError(f"{path}: a {other[0]}, where a {wanted} is needed")
-        keys = " or ".join(f"'{kind.HEADER_KEY}'" for kind in kinds)
+        keys = " or ".join(f"'{k.HEADER_KEY}'" for k in kinds)
         raise TranslucencyError(f"{path}: not a translucency {wanted} (no {keys} header)")
+    header = attrs[kind.HEADER_KEY]
+    if header.get("format") != kind.FORMAT:
+        raise TranslucencyError(f"{path}: not a translucency {kind.KIND} (format {header.get('format')!r})")
     if header.get("version") != kind.VERSION:
         raise TranslucencyError(
             f"{path}: {kind.KIND} version {header.get('version')!r} is not supported "
