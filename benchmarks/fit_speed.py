@@ -97,12 +97,12 @@ def whole_fit(path: Path, kind: str) -> dict:
 def solver_vs_scipy(path: Path, n_sample: int) -> dict:
     from scipy.optimize import least_squares
 
-    from translucency.fit._chunk import load_chunk as _load_chunk
-    from translucency.fit._chunk import weights as _weights
-    from translucency.fit._options import FitContext
     from translucency.fit._pixels import grouped as _grouped
-    from translucency.fit._state import FitState
+    from translucency.fit.chunk import load_chunk as _load_chunk
+    from translucency.fit.chunk import weights as _weights
+    from translucency.fit.options import FitContext
     from translucency.fit.planar import _PlanarSource
+    from translucency.fit.state import FitState
     from translucency.geometry import SampleGrid
     from translucency.io.dataset import open_dataset
     from translucency.solvers.varpro import fit_exponentials_batched

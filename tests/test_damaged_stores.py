@@ -7,9 +7,11 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
+from translucency._validate import TranslucencyError
 from translucency.cli.app import app
-from translucency.io.dataset import open_dataset
-from translucency.io.mesh_dataset import open_mesh_dataset
+from translucency.io.dataset import PlanarDataset, open_dataset
+from translucency.io.datasets import open_any_dataset
+from translucency.io.mesh_dataset import MeshDataset, open_mesh_dataset
 
 runner = CliRunner()
 ARGS = [
@@ -152,3 +154,15 @@ def test_a_damaged_mesh_data_set_is_found_and_repaired(mesh_scan, damage, array,
     res = runner.invoke(app, args)
     assert res.exit_code == 0 and "warning:" in res.output, res.output
     assert open_mesh_dataset(out).damaged_chunks() == {} and _mesh_digest(out) == before
+
+
+def test_one_opener_tells_the_kinds_apart(scan, mesh_scan):
+    """Each data set opens as its kind through the one opener; the other kind's reader names what it is."""
+    mesh = mesh_scan[0]
+    assert type(open_any_dataset(scan)) is PlanarDataset and type(open_any_dataset(mesh)) is MeshDataset
+    with pytest.raises(TranslucencyError, match="b.zarr: a mesh data set, where a planar data set is needed"):
+        open_dataset(mesh)
+    with pytest.raises(TranslucencyError, match="s.zarr: a planar data set, where a mesh data set is needed"):
+        open_mesh_dataset(scan)
+    with pytest.raises(TranslucencyError, match="nothing.zarr: no such data set"):
+        open_any_dataset(scan.parent / "nothing.zarr")

@@ -10,11 +10,12 @@ import textwrap
 
 import numpy as np
 import pytest
+import typer
 from typer.testing import CliRunner
 
 from translucency.cli.app import app
 from translucency.fit import FAMILIES, fit_planar
-from translucency.fit.families import register
+from translucency.fit.families import describe_families, register
 from translucency.io.dataset import write_dataset
 from translucency.io.model_file import load_model
 from translucency.model import ExponentialModel, PlanarAlpha
@@ -113,3 +114,16 @@ def test_an_unregistered_family_is_refused_in_one_line(tmp_path):
     assert (
         "model: expected one of iso, aniso, dipole, burley, pbd, ddipole, got 'iso-unguarded'" in res.output
     )
+
+
+def test_the_registry_describes_itself(seventh_family):
+    """``fit --model``'s choices are said by the registry: each family's name and summary, in order, a
+    registered family among them."""
+    text = describe_families()
+    assert text.startswith("iso | aniso (the paper's; planar data sets only) | dipole | burley | pbd")
+    assert text.endswith(" | ddipole (directional dipole at normal incidence) | iso-unguarded.")
+
+
+def test_the_cli_help_lists_the_registry():
+    fit = typer.main.get_command(app).commands["fit"]
+    assert next(p.help for p in fit.params if p.name == "model") == describe_families()

@@ -227,5 +227,5 @@ def test_fit_mesh_per_vertex(tmp_path):
     assert errs["iso"] < 0.15 and errs["iso per channel"] < errs["dipole"]
     with pytest.raises(TranslucencyError, match="isotropic"):
         fit_mesh(out, "aniso")
-    with pytest.raises(TranslucencyError, match="no such mesh data set"):
+    with pytest.raises(TranslucencyError, match="none.zarr: no such data set"):
         fit_mesh(tmp_path / "none.zarr")

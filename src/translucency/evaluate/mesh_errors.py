@@ -42,6 +42,7 @@ import numpy as np
 from .._validate import TranslucencyError
 from ..fit.mesh import mean_edge_length, read_pairs
 from ..io.mesh_dataset import MeshDataset, open_mesh_dataset
+from ..io.model_file import check_vertex_model
 from .errors import BANDS, PlanarErrors, beyond
 
 #: ring edges (mm) of the error-against-distance curve; 1 and 4 mm are the bands' edges
@@ -121,11 +122,7 @@ def check_same_points(data: MeshDataset, truth: MeshDataset) -> None:
 def check_model_points(model, ds: MeshDataset) -> None:
     """Refuse, in one line, a model that is not per-vertex, an unfinished data set, or a model whose
     incident points are not the data set's incident vertices (naming the first that differs)."""
-    if getattr(model, "geometry", None) != "mesh":
-        raise TranslucencyError(
-            f"{ds.path}: a mesh data set; it evaluates per-vertex models (fit on a mesh data set), "
-            "not a planar model"
-        )
+    check_vertex_model(model, f"evaluating on the mesh data set {ds.path}")
     if not ds.complete():
         raise TranslucencyError(f"{ds.path}: the acquisition is unfinished; resume it before evaluating")
     incident = ds["incident"]

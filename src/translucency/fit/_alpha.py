@@ -14,8 +14,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 if TYPE_CHECKING:  # annotations only
-    from ._state import FitState
     from .families import Family
+    from .state import FitState
 
 
 def update_alpha(state: FitState, family: Family, smooth=None) -> float:

@@ -1,4 +1,4 @@
-"""One round's work on a chunk of incident points, block by block (:data:`~._chunk.FIT_BLOCK`).
+"""One round's work on a chunk of incident points, block by block (:data:`~.chunk.FIT_BLOCK`).
 
 A block's work: read (or take from the cache) its data, weight it (round 1 by
 ring means of the data, later rounds by the reference model), let the family fit
@@ -12,12 +12,12 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ._chunk import FIT_BLOCK, load_chunk, objective, weights
 from ._pixels import pixel_sums, predict
-from ._state import FitState
+from .chunk import FIT_BLOCK, load_chunk, objective, weights
+from .state import FitState
 
 if TYPE_CHECKING:  # annotations only
-    from ._options import FitContext
+    from .options import FitContext
 
 
 def _blocks(s: int, e: int) -> list[tuple[int, int]]:

@@ -16,9 +16,9 @@ from ..cluster import compact
 from ._windows import Segments
 
 if TYPE_CHECKING:  # annotations only
-    from ._chunk import Chunk
-    from ._options import FitContext
-    from ._state import FitState, Params
+    from .chunk import Chunk
+    from .options import FitContext
+    from .state import FitState, Params
 
 
 def hat(theta, m):

@@ -43,12 +43,12 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..solvers import fit_exponentials_batched, rate_bounds
-from ._chunk import distance_balance
+from .chunk import distance_balance
 
 if TYPE_CHECKING:  # annotations only
-    from ._chunk import Chunk
-    from ._options import FitContext
-    from ._state import FitState
+    from .chunk import Chunk
+    from .options import FitContext
+    from .state import FitState
 
 
 #: where each direction is tied to the isotropic fit: at the head, in units of the smallest radius

@@ -10,7 +10,7 @@ with the modulation texture α per pixel and :math:`P_i` the per-point profile
 of a family in :data:`~translucency.fit.families.FAMILIES` (:mod:`translucency.fit.planar`
 lists them).  A *source* (the windows of a planar data set in :mod:`.planar`, the
 vertices of a mesh data set in :mod:`.mesh`) reads the data of points s..e and
-says where α lives; the objective and its weights are in :mod:`._chunk`.
+says where α lives; the objective and its weights are in :mod:`.chunk`.
 
 **Alternation.**  Each round (1) fits every point's parameters with α fixed,
 batched over all points (the family's :meth:`~.families.Family.fit`:
@@ -32,7 +32,7 @@ Work runs in chunks of incident points read from the store, so a data set
 larger than memory can be fitted.  α's statistics are one running sum per
 statistic, added in chunk order (a chunk that finishes early waits until the
 chunks before it are in), so they take one sample grid whatever the number of
-chunks.  With a checkpoint the state (:mod:`._state`) is saved as chunks are
+chunks.  With a checkpoint the state (:mod:`.state`) is saved as chunks are
 added and at the end of every round; an interrupted fit resumes from it bit for bit.
 """
 
@@ -50,8 +50,8 @@ import numpy as np
 from ..cluster import in_order_window, open_cluster
 from ._alpha import update_alpha
 from ._block import fit_chunk as _fit_chunk  # looked up here at each call (a test slows chunks down)
-from ._options import FitContext, FitResult
-from ._state import CHECKPOINT_SHARE, FitState
+from .options import FitContext, FitResult
+from .state import CHECKPOINT_SHARE, FitState
 
 
 def alternate(

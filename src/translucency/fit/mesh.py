@@ -27,9 +27,9 @@ from .._validate import TranslucencyError
 from ..geometry import tangent_frames
 from ..io.mesh_dataset import open_mesh_dataset
 from ..model import VertexAlpha
-from ._options import FitContext, FitResult, check_fit_options
 from ._rounds import alternate
 from .families import FAMILIES
+from .options import FitContext, FitResult, check_fit_options
 
 #: α's pooling radius in mean edge lengths.  Measured on the main job's pig against its converged reference
 #: (relative RMSE at 96 x 8,000 / 384 x 2,000 / 1,536 x 500 photons): 3 edges 0.082 / 0.070 / 0.078,

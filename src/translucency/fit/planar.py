@@ -19,7 +19,7 @@ per-incident-point profile of the chosen family:
 channel instead of the colour scale.)  r (mm) and θ (rad, in the sample's
 frame) of each window pixel come from :func:`translucency.geometry.window_geometry`.
 
-**Objective and alternation** (:mod:`._chunk`, :mod:`._rounds`, shared with the mesh fit).
+**Objective and alternation** (:mod:`.chunk`, :mod:`._rounds`, shared with the mesh fit).
 Weighted least squares over every valid pair,
 
 .. math:: \Phi = \sum_{i,j,\lambda} w_{ij\lambda}^2
@@ -63,10 +63,10 @@ from .._validate import TranslucencyError
 from ..geometry import SampleGrid, window_geometry
 from ..io.dataset import PlanarDataset, open_dataset
 from ..model import PlanarAlpha, Rectangle
-from ._chunk import POOL_POINTS
-from ._options import AUTO_DIRECTIONS, AUTO_TERMS, FitContext, FitResult, check_fit_options
 from ._rounds import alternate
+from .chunk import POOL_POINTS
 from .families import FAMILIES
+from .options import AUTO_DIRECTIONS, AUTO_TERMS, FitContext, FitResult, check_fit_options
 
 __all__ = [
     "FitResult",

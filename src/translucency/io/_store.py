@@ -1,9 +1,12 @@
-"""What the two chunked data-set stores share: lazy reads, the chunks of points, the damage checks.
+"""What the two chunked data-set stores share: opening and checking, lazy reads, the chunks of points,
+the damage checks, the ``info`` record.
 
 A store is a Zarr v3 group whose per-point arrays are chunked along their first axis in chunks of
 ``chunk_points`` incident points, with a ``chunk_done`` flag per chunk written last (the resume marker).
 :class:`~translucency.io.dataset.PlanarDataset` and :class:`~translucency.io.mesh_dataset.MeshDataset`
-derive from :class:`ChunkedStore`, each naming its arrays; their formats are their own modules'.
+derive from :class:`ChunkedStore`, each naming its header, its arrays and its own checks
+(:meth:`ChunkedStore.from_group`); their formats are their own modules'.  :func:`open_store` opens a
+path once, tells which kind of data set it holds and returns it opened as that kind.
 """
 
 from __future__ import annotations
@@ -16,6 +19,7 @@ from typing import ClassVar
 import numpy as np
 
 from .._validate import TranslucencyError
+from .outputs import DATASET_KEYS
 
 
 @dataclass
@@ -26,12 +30,24 @@ class ChunkedStore(ABC):
     header: dict
     group: object
 
+    #: the kind of data set, as :data:`~translucency.io.outputs.KINDS` names it
+    KIND: ClassVar[str]
+    #: the root group's attribute holding the header, and the header's ``format`` and ``version``
+    HEADER_KEY: ClassVar[str]
+    FORMAT: ClassVar[str]
+    VERSION: ClassVar[int]
     #: the arrays ``store[name]`` reads
     ARRAYS: ClassVar[tuple[str, ...]] = ()
     #: the per-point arrays written chunk by chunk, checked for each finished chunk of points
     PER_POINT: ClassVar[tuple[str, ...]] = ()
     #: what one index of the arrays' first axis is, as read errors name it
     ROW: ClassVar[str] = "row"
+
+    @classmethod
+    @abstractmethod
+    def from_group(cls, path: Path, header: dict, group) -> ChunkedStore:
+        """The data set of the opened Zarr ``group`` whose ``header`` is of this kind (format and version
+        checked by :func:`open_store`): the kind's header fields and arrays checked, one line a fault."""
 
     @property
     def n_points(self) -> int:
@@ -104,3 +120,77 @@ class ChunkedStore(ABC):
     def _damaged_whole(self, decode: bool) -> dict:
         """The arrays written whole at creation that are missing or do not decode: {name: [0]}."""
         return {}
+
+    def summary(self, **fields) -> dict:
+        """The ``translucency info`` record every data set shares — format, points, sample, photons, seed,
+        completion, size (bytes) and software — with the kind's own ``fields`` and the damaged chunks
+        ({array: [chunk, ...]}, :meth:`damaged_chunks`) in between; numbers as numbers, objects as objects."""
+        header, done, damaged = self.header, self["chunk_done"], self.damaged_chunks()
+        size = sum(f.stat().st_size for f in Path(self.path).rglob("*") if f.is_file())
+        acquisition = header.get("acquisition", header)  # planar headers nest it, mesh headers do not
+        return {
+            "format": header["format"],
+            "version": header["version"],
+            "n_points": header["n_points"],
+            **fields,
+            "damaged": {str(k): [int(c) for c in v] for k, v in damaged.items()},
+            "sample": header.get("sample", {}),
+            "photons": acquisition.get("photons"),
+            "seed": acquisition.get("seed"),
+            "chunks_done": int(done.sum()),
+            "chunks": int(done.size),
+            "complete": bool(done.all()),
+            "size_bytes": size,
+            "software": header.get("software", {}),
+        }
+
+
+def open_store(path, kinds: tuple[type[ChunkedStore], ...], *, writable: bool = False) -> ChunkedStore:
+    """Open the data set at ``path`` once, as the one of ``kinds`` its header names, and check it.
+
+    The checks every kind shares come first — the path exists, a folder holds ``zarr.json``, Zarr opens
+    it, its root carries the header of one of ``kinds`` with their format and version — then the kind's
+    own (:meth:`ChunkedStore.from_group`).  Each fault is one line naming the path; a data set of
+    another kind is named as such.  Read-only unless ``writable`` (used when resuming an acquisition).
+    """
+    path = Path(path)
+    if not path.exists():
+        raise TranslucencyError(f"{path}: no such data set")
+    import zarr  # heavy: Zarr loads where a store is read or written, not for --help
+
+    if path.is_dir() and not (path / "zarr.json").is_file():
+        raise TranslucencyError(f"{path}: a folder, but not a translucency data set (it holds no zarr.json)")
+    try:
+        group = zarr.open_group(str(path), mode="r+" if writable else "r")
+        attrs = dict(group.attrs)
+    except Exception as exc:  # noqa: BLE001 — any decoding fault becomes one line
+        raise TranslucencyError(f"{path}: not a readable Zarr data set ({type(exc).__name__})") from None
+    wanted = kinds[0].KIND if len(kinds) == 1 else "data set"
+    kind = next((k for k in kinds if isinstance(attrs.get(k.HEADER_KEY), dict)), None)
+    if kind is None:
+        other = [k for k, key in DATASET_KEYS.items() if isinstance(attrs.get(key), dict)]
+        if other:
+            raise TranslucencyError(f"{path}: a {other[0]}, where a {wanted} is needed")
+        keys = " or ".join(f"'{k.HEADER_KEY}'" for k in kinds)
+        raise TranslucencyError(f"{path}: not a translucency {wanted} (no {keys} header)")
+    header = attrs[kind.HEADER_KEY]
+    if header.get("format") != kind.FORMAT:
+        raise TranslucencyError(f"{path}: not a translucency {kind.KIND} (format {header.get('format')!r})")
+    if header.get("version") != kind.VERSION:
+        raise TranslucencyError(
+            f"{path}: {kind.KIND} version {header.get('version')!r} is not supported "
+            f"(this reader knows {kind.VERSION})"
+        )
+    return kind.from_group(path, header, group)
+
+
+def check_shapes(path: Path, group, expect: dict) -> None:
+    """Refuse, in one line, a store whose array ``name`` is missing, unreadable or not of the shape
+    ``expect[name]`` (a tuple; None: any length along that axis)."""
+    for name, shape in expect.items():
+        try:
+            arr = group[name]
+        except Exception:  # noqa: BLE001 — absent, or its metadata does not parse
+            raise TranslucencyError(f"{path}: missing or unreadable array {name!r}") from None
+        if len(arr.shape) != len(shape) or any(w is not None and w != a for w, a in zip(shape, arr.shape)):
+            raise TranslucencyError(f"{path}: array {name!r} has shape {tuple(arr.shape)}, expected {shape}")

@@ -34,7 +34,7 @@ import numpy as np
 
 from .._validate import TranslucencyError, as_float_array
 from .._version import __version__
-from ._store import ChunkedStore
+from ._store import ChunkedStore, check_shapes, open_store
 from .outputs import claim_output, reopen_or_clear
 
 FORMAT = "translucency-dataset"
@@ -46,6 +46,10 @@ _ARRAYS = ("x_i", "window_origin", "R_d", "variance", "mask", "specular", "total
 class PlanarDataset(ChunkedStore):
     """An opened data set; arrays are read lazily from the Zarr group."""
 
+    KIND = "planar data set"
+    HEADER_KEY = HEADER_KEY
+    FORMAT = FORMAT
+    VERSION = VERSION
     ARRAYS = _ARRAYS
     PER_POINT = ("R_d", "variance", "mask", "specular", "total_diffuse")
     ROW = "incident point"
@@ -61,6 +65,45 @@ class PlanarDataset(ChunkedStore):
     @property
     def chunk_points(self) -> int:
         return int(self.header["chunk_points"])
+
+    @classmethod
+    def from_group(cls, path: Path, header: dict, group) -> PlanarDataset:
+        units = header.get("units", {})
+        if units.get("length") != "mm" or units.get("R_d") != "mm^-2":
+            raise TranslucencyError(f"{path}: units {units} are not mm / mm^-2")
+        P, window, k = header.get("n_points"), header.get("window"), header.get("chunk_points")
+        if not (
+            isinstance(P, int)
+            and P >= 1
+            and isinstance(k, int)
+            and k >= 1
+            and isinstance(window, list)
+            and len(window) == 2
+            and all(isinstance(v, int) and v >= 1 for v in window)
+            and isinstance(header.get("pitch_mm"), (int, float))
+            and np.isfinite(header["pitch_mm"])
+            and header["pitch_mm"] > 0
+        ):
+            raise TranslucencyError(
+                f"{path}: header fields n_points {P!r}, window {window!r}, chunk_points {k!r} or pitch_mm "
+                f"{header.get('pitch_mm')!r} are not valid"
+            )
+        H, W = window
+        check_shapes(
+            path,
+            group,
+            {
+                "x_i": (P, 2),
+                "window_origin": (P, 2),
+                "R_d": (P, H, W, 3),
+                "variance": (P, H, W, 3),
+                "mask": (P, H, W),
+                "specular": (P, 3),
+                "total_diffuse": (P, 3),
+                "chunk_done": (-(-P // k),),
+            },
+        )
+        return cls(path, header, group)
 
     def _expects_files(self, name: str) -> bool:
         # chunks holding only the fill value may be absent by design in older stores (Zarr does not
@@ -231,73 +274,12 @@ def write_dataset(
 
 
 def open_dataset(path, *, writable: bool = False) -> PlanarDataset:
-    """Open a data set and check its header and arrays; one-line errors name the fault.
+    """Open a planar data set and check its header and arrays; one-line errors name the fault
+    (:func:`~translucency.io._store.open_store`).
 
     Read-only unless ``writable`` (used when resuming an acquisition).
     """
-
-    path = Path(path)
-    if not path.exists():
-        raise TranslucencyError(f"{path}: no such data set")
-    import zarr  # heavy: Zarr loads where a store is read or written, not for --help
-
-    if path.is_dir() and not (path / "zarr.json").is_file():
-        raise TranslucencyError(f"{path}: a folder, but not a translucency data set (it holds no zarr.json)")
-    try:
-        root = zarr.open_group(str(path), mode="r+" if writable else "r")
-        header = dict(root.attrs).get(HEADER_KEY)
-    except Exception as exc:  # noqa: BLE001
-        raise TranslucencyError(f"{path}: not a readable Zarr data set ({type(exc).__name__})") from None
-    if not isinstance(header, dict) or header.get("format") != FORMAT:
-        from .mesh_dataset import is_mesh_dataset  # cycle: mesh_dataset imports this module
-
-        if is_mesh_dataset(path):
-            raise TranslucencyError(f"{path}: a mesh data set (acquire mesh), where a planar one is needed")
-        raise TranslucencyError(f"{path}: not a translucency data set (no '{HEADER_KEY}' header)")
-    if header.get("version") != VERSION:
-        raise TranslucencyError(
-            f"{path}: data set version {header.get('version')!r} is not supported "
-            f"(this reader knows {VERSION})"
-        )
-    units = header.get("units", {})
-    if units.get("length") != "mm" or units.get("R_d") != "mm^-2":
-        raise TranslucencyError(f"{path}: units {units} are not mm / mm^-2")
-    P, window, k = header.get("n_points"), header.get("window"), header.get("chunk_points")
-    if not (
-        isinstance(P, int)
-        and P >= 1
-        and isinstance(k, int)
-        and k >= 1
-        and isinstance(window, list)
-        and len(window) == 2
-        and all(isinstance(v, int) and v >= 1 for v in window)
-        and isinstance(header.get("pitch_mm"), (int, float))
-        and np.isfinite(header["pitch_mm"])
-        and header["pitch_mm"] > 0
-    ):
-        raise TranslucencyError(
-            f"{path}: header fields n_points {P!r}, window {window!r}, chunk_points {k!r} or pitch_mm "
-            f"{header.get('pitch_mm')!r} are not valid"
-        )
-    H, W = window
-    expect = {
-        "x_i": (P, 2),
-        "window_origin": (P, 2),
-        "R_d": (P, H, W, 3),
-        "variance": (P, H, W, 3),
-        "mask": (P, H, W),
-        "specular": (P, 3),
-        "total_diffuse": (P, 3),
-    }
-    expect["chunk_done"] = (-(-P // k),)
-    for name, shape in expect.items():
-        try:
-            arr = root[name]
-        except Exception:  # noqa: BLE001 — absent, or its metadata does not parse
-            raise TranslucencyError(f"{path}: missing or unreadable array {name!r}") from None
-        if tuple(arr.shape) != shape:
-            raise TranslucencyError(f"{path}: array {name!r} has shape {tuple(arr.shape)}, expected {shape}")
-    return PlanarDataset(path, header, root)
+    return open_store(path, (PlanarDataset,), writable=writable)
 
 
 def dataset_identity(header: dict) -> dict:
@@ -317,37 +299,10 @@ def dataset_identity(header: dict) -> dict:
     return {"kind": "planar", "sample": volume if isinstance(volume, dict) else header.get("sample")}
 
 
-def summary_of_store(path: Path, header: dict, done: np.ndarray, damaged: dict, **fields) -> dict:
-    """The ``translucency info`` record every data set shares — format, points, sample, photons, seed,
-    completion, size (bytes) and software — with the kind's own ``fields`` and the ``damaged`` chunks
-    ({array: [chunk, ...]}, from ``damaged_chunks()``) in between; numbers as numbers, objects as objects."""
-    size = sum(f.stat().st_size for f in Path(path).rglob("*") if f.is_file())
-    acquisition = header.get("acquisition", header)  # planar headers nest it, mesh headers do not
-    return {
-        "format": header["format"],
-        "version": header["version"],
-        "n_points": header["n_points"],
-        **fields,
-        "damaged": {str(k): [int(c) for c in v] for k, v in damaged.items()},
-        "sample": header.get("sample", {}),
-        "photons": acquisition.get("photons"),
-        "seed": acquisition.get("seed"),
-        "chunks_done": int(done.sum()),
-        "chunks": int(done.size),
-        "complete": bool(done.all()),
-        "size_bytes": size,
-        "software": header.get("software", {}),
-    }
-
-
 def describe(ds: PlanarDataset) -> dict:
     """What ``translucency info`` reports of a planar data set (JSON-ready: docs/json.md)."""
     h = ds.header
-    return summary_of_store(
-        ds.path,
-        h,
-        ds["chunk_done"],
-        ds.damaged_chunks(),
+    return ds.summary(
         window_px=[int(v) for v in h["window"]],
         pitch_mm=float(h["pitch_mm"]),
         dtype=h["dtype"],

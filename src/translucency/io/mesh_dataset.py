@@ -32,7 +32,6 @@ that the reference of a model fitted to it can be rendered while the file is unc
 
 from __future__ import annotations
 
-import json
 import warnings
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -42,9 +41,8 @@ import numpy as np
 from .._validate import TranslucencyError
 from .._version import __version__
 from ..geometry import object_bounds
-from ._store import ChunkedStore
-from .dataset import summary_of_store
-from .outputs import reopen_or_clear
+from ._store import ChunkedStore, check_shapes, open_store
+from .outputs import kind_of, reopen_or_clear
 
 if TYPE_CHECKING:  # the annotations only: trimesh loads where a mesh is built
     import trimesh
@@ -65,8 +63,41 @@ class MeshDataset(ChunkedStore):
     when they are missing or do not decode.
     """
 
+    KIND = "mesh data set"
+    HEADER_KEY = HEADER_KEY
+    FORMAT = FORMAT
+    VERSION = VERSION
     ARRAYS = _ARRAYS
     PER_POINT = ("R_d", "specular")
+
+    @classmethod
+    def from_group(cls, path: Path, header: dict, group) -> MeshDataset:
+        P, V = header.get("n_points"), header.get("n_vertices")
+        if not (isinstance(P, int) and isinstance(V, int) and P >= 1 and V >= 3):
+            raise TranslucencyError(f"{path}: header n_points {P!r} / n_vertices {V!r} are not valid counts")
+        check_shapes(
+            path,
+            group,
+            {
+                "vertices": (V, 3),
+                "faces": (None, 3),
+                "normals": (V, 3),
+                "vertex_area": (V,),
+                "incident": (P,),
+                "R_d": (P, V, 3),
+                "specular": (P, 3),
+                "chunk_done": (None,),
+            },
+        )
+        for name, shape in (("R_d_var", (P, V, 3)), ("flags", (P, V))):  # a measured data set's (optional)
+            if name in group and tuple(group[name].shape) != shape:
+                raise TranslucencyError(
+                    f"{path}: array {name!r} has shape {tuple(group[name].shape)}, expected {shape}"
+                )
+        k = int(group["R_d"].chunks[0])
+        if group["chunk_done"].shape[0] != -(-P // k):
+            raise TranslucencyError(f"{path}: array 'chunk_done' does not match {P} points in chunks of {k}")
+        return cls(path, header, group)
 
     @property
     def chunk_points(self) -> int:
@@ -98,60 +129,13 @@ class MeshDataset(ChunkedStore):
 
 def is_mesh_dataset(path) -> bool:
     """Whether ``path`` is a folder whose root Zarr metadata carries the mesh data set's header."""
-    meta = Path(path) / "zarr.json"
-    try:
-        return meta.is_file() and isinstance(
-            json.loads(meta.read_text()).get("attributes", {}).get(HEADER_KEY), dict
-        )
-    except (OSError, ValueError, AttributeError):
-        return False
+    return kind_of(path) == MeshDataset.KIND
 
 
 def open_mesh_dataset(path, *, writable: bool = False) -> MeshDataset:
-    """Open a mesh data set and check its header and arrays; one-line errors name the fault."""
-    path = Path(path)
-    if not path.exists():
-        raise TranslucencyError(f"{path}: no such mesh data set")
-    import zarr  # heavy: Zarr loads where a store is read or written, not for --help
-
-    if path.is_dir() and not (path / "zarr.json").is_file():
-        raise TranslucencyError(f"{path}: a folder, but not a translucency data set (it holds no zarr.json)")
-    try:
-        group = zarr.open_group(str(path), mode="r+" if writable else "r")
-        header = dict(group.attrs).get(HEADER_KEY)
-    except Exception as exc:  # noqa: BLE001 — any decoding fault becomes one line
-        raise TranslucencyError(f"{path}: not a readable Zarr data set ({type(exc).__name__})") from None
-    if not isinstance(header, dict) or header.get("format") != FORMAT or header.get("version") != VERSION:
-        raise TranslucencyError(f"{path}: not a translucency mesh data set (v{VERSION})")
-    P, V = header.get("n_points"), header.get("n_vertices")
-    if not (isinstance(P, int) and isinstance(V, int) and P >= 1 and V >= 3):
-        raise TranslucencyError(f"{path}: header n_points {P!r} / n_vertices {V!r} are not valid counts")
-    expect = {
-        "vertices": (V, 3),
-        "faces": (None, 3),
-        "normals": (V, 3),
-        "vertex_area": (V,),
-        "incident": (P,),
-        "R_d": (P, V, 3),
-        "specular": (P, 3),
-        "chunk_done": (None,),
-    }
-    for name, shape in expect.items():
-        try:
-            arr = group[name]
-        except Exception:  # noqa: BLE001 — absent, or its metadata does not parse
-            raise TranslucencyError(f"{path}: missing or unreadable array {name!r}") from None
-        if len(arr.shape) != len(shape) or any(w is not None and w != a for w, a in zip(shape, arr.shape)):
-            raise TranslucencyError(f"{path}: array {name!r} has shape {tuple(arr.shape)}, expected {shape}")
-    for name, shape in (("R_d_var", (P, V, 3)), ("flags", (P, V))):  # a measured data set's (optional)
-        if name in group and tuple(group[name].shape) != shape:
-            raise TranslucencyError(
-                f"{path}: array {name!r} has shape {tuple(group[name].shape)}, expected {shape}"
-            )
-    k = int(group["R_d"].chunks[0])
-    if group["chunk_done"].shape[0] != -(-P // k):
-        raise TranslucencyError(f"{path}: array 'chunk_done' does not match {P} points in chunks of {k}")
-    return MeshDataset(path, header, group)
+    """Open a mesh data set and check its header and arrays; one-line errors name the fault
+    (:func:`~translucency.io._store.open_store`)."""
+    return open_store(path, (MeshDataset,), writable=writable)
 
 
 def mesh_header(
@@ -281,11 +265,7 @@ def describe_mesh(ds: MeshDataset) -> dict:
     bounds and centre in mm (where a light or a camera goes)."""
     h = ds.header
     vertices = np.asarray(ds.group["vertices"][...], dtype=np.float64)
-    return summary_of_store(
-        ds.path,
-        h,
-        ds["chunk_done"],
-        ds.damaged_chunks(),
+    return ds.summary(
         n_vertices=int(h["n_vertices"]),
         n_faces=int(ds.group["faces"].shape[0]),
         index_matched=h.get("request", {}).get("index_matched"),

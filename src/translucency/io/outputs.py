@@ -55,8 +55,8 @@ KINDS = ("planar data set", "mesh data set", "model file", "output folder", "jso
 #: the line a PLY the tool wrote carries in its header (:func:`kind_of` reads it)
 PLY_COMMENT = "comment written_by translucency"
 
-# header keys of the stores (kept here so that this module imports no stage)
-_DATASET_KEYS = {"planar data set": "translucency_dataset", "mesh data set": "translucency_mesh_dataset"}
+#: the header key of each kind of data set (kept here so that this module imports no stage)
+DATASET_KEYS = {"planar data set": "translucency_dataset", "mesh data set": "translucency_mesh_dataset"}
 _MODEL_KEY = "translucency_model"
 _FOLDER_KINDS = ("planar data set", "mesh data set", "output folder")
 
@@ -90,7 +90,7 @@ def kind_of(path) -> str | None:
             meta = path / "zarr.json"
             if meta.is_file():
                 attrs = _zarr_attributes(meta.read_bytes())
-                for kind, key in _DATASET_KEYS.items():
+                for kind, key in DATASET_KEYS.items():
                     if isinstance(attrs.get(key), dict):
                         return kind
             marker = path / MARKER
@@ -275,7 +275,7 @@ def remove_dataset(path) -> None:
     stays, with a warning, and so does the folder that holds it.
     """
     path = Path(path)
-    if kind_of(path) not in _DATASET_KEYS:
+    if kind_of(path) not in DATASET_KEYS:
         raise TranslucencyError(f"{path}: not a translucency data set; nothing removed")
     for child in path.iterdir():
         if child.is_dir() and not child.is_symlink() and (child / "zarr.json").is_file():

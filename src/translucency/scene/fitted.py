@@ -22,8 +22,7 @@ import numpy as np
 import trimesh
 
 from .._validate import TranslucencyError
-from ..io.inputs import expect_input
-from ..io.model_file import load_model, read_header
+from ..io.model_file import check_vertex_model, load_vertex_model
 from ..mitsuba import load_plugin
 from ..model.boundary import exit_factor
 from ..model.incidence import INCIDENCE_LAWS
@@ -34,18 +33,12 @@ from .surfaces import Glowing, exit_table
 
 def read_vertex_model(source, *, name: str):
     """(model, header) of a per-vertex model file (or an already loaded model with ``header={}``);
-    one line for a file that is not one."""
+    one line for a file that is not one, or a model that is not per-vertex."""
+    purpose = f"the scene's object '{name}'"
     if not isinstance(source, (str, Path)):
+        check_vertex_model(source, purpose)
         return source, {}
-    path = Path(source)
-    expect_input(path, ("model file",))
-    model = load_model(path)
-    if model.geometry != "mesh":
-        raise TranslucencyError(
-            f"{path}: a planar model; the scene's object '{name}' needs a per-vertex model (translucency fit "
-            "on a mesh data set)"
-        )
-    return model, read_header(path)
+    return load_vertex_model(source, purpose)
 
 
 def coat_of(eta: float, roughness: float):
@@ -145,8 +138,6 @@ def fitted_object(
     if incidence not in INCIDENCE_LAWS:
         raise TranslucencyError(f"incidence: {incidence!r} is not one of {', '.join(INCIDENCE_LAWS)}")
     model, header = read_vertex_model(source, name=name)
-    if getattr(model, "geometry", "mesh") != "mesh":
-        raise TranslucencyError(f"model of '{name}': a planar model; a scene needs a per-vertex model")
     mesh, acquisition = object_of_model(model, header or {"meta": {"acquisition": {}}})
     pose = pose_of(name, mesh.vertices, mesh.faces, shape_vertices, shape_faces, scene_unit_mm=scene_unit_mm)
     eta = boundary_eta(acquisition)  # 1 (index-matched) for a loaded model without its header

@@ -26,6 +26,19 @@ def register(family: Family) -> Family:
     return family
 
 
+def describe_families() -> str:
+    """The choices of ``fit --model`` as its help lists them: each registered family's name, with its
+    ``summary`` in parentheses where it has one, in the order of :data:`FAMILIES`.
+
+    Examples
+    --------
+    >>> print(describe_families())  # doctest: +NORMALIZE_WHITESPACE
+    iso | aniso (the paper's; planar data sets only) | dipole | burley | pbd (photon beam diffusion) |
+    ddipole (directional dipole at normal incidence).
+    """
+    return " | ".join(f"{f.name} ({f.summary})" if f.summary else f.name for f in FAMILIES.values()) + "."
+
+
 register(IsoFamily())
 register(AnisoFamily())
 register(DipoleFamily())
@@ -33,4 +46,4 @@ register(BurleyFamily())
 register(PBDFamily())
 register(DirectionalDipoleFamily())
 
-__all__ = ["AUTO_DIRECTIONS", "AUTO_TERMS", "FAMILIES", "Family", "register"]
+__all__ = ["AUTO_DIRECTIONS", "AUTO_TERMS", "FAMILIES", "Family", "describe_families", "register"]

@@ -6,6 +6,11 @@ fixed, what becomes of its amplitudes when α is normalised to mean 1, the model
 it builds from the fit's state, and the rates of its time estimate.  The
 alternation (:mod:`translucency.fit._rounds`) and the chunk's work
 (:mod:`translucency.fit._block`) ask the family and never switch on its name.
+
+The protocol names only public types of the fit: :class:`~translucency.fit.options.FitContext` (what
+every chunk shares), :class:`~translucency.fit.state.FitState` and :class:`~translucency.fit.state.Params`
+(the parameters), :class:`~translucency.fit.chunk.Chunk` (a chunk's data), so that a family written
+outside the package is typed against what it may import.
 """
 
 from __future__ import annotations
@@ -15,11 +20,11 @@ from typing import TYPE_CHECKING, ClassVar
 
 import numpy as np
 
-if TYPE_CHECKING:  # annotations only
+if TYPE_CHECKING:  # annotations only (fit.options imports this package, for FAMILIES)
     from ...model import ReflectanceModel
-    from .._chunk import Chunk
-    from .._options import FitContext
-    from .._state import FitState, Params
+    from ..chunk import Chunk
+    from ..options import FitContext
+    from ..state import FitState, Params
 
 #: the candidates of model selection (``n_terms="auto"``, ``n_directions="auto"``)
 AUTO_TERMS = (1, 2, 3, 4)
@@ -33,6 +38,9 @@ class Family(ABC):
     ----------
     name : str
         The family's name (``fit --model NAME``; ``FitContext.kind``).
+    summary : str
+        What ``fit --model``'s help says of it after its name, in parentheses (empty: the name says
+        it; :func:`~translucency.fit.families.describe_families`).
     shared_colour : bool
         ``colour="shared"`` applies: one fall-off scaled by (1, s_g, s_b) (C = 1 colour row).
     directional : bool
@@ -45,6 +53,7 @@ class Family(ABC):
     """
 
     name: ClassVar[str]
+    summary: ClassVar[str] = ""
     shared_colour: ClassVar[bool] = False
     directional: ClassVar[bool] = False
     keeps_alpha_scale: ClassVar[bool] = False

@@ -4,7 +4,7 @@ P_i(r) = Σ_k c_k e^{−a_k r} per colour row (and direction), fitted by variabl
 projection (:mod:`translucency.solvers.varpro`): every (point, colour row[,
 direction]) sub-problem at once, warm from the previous round where the point
 is ready, else from starts pooled over fixed blocks of
-:data:`~translucency.fit._chunk.POOL_POINTS` points.  With the shared colour
+:data:`~translucency.fit.chunk.POOL_POINTS` points.  With the shared colour
 (C = 1) the scale (1, s_g, s_b) of each point is solved in closed form after the
 fall-offs.
 """
@@ -18,14 +18,14 @@ import numpy as np
 
 from ...model import ExponentialModel
 from ...solvers import fit_exponentials_batched, rate_bounds
-from .._chunk import POOL_POINTS
 from .._pixels import predict
+from ..chunk import POOL_POINTS
 from ._base import AUTO_DIRECTIONS, AUTO_TERMS, Family
 
 if TYPE_CHECKING:  # annotations only
-    from .._chunk import Chunk
-    from .._options import FitContext
-    from .._state import FitState
+    from ..chunk import Chunk
+    from ..options import FitContext
+    from ..state import FitState
 
 
 def exp_sum(c, a, r):

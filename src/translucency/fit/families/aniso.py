@@ -25,6 +25,7 @@ class AnisoFamily(ExponentialFamily):
     """m ≥ 2 directions per point, each a sum of exponentials, blended by hat weights in θ."""
 
     name = "aniso"
+    summary = "the paper's; planar data sets only"
     directional = True
     time_terms = {"overhead": 0.3, "point_pixels": 3.2e-6}
 

@@ -9,6 +9,7 @@ class DirectionalDipoleFamily(PhysicalFamily):
     """The directional dipole at normal incidence (:func:`translucency.model.directional_dipole_R_d`)."""
 
     name = "ddipole"
+    summary = "directional dipole at normal incidence"
     model = DirectionalDipoleModel
     R_d = staticmethod(directional_dipole_R_d)
     time_terms = {"overhead": 0.3, "point_pixels": 1.7e-6}

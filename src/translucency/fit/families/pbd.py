@@ -9,6 +9,7 @@ class PBDFamily(PhysicalFamily):
     """Photon beam diffusion (:func:`translucency.model.pbd_R_d`)."""
 
     name = "pbd"
+    summary = "photon beam diffusion"
     model = PBDModel
     R_d = staticmethod(pbd_R_d)
     time_terms = {"overhead": 0.3, "point_pixels": 7.4e-5}

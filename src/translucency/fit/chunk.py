@@ -11,7 +11,7 @@ with m = α P of a *reference* model (never the pixel's own noisy value), v₀ =
 pixel area p² (per vertex area on meshes; without a photon count v₀ = Σ var /
 Σ y of the window, and ``"relative"`` keeps the data's ring-mean variance in
 place of v₀ m), b(r) = min(1, 1 mm / r) the distance balance, and ρ by
-``weighting`` (:data:`~translucency.fit._options.WEIGHTINGS`): ``"poisson"``
+``weighting`` (:data:`~translucency.fit.options.WEIGHTINGS`): ``"poisson"``
 (default) ρ = 0, the Poisson variance of the model, whose shape does not
 depend on N — more photons only shrink the noise; ``"relative"`` ρ =
 ``rel_sigma``, a relative error where the data are precise (its share grows
@@ -35,8 +35,8 @@ import numpy as np
 from ._windows import Segments, radius_groups
 
 if TYPE_CHECKING:  # annotations only
-    from ._options import FitContext
-    from ._state import FitState
+    from .options import FitContext
+    from .state import FitState
 
 #: incident points whose pooled profile seeds their cold starts together; blocks follow the points'
 #: absolute indices, so a fit does not depend on how its points are chunked (chunks hold whole blocks)
