@@ -3,8 +3,8 @@
 from __future__ import annotations
 
 from ..io.dataset import PlanarDataset
-from ..io.dataset import open_dataset as open_planar
-from ..io.mesh_dataset import MeshDataset, is_mesh_dataset, open_mesh_dataset
+from ..io.datasets import open_any_dataset
+from ..io.mesh_dataset import MeshDataset
 from ._arguments import as_path
 
 __all__ = ["open_dataset"]
@@ -37,5 +37,4 @@ def open_dataset(path) -> PlanarDataset | MeshDataset:
     >>> ds.n_points, ds.window, ds.pitch
     (1024, (33, 33), 0.25)
     """
-    path = as_path("path", path)
-    return open_mesh_dataset(path) if is_mesh_dataset(path) else open_planar(path)
+    return open_any_dataset(as_path("path", path))

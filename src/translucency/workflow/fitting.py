@@ -28,13 +28,13 @@ from ..fit import (
     fit_planar,
 )
 from ..io.dataset import PlanarDataset, dataset_identity
+from ..io.datasets import open_any_dataset
 from ..io.inputs import DATA_SETS, expect_input
 from ..io.mesh_dataset import MeshDataset
 from ..io.model_file import read_header, save_model
 from ..io.outputs import claim_output
 from ..model import check_physics
 from ._arguments import refuse_unknown, whole_number
-from .datasets import open_dataset
 from .run import Reporter, Run
 
 __all__ = ["Fitting", "fit_model"]
@@ -177,7 +177,7 @@ def _data_set(dataset) -> PlanarDataset | MeshDataset:
     """The data set of ``dataset`` (a path is checked to hold one: a model or mesh file is named so)."""
     if isinstance(dataset, (str, os.PathLike)):
         expect_input(Path(dataset), DATA_SETS)
-        dataset = open_dataset(dataset)
+        dataset = open_any_dataset(dataset)
     if not isinstance(dataset, (PlanarDataset, MeshDataset)):
         raise TranslucencyError(f"dataset: expected a data set or its path, got {type(dataset).__name__}")
     return dataset

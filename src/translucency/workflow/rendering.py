@@ -21,6 +21,7 @@ from .. import resources
 from .._validate import TranslucencyError, check_option
 from ..io.atomic import write_json
 from ..io.inputs import expect_input
+from ..io.model_file import check_vertex_model
 from ..io.records import jsonable
 from ..model.incidence import INCIDENCE_LAWS
 from ..render import MAX_PAIRS, Camera, default_radius, parse_light
@@ -144,11 +145,7 @@ def render_model(
     if isinstance(model, (str, os.PathLike)):
         expect_input(Path(model), ("model file",))  # a data set or a mesh file where the model belongs
     fitted, record = model_and_record("model", model)
-    if getattr(fitted, "geometry", None) != "mesh":
-        raise TranslucencyError(
-            f"{model if isinstance(model, (str, os.PathLike)) else 'model'}: a planar model; render needs a "
-            "per-vertex model of a mesh data set"
-        )
+    check_vertex_model(fitted, "render", model if isinstance(model, (str, os.PathLike)) else "model")
     mesh, acquisition = object_of_model(fitted, {"meta": record})
     placement = Placement.of(mesh, direction)
     lit = place_light(relative, placement)
