@@ -18,7 +18,6 @@ import importlib
 import inspect
 import re
 
-
 #: the packages (and top-level modules) whose public surface is counted
 SURFACES = (
     "translucency",
@@ -73,14 +72,14 @@ def public_surface() -> tuple[dict[str, list[tuple[str, object]]], list[str]]:
     for package in SURFACES:
         try:
             module = importlib.import_module(package)
-        except Exception as exc:  # a package being moved: skip it, say so
+        except Exception as exc:  # noqa: BLE001 — a package being moved: skip it, say so
             skipped.append(f"{package}: not importable ({type(exc).__name__}: {exc})")
             continue
         entries = []
         for name in _public_names(module):
             try:
                 obj = getattr(module, name)
-            except Exception as exc:  # a lazy name whose module fails to import
+            except Exception as exc:  # noqa: BLE001 — a lazy name whose module fails to import
                 skipped.append(f"{package}.{name}: not importable ({type(exc).__name__}: {exc})")
                 continue
             if inspect.isclass(obj) or inspect.isroutine(inspect.unwrap(obj)):  # lru_cache'd functions too
@@ -120,5 +119,3 @@ if __name__ == "__main__":  # the share per package: python tests/test_examples.
         done = [name for name, obj in entries if _has_example(obj)]
         lacking = [name for name, obj in entries if not _has_example(obj)]
         print(f"{package}: {len(done)}/{len(entries)}", " ".join(lacking))
-
-

@@ -154,7 +154,6 @@ def vertex_areas(mesh) -> np.ndarray:
     ...                          area_faces=np.array([0.5, 0.5]))   # a unit square in two triangles
     >>> a = vertex_areas(square)
     >>> a.round(4).tolist(), round(float(a.sum()), 6)   # the shared corners 0 and 2 stand for twice the area
-
     ([0.3333, 0.1667, 0.3333, 0.1667], 1.0)
     """
 

@@ -58,7 +58,6 @@ class ReflectanceModel(ABC):
 
     kind: str = "abstract"
 
-
     #: mesh models: the surface's triangles (F, 3) over ``alpha.vertices``, so that a model renders on its own
     faces: np.ndarray | None = None
     #: mesh models: what the acquisition measured per incident point, (N, 3) each — ``own``: R_d averaged

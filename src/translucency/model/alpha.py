@@ -97,7 +97,6 @@ class VertexAlpha:
     array([1., 3.])
     """
 
-
     values: np.ndarray
     vertices: np.ndarray
 

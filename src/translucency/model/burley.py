@@ -151,7 +151,6 @@ class BurleyModel(ReflectanceModel):
 
     kind = "burley"
 
-
     def __init__(self, x_i, A, s, alpha: Modulation, *, frame=None):
         super().__init__(x_i, alpha, frame)
         shape = (self.n_points, N_CHANNELS)

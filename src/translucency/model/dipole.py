@@ -175,7 +175,6 @@ class DipoleModel(MediumStorage, ReflectanceModel):
 
     kind = "dipole"
 
-
     def __init__(self, x_i, sigma_a, sigma_s_prime, eta: float, alpha: Modulation, *, frame=None):
         super().__init__(x_i, alpha, frame)
         self.sigma_a, self.sigma_s_prime, self.eta = medium_parameters(

@@ -149,7 +149,6 @@ class Rectangle(ObjectExtent):
     'a 32 x 16 mm sample'
     """
 
-
     kind = "rectangle"
 
     def __init__(self, lo, hi):

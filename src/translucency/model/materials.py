@@ -33,7 +33,6 @@ class Material:
     array([0.456, 0.381, 0.333])
     """
 
-
     name: str
     sigma_s_prime: np.ndarray
     sigma_a: np.ndarray
