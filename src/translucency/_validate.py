@@ -13,7 +13,17 @@ import numpy as np
 
 
 class TranslucencyError(ValueError):
-    """A user-facing error: one line that names what is wrong and where."""
+    """A user-facing error: one line that names what is wrong and where.
+
+    Examples
+    --------
+    >>> from translucency.model import material
+    >>> try:
+    ...     material("jade")
+    ... except ValueError as exc:   # a ValueError: callers that catch those catch it
+    ...     print(type(exc).__name__, "|", str(exc).split(";")[0])
+    TranslucencyError | material: unknown name 'jade'
+    """
 
 
 def plain(value, digits: int = 4) -> str:

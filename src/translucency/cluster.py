@@ -55,7 +55,14 @@ _TCP = re.compile(r"^tcp://(?P<host>[A-Za-z0-9_.\-]+|\[[0-9A-Fa-f:.]+\]):(?P<por
 
 @dataclass(frozen=True)
 class SchedulerSpec:
-    """A parsed ``--scheduler`` value: ``kind`` "threads", "local" (``workers`` processes) or "tcp"."""
+    """A parsed ``--scheduler`` value: ``kind`` "threads", "local" (``workers`` processes) or "tcp".
+
+    Examples
+    --------
+    >>> spec = SchedulerSpec("local", workers=4)
+    >>> str(spec), parse_scheduler(str(spec)) == spec   # its string is the option that names it
+    ('local:4', True)
+    """
 
     kind: str
     workers: int | None = None
@@ -112,6 +119,13 @@ class Cluster:
     """An open Dask client (and the LocalCluster it started, if any), with the few calls the tool uses.
 
     Make one with :func:`open_cluster`; pass it as ``scheduler=`` to several calls to share it.
+
+    Examples
+    --------
+    >>> spec = parse_scheduler("tcp://10.0.0.5:8786")
+    >>> cluster = Cluster(client=None, spec=spec)   # (open_cluster passes a connected Dask client)
+    >>> parse_scheduler(cluster) is spec   # a cluster passed as ``scheduler=`` names itself
+    True
     """
 
     def __init__(self, client, spec: SchedulerSpec, local=None):
@@ -270,6 +284,11 @@ def worker_environ() -> dict:
     against 3.5 s for the same chunks; 6.7 s in this process with the variable set).  Without it the
     worker's peak memory is what the chunk needs (measured in ``benchmarks/scale_out.py``).  Workers
     of a ``tcp://`` cluster are started by their owner: start them without it (docs/scaling.md).
+
+    Examples
+    --------
+    >>> "MALLOC_TRIM_THRESHOLD_" in worker_environ()
+    False
     """
     env = dict(dask.config.get("distributed.nanny.pre-spawn-environ", default={}) or {})
     env.pop(_TRIM, None)
@@ -298,6 +317,16 @@ def open_cluster(
         or "2GiB"); the worker spills, pauses, and is restarted beyond it.
     connect_timeout : float, optional
         Seconds to wait for a ``tcp://`` scheduler (default :data:`CONNECT_TIMEOUT_S`).
+
+    Examples
+    --------
+    >>> with open_cluster("threads") as cluster:   # this process's threads: no cluster
+    ...     print(cluster)
+    None
+    >>> shared = Cluster(None, parse_scheduler("local:2"))   # an open cluster is used as it is
+    >>> with open_cluster(shared) as cluster:
+    ...     print(cluster is shared)
+    True
     """
     timeout = CONNECT_TIMEOUT_S if connect_timeout is None else float(connect_timeout)
     if isinstance(scheduler, Cluster):
@@ -359,7 +388,13 @@ def ordered_sum(parts: Iterable[tuple[int, np.ndarray]], n: int) -> np.ndarray:
 def in_order_window(workers: int) -> int:
     """How far ahead of the oldest unfinished chunk a driver lets its chunks run: wide enough to keep
     ``workers`` busy past a slow chunk, narrow enough that the results it must hold until the chunks
-    before them are in (to reduce them in order) stay a few per worker."""
+    before them are in (to reduce them in order) stay a few per worker.
+
+    Examples
+    --------
+    >>> in_order_window(1), in_order_window(8)   # at least 16, else 4 per worker
+    (16, 32)
+    """
     return max(IN_FLIGHT_MIN, IN_FLIGHT_PER_WORKER * max(1, int(workers)))
 
 
@@ -384,7 +419,18 @@ def compact(a: np.ndarray) -> tuple[tuple[slice, ...], np.ndarray]:
 
 
 def expand(packed: tuple[tuple[slice, ...], np.ndarray], shape, dtype=np.float64) -> np.ndarray:
-    """The array that :func:`compact` packed."""
+    """The array that :func:`compact` packed.
+
+    Examples
+    --------
+    >>> a = np.zeros((4, 5)); a[1:3, 2] = [1.0, 2.0]
+    >>> box, values = compact(a)
+    >>> values.shape   # only the 2 × 1 box travels
+    (2, 1)
+    >>> bool((expand((box, values), a.shape) == a).all())
+    True
+    """
+
     box, values = packed
     out = np.zeros(shape, dtype=dtype)
     out[box] = values

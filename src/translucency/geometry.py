@@ -27,6 +27,15 @@ class SampleGrid:
     """The pixel grid covering all windows: α's support.
 
     Pixel ``[row, col]`` is centred at ``origin + pitch * (col + 1/2, row + 1/2)``.
+
+    Examples
+    --------
+    >>> corners = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 0.5]])   # three 5 × 5 windows of 0.25 mm pixels
+    >>> g = SampleGrid.covering(corners, 0.25, (5, 5))
+    >>> g.shape   # (rows, cols): 0.5 mm = 2 pixels more in y, 1 mm = 4 more in x
+    (7, 9)
+    >>> g.offsets(corners).tolist()   # each window's first pixel (row, col)
+    [[0, 0], [0, 4], [2, 0]]
     """
 
     origin: np.ndarray  # (2,) mm
@@ -47,7 +56,14 @@ class SampleGrid:
 
 @dataclass
 class WindowGeometry:
-    """Per-pixel geometry of a chunk of k windows of H × W pixels (J = H·W)."""
+    """Per-pixel geometry of a chunk of k windows of H × W pixels (J = H·W).
+
+    Examples
+    --------
+    >>> g = WindowGeometry(r=np.zeros((1, 4)), theta=np.zeros((1, 4)), pixel=np.arange(8).reshape(2, 4))
+    >>> g.r.shape, g.pixel.shape   # k = 2 windows alike: one row of r and θ, a row of pixels each
+    ((1, 4), (2, 4))
+    """
 
     r: np.ndarray  # (k or 1, J) mm
     theta: np.ndarray  # (k or 1, J) rad
@@ -61,6 +77,17 @@ def window_geometry(
 
     When every window lies alike around its point (offsets x_i − origin equal
     to 10⁻⁵ pixel: points snapped to pixel centres), r and θ are one row (1, J).
+
+    Examples
+    --------
+    >>> corners = np.array([[0.0, 0.0], [1.0, 0.0]])
+    >>> grid = SampleGrid.covering(corners, 0.25, (5, 5))
+    >>> x_i = corners + 0.625   # each point at its window's central pixel centre
+    >>> g = window_geometry(x_i, corners, grid, (5, 5))
+    >>> g.r.shape, g.pixel.shape   # the windows lie alike: r and θ are one row
+    ((1, 25), (2, 25))
+    >>> float(g.r[0, 12]), g.pixel[:, 12].tolist()   # the central pixel: r = 0, at columns 2 and 6 of row 2
+    (0.0, [20, 24])
     """
     h, w = window
     col, row = np.meshgrid(np.arange(w), np.arange(h))
@@ -77,7 +104,16 @@ def window_geometry(
 
 # -- meshes ---------------------------------------------------------------------------------
 def tangent_frames(normals: np.ndarray) -> np.ndarray:
-    """Orthonormal frames (t, b, n) as rows, shape (N, 3, 3), around unit normals (N, 3)."""
+    """Orthonormal frames (t, b, n) as rows, shape (N, 3, 3), around unit normals (N, 3).
+
+    Examples
+    --------
+    >>> f = tangent_frames(np.array([[0.0, 0.0, 2.0], [1.0, 1.0, 0.0]]))   # normals need not be unit
+    >>> f[:, 2].round(4).tolist()   # the last row: the unit normal
+    [[0.0, 0.0, 1.0], [0.7071, 0.7071, 0.0]]
+    >>> bool(np.allclose(f @ f.transpose(0, 2, 1), np.eye(3)))   # orthonormal
+    True
+    """
     n = normals / np.linalg.norm(normals, axis=1, keepdims=True)
     helper = np.where(np.abs(n[:, :1]) < 0.9, [[1.0, 0.0, 0.0]], [[0.0, 1.0, 0.0]])
     t = np.cross(helper, n)
@@ -107,7 +143,20 @@ def farthest_points(vertices: np.ndarray, k: int, start: int = 0) -> np.ndarray:
 
 
 def vertex_areas(mesh) -> np.ndarray:
-    """A third of the area of the triangles around each vertex, mm²."""
+    """A third of the area of the triangles around each vertex, mm².
+
+    ``mesh``: anything with ``vertices``, ``faces`` and ``area_faces`` (a :class:`trimesh.Trimesh`).
+
+    Examples
+    --------
+    >>> from types import SimpleNamespace
+    >>> square = SimpleNamespace(vertices=np.zeros((4, 3)), faces=np.array([[0, 1, 2], [0, 2, 3]]),
+    ...                          area_faces=np.array([0.5, 0.5]))   # a unit square in two triangles
+    >>> a = vertex_areas(square)
+    >>> a.round(4).tolist(), round(float(a.sum()), 6)   # the shared corners 0 and 2 stand for twice the area
+    ([0.3333, 0.1667, 0.3333, 0.1667], 1.0)
+    """
+
     return np.bincount(mesh.faces.ravel(), np.repeat(mesh.area_faces / 3.0, 3), minlength=len(mesh.vertices))
 
 

@@ -118,6 +118,16 @@ def load_volume(path) -> Volume:
     Required arrays: ``sigma_s`` and ``sigma_a`` of shape (Z, Y, X, 3) in mm⁻¹
     (z index 0 at the lit top surface) and scalar ``voxel_mm``; optional
     scalars ``g`` (default 0) and ``eta`` (default 1.3).
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> sigma = np.ones((2, 4, 6, 3))   # Z, Y, X, channels
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     np.savez(f"{tmp}/v.npz", sigma_s=sigma, sigma_a=0.01 * sigma, voxel_mm=0.5)
+    ...     v = load_volume(f"{tmp}/v.npz")
+    >>> v.size_mm, v.g, v.eta   # (W, H, T) mm; the defaults of g and η
+    ((3.0, 2.0, 1.0), 0.0, 1.3)
     """
     path = Path(path)
     if not path.exists():

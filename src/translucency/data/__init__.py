@@ -26,17 +26,37 @@ DATA_DIR = Path(str(files("translucency") / "data"))
 
 
 def default_dataset_path() -> Path:
-    """Path of the embedded default data set (the fitted scan)."""
+    """Path of the embedded default data set (the fitted scan).
+
+    Examples
+    --------
+    >>> p = default_dataset_path()
+    >>> p.name, p.parent == DATA_DIR, p.is_dir()   # a Zarr store is a folder
+    ('marble_default.zarr', True, True)
+    """
     return DATA_DIR / "marble_default.zarr"
 
 
 def default_truth_path() -> Path:
-    """Path of the embedded data set's held-out truth (same sample and points, independent photons)."""
+    """Path of the embedded data set's held-out truth (same sample and points, independent photons).
+
+    Examples
+    --------
+    >>> default_truth_path().name, default_truth_path().is_dir()
+    ('marble_default_truth.zarr', True)
+    """
     return DATA_DIR / "marble_default_truth.zarr"
 
 
 def default_fine_profiles_path() -> Path:
-    """Path of the fine near-x_i ring profiles of Figure 1 (``.npz``)."""
+    """Path of the fine near-x_i ring profiles of Figure 1 (``.npz``).
+
+    Examples
+    --------
+    >>> p = default_fine_profiles_path()
+    >>> p.suffix, p.is_file()
+    ('.npz', True)
+    """
     return DATA_DIR / "marble_default_fine_profiles.npz"
 
 
@@ -52,5 +72,14 @@ def default_dataset() -> PlanarDataset:
 
 
 def default_truth() -> PlanarDataset:
-    """The embedded data set's held-out truth, opened (the same sample and points, independent photons)."""
+    """The embedded data set's held-out truth, opened (the same sample and points, independent photons).
+
+    Examples
+    --------
+    >>> truth, data = default_truth(), default_dataset()
+    >>> truth.n_points == data.n_points   # the same points ...
+    True
+    >>> [(d.header["acquisition"][k]) for d in (data, truth) for k in ("photons", "seed")]   # ... new photons
+    [20000, 1, 60000, 2]
+    """
     return open_dataset(default_truth_path())

@@ -143,6 +143,17 @@ def fit_mesh(
     -------
     FitResult
         ``model`` is a mesh model: x_i (N, 3), tangent frames, :class:`VertexAlpha`.
+
+    Examples
+    --------
+    >>> fit_mesh("object.zarr", "aniso")   # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    translucency._validate.TranslucencyError: model: on meshes the isotropic model is fitted ...
+    >>> fit_mesh("object.zarr", "iso", colour="grey")   # options refused before the data set is opened
+    Traceback (most recent call last):
+    ...
+    translucency._validate.TranslucencyError: colour: expected 'shared' or 'per-channel', got 'grey'
     """
     t0 = time.perf_counter()
     if model == "aniso":

@@ -49,6 +49,14 @@ class FitResult:
     acquisition : dict, optional
         The data set's header (mesh fits): what was acquired, so that a model
         file can rebuild its reference without the data set.
+
+    Examples
+    --------
+    >>> result = FitResult(model=None, flagged=np.array([False, True, False]), history=[2.5, 1.25],
+    ...                    seconds=3.14159, options={"model": "iso"}, best_round=2)
+    >>> meta = result.metadata("scan.zarr")
+    >>> meta["flagged_points"], meta["objective_per_round"], meta["seconds"]   # indices; Φ per round; s
+    ([1], [2.5, 1.25], 3.14)
     """
 
     model: object
@@ -95,7 +103,20 @@ def check_fit_options(
     rel_sigma: float = 0.05,
     weighting: str = "poisson",
 ) -> None:
-    """Refuse bad fit options with one line naming the option (before any work)."""
+    """Refuse bad fit options with one line naming the option (before any work).
+
+    Examples
+    --------
+    >>> check_fit_options("aniso", n_terms="auto", n_directions=8)   # good options: nothing to say
+    >>> check_fit_options("iso", n_terms=5)
+    Traceback (most recent call last):
+    ...
+    translucency._validate.TranslucencyError: terms: n must be between 1 and 4 or 'auto', got 5
+    >>> check_fit_options("iso", n_directions="auto")
+    Traceback (most recent call last):
+    ...
+    translucency._validate.TranslucencyError: directions: 'auto' needs the anisotropic model, got model 'iso'
+    """
     if model not in FAMILIES:
         raise TranslucencyError(f"model: expected one of {', '.join(FAMILIES)}, got {model!r}")
     if n_terms != "auto" and not 1 <= _as_count(n_terms) <= 4:
@@ -124,7 +145,18 @@ def _as_count(v) -> int:
 
 @dataclass(kw_only=True)
 class FitContext:
-    """What every chunk of a fit shares: the source, the model family and the fit options."""
+    """What every chunk of a fit shares: the source, the model family and the fit options.
+
+    Examples
+    --------
+    >>> ctx = FitContext(source=None, kind="aniso", n=3, m=8, C=3, exclusion=0.25, rel_sigma=0.05, eta=1.3,
+    ...                  radius_step=None, sweeps=2, balance=True, x_i=np.zeros((4, 2)), weighting="relative")
+    >>> ctx.family.name, ctx.family.directional, ctx.rho   # ρ = rel_sigma under "relative" weighting
+    ('aniso', True, 0.05)
+    >>> FitContext(source=None, kind="iso", n=3, m=1, C=3, exclusion=0.25, rel_sigma=0.05, eta=1.3,
+    ...            radius_step=None, sweeps=1, balance=True, x_i=np.zeros((4, 2))).rho   # "poisson": 0
+    0.0
+    """
 
     source: object  # where the chunks come from: a planar or a mesh source
     kind: str  # one of KINDS: the family's name

@@ -39,6 +39,14 @@ class ProfileFit:
         Exponents in mm⁻¹, all < 0, sorted from steepest to flattest.
     rel_l2 : float
         Relative L2 error :math:`\\|f - y\\| / \\|y\\|` with the fit's weights.
+
+    Examples
+    --------
+    >>> fit = ProfileFit(c=np.array([0.5, 0.05]), d=np.array([-3.0, -0.4]), rel_l2=0.0)
+    >>> float(fit(0.0)), round(float(fit(1.0)), 6)   # Σ c; 0.5 e⁻³ + 0.05 e^-0.4
+    (0.55, 0.05841)
+    >>> round(float(2 * np.pi * np.sum(fit.c / fit.d**2)), 4)   # its total 2π Σ c/d², dimensionless
+    2.3126
     """
 
     c: np.ndarray

@@ -39,6 +39,14 @@ def prepare_libllvm() -> None:
 
     Called when translucency is imported, so that a later ``import mitsuba`` in the same process
     loads the right library too; it has no effect once Dr.Jit has loaded one.
+
+    Examples
+    --------
+    >>> from unittest import mock
+    >>> with mock.patch.dict(os.environ, DRJIT_LIBLLVM_PATH="/opt/llvm/libLLVM.so"):
+    ...     prepare_libllvm()   # the user's choice stays
+    ...     print(os.environ["DRJIT_LIBLLVM_PATH"])
+    /opt/llvm/libLLVM.so
     """
     if "DRJIT_LIBLLVM_PATH" not in os.environ:
         lib = _find_libllvm()
@@ -52,6 +60,12 @@ def mitsuba(variant: str | None = None):
 
     ``variant`` defaults to ``cuda_ad_rgb`` when a CUDA device works and to
     ``llvm_ad_rgb`` otherwise.
+
+    Examples
+    --------
+    >>> mi = mitsuba()
+    >>> mi.variant() in ("llvm_ad_rgb", "cuda_ad_rgb"), mitsuba() is mi   # loaded once, then cached
+    (True, True)
     """
     prepare_libllvm()
     try:  # imported here: DRJIT_LIBLLVM_PATH must be set first, and loading Dr.Jit/Mitsuba takes seconds
@@ -84,7 +98,14 @@ def mitsuba(variant: str | None = None):
 
 
 def engine_versions() -> dict:
-    """Versions of Mitsuba and Dr.Jit (for provenance in data sets)."""
+    """Versions of Mitsuba and Dr.Jit (for provenance in data sets).
+
+    Examples
+    --------
+    >>> v = engine_versions()
+    >>> sorted(v), v["mitsuba"].split(".")[0]   # Mitsuba 3
+    (['drjit', 'mitsuba'], '3')
+    """
     out = {}
     for pkg in ("mitsuba", "drjit"):
         try:
@@ -95,7 +116,14 @@ def engine_versions() -> dict:
 
 
 def drjit():
-    """The ``drjit`` module, loaded (with Mitsuba) by :func:`mitsuba` on the libLLVM chosen there."""
+    """The ``drjit`` module, loaded (with Mitsuba) by :func:`mitsuba` on the libLLVM chosen there.
+
+    Examples
+    --------
+    >>> dr = drjit()
+    >>> float(dr.sum(dr.arange(mitsuba().Float, 4))[0])   # 0 + 1 + 2 + 3 on the chosen backend
+    6.0
+    """
     mitsuba()
     import drjit as dr  # after mitsuba(): Dr.Jit must load with the libLLVM chosen there
 

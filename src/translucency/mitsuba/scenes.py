@@ -25,7 +25,14 @@ SPOT_BEAM_FRACTION = 0.75
 
 def rays(origins: np.ndarray, directions: np.ndarray, maxt: np.ndarray | None = None):
     """A Mitsuba ``Ray3f`` wavefront from (N, 3) origins and directions (mm), optionally ending at
-    ``maxt``."""
+    ``maxt``.
+
+    Examples
+    --------
+    >>> ray = rays(np.array([[0.0, 0, 5], [1, 0, 5]]), np.array([[0.0, 0, -1], [0, 0, -1]]), maxt=[10.0, 3.0])
+    >>> ray.o.z.numpy().tolist(), ray.maxt.numpy().tolist()   # two rays (float32) in one wavefront
+    ([5.0, 5.0], [10.0, 3.0])
+    """
     mi = mitsuba()
     ray = mi.Ray3f(
         mi.Point3f(*(np.ascontiguousarray(origins[:, j]).astype(np.float32) for j in range(3))),
@@ -44,7 +51,18 @@ def write_ply(
     comment: str | None = None,
 ) -> None:
     """A binary PLY with float positions and (optionally) float r, g, b per vertex (Mitsuba's
-    vertex_color); ``comment``: one header line (``comment ...``)."""
+    vertex_color); ``comment``: one header line (``comment ...``).
+
+    Examples
+    --------
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     write_ply(Path(tmp) / "t.ply", np.eye(3), np.array([[0, 1, 2]]), comment="comment one triangle")
+    ...     head, body = (Path(tmp) / "t.ply").read_bytes().split(b"end_header\\n")
+    >>> head.decode().splitlines()[2:4]
+    ['comment one triangle', 'element vertex 3']
+    >>> len(body)   # 3 vertices × 3 float32 + one face: a count byte and 3 int32
+    49
+    """
     props = "property float x\nproperty float y\nproperty float z\n"
     cols = [np.asarray(vertices)]
     if colour is not None:
@@ -69,6 +87,17 @@ def load_with_mesh(mesh, scene: dict, *, key: str = "object", colour: np.ndarray
     The mesh travels through a temporary binary PLY (positions, optionally
     ``vertex_color``); the entries already in ``scene[key]`` (BSDF, emitter,
     interior medium, ``face_normals``) are kept.
+
+    ``mesh``: anything with ``vertices`` and ``faces`` (a :class:`trimesh.Trimesh`).
+
+    Examples
+    --------
+    >>> from types import SimpleNamespace
+    >>> tetra = SimpleNamespace(vertices=np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]]),
+    ...                         faces=np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]))
+    >>> shape = load_with_mesh(tetra, {"type": "scene"}).shapes()[0]
+    >>> shape.vertex_count(), shape.face_count()
+    (4, 4)
     """
     mi = mitsuba()
     with tempfile.TemporaryDirectory() as tmp:
@@ -79,7 +108,18 @@ def load_with_mesh(mesh, scene: dict, *, key: str = "object", colour: np.ndarray
 
 
 def mesh_scene(mesh):
-    """A Mitsuba scene holding only the mesh, with face normals (for ray tests and boundary hits)."""
+    """A Mitsuba scene holding only the mesh, with face normals (for ray tests and boundary hits).
+
+    Examples
+    --------
+    >>> from types import SimpleNamespace
+    >>> tetra = SimpleNamespace(vertices=np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]]),
+    ...                         faces=np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]))
+    >>> hit = mesh_scene(tetra).ray_intersect(rays(np.array([[0.2, 0.2, 5.0], [2, 2, 5]]),
+    ...                                            np.array([[0.0, 0, -1], [0, 0, -1]])))
+    >>> hit.is_valid().numpy().tolist(), round(float(hit.t.numpy()[0]), 4)  # face x + y + z = 1 at z = 0.6
+    ([True, False], 4.4)
+    """
     return load_with_mesh(mesh, {"type": "scene", "object": {"face_normals": True}})
 
 
@@ -104,6 +144,16 @@ def slab_medium_dict(
     spans x from ``top_corner[0]``, y from ``top_corner[1]`` and z downwards
     from ``top_corner[2]`` (slabs: the origin; objects: (lo.x, lo.y, hi.z)).  ``placed`` (4 × 4) carries
     that box into a scene whose unit is ``unit_mm`` millimetres (the coefficients scaled to per scene unit).
+
+    Examples
+    --------
+    >>> from translucency.acquire import Volume
+    >>> slab = Volume.homogeneous((4, 8, 8), 0.5, sigma_s=[1.0] * 3, sigma_a=[0.01] * 3, g=0.3)
+    >>> medium = slab_medium_dict(slab, 0)
+    >>> medium["type"], medium["phase"], medium["sigma_t"]["data"].shape   # grids (Z, Y, X, 1)
+    ('heterogeneous', {'type': 'hg', 'g': 0.3}, (4, 8, 8, 1))
+    >>> round(float(medium["albedo"]["data"].numpy().max()), 4)   # σ_s / σ_t = 1 / 1.01
+    0.9901
     """
     mi = mitsuba()
     W, H, T = volume.size_mm
@@ -125,7 +175,15 @@ def slab_medium_dict(
 
 def look_at(origin, target, up=None):
     """Mitsuba's ``to_world`` looking from ``origin`` at ``target`` (mm); ``up`` chosen off the axis if not
-    given."""
+    given.
+
+    Examples
+    --------
+    >>> mi = mitsuba()
+    >>> to_world = look_at((0, 0, 10), (0, 0, 0))   # looking straight down from 10 mm
+    >>> list(to_world @ mi.ScalarPoint3f(0, 0, 0)), list(to_world @ mi.ScalarVector3f(0, 0, 1))
+    ([0.0, 0.0, 10.0], [0.0, 0.0, -1.0])
+    """
     if up is None:
         axis = np.asarray(target, float) - np.asarray(origin, float)
         up = [0.0, 0.0, 1.0] if abs(axis[2]) < 0.99 * np.linalg.norm(axis) else [0.0, 1.0, 0.0]
@@ -142,6 +200,12 @@ def spot_dict(position, target, cutoff_deg: float, intensity: float = 1.0, up=No
     """Mitsuba ``spot`` emitter at ``position`` aimed at ``target`` (mm); intensity in W/sr.
 
     The beam width is :data:`SPOT_BEAM_FRACTION` of the cutoff, stated here for every spot of the package.
+
+    Examples
+    --------
+    >>> spot = spot_dict((0, 0, 100), (0, 0, 0), cutoff_deg=2.0)
+    >>> spot["type"], spot["cutoff_angle"], spot["beam_width"]   # full intensity to ¾ of the cutoff
+    ('spot', 2.0, 1.5)
     """
     return {
         "type": "spot",
@@ -181,6 +245,12 @@ def perspective_camera_dict(
 
     ``far_clip`` (mm) with the near clip at 0.01 mm; None leaves both and the field of view's axis to
     Mitsuba's defaults (the renderer's :class:`translucency.render.Camera`).
+
+    Examples
+    --------
+    >>> camera = perspective_camera_dict((0, 0, 100), (0, 0, 0), fov_deg=30, width=64, height=48, spp=4)
+    >>> camera["fov_axis"], camera["far_clip"], list(load_plugin(camera).film().size())
+    ('x', 100000.0, [64, 48])
     """
     clip = {} if far_clip is None else {"fov_axis": "x", "near_clip": 1e-2, "far_clip": float(far_clip)}
     return _perspective(look_at(origin, target, up), fov_deg, width, height, spp, clip)
@@ -210,7 +280,16 @@ def perspective_to_world_dict(
 ) -> dict:
     """Mitsuba ``perspective`` sensor with a 4 × 4 ``to_world`` (Mitsuba's camera frame: left, up,
     forward), horizontal field of view ``fov_deg``, an RGB ``hdrfilm`` with a box filter, ``spp`` samples
-    (a calibrated camera's, :meth:`translucency.rig.cameras.Camera.sensor_dict`)."""
+    (a calibrated camera's, :meth:`translucency.rig.cameras.Camera.sensor_dict`).
+
+    Examples
+    --------
+    >>> to_world = np.eye(4)
+    >>> to_world[:3, 3] = [1.0, 2.0, 3.0]   # a camera at (1, 2, 3) mm
+    >>> sensor = perspective_to_world_dict(to_world, 40.0, 32, 24, spp=1)
+    >>> list(sensor["to_world"].translation()), list(load_plugin(sensor).film().size())
+    ([1.0, 2.0, 3.0], [32, 24])
+    """
     to_world = mitsuba().ScalarTransform4f(np.asarray(to_world, dtype=np.float64).tolist())
     clip = {"fov_axis": "x", "near_clip": 1e-2, "far_clip": 1e5}
     return _perspective(to_world, fov_deg, width, height, spp, clip)
@@ -219,7 +298,17 @@ def perspective_to_world_dict(
 def pinhole_sensor_dict(camera, spp: int) -> dict:
     """The ``perspective`` sensor of a pinhole ``camera`` (its ``origin``, ``target``, ``up`` in mm, ``fov``
     in degrees, ``width`` × ``height`` pixels; :class:`translucency.render.Camera`), ``spp`` samples a
-    pixel, with Mitsuba's default clipping planes."""
+    pixel, with Mitsuba's default clipping planes.
+
+    Examples
+    --------
+    >>> from types import SimpleNamespace
+    >>> camera = SimpleNamespace(origin=(0, 0, 100), target=(0, 0, 0), up=(0, 1, 0), fov=30.0, width=16,
+    ...                          height=16)
+    >>> sensor = pinhole_sensor_dict(camera, spp=2)
+    >>> "near_clip" in sensor, sensor["sampler"]["sample_count"]   # Mitsuba's clipping planes
+    (False, 2)
+    """
     return perspective_camera_dict(
         camera.origin,
         camera.target,
@@ -243,7 +332,15 @@ def marker_dict(x: float, y: float, radius: float, radiance: float = 1.0, z: flo
 
 
 def load_plugin(description: dict):
-    """One Mitsuba object (an emitter, a sensor, …) from its dictionary, outside any scene."""
+    """One Mitsuba object (an emitter, a sensor, …) from its dictionary, outside any scene.
+
+    Examples
+    --------
+    >>> load_plugin({"type": "constant"}).is_environment()   # an environment emitter
+    True
+    >>> load_plugin(spot_dict((0, 0, 100), (0, 0, 0), 2.0)).is_environment()
+    False
+    """
     return mitsuba().load_dict(description)
 
 
@@ -253,6 +350,18 @@ def vertex_radiance_scene(mesh, sensor: dict, *, eta: float = 1.0, environment: 
 
     η ≠ 1 gives the surface a ``plastic`` BSDF with no diffuse part (Fresnel reflection off a smooth
     dielectric); ``environment``, an emitter dictionary, is seen behind the object and in that reflection.
+
+    Examples
+    --------
+    >>> from types import SimpleNamespace
+    >>> tetra = SimpleNamespace(vertices=np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]]),
+    ...                         faces=np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]))
+    >>> camera = perspective_camera_dict((3, 3, 3), (0, 0, 0), 30.0, 16, 16)
+    >>> scene = vertex_radiance_scene(tetra, camera)
+    >>> scene.shapes()[0].is_emitter(), len(scene.emitters())   # the object glows; nothing else does
+    (True, 1)
+    >>> len(vertex_radiance_scene(tetra, camera, eta=1.5, environment={"type": "constant"}).emitters())
+    2
     """
     bsdf = (
         {"type": "diffuse", "reflectance": 0.0}
@@ -276,7 +385,22 @@ def vertex_radiance_scene(mesh, sensor: dict, *, eta: float = 1.0, environment: 
 def object_volpath_scene(mesh, volume, channel: int, emitter: dict, sensor: dict, *, eta: float = 1.0):
     """The reference's scene: ``mesh`` filled with one channel of ``volume`` (over its bounding box),
     behind a ``null`` (η = 1) or smooth ``dielectric`` boundary, lit by ``emitter``, path-traced by
-    ``volpath`` without depth limit or Russian roulette before depth 100,000."""
+    ``volpath`` without depth limit or Russian roulette before depth 100,000.
+
+    Examples
+    --------
+    >>> from types import SimpleNamespace
+    >>> from translucency.acquire import Volume
+    >>> tetra = SimpleNamespace(vertices=np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]]),
+    ...                         faces=np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]),
+    ...                         bounds=np.array([[0.0, 0, 0], [1, 1, 1]]))
+    >>> filling = Volume.homogeneous((2, 2, 2), 0.5, sigma_s=[1.0] * 3, sigma_a=[0.01] * 3)
+    >>> scene = object_volpath_scene(tetra, filling, 0, spot_dict((0, 0, 100), (0, 0, 0), 2.0),
+    ...                              perspective_camera_dict((3, 3, 3), (0, 0, 0), 30.0, 16, 16), eta=1.3)
+    >>> shape = scene.shapes()[0]
+    >>> shape.interior_medium() is not None, str(shape.bsdf()).split("[")[0]   # filled, behind glass
+    (True, 'SmoothDielectric')
+    """
     boundary = (
         {"type": "null"} if eta == 1.0 else {"type": "dielectric", "int_ior": float(eta), "ext_ior": 1.0}
     )
@@ -304,6 +428,16 @@ def slab_scene(
 
     ``moment``: ``volpath`` nested in the ``moment`` integrator, which also records each pixel's second
     moment (the variance of the validation harness).
+
+    Examples
+    --------
+    >>> from translucency.acquire import Volume
+    >>> slab = Volume.homogeneous((4, 8, 8), 0.5, sigma_s=[1.0] * 3, sigma_a=[0.01] * 3)   # 4 × 4 × 2 mm
+    >>> scene = slab_scene(slab, 0, spot_dict((2, 2, 100), (2, 2, 0), 1.0),
+    ...                    perspective_camera_dict((2, 2, 50), (2, 2, 0), 10.0, 8, 8))
+    >>> box = scene.bbox()
+    >>> list(box.min), list(box.max)   # [0, W] × [0, H] × [−T, 0]
+    ([0.0, 0.0, -2.0], [4.0, 4.0, 0.0])
     """
     integrator = {"type": "volpath", "max_depth": -1, "rr_depth": int(rr_depth)}
     if moment:
@@ -321,7 +455,15 @@ def slab_scene(
 
 def markers_scene(sensor: dict, markers_mm, radius_mm: float):
     """Glowing disc markers (:func:`marker_dict`) at ``markers_mm`` (N, 2) on z ≈ 0, seen by ``sensor``
-    through the ``direct`` integrator."""
+    through the ``direct`` integrator.
+
+    Examples
+    --------
+    >>> camera = perspective_camera_dict((0, 0, 100), (0, 0, 0), 30.0, 16, 16)
+    >>> scene = markers_scene(camera, [[0, 0], [5, 0], [0, 5]], radius_mm=1.0)
+    >>> len(scene.emitters()), [round(v, 3) for v in scene.bbox().max]   # three discs of radius 1 mm
+    (3, [6.0, 6.0, 0.001])
+    """
     scene = {"type": "scene", "integrator": {"type": "direct"}, "camera": sensor}
     for k, (x, y) in enumerate(np.asarray(markers_mm, float)):
         scene[f"marker{k}"] = marker_dict(x, y, radius_mm)
@@ -344,6 +486,13 @@ def checkerboard_scene(
     ``board_to_world`` (4 × 4) maps the board's frame to the scene's.  The board is a ``rectangle`` whose
     surface is an area emitter of a nearest-neighbour bitmap, ``pixels_per_square`` texels to a square's
     side; it glows on its +z side only.
+
+    Examples
+    --------
+    >>> camera = perspective_camera_dict((10, 5, 100), (10, 5, 0), 30.0, 16, 16)
+    >>> box = checkerboard_scene(camera, np.eye(4), inner=(3, 2), square_mm=10.0).bbox()
+    >>> list(box.min), list(box.max)   # 4 × 3 squares of 10 mm, one square beyond the inner corners
+    ([-10.0, -10.0, 0.0], [30.0, 20.0, 0.0])
     """
     mi = mitsuba()
     nx, ny = (int(v) + 1 for v in inner)  # squares along the board's x and y

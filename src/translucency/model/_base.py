@@ -40,6 +40,20 @@ class ReflectanceModel(ABC):
         Mesh only: rows are the tangent, bitangent and normal at each
         :math:`\\vec x_i` (orthonormal).  Planar samples use the global x and y
         axes as tangent and bitangent.
+
+    Examples
+    --------
+    >>> from translucency.model import BurleyModel, PlanarAlpha
+    >>> alpha = PlanarAlpha(np.full((4, 4), 2.0), (0.0, 0.0), 1.0)   # α = 2 everywhere
+    >>> m = BurleyModel([[2.0, 2.0]], [[0.8, 0.8, 0.8]], [[2.0, 2.0, 2.0]], alpha)
+    >>> isinstance(m, ReflectanceModel), m.geometry, m.n_points
+    (True, 'planar', 1)
+    >>> r, theta = m.polar(np.array([0]), np.array([[2.0, 3.0]]))   # 1 mm along +y: θ = π/2
+    >>> float(r[0]), round(float(theta[0]), 4)
+    (1.0, 1.5708)
+    >>> # R_d = α(x_o) P_i(r, θ): twice the profile
+    >>> bool(np.allclose(m.R_d([0], [[2.0, 3.0]]), 2 * m.profile(np.array([0]), r, theta)))
+    True
     """
 
     kind: str = "abstract"

@@ -89,6 +89,12 @@ class VertexAlpha:
         :math:`\\alpha` per vertex, >= 0.
     vertices : array_like, shape (V, 3)
         Vertex positions in mm, used to look up arbitrary points.
+
+    Examples
+    --------
+    >>> a = VertexAlpha([1.0, 2.0, 3.0], np.eye(3))   # α = 1, 2, 3 at the unit points on x, y, z
+    >>> a.at(np.array([[0.9, 0.1, 0.0], [0.0, 0.2, 0.7]]))   # the nearest vertex's value
+    array([1., 3.])
     """
 
     values: np.ndarray

@@ -96,6 +96,16 @@ class PhysicsCheck:
         Anisotropic models: the largest of each point's directions' own totals (reported, not bounded).
     object : str, optional
         The object in words ("a 32 x 32 mm sample"); default from ``size_mm``.
+
+    Examples
+    --------
+    >>> c = PhysicsCheck(total=np.array([[0.5, 0.5, 0.5], [1.2, 0.4, 0.3]]), radius=np.array([3.0, 4.0]),
+    ...                  size_mm=20.0, over_albedo=np.array([False, True]),
+    ...                  beyond_object=np.array([False, False]))
+    >>> c.ok, c.flagged.tolist()
+    (False, [False, True])
+    >>> c.summary()["over_albedo"], c.summary()["max_total_reflectance"]   # the flagged points' indices
+    ([1], 1.2)
     """
 
     total: np.ndarray
@@ -185,7 +195,18 @@ class PhysicsCheck:
 def object_extent(model) -> ObjectExtent:
     """The object ``model`` describes: its recorded :attr:`~ReflectanceModel.extent` (a fitted planar
     sample's rectangle, a semi-infinite slab), else an object the size of α's support: the diagonal of a
-    planar α's grid (the sample is at least as large as its windows) or of a mesh's bounding box."""
+    planar α's grid (the sample is at least as large as its windows) or of a mesh's bounding box.
+
+    Examples
+    --------
+    >>> from translucency.model import BurleyModel, PlanarAlpha, Rectangle
+    >>> m = BurleyModel([[0.0, 0.0]], [[0.8] * 3], [[2.0] * 3], PlanarAlpha.uniform((30, 40), pitch=0.1))
+    >>> object_extent(m)   # nothing recorded: α's 3 x 4 mm grid, 5 mm across
+    <Diameter {'kind': 'diameter', 'size_mm': 5.0}>
+    >>> m.extent = Rectangle((0, 0), (32, 32))   # what a fitter records: the sample's top face
+    >>> object_extent(m).describe()
+    'a 32 x 32 mm sample'
+    """
     if getattr(model, "extent", None) is not None:
         return model.extent
     size = model_extent(model)
@@ -194,7 +215,17 @@ def object_extent(model) -> ObjectExtent:
 
 def model_extent(model) -> float:
     """Size (mm) of the object a model describes: its recorded extent's diameter, else the diagonal of
-    α's support (planar grid or vertices)."""
+    α's support (planar grid or vertices).
+
+    Examples
+    --------
+    >>> from translucency.model import BurleyModel, VertexAlpha
+    >>> cube = np.array([[0, 0, 0], [2, 0, 0], [0, 2, 0], [0, 0, 1]], dtype=float)
+    >>> m = BurleyModel(cube[:1], [[0.8] * 3], [[2.0] * 3], VertexAlpha.uniform(cube), frame=np.eye(3)[None])
+    >>> model_extent(m)   # the bounding box's diagonal: √(2² + 2² + 1²) mm
+    3.0
+    """
+
     if getattr(model, "extent", None) is not None:
         return model.extent.size_mm
     alpha = model.alpha

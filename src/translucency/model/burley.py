@@ -42,7 +42,13 @@ def burley_R(r, A, s) -> np.ndarray:
 
 
 def burley_energy_within(radius, A, s) -> np.ndarray:
-    """Closed-form :math:`\\int_0^R 2\\pi r R(r)\\,dr`; R may be ``inf``."""
+    """Closed-form :math:`\\int_0^R 2\\pi r R(r)\\,dr`; R may be ``inf``.
+
+    Examples
+    --------
+    >>> burley_energy_within([0.0, 1.0, np.inf], 0.8, 2.0).round(4)   # 0 at R = 0, the albedo A at R = ∞
+    array([0.    , 0.4649, 0.8   ])
+    """
     sR = s * np.asarray(radius, dtype=np.float64)
     return A * (1.0 - 0.25 * np.exp(-sR) - 0.75 * np.exp(-sR / 3.0))
 
@@ -57,6 +63,13 @@ def burley_shape(A, mean_free_path, config: str = "searchlight") -> np.ndarray:
       * ``"searchlight"`` (normal incidence, mean free path): :math:`\\tilde s = 1.85 - A + 7|A - 0.8|^3`
       * ``"diffuse"`` (diffuse transmission, mean free path): :math:`\\tilde s = 1.9 - A + 3.5(A - 0.8)^2`
       * ``"dmfp"`` (diffuse mean free path :math:`\\ell_d`): :math:`\\tilde s = 3.5 + 100(A - 0.33)^4`
+
+    Examples
+    --------
+    >>> float(burley_shape(0.8, 1.0))   # searchlight at A = 0.8: 1.85 − 0.8 per 1 mm mean free path
+    1.05
+    >>> float(burley_shape(0.8, 2.0))   # s scales as 1/ℓ
+    0.525
     """
     A = np.asarray(A, dtype=np.float64)
     if config == "searchlight":
@@ -125,6 +138,15 @@ class BurleyModel(ReflectanceModel):
         Shape parameter per point and channel, mm⁻¹, > 0.
     alpha : PlanarAlpha or VertexAlpha
         Modulation texture.
+
+    Examples
+    --------
+    >>> from translucency.model import PlanarAlpha
+    >>> m = BurleyModel([[0.0, 0.0]], [[0.8, 0.6, 0.4]], [[2.0, 2.0, 2.0]], PlanarAlpha.uniform((8, 8)))
+    >>> m.total_reflectance()   # the profile integrates to the albedo A
+    array([[0.8, 0.6, 0.4]])
+    >>> m.energy_within([0], [1.0]).round(4)   # within 1 mm: A (1 − e^{-2}/4 − 3 e^{-2/3}/4)
+    array([[0.4649, 0.3487, 0.2324]])
     """
 
     kind = "burley"

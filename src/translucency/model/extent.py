@@ -28,7 +28,15 @@ from .._validate import TranslucencyError
 
 
 class ObjectExtent(ABC):
-    """Protocol: the edge of the object a model describes, seen from its incident points."""
+    """Protocol: the edge of the object a model describes, seen from its incident points.
+
+    Examples
+    --------
+    >>> [isinstance(e, ObjectExtent) for e in (SemiInfinite(), Diameter(10.0), Rectangle((0, 0), (4, 3)))]
+    [True, True, True]
+    >>> Rectangle((0, 0), (4, 3)).size_mm   # the diameter: the rectangle's diagonal
+    5.0
+    """
 
     #: the variant's name in a model file's header
     kind = "abstract"
@@ -61,7 +69,14 @@ class ObjectExtent(ABC):
 
 
 class SemiInfinite(ObjectExtent):
-    """A semi-infinite slab: every profile's energy lies on its surface."""
+    """A semi-infinite slab: every profile's energy lies on its surface.
+
+    Examples
+    --------
+    >>> s = SemiInfinite()
+    >>> s.size_mm, s.distance(np.zeros((1, 2)), np.array([0.0, 1.0]))   # no edge in any direction
+    (inf, array([[inf, inf]]))
+    """
 
     kind = "semi-infinite"
 
@@ -85,7 +100,16 @@ class SemiInfinite(ObjectExtent):
 
 class Diameter(ObjectExtent):
     """An object no two points of which lie farther apart than ``size`` mm (a mesh's bounding-box diagonal):
-    energy farther than that from x_i is beyond it in every direction."""
+    energy farther than that from x_i is beyond it in every direction.
+
+    Examples
+    --------
+    >>> d = Diameter(10.0)
+    >>> d.distance(np.zeros((2, 3)), np.array([0.0, np.pi])).tolist()   # the same from every point, every way
+    [[10.0, 10.0], [10.0, 10.0]]
+    >>> d.describe(), extent_from_dict(d.as_dict()).size_mm
+    ('a 10 mm object', 10.0)
+    """
 
     kind = "diameter"
 
@@ -114,7 +138,16 @@ class Diameter(ObjectExtent):
 
 
 class Rectangle(ObjectExtent):
-    """A planar sample's top face, the rectangle from corner ``lo`` = (x0, y0) to ``hi`` = (x1, y1) in mm."""
+    """A planar sample's top face, the rectangle from corner ``lo`` = (x0, y0) to ``hi`` = (x1, y1) in mm.
+
+    Examples
+    --------
+    >>> r = Rectangle((0, 0), (32, 16))
+    >>> r.distance(np.array([[16.0, 8.0]]), np.array([0.0, np.pi / 2]))   # from the centre along +x, +y
+    array([[16.,  8.]])
+    >>> r.describe()
+    'a 32 x 16 mm sample'
+    """
 
     kind = "rectangle"
 

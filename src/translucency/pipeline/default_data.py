@@ -39,6 +39,16 @@ def demo_volume(
     clear lamellae (σ_s = 0.15 mm⁻¹, 0.5 mm wide, 1 mm pitch in y, the full depth) alternate with the
     veined marble scattering 1.6× more: light channels along x, so R_d spreads farther along x than y.
     The coefficients vary across y but not along x in the band.
+
+    Examples
+    --------
+    >>> v = demo_volume((8.0, 8.0, 2.0), band_y_mm=4.0)   # a small one: 8 × 8 × 2 mm, the band above y = 4 mm
+    >>> v.sigma_s.shape   # (Z, Y, X, RGB), 0.25 mm voxels
+    (8, 32, 32, 3)
+    >>> v.sigma_s[0, 16:24, 0, 1].round(2)   # green σ_s (mm⁻¹) up the band: clear lamellae at 0.16
+    array([4.19, 0.16, 0.16, 4.19, 4.19, 0.16, 0.16, 4.19], dtype=float32)
+    >>> np.unique(v.sigma_s[:, 17, :, 1]).round(2)   # a lamella is clear along x and through the depth
+    array([0.16], dtype=float32)
     """
     vol = make_sample("marble", size_mm, voxel_mm, seed=seed)
     y = (np.arange(vol.sigma_s.shape[1]) + 0.5) * voxel_mm
@@ -58,7 +68,16 @@ def demo_volume(
 
 
 def default_setup(which: str) -> PlanarSetup:
-    """The :class:`PlanarSetup` of the embedded ``"fit"`` data or of its held-out ``"truth"``."""
+    """The :class:`PlanarSetup` of the embedded ``"fit"`` data or of its held-out ``"truth"``.
+
+    Examples
+    --------
+    >>> fit, truth = default_setup("fit"), default_setup("truth")
+    >>> fit.grid, fit.window_pixels(), fit.dtype   # 1024 points, 33 × 33-pixel windows, as stored
+    ((32, 32), 33, 'float16')
+    >>> (fit.photons, fit.seed), (truth.photons, truth.seed)   # the truth: 3× the photons, another seed
+    ((20000, 1), (60000, 2))
+    """
     photons, seed = DEFAULT_ACQUISITIONS[which]
     sc = DEFAULT_SCAN
     return PlanarSetup(
@@ -75,7 +94,19 @@ def default_setup(which: str) -> PlanarSetup:
 
 def profile_points(x_i: np.ndarray, volume: Volume, band_y_mm: float = DEFAULT_SAMPLE["band_y_mm"]):
     """Four incident points for Figure 1's profiles: clean marble, a vein, a clear lamella and the
-    marble between lamellae in the band (by the surface voxel's absorption and scattering)."""
+    marble between lamellae in the band (by the surface voxel's absorption and scattering).
+
+    Examples
+    --------
+    >>> v = demo_volume((8.0, 8.0, 2.0), band_y_mm=4.0)
+    >>> g = np.arange(0.625, 8.0, 0.5)
+    >>> x_i = np.stack(np.meshgrid(g, g), axis=-1).reshape(-1, 2)   # 16 × 16 points 0.5 mm apart
+    >>> cols, rows = (x_i[profile_points(x_i, v, band_y_mm=4.0)] / v.voxel_mm).astype(int).T
+    >>> v.sigma_a[0, rows, cols, 1].astype(float).round(4).tolist()  # green σ_a: the least, the most (a vein)
+    [0.0041, 0.0144, 0.002, 0.0041]
+    >>> v.sigma_s[0, rows, cols, 1].astype(float).round(2).tolist()  # σ_s: a clear lamella, the band's marble
+    [2.62, 2.25, 0.16, 4.19]
+    """
     v = volume.voxel_mm
     row = np.clip((x_i[:, 1] / v).astype(int), 0, volume.sigma_a.shape[1] - 1)
     col = np.clip((x_i[:, 0] / v).astype(int), 0, volume.sigma_a.shape[2] - 1)
@@ -95,6 +126,17 @@ def fine_profiles(
     """Ring-averaged R_d(r) around ``points`` on a fine radial grid, straight from the photon exits.
 
     R_d of a ring = exits in it / (N · ring area); its variance p̂(1 − p̂)/(N · area²).  Per channel.
+
+    Examples
+    --------
+    >>> from translucency.acquire import Volume
+    >>> slab = Volume.homogeneous((8, 16, 16), 0.25, sigma_s=[1.0] * 3, sigma_a=[0.01] * 3)
+    >>> prof = fine_profiles(slab, np.array([[2.0, 2.0]]), [0], photons=100, seed=3, bin_mm=0.5, r_max_mm=2.0)
+    >>> prof["edges_mm"].tolist(), prof["R_d"].shape   # 4 rings, (points, rings, RGB) in mm⁻²
+    ([0.0, 0.5, 1.0, 1.5, 2.0], (1, 4, 3))
+    >>> share = (prof["R_d"][0] * np.pi * np.diff(prof["edges_mm"] ** 2)[:, None]).sum(axis=0)
+    >>> bool(((share > 0) & (share <= 1)).all())   # the share of the photons leaving within 2 mm
+    True
     """
     edges = np.arange(0.0, r_max_mm + 1e-9, bin_mm)
     area = np.pi * np.diff(edges**2)

@@ -76,6 +76,17 @@ def run_demo(
     -------
     dict
         Paths of the outputs.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> with tempfile.TemporaryDirectory() as tmp:   # a folder of someone else's files: refused at once
+    ...     _ = (Path(tmp) / "notes.txt").write_text("mine")
+    ...     run_demo(tmp)   # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    translucency._validate.TranslucencyError: out ...: exists and is not a translucency output folder; ...
     """
     out_dir = claim_folder(out_dir, overwrite=overwrite, inputs=[dataset])
     profiles = []

@@ -19,7 +19,16 @@ FIGURE2_REFERENCE_SPP = 256
 
 
 def figure2_scene(size=(160, 120)):
-    """The main job's object: the pig filled with veined marble (1 mm voxels, seed 1), light, camera."""
+    """The main job's object: the pig filled with veined marble (1 mm voxels, seed 1), light, camera.
+
+    Examples
+    --------
+    >>> pig, volume, light, camera = figure2_scene(size=(16, 12))
+    >>> pig.is_watertight, volume.voxel_mm, (camera.width, camera.height)   # a closed mesh, mm voxels
+    (True, 1.0, (16, 12))
+    >>> light.position, light.intensity   # mm, W/sr
+    ((60.0, -80.0, 120.0), 20000.0)
+    """
     pig = make_pig()
     volume = object_volume("marble", pig, 1.0, seed=1)
     light = PointLight((60.0, -80.0, 120.0), 2.0e4)

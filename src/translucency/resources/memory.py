@@ -51,7 +51,13 @@ _UNITS = {"": 1, "B": 1, "K": 2**10, "M": 2**20, "G": 2**30, "T": 2**40}
 
 @dataclass
 class Need:
-    """What a command needs: peak ``memory`` and ``disk`` (output) in bytes, and what dominates."""
+    """What a command needs: peak ``memory`` and ``disk`` (output) in bytes, and what dominates.
+
+    Examples
+    --------
+    >>> Need(memory=1.5 * GiB, disk=2 * MiB, what="the windows").as_dict()
+    {'memory_bytes': 1610612736, 'disk_bytes': 2097152, 'dominated_by': 'the windows'}
+    """
 
     memory: float
     disk: float
@@ -142,6 +148,16 @@ def check_resources(command: str, need: Need, max_memory: int | None, out=None) 
     """Refuse, in one line, a ``need`` beyond ``max_memory`` (default: available memory) or the free disk.
 
     Called before the command allocates or writes anything.  Returns ``need``.
+
+    Examples
+    --------
+    >>> need = Need(memory=3 * GiB, disk=0, what="the transport")
+    >>> check_resources("render", need, max_memory=4 * GiB) is need
+    True
+    >>> check_resources("render", need, max_memory=parse_size("--max-memory", "2G"))  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    translucency._validate.TranslucencyError: render: needs about 3 GiB of memory (the transport), ...
     """
     limit = max_memory if max_memory is not None else available_memory()
     if limit is not None and need.memory > limit:

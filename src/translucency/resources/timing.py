@@ -115,7 +115,15 @@ UNCALIBRATED = "uncalibrated"
 
 @dataclass
 class TimeEstimate:
-    """The time a command is expected to take, and where its calibration came from."""
+    """The time a command is expected to take, and where its calibration came from.
+
+    Examples
+    --------
+    >>> TimeEstimate(150.0, "uncalibrated: first run here").text()   # minutes from 120 s on
+    'about 2 min (uncalibrated: first run here)'
+    >>> TimeEstimate(30.0, "calibrated on this machine by 2 earlier runs", startup=5.0).text()
+    'about 35 s in all (5 s of it so far; calibrated on this machine by 2 earlier runs)'
+    """
 
     seconds: float
     source: str
@@ -282,7 +290,19 @@ def _runs(entry: dict, command: str) -> list[tuple[float, float]]:
 
 def record_time(command: str, units: dict, seconds: float, *, cold: bool = False) -> None:
     """Calibrate ``command`` on this machine with the ``seconds`` a run of ``units`` really took (``cold``:
-    the run compiled its kernels: their :data:`TIME_TERMS` ``first_run`` seconds are part of it)."""
+    the run compiled its kernels: their :data:`TIME_TERMS` ``first_run`` seconds are part of it).
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> from unittest import mock
+    >>> units = {"pairs": 1e6, "models": 1}   # ``evaluate mesh``: 1.5 s + 1.5e-6 s × 10⁶ + 1 s = 4 s here
+    >>> with tempfile.TemporaryDirectory() as cache, mock.patch.dict(os.environ, TRANSLUCENCY_CACHE=cache):
+    ...     record_time("evaluate mesh", units, 8.0)   # this machine took twice the formula's time
+    ...     estimate = estimate_time("evaluate mesh", units)
+    >>> estimate.text()   # the next run of that size: 4 s × 2
+    'about 8 s (calibrated on this machine by 1 earlier run)'
+    """
     raw = _raw_seconds(command, units) + _first_run(command, cold)
     if not (raw > 0 and math.isfinite(seconds) and seconds > 0):
         return

@@ -308,6 +308,12 @@ def rate_bounds(r: np.ndarray) -> tuple[float, float]:
     From 0.5/span (a slower decay is indistinguishable from a constant and would
     inflate the total 2π Σ c/a²) to 8/r_min (the term has fallen to e⁻⁸ at the
     first sample beyond r = 0).
+
+    Examples
+    --------
+    >>> lo, hi = rate_bounds(np.linspace(0.0, 8.0, 33))   # radii 0 to 8 mm, 0.25 mm apart
+    >>> round(float(np.exp(lo)), 4), round(float(np.exp(hi)), 4)   # rates 0.5/8 to 8/0.25 mm⁻¹
+    (0.0625, 32.0)
     """
     r = np.asarray(r, dtype=np.float64)
     span = max(float(r.max() - r.min()), 1e-6)

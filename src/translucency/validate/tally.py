@@ -42,6 +42,13 @@ class TopExits:
     """Photons of one channel that left through the top face: position (mm) and cos θ to +z.
 
     ``power`` is the beam's total power P (per unit intensity) shared by ``n_photons`` photons.
+
+    Examples
+    --------
+    >>> exits = TopExits(x=np.array([0.5, 0.6]), y=np.array([0.5, 0.4]), cos_exit=np.array([1.0, 0.5]),
+    ...                  n_photons=100, power=1.0, seconds=0.0)
+    >>> len(exits.x), exits.power / exits.n_photons   # 2 of 100 photons left the top; each carries P/N
+    (2, 0.01)
     """
 
     x: np.ndarray
@@ -65,6 +72,17 @@ def walk_spot(
     passed by the walk, so the streams, though distinct, change with the
     batch size: results are the same only statistically.)  The time includes
     sampling the entries.
+
+    Examples
+    --------
+    >>> from translucency.acquire import Volume
+    >>> slab = Volume.homogeneous((4, 8, 8), 0.5, sigma_s=[1.0] * 3, sigma_a=[0.01] * 3, eta=1.0)
+    >>> beam = SpotBeam((2.0, 2.0), radius_mm=0.5, distance_mm=100.0)
+    >>> exits = walk_spot(slab, beam, 0, 300, seed=1)
+    >>> exits.n_photons, 0 < len(exits.x) < 300   # some photons leave through the top, not all
+    (300, True)
+    >>> bool((exits.cos_exit > 0).all()), bool(((exits.x >= 0) & (exits.x <= 4)).all())  # upward, on the face
+    (True, True)
     """
     n = check_positive("photons", n_photons, "photons")
     if n != int(n):
@@ -97,6 +115,14 @@ def pixel_index(coord: np.ndarray, centres: np.ndarray, pitch_mm: float) -> np.n
     """Pixel index along one axis from pixel centres ``pitch_mm`` apart (rising or falling); -1 outside.
 
     The binning rule of :func:`radiance_from_exits`.
+
+    Examples
+    --------
+    >>> coord = np.array([0.1, 2.9, 3.1, -0.2])
+    >>> pixel_index(coord, np.array([0.5, 1.5, 2.5]), 1.0).tolist()   # rising centres
+    [0, 2, -1, -1]
+    >>> pixel_index(coord, np.array([2.5, 1.5, 0.5]), 1.0).tolist()   # falling (image rows along −y)
+    [2, 0, -1, -1]
     """
     step = pitch_mm if len(centres) < 2 or centres[1] > centres[0] else -pitch_mm
     idx = np.floor((coord - (centres[0] - 0.5 * step)) / step).astype(np.int64)
@@ -109,6 +135,15 @@ def radiance_from_exits(
     """Radiance image and its variance from top exits within ``cone_deg`` of +z (see module notes).
 
     ``x``, ``y``: pixel centres (n, n) indexed [row, column], as from :func:`pixel_centres`.
+
+    Examples
+    --------
+    >>> exits = TopExits(x=np.full(4, 0.5), y=np.full(4, 0.5), cos_exit=np.ones(4), n_photons=100,
+    ...                  power=1.0, seconds=0.0)   # 4 of 100 photons leave pixel [0, 0] straight up
+    >>> x, y = np.meshgrid([0.5, 1.5], [0.5, 1.5])
+    >>> L, var = radiance_from_exits(exits, x, y, pitch_mm=1.0, cone_deg=90.0)
+    >>> round(float(L[0, 0]), 6), round(4 / (100 * np.pi), 6), float(L[1, 1])   # P n / (N A π sin²θ)
+    (0.012732, 0.012732, 0.0)
     """
     if not 0.0 < check_positive("cone", cone_deg, "degrees") <= 90.0:
         raise TranslucencyError(f"cone: must lie in (0, 90] degrees, got {cone_deg!r}")
@@ -138,6 +173,15 @@ def tally_radiance(
     Per channel c, ``n_photons`` photons (seed ``3 seed + c``); the estimator
     and its binomial variance are in the module notes.  Returns the image and
     the top exits per channel (to re-tally with other cones without re-walking).
+
+    Examples
+    --------
+    >>> from translucency.acquire import Volume
+    >>> slab = Volume.homogeneous((4, 8, 8), 0.5, sigma_s=[1.0] * 3, sigma_a=[0.01] * 3, eta=1.0)
+    >>> beam, window = SpotBeam((2.0, 2.0)), PixelWindow((2.0, 2.0), n_pixels=4, pitch_mm=0.5)
+    >>> image, exits = tally_radiance(slab, beam, window, 300, channels=(1,))
+    >>> image.radiance.shape, len(exits), bool((image.variance >= 0).all())
+    ((4, 4, 1), 1, True)
     """
     _check_fits(volume, beam, window)
     channels = check_channels(channels)

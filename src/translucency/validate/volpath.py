@@ -56,6 +56,13 @@ def volpath_scene(
 
     The integrator is ``moment`` around ``volpath`` (unbounded depth); ``rr_depth``
     is the depth where volpath's Russian roulette starts (see :func:`render_volpath_spot`).
+
+    Examples
+    --------
+    >>> slab = Volume.homogeneous((4, 8, 8), 0.5, sigma_s=[1.0] * 3, sigma_a=[0.01] * 3, eta=1.0)
+    >>> scene = volpath_scene(slab, 0, SpotBeam((2.0, 2.0)), PixelWindow((2.0, 2.0), n_pixels=4), spp=2)
+    >>> len(scene.sensors()), len(scene.emitters()), scene.sensors()[0].film().size().numpy().tolist()
+    (1, 1, [4, 4])
     """
     return slab_scene(
         volume, channel, beam.emitter_dict(), window.sensor_dict(spp), rr_depth=rr_depth, moment=True
@@ -91,6 +98,20 @@ def render_volpath_spot(
     RadianceImage
         ``seconds`` counts scene loading and rendering (kernels compiled by an
         earlier call with the same structure are reused).
+
+    Examples
+    --------
+    >>> slab = Volume.homogeneous((4, 8, 8), 0.5, sigma_s=[1.0] * 3, sigma_a=[0.01] * 3, eta=1.0)
+    >>> beam, window = SpotBeam((2.0, 2.0)), PixelWindow((2.0, 2.0), n_pixels=4)
+    >>> # a variance needs two paths a pixel at least
+    >>> render_volpath_spot(slab, beam, window, spp=1)   # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    translucency._validate.TranslucencyError: spp: need an integer of at least 2 samples per pixel ...
+    >>> render_volpath_spot(slab, SpotBeam((0.2, 2.0)), window, spp=2)   # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    translucency._validate.TranslucencyError: beam: the lit disc at (0.2, 2.0) mm of radius 0.5 mm ...
     """
     mi = mitsuba()
     _check_fits(volume, beam, window)

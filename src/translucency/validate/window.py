@@ -22,7 +22,14 @@ CAMERA_HEIGHT_MM = 10.0  # orthographic camera plane above the slab (any height 
 
 @dataclass(frozen=True)
 class PixelWindow:
-    """A square window of ``n_pixels`` × ``n_pixels`` pixels of side ``pitch_mm`` centred on ``centre_xy``."""
+    """A square window of ``n_pixels`` × ``n_pixels`` pixels of side ``pitch_mm`` centred on ``centre_xy``.
+
+    Examples
+    --------
+    >>> w = PixelWindow((2.0, 2.0), n_pixels=4, pitch_mm=0.5)
+    >>> w.side_mm, w.sensor_dict()["type"], w.sensor_dict()["film"]["width"]
+    (2.0, 'orthographic', 4)
+    """
 
     centre_xy: tuple[float, float]
     n_pixels: int = 16
@@ -70,6 +77,12 @@ def pixel_centres(window: PixelWindow) -> tuple[np.ndarray, np.ndarray]:
     Read from Mitsuba itself: the ray its sensor traces through each pixel
     centre, so the mapping of image rows and columns to the slab does not rest
     on our reading of the orthographic transform.
+
+    Examples
+    --------
+    >>> x, y = pixel_centres(PixelWindow((2.0, 2.0), n_pixels=4, pitch_mm=0.5))
+    >>> x[0].round(4).tolist(), y[:, 0].round(4).tolist()   # columns run along +x, rows down along −y
+    ([1.25, 1.75, 2.25, 2.75], [2.75, 2.25, 1.75, 1.25])
     """
     mi = mitsuba()
     n = window.n_pixels
@@ -90,6 +103,13 @@ class RadianceImage:
     ``radiance`` and ``variance`` (of the estimate) have shape (n, n, C) for the
     C rendered ``channels``; ``x``, ``y`` (n, n) are the pixel centres (mm);
     ``seconds`` is the wall time of the estimate (per channel in ``seconds_per_channel``).
+
+    Examples
+    --------
+    >>> x, y = np.meshgrid([0.5, 1.5], [1.5, 0.5])
+    >>> image = RadianceImage(np.ones((2, 2, 1)), np.zeros((2, 2, 1)), x, y, channels=(1,), seconds=0.0)
+    >>> image.radiance.shape, image.channels   # (n, n, C): one rendered channel, green
+    ((2, 2, 1), (1,))
     """
 
     radiance: np.ndarray
