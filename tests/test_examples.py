@@ -44,6 +44,7 @@ SURFACES = (
     "translucency.pipeline",
     "translucency.geometry",
     "translucency.cluster",
+    "translucency.workflow",
 )
 
 #: the least share of public functions and classes with a runnable example

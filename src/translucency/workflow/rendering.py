@@ -47,7 +47,15 @@ DEFAULT_LIGHT = "point:60,-80,120,2e4"
 
 @dataclasses.dataclass
 class Rendering:
-    """What :func:`render_model` made: our picture, the reference (if asked for), the numbers, the folder."""
+    """What :func:`render_model` made: our picture, the reference (if asked for), the numbers, the folder.
+
+    Examples
+    --------
+    >>> import translucency as tl
+    >>> shot = tl.render_model("pig.model.zip", "render", reference=True)  # doctest: +SKIP
+    >>> shot.picture.shape, shot.numbers["rel_rmse"] < 0.1  # doctest: +SKIP
+    ((240, 320, 3), True)
+    """
 
     picture: np.ndarray  # (H, W, 3) linear radiance, our model's
     reference: np.ndarray | None  # (H, W, 3) Mitsuba volpath of the filling, or None
@@ -214,7 +222,15 @@ def render_model(
 
 @dataclasses.dataclass
 class SceneRendering:
-    """What :func:`render_scene` made: our picture, the reference (if asked for), the folder, the summary."""
+    """What :func:`render_scene` made: our picture, the reference (if asked for), the folder, the summary.
+
+    Examples
+    --------
+    >>> import translucency as tl
+    >>> shot = tl.render_scene("scene.xml", {"pig": "pig.model.zip"}, "shot")  # doctest: +SKIP
+    >>> (shot.folder / "scene.json").is_file()  # doctest: +SKIP
+    True
+    """
 
     picture: np.ndarray  # (H, W, 3) linear radiance of the scene with the fitted objects glowing in it
     reference: np.ndarray | None  # (H, W, 3) Mitsuba volpath with the objects' volumes in place, or None
