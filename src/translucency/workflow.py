@@ -40,7 +40,7 @@ from .render.lights import Placement, place_light
 from .render.object import boundary_eta, object_of_model, volume_of_dataset
 from .rig import ImportSetup, load_calibration
 from .rig import import_images as _import_images
-from .rig.hdr import read_hdr
+from .rig.shared.hdr import read_hdr
 
 __all__ = [
     "Rendering",

@@ -210,7 +210,7 @@ def perspective_to_world_dict(
 ) -> dict:
     """Mitsuba ``perspective`` sensor with a 4 × 4 ``to_world`` (Mitsuba's camera frame: left, up,
     forward), horizontal field of view ``fov_deg``, an RGB ``hdrfilm`` with a box filter, ``spp`` samples
-    (a calibrated camera's, :meth:`translucency.rig.cameras.Camera.sensor_dict`)."""
+    (a calibrated camera's, :meth:`translucency.rig.object.cameras.Camera.sensor_dict`)."""
     to_world = mitsuba().ScalarTransform4f(np.asarray(to_world, dtype=np.float64).tolist())
     clip = {"fov_axis": "x", "near_clip": 1e-2, "far_clip": 1e5}
     return _perspective(to_world, fov_deg, width, height, spp, clip)
