@@ -13,9 +13,9 @@
 
 The layout: :mod:`.contract` is what both importers are — a setup read and checked, chunks of laser
 shots, a data set written chunk by chunk and resumed (:class:`Importer`, :func:`run_import`);
-:mod:`.shared` holds what both use (HDR frames, the homography and its pixel conventions,
-checkerboards, the virtual sensor); each importer's folder holds its steps, one concept a module, and
-its virtual rig beside it.
+:mod:`.shared` holds what both use (HDR frames, the homography and its pixel conventions, checkerboards,
+the virtual rigs' sensor and laser power); each importer's folder holds its steps, one concept a module,
+and its virtual rig beside it.
 """
 
 from .contract import Chunk, Importer, run_import

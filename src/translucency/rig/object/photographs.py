@@ -37,9 +37,10 @@ import numpy as np
 from ..._validate import TranslucencyError
 from ...geometry import farthest_points
 from ...io.atomic import atomic_path, write_json
-from ...mitsuba import SPOT_BEAM_FRACTION, mesh_scene, mitsuba, object_volpath_scene, rays, spot_dict
+from ...mitsuba import mesh_scene, mitsuba, object_volpath_scene, rays, spot_dict
 from ..shared.hdr import write_hdr
 from ..shared.sensor import Sensor
+from ..shared.spot import spot_power
 from .cameras import Camera
 from .setup import FORMAT, VERSION
 from .surface_map import surface_map
@@ -52,7 +53,8 @@ SHORT_EXPOSURE = 0.02
 @dataclass(frozen=True)
 class LaserBeam:
     """A spot ``distance_mm`` from the surface lighting a disc of ``radius_mm`` (Mitsuba's linear fall-off
-    from :data:`SPOT_BEAM_FRACTION` of the cutoff)."""
+    from :data:`translucency.mitsuba.SPOT_BEAM_FRACTION` of the cutoff; its power
+    :func:`translucency.rig.shared.spot.spot_power`)."""
 
     radius_mm: float = 0.3
     distance_mm: float = 60.0
@@ -62,11 +64,7 @@ class LaserBeam:
 
     def power(self, distance_mm: float) -> float:
         """Power (W) per unit intensity (W/sr): 2π ∫ f(θ) sin θ dθ over the cone."""
-        tc = np.radians(self.cutoff_deg(distance_mm))
-        tw = SPOT_BEAM_FRACTION * tc
-        th = np.linspace(0.0, tc, 20001)
-        f = np.where(th <= tw, 1.0, (tc - th) / (tc - tw))
-        return float(2 * np.pi * np.trapezoid(f * np.sin(th), th))
+        return spot_power(self.cutoff_deg(distance_mm))
 
 
 def cameras_around(mesh, n: int, width: int, height: int, *, fov_deg: float = 30.0, seed: int = 0) -> list:

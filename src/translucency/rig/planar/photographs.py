@@ -39,6 +39,7 @@ from ...mitsuba import (
 from ..shared.hdr import write_hdr
 from ..shared.homography import Homography, homography_from_points
 from ..shared.sensor import Sensor
+from ..shared.spot import spot_power
 from .calibration import find_markers, match_markers
 
 
@@ -106,11 +107,7 @@ class Beam:
 
     def power(self) -> float:
         """Power (W) per unit intensity (W/sr): 2π ∫ f(θ) sin θ dθ over the cone, in float64."""
-        tc = np.radians(self.cutoff_deg)
-        tw = SPOT_BEAM_FRACTION * tc
-        th = np.linspace(0.0, tc, 20001)
-        f = np.where(th <= tw, 1.0, (tc - th) / (tc - tw))
-        return float(2 * np.pi * np.trapezoid(f * np.sin(th), th))
+        return spot_power(self.cutoff_deg)
 
     def emitter_dict(self, x: float, y: float) -> dict:
         return spot_dict((x, y, self.distance_mm), (x, y, 0.0), self.cutoff_deg, 1.0, up=(0.0, 1.0, 0.0))
