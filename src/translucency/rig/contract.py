@@ -41,8 +41,13 @@ class Chunk:
 class Importer(Protocol):
     """An import whose setup is read and checked: its chunks of laser shots → its data set."""
 
-    n_points: int  # laser shots P
-    chunk_points: int  # laser shots per chunk
+    @property
+    def n_points(self) -> int:
+        """Laser shots P."""
+
+    @property
+    def chunk_points(self) -> int:
+        """Laser shots per chunk."""
 
     def create(self, out: Path, *, overwrite: bool):
         """The data set at ``out`` (its ``group`` holds ``chunk_done``), made or reopened to resume."""
