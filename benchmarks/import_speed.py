@@ -25,8 +25,8 @@ from pathlib import Path
 import numpy as np
 
 from translucency.rig import Calibration, ImportSetup, import_images, write_pfm
-from translucency.rig.hdr import write_exr
-from translucency.rig.photographs import VirtualCamera
+from translucency.rig.planar.photographs import VirtualCamera
+from translucency.rig.shared.hdr import write_exr
 
 
 def make_folder(folder: Path, n: int, size: tuple[int, int], fmt: str) -> tuple[Calibration, int]:

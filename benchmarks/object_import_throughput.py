@@ -20,11 +20,11 @@ import numpy as np
 import trimesh
 
 from translucency.io.atomic import write_json
-from translucency.rig.cameras import Camera
-from translucency.rig.hdr import read_hdr, write_pfm
-from translucency.rig.object_import import import_object
-from translucency.rig.object_photographs import cameras_around
-from translucency.rig.surface_map import surface_map
+from translucency.rig.object.cameras import Camera
+from translucency.rig.object.importer import import_object
+from translucency.rig.object.photographs import cameras_around
+from translucency.rig.object.surface_map import surface_map
+from translucency.rig.shared.hdr import read_hdr, write_pfm
 
 
 def synthetic_rig(folder: Path, shots: int, n_cam: int, width: int, height: int) -> list[Path]:

@@ -9,8 +9,8 @@ import pytest
 
 from translucency._validate import TranslucencyError
 from translucency.rig import homography_from_checkerboard, homography_from_points, load_calibration, write_pfm
-from translucency.rig.calibration import find_markers
-from translucency.rig.photographs import VirtualCamera, homography_error
+from translucency.rig.planar.calibration import find_markers
+from translucency.rig.planar.photographs import VirtualCamera, homography_error
 
 #: an oblique pose over a 10 × 10 mm sample (as tests/test_rig.py's)
 CAMERA = VirtualCamera((5.0, -4.0, 11.0), (5.0, 5.0, 0.0), 40.0, 240, 200)

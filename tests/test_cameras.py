@@ -10,9 +10,9 @@ import pytest
 
 from translucency._validate import TranslucencyError
 from translucency.mitsuba import mitsuba
-from translucency.rig.cameras import Camera, calibrate_intrinsics, estimate_pose
-from translucency.rig.checkerboard import find_corners
-from translucency.rig.targets import FILL, TILT_DEG, checkerboard_poses, render_checkerboards
+from translucency.rig.object.cameras import Camera, calibrate_intrinsics, estimate_pose
+from translucency.rig.object.targets import FILL, TILT_DEG, checkerboard_poses, render_checkerboards
+from translucency.rig.shared.checkerboard import find_corners
 
 #: a lens with radial and tangential distortion (OpenCV's k1, k2, p1, p2, k3)
 LENS = [-0.1, 0.01, 0.001, -0.0005, 0.0]

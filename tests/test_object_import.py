@@ -22,8 +22,9 @@ from translucency.fit.mesh import read_pairs
 from translucency.geometry import vertex_areas
 from translucency.io.mesh import load_mesh
 from translucency.io.mesh_dataset import open_mesh_dataset
-from translucency.rig.cameras import Camera
-from translucency.rig.exit_law import (
+from translucency.rig.object import SPOT, UNSEEN, import_object
+from translucency.rig.object.cameras import Camera
+from translucency.rig.object.exit_law import (
     A_GRID,
     BAND_EDGES_MM,
     KAPPA_GRID,
@@ -33,9 +34,8 @@ from translucency.rig.exit_law import (
     Lambertian,
     fit_from_views,
 )
-from translucency.rig.hdr import write_pfm
-from translucency.rig.object_import import SPOT, UNSEEN, import_object
-from translucency.rig.surface_map import GRAZING_DEG, surface_map
+from translucency.rig.object.surface_map import GRAZING_DEG, surface_map
+from translucency.rig.shared.hdr import write_pfm
 
 runner = CliRunner()
 

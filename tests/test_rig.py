@@ -30,8 +30,8 @@ from translucency.rig import (
     read_hdr,
     write_pfm,
 )
-from translucency.rig.hdr import write_exr
-from translucency.rig.photographs import VirtualCamera, homography_error
+from translucency.rig.planar.photographs import VirtualCamera, homography_error
+from translucency.rig.shared.hdr import write_exr
 
 runner = CliRunner()
 cli = typer.Typer()
@@ -268,9 +268,9 @@ def test_corrections_undo_dark_flat_and_vignetting(tmp_path, rng):
 
 
 def test_variance_follows_the_noise_model(tmp_path, rng):
-    from translucency.rig.frames import load_frame
-    from translucency.rig.positions import Shot
-    from translucency.rig.resample import resample_window
+    from translucency.rig.planar.frames import load_frame
+    from translucency.rig.planar.positions import Shot
+    from translucency.rig.planar.resample import resample_window
 
     H = CAMERA.homography()
     setup = ImportSetup(pitch=0.5, window=2.0, supersample=3)
@@ -462,8 +462,8 @@ def test_fitter_reads_an_imported_data_set(tmp_path):
 
 # -- a tiny Mitsuba rig --------------------------------------------------------------------------------
 def test_markers_photographed_by_mitsuba_give_the_pose(tmp_path):
-    from translucency.rig.calibration import find_markers, match_markers
-    from translucency.rig.photographs import default_markers, render_markers
+    from translucency.rig.planar.calibration import find_markers, match_markers
+    from translucency.rig.planar.photographs import default_markers, render_markers
 
     cam = VirtualCamera((5.0, -4.0, 11.0), (5.0, 5.0, 0.0), 40.0, 96, 80)
     markers = default_markers([[5.0, 5.0]], cam)
@@ -599,7 +599,8 @@ def end_to_end(
     from translucency.evaluate.errors import planar_errors
     from translucency.fit import fit_planar
     from translucency.rig import load_calibration
-    from translucency.rig.photographs import Beam, Sensor, photograph_sample
+    from translucency.rig.planar.photographs import Beam, photograph_sample
+    from translucency.rig.shared.sensor import Sensor
 
     vol = rig_sample()
     window, pitch, exclusion, radius = 5.0, 0.25, 0.75, 2.4
@@ -662,7 +663,7 @@ def end_to_end(
                 )
             )
             sets[h].append((folder, folder / "positions.csv", load_calibration(folder / "calibration.json")))
-    # the beam's width corrected by its second moment (rig/importer.beam_correction)
+    # the beam's width corrected by its second moment (rig/planar/beam.beam_correction)
     beam_rms = Beam(beam_mm, 50.0).rms_mm() if correct_beam else 0.0
     setup_import = ImportSetup(pitch=pitch, window=window, specular_radius=0.5, dilate=1, beam_rms=beam_rms)
 
@@ -756,7 +757,7 @@ def test_beam_correction_undoes_a_disc_beam():
     """A 0.25 mm uniform disc beam, convolved numerically with the analytic profile() (not the
     second-order model the correction uses), raises R_d by 1–5 % at 0.75–2 mm; corrected by the beam's
     second moment (b²/2) it is back within a quarter of that."""
-    from translucency.rig.beam import beam_correction
+    from translucency.rig.planar.beam import beam_correction
 
     setup = ImportSetup(pitch=0.1, window=4.1, beam_rms=0.25 / np.sqrt(2.0))
     n = setup.window_pixels()

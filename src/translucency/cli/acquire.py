@@ -75,7 +75,7 @@ def acquire_photographs_cmd(
     """Photograph a virtual sample with Mitsuba 3 (narrow beam per point, oblique perspective camera,
     sensor noise, dark offset, vignetting, saturation): a lab's hand-over for `translucency import images`."""
     from ..acquire import PlanarSetup, load_volume, make_sample  # heavy: Mitsuba loads only when it runs
-    from ..rig.photographs import VirtualCamera, photograph_sample
+    from ..rig.planar.photographs import VirtualCamera, photograph_sample
 
     check_option("--grid", grid, lo=1, hi=64)
     check_option("--spp", spp, lo=1)

@@ -52,7 +52,7 @@ def acquire_object_photographs_cmd(
     )  # heavy: Mitsuba and trimesh load only when it runs
     from ..acquire.objects import make_pig
     from ..io.mesh import check_mesh_file, load_mesh
-    from ..rig.object_photographs import LaserBeam, photograph_object
+    from ..rig.object.photographs import LaserBeam, photograph_object
 
     check_option("--points", points, lo=1)
     check_option("--cameras", cameras, lo=1, hi=64)

@@ -35,8 +35,7 @@ def import_object_cmd(
     from ..io.mesh_dataset import (
         open_mesh_dataset,
     )  # heavy: Mitsuba, OpenCV and trimesh load only when it runs
-    from ..rig.object_import import import_object
-    from ..rig.object_setup import read_object_rig
+    from ..rig.object import import_object, read_object_rig
 
     check_option("--chunk", chunk, lo=1)
     if exit_law is not None and exit_law not in ("from-views", "dielectric", "lambertian"):

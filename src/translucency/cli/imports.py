@@ -95,8 +95,7 @@ def import_images_cmd(
 ):
     """Import HDR photographs of a scanned laser spot (with the camera calibration) as a planar data set."""
     from ..cluster import parse_scheduler  # heavy: Dask, SciPy and scikit-image load only when it runs
-    from ..rig.calibration import load_calibration
-    from ..rig.importer import ImportSetup, import_images
+    from ..rig.planar import ImportSetup, import_images, load_calibration
 
     parse_scheduler(scheduler)  # a bad value or an unreachable cluster: one line, before work
     for name, value in (("--pitch", pitch), ("--window", window)):

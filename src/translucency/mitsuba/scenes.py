@@ -280,7 +280,7 @@ def perspective_to_world_dict(
 ) -> dict:
     """Mitsuba ``perspective`` sensor with a 4 × 4 ``to_world`` (Mitsuba's camera frame: left, up,
     forward), horizontal field of view ``fov_deg``, an RGB ``hdrfilm`` with a box filter, ``spp`` samples
-    (a calibrated camera's, :meth:`translucency.rig.cameras.Camera.sensor_dict`).
+    (a calibrated camera's, :meth:`translucency.rig.object.cameras.Camera.sensor_dict`).
 
     Examples
     --------

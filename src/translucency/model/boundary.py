@@ -7,7 +7,7 @@ diffusion approximation, the radiance
 
 for the exitance M (W/mm²), normalised so that :math:`\int L \cos\theta_o\, d\omega = M`.  The
 renderer draws exitance with this law (:mod:`translucency.render.transport`) and an object rig's
-importer inverts it (:mod:`translucency.rig.exit_law`): one home for both.
+importer inverts it (:mod:`translucency.rig.object.exit_law`): one home for both.
 """
 
 from __future__ import annotations

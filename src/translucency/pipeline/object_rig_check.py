@@ -2,9 +2,9 @@ r"""The object rig end to end: virtual photographs → ``import object`` → the
 
 For one mesh and filling, :func:`object_rig_check`
 
-1. photographs the object twice with the virtual rig (:mod:`translucency.rig.object_photographs`,
+1. photographs the object twice with the virtual rig (:mod:`translucency.rig.object.photographs`,
    render and sensor seeds 0 and 1: two independent acquisitions) and imports both
-   (:func:`translucency.rig.object_import.import_object`) — A and B;
+   (:func:`translucency.rig.object.importer.import_object`) — A and B;
 2. tallies the same object, filling and incident vertices with photons (``acquire mesh``,
    index-matched: the photographs' boundary) — T, whose own noise is far below the photographs';
 3. compares per pair (x_i, v) over the pairs A measures (no flag) above 5 σ: the **recovery**
@@ -30,8 +30,8 @@ from ..fit.mesh import fit_mesh
 from ..io.mesh_dataset import open_mesh_dataset
 from ..render import Camera, PointLight
 from ..render.figure import figure2
-from ..rig.object_import import import_object
-from ..rig.object_photographs import photograph_object
+from ..rig.object.importer import import_object
+from ..rig.object.photographs import photograph_object
 
 
 def object_rig_check(

@@ -2,7 +2,7 @@
 
 :func:`fit_exponentials_batched` (:mod:`.varpro`) fits sums of exponentials to many weighted
 profiles at once by variable projection — the fitter's hot path (:mod:`translucency.fit`) and the
-beam-width correction of a rig's windows (:mod:`translucency.rig.beam`);
+beam-width correction of a rig's windows (:mod:`translucency.rig.planar.beam`);
 :func:`fit_params_batched` (:mod:`.lm`) fits two-parameter baseline profiles (dipole, Burley, …)
 by batched Levenberg–Marquardt.  A shared home: fit and rig both use them, neither owns them.
 """

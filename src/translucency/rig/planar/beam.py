@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..solvers import fit_exponentials_batched
+from ...solvers import fit_exponentials_batched
 from .setup import ImportSetup
 
 

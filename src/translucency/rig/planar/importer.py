@@ -4,7 +4,7 @@ For each laser position (incident point x_i) the rig provides one HDR image (or 
 frames, or a bracket of LDR exposures).  Each image becomes one window of R_d on the sample-plane
 grid around x_i:
 
-1. **read** the image(s) (:mod:`.hdr`); repeated frames are averaged, brackets merged;
+1. **read** the image(s) (:mod:`translucency.rig.shared.hdr`); repeated frames are averaged, brackets merged;
 2. **correct** in the image: subtract the dark frame, divide by the flat field and the vignetting
    fall-off, divide by the exposure time (s) and the laser power (W);
 3. **resample** to the window's pixels on the sample plane: each output pixel is the mean over
@@ -30,23 +30,24 @@ Work runs in chunks of points with the data set's ``chunk_done`` flags: a re-run
 
 The steps' homes: :mod:`.positions` (the table of laser positions), :mod:`.setup` (the import's
 arguments), :mod:`.frames` (steps 1–2), :mod:`.resample` (step 3), :mod:`.beam` (the beam-width
-correction), :mod:`.provenance` (hashes, header, resume request); this module runs the chunks.
+correction), :mod:`.provenance` (hashes, header, resume request); this module runs the chunks as
+:class:`PlanarImport`, the importers' contract of :mod:`translucency.rig.contract`.
 """
 
 from __future__ import annotations
 
 import os
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from .._validate import TranslucencyError
-from ..cluster import open_cluster, parse_scheduler
-from ..io.dataset import PlanarDataset, create_dataset
-from ..io.outputs import output_lock
+from ..._validate import TranslucencyError
+from ...cluster import open_cluster, parse_scheduler
+from ...io.dataset import PlanarDataset, create_dataset
+from ..contract import Chunk, run_import
 from .beam import beam_correction
 from .calibration import Calibration
 from .frames import image_shape, load_frame, pfm_shape
@@ -105,8 +106,8 @@ def import_images(
     Examples
     --------
     >>> import tempfile
-    >>> from translucency.rig.calibration import Homography
-    >>> from translucency.rig.hdr import write_pfm
+    >>> from translucency.rig.shared.hdr import write_pfm
+    >>> from translucency.rig.shared.homography import Homography
     >>> d = Path(tempfile.mkdtemp())
     >>> write_pfm(d / "a.pfm", np.full((64, 64, 3), 2.0, np.float32))
     >>> _ = (d / "pos.csv").write_text("file,x,y\\na.pfm,3.2,3.2\\n")
@@ -116,76 +117,118 @@ def import_images(
     >>> ds.window, float(ds["R_d"][0, 2, 2, 0])
     ((5, 5), 0.5)
     """
-    setup = setup or ImportSetup()
-    setup.check()
-    parse_scheduler(scheduler)  # a bad option is one line before any work
-    folder = Path(folder)
-    table = None
-    if not isinstance(positions, list | tuple):
-        table = Path(positions)
-        positions = read_positions(table, folder)
-    shots = list(positions)
-    if not shots:
-        raise TranslucencyError("positions: no laser positions")
-    shape = image_shape(shots[0])
-    calibration.check(shape)
-    for s in shots:  # PFM sizes from their headers, before any work (other formats: when read)
-        for f in s.files:
-            got = pfm_shape(f)
-            if got is not None and got != shape[:2]:
+    importer = PlanarImport.from_setup(
+        folder,
+        positions,
+        calibration,
+        setup,
+        inputs=inputs,
+        workers=workers,
+        views=views,
+        scheduler=scheduler,
+    )
+    return run_import(importer, out, overwrite=overwrite, progress=progress)
+
+
+@dataclass
+class PlanarImport:
+    """An import of photographs, its setup read and checked: the :class:`~translucency.rig.contract.Importer`
+    of a planar data set (arguments as :func:`import_images`'s)."""
+
+    job: _ImportJob
+    header: dict
+    inputs: list  # the inputs the data set is made from (compared on resume)
+    workers: int
+    scheduler: str | None
+    n_points: int
+    chunk_points: int
+
+    @classmethod
+    def from_setup(
+        cls,
+        folder,
+        positions,
+        calibration: Calibration,
+        setup: ImportSetup | None = None,
+        *,
+        inputs=(),
+        workers: int | None = None,
+        views=(),
+        scheduler: str | None = "threads",
+    ) -> PlanarImport:
+        """Read the laser positions, check the images' sizes and the calibrations, hash the files."""
+        setup = setup or ImportSetup()
+        setup.check()
+        parse_scheduler(scheduler)  # a bad option is one line before any work
+        folder = Path(folder)
+        table = None
+        if not isinstance(positions, list | tuple):
+            table = Path(positions)
+            positions = read_positions(table, folder)
+        shots = list(positions)
+        if not shots:
+            raise TranslucencyError("positions: no laser positions")
+        shape = image_shape(shots[0])
+        calibration.check(shape)
+        for s in shots:  # PFM sizes from their headers, before any work (other formats: when read)
+            for f in s.files:
+                got = pfm_shape(f)
+                if got is not None and got != shape[:2]:
+                    raise TranslucencyError(
+                        f"{f}: image of {got[1]} x {got[0]} pixels "
+                        f"among images of {shape[1]} x {shape[0]} pixels"
+                    )
+        H = calibration.homography
+        others = []
+        for v_folder, v_positions, v_calib in views:
+            v_folder = Path(v_folder)
+            v_table = None if isinstance(v_positions, list | tuple) else Path(v_positions)
+            v_shots = list(v_positions) if v_table is None else read_positions(v_table, v_folder)
+            if len(v_shots) != len(shots):
                 raise TranslucencyError(
-                    f"{f}: image of {got[1]} x {got[0]} pixels among images of {shape[1]} x {shape[0]} pixels"
+                    f"views: {v_folder} has {len(v_shots)} laser positions, the first view {len(shots)}"
                 )
-    H = calibration.homography
-    others = []
-    for v_folder, v_positions, v_calib in views:
-        v_folder = Path(v_folder)
-        v_table = None if isinstance(v_positions, list | tuple) else Path(v_positions)
-        v_shots = list(v_positions) if v_table is None else read_positions(v_table, v_folder)
-        if len(v_shots) != len(shots):
-            raise TranslucencyError(
-                f"views: {v_folder} has {len(v_shots)} laser positions, the first view {len(shots)}"
-            )
-        v_shape = image_shape(v_shots[0])
-        v_calib.check(v_shape)
-        others.append((v_folder, v_table, v_shots, v_calib, v_shape))
-    x_i = np.array(
-        [s.position if s.units == "mm" else H.to_sample([s.position])[0] for s in shots], dtype=np.float64
-    )
-    n, p = setup.window_pixels(), setup.pitch
-    centre = (np.floor(x_i / p) + 0.5) * p  # the window's centre pixel on the lattice of the acquisition
-    origin = centre - p * n / 2.0
-    workers = max(1, int(workers or min(4, os.cpu_count() or 1)))
-    header = import_header(
-        folder, table, shots, calibration, setup, x_i, views=[o[:4] for o in others], workers=workers
-    )
-    P, k = len(shots), setup.chunk_points
-    job = _ImportJob(shots, calibration, shape, [o[2:] for o in others], setup, x_i, origin)
-    with output_lock(out):
-        view_inputs = [p for o in others for p in o[:2]]
-        ds = create_dataset(out, header, overwrite=overwrite, inputs=[folder, table, *view_inputs, *inputs])
+            v_shape = image_shape(v_shots[0])
+            v_calib.check(v_shape)
+            others.append((v_folder, v_table, v_shots, v_calib, v_shape))
+        x_i = np.array(
+            [s.position if s.units == "mm" else H.to_sample([s.position])[0] for s in shots], dtype=np.float64
+        )
+        n, p = setup.window_pixels(), setup.pitch
+        centre = (np.floor(x_i / p) + 0.5) * p  # the window's centre pixel on the lattice of the acquisition
+        origin = centre - p * n / 2.0
+        workers = max(1, int(workers or min(4, os.cpu_count() or 1)))
+        header = import_header(
+            folder, table, shots, calibration, setup, x_i, views=[o[:4] for o in others], workers=workers
+        )
+        job = _ImportJob(shots, calibration, shape, [o[2:] for o in others], setup, x_i, origin)
+        inputs = [folder, table, *(q for o in others for q in o[:2]), *inputs]
+        return cls(job, header, inputs, workers, scheduler, len(shots), setup.chunk_points)
+
+    def create(self, out, *, overwrite: bool) -> PlanarDataset:
+        """The planar data set at ``out`` with the laser positions and the windows' origins."""
+        ds = create_dataset(out, self.header, overwrite=overwrite, inputs=self.inputs)
         g = ds.group
-        g["x_i"][...] = x_i.astype(np.float32)
-        g["window_origin"][...] = origin.astype(np.float32)
-        done = np.asarray(g["chunk_done"][...])
-        todo = [(chunk, chunk * k, min(P, (chunk + 1) * k)) for chunk in range(len(done)) if not done[chunk]]
-        finished = P - sum(hi - lo for _, lo, hi in todo)  # points of the chunks done before
-        if progress and finished:
-            progress(finished, P)
-        with open_cluster(scheduler) as cluster:
-            if cluster is None:  # this process: chunk after chunk, a chunk's images in threads
-                with ThreadPoolExecutor(workers) as pool:
-                    for chunk, lo, hi in todo:
-                        _import_chunk(job, ds, chunk, lo, hi, pool)
-                        finished += hi - lo
-                        if progress:
-                            progress(finished, P)
-            else:  # a task per chunk: each reads its images, writes its part of the store and its flag
-                tasks = [(ds, chunk, lo, hi) for chunk, lo, hi in todo]
-                for i, _ in cluster.run(_import_chunk, tasks, shared=(cluster.keep(job),)):
-                    finished += todo[i][2] - todo[i][1]
-                    if progress:
-                        progress(finished, P)
+        g["x_i"][...] = self.job.x_i.astype(np.float32)
+        g["window_origin"][...] = self.job.origin.astype(np.float32)
+        return ds
+
+    def import_chunks(self, ds: PlanarDataset, todo: list[Chunk]) -> Iterator[Chunk]:
+        """The chunks on the scheduler: in this process chunk after chunk, a chunk's images in threads; on
+        a cluster a task per chunk, each reading its images and writing its part of the store and its flag."""
+        with open_cluster(self.scheduler) as cluster:
+            if cluster is None:
+                with ThreadPoolExecutor(self.workers) as pool:
+                    for chunk in todo:
+                        _import_chunk(self.job, ds, chunk.index, chunk.lo, chunk.hi, pool)
+                        yield chunk
+            else:
+                tasks = [(ds, c.index, c.lo, c.hi) for c in todo]
+                for i, _ in cluster.run(_import_chunk, tasks, shared=(cluster.keep(self.job),)):
+                    yield todo[i]
+
+    def finish(self, ds: PlanarDataset, done: list[Chunk]) -> PlanarDataset:
+        """The data set, every chunk written."""
         return ds
 
 

@@ -10,9 +10,9 @@ from pathlib import Path
 import numpy as np
 from scipy.ndimage import binary_dilation
 
-from .._validate import TranslucencyError
+from ..._validate import TranslucencyError
+from ..shared.hdr import LDR_SUFFIXES, merge_exposures, read_hdr, read_ldr
 from .calibration import Calibration
-from .hdr import LDR_SUFFIXES, merge_exposures, read_hdr, read_ldr
 from .positions import Shot
 from .setup import ImportSetup
 

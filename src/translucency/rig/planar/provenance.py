@@ -1,8 +1,7 @@
-"""What an import records and compares on resume: the files' SHA-256, the calibration, the setup."""
+"""What a planar import records and compares on resume: the files' SHA-256, the calibration, the setup."""
 
 from __future__ import annotations
 
-import hashlib
 import json
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import asdict
@@ -10,16 +9,9 @@ from pathlib import Path
 
 import numpy as np
 
-from .._version import __version__
-from ..io.dataset import FORMAT, VERSION
-
-
-def sha256_file(path, block: int = 1 << 22) -> str:
-    h = hashlib.sha256()
-    with open(path, "rb") as f:
-        while chunk := f.read(block):
-            h.update(chunk)
-    return h.hexdigest()
+from ..._version import __version__
+from ...io.dataset import FORMAT, VERSION
+from ..contract import sha256_file
 
 
 def import_header(

@@ -3,10 +3,10 @@
 A slab (:func:`translucency.mitsuba.scenes.slab_scene`, index-matched: Mitsuba cannot pass a delta
 light through a smooth dielectric) is lit by a narrow ``spot`` beam straight down at each incident point
 and seen by a ``perspective`` camera at a known oblique pose (:class:`VirtualCamera`).  ``volpath``
-renders the radiance L per unit intensity of the spot, one grey channel of the volume at a time.  A
-sensor model (:func:`expose`) then turns radiance into raw pixel values: a gain ``k`` (value per unit
-radiance), vignetting, pixel response non-uniformity (the flat field), a dark offset, photon noise
-(``gain`` values per electron), read noise and clipping at the saturation level.
+renders the radiance L per unit intensity of the spot, one grey channel of the volume at a time.  The
+sensor model (:class:`translucency.rig.shared.sensor.Sensor`) then turns radiance into raw pixel values:
+a gain ``k`` (value per unit radiance), vignetting, pixel response non-uniformity (the flat field), a
+dark offset, photon noise (``gain`` values per electron), read noise and clipping at the saturation level.
 
 The camera's plane-to-image homography follows from its pose (:meth:`VirtualCamera.homography`):
 with Mitsuba's ``look_at`` frame (left, up, forward) R, focal length f = (W/2)/tan(fov/2) pixels and the
@@ -26,9 +26,9 @@ from pathlib import Path
 
 import numpy as np
 
-from .._validate import TranslucencyError
-from ..io.atomic import atomic_path, write_json
-from ..mitsuba import (
+from ..._validate import TranslucencyError
+from ...io.atomic import atomic_path, write_json
+from ...mitsuba import (
     SPOT_BEAM_FRACTION,
     markers_scene,
     mitsuba,
@@ -36,8 +36,11 @@ from ..mitsuba import (
     slab_scene,
     spot_dict,
 )
-from .calibration import Homography, find_markers, homography_from_points, match_markers
-from .hdr import write_exr, write_pfm
+from ..shared.hdr import write_hdr
+from ..shared.homography import Homography, homography_from_points
+from ..shared.sensor import Sensor
+from ..shared.spot import spot_power
+from .calibration import find_markers, match_markers
 
 
 @dataclass(frozen=True)
@@ -104,11 +107,7 @@ class Beam:
 
     def power(self) -> float:
         """Power (W) per unit intensity (W/sr): 2π ∫ f(θ) sin θ dθ over the cone, in float64."""
-        tc = np.radians(self.cutoff_deg)
-        tw = SPOT_BEAM_FRACTION * tc
-        th = np.linspace(0.0, tc, 20001)
-        f = np.where(th <= tw, 1.0, (tc - th) / (tc - tw))
-        return float(2 * np.pi * np.trapezoid(f * np.sin(th), th))
+        return spot_power(self.cutoff_deg)
 
     def emitter_dict(self, x: float, y: float) -> dict:
         return spot_dict((x, y, self.distance_mm), (x, y, 0.0), self.cutoff_deg, 1.0, up=(0.0, 1.0, 0.0))
@@ -135,47 +134,6 @@ def render_markers(camera: VirtualCamera, markers_mm, radius_mm: float = 0.25, s
     """A photograph (H, W, 3) of glowing disc markers at ``markers_mm`` (N, 2) on the plane z = 0."""
     scene = markers_scene(camera.sensor_dict(spp), markers_mm, radius_mm)
     return np.array(mitsuba().render(scene, spp=int(spp), seed=0), dtype=np.float32)
-
-
-@dataclass(frozen=True)
-class Sensor:
-    """Raw pixel value = clip(Poisson(k·L·vig·prnu / gain)·gain + dark + N(0, read²), saturation).
-
-    ``k``: value per unit radiance; ``gain``: values per electron; ``vignetting``: (k1, k2) of
-    1 + k1 ρ² + k2 ρ⁴ (ρ from the image centre in half-diagonals); ``prnu``: relative spread of the
-    pixels' response (the flat field); ``dark``: mean dark offset (with a gentle gradient).
-    """
-
-    k: float = 5e6
-    gain: float = 0.01
-    read_noise: float = 0.02
-    dark: float = 0.5
-    vignetting: tuple = (-0.3, 0.05)
-    prnu: float = 0.02
-    saturation: float = 60.0
-
-    def frames(self, shape, seed: int = 0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """The dark frame, the flat field (mean 1) and the vignetting fall-off of this sensor."""
-        rng = np.random.default_rng(seed)
-        H, W = shape[:2]
-        v, u = np.mgrid[0:H, 0:W].astype(np.float32)
-        dark = self.dark * (1 + 0.2 * (u / W - 0.5))[..., None] * np.ones(3, np.float32)
-        flat = 1 + self.prnu * rng.standard_normal((H, W, 3)).astype(np.float32)
-        flat /= flat.mean()
-        rho2 = ((u - (W - 1) / 2) ** 2 + (v - (H - 1) / 2) ** 2) / (0.25 * (W * W + H * H))
-        vig = np.ones_like(rho2)
-        for i, c in enumerate(self.vignetting, start=1):
-            vig = vig + c * rho2**i
-        return dark.astype(np.float32), flat.astype(np.float32), vig[..., None].astype(np.float32)
-
-    def expose(self, radiance: np.ndarray, seed: int = 0, frames_seed: int = 0) -> np.ndarray:
-        """Raw pixel values of one exposure of ``radiance``."""
-        dark, flat, vig = self.frames(radiance.shape, frames_seed)
-        rng = np.random.default_rng(seed)
-        signal = np.maximum(self.k * radiance * vig * flat, 0.0)
-        electrons = rng.poisson(signal / self.gain) if self.gain > 0 else signal
-        raw = electrons * self.gain + dark + self.read_noise * rng.standard_normal(radiance.shape)
-        return np.minimum(raw, self.saturation).astype(np.float32)
 
 
 def photograph_sample(
@@ -223,7 +181,7 @@ def photograph_sample(
         L = render_radiance(volume, camera, beam, p, spp=spp, seed=seed + j, channels=channels)
         raw = sensor.expose(L, seed=1000 + seed + j)
         name = f"shot_{j:03d}.{image_format}"
-        _write(folder / name, raw)
+        write_hdr(folder / name, raw)
         rows.append({"file": name, "x": f"{p[0]:.6f}", "y": f"{p[1]:.6f}", "power": f"{power:.9g}"})
     with atomic_path(folder / "positions.csv") as tmp:
         with open(tmp, "w", newline="") as f:
@@ -231,12 +189,12 @@ def photograph_sample(
             w.writeheader()
             w.writerows(rows)
     dark, flat, _ = sensor.frames(shape)
-    _write(folder / "dark.pfm", dark)
-    _write(folder / "flat.pfm", flat)
+    write_hdr(folder / "dark.pfm", dark)
+    write_hdr(folder / "flat.pfm", flat)
     if markers_mm is None:
         markers_mm = default_markers(x_i, camera)
     photo = render_markers(camera, markers_mm)
-    _write(folder / "markers.pfm", photo)
+    write_hdr(folder / "markers.pfm", photo)
     truth = camera.homography()
     found = match_markers(markers_mm, find_markers(photo, len(markers_mm)), truth)
     est, rms = homography_from_points(markers_mm, found)
@@ -258,7 +216,7 @@ def photograph_sample(
             reference["volume"], camera, beam, reference["x"], spp=ref_spp, seed=seed + 999, channels=channels
         )
         ref_sensor = Sensor(**{**sensor.__dict__, "k": sensor.k * t})
-        _write(folder / "reference.pfm", ref_sensor.expose(L, seed=seed + 4242))
+        write_hdr(folder / "reference.pfm", ref_sensor.expose(L, seed=seed + 4242))
         calib["reference"] = {
             "image": "reference.pfm",
             "x": float(reference["x"][0]),
@@ -287,11 +245,6 @@ def default_markers(x_i, camera: VirtualCamera, margin_px: float = 4.0) -> np.nd
     raise TranslucencyError("markers: the camera does not see the incident points")
 
 
-def _write(path: Path, image: np.ndarray) -> None:
-    with atomic_path(path) as tmp:
-        (write_pfm if path.suffix == ".pfm" else write_exr)(tmp, image)
-
-
 def homography_error(estimated: Homography, truth: Homography, xy) -> float:
     """Largest image distance (pixels) between the two homographies' images of sample points ``xy``."""
     return float(np.max(np.linalg.norm(estimated.to_image(xy) - truth.to_image(xy), axis=1)))
@@ -300,7 +253,6 @@ def homography_error(estimated: Homography, truth: Homography, xy) -> float:
 __all__ = [
     "VirtualCamera",
     "Beam",
-    "Sensor",
     "render_radiance",
     "render_markers",
     "photograph_sample",

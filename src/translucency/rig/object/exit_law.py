@@ -37,8 +37,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._validate import TranslucencyError
-from ..model.boundary import exit_factor
+from ..._validate import TranslucencyError
+from ...model.boundary import exit_factor
 
 #: distance bands (mm from the laser's hit) of :class:`FromViews`, the last one open
 BAND_EDGES_MM = (0.0, 2.0, 6.0)

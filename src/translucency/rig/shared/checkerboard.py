@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._validate import TranslucencyError
+from ..._validate import TranslucencyError
 from .homography import Homography, homography_from_points
 
 #: the largest RMS distance (pixels) between the corners found and the board's grid seen through H

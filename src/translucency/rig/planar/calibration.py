@@ -1,7 +1,7 @@
 """Camera calibration of a rig: the plane-to-image homography with the radiometric corrections.
 
 The geometry and its conventions (sample mm, image pixels with integer coordinates at pixel centres,
-H from sample to image) are :mod:`.homography`'s; H comes from a 3×3 matrix
+H from sample to image) are :mod:`translucency.rig.shared.homography`'s; H comes from a 3×3 matrix
 (:meth:`.Homography.from_matrix`), from four or more marked points with known sample coordinates
 (:func:`.homography_from_points`, OpenCV's ``findHomography``) — found in a photograph of bright
 markers by :func:`find_markers` and ordered by :func:`match_markers` — or from a photograph of a
@@ -24,9 +24,9 @@ from pathlib import Path
 
 import numpy as np
 
-from .._validate import TranslucencyError
-from .checkerboard import homography_from_checkerboard
-from .homography import Homography, homography_from_points
+from ..._validate import TranslucencyError
+from ..shared.checkerboard import homography_from_checkerboard
+from ..shared.homography import Homography, homography_from_points
 
 
 def find_markers(image: np.ndarray, n: int, *, threshold: float | None = None) -> np.ndarray:
@@ -212,7 +212,7 @@ def load_calibration(path) -> Calibration:
     — the scale from a photograph of a reference of known reflectance (:func:`scale_from_reference`),
     corrected like every shot.
     """
-    from .hdr import read_hdr  # the readers of the frames
+    from ..shared.hdr import read_hdr  # the readers of the frames
 
     path = Path(path)
     try:

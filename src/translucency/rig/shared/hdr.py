@@ -20,7 +20,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .._validate import TranslucencyError
+from ..._validate import TranslucencyError
+from ...io.atomic import atomic_path
 
 #: the suffixes read as HDR images, and the readers' names in messages
 HDR_SUFFIXES = (".exr", ".hdr", ".pfm")
@@ -96,7 +97,7 @@ def write_pfm(path, image: np.ndarray) -> None:
 
 
 def _mitsuba_bitmap(path) -> np.ndarray:
-    from ..mitsuba import mitsuba  # loaded only for EXR / HDR files (Dr.Jit's libLLVM must be set first)
+    from ...mitsuba import mitsuba  # loaded only for EXR / HDR files (Dr.Jit's libLLVM must be set first)
 
     mi = mitsuba()
     try:
@@ -111,10 +112,17 @@ def _mitsuba_bitmap(path) -> np.ndarray:
 
 def write_exr(path, image: np.ndarray) -> None:
     """Write (H, W, 3) floats as an OpenEXR (or, by the suffix ``.hdr``, a Radiance RGBE) file via Mitsuba."""
-    from ..mitsuba import mitsuba  # loaded only here (Dr.Jit's libLLVM must be set first)
+    from ...mitsuba import mitsuba  # loaded only here (Dr.Jit's libLLVM must be set first)
 
     mi = mitsuba()
     mi.Bitmap(np.ascontiguousarray(image, dtype=np.float32)).write(str(path))
+
+
+def write_hdr(path: Path, image: np.ndarray) -> None:
+    """Write an image atomically (no reader sees half a file): PFM for a ``.pfm`` path, else by
+    :func:`write_exr`."""
+    with atomic_path(path) as tmp:
+        (write_pfm if path.suffix == ".pfm" else write_exr)(tmp, image)
 
 
 def read_hdr(path) -> np.ndarray:

@@ -1,12 +1,12 @@
 r"""A virtual object rig: Mitsuba 3 photographs of a filled mesh lit by a laser, from calibrated cameras.
 
-What a lab hands over for ``translucency import object`` (:mod:`.object_setup`), made without a lab:
+What a lab hands over for ``translucency import object`` (:mod:`.setup`), made without a lab:
 
 * **the object**: the mesh filled with a volume (one grey channel at a time), behind an index-matched
   ``null`` boundary (:func:`translucency.mitsuba.scenes.object_volpath_scene`);
 * **the laser**: at each incident vertex :math:`x_i` (the farthest-point sample ``acquire mesh``
   takes) a Mitsuba ``spot`` at :math:`x_i + D n_i` aimed along :math:`-n_i`, lighting a disc of
-  ``beam_radius_mm`` (its power from the spot's fall-off, :class:`.photographs.Beam`).  A *pencil* beam
+  ``beam_radius_mm`` (its power from the spot's fall-off, :class:`LaserBeam`).  A *pencil* beam
   cannot be rendered: camera paths inside the medium must reach the light by next-event estimation
   through the boundary, and only those that scatter inside the beam's cylinder do; a 0.3 mm disc keeps
   that chance workable at tens of samples per pixel, and the difference from a pencil is confined to
@@ -16,9 +16,9 @@ What a lab hands over for ``translucency import object`` (:mod:`.object_setup`),
 * **the cameras**: ``n_cameras`` distortion-free pinholes on a sphere around the object
   (:class:`.cameras.Camera`), each photograph rendered twice with independent seeds (repeated
   frames: their scatter is the photographs' Monte Carlo noise) plus one short exposure (for the
-  saturated spot), exposed by the sensor model of :class:`.photographs.Sensor` (gain, photon and read
-  noise, dark offset, vignetting, flat field, saturation) under a laser power that drifts from shot to
-  shot (recorded as a power monitor would);
+  saturated spot), exposed by the sensor model of :class:`translucency.rig.shared.sensor.Sensor`
+  (gain, photon and read noise, dark offset, vignetting, flat field, saturation) under a laser power
+  that drifts from shot to shot (recorded as a power monitor would);
 * **calibration**: each camera's pose as marked points (12 vertices it sees, their projections with
   0.15 px of noise) and, if asked, checkerboard photographs for its intrinsics.
 
@@ -34,13 +34,15 @@ from pathlib import Path
 
 import numpy as np
 
-from .._validate import TranslucencyError
-from ..geometry import farthest_points
-from ..io.atomic import atomic_path, write_json
-from ..mitsuba import SPOT_BEAM_FRACTION, mesh_scene, mitsuba, object_volpath_scene, rays, spot_dict
+from ..._validate import TranslucencyError
+from ...geometry import farthest_points
+from ...io.atomic import atomic_path, write_json
+from ...mitsuba import mesh_scene, mitsuba, object_volpath_scene, rays, spot_dict
+from ..shared.hdr import write_hdr
+from ..shared.sensor import Sensor
+from ..shared.spot import spot_power
 from .cameras import Camera
-from .object_setup import FORMAT, VERSION
-from .photographs import Sensor, _write
+from .setup import FORMAT, VERSION
 from .surface_map import surface_map
 from .targets import render_checkerboards
 
@@ -51,7 +53,8 @@ SHORT_EXPOSURE = 0.02
 @dataclass(frozen=True)
 class LaserBeam:
     """A spot ``distance_mm`` from the surface lighting a disc of ``radius_mm`` (Mitsuba's linear fall-off
-    from :data:`SPOT_BEAM_FRACTION` of the cutoff)."""
+    from :data:`translucency.mitsuba.SPOT_BEAM_FRACTION` of the cutoff; its power
+    :func:`translucency.rig.shared.spot.spot_power`)."""
 
     radius_mm: float = 0.3
     distance_mm: float = 60.0
@@ -61,11 +64,7 @@ class LaserBeam:
 
     def power(self, distance_mm: float) -> float:
         """Power (W) per unit intensity (W/sr): 2π ∫ f(θ) sin θ dθ over the cone."""
-        tc = np.radians(self.cutoff_deg(distance_mm))
-        tw = SPOT_BEAM_FRACTION * tc
-        th = np.linspace(0.0, tc, 20001)
-        f = np.where(th <= tw, 1.0, (tc - th) / (tc - tw))
-        return float(2 * np.pi * np.trapezoid(f * np.sin(th), th))
+        return spot_power(self.cutoff_deg(distance_mm))
 
 
 def cameras_around(mesh, n: int, width: int, height: int, *, fov_deg: float = 30.0, seed: int = 0) -> list:
@@ -153,8 +152,8 @@ def photograph_object(
     spp : int
         Samples per pixel of each of the two repeated frames.
     sensor : Sensor, optional
-        The cameras' sensor; by default :class:`.photographs.Sensor` with its gain k set so that the
-        brightest 0.5 % of the first shot's brightest camera saturate in the long exposure.
+        The cameras' sensor; by default :class:`translucency.rig.shared.sensor.Sensor` with its gain k
+        set so that the brightest 0.5 % of the first shot's brightest camera saturate in the long exposure.
 
     Returns
     -------
@@ -184,8 +183,8 @@ def photograph_object(
     for i, c in enumerate(cameras):
         (folder / c.name).mkdir(exist_ok=True)
         dark, flat, _ = sensor.frames((c.height, c.width, 3), seed=i)
-        _write(folder / c.name / f"dark.{image_format}", dark)
-        _write(folder / c.name / f"flat.{image_format}", flat)
+        write_hdr(folder / c.name / f"dark.{image_format}", dark)
+        write_hdr(folder / c.name / f"flat.{image_format}", flat)
         entry = {
             "name": c.name,
             "width": c.width,
@@ -205,7 +204,7 @@ def photograph_object(
             names = []
             for b, img in enumerate(render_checkerboards(c, (7, 5), 4.0 * np.linalg.norm(mesh.extents) / 80)):
                 name = f"{c.name}/board_{b:02d}.{image_format}"
-                _write(folder / name, img)
+                write_hdr(folder / name, img)
                 names.append(name)
             entry["intrinsics"] = {
                 "checkerboards": names,
@@ -251,12 +250,12 @@ def photograph_object(
             for rep, L in enumerate(radiance[i]):
                 raw = _expose(sensor, L * power, 1.0, noise + 3 * rep, i)
                 name = f"shots/{j:03d}_{c.name}_{'ab'[rep]}.{image_format}"
-                _write(folder / name, raw)
+                write_hdr(folder / name, raw)
                 frames.append({"file": name, "exposure_s": 1.0})
                 if rep == 0:  # the short exposure, from the same radiance
                     raw = _expose(sensor, L * power, SHORT_EXPOSURE, noise + 2, i)
                     name = f"shots/{j:03d}_{c.name}_short.{image_format}"
-                    _write(folder / name, raw)
+                    write_hdr(folder / name, raw)
                     frames.append({"file": name, "exposure_s": SHORT_EXPOSURE})
             images[c.name] = frames
         shots.append({"hit": {"point": verts[v].tolist()}, "power": power, "images": images})

@@ -31,7 +31,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .._validate import TranslucencyError
+from ..._validate import TranslucencyError
 
 #: the largest RMS reprojection error (pixels) of a pose or an intrinsic calibration accepted by default
 MAX_REPROJECTION_PX = 1.0
@@ -230,7 +230,7 @@ class Camera:
 
         Only a distortion-free camera with square pixels and a centred principal point can be rendered so
         (the virtual rig's); another is refused in one line."""
-        from ..mitsuba import perspective_to_world_dict  # heavy: Mitsuba loads only where a camera renders
+        from ...mitsuba import perspective_to_world_dict  # heavy: Mitsuba loads only where a camera renders
 
         W, H = self.width, self.height
         fx, fy, cx, cy = self.K[0, 0], self.K[1, 1], self.K[0, 2], self.K[1, 2]
@@ -340,10 +340,11 @@ def calibrate_intrinsics(
 ) -> tuple[np.ndarray, np.ndarray, float]:
     """K and the distortion of a camera from photographs of a flat checkerboard in several poses.
 
-    Corners by ``cv2.findChessboardCornersSB`` and ``cv2.cornerSubPix`` (:mod:`.checkerboard`), then
-    ``cv2.calibrateCamera`` with k3 fixed at zero (five coefficients, the last 0).  Returns (K, dist,
-    RMS reprojection error in px); refuses fewer than three photographs, photographs of different sizes,
-    one without the board, or an error above ``max_rms_px``.
+    Corners by ``cv2.findChessboardCornersSB`` and ``cv2.cornerSubPix``
+    (:mod:`translucency.rig.shared.checkerboard`), then ``cv2.calibrateCamera`` with k3 fixed at zero
+    (five coefficients, the last 0).  Returns (K, dist, RMS reprojection error in px); refuses fewer than
+    three photographs, photographs of different sizes, one without the board, or an error above
+    ``max_rms_px``.
 
     ``fix_aspect`` holds f_x/f_y at 1 (square pixels); ``zero_tangent`` holds p1 = p2 = 0 (a lens without
     decentring), which pins the principal point: free, p1 and p2 trade off against it (on eight 240 × 180
@@ -351,7 +352,7 @@ def calibrate_intrinsics(
     """
     import cv2  # heavy: OpenCV loads only where a camera is calibrated
 
-    from .checkerboard import find_corners
+    from ..shared.checkerboard import find_corners
 
     nx, ny = (int(v) for v in inner)
     k = np.arange(nx * ny)

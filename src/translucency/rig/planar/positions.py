@@ -9,8 +9,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .._validate import TranslucencyError
-from .hdr import HDR_SUFFIXES, LDR_SUFFIXES
+from ..._validate import TranslucencyError
+from ..shared.hdr import HDR_SUFFIXES, LDR_SUFFIXES
 
 IMAGE_SUFFIXES = HDR_SUFFIXES + LDR_SUFFIXES
 

@@ -22,8 +22,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._validate import TranslucencyError
-from ..mitsuba import checkerboard_scene, mitsuba
+from ..._validate import TranslucencyError
+from ...mitsuba import checkerboard_scene, mitsuba
 from .cameras import Camera
 
 #: the tilt (degrees) of a board out of the picture's plane: at least, at most

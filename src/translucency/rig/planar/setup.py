@@ -6,7 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._validate import TranslucencyError
+from ..._validate import TranslucencyError
 
 
 @dataclass(frozen=True)

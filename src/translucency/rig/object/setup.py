@@ -5,7 +5,7 @@ The file (every path relative to its folder; JSON schema in docs/object-rig.md):
     {"format": "translucency-object-rig", "version": 1,
      "mesh": {"file": "scan.ply", "scale_mm": 1.0, "up": "z"},
      "boundary": {"eta": 1.0},                      # 1: index-matched; > 1 a smooth dielectric
-     "exit_law": "lambertian",                       # or "dielectric", "from-views" (rig.exit_law)
+     "exit_law": "lambertian",                       # or "dielectric", "from-views" (.exit_law)
      "grazing_deg": 75, "spot_radius_mm": 0.5, "min_coverage": 0.5, "max_reprojection_px": 1.0,
      "cameras": [{"name": "cam0", "width": 160, "height": 120,
                   "intrinsics": {"K": [[...]], "dist": [...]}       # or {"checkerboards": [files],
@@ -39,9 +39,9 @@ from pathlib import Path
 
 import numpy as np
 
-from .._validate import TranslucencyError
+from ..._validate import TranslucencyError
+from ..shared.hdr import read_hdr
 from .cameras import MAX_REPROJECTION_PX, Camera, calibrate_intrinsics, estimate_pose
-from .hdr import read_hdr
 
 FORMAT = "translucency-object-rig"
 VERSION = 1

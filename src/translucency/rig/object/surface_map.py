@@ -27,8 +27,8 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
-from .._validate import TranslucencyError
-from ..mitsuba import mesh_scene, rays
+from ..._validate import TranslucencyError
+from ...mitsuba import mesh_scene, rays
 from .cameras import Camera
 
 #: pixels seen at more than this angle from the normal are not used (degrees)

@@ -8,7 +8,7 @@ Conventions — stated here once for the whole of ``rig/`` and its calibration f
   −0.5 … W − 0.5 in u.  This is OpenCV's convention (and that of scikit-image's centroids), so points
   pass to and from OpenCV unchanged.  The one place a half-pixel shift appears is where a renderer's film
   coordinates (pixel col covering [col, col + 1)) become these: the virtual camera's intrinsics
-  (:meth:`translucency.rig.photographs.VirtualCamera.homography`, principal point W/2 − 0.5);
+  (:meth:`translucency.rig.planar.photographs.VirtualCamera.homography`, principal point W/2 − 0.5);
 * **H** maps sample to image, :math:`(u, v, 1)^T \\sim H\\, (x, y, 1)^T`, normalised to H[2, 2] = 1.
 
 :class:`Homography` holds H.  :func:`homography_from_points` estimates it from N ≥ 4 marked points with
@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._validate import TranslucencyError, as_float_array
+from ..._validate import TranslucencyError, as_float_array
 
 #: two marked points closer than this fraction of the points' spread (RMS distance from their centroid)
 #: coincide

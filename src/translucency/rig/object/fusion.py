@@ -1,0 +1,68 @@
+r"""Fusion of the cameras' cell means into one exitance per vertex, and its flags (steps 5–6 of
+:mod:`.importer`).
+
+A camera counts for a vertex where it sees at least ``min_coverage`` of the cell with usable pixels and
+at least :data:`FUSED_COVERAGE` of what the best camera covers; the weights
+:math:`w_c = n_c\,\gamma_c` (:math:`n_c` the cell's effective number of pixels) do not depend on the
+measured values.  R in mm⁻² per unit incident power, its variance in mm⁻⁴; the flag bits
+(:data:`UNSEEN`, :data:`SATURATED`, :data:`GRAZING`, :data:`SPOT`) say what kept a pair from being
+measured.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .setup import ObjectRig
+from .views import CameraView
+
+#: flag bits of ``flags`` (P, V) uint8
+UNSEEN, SATURATED, GRAZING, SPOT = 1, 2, 4, 8
+
+#: a camera's view of a cell is fused only where it covers at least this fraction of what the best
+#: camera covers: a view of part of a cell measures the mean over that part, not the cell's mean
+FUSED_COVERAGE = 0.9
+
+
+def fuse(per_cam, cameras: list[CameraView], area, rig: ObjectRig):
+    """Exitance per vertex fused over cameras (steps 4–5 of :mod:`.importer`): R (V, 3), variance (V, 3),
+    flags (V,)."""
+    V = len(area)
+    num = np.zeros((V, 3))
+    den = np.zeros(V)
+    var = np.zeros((V, 3))
+    flags = np.zeros(V, np.uint8)
+    grazing = np.zeros(V, dtype=bool)
+    saturated = np.zeros(V, dtype=bool)
+    weights = []
+    best = np.zeros(V)  # the largest usable coverage of each cell by any camera
+    for cm in per_cam:
+        if cm is not None:
+            best = np.maximum(best, cm[2] / np.maximum(area, 1e-30))
+    for cam, cm in zip(cameras, per_cam):
+        if cm is None:
+            continue
+        M, vM, used, gamma = cm
+        m = cam.map
+        grazing |= m.grazing
+        seen = m.den / np.maximum(area, 1e-30) >= rig.min_coverage
+        cover = used / np.maximum(area, 1e-30)
+        good = seen & (cover >= rig.min_coverage)
+        saturated |= seen & ~good
+        good &= cover >= FUSED_COVERAGE * np.minimum(best, 1.0)
+        w = np.where(good, m.n_eff * np.nan_to_num(gamma).mean(axis=1), 0.0)
+        M = np.where(good[:, None], np.nan_to_num(M), 0.0)
+        vM = np.where(good[:, None], np.nan_to_num(vM), 0.0)
+        num += w[:, None] * M
+        den += w
+        weights.append((w, vM))
+    measured = den > 0
+    with np.errstate(invalid="ignore", divide="ignore"):
+        R = np.where(measured[:, None], num / den[:, None], 0.0)
+        for w, vM in weights:
+            var += (w[:, None] ** 2) * vM
+        var = np.where(measured[:, None], var / (den**2)[:, None], np.nan)
+    flags[~measured] |= UNSEEN
+    flags[~measured & saturated] |= SATURATED
+    flags[~measured & grazing] |= GRAZING
+    return R, var, flags

@@ -1,0 +1,307 @@
+r"""A lab's object: multi-view HDR photographs of a laser stepped over a scanned mesh → a mesh data set.
+
+``translucency import object RIG`` (:func:`import_object`) writes what ``acquire mesh`` writes —
+:math:`R_d(x_i, v)` in mm⁻² per unit incident power for every vertex v of the mesh and every laser
+position x_i (snapped to its nearest vertex), in a :mod:`translucency.io.mesh_dataset` — plus, per
+pair, its variance (``R_d_var``) and what kept it from being measured (``flags``):
+
+1. **Cameras** (:mod:`.setup`, :mod:`.cameras`, :mod:`.views`): K and distortion given or by OpenCV from
+   checkerboards, the pose given or by ``solvePnP`` from marked points; reprojection errors above the
+   bound refused; a mesh most of whose vertices project outside every image refused.
+2. **Visibility, once per camera** (:mod:`.surface_map`): Mitsuba casts a ray through every pixel
+   centre; the map W (vertex × pixel) of barycentric weight × footprint area defines the per-vertex
+   value exactly as the tally does.
+3. **Radiance per frame**: :math:`L = (Z - \text{dark})/(k\,t\,\text{vig}\,\text{flat})/P`
+   (:mod:`.setup`, :mod:`.radiance`); saturated or non-finite pixels are unusable; several frames are combined
+   per pixel weighted by exposure time; the variance is the noise model's, or — where two or more
+   frames share an exposure — the larger of it and the frames' own scatter (which also holds what the
+   noise model does not know, e.g. a renderer's Monte Carlo noise).
+4. **Exitance per camera and vertex**: :math:`M_{vc} = \pi \bar L_{vc}/\gamma(\mu_{vc}, r)` with the
+   exit's angular law γ (:mod:`.exit_law`; from the views by default, for an index-matched boundary,
+   :mod:`.law_estimate`).
+5. **Fusion over cameras** (:mod:`.fusion`) that see at least ``min_coverage`` of the vertex's cell
+   with usable pixels: weights :math:`w_c = n_c\,\gamma_c` (:math:`n_c = (\sum_p W)^2/\sum_p W^2` the
+   cell's effective number of pixels: with photon noise, Var M ∝ 1/(n γ)), which do not depend on the
+   measured values (inverse *measured* variances would favour the camera that read low).
+6. **Flags** (bits): :data:`UNSEEN` no camera sees the cell well (its value is filled over the mesh
+   graph from measured neighbours, harmonic fill: :mod:`.fill`), :data:`SATURATED` a camera saw it
+   saturated, :data:`GRAZING` only at grazing angles, :data:`SPOT` within ``spot_radius_mm`` of the
+   hit.  The per-vertex fit leaves flagged pairs out; the stored value keeps the energy bookkeeping whole.
+
+The laser hits are snapped to vertices by :mod:`.hits`.  Laser shots are processed in chunks (the
+unit of resuming and of memory) by :class:`ObjectImport`, the importers' contract of
+:mod:`translucency.rig.contract`; same arguments resume, other arguments are refused unless
+``overwrite``.  Units: mm, W, seconds; R_d in mm⁻².
+"""
+
+from __future__ import annotations
+
+import json
+import time
+import warnings
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..._validate import TranslucencyError
+from ...geometry import vertex_areas
+from ...io.mesh_dataset import MeshDataset, create_mesh_dataset, mesh_header, open_mesh_dataset
+from ...io.outputs import remove_dataset
+from ...mitsuba import mesh_scene
+from ..contract import Chunk, run_import, sha256_file
+from .exit_law import ExitLaw, Lambertian, law_named
+from .fill import HarmonicFill
+from .fusion import GRAZING, SATURATED, SPOT, UNSEEN, fuse
+from .hits import incident_vertices
+from .law_estimate import estimate_law
+from .radiance import shot_cell_means
+from .setup import ObjectRig, calibrated_camera, read_object_rig
+from .views import CameraView, check_mesh_seen, prepare_view
+
+
+def import_object(
+    rig,
+    out,
+    *,
+    chunk_points: int = 8,
+    overwrite: bool = False,
+    progress: Callable[[int, int], None] | None = None,
+    exit_law: str | None = None,
+) -> dict:
+    """Turn a lab's object rig (``object.json``, :mod:`.setup`) into a mesh data set at ``out``.
+
+    Parameters
+    ----------
+    rig : path
+        The rig file, or the folder holding ``object.json``.
+    out : path
+        The mesh data set (Zarr directory) to write.
+    chunk_points : int
+        Laser shots per chunk (the unit of resuming; memory holds one chunk of images).
+    exit_law : str, optional
+        Overrides the rig file's ``exit_law`` (``"lambertian"``, ``"dielectric"``, ``"from-views"``).
+
+    Returns
+    -------
+    dict
+        ``path``, ``cameras`` (reprojection errors, vertices seen), ``exit_law``, ``energy`` (per shot:
+        Σ_v A_v R_d per channel), ``flags`` (counts), ``seconds`` and ``bytes_read`` (image bytes).
+    """
+    t0 = time.perf_counter()
+    importer = ObjectImport.from_setup(rig, chunk_points=chunk_points, exit_law=exit_law)
+    fresh = not Path(out).exists() or not any(Path(out).iterdir())  # a refused import removes what it made
+    try:
+        flag_counts = run_import(importer, out, overwrite=overwrite, progress=progress)
+    except (TranslucencyError, KeyboardInterrupt):
+        if fresh and Path(out).exists() and not _finished_any(out):
+            remove_dataset(out)
+        raise
+    return {
+        "path": str(out),
+        "cameras": [
+            {
+                "name": c.camera.name,
+                "reprojection_px": c.camera.reprojection_px,
+                "vertices_seen": int((c.map.den > 0).sum()),
+            }
+            for c in importer.cameras
+        ],
+        "exit_law": importer.law.describe(),
+        "energy": importer.energy.tolist(),
+        "flags": dict(zip(("unseen", "saturated", "grazing", "spot"), flag_counts.tolist())),
+        "seconds": time.perf_counter() - t0,
+        "bytes_read": importer.bytes_read,
+        "incident": importer.incident.tolist(),
+    }
+
+
+@dataclass
+class ObjectImport:
+    """An object rig read and checked, its cameras posed and mapped, its hits snapped, its exit law chosen:
+    the :class:`~translucency.rig.contract.Importer` of a mesh data set."""
+
+    setup: ObjectRig
+    mesh: object  # trimesh.Trimesh, mm
+    area: np.ndarray  # (V,) vertex areas A_v, mm²
+    cameras: list[CameraView]
+    incident: np.ndarray  # (P,) the vertex nearest each hit
+    hits: np.ndarray  # (P, 3) where each shot enters, mm
+    law: ExitLaw
+    header: dict
+    chunk_points: int
+    energy: np.ndarray  # (P, 3) Σ_v A_v R_d per shot
+    bytes_read: int = 0  # image bytes read by the chunks imported
+
+    @property
+    def n_points(self) -> int:
+        return len(self.incident)
+
+    @classmethod
+    def from_setup(cls, rig, *, chunk_points: int = 8, exit_law: str | None = None) -> ObjectImport:
+        """Read ``object.json`` and the mesh, pose the cameras and map them, snap the hits, choose the law."""
+        from ...io.mesh import load_mesh  # heavy: trimesh loads where a mesh is read
+
+        if chunk_points < 1:
+            raise TranslucencyError(f"chunk_points: must be >= 1, got {chunk_points}")
+        setup = read_object_rig(rig)
+        law_name = exit_law or setup.exit_law
+        fixed_law = law_named(law_name, setup.eta)
+        mesh = load_mesh(setup.mesh_file, scale_mm=setup.scale_mm, up=setup.up)
+        scene = mesh_scene(mesh)
+        area = vertex_areas(mesh)
+        V = len(mesh.vertices)
+        posed = [calibrated_camera(c, setup.folder, setup.max_reprojection_px) for c in setup.cameras]
+        check_mesh_seen(mesh, posed, setup)  # before the maps: a wrong mesh is named as such, not as a camera
+        cameras = [prepare_view(c, cam, setup, mesh, scene) for c, cam in zip(setup.cameras, posed)]
+        incident, hits = incident_vertices(setup, mesh, scene)
+        P = len(incident)
+        if fixed_law is None and len(cameras) < 2:
+            raise TranslucencyError(
+                f"{setup.path}: exit_law 'from-views' needs two cameras or more; "
+                "give 'lambertian' or 'dielectric'"
+            )
+        law = fixed_law
+        if law is None:  # estimated from the first shots (reading them once more in the chunks)
+            try:
+                law = estimate_law(setup, cameras, mesh, scene, hits, area)
+            except TranslucencyError as exc:  # too few views of one vertex: say so, and take π L
+                # stacklevel 3: the warning names the caller of import_object
+                warnings.warn(f"{setup.path}: {exc} — imported with the Lambertian law instead", stacklevel=3)
+                law = Lambertian()
+        sample = setup.sample or {}
+        request = {
+            "rig": str(setup.path.resolve()),
+            "rig_sha256": sha256_file(setup.path),
+            "chunk": int(chunk_points),
+            "exit_law": law.describe(),
+            "vertices": V,
+            "faces": len(mesh.faces),
+            "bounds": np.round(mesh.bounds, 6).tolist(),
+            "index_matched": setup.eta == 1.0,
+            # a virtual rig's filling (so that a reference can be rendered as for `acquire mesh`);
+            # a lab has none
+            "volume": sample.get("description", {"source": "photographs"}),
+            "volume_grid": sample.get("volume_grid"),
+        }
+        request = json.loads(json.dumps(request))
+        header = mesh_header(
+            n_points=P,
+            n_vertices=V,
+            photons=0,  # set from the measured noise once the data are in (the fit's weights)
+            seed=0,
+            # the medium's index (recorded apart when the boundary is index-matched, as `acquire mesh` does)
+            eta=(setup.raw.get("boundary") or {}).get("medium_eta", setup.eta),
+            g=sample.get("description", {}).get("g", 0.0),
+            sample=sample.get("description", {"source": "photographs"}),
+            request=request,
+            source="photographs",
+            photographs=_provenance(setup, cameras, hits, law),
+        )
+        return cls(setup, mesh, area, cameras, incident, hits, law, header, chunk_points, np.zeros((P, 3)))
+
+    def create(self, out, *, overwrite: bool) -> MeshDataset:
+        """The mesh data set at ``out``: the mesh, its vertex areas and the incident vertices."""
+        return create_mesh_dataset(
+            out,
+            self.header,
+            self.mesh,
+            self.area,
+            self.incident,
+            chunk_points=self.chunk_points,
+            overwrite=overwrite,
+            inputs=self.setup.files,
+            measured=True,
+        )
+
+    def import_chunks(self, ds: MeshDataset, todo: list[Chunk]) -> Iterator[Chunk]:
+        """Per shot: the cameras' cell means, fused, flagged, the unseen filled; per chunk its R_d, variance
+        and flags written, then its done flag."""
+        setup, mesh, area, law = self.setup, self.mesh, self.area, self.law
+        cameras, hits = self.cameras, self.hits
+        root, V, energy = ds.group, len(mesh.vertices), self.energy
+        fill = HarmonicFill(mesh)
+        every = {"write_empty_chunks": True}
+        for chunk in todo:
+            c, lo, hi = chunk.index, chunk.lo, chunk.hi
+            R = np.zeros((hi - lo, V, 3), np.float32)
+            var = np.zeros((hi - lo, V, 3), np.float32)
+            flags = np.zeros((hi - lo, V), np.uint8)
+            for j in range(lo, hi):
+                shot = setup.shots[j]
+                r = np.linalg.norm(mesh.vertices - hits[j], axis=1)
+                per_cam, nbytes = shot_cell_means(shot, cameras, setup, law, hits[j])
+                self.bytes_read += nbytes
+                Rj, vj, fj = fuse(per_cam, cameras, area, setup)
+                fj[r <= setup.spot_radius_mm] |= SPOT
+                Rj = fill(Rj, (fj & (UNSEEN | SATURATED)) != 0)
+                vj[~np.isfinite(vj)] = 0.0
+                R[j - lo], var[j - lo], flags[j - lo] = Rj, vj, fj
+                energy[j] = area @ Rj
+            root["R_d"].with_config(every)[lo:hi] = R
+            root["R_d_var"].with_config(every)[lo:hi] = var
+            root["flags"].with_config(every)[lo:hi] = flags
+            root["specular"].with_config(every)[lo:hi] = np.zeros((hi - lo, 3), np.float32)
+            root["chunk_done"][c] = True
+            yield chunk
+
+    def finish(self, ds: MeshDataset, done: list[Chunk]) -> np.ndarray:
+        """The energy of the shots imported before, the photon count equivalent to the measured noise (into
+        the header); the pairs of each flag counted (UNSEEN, SATURATED, GRAZING, SPOT)."""
+        root, area = ds.group, self.area
+        for chunk in done:
+            R = np.asarray(root["R_d"][chunk.lo : chunk.hi], dtype=np.float64)
+            self.energy[chunk.lo : chunk.hi] = np.einsum("pvk,v->pk", R, area)
+        flag_counts = np.zeros(4, dtype=np.int64)
+        flags_all = np.asarray(root["flags"][...])
+        for b, bit in enumerate((UNSEEN, SATURATED, GRAZING, SPOT)):
+            flag_counts[b] = int(((flags_all & bit) != 0).sum())
+        self.header["photons"] = _equivalent_photons(root, area, flags_all)
+        root.attrs.update({"translucency_mesh_dataset": self.header})
+        return flag_counts
+
+
+def _finished_any(out) -> bool:
+    """Whether the data set at ``out`` holds a finished chunk (kept for resuming when interrupted)."""
+    try:
+        return bool(np.asarray(open_mesh_dataset(out)["chunk_done"][...]).any())
+    except TranslucencyError:
+        return False
+
+
+def _equivalent_photons(root, area, flags) -> float:
+    r"""The photon count N with Poisson variance R/(N A_v) closest to the measured variance of the pairs
+    above 5 σ (median): the per-vertex fit weights its pairs by that model (:mod:`translucency.fit.mesh`)."""
+    R = np.asarray(root["R_d"][...], dtype=np.float64).mean(axis=2)
+    var = np.asarray(root["R_d_var"][...], dtype=np.float64).mean(axis=2)
+    ok = (flags == 0) & (var > 0) & (R > 5 * np.sqrt(np.maximum(var, 0)))
+    if not ok.any():
+        return 1.0
+    A = np.broadcast_to(area[None], R.shape)
+    return float(np.median(R[ok] / (var[ok] * A[ok])))
+
+
+def _provenance(rig: ObjectRig, cameras: list[CameraView], hits: np.ndarray, law: ExitLaw) -> dict:
+    return {
+        "rig": str(rig.path.resolve()),
+        "mesh": {"file": str(rig.mesh_file.resolve()), "sha256": sha256_file(rig.mesh_file)},
+        "cameras": [
+            {**c.camera.to_dict(), "name": c.camera.name, "reprojection_px": c.camera.reprojection_px}
+            for c in cameras
+        ],
+        "hits_mm": np.round(hits, 6).tolist(),
+        "power_W": [s.power for s in rig.shots],
+        "files": [
+            {cam: [str(f.file.relative_to(rig.folder)) for f in frames] for cam, frames in s.frames.items()}
+            for s in rig.shots
+        ],
+        "exit_law": law.describe(),
+        "boundary_eta": rig.eta,
+        "spot_radius_mm": rig.spot_radius_mm,
+        "grazing_deg": rig.grazing_deg,
+        "min_coverage": rig.min_coverage,
+    }
+
+
+__all__ = ["import_object", "ObjectImport", "UNSEEN", "SATURATED", "GRAZING", "SPOT"]

@@ -1,0 +1,96 @@
+r"""The radiance of a view (step 3 of :mod:`.importer`) and its cell means per camera (step 4).
+
+One camera's frames of a shot become the radiance per unit laser power at the pixels its map uses,
+:math:`L = (Z - \text{dark})/(k\,t\,\text{vig}\,\text{flat})/P` in W mm⁻² sr⁻¹ per W; saturated pixels
+are unusable; frames are combined per pixel weighted by exposure time (photon noise); the variance is
+the noise model's — or, where two or more frames share the longest exposure, the larger of it and the
+frames' own scatter.  The surface map then takes cell means over each vertex's cell: of L, or of the
+exitance :math:`M = \pi L/\gamma(\mu, s, r)` converted pixel by pixel with the exit law γ
+(:mod:`.exit_law`).  float32 throughout.
+"""
+
+from __future__ import annotations
+
+import os
+from concurrent.futures import ThreadPoolExecutor
+
+import numpy as np
+
+from .exit_law import Lambertian
+from .setup import ObjectRig, ObjectShot
+from .views import CameraView, read_frame
+
+
+def view_radiance(shot: ObjectShot, cam: CameraView, rig: ObjectRig):
+    """One camera's frames of a shot as radiance per unit power at the pixels its map uses (n, 3), its
+    variance and the usable pixels (n,) (step 3 of :mod:`.importer`); and the bytes read.  float32
+    throughout."""
+    setup = cam.setup
+    rad = setup.radiometry
+    shape = (setup.height, setup.width)
+    frames = shot.frames.get(setup.name, [])
+    used = cam.map.used
+    dark, gain = cam.dark_u, cam.gain_u
+    num = np.zeros((len(used), 3), np.float32)
+    wsum = np.zeros_like(num)
+    var_model = np.zeros_like(num)
+    longest = max(f.exposure_s for f in frames)
+    rep_n = np.zeros(len(used), np.float32)  # repeated frames of the longest exposure: n, Σ L, Σ L²
+    rep_s = np.zeros_like(num)
+    rep_s2 = np.zeros_like(num)
+    nbytes = 0
+    for f in frames:
+        raw = read_frame(f.file, shape, "photograph")
+        nbytes += raw.size * 4
+        raw = raw[used]
+        ok = (raw < rad.saturation).all(axis=1)
+        signal = raw - dark
+        scale = 1.0 / (gain * np.float32(f.exposure_s * shot.power))  # value → radiance per unit power
+        L = signal * scale
+        w = np.float32(f.exposure_s) * ok[:, None]  # photon noise: weight ∝ exposure
+        num += w * L
+        wsum += w
+        var_model += w * w * (rad.gain * np.maximum(signal, 0.0) + rad.read_noise**2) * scale * scale
+        if f.exposure_s == longest:
+            rep_n += ok
+            rep_s += ok[:, None] * L
+            rep_s2 += ok[:, None] * L * L
+    usable = (wsum > 0).all(axis=1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        L = np.where(wsum > 0, num / wsum, 0.0)
+        var = np.where(wsum > 0, var_model / (wsum * wsum), 0.0)
+        n = rep_n[:, None]
+        scatter = (rep_s2 - rep_s * rep_s / n) / (n - 1) / n  # the scatter of the repeated frames' mean
+    var = np.where((n >= 2) & np.isfinite(scatter), np.maximum(var, scatter), var)
+    return L, var, usable, nbytes
+
+
+def shot_cell_means(shot: ObjectShot, cameras: list[CameraView], rig: ObjectRig, law=None, hit=None):
+    """Per camera: (cell mean (V, 3), its variance, usable weight (V,), mean γ (V, 3)) of the radiance —
+    or, with ``law``, of the exitance πL/γ converted pixel by pixel (γ at each pixel's cosine, slant
+    and distance from ``hit``: the law varies across a cell near the hit); and the bytes read.  The
+    cameras run on threads (reading, NumPy and the sparse products release the GIL)."""
+
+    def one(cam: CameraView):
+        if cam.setup.name not in shot.frames:
+            return None, 0
+        L, var, usable, nb = view_radiance(shot, cam, rig)
+        m = cam.map
+        if law is None:
+            return (*m.cell_means(L, var, usable), None), nb
+        u = m.used
+        if law.needs_direction:  # the slant and the distance of every pixel used
+            r, slant = np.linalg.norm(m.position[u] - hit, axis=1), m.slant(hit, u)
+        else:
+            r = slant = np.zeros(len(u))
+        gamma = law.factor(m.mu[u], slant, r).astype(np.float32)  # (n, 3)
+        E, vE = np.float32(np.pi) * L / gamma, var * (np.float32(np.pi) / gamma) ** 2
+        if isinstance(law, Lambertian):
+            g_mean = np.ones((len(m.den), 3), np.float32)
+        else:
+            g_mean = m.cell_means(gamma, np.zeros_like(gamma), usable)[0]
+        return (*m.cell_means(E, vE, usable), g_mean), nb
+
+    with ThreadPoolExecutor(min(len(cameras), os.cpu_count() or 1)) as pool:
+        results = list(pool.map(one, cameras))
+    return [r for r, _ in results], sum(nb for _, nb in results)
