@@ -18,7 +18,7 @@ from typing import ClassVar
 
 import numpy as np
 
-from .._validate import TranslucencyError
+from .._validate import TranslucencyError, check_undamaged
 from .outputs import DATASET_KEYS
 
 
@@ -57,6 +57,18 @@ class ChunkedStore(ABC):
     @abstractmethod
     def chunk_points(self) -> int:
         """Incident points per chunk (per ``chunk_done`` flag)."""
+
+    def check_complete(self) -> None:
+        """Refuse, in one line, a data set that is damaged (missing or undecodable chunks: re-running the
+        acquisition with the same arguments repairs exactly those) or unfinished (an interrupted
+        acquisition: re-running it finishes it)."""
+        check_undamaged(self)
+        done = np.asarray(self.group["chunk_done"][...], dtype=bool)  # decodes: checked with the damage
+        if not done.all():
+            raise TranslucencyError(
+                f"{self.path}: unfinished acquisition ({int(done.sum())}/{len(done)} chunks done); re-run "
+                "the same `translucency acquire` command to finish it"
+            )
 
     def __getitem__(self, key: str) -> np.ndarray:
         if key not in self.ARRAYS:

@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import resources
-from .._validate import TranslucencyError, check_option, check_undamaged
+from .._validate import TranslucencyError, check_option
 from ..fit import (
     FAMILIES,
     FIT_BLOCK,
@@ -165,9 +165,18 @@ def fit_model(
     on_mesh = isinstance(data, MeshDataset)
     stage = fit_mesh if on_mesh else fit_planar
     refuse_unknown(f"fit on a {'mesh' if on_mesh else 'planar'} data set", options, stage)
-    if on_mesh:
+    if on_mesh:  # what a per-vertex fit does not take, one line each
         colour = colour or "shared"
-        _check_mesh_options(family, n_terms, weighting, data)
+        if family in FAMILIES and FAMILIES[family].directional:
+            raise TranslucencyError(
+                f"family={family!r}: the anisotropic model is for planar data sets; {data.path} is a "
+                "mesh data set, where the isotropic model is fitted per vertex (r = |x_o - x_i|, as in the "
+                "paper): use family='iso'"
+            )
+        if n_terms == "auto":
+            raise TranslucencyError("n_terms: 'auto' selects on planar data only; give n for a mesh fit")
+        if weighting != "poisson":
+            raise TranslucencyError("weighting: mesh fits weight by the Poisson variance only")
     else:
         colour = colour or "per-channel"
     check_fit_options(family, n_terms, 1 if on_mesh else n_directions, colour, weighting=weighting)
@@ -175,7 +184,7 @@ def fit_model(
     out = None if out is None else Path(out)
     if out is not None:
         claim_output(out, "model file", overwrite=overwrite, inputs=[data.path], option="out")
-    _refuse_unfinished(data)
+    data.check_complete()  # a damaged or unfinished data set: one line, before any work
     args = dict(n_terms=n_terms, colour=colour, exclusion_mm=exclusion_mm, max_rounds=max_rounds)
     args.update(alpha_radius=alpha_radius, scheduler=scheduler, **options)
     if on_mesh:
@@ -215,33 +224,6 @@ def _count_or_auto(name: str, value):
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
         raise TranslucencyError(f"{name}: expected a whole number or 'auto', got {value!r}")
     return int(value)
-
-
-def _check_mesh_options(family: str, n_terms, weighting: str, data: MeshDataset) -> None:
-    """What a per-vertex fit does not take, one line each."""
-    if family in FAMILIES and FAMILIES[family].directional:
-        raise TranslucencyError(
-            f"family={family!r}: the anisotropic model is for planar data sets; {data.path} is a mesh data "
-            "set, where the isotropic model is fitted per vertex (r = |x_o - x_i|, as in the paper): use "
-            "family='iso'"
-        )
-    if n_terms == "auto":
-        raise TranslucencyError("n_terms: 'auto' selects on planar data only; give n for a mesh fit")
-    if weighting != "poisson":
-        raise TranslucencyError("weighting: mesh fits weight by the Poisson variance only")
-
-
-def _refuse_unfinished(data) -> None:
-    """One line for an unfinished data set (an interrupted acquisition) or one with missing or
-    undecodable chunks (``info`` lists them; re-running the acquisition with the same arguments
-    finishes it, or repairs exactly those)."""
-    check_undamaged(data)
-    done = np.asarray(data.group["chunk_done"][...], dtype=bool)  # decodes: checked with the damage above
-    if not done.all():
-        raise TranslucencyError(
-            f"{data.path}: unfinished acquisition ({int(done.sum())}/{len(done)} chunks done); re-run the "
-            "same `translucency acquire` command to finish it, then fit"
-        )
 
 
 def _fit_mesh(run: Run, data: MeshDataset, family: str, out: Path | None, args: dict) -> FitResult:
