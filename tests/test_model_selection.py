@@ -4,7 +4,8 @@ import numpy as np
 import pytest
 
 from translucency._validate import TranslucencyError
-from translucency.fit.planar import fit_planar, held_out_error, pair_half
+from translucency.fit.held_out import held_out_error, pair_half
+from translucency.fit.planar import fit_planar
 from translucency.geometry import SampleGrid
 
 #: 2 × 2 points over 2 mm, 100 k photons, seed 4 (volume and photons), as tests/test_evaluate.py's fibers

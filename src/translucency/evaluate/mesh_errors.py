@@ -42,7 +42,7 @@ import numpy as np
 from .._validate import TranslucencyError
 from ..fit.mesh import mean_edge_length, read_pairs
 from ..io.mesh_dataset import MeshDataset, open_mesh_dataset
-from ..io.model_file import check_vertex_model
+from ..io.vertex_model import check_vertex_model
 from .errors import BANDS, PlanarErrors, beyond
 
 #: ring edges (mm) of the error-against-distance curve; 1 and 4 mm are the bands' edges

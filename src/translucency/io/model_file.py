@@ -64,7 +64,6 @@ from ..model.bounds import check_physics
 from ..model.extent import extent_from_dict
 from ..model.through import COS_EDGES, R_EDGES
 from .atomic import atomic_path
-from .inputs import expect_input
 from .outputs import claim_output
 
 FORMAT = "translucency-model"
@@ -429,77 +428,24 @@ def load_model(path) -> ReflectanceModel:
     -------
     ExponentialModel, DipoleModel, BurleyModel, PBDModel or DirectionalDipoleModel
     """
-    path = Path(path)
-    return _read_model(path, *_open(path))
+    return read_model(path)[0]
 
 
-def load_vertex_model(path, purpose: str) -> tuple[ReflectanceModel, dict]:
-    """Read a per-vertex model file (a fit on a mesh data set) and its header, the file opened once.
-
-    ``path`` is refused in one line when it is another of the tool's kinds (a data set, a mesh file:
-    :func:`~translucency.io.inputs.expect_input`), read and validated as :func:`load_model` reads it,
-    and refused by :func:`check_vertex_model` when its model is planar.
-
-    Parameters
-    ----------
-    path : str or Path
-        A file written by :func:`save_model`.
-    purpose : str
-        What needs the per-vertex model, as the message says it: ``"render"``, ``"export"``,
-        ``"--compare"``, ``"the scene's object 'ball'"``.
-
-    Returns
-    -------
-    model : ReflectanceModel
-        The model, ``geometry == "mesh"``.
-    header : dict
-        The file's header (as :func:`read_header` returns it).
-
-    Raises
-    ------
-    TranslucencyError
-        One line naming the file: its fault (:class:`ModelFileError`), or that its model is planar.
+def read_model(path) -> tuple[ReflectanceModel, dict]:
+    """A model file's model and header, the file opened once (:func:`load_model`, :func:`read_header`).
 
     Examples
     --------
     >>> import tempfile, translucency as tl
     >>> m = tl.ExponentialModel([[0.0, 0.0]], [[[[1.0]]]], [[[[-2.0]]]],
     ...                         tl.PlanarAlpha.uniform((2, 2)), s_g=[1.0], s_b=[1.0])
-    >>> p = save_model(m, tempfile.mkdtemp() + "/planar.model.zip")
-    >>> try:
-    ...     load_vertex_model(p, "render")
-    ... except TranslucencyError as exc:
-    ...     print(str(exc).split("/")[-1])
-    planar.model.zip: a planar model; render needs a per-vertex model (translucency fit on a mesh data set)
+    >>> model, header = read_model(save_model(m, tempfile.mkdtemp() + "/m.model.zip"))
+    >>> header["kind"], header["geometry"], float(model.d[0, 0, 0, 0])
+    ('exponential', 'planar', -2.0)
     """
     path = Path(path)
-    expect_input(path, ("model file",))
     root, header = _open(path)
-    model = _read_model(path, root, header)
-    check_vertex_model(model, purpose, path)
-    return model, header
-
-
-def check_vertex_model(model, purpose: str, source="model") -> None:
-    """Refuse, in the one line every per-vertex reader says, a ``model`` that is not per-vertex.
-
-    ``purpose``: what needs it (:func:`load_vertex_model`); ``source``: what the message names, the
-    file the model was read from or the argument it was given as.
-
-    Examples
-    --------
-    >>> from types import SimpleNamespace
-    >>> try:
-    ...     check_vertex_model(SimpleNamespace(geometry="planar"), "render")
-    ... except TranslucencyError as exc:
-    ...     print(exc)
-    model: a planar model; render needs a per-vertex model (translucency fit on a mesh data set)
-    """
-    if getattr(model, "geometry", None) != "mesh":
-        raise TranslucencyError(
-            f"{source}: a planar model; {purpose} needs a per-vertex model "
-            "(translucency fit on a mesh data set)"
-        )
+    return _read_model(path, root, header), header
 
 
 def _read_model(path: Path, root, header: dict) -> ReflectanceModel:

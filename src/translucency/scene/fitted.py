@@ -22,7 +22,7 @@ import numpy as np
 import trimesh
 
 from .._validate import TranslucencyError
-from ..io.model_file import check_vertex_model, load_vertex_model
+from ..io.vertex_model import check_vertex_model, load_vertex_model
 from ..mitsuba import load_plugin
 from ..model.boundary import exit_factor
 from ..model.incidence import INCIDENCE_LAWS

@@ -21,8 +21,8 @@ from .. import resources
 from .._validate import TranslucencyError, check_option
 from ..io.atomic import write_json
 from ..io.inputs import expect_input
-from ..io.model_file import check_vertex_model
 from ..io.records import jsonable
+from ..io.vertex_model import check_vertex_model
 from ..model.incidence import INCIDENCE_LAWS
 from ..render import MAX_PAIRS, Camera, default_radius, parse_light
 from ..render.camera import view_direction
