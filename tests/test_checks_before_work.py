@@ -114,7 +114,7 @@ def _failing_figure2(model, mesh, light, out_dir, **kwargs):
 
 
 def test_a_failed_render_leaves_nothing_behind(ball, tmp_path, monkeypatch):
-    from translucency.render import figure as render_cli  # the command imports figure2 from here
+    from translucency.workflow import rendering as render_cli  # render_model imports figure2 from here
 
     monkeypatch.setattr(render_cli, "figure2", _failing_figure2)
     new = tmp_path / "new"

@@ -50,9 +50,13 @@ FLAGS = {
     "roughness": "--roughness",
 }
 
-#: arguments that are also plain words ("out", "scale"): translated only where a message begins with
-#: them, the place a message names the argument at fault (``out PATH: …``)
-_WORDS = {name for name in FLAGS if "_" not in name}
+#: arguments that are also header fields (``chunk_points`` of a data set's header): translated only where a
+#: message begins with them, the place a message names the argument at fault (``chunk_points: …``)
+LEADING_ONLY = {"chunk_points": "--chunk"}
+
+#: arguments that are also plain words ("out", "scale"): translated, like :data:`LEADING_ONLY`, only
+#: where a message begins with them (``out PATH: …``)
+_WORDS = {name: FLAGS[name] for name in FLAGS if "_" not in name} | LEADING_ONLY
 
 # ``name=True`` → ``--flag``; ``name=VALUE`` → ``--flag VALUE`` (quotes of a string value dropped)
 _ASSIGNED = re.compile(r"(?<![\w./-])([a-z][a-z0-9_]*)=(True\b|'[^']*'|\"[^\"]*\"|[^\s,;:)]+)")
@@ -74,6 +78,8 @@ def cli_words(message: str) -> str:
     'ball.ply: the object is 0.2 mm across at --scale 1 mm per unit — --scale 1000?'
     >>> cli_words("n_terms: must be between 1 and 4; the output stays as it is")
     '--terms: must be between 1 and 4; the output stays as it is'
+    >>> cli_words("chunk_points: must be >= 1, got 0; header fields n_points 3, chunk_points 4")
+    '--chunk: must be >= 1, got 0; header fields n_points 3, chunk_points 4'
     """
 
     def assigned(match: re.Match) -> str:
@@ -86,7 +92,7 @@ def cli_words(message: str) -> str:
         return FLAGS.get(match.group(1), match.group(1))
 
     def leading(match: re.Match) -> str:
-        return FLAGS[match.group(1)] if match.group(1) in _WORDS else match.group(1)
+        return _WORDS.get(match.group(1), match.group(1))
 
     text = _ASSIGNED.sub(assigned, message)
     text = _BARE.sub(bare, text)

@@ -82,7 +82,7 @@ def acquire_planar(
     Examples
     --------
     >>> import tempfile, translucency as tl
-    >>> slab = tl.makevolume_of("homogeneous:marble", (6.0, 6.0, 2.0), 1.0)
+    >>> slab = tl.make_sample("homogeneous:marble", (6.0, 6.0, 2.0), 1.0)
     >>> ds = tl.acquire_planar(slab, tempfile.mkdtemp() + "/d.zarr", grid=2, span=2.0, window=2.0,
     ...                        photons=200)  # doctest: +SKIP
     >>> ds.n_points, ds.window  # doctest: +SKIP

@@ -33,7 +33,7 @@ def open_dataset(path) -> PlanarDataset | MeshDataset:
     Examples
     --------
     >>> import translucency as tl
-    >>> ds = tl.open_dataset(tl.data.default_datasetas_path())
+    >>> ds = tl.open_dataset(tl.data.default_dataset_path())
     >>> ds.n_points, ds.window, ds.pitch
     (1024, (33, 33), 0.25)
     """

@@ -57,6 +57,7 @@ def import_images(
     Examples
     --------
     >>> import tempfile, numpy as np, translucency as tl
+    >>> from pathlib import Path
     >>> from translucency.rig import Calibration, Homography, write_pfm
     >>> d = Path(tempfile.mkdtemp())
     >>> write_pfm(d / "a.pfm", np.full((64, 64, 3), 2.0, np.float32))
