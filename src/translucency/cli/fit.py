@@ -18,59 +18,73 @@ from ._common import (
 )
 from ._run import RichReporter
 
+# -- the options (their help is what --help shows) --------------------------------------------------
+_DATA = typer.Argument(
+    ...,
+    help="A planar or a mesh data set (.zarr directory, from acquire planar|mesh or import images).",
+)
+_OUT = typer.Option(..., "--out", "-o", help="Model file to write (.model.zip).")
+_MODEL = typer.Option(
+    "iso",
+    "--model",
+    help="iso | aniso (the paper's; planar data sets only) | dipole | burley | pbd (photon beam "
+    "diffusion) | ddipole (directional dipole at normal incidence).",
+)
+_TERMS = typer.Option(
+    "3", "--terms", "-n", help="Exponential terms n per profile (1-4), or auto (held-out choice)."
+)
+_DIRECTIONS = typer.Option(
+    "8",
+    "--directions",
+    "-m",
+    help="Directions m of the anisotropic model (>= 2), or auto (m in 1, 2, 4, 8, 16 by held-out error).",
+)
+_WEIGHTING = typer.Option(
+    "poisson",
+    "--weighting",
+    help="poisson: residuals weighted by the model's Poisson variance (more photons never hurt); "
+    "relative: adds a 5 % relative error (the former default).",
+)
+_COLOUR = typer.Option(
+    None,
+    "--colour",
+    help="shared: the paper's (1, s_g, s_b) scale of one fall-off; per-channel: one fall-off "
+    "per channel. Default: per-channel on planar data, shared on meshes.",
+)
+_EXCLUSION = typer.Option(
+    None, "--exclusion", help="Ignore pixels closer than this to x_i, mm (default one pixel)."
+)
+_ROUNDS = typer.Option(3, "--rounds", help="Most alternation rounds (parameters, then alpha).")
+_CHUNK = typer.Option(
+    None,
+    "--chunk",
+    help="Incident points read and fitted together, a task (default: an eighth of the points, "
+    "128 to 512, in whole chunks of the store).",
+)
+_ALPHA_RADIUS = typer.Option(
+    None,
+    "--alpha-radius",
+    help="Pool alpha's statistics over the pixels (vertices) within this distance, mm. Default: alpha "
+    "per pixel on planar data (dense scans), 12 mean edge lengths on meshes. For sparse grids of "
+    "incident points or noisy data such as photographs (docs/rig.md).",
+)
+_FLOAT16 = typer.Option(False, "--float16", help="Store parameters as float16 (smaller file).")
+
 
 @user_errors
 def fit(
-    data: Path = typer.Argument(
-        ...,
-        help="A planar or a mesh data set (.zarr directory, from acquire planar|mesh or import images).",
-    ),
-    out: Path = typer.Option(..., "--out", "-o", help="Model file to write (.model.zip)."),
-    model: str = typer.Option(
-        "iso",
-        "--model",
-        help="iso | aniso (the paper's; planar data sets only) | dipole | burley | pbd (photon beam "
-        "diffusion) | ddipole (directional dipole at normal incidence).",
-    ),
-    terms: str = typer.Option(
-        "3", "--terms", "-n", help="Exponential terms n per profile (1-4), or auto (held-out choice)."
-    ),
-    directions: str = typer.Option(
-        "8",
-        "--directions",
-        "-m",
-        help="Directions m of the anisotropic model (>= 2), or auto (m in 1, 2, 4, 8, 16 by held-out error).",
-    ),
-    weighting: str = typer.Option(
-        "poisson",
-        "--weighting",
-        help="poisson: residuals weighted by the model's Poisson variance (more photons never hurt); "
-        "relative: adds a 5 % relative error (the former default).",
-    ),
-    colour: str = typer.Option(
-        None,
-        "--colour",
-        help="shared: the paper's (1, s_g, s_b) scale of one fall-off; per-channel: one fall-off "
-        "per channel. Default: per-channel on planar data, shared on meshes.",
-    ),
-    exclusion: float = typer.Option(
-        None, "--exclusion", help="Ignore pixels closer than this to x_i, mm (default one pixel)."
-    ),
-    rounds: int = typer.Option(3, "--rounds", help="Most alternation rounds (parameters, then alpha)."),
-    chunk: int = typer.Option(
-        None,
-        "--chunk",
-        help="Incident points read and fitted together, a task (default: an eighth of the points, "
-        "128 to 512, in whole chunks of the store).",
-    ),
-    alpha_radius: float = typer.Option(
-        None,
-        "--alpha-radius",
-        help="Pool alpha's statistics over the pixels (vertices) within this distance, mm. Default: alpha "
-        "per pixel on planar data (dense scans), 12 mean edge lengths on meshes. For sparse grids of "
-        "incident points or noisy data such as photographs (docs/rig.md).",
-    ),
-    float16: bool = typer.Option(False, "--float16", help="Store parameters as float16 (smaller file)."),
+    data: Path = _DATA,
+    out: Path = _OUT,
+    model: str = _MODEL,
+    terms: str = _TERMS,
+    directions: str = _DIRECTIONS,
+    weighting: str = _WEIGHTING,
+    colour: str = _COLOUR,
+    exclusion: float = _EXCLUSION,
+    rounds: int = _ROUNDS,
+    chunk: int = _CHUNK,
+    alpha_radius: float = _ALPHA_RADIUS,
+    float16: bool = _FLOAT16,
     overwrite: bool = overwrite_option(),
     scheduler: str = scheduler_option(),
     max_memory: str = max_memory_option(),

@@ -19,136 +19,137 @@ DEFAULT_LIGHT = "point:60,-80,120,2e4"
 DEFAULT_VIEW, DEFAULT_SIZE = "1,-1.6,0.7", (320, 240)
 
 
+# -- the options (their help is what --help shows) --------------------------------------------------
+_MODEL = typer.Argument(
+    None, help="A per-vertex model file (translucency fit on a mesh data set); none with --scene."
+)
+_OUT = typer.Option(Path("render"), "--out", "-o", help="Directory for ours.exr/.png (and the reference).")
+_LIGHT = typer.Option(
+    [DEFAULT_LIGHT],
+    "--light",
+    metavar="LIGHT",
+    help="In the object's frame (mm, +z up; the render prints the object's centre and size): "
+    "point:x,y,z[,I] (at x,y,z; I in W/sr) | spot:x,y,z,tx,ty,tz,cutoff[,I] (at x,y,z aimed at "
+    "tx,ty,tz, cone half-angle in degrees) | directional:dx,dy,dz[,E] (dx,dy,dz: the direction the "
+    "light TRAVELS, 0,0,-1 shines down; E in W/mm^2) | env:L (a constant sky, W/(mm^2 sr)) | "
+    "env:MAP.exr[,scale] (a latitude-longitude map, its +Y turned to +z). Relative to the object: "
+    "point@AZ,EL[,DIST[,I]] | spot@AZ,EL[,DIST[,CUTOFF[,I]]] (aimed at the centre) | "
+    "directional@AZ,EL[,E] (coming FROM AZ,EL): AZ degrees from +x towards +y, EL degrees above the "
+    "xy plane, around the object's centre; DIST in mm or object sizes with x (2x; size = the "
+    "bounding box's diagonal; default 1.5x); AZ,EL may be camera (from the "
+    "camera's side) or back (behind the object). Without I or E: 1e4 W/sr, 1 W/mm^2.",
+)
+_VIEW = typer.Option(
+    DEFAULT_VIEW,
+    "--view",
+    metavar="X,Y,Z",
+    help="Direction from the object's centre towards the camera, x,y,z in the object's frame "
+    "(+z up); the camera looks at the centre from 1.9 object sizes.",
+)
+_EXPOSURE = typer.Option(
+    "fixed",
+    "--exposure",
+    metavar="HOW",
+    help="Exposure of the PNGs: fixed (from the object and the light's power alone, the same for "
+    "every render of this object under lights of one power), fixed+STOPS / fixed-STOPS (brighter / "
+    "darker by that many stops), auto (per picture: its brightest 1% at 0.8) or a factor on the "
+    "linear radiance (the 'exposure' render.json states, to match another render). The EXRs are "
+    "linear whatever the exposure.",
+)
+_SIZE = typer.Option(DEFAULT_SIZE, "--size", help="Image width and height in pixels.")
+_REFERENCE = typer.Option(
+    False, "--reference", help="Also path-trace the reference (Mitsuba volpath) and compare."
+)
+_SPP = typer.Option(32, "--spp", help="Samples per pixel of each of the two reference renders.")
+_RADIUS = typer.Option(
+    None,
+    "--radius",
+    help="Near radius of the transport, mm: pairs within it summed exactly, those beyond it through the "
+    "hierarchical far field (default: the 99% energy radius, or less where the pairs would not fit in a "
+    "quarter of --max-memory or of the machine's memory). A smaller radius lowers the memory.",
+)
+_INCIDENCE = typer.Option(
+    "half-space",
+    "--incidence",
+    metavar="LAW",
+    help="How light arriving at an angle counts against the data's normal-incidence beams: 'half-space' "
+    "(Chandrasekhar's plane albedo per vertex from its measured total: oblique light comes back more, "
+    "and by reciprocity leaves more toward oblique views; index-matched objects), 'half-space-in' (the "
+    "light in only, a Lambertian exit) or 'normal' (every direction as measured).",
+)
+_THROUGH = typer.Option(
+    False,
+    "--through",
+    help="Use the model's through-body table (light between sides whose normals face apart, measured "
+    "against the fit): brighter back-lit objects, not better on every case (docs/objects.md).",
+)
+_SCENE = typer.Option(
+    None,
+    "--scene",
+    help="A Mitsuba 3 scene file (XML) to render the fitted objects in: its emitters, shapes, sensor "
+    "and film as they are; name the objects with --model (docs/objects.md, 'Your scene').",
+)
+_MODELS = typer.Option(
+    [],
+    "--model",
+    metavar="ID=FILE",
+    help="With --scene: the shape with this id is this per-vertex model (its mesh from 'translucency "
+    "export MODEL --ply', placed by to_world). Repeat for several objects.",
+)
+_SCENE_UNIT = typer.Option(1.0, "--scene-unit", help="With --scene: millimetres per scene unit.")
+_SAMPLES = typer.Option(
+    32, "--samples", help="With --scene: irradiance samples per vertex and pass (path-traced)."
+)
+_PASSES = typer.Option(
+    2,
+    "--passes",
+    help="With --scene: light-in / through-the-body passes (2: the scene lit by the objects "
+    "lights them back once).",
+)
+_MAX_DEPTH = typer.Option(8, "--max-depth", help="With --scene: longest light path, bounces.")
+_ROUGHNESS = typer.Option(
+    0.0, "--roughness", help="With --scene: GGX roughness of a dielectric object's boundary (0: smooth)."
+)
+_PICTURE_SPP = typer.Option(16, "--picture-spp", help="With --scene: samples per pixel of our picture.")
+
+
 @user_errors
 def render(
-    model: Path = typer.Argument(
-        None, help="A per-vertex model file (translucency fit on a mesh data set); none with --scene."
-    ),
-    out: Path = typer.Option(
-        Path("render"), "--out", "-o", help="Directory for ours.exr/.png (and the reference)."
-    ),
-    light: list[str] = typer.Option(
-        [DEFAULT_LIGHT],
-        "--light",
-        metavar="LIGHT",
-        help="In the object's frame (mm, +z up; the render prints the object's centre and size): "
-        "point:x,y,z[,I] (at x,y,z; I in W/sr) | spot:x,y,z,tx,ty,tz,cutoff[,I] (at x,y,z aimed at "
-        "tx,ty,tz, cone half-angle in degrees) | directional:dx,dy,dz[,E] (dx,dy,dz: the direction the "
-        "light TRAVELS, 0,0,-1 shines down; E in W/mm^2) | env:L (a constant sky, W/(mm^2 sr)) | "
-        "env:MAP.exr[,scale] (a latitude-longitude map, its +Y turned to +z). Relative to the object: "
-        "point@AZ,EL[,DIST[,I]] | spot@AZ,EL[,DIST[,CUTOFF[,I]]] (aimed at the centre) | "
-        "directional@AZ,EL[,E] (coming FROM AZ,EL): AZ degrees from +x towards +y, EL degrees above the "
-        "xy plane, around the object's centre; DIST in mm or object sizes with x (2x; size = the "
-        "bounding box's diagonal; default 1.5x); AZ,EL may be camera (from the "
-        "camera's side) or back (behind the object). Without I or E: 1e4 W/sr, 1 W/mm^2.",
-    ),
-    view: str = typer.Option(
-        DEFAULT_VIEW,
-        "--view",
-        metavar="X,Y,Z",
-        help="Direction from the object's centre towards the camera, x,y,z in the object's frame "
-        "(+z up); the camera looks at the centre from 1.9 object sizes.",
-    ),
-    exposure: str = typer.Option(
-        "fixed",
-        "--exposure",
-        metavar="HOW",
-        help="Exposure of the PNGs: fixed (from the object and the light's power alone, the same for "
-        "every render of this object under lights of one power), fixed+STOPS / fixed-STOPS (brighter / "
-        "darker by that many stops), auto (per picture: its brightest 1% at 0.8) or a factor on the "
-        "linear radiance (the 'exposure' render.json states, to match another render). The EXRs are "
-        "linear whatever the exposure.",
-    ),
-    size: tuple[int, int] = typer.Option(DEFAULT_SIZE, "--size", help="Image width and height in pixels."),
-    reference: bool = typer.Option(
-        False, "--reference", help="Also path-trace the reference (Mitsuba volpath) and compare."
-    ),
-    spp: int = typer.Option(32, "--spp", help="Samples per pixel of each of the two reference renders."),
-    radius: float = typer.Option(
-        None,
-        "--radius",
-        help="Near radius of the transport, mm: pairs within it summed exactly, those beyond it through the "
-        "hierarchical far field (default: the 99% energy radius, or less where the pairs would not fit in a "
-        "quarter of --max-memory or of the machine's memory). A smaller radius lowers the memory.",
-    ),
-    incidence: str = typer.Option(
-        "half-space",
-        "--incidence",
-        metavar="LAW",
-        help="How light arriving at an angle counts against the data's normal-incidence beams: 'half-space' "
-        "(Chandrasekhar's plane albedo per vertex from its measured total: oblique light comes back more, "
-        "and by reciprocity leaves more toward oblique views; index-matched objects), 'half-space-in' (the "
-        "light in only, a Lambertian exit) or 'normal' (every direction as measured).",
-    ),
-    through: bool = typer.Option(
-        False,
-        "--through",
-        help="Use the model's through-body table (light between sides whose normals face apart, measured "
-        "against the fit): brighter back-lit objects, not better on every case (docs/objects.md).",
-    ),
-    scene: Path = typer.Option(
-        None,
-        "--scene",
-        help="A Mitsuba 3 scene file (XML) to render the fitted objects in: its emitters, shapes, sensor "
-        "and film as they are; name the objects with --model (docs/objects.md, 'Your scene').",
-    ),
-    models: list[str] = typer.Option(
-        [],
-        "--model",
-        metavar="ID=FILE",
-        help="With --scene: the shape with this id is this per-vertex model (its mesh from 'translucency "
-        "export MODEL --ply', placed by to_world). Repeat for several objects.",
-    ),
-    scene_unit: float = typer.Option(1.0, "--scene-unit", help="With --scene: millimetres per scene unit."),
-    samples: int = typer.Option(
-        32, "--samples", help="With --scene: irradiance samples per vertex and pass (path-traced)."
-    ),
-    passes: int = typer.Option(
-        2,
-        "--passes",
-        help="With --scene: light-in / through-the-body passes (2: the scene lit by the objects "
-        "lights them back once).",
-    ),
-    max_depth: int = typer.Option(8, "--max-depth", help="With --scene: longest light path, bounces."),
-    roughness: float = typer.Option(
-        0.0, "--roughness", help="With --scene: GGX roughness of a dielectric object's boundary (0: smooth)."
-    ),
-    picture_spp: int = typer.Option(
-        16, "--picture-spp", help="With --scene: samples per pixel of our picture."
-    ),
+    model: Path = _MODEL,
+    out: Path = _OUT,
+    light: list[str] = _LIGHT,
+    view: str = _VIEW,
+    exposure: str = _EXPOSURE,
+    size: tuple[int, int] = _SIZE,
+    reference: bool = _REFERENCE,
+    spp: int = _SPP,
+    radius: float = _RADIUS,
+    incidence: str = _INCIDENCE,
+    through: bool = _THROUGH,
+    scene: Path = _SCENE,
+    models: list[str] = _MODELS,
+    scene_unit: float = _SCENE_UNIT,
+    samples: int = _SAMPLES,
+    passes: int = _PASSES,
+    max_depth: int = _MAX_DEPTH,
+    roughness: float = _ROUGHNESS,
+    picture_spp: int = _PICTURE_SPP,
     overwrite: bool = overwrite_option(),
     max_memory: str = max_memory_option(),
     quiet: bool = quiet_option(),
     as_json: bool = json_option(),
 ):
     """Relight a fitted object: irradiance per vertex, sparse transport, a picture through Mitsuba (EXR + PNG)."""  # noqa: E501 — Typer lists the docstring verbatim as the command's one-line help; a line break would show in `translucency --help`
-    from ..workflow.rendering import (
-        render_model,
-        render_scene,
-    )  # heavy: Mitsuba, Numba, trimesh load only to render
+    from ..workflow.rendering import render_model, render_scene  # heavy: Mitsuba, Numba, trimesh
 
-    reporter = RichReporter(quiet)
+    # what both kinds of render take, as the library names it
+    common = dict(incidence=incidence, radius=radius, exposure=exposure, reference=reference, spp=spp)
+    common.update(overwrite=overwrite, max_memory=max_memory, reporter=RichReporter(quiet))
     if scene is not None:
         _refuse_object_options(model, light, view, size, through)
-        shot = render_scene(
-            scene,
-            parse_models(models),
-            out,
-            scene_unit=scene_unit,
-            samples=samples,
-            passes=passes,
-            max_depth=max_depth,
-            roughness=roughness,
-            picture_spp=picture_spp,
-            incidence=incidence,
-            radius=radius,
-            exposure=exposure,
-            reference=reference,
-            spp=spp,
-            overwrite=overwrite,
-            max_memory=max_memory,
-            reporter=reporter,
-        )
+        per_scene = dict(scene_unit=scene_unit, samples=samples, passes=passes, max_depth=max_depth)
+        per_scene.update(roughness=roughness, picture_spp=picture_spp)
+        shot = render_scene(scene, parse_models(models), out, **per_scene, **common)
         finish(as_json, quiet, shot.summary, [_scene_table(scene, shot.summary, reference), f"images: {out}"])
         return
     if models:
@@ -157,22 +158,7 @@ def render(
         raise TranslucencyError("render: give a per-vertex model file, or --scene SCENE.xml --model ID=FILE")
     if len(light) > 1:
         raise TranslucencyError("--light: one light per render for now (run once per light)")
-    rendering = render_model(
-        model,
-        out,
-        light=light[0],
-        view=view,
-        size=size,
-        exposure=exposure,
-        reference=reference,
-        spp=spp,
-        radius=radius,
-        incidence=incidence,
-        through=through,
-        overwrite=overwrite,
-        max_memory=max_memory,
-        reporter=reporter,
-    )
+    rendering = render_model(model, out, light=light[0], view=view, size=size, through=through, **common)
     table = Table(title=f"render of {model.name}", show_header=False)
     for k, v in rendering.numbers.items():
         table.add_row(k, f"{v:.4g}" if isinstance(v, float) else str(v))
