@@ -3,7 +3,6 @@ through Mitsuba (EXR + PNG), and with ``--reference`` the path-traced reference 
 
 from __future__ import annotations
 
-import dataclasses
 from pathlib import Path
 
 import typer
@@ -255,4 +254,4 @@ def render(
 
 def _light_record(light) -> dict:
     """A light as JSON: its kind (point, directional, spot, environment) and its parameters."""
-    return {"kind": type(light).__name__.removesuffix("Light").lower(), **dataclasses.asdict(light)}
+    return light.record()
