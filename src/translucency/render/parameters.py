@@ -4,7 +4,7 @@ the surface.
 The fit gives parameters at the incident points only.  Vertex v gets the profile
 :math:`P_v(r) = \sum_j w_{vj} P_j(r)` of its k nearest incident points j, inverse-square-distance
 weights :math:`w_{vj}` over distances along the surface (:func:`geodesic_neighbours`, Dijkstra over the
-mesh's edges, mm) — the amplitudes c (mm⁻², α included) and rates d (mm⁻¹, negative) of
+mesh's edges, mm) — the amplitudes c (mm⁻²) and rates d (mm⁻¹, negative) of
 :math:`P(r) = \sum_n c_n e^{d_n r}` per channel, and the colour scale (:func:`vertex_parameters`); and,
 for a model that carries what its acquisition measured, each vertex's own-area value (mm⁻²) and total
 exitance (dimensionless) (:func:`measured_per_vertex`).
