@@ -41,16 +41,13 @@ from translucency.io.mesh_dataset import open_mesh_dataset
 from translucency.mitsuba import mesh_scene
 from translucency.render.camera import Camera
 from translucency.render.compare import compare
+from translucency.render.irradiance import vertex_irradiance
 from translucency.render.lights import parse_light
+from translucency.render.parameters import neighbour_weights
 from translucency.render.picture import VertexPicture, coverage
 from translucency.render.reference import converged_reference
-from translucency.render.transport import (
-    neighbour_weights,
-    relight_vertices,
-    transport_matrices,
-    vertex_irradiance,
-    view_cosines,
-)
+from translucency.render.relight import relight_vertices, view_cosines
+from translucency.render.transport import transport_matrices
 
 CASE = "cow-skin-spot:cow.obj:8:z:skin:128:4000:spot:-60,70,90,0,0,0,25,3e4:-1,1.2,0.6"
 

@@ -385,6 +385,43 @@ def stated_more_than_once(root: Path) -> list[str]:
     return offenders
 
 
+def lights_told_apart_outside_lights(root: Path) -> list[str]:
+    """No ``isinstance`` (``issubclass``) on a light class outside ``render/lights.py``: the rest of the
+    package asks a light through its protocol (``render.lights.Light``), so that a new kind of light is one
+    class there.
+
+    A light class: a class of ``render/lights.py`` whose name ends in ``Light``, named plainly or as an
+    attribute (``lights.PointLight``), alone or in a tuple.
+    """
+    home = _by_name(root).get(f"{root.name}.render.lights")
+    if home is None:
+        return []
+    kinds = {
+        node.name for node in home.tree.body if isinstance(node, ast.ClassDef) and node.name.endswith("Light")
+    }
+    offenders = []
+    for module in modules(root):
+        if module is home:
+            continue
+        for node in ast.walk(module.tree):
+            if not (
+                isinstance(node, ast.Call)
+                and getattr(node.func, "id", None) in ("isinstance", "issubclass")
+                and len(node.args) == 2
+            ):
+                continue
+            named = {
+                n.id if isinstance(n, ast.Name) else n.attr
+                for n in ast.walk(node.args[1])
+                if isinstance(n, ast.Name | ast.Attribute)
+            }
+            if named & kinds:
+                on = ", ".join(sorted(named & kinds))
+                what = f"tells lights apart ({node.func.id} on {on}) outside render/lights.py"
+                offenders.append(module.at(node, what))
+    return offenders
+
+
 CHECKS = (
     private_across_packages,
     private_modules_export_plain_names,
@@ -393,6 +430,7 @@ CHECKS = (
     imports_against_the_pipeline,
     engines_outside_their_homes,
     stated_more_than_once,
+    lights_told_apart_outside_lights,
 )
 
 
@@ -520,6 +558,22 @@ CLEAN = {
             return plt, LogNorm, fit_all
         """,
     "render/__init__.py": "from .picture import picture\n",
+    "render/camera.py": """
+        def aim(target):
+            return target if isinstance(target, tuple) else tuple(target)
+        """,
+    "render/lights.py": """
+        class Light:
+            delta = False
+
+
+        class PointLight(Light):
+            delta = True
+
+
+        def place(light, placement):
+            return light if isinstance(light, PointLight) else placement
+        """,
     "render/picture.py": """
         import matplotlib.image as mpimg
 
@@ -630,6 +684,17 @@ VIOLATIONS = [
         stated_more_than_once,
         {"render/x.py": "import os\n\n\ndef save(a, b):\n    os.replace(a, b)\n"},
         "render/x.py:5",
+    ),
+    # (e) lights answer through their protocol: no isinstance on a light class outside render/lights.py
+    (
+        lights_told_apart_outside_lights,
+        {"render/x.py": "from .lights import PointLight\n\nA = isinstance(1, PointLight)\n"},
+        "render/x.py:3",
+    ),
+    (
+        lights_told_apart_outside_lights,
+        {"view/x.py": "from ..render import lights\n\nB = issubclass(int, (str, lights.Light))\n"},
+        "view/x.py:3",
     ),
 ]
 

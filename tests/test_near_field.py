@@ -14,7 +14,8 @@ from translucency.cli.app import app
 from translucency.fit.mesh import fit_mesh
 from translucency.geometry import vertex_areas
 from translucency.io.mesh_dataset import open_mesh_dataset
-from translucency.render.transport import relight_vertices, transport_matrices
+from translucency.render.relight import relight_vertices
+from translucency.render.transport import transport_matrices
 
 runner = CliRunner()
 
@@ -139,10 +140,10 @@ def test_skin_under_a_spot_renders_close_to_its_reference(tmp_path):
     from translucency.mitsuba import mesh_scene
     from translucency.render.camera import Camera
     from translucency.render.compare import compare
+    from translucency.render.irradiance import vertex_irradiance
     from translucency.render.lights import parse_light
     from translucency.render.picture import VertexPicture, coverage
     from translucency.render.reference import converged_reference
-    from translucency.render.transport import vertex_irradiance
 
     pig = make_pig()
     vol = object_volume("skin", pig, 1.0, seed=3)

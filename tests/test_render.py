@@ -61,7 +61,7 @@ def test_transport_equals_a_plain_double_loop(ball):
 
 def test_profiles_are_blended_not_parameters(ball):
     """Between incident points the profile is the weighted mean of their profiles (no new exponential)."""
-    from translucency.render.transport import vertex_parameters
+    from translucency.render.parameters import vertex_parameters
 
     rng = np.random.default_rng(2)
     model = _model_on(ball, rng, np.array([0, 5, 9, 40]))
@@ -325,7 +325,7 @@ def test_parameters_follow_the_surface_not_the_gap():
     """Two blocks 0.3 mm apart: a vertex on one takes no parameters from the other (geodesic
     neighbours), while straight-line neighbours would mix them; graph distances on a ball
     approximate great-circle arcs."""
-    from translucency.render.transport import geodesic_neighbours, vertex_parameters
+    from translucency.render.parameters import geodesic_neighbours, vertex_parameters
 
     a = trimesh.creation.box(extents=(10, 10, 2)).subdivide().subdivide()
     b = a.copy().apply_translation((0, 0, 2.3))

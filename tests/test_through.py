@@ -15,7 +15,8 @@ from translucency.fit.through import measure_through
 from translucency.geometry import vertex_areas
 from translucency.io.mesh_dataset import open_mesh_dataset
 from translucency.model.through import COS_EDGES, R_EDGES, _centres, interpolation_nodes, through_factor
-from translucency.render.transport import relight_vertices, transport_matrices
+from translucency.render.relight import relight_vertices
+from translucency.render.transport import transport_matrices
 
 
 def test_interpolation_is_exact_at_the_centres_and_a_partition_of_unity():

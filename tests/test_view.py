@@ -114,15 +114,15 @@ def test_transfer_under_a_constant_sky_is_the_closed_form(prepared):
     radiance is the transport of that."""
     from translucency.model.incidence import HalfSpaceIncidence, cosine_mean
     from translucency.render.lights import EnvironmentLight
-    from translucency.render.transfer import light_coefficients, transfer_vectors
-    from translucency.render.transport import relight_vertices
+    from translucency.render.relight import relight_vertices
+    from translucency.render.transfer import transfer_vectors
 
     view = prepared
     L = 0.2
     R1 = np.random.default_rng(1).uniform(0.2, 0.8, (len(view.mesh.vertices), 3))
     law = HalfSpaceIncidence(R1)  # oblique light comes back more: <F> > 1
     transfer = transfer_vectors(view.transport, view.mesh, view.scene, law, directions=512)
-    ours = transfer.radiance(light_coefficients(EnvironmentLight(L), transfer.bands))
+    ours = transfer.radiance(EnvironmentLight(L).sh_coefficients(transfer.bands))
     E = math.pi * L * cosine_mean(R1)
     assert E.min() > 1.02 * math.pi * L
     # the ear is 4 mm from the ball: it hides a little of the sky from the ball's +x side and back
@@ -142,7 +142,8 @@ def test_directional_light_page_formula_is_close_to_the_full_relight(prepared):
 
 
 def test_coarse_transport_on_every_vertex_is_the_transport(prepared):
-    from translucency.render.transport import relight_vertices, vertex_irradiance
+    from translucency.render.irradiance import vertex_irradiance
+    from translucency.render.relight import relight_vertices
 
     view = prepared
     light = view.light_at("point", (0.3, -1.0, 0.5))

@@ -9,7 +9,7 @@ from ..io.gltf import MM_PER_GLTF_UNIT, write_glb
 from ..model.burley import burley_of_exponentials, burley_shape
 from ..render import boundary_eta, relight_vertices, transport_matrices, vertex_irradiance
 from ..render.lights import Placement, parse_light, place_light
-from ..render.transport import vertex_parameters
+from ..render.parameters import vertex_parameters
 
 
 def export_gltf(model, mesh, acquisition: dict, path, light_text: str) -> dict:

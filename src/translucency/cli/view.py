@@ -94,7 +94,7 @@ def view(
     environment = None
     if sky is not None:
         environment = parse_light(sky)
-        if not isinstance(environment, EnvironmentLight):
+        if environment.kind != EnvironmentLight.kind:
             raise TranslucencyError(f"--sky {sky}: an environment light, env:L or env:MAP.exr[,scale]")
     expect_input(model, ("model file",))
     m = load_model(model)

@@ -110,7 +110,7 @@ def far_field_operator(model, *, v, area, alpha, weights, c, d, radius, surface,
     (:math:`b_i = A_i/\pi`); ``None`` when every pair of vertices lies within it.
 
     ``weights`` = (w, idx): each vertex's blend of incident points, ``c, d``: the blended profiles
-    (V, C, T) (:func:`translucency.render.transport.vertex_parameters`), ``surface``: the mesh's area
+    (V, C, T) (:func:`translucency.render.parameters.vertex_parameters`), ``surface``: the mesh's area
     (mm²), ``clusters``: K (default :func:`default_clusters`).  ``through`` = (table (V, 4, 8, 3), normals
     (V, 3)): the through-body table (:mod:`translucency.model.through`) at the cluster level — each
     :math:`F_{OJ}` times cluster J's area-weighted mean table at the cosine between the seed's normal and

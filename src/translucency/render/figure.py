@@ -1,8 +1,8 @@
 """The paper's Figure 2: a fitted object rendered beside its path-traced reference.
 
-:func:`figure2` lights the object (:mod:`.object`), renders ours (:mod:`.transport`, :mod:`.picture`)
-and the ``volpath`` reference (:mod:`.reference`) through one camera (:mod:`.camera`), compares them
-(:mod:`.compare`) and writes reference | ours | FLIP error with the numbers.
+:func:`figure2` lights the object (:mod:`.object`), renders ours (:mod:`.transport`, :mod:`.relight`,
+:mod:`.picture`) and the ``volpath`` reference (:mod:`.reference`) through one camera (:mod:`.camera`),
+compares them (:mod:`.compare`) and writes reference | ours | FLIP error with the numbers.
 """
 
 from __future__ import annotations
@@ -21,8 +21,9 @@ from .compare import compare, region_errors
 from .lights import DEFAULT_DISTANCE, Placement
 from .picture import VertexPicture, coverage
 from .reference import converged_reference
+from .relight import relight_object
 from .tonemap import Exposure, auto_exposure, parse_exposure, save_images, tonemap
-from .transport import relight_object, transport_matrices
+from .transport import transport_matrices
 
 
 def figure2(

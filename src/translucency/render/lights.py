@@ -1,16 +1,29 @@
-"""Lights of a rendering: point, spot, directional and environment (constant sky or map).
+r"""Lights of a rendering: point, spot, directional and environment (constant sky or map), each one class
+behind one protocol, :class:`Light`.
 
-Each light is a small frozen dataclass in mm and W: it knows its own Mitsuba
-emitter (:meth:`emitter_dict`), used alike for the irradiance at the vertices,
-for our picture and for the ``volpath`` reference, so the conventions live in
-one place, and the irradiance it brings at a stated distance (:meth:`irradiance_scale`, the
-scale of a fixed exposure).  The spot's falloff is Mitsuba's
-(:data:`translucency.mitsuba.SPOT_BEAM_FRACTION`).
+A light answers everything the renderer asks of it, so that the rest of ``render/`` never tells kinds
+apart and a new kind of light is one class here:
 
-:func:`parse_light` reads a light's text.  Positions and directions are in the object's frame (mm,
-+z up); a light may also be placed relative to the object (``point@AZ,EL,DIST``: azimuth and
-elevation around the object's centre, a distance from it), resolved by :class:`RelativeLight` against
-a :class:`Placement` (the object's bounds and the direction towards the camera).
+- :meth:`Light.irradiance_at`: the irradiance E (W/mm²) it brings to points with their normals, with
+  shadow rays traced by Mitsuba (``ray_test``), behind a boundary weighted by
+  :math:`F_t(\theta_i)/F_t(0)` and with an incidence law per channel
+  (:mod:`translucency.render.irradiance` states the integral);
+- :meth:`Light.sh_coefficients`: its projection on the real spherical harmonics (:mod:`.sh`), for a
+  :attr:`~Light.distant` light — one that is the same at every point;
+- :attr:`Light.delta`: whether it arrives along one direction at a point (sharp shadows; unseen in a
+  smooth reflection; unreachable through a delta refraction, so no ``volpath`` reference behind a
+  dielectric);
+- :meth:`Light.emitter_dict`: its Mitsuba emitter, used alike for our picture and for the ``volpath``
+  reference, so the conventions live in one place; :meth:`Light.irradiance_scale`: the irradiance it
+  brings at a stated distance (the scale of a fixed exposure);
+- :meth:`Light.parse` (from its text, through :func:`parse_light`), :meth:`Light.placed` (placed
+  relative to the object), :meth:`Light.place` and :meth:`Light.record` (its JSON record).
+
+The spot's falloff is Mitsuba's (:data:`translucency.mitsuba.SPOT_BEAM_FRACTION`).  Positions and
+directions are in the object's frame (mm, +z up); a light may also be placed relative to the object
+(``point@AZ,EL,DIST``: azimuth and elevation around the object's centre, a distance from it), resolved by
+:class:`RelativeLight` against a :class:`Placement` (the object's bounds and the direction towards the
+camera).
 
 Units: point and spot intensity I in W/sr, directional irradiance E in W/mm²,
 environment radiance L in W/(mm² sr).
@@ -18,13 +31,19 @@ environment radiance L in W/(mm² sr).
 
 from __future__ import annotations
 
+import dataclasses
+from abc import ABC, abstractmethod
 from dataclasses import dataclass
 from pathlib import Path
+from typing import ClassVar
 
 import numpy as np
 
-from .._validate import TranslucencyError
-from ..mitsuba import SPOT_BEAM_FRACTION, load_plugin, mitsuba, spot_dict
+from .._validate import TranslucencyError, plain
+from ..geometry import tangent_frames
+from ..mitsuba import SPOT_BEAM_FRACTION, drjit, load_plugin, mitsuba, rays, spot_dict
+from ..model.boundary import fresnel_transmittance
+from . import sh
 
 #: the largest power (I in W/sr, E in W/mm², L and a map's scale in W/(mm² sr)) a light may have: far
 #: beyond any lamp or the sun, well inside float32, so that irradiance, transport and pictures stay finite
@@ -44,15 +63,175 @@ DEFAULT_IRRADIANCE = 1.0
 DEFAULT_CUTOFF_DEG = 20.0
 
 
+#: every kind of light by the word its text begins with (``point:``, ``env:``), in the order the messages
+#: list them; a :class:`Light` subclass that states its :attr:`~Light.prefix` is one
+KINDS: dict[str, type[Light]] = {}
+#: the keywords that place a light along the camera's direction (towards it, or opposite it)
+ANCHORS = ("camera", "back")
+
+
+class Light(ABC):
+    """What every light answers (module docstring): one subclass per kind, a frozen dataclass in mm and W."""
+
+    #: its kind in records and messages ("point", "spot", "directional", "environment")
+    kind: ClassVar[str]
+    #: the word its text begins with (``point:…``); stating it registers the kind in :data:`KINDS`
+    prefix: ClassVar[str]
+    #: its text's forms, for the messages (:data:`FORMS`)
+    forms: ClassVar[str]
+    #: how many numbers its text ``prefix:a,b,…`` takes, and which of them is its power
+    counts: ClassVar[tuple[int, ...]]
+    power_index: ClassVar[int]
+    #: what follows the angles of its form relative to the object (``prefix@AZ,EL,…``), in order, and that
+    #: form; () and None: it cannot be placed relative to the object
+    relative_tail: ClassVar[tuple[str, ...]] = ()
+    relative_form: ClassVar[str | None] = None
+    #: infinitely far: the same at every point, so it has spherical-harmonic coefficients; a light that is
+    #: not distant stands at a ``position`` (mm)
+    distant: ClassVar[bool]
+    #: it arrives along one direction at a point (module docstring)
+    delta: ClassVar[bool]
+
+    def __init_subclass__(cls, **kwargs):
+        super().__init_subclass__(**kwargs)
+        if "prefix" in cls.__dict__:
+            KINDS[cls.prefix] = cls
+
+    @classmethod
+    def parse(cls, text: str, rest: str) -> Light:
+        """The light of ``text`` (``prefix:rest``): its numbers checked, then :meth:`of_numbers`."""
+        parts = rest.split(",")
+        if len(parts) not in cls.counts:
+            raise TranslucencyError(
+                f"light: {cls.prefix}: takes {' or '.join(map(str, cls.counts))} numbers, got {len(parts)} "
+                f"in {text!r}; expected {FORMS}"
+            )
+        v = [_number(text, f"number {k + 1}", p) for k, p in enumerate(parts)]
+        power = cls.power_index
+        if len(v) > power and v[power] < 0:
+            raise TranslucencyError(f"light: the intensity of {text!r} must be >= 0")
+        if len(v) > power and v[power] > MAX_POWER:
+            raise TranslucencyError(f"light: the intensity of {text!r} must be at most {MAX_POWER:g}")
+        if max((abs(x) for x in v[:power]), default=0.0) > MAX_COORDINATE:
+            raise TranslucencyError(
+                f"light: positions and directions of {text!r} must lie within ±{MAX_COORDINATE:g}"
+            )
+        return cls.of_numbers(text, v)
+
+    @classmethod
+    @abstractmethod
+    def of_numbers(cls, text: str, v: list) -> Light:
+        """The light of its text's numbers ``v`` (finite; the power and coordinates within bounds)."""
+
+    @classmethod
+    def placed(cls, relative: RelativeLight, placement: Placement) -> Light:
+        """The light that ``relative`` describes, in the object's frame (a kind with a
+        :attr:`relative_tail`)."""
+        raise TypeError(f"a {cls.__name__} cannot be placed relative to the object")
+
+    def place(self, placement: Placement) -> Light:
+        """The light in the object's frame: itself (a :class:`RelativeLight` resolves there)."""
+        return self
+
+    @abstractmethod
+    def emitter_dict(self) -> dict:
+        """The Mitsuba emitter of this light."""
+
+    @abstractmethod
+    def irradiance_scale(self, distance: float) -> float:
+        """Irradiance (W/mm²) it brings to a surface facing it at ``distance`` mm."""
+
+    @abstractmethod
+    def irradiance_at(self, scene, x, n, extent: float, eta: float = 1.0, incidence=None) -> np.ndarray:
+        r"""Irradiance E (W/mm²) at points ``x`` (N, 3) with unit normals ``n``, shadowed by Mitsuba's
+        ``scene`` (rays leave a fraction of ``extent``, the object's largest extent in mm, off the
+        surface): (N,), or (N, 3) for an environment map or with an ``incidence`` law; with ``eta`` ≠ 1
+        each arriving direction weighted by :math:`F_t(\theta_i)/F_t(0)`
+        (:func:`translucency.render.irradiance.vertex_irradiance`)."""
+
+    def sh_coefficients(self, bands: int) -> np.ndarray:
+        """Its coefficients (K, 3) on the first ``bands`` bands of real spherical harmonics (:mod:`.sh`)."""
+        raise TypeError(
+            f"a {type(self).__name__} is not distant: no transfer (point and spot lights relight)"
+        )
+
+    def record(self) -> dict:
+        """The light as JSON: its kind and its parameters."""
+        return {"kind": self.kind, **dataclasses.asdict(self)}
+
+
+class _DeltaLight(Light):
+    """A light arriving along one direction at a point: its unshadowed irradiance and direction
+    (:meth:`arrival`), then one shadow ray per point."""
+
+    delta = True
+
+    @abstractmethod
+    def arrival(self, scene, x, n) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        r"""(w, E, t): the unit direction towards the light (N, 3), the unshadowed irradiance
+        :math:`E = I\,\cos^+\theta_i / d^2` or :math:`E\cos^+\theta_i` (N,), W/mm², and how far a
+        shadow ray goes (N,), mm."""
+
+    def irradiance_at(self, scene, x, n, extent: float, eta: float = 1.0, incidence=None) -> np.ndarray:
+        w, E, t_max = self.arrival(scene, x, n)
+        eps = 1e-4 * extent
+        o = x + n * eps * 5
+        blocked = np.asarray(scene.ray_test(rays(o, w, t_max - 10 * eps)))
+        cos_i = np.einsum("vk,vk->v", w, n)
+        E = E * fresnel_transmittance(cos_i, eta) / fresnel_transmittance(1.0, eta)
+        E = np.where(blocked | (E <= 0), 0.0, E)
+        F = None if incidence is None else incidence.factor(cos_i)  # (V, 3) or None
+        return E if F is None else E[:, None] * F
+
+
+def _from_position(scene, position, intensity, x, n) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:meth:`_DeltaLight.arrival` of an isotropic intensity I (W/sr) at ``position`` (mm); a one-line
+    error for a position inside the object."""
+    mi = mitsuba()
+    p = np.asarray(position, dtype=np.float64)
+    # inside a closed, outward-oriented surface a ray first meets a face from its back
+    probe = scene.ray_intersect(mi.Ray3f(mi.Point3f(*map(float, p)), mi.Vector3f(0.5773, 0.5774, 0.5773)))
+    if (
+        bool(probe.is_valid()[0])
+        and float(
+            np.asarray(probe.n.x)[0] * 0.5773
+            + np.asarray(probe.n.y)[0] * 0.5774
+            + np.asarray(probe.n.z)[0] * 0.5773
+        )
+        > 0
+    ):
+        raise TranslucencyError(f"light: the point light at {plain(p)} mm is inside the object")
+    to = p - x
+    dist = np.linalg.norm(to, axis=1)
+    w = to / dist[:, None]
+    E = intensity * np.maximum((w * n).sum(1), 0.0) / dist**2
+    return w, E, dist
+
+
 @dataclass(frozen=True)
-class PointLight:
+class PointLight(_DeltaLight):
     """Isotropic point light: intensity I (W/sr) at ``position`` (mm)."""
+
+    kind = prefix = "point"
+    forms = "point:x,y,z[,I]"
+    counts, power_index = (3, 4), 3
+    relative_tail = ("distance", "intensity")
+    relative_form = "point@AZ,EL[,DIST[,I]]"
+    distant = False
 
     position: tuple
     intensity: float = DEFAULT_INTENSITY
 
+    @classmethod
+    def of_numbers(cls, text: str, v: list) -> PointLight:
+        return cls(tuple(v[:3]), *(v[3:] or []))
+
+    @classmethod
+    def placed(cls, relative: RelativeLight, placement: Placement) -> PointLight:
+        position, _ = relative.position(placement)
+        return cls(position, relative.power_or(DEFAULT_INTENSITY))
+
     def emitter_dict(self) -> dict:
-        """The Mitsuba emitter of this light."""
         return {
             "type": "point",
             "position": [float(v) for v in self.position],
@@ -63,39 +242,45 @@ class PointLight:
         """Irradiance (W/mm²) on a surface facing the light at ``distance`` mm: I / d²."""
         return float(self.intensity) / float(distance) ** 2
 
-
-@dataclass(frozen=True)
-class DirectionalLight:
-    """Distant light: irradiance E (W/mm²) on a surface facing it, travelling along ``direction``."""
-
-    direction: tuple
-    irradiance: float = DEFAULT_IRRADIANCE
-
-    def emitter_dict(self) -> dict:
-        """The Mitsuba emitter of this light."""
-        return {
-            "type": "directional",
-            "direction": [float(v) for v in self.direction],
-            "irradiance": float(self.irradiance),
-        }
-
-    def irradiance_scale(self, distance: float) -> float:
-        """Irradiance (W/mm²) on a surface facing the light: E, at any distance."""
-        return float(self.irradiance)
+    def arrival(self, scene, x, n):
+        return _from_position(scene, self.position, self.intensity, x, n)
 
 
 @dataclass(frozen=True)
-class SpotLight:
+class SpotLight(_DeltaLight):
     """A point light at ``position`` aimed at ``target`` (mm), intensity I (W/sr) inside a cone.
 
     Mitsuba's falloff: full intensity within ``SPOT_BEAM_FRACTION × cutoff``, falling linearly in
     angle to 0 at ``cutoff``.
     """
 
+    kind = prefix = "spot"
+    forms = "spot:x,y,z,tx,ty,tz,cutoff[,I]"
+    counts, power_index = (7, 8), 7
+    relative_tail = ("distance", "cutoff", "intensity")
+    relative_form = "spot@AZ,EL[,DIST[,CUTOFF[,I]]]"
+    distant = False
+
     position: tuple
     target: tuple
     cutoff_deg: float = 20.0
     intensity: float = DEFAULT_INTENSITY
+
+    @classmethod
+    def of_numbers(cls, text: str, v: list) -> SpotLight:
+        if np.allclose(v[:3], v[3:6]):
+            raise TranslucencyError(f"light: the spot in {text!r} is aimed at its own position")
+        if not MIN_CUTOFF_DEG <= v[6] < 90:
+            raise TranslucencyError(
+                f"light: the spot's cutoff angle in {text!r} must lie in [{MIN_CUTOFF_DEG:g}, 90) degrees"
+            )
+        return cls(tuple(v[:3]), tuple(v[3:6]), *v[6:])
+
+    @classmethod
+    def placed(cls, relative: RelativeLight, placement: Placement) -> SpotLight:
+        position, centre = relative.position(placement)
+        intensity = relative.power_or(DEFAULT_INTENSITY)
+        return cls(position, tuple(float(x) for x in centre), float(relative.cutoff_deg), intensity)
 
     @property
     def beam_width_deg(self) -> float:
@@ -110,16 +295,67 @@ class SpotLight:
         return np.clip((self.cutoff_deg - theta) / (self.cutoff_deg - self.beam_width_deg), 0.0, 1.0)
 
     def emitter_dict(self) -> dict:
-        """The Mitsuba emitter of this light."""
         return spot_dict(self.position, self.target, self.cutoff_deg, self.intensity)
 
     def irradiance_scale(self, distance: float) -> float:
         """Irradiance (W/mm²) on a surface facing the light inside its cone at ``distance`` mm: I / d²."""
         return float(self.intensity) / float(distance) ** 2
 
+    def arrival(self, scene, x, n):
+        w, E, dist = _from_position(scene, self.position, self.intensity, x, n)
+        return w, E * self.falloff(-w), dist
+
 
 @dataclass(frozen=True)
-class EnvironmentLight:
+class DirectionalLight(_DeltaLight):
+    """Distant light: irradiance E (W/mm²) on a surface facing it, travelling along ``direction``."""
+
+    kind = prefix = "directional"
+    forms = "directional:dx,dy,dz[,E] (the direction the light travels)"
+    counts, power_index = (3, 4), 3
+    relative_tail = ("irradiance",)
+    relative_form = "directional@AZ,EL[,E]"
+    distant = True
+
+    direction: tuple
+    irradiance: float = DEFAULT_IRRADIANCE
+
+    @classmethod
+    def of_numbers(cls, text: str, v: list) -> DirectionalLight:
+        d = np.asarray(v[:3])
+        if not np.linalg.norm(d) > 0:
+            raise TranslucencyError("light: a directional light needs a non-zero direction")
+        return cls(tuple(float(x) for x in d / np.linalg.norm(d)), *(v[3:] or []))
+
+    @classmethod
+    def placed(cls, relative: RelativeLight, placement: Placement) -> DirectionalLight:
+        u = relative.direction(placement)
+        return cls(tuple(float(x) for x in -u), relative.power_or(DEFAULT_IRRADIANCE))
+
+    def emitter_dict(self) -> dict:
+        return {
+            "type": "directional",
+            "direction": [float(v) for v in self.direction],
+            "irradiance": float(self.irradiance),
+        }
+
+    def irradiance_scale(self, distance: float) -> float:
+        """Irradiance (W/mm²) on a surface facing the light: E, at any distance."""
+        return float(self.irradiance)
+
+    def arrival(self, scene, x, n):
+        w = -np.asarray(self.direction, dtype=np.float64)
+        E = self.irradiance * np.maximum(n @ w, 0.0)
+        return np.broadcast_to(w, x.shape), E, np.full(len(x), 1e7)
+
+    def sh_coefficients(self, bands: int) -> np.ndarray:
+        r""":math:`L_k = E\, Y_k(\omega_l)`, :math:`\omega_l` the direction it arrives from."""
+        d = -np.asarray(self.direction, dtype=np.float64)  # the light arrives from −direction
+        return sh.project_directional(d / np.linalg.norm(d), self.irradiance, bands)
+
+
+@dataclass(frozen=True)
+class EnvironmentLight(Light):
     """Light from every direction: a constant radiance L (W/(mm² sr)), or an environment map.
 
     With ``filename`` a latitude–longitude image (EXR, HDR, PNG; linear RGB) read by
@@ -128,12 +364,32 @@ class EnvironmentLight:
     the reference.
     """
 
+    kind = "environment"
+    prefix = "env"
+    forms = "env:L, env:MAP.exr[,scale]"
+    counts, power_index = (1,), 0
+    distant = True
+    delta = False
+
     radiance: float = 0.1
     samples: int = 64  # visibility rays per vertex (cosine-weighted, or by the map's importance)
     filename: str | None = None
 
+    @classmethod
+    def parse(cls, text: str, rest: str) -> EnvironmentLight:
+        """``env:L`` or ``env:MAP[,scale]`` (a first part that is not a number names a map)."""
+        if rest:
+            try:
+                float(rest.split(",")[0])
+            except ValueError:  # not a number: the name of an environment map
+                return _environment_map(rest)
+        return super().parse(text, rest)
+
+    @classmethod
+    def of_numbers(cls, text: str, v: list) -> EnvironmentLight:
+        return cls(v[0])
+
     def emitter_dict(self) -> dict:
-        """The Mitsuba emitter of this light."""
         if self.filename is None:
             return {"type": "constant", "radiance": float(self.radiance)}
         return {
@@ -166,6 +422,68 @@ class EnvironmentLight:
         rows = np.sin((np.arange(grey.shape[0]) + 0.5) / grey.shape[0] * np.pi)  # a row's solid angle
         mean = float((grey.mean(axis=1) * rows).sum() / rows.sum())
         return float(np.pi * self.radiance * mean)
+
+    def irradiance_at(self, scene, x, n, extent: float, eta: float = 1.0, incidence=None) -> np.ndarray:
+        r"""Estimate :math:`E = \int L(\omega) V(\omega) \cos\theta\, F(\cos\theta)\, d\omega` with K =
+        :attr:`samples` rays per point (F: the incidence law's factor, 1 without one).
+
+        Constant sky: cosine-weighted directions, :math:`E \approx \pi L \langle V F \rangle`.
+        Map: directions drawn by the ``envmap`` emitter in proportion to its luminance,
+        :math:`E \approx \langle (L/p)\, V \cos^+\theta\, F \rangle` (RGB).
+        """
+        mi = mitsuba()
+        K = int(self.samples)
+        rng = np.random.default_rng(0)
+        u1, u2 = rng.random((2, len(x), K))
+        o = np.repeat(x + n * 5e-4 * extent, K, axis=0)
+        if self.filename is None:
+            r, phi = np.sqrt(u1), 2 * np.pi * u2
+            local = np.stack([r * np.cos(phi), r * np.sin(phi), np.sqrt(1 - u1)], axis=-1)  # cosine-weighted
+            frame = tangent_frames(n)  # rows t, b, n
+            w = np.einsum("vkj,vji->vki", local, frame).reshape(-1, 3)
+            weight = np.full((len(w), 1), np.pi * self.radiance)  # L cos / p with p = cos/π
+        else:
+            emitter = load_plugin(self.emitter_dict())
+            it = drjit().zeros(mi.Interaction3f, len(o))
+            it.p = mi.Point3f(*(o[:, j].astype(np.float32) for j in range(3)))
+            ds, spec = emitter.sample_direction(
+                it, mi.Point2f(u1.ravel().astype(np.float32), u2.ravel().astype(np.float32))
+            )
+            w = np.stack([np.asarray(ds.d.x), np.asarray(ds.d.y), np.asarray(ds.d.z)], axis=1).astype(
+                np.float64
+            )
+            weight = np.stack([np.asarray(spec[j]) for j in range(3)], axis=1)  # L / p, times cos⁺ below
+        cos_i = np.einsum("vkj,vj->vk", w.reshape(len(x), K, 3), n).reshape(-1)
+        if self.filename is not None:
+            weight = weight * np.maximum(cos_i, 0.0)[:, None]
+        open_sky = ~np.asarray(scene.ray_test(rays(o, w)))
+        weight = (
+            weight * (open_sky * fresnel_transmittance(cos_i, eta) / fresnel_transmittance(1.0, eta))[:, None]
+        )
+        weight = weight.reshape(len(x), K, -1)
+        F = None if incidence is None else incidence.factor(cos_i.reshape(len(x), K))  # (V, K, 3)
+        if F is not None:
+            return (weight * F).mean(axis=1)
+        E = weight.mean(axis=1)
+        return E[:, 0] if self.filename is None else E
+
+    def sh_coefficients(self, bands: int) -> np.ndarray:
+        r""":math:`L_k = \int L\, Y_k\, d\omega` over :meth:`radiance_at` (:func:`.sh.project_environment`,
+        a Fibonacci lattice's quadrature)."""
+        return sh.project_environment(self.radiance_at, bands)
+
+
+def _forms() -> str:
+    """Every form of a light's text, for the messages: each kind's, then those relative to the object."""
+    relative = [cls.relative_form for cls in KINDS.values() if cls.relative_form]
+    return (
+        f"{', '.join(cls.forms for cls in KINDS.values())}, {', '.join(relative[:-1])} or {relative[-1]} "
+        "(AZ,EL: degrees around the object's centre, or camera or back)"
+    )
+
+
+#: every form of a light's text, for the messages
+FORMS = _forms()
 
 
 @dataclass(frozen=True)
@@ -214,23 +532,6 @@ class Placement:
         return f"object: centre ({c}) mm, size {f.format(self.size)} mm (bounding-box diagonal); {axes} mm"
 
 
-#: every form of a light's text, for the messages
-FORMS = (
-    "point:x,y,z[,I], spot:x,y,z,tx,ty,tz,cutoff[,I], directional:dx,dy,dz[,E] (the direction the light "
-    "travels), env:L, env:MAP.exr[,scale], point@AZ,EL[,DIST[,I]], spot@AZ,EL[,DIST[,CUTOFF[,I]]] or "
-    "directional@AZ,EL[,E] (AZ,EL: degrees around the object's centre, or camera or back)"
-)
-
-#: what follows the angles of a relative form, in order
-_RELATIVE_TAIL = {
-    "point": ("distance", "intensity"),
-    "spot": ("distance", "cutoff", "intensity"),
-    "directional": ("irradiance",),
-}
-#: the keywords that place a light along the camera's direction (towards it, or opposite it)
-ANCHORS = ("camera", "back")
-
-
 @dataclass(frozen=True)
 class RelativeLight:
     """A point, spot or directional light placed relative to the object; :meth:`place` resolves it.
@@ -261,20 +562,21 @@ class RelativeLight:
         az, el = np.radians(self.azimuth), np.radians(self.elevation)
         return np.array([np.cos(el) * np.cos(az), np.cos(el) * np.sin(az), np.sin(el)])
 
-    def place(self, placement: Placement):
-        """The light in the object's frame: a :class:`PointLight`, :class:`SpotLight` or
-        :class:`DirectionalLight`."""
+    def position(self, placement: Placement) -> tuple[tuple, np.ndarray]:
+        """A point's or spot's position (mm) ``distance`` from the object's centre towards the light, and
+        the centre."""
         u = self.direction(placement)
-        if self.kind == "directional":
-            E = DEFAULT_IRRADIANCE if self.power is None else self.power
-            return DirectionalLight(tuple(float(x) for x in -u), float(E))
         centre = np.asarray(placement.centre, dtype=np.float64)
         d = self.distance * placement.size if self.in_sizes else self.distance
-        position = tuple(float(x) for x in centre + d * u)
-        intensity = float(DEFAULT_INTENSITY if self.power is None else self.power)
-        if self.kind == "spot":
-            return SpotLight(position, tuple(float(x) for x in centre), float(self.cutoff_deg), intensity)
-        return PointLight(position, intensity)
+        return tuple(float(x) for x in centre + d * u), centre
+
+    def power_or(self, default: float) -> float:
+        """Its power, or ``default`` where its text gave none."""
+        return float(default if self.power is None else self.power)
+
+    def place(self, placement: Placement) -> Light:
+        """The light in the object's frame: its kind's :meth:`Light.placed`."""
+        return KINDS[self.kind].placed(self, placement)
 
 
 def parse_light(text: str, placement: Placement | None = None):
@@ -306,51 +608,14 @@ def parse_light(text: str, placement: Placement | None = None):
         light = _relative(text, kind.strip(), rest)
         return light if placement is None else light.place(placement)
     kind, _, rest = text.partition(":")
-    if kind == "env" and rest:
-        try:
-            float(rest.split(",")[0])
-        except ValueError:  # not a number: the name of an environment map
-            return _environment_map(rest)
-    counts = {"point": (3, 4), "directional": (3, 4), "spot": (7, 8), "env": (1,)}
-    if kind not in counts:
+    if kind not in KINDS:
         raise TranslucencyError(f"light: unknown kind {kind!r} in {text!r}; expected {FORMS}")
-    parts = rest.split(",")
-    if len(parts) not in counts[kind]:
-        raise TranslucencyError(
-            f"light: {kind}: takes {' or '.join(map(str, counts[kind]))} numbers, got {len(parts)} in "
-            f"{text!r}; expected {FORMS}"
-        )
-    v = [_number(text, f"number {k + 1}", p) for k, p in enumerate(parts)]
-    power = {"point": 3, "directional": 3, "spot": 7, "env": 0}[kind]
-    if len(v) > power and v[power] < 0:
-        raise TranslucencyError(f"light: the intensity of {text!r} must be >= 0")
-    if len(v) > power and v[power] > MAX_POWER:
-        raise TranslucencyError(f"light: the intensity of {text!r} must be at most {MAX_POWER:g}")
-    if max((abs(x) for x in v[:power]), default=0.0) > MAX_COORDINATE:
-        raise TranslucencyError(
-            f"light: positions and directions of {text!r} must lie within ±{MAX_COORDINATE:g}"
-        )
-    if kind == "spot" and np.allclose(v[:3], v[3:6]):
-        raise TranslucencyError(f"light: the spot in {text!r} is aimed at its own position")
-    if kind == "spot" and not MIN_CUTOFF_DEG <= v[6] < 90:
-        raise TranslucencyError(
-            f"light: the spot's cutoff angle in {text!r} must lie in [{MIN_CUTOFF_DEG:g}, 90) degrees"
-        )
-    if kind == "point":
-        return PointLight(tuple(v[:3]), *(v[3:] or []))
-    if kind == "directional":
-        d = np.asarray(v[:3])
-        if not np.linalg.norm(d) > 0:
-            raise TranslucencyError("light: a directional light needs a non-zero direction")
-        return DirectionalLight(tuple(float(x) for x in d / np.linalg.norm(d)), *(v[3:] or []))
-    if kind == "spot":
-        return SpotLight(tuple(v[:3]), tuple(v[3:6]), *v[6:])
-    return EnvironmentLight(v[0])
+    return KINDS[kind].parse(text, rest)
 
 
-def place_light(light, placement: Placement):
+def place_light(light, placement: Placement) -> Light:
     """``light`` in the object's frame: a :class:`RelativeLight` placed, any other light as it is."""
-    return light.place(placement) if isinstance(light, RelativeLight) else light
+    return light.place(placement)
 
 
 def _number(text: str, what: str, part: str) -> float:
@@ -366,7 +631,8 @@ def _number(text: str, what: str, part: str) -> float:
 
 def _relative(text: str, kind: str, rest: str) -> RelativeLight:
     """``KIND@AZ,EL[,…]`` or ``KIND@camera|back[,…]``: checked part by part."""
-    if kind not in _RELATIVE_TAIL:
+    cls = KINDS.get(kind)
+    if cls is None or not cls.relative_tail:
         raise TranslucencyError(
             f"light: {kind!r} cannot be placed relative to the object in {text!r} (point, spot or "
             f"directional can); expected {FORMS}"
@@ -387,7 +653,7 @@ def _relative(text: str, kind: str, rest: str) -> RelativeLight:
                 f"light: the elevation {parts[1]!r} of {text!r} must lie in [-90, 90] degrees"
             )
         tail = parts[2:]
-    names = _RELATIVE_TAIL[kind]
+    names = cls.relative_tail
     if len(tail) > len(names):
         raise TranslucencyError(
             f"light: {text!r} has {len(tail)} values after the direction; {kind}@ takes at most "

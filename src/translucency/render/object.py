@@ -77,10 +77,9 @@ def check_light_outside(mesh, light) -> None:
     triangle seen from there, Van Oosterom and Strackee's formula, summed over 4π) is 1 inside a
     closed surface and 0 outside, whatever the orientation of its triangles.
     """
-    position = getattr(light, "position", None)
-    if position is None:  # directional and environment lights come from outside
+    if light.distant:  # directional and environment lights come from outside
         return
-    p = np.asarray(position, dtype=np.float64)
+    p = np.asarray(light.position, dtype=np.float64)
     a, b, c = (
         np.asarray(mesh.vertices, dtype=np.float64)[np.asarray(mesh.faces)[:, k]] - p for k in range(3)
     )
@@ -91,7 +90,7 @@ def check_light_outside(mesh, light) -> None:
     winding = 2.0 * np.arctan2(det, denom).sum() / (4.0 * np.pi)
     if abs(winding) > 0.5:
         raise TranslucencyError(
-            f"light: the {type(light).__name__.removesuffix('Light').lower()} light at "
+            f"light: the {light.kind} light at "
             f"{plain(p)} mm is inside the object (bounds {plain(np.round(mesh.bounds[0], 1))} to "
             f"{plain(np.round(mesh.bounds[1], 1))} mm)"
         )

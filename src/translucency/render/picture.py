@@ -17,7 +17,6 @@ import numpy as np
 from .._validate import TranslucencyError
 from ..mitsuba import mitsuba, pinhole_sensor_dict, vertex_radiance_scene
 from .camera import Camera
-from .lights import EnvironmentLight
 
 
 class VertexPicture:
@@ -36,9 +35,9 @@ class VertexPicture:
     eta : float
         ≠ 1: the surface also reflects (smooth dielectric, Fresnel).
     light : optional
-        An :class:`EnvironmentLight` is drawn behind the object and reflected
-        (the reflection of a point, spot or directional light in a smooth
-        surface covers no area and is not drawn).
+        A light that is not a delta light (:attr:`~.lights.Light.delta`: an environment) is drawn
+        behind the object and reflected (the reflection of a point, spot or directional light in a
+        smooth surface covers no area and is not drawn).
 
     Examples
     --------
@@ -51,7 +50,7 @@ class VertexPicture:
 
     def __init__(self, mesh, camera: Camera, *, spp: int = 4, eta: float = 1.0, light=None):
         self.n_vertices = len(mesh.vertices)
-        environment = light.emitter_dict() if isinstance(light, EnvironmentLight) else None
+        environment = None if light is None or light.delta else light.emitter_dict()
         self.scene = vertex_radiance_scene(
             mesh, pinhole_sensor_dict(camera, spp), eta=eta, environment=environment
         )

@@ -40,20 +40,19 @@ from ..io.atomic import atomic_path, write_json
 from ..mitsuba import engine_versions, mitsuba, object_volpath_scene, pinhole_sensor_dict
 from .camera import Camera
 from .compare import rel_rmse
-from .lights import EnvironmentLight
 
 
 def check_reference(light, eta: float = 1.0) -> None:
     """Refuse, in one line and before any work, a reference ``volpath`` cannot render: a dielectric
     boundary (``eta`` ≠ 1) under a point, spot or directional light (module docstring)."""
-    if eta != 1.0 and not isinstance(light, EnvironmentLight):
+    if not hasattr(light, "emitter_dict"):
+        raise TranslucencyError(f"light: no reference for {plain(light)}")
+    if eta != 1.0 and light.delta:
         raise TranslucencyError(
             "reference: volpath cannot light a dielectric object with a point, spot or "
             "directional light (a delta refraction); use an env light or an index-matched "
             "data set"
         )
-    if not hasattr(light, "emitter_dict"):
-        raise TranslucencyError(f"light: no reference for {plain(light)}")
 
 
 def render_reference(

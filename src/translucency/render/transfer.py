@@ -7,10 +7,11 @@ A distant light of radiance :math:`L(\omega)` (W/(mm² sr)) gives vertex i the e
           \frac{F_t(\theta_i)}{F_t(0)}\, d\omega
 
 (visibility :math:`V_i`, the incidence law :math:`F_i` per channel and, behind a dielectric boundary,
-the Fresnel ratio: :func:`translucency.render.transport.vertex_irradiance`), and the transport
-(:func:`~translucency.render.transport.relight_vertices`, linear in E) turns it into the radiance
+the Fresnel ratio: :func:`translucency.render.irradiance.vertex_irradiance`), and the transport
+(:func:`~translucency.render.relight.relight_vertices`, linear in E) turns it into the radiance
 :math:`B_o = (T E)_o` (Lambertian exit, before the exit law).  With the light in real spherical
-harmonics, :math:`L \approx \sum_k L_k Y_k` (:mod:`.sh`), everything is linear:
+harmonics, :math:`L \approx \sum_k L_k Y_k` (:mod:`.sh`, :meth:`.lights.Light.sh_coefficients`),
+everything is linear:
 
 .. math:: B_o \approx \sum_k L_k\, t_{o,k}, \qquad t_{o,k} = \bigl(T\, E^{(k)}\bigr)_o, \qquad
           E^{(k)}_i = \frac{4\pi}{S} \sum_{s} Y_k(\omega_s)\, V_i(\omega_s)\, \cos^+\theta_{is}\,
@@ -42,8 +43,7 @@ import numpy as np
 from ..mitsuba import rays
 from ..model.boundary import fresnel_transmittance
 from . import sh
-from .lights import DirectionalLight, EnvironmentLight
-from .transport import Transport, relight_vertices
+from .relight import Transport, relight_vertices
 
 #: bands of the light basis by default: 16 coefficients per vertex and channel
 DEFAULT_BANDS = 4
@@ -80,16 +80,6 @@ class Transfer:
             E = E[:, None] if E.ndim == 1 else E
             B += self.local * (E - np.einsum("vk,kc->vc", self.irradiance, L))
         return B
-
-
-def light_coefficients(light, bands: int) -> np.ndarray:
-    """The coefficients (K, 3) of a directional or environment ``light`` (:mod:`.sh`)."""
-    if isinstance(light, DirectionalLight):
-        d = -np.asarray(light.direction, dtype=np.float64)  # the light arrives from −direction
-        return sh.project_directional(d / np.linalg.norm(d), light.irradiance, bands)
-    if isinstance(light, EnvironmentLight):
-        return sh.project_environment(light.radiance_at, bands)
-    raise TypeError(f"a {type(light).__name__} is not distant: no transfer (point and spot lights relight)")
 
 
 def transfer_vectors(

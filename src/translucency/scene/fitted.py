@@ -68,7 +68,7 @@ class FittedObject:
     coat: object = None
     acquisition: dict = field(default_factory=dict)  # the data set's header (the filling, for a reference)
     scene_unit_mm: float = 1.0
-    transport: object = None  # translucency.render.transport.Transport, once prepared
+    transport: object = None  # translucency.render.relight.Transport, once prepared
     law: object = None  # the incidence law, once prepared
     glowing: Glowing = None  # the object as a light of the scene, once prepared
 

@@ -35,22 +35,13 @@ from ..model.bounds import check_physics
 from ..model.incidence import HalfSpaceIncidence, cosine_mean, incidence_factor
 from ..render.camera import Camera
 from ..render.compare import rel_rmse
+from ..render.irradiance import vertex_irradiance
 from ..render.lights import DirectionalLight, EnvironmentLight, PointLight, SpotLight
+from ..render.parameters import neighbour_weights
 from ..render.picture import VertexPicture, coverage
-from ..render.transfer import (
-    DEFAULT_BANDS,
-    DEFAULT_DIRECTIONS,
-    Transfer,
-    light_coefficients,
-    transfer_vectors,
-)
-from ..render.transport import (
-    neighbour_weights,
-    relight_vertices,
-    transport_matrices,
-    vertex_irradiance,
-    view_cosines,
-)
+from ..render.relight import relight_vertices, view_cosines
+from ..render.transfer import DEFAULT_BANDS, DEFAULT_DIRECTIONS, Transfer, transfer_vectors
+from ..render.transport import transport_matrices
 from .maps import page_maps
 
 #: texels per row of the transfer texture (WebGL2 guarantees 2048 at least; 4096 everywhere we know)
@@ -123,7 +114,7 @@ class ObjectView:
         """Radiance per vertex (V, 3) of a light, before the exit law (the page applies it): irradiance
         with shadow rays, then the sparse transport.  With ``receivers`` (vertex indices) a draft at
         those only: their irradiance through the transport coarsened to their cells
-        (:meth:`~translucency.render.transport.Transport.coarse`, prepared on the first call)."""
+        (:meth:`~translucency.render.relight.Transport.coarse`, prepared on the first call)."""
         if receivers is None:
             E = vertex_irradiance(self.mesh, self.scene, light, self.eta, self.law)
             return relight_vertices(self.transport, E)
@@ -243,8 +234,8 @@ def transfer_errors(view: ObjectView, size=(160, 120)) -> dict:
     for name, light in lights.items():
         E = vertex_irradiance(view.mesh, view.scene, light, view.eta, view.law)
         full = relight_vertices(view.transport, E)
-        local = E if isinstance(light, DirectionalLight) else None  # the page: its shadow map
-        ours = np.maximum(stored.radiance(light_coefficients(light, stored.bands), local), 0.0)
+        local = E if light.delta else None  # the page: its shadow map
+        ours = np.maximum(stored.radiance(light.sh_coefficients(stored.bands), local), 0.0)
         out[name] = rel_rmse(picture.draw(full * exit_law), picture.draw(ours * exit_law), mask)
     return out
 
@@ -367,7 +358,7 @@ def _light_data(view: ObjectView) -> tuple[dict, dict]:
     transfer = view.transfer
     meta, arrays = encode_transfer(transfer)
     exit_law = _law_arrays(view, arrays)
-    env = light_coefficients(view.environment, transfer.bands)
+    env = view.environment.sh_coefficients(transfer.bands)
     # the exposure: the default light's picture at 0.5 for its brightest percent of vertices
     default = view.relight(view.light_at("directional", _unit(*DEFAULT_LIGHT)))
     bright = float(

@@ -21,7 +21,7 @@ from ..evaluate.rings import ring_stats
 from ..model.bounds import check_physics
 from ..render import sh
 from ..render.lights import EnvironmentLight
-from ..render.transfer import DEFAULT_BANDS, Transfer, light_coefficients
+from ..render.transfer import DEFAULT_BANDS, Transfer
 from .maps import page_maps
 from .object_page import (
     DEFAULT_LIGHT,
@@ -116,7 +116,7 @@ def planar_page_data(
         "eta": 1.0,
         "exposure": 0.5 / bright if bright > 0 else 1.0,
         "blur_mm": 0.0,
-        "env": {"coefficients": light_coefficients(environment, bands).tolist()},
+        "env": {"coefficients": environment.sh_coefficients(bands).tolist()},
         "errors": {},
         "about": "A flat, index-matched sample: nothing shadows, every point sees the same sky, so the "
         "relit sample is α ρ / π times the irradiance (exact for the paper's model with a Lambertian exit).",

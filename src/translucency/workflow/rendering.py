@@ -216,7 +216,7 @@ def render_model(
             work.fresh = not numbers.get("reference_cached", False)
         ours = read_hdr(folder / "ours.exr")
         ref = read_hdr(folder / "reference.exr") if reference else None
-    summary = {"command": "render", "model": model, "images": out, **numbers, "light": _light_record(lit)}
+    summary = {"command": "render", "model": model, "images": out, **numbers, "light": lit.record()}
     return Rendering(ours, ref, numbers, None if out is None else folder, run.summary(summary))
 
 
@@ -416,11 +416,6 @@ def render_scene(
     summary["seconds"] = time.perf_counter() - t
     write_json(out / "scene.json", jsonable(summary))
     return SceneRendering(ours, ref, out, run.summary(summary))
-
-
-def _light_record(light) -> dict:
-    """A light as JSON: its kind (point, directional, spot, environment) and its parameters."""
-    return {"kind": type(light).__name__.removesuffix("Light").lower(), **dataclasses.asdict(light)}
 
 
 def _plot(ref_ldr, our_ldr, flip_map, objects, errors, path) -> None:

@@ -1,0 +1,184 @@
+r"""Relighting: the radiance of every vertex under a light, from a prepared :class:`Transport`.
+
+Per channel λ, the radiance leaving vertex o (W/(mm² sr)) for the irradiance E (W/mm²,
+:mod:`.irradiance`) is
+
+.. math:: L_\lambda = T_\lambda E \;+\; \mathrm{own}_\lambda \odot E \;+\;
+          \alpha \odot W F_\lambda B_\lambda (s_\lambda E)
+
+— the sparse near matrices, the measured own area and the far field (:mod:`.transport` builds them) —
+one sparse product per channel (:func:`relight_vertices`); :meth:`Transport.rows` keeps a few receivers'
+rows and :meth:`Transport.coarse` sums the columns of cells for a draft.  The exitance :math:`\pi L`
+leaves Lambertian, or behind a dielectric boundary with the angular shape of the transmission,
+:math:`L(\theta_o) = M\, F_t(\theta_o) / (\pi (1 - F_{dr,e}))` (:func:`exit_fresnel`), or with the
+incidence law's reciprocal exit (:func:`relight_object`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+from numba import njit, prange
+from scipy.spatial import cKDTree
+
+from ..model.boundary import exit_factor
+from ..model.incidence import incidence_law
+from ._far_field import FarField
+from .irradiance import vertex_irradiance
+
+
+def view_cosines(mesh, viewpoint) -> np.ndarray:
+    r""":math:`\cos\theta_o` per vertex: its normal against the direction to ``viewpoint`` (mm)."""
+    to = np.asarray(viewpoint, dtype=np.float64) - np.asarray(mesh.vertices, dtype=np.float64)
+    return np.einsum("vk,vk->v", to, np.asarray(mesh.vertex_normals)) / np.linalg.norm(to, axis=1)
+
+
+def exit_fresnel(mesh, viewpoint, eta: float) -> np.ndarray:
+    r"""Per-vertex factor :math:`F_t(\theta_o)/(1 - F_{dr,e})` toward ``viewpoint`` (1 where η = 1)."""
+    if eta == 1.0:
+        return np.ones(len(mesh.vertices))
+    return exit_factor(view_cosines(mesh, viewpoint), eta)
+
+
+@dataclass(kw_only=True)
+class Transport:
+    r"""The prepared transport: L_λ = T_λ E per channel (:func:`.transport.transport_matrices`).
+
+    Either three matrices (one fall-off per channel) or one matrix T with the
+    incident vertices' colour scale, :math:`T_\lambda = T\,\mathrm{diag}(s_\lambda)`; with a
+    measured near field the own-area term is kept apart per channel:
+    :math:`L_\lambda \mathrel{+}= \mathrm{own}_\lambda E`; the pairs beyond the near radius are the
+    far field, :math:`L_\lambda \mathrel{+}= \alpha \odot W F_\lambda B_\lambda (s_\lambda E)`
+    (:class:`translucency.render._far_field.FarField`).
+    """
+
+    matrices: list  # CSR (V × V), float32: one or three
+    scale: np.ndarray | None = None  # (V, 3) colour scale of the incident vertex (one matrix)
+    own: np.ndarray | None = None  # (V, 3) A_i own_i / π: each vertex's own area, per channel (measured)
+    far: FarField | None = None  # the pairs beyond the near radius (None: truncated, or none there)
+    reflectance: np.ndarray | None = None  # (V, 3) measured normal-incidence total reflectance, blended
+    through: bool = False  # the model's through-body table is in the matrices (model/through.py)
+    receivers: np.ndarray | None = None  # the vertices whose radiance it gives (None: all; :meth:`rows`)
+
+    def incidence(self, name: str = "half-space", eta: float = 1.0):
+        """The incidence law ``name`` for this object (:func:`translucency.model.incidence.incidence_law`)."""
+        return incidence_law(name, self.reflectance, eta)
+
+    @property
+    def nnz(self) -> int:
+        """Stored pairs per channel."""
+        return int(self.matrices[0].nnz)
+
+    def coarse(self, vertices, receivers) -> Transport:
+        r"""A draft between a few vertices: the irradiance is given at ``receivers`` only (indices into the
+        mesh's ``vertices``, mm), each standing for the vertices nearest it (its cell); the radiance
+        comes back at the receivers.  The columns of every cell are summed once,
+        :math:`T'_{rj} = \sum_{i \in j} T_{ri}`, and a shared colour scale is taken per cell (its
+        mean) — a coarser quadrature of the same transport, for a light that moves (the full one when
+        it stops)."""
+        r = np.asarray(receivers, dtype=np.int64)
+        v = np.asarray(vertices, dtype=np.float64)
+        _, cell = cKDTree(v[r]).query(v)
+        P = sp.csr_matrix((np.ones(len(v), np.float32), (np.arange(len(v)), cell)), shape=(len(v), len(r)))
+        scale = None
+        if self.scale is not None:
+            count = np.bincount(cell, minlength=len(r))[:, None]
+            scale = (P.T @ self.scale.astype(np.float64) / np.maximum(count, 1)).astype(np.float32)
+        sub = self.rows(r)  # the receivers' rows, then their columns summed per cell
+        far = sub.far
+        if far is not None:
+            far = dataclasses.replace(far, B=[(B @ P).tocsr() for B in far.B])
+        matrices = [(T @ P).tocsr() for T in sub.matrices]
+        return dataclasses.replace(sub, matrices=matrices, scale=scale, far=far, receivers=None)
+
+    def rows(self, receivers) -> Transport:
+        """The same transport giving the radiance of ``receivers`` (vertex indices) only: the rows of the
+        near matrices and of the far field's interpolation (a relight of a few vertices under a light
+        that lights them all)."""
+        r = np.asarray(receivers, dtype=np.int64)
+        far = None
+        if self.far is not None:
+            far = dataclasses.replace(
+                self.far, W=self.far.W[r], alpha=self.far.alpha[r], label=self.far.label[r]
+            )
+        return dataclasses.replace(
+            self,
+            matrices=[T[r] for T in self.matrices],
+            own=None if self.own is None else self.own[r],
+            reflectance=None if self.reflectance is None else self.reflectance[r],
+            far=far,
+            receivers=r,
+        )
+
+
+@njit(parallel=True, cache=True)
+def _csr_times_rgb(indptr, indices, data, X, out):
+    """out = T X for a CSR matrix T and three columns X (V, 3): each row's pairs read once, rows on all
+    cores."""
+    for o in prange(indptr.shape[0] - 1):
+        a0 = a1 = a2 = np.float32(0.0)
+        for j in range(indptr[o], indptr[o + 1]):
+            w, col = data[j], indices[j]
+            a0 += w * X[col, 0]
+            a1 += w * X[col, 1]
+            a2 += w * X[col, 2]
+        out[o, 0], out[o, 1], out[o, 2] = a0, a1, a2
+
+
+def relight_vertices(transport: Transport, E: np.ndarray) -> np.ndarray:
+    """Radiance per vertex (V, 3) for irradiance E (V,) or (V, 3): one sparse product, plus the far field
+    (per receiving vertex, (R, 3), for a transport restricted by :meth:`Transport.rows`).
+
+    With one shared matrix the three channels go through it together (the matrix is read once,
+    rows on all cores, Numba); otherwise one SciPy product per channel.  The far field (if prepared)
+    adds two sparse products and one K × K product per channel.
+    """
+    E = np.asarray(E, dtype=np.float32)
+    E = np.repeat(E[:, None], 3, axis=1) if E.ndim == 1 else E
+    rows = transport.matrices[0].shape[0]
+    if transport.scale is None:  # one matrix per channel
+        X = E
+        out = np.stack([T @ E[:, ch] for ch, T in enumerate(transport.matrices)], axis=1)
+    else:
+        X, T, out = (
+            np.ascontiguousarray(E * transport.scale),
+            transport.matrices[0],
+            np.empty((rows, 3), np.float32),
+        )
+        _csr_times_rgb(T.indptr, T.indices, T.data, X, out)
+    if transport.own is not None:  # the receivers' own area: their own irradiance
+        out += transport.own * (E if transport.receivers is None else E[transport.receivers])
+    if transport.far is not None:  # the pairs beyond the near radius, through the clusters
+        out += transport.far.apply(X)
+    return out
+
+
+def relight_object(
+    transport: Transport, mesh, scene, light, viewpoint, *, eta: float = 1.0, incidence: str = "half-space"
+):
+    r"""What the camera at ``viewpoint`` sees of every vertex under ``light``: radiance (V, 3), W/(mm² sr).
+
+    The whole chain once: the irradiance with shadows and the incidence law
+    (:func:`vertex_irradiance`, :mod:`translucency.model.incidence`), the transport
+    (:func:`relight_vertices`), the exit toward the camera — the boundary's Fresnel law
+    (:func:`exit_fresnel`, η ≠ 1) or the incidence law's reciprocal exit (η = 1).
+
+    Returns
+    -------
+    L : ndarray, shape (V, 3)
+    E : ndarray, shape (V,) or (V, 3)
+        The (effective) irradiance.
+    law : the incidence law used (its ``name`` goes into summaries).
+
+    Examples
+    --------
+    >>> L, E, law = relight_object(T, mesh, scene, light, camera.origin)  # doctest: +SKIP
+    """
+    law = transport.incidence(incidence, eta)
+    E = vertex_irradiance(mesh, scene, light, eta, law)
+    L = relight_vertices(transport, E) * exit_fresnel(mesh, viewpoint, eta)[:, None]
+    exit_law = law.exit(view_cosines(mesh, viewpoint))
+    return (L if exit_law is None else L * exit_law), E, law
