@@ -29,8 +29,9 @@ def ball(tmp_path_factory):
     kw = {"voxel_mm": 1.0, "points": 4, "photons": 3000, "index_matched": True}
     data = tl.acquire_mesh(mesh, folder / "ball.zarr", "homogeneous:marble", seed=0, **kw)
     truth = tl.acquire_mesh(mesh, folder / "ball_seed1.zarr", "homogeneous:marble", seed=1, **kw)
-    fit = tl.fit_model(data, max_rounds=2)
-    save_model(fit.model, folder / "ball.model.zip", meta=fit.metadata(data.path))
+    fit = tl.fit_model(
+        data, "iso", folder / "ball.model.zip", max_rounds=2
+    ).result  # written, with its record
     return data, truth, fit, folder
 
 

@@ -386,22 +386,24 @@ def stated_more_than_once(root: Path) -> list[str]:
 
 
 def lights_told_apart_outside_lights(root: Path) -> list[str]:
-    """No ``isinstance`` (``issubclass``) on a light class outside ``render/lights.py``: the rest of the
+    """No ``isinstance`` (``issubclass``) on a light class outside ``render/lights/``: the rest of the
     package asks a light through its protocol (``render.lights.Light``), so that a new kind of light is one
     class there.
 
-    A light class: a class of ``render/lights.py`` whose name ends in ``Light``, named plainly or as an
-    attribute (``lights.PointLight``), alone or in a tuple.
+    A light class: a class of ``render/lights`` (a module, or a package and its modules) whose name ends
+    in ``Light``, named plainly or as an attribute (``lights.PointLight``), alone or in a tuple.
     """
-    home = _by_name(root).get(f"{root.name}.render.lights")
-    if home is None:
-        return []
+    home = f"{root.name}.render.lights"
+    homes = [m for m in modules(root) if m.name == home or m.name.startswith(home + ".")]
     kinds = {
-        node.name for node in home.tree.body if isinstance(node, ast.ClassDef) and node.name.endswith("Light")
+        node.name
+        for module in homes
+        for node in module.tree.body
+        if isinstance(node, ast.ClassDef) and node.name.endswith("Light")
     }
     offenders = []
     for module in modules(root):
-        if module is home:
+        if module in homes:
             continue
         for node in ast.walk(module.tree):
             if not (
@@ -417,7 +419,7 @@ def lights_told_apart_outside_lights(root: Path) -> list[str]:
             }
             if named & kinds:
                 on = ", ".join(sorted(named & kinds))
-                what = f"tells lights apart ({node.func.id} on {on}) outside render/lights.py"
+                what = f"tells lights apart ({node.func.id} on {on}) outside render/lights"
                 offenders.append(module.at(node, what))
     return offenders
 

@@ -145,7 +145,7 @@ def render_model(
         check_option("size", v, hi=16384)
     chosen_exposure = parse_exposure(exposure, name="exposure")
     relative = parse_light(light) if isinstance(light, str) else light  # placed once the object is known
-    if not hasattr(relative, "emitter_dict"):
+    if not hasattr(relative, "place"):  # a light, or one placed relative to the object
         raise TranslucencyError(f"light: expected a light or its text (point:x,y,z,I …), got {light!r}")
     run = Run("render", max_memory=max_memory, reporter=reporter)
     # the arguments first (no file read), then the model and what it implies, then the output, then work

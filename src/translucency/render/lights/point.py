@@ -1,0 +1,77 @@
+"""The isotropic point light: intensity I (W/sr) at a position (mm)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from ..._validate import TranslucencyError, plain
+from ...mitsuba import mitsuba
+from .light import DEFAULT_INTENSITY, _DeltaLight
+
+if TYPE_CHECKING:  # the placement's types, for the signatures only
+    from .placement import Placement, RelativeLight
+
+
+def _from_position(scene, position, intensity, x, n) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:meth:`_DeltaLight.arrival` of an isotropic intensity I (W/sr) at ``position`` (mm); a one-line
+    error for a position inside the object."""
+    mi = mitsuba()
+    p = np.asarray(position, dtype=np.float64)
+    # inside a closed, outward-oriented surface a ray first meets a face from its back
+    probe = scene.ray_intersect(mi.Ray3f(mi.Point3f(*map(float, p)), mi.Vector3f(0.5773, 0.5774, 0.5773)))
+    if (
+        bool(probe.is_valid()[0])
+        and float(
+            np.asarray(probe.n.x)[0] * 0.5773
+            + np.asarray(probe.n.y)[0] * 0.5774
+            + np.asarray(probe.n.z)[0] * 0.5773
+        )
+        > 0
+    ):
+        raise TranslucencyError(f"light: the point light at {plain(p)} mm is inside the object")
+    to = p - x
+    dist = np.linalg.norm(to, axis=1)
+    w = to / dist[:, None]
+    E = intensity * np.maximum((w * n).sum(1), 0.0) / dist**2
+    return w, E, dist
+
+
+@dataclass(frozen=True)
+class PointLight(_DeltaLight):
+    """Isotropic point light: intensity I (W/sr) at ``position`` (mm)."""
+
+    kind = prefix = "point"
+    forms = "point:x,y,z[,I]"
+    counts, power_index = (3, 4), 3
+    relative_tail = ("distance", "intensity")
+    relative_form = "point@AZ,EL[,DIST[,I]]"
+    distant = False
+
+    position: tuple
+    intensity: float = DEFAULT_INTENSITY
+
+    @classmethod
+    def of_numbers(cls, text: str, v: list) -> PointLight:
+        return cls(tuple(v[:3]), *(v[3:] or []))
+
+    @classmethod
+    def placed(cls, relative: RelativeLight, placement: Placement) -> PointLight:
+        position, _ = relative.position(placement)
+        return cls(position, relative.power_or(DEFAULT_INTENSITY))
+
+    def emitter_dict(self) -> dict:
+        return {
+            "type": "point",
+            "position": [float(v) for v in self.position],
+            "intensity": float(self.intensity),
+        }
+
+    def irradiance_scale(self, distance: float) -> float:
+        """Irradiance (W/mm²) on a surface facing the light at ``distance`` mm: I / d²."""
+        return float(self.intensity) / float(distance) ** 2
+
+    def arrival(self, scene, x, n):
+        return _from_position(scene, self.position, self.intensity, x, n)
