@@ -54,6 +54,26 @@ class Chunk:
 
     Geometry is (1, J) when every window lies alike around its point (the
     usual case: points snapped to pixel centres) and (k, J) otherwise.
+
+    Examples
+    --------
+    Two points sharing one geometry row of 4 pixels, the centre pixel unused; beyond 1 mm a pixel
+    counts 1 mm / r:
+
+    >>> from translucency.fit._windows import Segments, radius_groups
+    >>> r = np.array([[0.0, 0.5, 1.0, 2.0]])
+    >>> gid, r_g, r_base = radius_groups(r, 0.5)
+    >>> ch = Chunk(y=np.ones((2, 4, 3)), valid=np.array([[False, True, True, True]] * 2),
+    ...            balance=np.minimum(1.0, 1.0 / np.maximum(r, 1e-9)), var_ring=None, r=r,
+    ...            theta=np.zeros_like(r), gid=gid, r_g=r_g, r_base=r_base,
+    ...            rings=Segments.of(gid, 2, r_g.size), base=np.array([[0], [10]]),
+    ...            local=np.arange(4)[None])
+    >>> ch.static.tolist()
+    [[0.0, 1.0, 1.0, 0.5], [0.0, 1.0, 1.0, 0.5]]
+    >>> ch.pixel.tolist()
+    [[0, 1, 2, 3], [10, 11, 12, 13]]
+    >>> ch.per_channel(ch.static).shape
+    (2, 4, 3)
     """
 
     y: np.ndarray  # (k, J, 3) data, 0 off the valid pixels

@@ -28,6 +28,22 @@ class Params:
 
     Every family reads the arrays it uses: the exponential families c, a (and s for
     the shared colour), the two-parameter baselines p; α is the modulation texture.
+
+    Examples
+    --------
+    >>> P = Params(c=np.zeros((2, 1, 1, 1)), a=np.ones((2, 1, 1, 1)), p=np.ones((2, 3, 2)),
+    ...            s=np.ones((2, 3)), alpha=np.ones((4, 4)))
+    >>> q = P.copy()
+    >>> q.c += 1.0                 # a copy is independent
+    >>> float(P.c.sum()), float(q.c.sum())
+    (0.0, 2.0)
+    >>> row = P.rows(1, 2)         # views: a write reaches P; α is shared
+    >>> row.c[...] = 7.0
+    >>> P.c.ravel().tolist(), row.alpha is P.alpha
+    ([0.0, 7.0], True)
+    >>> P.assign(q)
+    >>> P.c.ravel().tolist()
+    [1.0, 1.0]
     """
 
     #: the arrays of a set, in checkpoint order
@@ -72,6 +88,44 @@ class FitState:
     the *reference* state ``ref`` whose model gives the common weights of rounds 2, 3, …
     (set once, after round 1), and the *best* state found so far, ``best``, with its
     objective under those weights (``best_score``).
+
+    Parameters
+    ----------
+    P, C, m, n : int
+        Incident points, colour rows, directions and exponential terms.
+    alpha_shape : tuple of int
+        The shape of α (the source's).
+    n_chunks : int
+        Chunks of a round (one Φ each).
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> st = FitState(P=4, C=1, m=1, n=2, alpha_shape=(3, 3))
+    >>> st.c.shape, st.p.shape, st.alpha.shape
+    ((4, 1, 1, 2), (4, 3, 2), (3, 3))
+    >>> st.c[1] = 0.5
+    >>> st.keep("best")
+    >>> st.c[1] = 9.0
+    >>> st.restore_best()
+    >>> float(st.c[1].max())
+    0.5
+
+    A checkpoint is taken back only by the same request with the same shapes:
+
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "fit.ckpt.npz"
+    >>> st.save(path, "request A")
+    >>> back = FitState(4, 1, 1, 2, (3, 3))
+    >>> back.load(path, "request B"), back.load(path, "request A"), float(back.c[1].max())
+    (False, True, 0.5)
+    >>> FitState(5, 1, 1, 2, (3, 3)).load(path, "request A")
+    False
+
+    Chunks are added in order only:
+
+    >>> st.add(1, None, 0, 1, 0.0, 0.0, None, None)
+    Traceback (most recent call last):
+    ValueError: chunk 1 added out of order (next: 0)
     """
 
     #: the parameters of one incident point each, and its other arrays (copied per chunk, committed back)

@@ -57,6 +57,41 @@ def run_figure2(
     per-vertex model to ``model_path`` (replacing an earlier one with ``overwrite``) and Figure 2 into
     ``report_dir``.  The reference is the mean of two ``spp``-sample volpath renders, shipped with the
     package for the default arguments (``make default-reference`` makes it again).
+
+    Parameters
+    ----------
+    report_dir : str or Path
+        Where ``figure2.png`` and ``figure2.json`` go.
+    data_path, model_path : str or Path
+        The mesh data set and the per-vertex model file to write.
+    points, photons : int
+        Incident vertices and photons per vertex and channel of the acquisition.
+    spp : int
+        Samples per pixel of each of the reference's two renders.
+    size : (int, int)
+        The picture's width and height, pixels.
+    overwrite : bool
+        Replace a model file at ``model_path``.
+    extension_dir : str or Path, optional
+        Where the through-body picture goes (none without).
+
+    Returns
+    -------
+    dict
+        Figure 2's numbers (as ``figure2.json``): the errors against the reference, its noise, the
+        timings and ``speedup_vs_reference``.
+
+    Examples
+    --------
+    The main job's Figure 2 (minutes: the acquisition and the fit; the reference is shipped):
+
+    >>> import tempfile
+    >>> d = Path(tempfile.mkdtemp())
+    >>> out = run_figure2(d / "report", d / "pig.zarr", d / "pig.model.zip")  # doctest: +SKIP
+    >>> out["reference_spp"], Path(out["reference_cached"]).name  # doctest: +SKIP
+    (256, 'references')
+    >>> sorted(p.name for p in (d / "report").glob("figure2.*"))  # doctest: +SKIP
+    ['figure2.json', 'figure2.png']
     """
     pig, volume, light, camera = figure2_scene(size)
     acquire_mesh(
@@ -106,7 +141,39 @@ def run_figure2(
 
 
 def write_figure2_reference(folder=None, *, spp: int = FIGURE2_REFERENCE_SPP, size=(160, 120)) -> dict:
-    """Render the main job's converged reference into ``folder`` (default: the shipped references)."""
+    """Render the main job's converged reference into ``folder`` (default: the shipped references).
+
+    Parameters
+    ----------
+    folder : str or Path, optional
+        The reference cache to look in and write to (default: the shipped references).
+    spp : int
+        Samples per pixel of each of the two renders.
+    size : (int, int)
+        The picture's width and height, pixels.
+
+    Returns
+    -------
+    dict
+        ``key``, ``spp``, ``noise`` (relative RMSE of the mean of the two renders), ``seconds`` (path
+        tracing) and ``cached`` (the folder it was found in; None when rendered now).
+
+    Examples
+    --------
+    The shipped reference was rendered at :data:`FIGURE2_REFERENCE_SPP` samples per pixel, twice:
+
+    >>> import json
+    >>> shipped = [json.loads(p.read_text()) for p in SHIPPED_REFERENCES.glob("*.json")]
+    >>> [(ref["spp"], ref["renders"]) for ref in shipped] == [(FIGURE2_REFERENCE_SPP, 2)]
+    True
+
+    With the default arguments it is found there and nothing is rendered (a few seconds: the scene and
+    its key); into another folder the two renders take about 13 minutes:
+
+    >>> info = write_figure2_reference()  # doctest: +SKIP
+    >>> info["spp"], info["renders"], Path(info["cached"]).name  # doctest: +SKIP
+    (256, 2, 'references')
+    """
     pig, volume, light, camera = figure2_scene(size)
     _, info = converged_reference(
         pig, volume, light, camera, coverage(pig, camera), spp=spp, cache=folder or SHIPPED_REFERENCES

@@ -31,7 +31,17 @@ from ..io.outputs import output_lock
 
 @dataclass(frozen=True)
 class Chunk:
-    """Chunk ``index`` of an import: the laser shots ``lo`` … ``hi`` − 1."""
+    """Chunk ``index`` of an import: the laser shots ``lo`` … ``hi`` − 1.
+
+    Examples
+    --------
+    >>> c = Chunk(index=2, lo=16, hi=20)  # the last, short chunk of 20 shots at 8 a chunk
+    >>> c.hi - c.lo
+    4
+    >>> c.lo = 0
+    Traceback (most recent call last):
+    dataclasses.FrozenInstanceError: cannot assign to field 'lo'
+    """
 
     index: int
     lo: int
@@ -39,7 +49,38 @@ class Chunk:
 
 
 class Importer(Protocol):
-    """An import whose setup is read and checked: its chunks of laser shots → its data set."""
+    """An import whose setup is read and checked: its chunks of laser shots → its data set.
+
+    Examples
+    --------
+    A toy importer of 5 shots, 2 a chunk, whose data set lives in memory; run again, it finds every
+    chunk done and imports nothing (progress is counted in shots, those done before included):
+
+    >>> import tempfile
+    >>> from types import SimpleNamespace
+    >>> ds = SimpleNamespace(group={"chunk_done": np.zeros(3, bool)}, values=np.zeros(5, int))
+    >>> class Squares:
+    ...     n_points, chunk_points = 5, 2
+    ...     def create(self, out, *, overwrite):
+    ...         return ds
+    ...     def import_chunks(self, ds, todo):
+    ...         for c in todo:
+    ...             ds.values[c.lo : c.hi] = np.arange(c.lo, c.hi) ** 2
+    ...             ds.group["chunk_done"][c.index] = True  # written last
+    ...             yield c
+    ...     def finish(self, ds, done):
+    ...         return ds.values.tolist()
+    >>> out = Path(tempfile.mkdtemp()) / "toy"
+    >>> show = lambda done, total: print(done, "of", total)
+    >>> run_import(Squares(), out, progress=show)
+    2 of 5
+    4 of 5
+    5 of 5
+    [0, 1, 4, 9, 16]
+    >>> run_import(Squares(), out, progress=show)
+    5 of 5
+    [0, 1, 4, 9, 16]
+    """
 
     @property
     def n_points(self) -> int:

@@ -85,7 +85,26 @@ def _models(text: str) -> dict:
 
 
 def register_mitsuba_plugin() -> None:
-    """Register ``<integrator type="translucency">`` with Mitsuba (module docstring)."""
+    """Register ``<integrator type="translucency">`` with Mitsuba (module docstring).
+
+    Loading the integrator only reads its parameters (the model files are opened on the first
+    render); a malformed ``models`` is refused when the scene is loaded.
+
+    Examples
+    --------
+    >>> from translucency.mitsuba import mitsuba
+    >>> mi = mitsuba()
+    >>> register_mitsuba_plugin()
+    >>> integrator = mi.load_dict({"type": "translucency", "models": "pig=/data/pig.model.zip",
+    ...                            "samples": 8})
+    >>> integrator.models, integrator.options["samples"], integrator.options["scene_unit_mm"]
+    ({'pig': PosixPath('/data/pig.model.zip')}, 8, 1.0)
+    >>> try:
+    ...     mi.load_dict({"type": "translucency", "models": "pig"})
+    ... except RuntimeError as exc:  # Mitsuba wraps the plugin's error; its last line is ours
+    ...     print(str(exc).splitlines()[-1])
+    TranslucencyError: integrator translucency: models: expected id=FILE pairs, got 'pig'
+    """
     mi = mitsuba()
     base = integrator_class()
 

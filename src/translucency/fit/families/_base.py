@@ -50,6 +50,27 @@ class Family(ABC):
     time_terms : dict
         Seconds of ``translucency fit`` on the development machine: ``overhead`` and per
         ``point_pixels`` (points × window pixels, or vertices, × rounds).
+
+    Examples
+    --------
+    The isotropic family's profile is Σ_k c_k e^{−a_k r}: one term c = 1 mm⁻², a = 2 mm⁻¹ gives
+    e^{−2r}; normalising α to mean 1/2 moves the factor into c (αP unchanged):
+
+    >>> import numpy as np
+    >>> from translucency.fit.families import FAMILIES
+    >>> from translucency.fit.state import FitState
+    >>> iso = FAMILIES["iso"]
+    >>> iso, iso.shared_colour, iso.keeps_alpha_scale, FAMILIES["dipole"].keeps_alpha_scale
+    (<IsoFamily 'iso'>, True, False, True)
+    >>> iso.params_per_point(2, 1, "per-channel"), iso.params_per_point(2, 1, "shared")
+    (14, 6)
+    >>> st = FitState(P=1, C=1, m=1, n=1, alpha_shape=(2, 2))
+    >>> st.c[...], st.a[...] = 1.0, 2.0
+    >>> iso.profiles(None, st, slice(0, 1), np.array([0.0, 0.5, 1.0])).ravel().round(4)
+    array([1.    , 0.3679, 0.1353])
+    >>> iso.rescale(st, 0.5)
+    >>> st.c.ravel().tolist()
+    [0.5]
     """
 
     name: ClassVar[str]

@@ -88,6 +88,29 @@ def import_object(
     dict
         ``path``, ``cameras`` (reprojection errors, vertices seen), ``exit_law``, ``energy`` (per shot:
         Σ_v A_v R_d per channel), ``flags`` (counts), ``seconds`` and ``bytes_read`` (image bytes).
+
+    Raises
+    ------
+    TranslucencyError
+        One line: a fault of the rig file, a camera or the mesh, or another import at ``out``.
+
+    Examples
+    --------
+    A folder without ``object.json`` is refused before anything is written:
+
+    >>> import tempfile
+    >>> try:
+    ...     import_object(tempfile.mkdtemp(), "unused.zarr")
+    ... except TranslucencyError as exc:
+    ...     print(str(exc).split("/")[-1])
+    object.json: cannot read (No such file or directory)
+
+    A virtual rig's hand-over (:func:`~translucency.rig.object.photographs.photograph_object`)
+    imported (ray casting and reading the images take seconds):
+
+    >>> info = import_object("sphere-rig", "sphere.zarr", exit_law="lambertian")  # doctest: +SKIP
+    >>> sorted(info["flags"]), len(info["energy"]), len(info["energy"][0])  # doctest: +SKIP
+    (['grazing', 'saturated', 'spot', 'unseen'], 2, 3)
     """
     t0 = time.perf_counter()
     importer = ObjectImport.from_setup(rig, chunk_points=chunk_points, exit_law=exit_law)
@@ -120,7 +143,26 @@ def import_object(
 @dataclass
 class ObjectImport:
     """An object rig read and checked, its cameras posed and mapped, its hits snapped, its exit law chosen:
-    the :class:`~translucency.rig.contract.Importer` of a mesh data set."""
+    the :class:`~translucency.rig.contract.Importer` of a mesh data set.
+
+    Examples
+    --------
+    >>> try:
+    ...     ObjectImport.from_setup("sphere-rig", chunk_points=0)
+    ... except TranslucencyError as exc:
+    ...     print(exc)
+    chunk_points: must be >= 1, got 0
+
+    Read, posed and mapped once (seconds), then run chunk by chunk, resumable:
+
+    >>> from translucency.rig.contract import run_import
+    >>> imp = ObjectImport.from_setup("sphere-rig", chunk_points=1)  # doctest: +SKIP
+    >>> imp.n_points, [c.camera.name for c in imp.cameras]  # doctest: +SKIP
+    (2, ['cam0', 'cam1', 'cam2'])
+    >>> flags = run_import(imp, "sphere.zarr")  # pairs unseen, saturated, grazing, spot  # doctest: +SKIP
+    >>> flags.shape  # doctest: +SKIP
+    (4,)
+    """
 
     setup: ObjectRig
     mesh: object  # trimesh.Trimesh, mm

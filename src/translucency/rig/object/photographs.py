@@ -54,7 +54,19 @@ SHORT_EXPOSURE = 0.02
 class LaserBeam:
     """A spot ``distance_mm`` from the surface lighting a disc of ``radius_mm`` (Mitsuba's linear fall-off
     from :data:`translucency.mitsuba.SPOT_BEAM_FRACTION` of the cutoff; its power
-    :func:`translucency.rig.shared.spot.spot_power`)."""
+    :func:`translucency.rig.shared.spot.spot_power`).
+
+    Examples
+    --------
+    The spot keeps its disc wherever it sits: half as far, its cone is twice as wide and its power per
+    unit intensity four times as large (the solid angle, to small-angle accuracy):
+
+    >>> beam = LaserBeam(radius_mm=0.3, distance_mm=60.0)
+    >>> round(beam.cutoff_deg(60.0), 4), round(beam.cutoff_deg(30.0) / beam.cutoff_deg(60.0), 4)
+    (0.2865, 2.0)
+    >>> round(beam.power(30.0) / beam.power(60.0), 3)
+    4.0
+    """
 
     radius_mm: float = 0.3
     distance_mm: float = 60.0
@@ -159,6 +171,30 @@ def photograph_object(
     -------
     dict
         ``folder``, ``incident`` (vertex indices), ``cameras`` (the true ones), ``seconds``.
+
+    Examples
+    --------
+    A refusal comes before any render:
+
+    >>> try:
+    ...     photograph_object(None, None, "unused", spp=0)
+    ... except TranslucencyError as exc:
+    ...     print(exc)
+    spp: must be >= 1, got 0
+
+    A sphere of skin from three cameras (renders take tens of seconds):
+
+    >>> import tempfile, trimesh  # doctest: +SKIP
+    >>> from translucency.acquire.mesh import object_volume  # doctest: +SKIP
+    >>> mesh = trimesh.creation.icosphere(subdivisions=2, radius=6.0)  # doctest: +SKIP
+    >>> volume = object_volume("homogeneous:skin1", mesh, 0.5, seed=1)  # doctest: +SKIP
+    >>> folder = Path(tempfile.mkdtemp()) / "sphere-rig"  # doctest: +SKIP
+    >>> out = photograph_object(mesh, volume, folder, n_points=2, n_cameras=3, resolution=(32, 32),
+    ...                         spp=4)  # doctest: +SKIP
+    >>> sorted(out), len(out["incident"]), len(out["cameras"])  # doctest: +SKIP
+    (['cameras', 'folder', 'incident', 'seconds'], 2, 3)
+    >>> sorted(p.name for p in folder.glob("*.json"))  # doctest: +SKIP
+    ['object.json', 'truth.json']
     """
     t0 = time.perf_counter()
     if image_format not in ("pfm", "exr"):

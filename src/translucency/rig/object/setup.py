@@ -90,7 +90,29 @@ class ObjectShot:
 
 @dataclass(frozen=True)
 class ObjectRig:
-    """A checked ``object.json``."""
+    """A checked ``object.json``.
+
+    Examples
+    --------
+    The smallest rig file: one camera with K and its pose, one shot; the rest takes its defaults:
+
+    >>> import json, tempfile
+    >>> d = Path(tempfile.mkdtemp())
+    >>> for name in ("scan.ply", "s0.pfm"):  # only their presence is checked here
+    ...     _ = (d / name).write_bytes(b"")
+    >>> camera = {"name": "cam0", "width": 160, "height": 120, "radiometry": {"k": 5e6},
+    ...           "intrinsics": {"K": [[200, 0, 79.5], [0, 200, 59.5], [0, 0, 1]]},
+    ...           "pose": {"R": np.eye(3).tolist(), "t": [0, 0, 100]}}
+    >>> rig = {"format": "translucency-object-rig", "version": 1, "mesh": {"file": "scan.ply"},
+    ...        "cameras": [camera],
+    ...        "shots": [{"hit": {"vertex": 12}, "power": 0.5, "images": {"cam0": ["s0.pfm"]}}]}
+    >>> _ = (d / "object.json").write_text(json.dumps(rig))
+    >>> r = read_object_rig(d / "object.json")
+    >>> r.eta, r.exit_law, r.grazing_deg, r.min_coverage, r.scale_mm
+    (1.0, 'lambertian', 75.0, 0.5, 1.0)
+    >>> r.shots[0].power, r.shots[0].frames["cam0"][0].exposure_s, [p.name for p in r.files]
+    (0.5, 1.0, ['scan.ply', 's0.pfm'])
+    """
 
     path: Path
     folder: Path
@@ -145,7 +167,50 @@ def _file(folder: Path, name, where: str) -> Path:
 
 
 def read_object_rig(path) -> ObjectRig:
-    """Read and check ``object.json`` (module notes); every fault is one line naming the entry."""
+    """Read and check ``object.json`` (module notes); every fault is one line naming the entry.
+
+    Parameters
+    ----------
+    path : str or Path
+        The rig file, or the folder holding ``object.json``.
+
+    Returns
+    -------
+    ObjectRig
+        Its files found, its numbers checked (the images themselves are read by the import).
+
+    Raises
+    ------
+    TranslucencyError
+        One line naming the file and the entry at fault.
+
+    Examples
+    --------
+    >>> import json, tempfile
+    >>> d = Path(tempfile.mkdtemp())
+    >>> for name in ("scan.ply", "s0.pfm"):  # only their presence is checked here
+    ...     _ = (d / name).write_bytes(b"")
+    >>> camera = {"name": "cam0", "width": 160, "height": 120, "radiometry": {"k": 5e6},
+    ...           "intrinsics": {"K": [[200, 0, 79.5], [0, 200, 59.5], [0, 0, 1]]},
+    ...           "pose": {"R": np.eye(3).tolist(), "t": [0, 0, 100]}}
+    >>> rig = {"format": "translucency-object-rig", "version": 1, "mesh": {"file": "scan.ply"},
+    ...        "cameras": [camera],
+    ...        "shots": [{"hit": {"vertex": 12}, "power": 0.5, "images": {"cam0": ["s0.pfm"]}}]}
+    >>> _ = (d / "object.json").write_text(json.dumps(rig))
+    >>> read_object_rig(d).exit_law  # index-matched (eta 1): π L
+    'lambertian'
+    >>> rig["boundary"] = {"eta": 1.4}
+    >>> _ = (d / "object.json").write_text(json.dumps(rig))
+    >>> read_object_rig(d).exit_law  # a smooth dielectric: the diffusion law
+    'dielectric'
+    >>> rig["shots"][0]["images"] = {"cam1": ["s0.pfm"]}
+    >>> _ = (d / "object.json").write_text(json.dumps(rig))
+    >>> try:
+    ...     read_object_rig(d)
+    ... except TranslucencyError as exc:
+    ...     print(str(exc).split("/")[-1])
+    object.json: shot 0: images of unknown camera 'cam1'
+    """
     path = Path(path)
     if path.is_dir():
         path = path / "object.json"

@@ -88,6 +88,23 @@ class Calibration:
         Noise model of a frame in pixel values: Var = gain · value + read_noise².
     saturation : float
         Pixel values at or above this (before any correction) are saturated.
+
+    Examples
+    --------
+    The vignetting fall-off is 1 at the image centre and 1 + k1 + k2 a half-diagonal away (2.5 px in a
+    4 × 3 image):
+
+    >>> H = Homography.from_matrix(np.diag([10.0, 10.0, 1.0]))  # 10 px per mm
+    >>> cal = Calibration(H, scale=4.0, vignetting=(-0.3, 0.05))
+    >>> cal.falloff(np.array([1.5, 4.0]), np.array([1.0, 1.0]), (3, 4)).round(6).tolist()
+    [1.0, 0.75]
+    >>> cal.describe()["scale"], cal.describe()["saturation"]
+    (4.0, None)
+    >>> try:
+    ...     Calibration(H, scale=(1.0, 2.0)).check((3, 4, 3))
+    ... except TranslucencyError as exc:
+    ...     print(exc)
+    calibration scale: must be one positive number or three (R, G, B), got (1.0, 2.0)
     """
 
     homography: Homography
@@ -211,6 +228,44 @@ def load_calibration(path) -> Calibration:
     R, G, B), "power": W, "exposure_s", optional "inner_mm": the total is over the annulus from there})
     — the scale from a photograph of a reference of known reflectance (:func:`scale_from_reference`),
     corrected like every shot.
+
+    Parameters
+    ----------
+    path : str or Path
+        The JSON file; the image files it names are relative to its folder.
+
+    Returns
+    -------
+    Calibration
+        With ``source``: the file, the method (``homography``, ``points``, ``checkerboard``) and the
+        reprojection error ``rms_px`` of the last two.
+
+    Raises
+    ------
+    TranslucencyError
+        One line naming the file: unreadable, not one way to H, a bad value.
+
+    Examples
+    --------
+    Four marked points 10 px per mm apart give H and its 100 px/mm²:
+
+    >>> import json, tempfile
+    >>> d = Path(tempfile.mkdtemp())
+    >>> square = [[0, 0], [4, 0], [4, 4], [0, 4]]
+    >>> marked = [[10 * x + 5, 10 * y + 7] for x, y in square]
+    >>> spec = {"points": {"sample_mm": square, "image_px": marked}, "scale": 2.5}
+    >>> _ = (d / "cal.json").write_text(json.dumps(spec))
+    >>> cal = load_calibration(d / "cal.json")
+    >>> cal.homography.to_image([[1.0, 2.0]]).round(6).tolist(), cal.scale, cal.source["method"]
+    ([[15.0, 27.0]], 2.5, 'points')
+    >>> round(float(cal.homography.pixels_per_mm2([[2.0, 2.0]])[0]), 6)
+    100.0
+    >>> _ = (d / "both.json").write_text(json.dumps({**spec, "homography": np.eye(3).tolist()}))
+    >>> try:
+    ...     load_calibration(d / "both.json")
+    ... except TranslucencyError as exc:
+    ...     print(str(exc).split("/")[-1])
+    both.json: give exactly one of homography, points or checkerboard, got ['homography', 'points']
     """
     from ..shared.hdr import read_hdr  # the readers of the frames
 

@@ -133,7 +133,39 @@ def import_images(
 @dataclass
 class PlanarImport:
     """An import of photographs, its setup read and checked: the :class:`~translucency.rig.contract.Importer`
-    of a planar data set (arguments as :func:`import_images`'s)."""
+    of a planar data set (arguments as :func:`import_images`'s).
+
+    Examples
+    --------
+    One photograph of value 2 at 10 px per mm, 4 pixel values per unit exitance: R_d = 2 / 4 = 0.5 mm⁻²
+    over the window, whose origin lies on the pitch's lattice around x_i:
+
+    >>> import tempfile
+    >>> from translucency.rig.shared.hdr import write_pfm
+    >>> from translucency.rig.shared.homography import Homography
+    >>> d = Path(tempfile.mkdtemp())
+    >>> write_pfm(d / "a.pfm", np.full((64, 64, 3), 2.0, np.float32))
+    >>> _ = (d / "pos.csv").write_text("file,x,y\\na.pfm,3.2,3.2\\n")
+    >>> cal = Calibration(Homography.from_matrix(np.diag([10.0, 10.0, 1.0])), scale=4.0)
+    >>> imp = PlanarImport.from_setup(d, d / "pos.csv", cal, ImportSetup(pitch=0.5, window=2.5))
+    >>> imp.n_points, imp.chunk_points, imp.header["window"]
+    (1, 16, [5, 5])
+    >>> ds = imp.create(Path(tempfile.mkdtemp()) / "out.zarr", overwrite=False)
+    >>> [c.index for c in imp.import_chunks(ds, [Chunk(0, 0, 1)])]
+    [0]
+    >>> float(ds.group["R_d"][0, 2, 2, 0]), ds.group["window_origin"][0].tolist()
+    (0.5, [2.0, 2.0])
+
+    Images of another size are refused before any work:
+
+    >>> write_pfm(d / "b.pfm", np.ones((32, 32, 3), np.float32))
+    >>> _ = (d / "two.csv").write_text("file,x,y\\na.pfm,3.2,3.2\\nb.pfm,3.2,2.2\\n")
+    >>> try:
+    ...     PlanarImport.from_setup(d, d / "two.csv", cal)
+    ... except TranslucencyError as exc:
+    ...     print(str(exc).split("/")[-1])
+    b.pfm: image of 32 x 32 pixels among images of 64 x 64 pixels
+    """
 
     job: _ImportJob
     header: dict

@@ -45,7 +45,22 @@ from .calibration import find_markers, match_markers
 
 @dataclass(frozen=True)
 class VirtualCamera:
-    """A pinhole camera at ``origin`` looking at ``target`` (mm) with a horizontal field of view (degrees)."""
+    """A pinhole camera at ``origin`` looking at ``target`` (mm) with a horizontal field of view (degrees).
+
+    Examples
+    --------
+    Straight above the target with a 90° field: f = 32 px / tan 45°, 16 mm away, so 2 px per mm; the
+    plane seen from above is mirrored (det < 0):
+
+    >>> cam = VirtualCamera((5.0, 5.0, 16.0), (5.0, 5.0, 0.0), fov_deg=90.0, width=64, height=64)
+    >>> H = cam.homography()
+    >>> H.to_image([[5.0, 5.0]]).round(6).tolist()  # the target at the image centre
+    [[31.5, 31.5]]
+    >>> round(float(H.pixels_per_mm2([[5.0, 5.0]])[0]), 6)
+    4.0
+    >>> bool(np.linalg.det(H.jacobian([[5.0, 5.0]])[0]) < 0)
+    True
+    """
 
     origin: tuple[float, float, float]
     target: tuple[float, float, float]
@@ -85,7 +100,19 @@ class VirtualCamera:
 @dataclass(frozen=True)
 class Beam:
     """The laser of the virtual rig: a spot at ``distance_mm`` above the point, lighting a disc of
-    ``radius_mm`` (Mitsuba's linear fall-off from :data:`SPOT_BEAM_FRACTION` of the cutoff)."""
+    ``radius_mm`` (Mitsuba's linear fall-off from :data:`SPOT_BEAM_FRACTION` of the cutoff).
+
+    Examples
+    --------
+    A 0.3 mm disc from 50 mm: with a = 0.75 (the fall-off's start) its power per unit intensity is
+    close to the cone's solid angle π θ² times (1 + a + a²)/3, and its rms radius close to
+    R √(0.3 (1 + a + a² + a³ + a⁴)/(1 + a + a²)) = 0.6291 R (R/√2 = 0.7071 R for a uniform disc):
+
+    >>> b = Beam(radius_mm=0.3, distance_mm=50.0)
+    >>> theta = float(np.radians(b.cutoff_deg))
+    >>> round(b.cutoff_deg, 4), round(b.power() / (np.pi * theta**2), 4), round(b.rms_mm() / 0.3, 4)
+    (0.3438, 0.7708, 0.6291)
+    """
 
     radius_mm: float = 0.3
     distance_mm: float = 50.0
@@ -162,10 +189,62 @@ def photograph_sample(
     annulus from there) and "spp" (samples per pixel of its photograph)} photographed into
     ``reference.pfm``).
 
+    Parameters
+    ----------
+    volume : Volume
+        The sample (a slab, index-matched).
+    x_i : array (P, 2)
+        Incident points, mm.
+    folder : str or Path
+        Where the hand-over goes (created).
+    camera : VirtualCamera
+        The camera's pose and image size.
+    beam : Beam, optional
+        The laser (default :class:`Beam`).
+    sensor : Sensor, optional
+        Radiance → raw values (default :class:`~translucency.rig.shared.sensor.Sensor`).
+    spp : int
+        Samples per pixel of each render.
+    seed : int
+        The renders' and the sensor's noise.
+    channels : tuple of int
+        The channels rendered (a grey volume needs one; the others copy it).
+    image_format : {"pfm", "exr"}
+        The shots' file format.
+    markers_mm : array (N, 2), optional
+        The calibration markers (default: eight on an ellipse the camera sees whole).
+    scale, reference : optional
+        The radiometric scale written to ``calibration.json``, or a reference to photograph (above).
+
     Returns
     -------
     dict
         ``homography`` (the true one, from the pose), ``marked`` (estimated one), ``rms_px``, ``power``.
+
+    Examples
+    --------
+    A refusal comes before any render:
+
+    >>> cam = VirtualCamera((6.0, -3.0, 11.0), (6.0, 6.0, 0.0), 40.0, 32, 32)
+    >>> try:
+    ...     photograph_sample(None, [[6.0, 6.0]], "unused", camera=cam, image_format="png")
+    ... except TranslucencyError as exc:
+    ...     print(exc)
+    format: pfm or exr, got 'png'
+
+    Two shots of a homogeneous slab (renders take seconds):
+
+    >>> import tempfile
+    >>> from translucency.acquire import Volume
+    >>> vol = Volume.homogeneous((8, 48, 48), 0.25, (1.0, 0.8, 0.6), (0.01, 0.02, 0.04))
+    >>> folder = Path(tempfile.mkdtemp())
+    >>> out = photograph_sample(vol, [[6.0, 6.0], [5.0, 6.0]], folder, camera=cam, spp=4,
+    ...                         scale=5e6)  # doctest: +SKIP
+    >>> sorted(out), round(out["power"] * 1e5, 4)  # doctest: +SKIP
+    (['homography', 'marked', 'power', 'rms_px'], 8.7177)
+    >>> sorted(p.name for p in folder.iterdir())  # doctest: +SKIP +NORMALIZE_WHITESPACE
+    ['calibration.json', 'dark.pfm', 'flat.pfm', 'markers.pfm', 'positions.csv',
+     'shot_000.pfm', 'shot_001.pfm']
     """
     beam = beam or Beam()
     sensor = sensor or Sensor()

@@ -17,7 +17,34 @@ IMAGE_SUFFIXES = HDR_SUFFIXES + LDR_SUFFIXES
 
 @dataclass(frozen=True)
 class Shot:
-    """One laser position: its image file(s), where the laser is, its power and exposure time(s)."""
+    """One laser position: its image file(s), where the laser is, its power and exposure time(s).
+
+    Attributes
+    ----------
+    files : tuple of Path
+        Its image(s): one HDR image, repeated frames, or a bracket of LDR exposures.
+    position : (float, float)
+        Where the laser is, in ``units``.
+    units : {"mm", "px"}
+        Sample millimetres or image pixels.
+    power : float
+        Laser power, W.
+    exposures : tuple of float
+        Exposure time(s), s: one, or one per file of a bracket.
+
+    Examples
+    --------
+    A row of a table of laser positions: a bracket of two LDR exposures, the laser given in pixels:
+
+    >>> import tempfile
+    >>> d = Path(tempfile.mkdtemp())
+    >>> for name in ("a.png", "b.png"):
+    ...     _ = (d / name).write_bytes(b"")
+    >>> _ = (d / "pos.csv").write_text("file,u,v,exposure\\na.png;b.png,120,80,0.01;0.1\\n")
+    >>> shot = read_positions(d / "pos.csv", d)[0]
+    >>> [f.name for f in shot.files], shot.position, shot.units, shot.exposures, shot.power
+    (['a.png', 'b.png'], (120.0, 80.0), 'px', (0.01, 0.1), 1.0)
+    """
 
     files: tuple[Path, ...]
     position: tuple[float, float]

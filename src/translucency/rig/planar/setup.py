@@ -18,6 +18,18 @@ class ImportSetup:
     ``specular_radius``: mask around x_i; ``dilate``:
     growth of the saturated mask, image pixels; ``floor``: values below it (after the dark frame) are
     under-exposed; ``sample_size``: (W, H) of the sample, pixels outside are masked (optional).
+
+    Examples
+    --------
+    A window has an odd number of pixels, x_i in the centre one:
+
+    >>> [ImportSetup(pitch=p, window=w).window_pixels() for p, w in ((0.25, 8.0), (0.5, 2.5))]
+    [33, 5]
+    >>> try:
+    ...     ImportSetup(pitch=0.5, window=0.2).check()
+    ... except TranslucencyError as exc:
+    ...     print(exc)
+    window: must be at least one pixel (0.5 mm), got 0.2
     """
 
     pitch: float = 0.25

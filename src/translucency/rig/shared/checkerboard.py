@@ -33,6 +33,46 @@ def homography_from_checkerboard(
     apart, the one chosen is seen from above (the sample's z axis towards the camera: a camera on the
     +z side sees the plane mirrored, det ∂(u, v)/∂(x, y) < 0) with its x axis most nearly left to right
     in the image — put the board's origin accordingly.  Errors are one line prefixed by ``name``.
+
+    Parameters
+    ----------
+    image : array (H, W) or (H, W, 3)
+        The photograph (any scale: it is normalised).
+    inner : (int, int)
+        Inner corners (columns, rows) of the board.
+    square_mm : float
+        The side of a square, mm.
+    origin_mm : (float, float)
+        Where inner corner (0, 0) lies on the sample, mm.
+    name : str
+        What messages call the photograph.
+
+    Returns
+    -------
+    H : Homography
+        Sample (mm) → image (px).
+    rms : float
+        RMS distance (px) of the corners found from the board's grid seen through H.
+
+    Examples
+    --------
+    A board of 5 × 4 squares of 0.5 mm seen from above at 16 px a square (32 px/mm; y up the sample,
+    so v runs down the image), a white margin of two squares around it:
+
+    >>> v, u = np.mgrid[0:144, 0:144]
+    >>> col, row = (u - 31.5) // 16, (111.5 - v) // 16
+    >>> on = (col >= 0) & (col < 5) & (row >= 0) & (row < 4)
+    >>> img = np.where(on & ((col + row) % 2 == 0), 0.05, 0.95)
+    >>> H, rms = homography_from_checkerboard(img, (4, 3), 0.5)
+    >>> H.to_image([[0.0, 0.0], [0.5, 0.0], [0.0, 0.5]]).round(2).tolist(), round(rms, 3)
+    ([[47.5, 95.5], [63.5, 95.5], [47.5, 79.5]], 0.0)
+    >>> round(float(H.pixels_per_mm2([[1.0, 0.75]])[0]), 1)  # 32²
+    1024.0
+    >>> try:
+    ...     homography_from_checkerboard(img, (5, 3), 0.5)
+    ... except TranslucencyError as exc:
+    ...     print(exc)
+    checkerboard: OpenCV finds no 5 x 3 grid of inner corners
     """
     nx, ny = (int(v) for v in inner)
     uv = find_corners(image, (nx, ny), name=name)

@@ -86,7 +86,26 @@ def _decode_pfm(data: bytes, path) -> np.ndarray:
 
 
 def write_pfm(path, image: np.ndarray) -> None:
-    """Write (H, W, 3) or (H, W) floats as a little-endian PFM (bottom row first, as the format says)."""
+    """Write (H, W, 3) or (H, W) floats as a little-endian PFM (bottom row first, as the format says).
+
+    Parameters
+    ----------
+    path : str or Path
+        The file to write (not atomically: :func:`write_hdr` is).
+    image : array (H, W, 3) or (H, W)
+        Colour (``PF``) or grey (``Pf``) values, stored as float32.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> p = Path(tempfile.mkdtemp()) / "g.pfm"
+    >>> write_pfm(p, np.array([[1.0, 2.0], [3.0, 4.0]]))  # grey: rows stored bottom-up
+    >>> data = p.read_bytes()
+    >>> data[:12], np.frombuffer(data[12:], "<f4").tolist()
+    (b'Pf\\n2 2\\n-1.0\\n', [3.0, 4.0, 1.0, 2.0])
+    >>> read_pfm(p)[..., 0].tolist()  # read back top row first (grey as three equal channels)
+    [[1.0, 2.0], [3.0, 4.0]]
+    """
     image = np.asarray(image, dtype="<f4")
     colour = image.ndim == 3
     h, w = image.shape[:2]

@@ -23,6 +23,21 @@ class Sensor:
     ``k``: value per unit radiance; ``gain``: values per electron; ``vignetting``: (k1, k2) of
     1 + k1 ρ² + k2 ρ⁴ (ρ from the image centre in half-diagonals); ``prnu``: relative spread of the
     pixels' response (the flat field); ``dark``: mean dark offset (with a gentle gradient).
+
+    Examples
+    --------
+    Without read noise, dark offset, vignetting or flat field, and with a tiny gain (10¹³ electrons per
+    value: no visible photon noise), a raw value is k·L, clipped at saturation:
+
+    >>> ideal = Sensor(k=10.0, gain=1e-13, read_noise=0.0, dark=0.0, vignetting=(), prnu=0.0)
+    >>> ideal.expose(np.array([[[1.0, 2.0, 10.0]]])).round(3).tolist()
+    [[[10.0, 20.0, 60.0]]]
+
+    The default sensor's flat field has mean 1; its vignetting is 1 at the image centre:
+
+    >>> dark, flat, vig = Sensor().frames((5, 5, 3))
+    >>> round(float(flat.mean()), 5), float(vig[2, 2, 0]), dark.shape
+    (1.0, 1.0, (5, 5, 3))
     """
 
     k: float = 5e6
