@@ -2,7 +2,8 @@
 
 :func:`mitsuba` imports Mitsuba with a working variant (LLVM on the CPU with the
 libLLVM of the ``karellen-llvm-core`` wheel, CUDA when present);
-:mod:`.scenes` turns meshes, volumes and ray sets into Mitsuba objects.  Every
+:mod:`.scenes` turns meshes, volumes and ray sets into Mitsuba objects, :mod:`.sensors` our cameras
+into Mitsuba's.  Every
 stage that talks to Mitsuba goes through here.
 """
 
@@ -13,13 +14,9 @@ from .scenes import (
     checkerboard_scene,
     load_plugin,
     load_with_mesh,
-    look_at,
     markers_scene,
     mesh_scene,
     object_volpath_scene,
-    perspective_camera_dict,
-    perspective_to_world_dict,
-    pinhole_sensor_dict,
     rays,
     slab_medium_dict,
     slab_scene,
@@ -27,6 +24,7 @@ from .scenes import (
     vertex_radiance_scene,
     write_ply,
 )
+from .sensors import look_at, perspective_camera_dict, perspective_to_world_dict, pinhole_sensor_dict
 
 __all__ = [
     "mitsuba",

@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from ._engine import mitsuba
+from .sensors import look_at
 
 #: an rr_depth that ``volpath`` never reaches: Russian roulette off (see :func:`slab_scene`)
 NO_ROULETTE = 1 << 30
@@ -173,29 +174,6 @@ def slab_medium_dict(
     }
 
 
-def look_at(origin, target, up=None):
-    """Mitsuba's ``to_world`` looking from ``origin`` at ``target`` (mm); ``up`` chosen off the axis if not
-    given.
-
-    Examples
-    --------
-    >>> mi = mitsuba()
-    >>> to_world = look_at((0, 0, 10), (0, 0, 0))   # looking straight down from 10 mm
-    >>> list(to_world @ mi.ScalarPoint3f(0, 0, 0)), list(to_world @ mi.ScalarVector3f(0, 0, 1))
-    ([0.0, 0.0, 10.0], [0.0, 0.0, -1.0])
-    """
-    if up is None:
-        axis = np.asarray(target, float) - np.asarray(origin, float)
-        up = [0.0, 0.0, 1.0] if abs(axis[2]) < 0.99 * np.linalg.norm(axis) else [0.0, 1.0, 0.0]
-    return (
-        mitsuba()
-        .ScalarTransform4f()
-        .look_at(
-            origin=[float(v) for v in origin], target=[float(v) for v in target], up=[float(v) for v in up]
-        )
-    )
-
-
 def spot_dict(position, target, cutoff_deg: float, intensity: float = 1.0, up=None) -> dict:
     """Mitsuba ``spot`` emitter at ``position`` aimed at ``target`` (mm); intensity in W/sr.
 
@@ -236,91 +214,6 @@ def slab_shape_dict(volume, channel: int) -> dict:
     }
 
 
-def perspective_camera_dict(
-    origin, target, fov_deg: float, width: int, height: int, spp: int = 16, up=None, *, far_clip=1e5
-) -> dict:
-    """Mitsuba ``perspective`` sensor at ``origin`` looking at ``target`` (mm), horizontal field of view
-    ``fov_deg``, an RGB ``hdrfilm`` of ``width`` × ``height`` pixels with a box filter (a pixel's value is
-    the mean radiance over its footprint).
-
-    ``far_clip`` (mm) with the near clip at 0.01 mm; None leaves both and the field of view's axis to
-    Mitsuba's defaults (the renderer's :class:`translucency.render.Camera`).
-
-    Examples
-    --------
-    >>> camera = perspective_camera_dict((0, 0, 100), (0, 0, 0), fov_deg=30, width=64, height=48, spp=4)
-    >>> camera["fov_axis"], camera["far_clip"], list(load_plugin(camera).film().size())
-    ('x', 100000.0, [64, 48])
-    """
-    clip = {} if far_clip is None else {"fov_axis": "x", "near_clip": 1e-2, "far_clip": float(far_clip)}
-    return _perspective(look_at(origin, target, up), fov_deg, width, height, spp, clip)
-
-
-def _perspective(to_world, fov_deg: float, width: int, height: int, spp: int, clip: dict) -> dict:
-    """A ``perspective`` sensor: ``to_world``, field of view, clipping ``clip``, an RGB ``hdrfilm`` of
-    ``width`` × ``height`` with a box filter, ``spp`` independent samples a pixel."""
-    return {
-        "type": "perspective",
-        "fov": float(fov_deg),
-        **clip,
-        "to_world": to_world,
-        "film": {
-            "type": "hdrfilm",
-            "width": int(width),
-            "height": int(height),
-            "rfilter": {"type": "box"},
-            "pixel_format": "rgb",
-        },
-        "sampler": {"type": "independent", "sample_count": int(spp)},
-    }
-
-
-def perspective_to_world_dict(
-    to_world: np.ndarray, fov_deg: float, width: int, height: int, spp: int
-) -> dict:
-    """Mitsuba ``perspective`` sensor with a 4 × 4 ``to_world`` (Mitsuba's camera frame: left, up,
-    forward), horizontal field of view ``fov_deg``, an RGB ``hdrfilm`` with a box filter, ``spp`` samples
-    (a calibrated camera's, :meth:`translucency.rig.object.cameras.Camera.sensor_dict`).
-
-    Examples
-    --------
-    >>> to_world = np.eye(4)
-    >>> to_world[:3, 3] = [1.0, 2.0, 3.0]   # a camera at (1, 2, 3) mm
-    >>> sensor = perspective_to_world_dict(to_world, 40.0, 32, 24, spp=1)
-    >>> list(sensor["to_world"].translation()), list(load_plugin(sensor).film().size())
-    ([1.0, 2.0, 3.0], [32, 24])
-    """
-    to_world = mitsuba().ScalarTransform4f(np.asarray(to_world, dtype=np.float64).tolist())
-    clip = {"fov_axis": "x", "near_clip": 1e-2, "far_clip": 1e5}
-    return _perspective(to_world, fov_deg, width, height, spp, clip)
-
-
-def pinhole_sensor_dict(camera, spp: int) -> dict:
-    """The ``perspective`` sensor of a pinhole ``camera`` (its ``origin``, ``target``, ``up`` in mm, ``fov``
-    in degrees, ``width`` × ``height`` pixels; :class:`translucency.render.Camera`), ``spp`` samples a
-    pixel, with Mitsuba's default clipping planes.
-
-    Examples
-    --------
-    >>> from types import SimpleNamespace
-    >>> camera = SimpleNamespace(origin=(0, 0, 100), target=(0, 0, 0), up=(0, 1, 0), fov=30.0, width=16,
-    ...                          height=16)
-    >>> sensor = pinhole_sensor_dict(camera, spp=2)
-    >>> "near_clip" in sensor, sensor["sampler"]["sample_count"]   # Mitsuba's clipping planes
-    (False, 2)
-    """
-    return perspective_camera_dict(
-        camera.origin,
-        camera.target,
-        camera.fov,
-        camera.width,
-        camera.height,
-        spp,
-        up=camera.up,
-        far_clip=None,
-    )
-
-
 def marker_dict(x: float, y: float, radius: float, radiance: float = 1.0, z: float = 1e-3) -> dict:
     """A glowing disc marker of ``radius`` (mm) lying on the plane z ≈ 0 at (x, y), facing +z (calibration
     targets of the virtual rig)."""
@@ -353,6 +246,7 @@ def vertex_radiance_scene(mesh, sensor: dict, *, eta: float = 1.0, environment: 
 
     Examples
     --------
+    >>> from translucency.mitsuba import perspective_camera_dict
     >>> from types import SimpleNamespace
     >>> tetra = SimpleNamespace(vertices=np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]]),
     ...                         faces=np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]))
@@ -389,6 +283,7 @@ def object_volpath_scene(mesh, volume, channel: int, emitter: dict, sensor: dict
 
     Examples
     --------
+    >>> from translucency.mitsuba import perspective_camera_dict
     >>> from types import SimpleNamespace
     >>> from translucency.acquire import Volume
     >>> tetra = SimpleNamespace(vertices=np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]]),
@@ -431,6 +326,7 @@ def slab_scene(
 
     Examples
     --------
+    >>> from translucency.mitsuba import perspective_camera_dict
     >>> from translucency.acquire import Volume
     >>> slab = Volume.homogeneous((4, 8, 8), 0.5, sigma_s=[1.0] * 3, sigma_a=[0.01] * 3)   # 4 × 4 × 2 mm
     >>> scene = slab_scene(slab, 0, spot_dict((2, 2, 100), (2, 2, 0), 1.0),
@@ -459,6 +355,7 @@ def markers_scene(sensor: dict, markers_mm, radius_mm: float):
 
     Examples
     --------
+    >>> from translucency.mitsuba import perspective_camera_dict
     >>> camera = perspective_camera_dict((0, 0, 100), (0, 0, 0), 30.0, 16, 16)
     >>> scene = markers_scene(camera, [[0, 0], [5, 0], [0, 5]], radius_mm=1.0)
     >>> len(scene.emitters()), [round(v, 3) for v in scene.bbox().max]   # three discs of radius 1 mm
@@ -489,6 +386,7 @@ def checkerboard_scene(
 
     Examples
     --------
+    >>> from translucency.mitsuba import perspective_camera_dict
     >>> camera = perspective_camera_dict((10, 5, 100), (10, 5, 0), 30.0, 16, 16)
     >>> box = checkerboard_scene(camera, np.eye(4), inner=(3, 2), square_mm=10.0).bbox()
     >>> list(box.min), list(box.max)   # 4 × 3 squares of 10 mm, one square beyond the inner corners
