@@ -26,10 +26,10 @@ class Sensor:
 
     Examples
     --------
-    Without read noise, dark offset, vignetting or flat field, and with a tiny gain (10¹³ electrons per
-    value: no visible photon noise), a raw value is k·L, clipped at saturation:
+    Without read noise, dark offset, vignetting or flat field, and with gain 0 (no photon noise), a raw
+    value is k·L, clipped at saturation:
 
-    >>> ideal = Sensor(k=10.0, gain=1e-13, read_noise=0.0, dark=0.0, vignetting=(), prnu=0.0)
+    >>> ideal = Sensor(k=10.0, gain=0.0, read_noise=0.0, dark=0.0, vignetting=(), prnu=0.0)
     >>> ideal.expose(np.array([[[1.0, 2.0, 10.0]]])).round(3).tolist()
     [[[10.0, 20.0, 60.0]]]
 
@@ -67,6 +67,7 @@ class Sensor:
         dark, flat, vig = self.frames(radiance.shape, frames_seed)
         rng = np.random.default_rng(seed)
         signal = np.maximum(self.k * radiance * vig * flat, 0.0)
-        electrons = rng.poisson(signal / self.gain) if self.gain > 0 else signal
-        raw = electrons * self.gain + dark + self.read_noise * rng.standard_normal(radiance.shape)
+        # shot noise in electrons, back in values; gain 0: a noise-free signal (no electrons to count)
+        shot = rng.poisson(signal / self.gain) * self.gain if self.gain > 0 else signal
+        raw = shot + dark + self.read_noise * rng.standard_normal(radiance.shape)
         return np.minimum(raw, self.saturation).astype(np.float32)
