@@ -20,9 +20,9 @@ Examples
 >>> run = Run("render", max_memory="4G")
 >>> run.check(Need(memory=2**20, disk=0, what="a picture"), out).memory
 1048576
->>> _ = run.claim_folder(out)
->>> timing = run.time({"pixels": 100, "vertices": 10, "pairs": 100, "spp_reference": 0})
->>> with run.work("render", total=1) as work:
+>>> _ = run.claim_folder(out, overwrite=False)
+>>> timing = run.time({"vertices": 10, "pairs": 100, "samples": 100, "reference_samples": 0})
+>>> with run.work("render", total=1, fresh=False) as work:  # fresh=False: not recorded in the calibration
 ...     work.update(completed=1)
 >>> summary = run.summary({"command": "render"})
 >>> sorted(summary)
