@@ -66,6 +66,7 @@ AT_START = {
     "up": "--up",
     "scale": "--scale",
     "fov": "--fov",
+    "resolution": "--resolution",
     "cameras": "--cameras",
     "supersample": "--supersample",
     "dilate": "--dilate",
