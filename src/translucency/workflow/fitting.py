@@ -137,12 +137,12 @@ def fit_model(
     >>> fitting.model.n_points, fitting.summary["rounds"]  # doctest: +SKIP
     (1024, 3)
     """
-    data = _data_set(dataset)
-    max_rounds = whole_number("max_rounds", max_rounds)
+    max_rounds = whole_number("max_rounds", max_rounds)  # the options first: one line before any file
     check_option("exclusion_mm", exclusion_mm, lo=0)
     check_option("chunk_points", chunk_points, lo=1)
     check_option("alpha_radius", alpha_radius, lo=0)
     n_terms, n_directions = _count_or_auto("n_terms", n_terms), _count_or_auto("n_directions", n_directions)
+    data = _data_set(dataset)
     on_mesh = isinstance(data, MeshDataset)
     stage = fit_mesh if on_mesh else fit_planar
     refuse_unknown(f"fit on a {'mesh' if on_mesh else 'planar'} data set", options, stage)
