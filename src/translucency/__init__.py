@@ -48,8 +48,12 @@ _WORKFLOW = (
     "render_model",
     "render_scene",
     "import_images",
+    "import_object",
+    "acquire_photographs",
+    "acquire_object_photographs",
     "make_sample",
     "Fitting",
+    "Photographs",
     "Rendering",
     "SceneRendering",
 )

@@ -50,13 +50,45 @@ FLAGS = {
     "roughness": "--roughness",
 }
 
-#: arguments that are also header fields (``chunk_points`` of a data set's header): translated only where a
-#: message begins with them, the place a message names the argument at fault (``chunk_points: …``)
-LEADING_ONLY = {"chunk_points": "--chunk"}
+#: arguments translated only where a message begins with them and a colon (``chunk_points: …``), the place
+#: a message names the argument at fault: they are also fields of a file or a data set's header
+#: (``chunk_points``, ``voxel_mm``) or words that begin other sentences (``format version …``, ``up to …``)
+AT_START = {
+    "photons": "--photons",
+    "seed": "--seed",
+    "grid": "--grid",
+    "pitch": "--pitch",
+    "voxel": "--voxel",
+    "g": "--g",
+    "angle": "--angle",
+    "chunk": "--chunk",
+    "dtype": "--dtype",
+    "up": "--up",
+    "scale": "--scale",
+    "fov": "--fov",
+    "resolution": "--resolution",
+    "cameras": "--cameras",
+    "supersample": "--supersample",
+    "dilate": "--dilate",
+    "eta": "--eta",
+    "chunk_points": "--chunk",
+    "voxel_mm": "--voxel",
+    "sample_seed": "--sample-seed",
+    "image_format": "--format",
+    "beam_mm": "--beam",
+    "specular_radius": "--specular-radius",
+    "beam_rms": "--beam-rms",
+    "sample_size": "--sample-size",
+    "views": "--view",
+}
 
-#: arguments that are also plain words ("out", "scale"): translated, like :data:`LEADING_ONLY`, only
-#: where a message begins with them (``out PATH: …``)
-_WORDS = {name: FLAGS[name] for name in FLAGS if "_" not in name} | LEADING_ONLY
+#: arguments that are paths: translated where a message begins with the argument and its path
+#: (``mesh /data/ball.ply: …``); a library ``sample`` given as a path is the command line's ``--volume``
+PATHS = {"mesh": "--mesh", "volume": "--volume", "sample": "--volume", "calibration": "--calibration"}
+
+#: arguments that are also plain words ("out", "scale"): translated only where a message begins with
+#: them, the place a message names the argument at fault (``out PATH: …``)
+_WORDS = {name for name in FLAGS if "_" not in name}
 
 # ``name=True`` → ``--flag``; ``name=VALUE`` → ``--flag VALUE`` (quotes of a string value dropped)
 _ASSIGNED = re.compile(r"(?<![\w./-])([a-z][a-z0-9_]*)=(True\b|'[^']*'|\"[^\"]*\"|[^\s,;:)]+)")
@@ -65,6 +97,10 @@ _ASSIGNED = re.compile(r"(?<![\w./-])([a-z][a-z0-9_]*)=(True\b|'[^']*'|\"[^\"]*\
 _BARE = re.compile(r"(?<![\w./`-])([a-z][a-z0-9]*(?:_[a-z0-9]+)+)(?![\w/=-]|\.\w)")
 # the argument a message begins with: ``out PATH: …`` or ``name: …``
 _LEADING = re.compile(r"^([a-z][a-z0-9_]*)(?=[ :])")
+# an argument of AT_START a message begins with: ``name: …``
+_NAMED = re.compile(r"^([a-z][a-z0-9_]*)(?=:)")
+# a path argument a message begins with: ``mesh PATH: …`` (a path: a word with a slash or a dot)
+_PATH = re.compile(r"^([a-z][a-z0-9_]*)(?= \S*[/.]\S*:)")
 
 
 def cli_words(message: str) -> str:
@@ -80,6 +116,8 @@ def cli_words(message: str) -> str:
     '--terms: must be between 1 and 4; the output stays as it is'
     >>> cli_words("chunk_points: must be >= 1, got 0; header fields n_points 3, chunk_points 4")
     '--chunk: must be >= 1, got 0; header fields n_points 3, chunk_points 4'
+    >>> cli_words("mesh /data/ball: is a folder, not a mesh file")
+    '--mesh /data/ball: is a folder, not a mesh file'
     """
 
     def assigned(match: re.Match) -> str:
@@ -92,8 +130,10 @@ def cli_words(message: str) -> str:
         return FLAGS.get(match.group(1), match.group(1))
 
     def leading(match: re.Match) -> str:
-        return _WORDS.get(match.group(1), match.group(1))
+        return FLAGS[match.group(1)] if match.group(1) in _WORDS else match.group(1)
 
     text = _ASSIGNED.sub(assigned, message)
     text = _BARE.sub(bare, text)
+    text = _PATH.sub(lambda match: PATHS[match.group(1)] if match.group(1) in PATHS else match.group(1), text)
+    text = _NAMED.sub(lambda match: AT_START.get(match.group(1), match.group(1)), text)
     return _LEADING.sub(leading, text)

@@ -8,9 +8,8 @@ from pathlib import Path
 
 import typer
 
-from .._validate import TranslucencyError, check_option
-from ..io.outputs import claim_output
-from ._common import dataset_overwrite_option, finish, json_option, progress, quiet_option, user_errors
+from ._common import dataset_overwrite_option, finish, json_option, quiet_option, user_errors
+from ._run import RichReporter
 
 
 @user_errors
@@ -32,50 +31,17 @@ def import_object_cmd(
     as_json: bool = json_option(),
 ):
     """Import multi-view photographs of a laser scanned over a real object as a mesh data set."""
-    from ..io.mesh_dataset import (
-        open_mesh_dataset,
-    )  # heavy: Mitsuba, OpenCV and trimesh load only when it runs
-    from ..rig.object import import_object, read_object_rig
+    from ..workflow.importing import import_object  # heavy: Mitsuba, OpenCV and trimesh load when it runs
 
-    check_option("--chunk", chunk, lo=1)
-    if exit_law is not None and exit_law not in ("from-views", "dielectric", "lambertian"):
-        raise TranslucencyError(f"--exit-law: one of from-views, dielectric, lambertian; got {exit_law!r}")
-    setup = read_object_rig(rig)  # a bad rig file: one line before the output is judged
-    claim_output(out, "mesh data set", overwrite=overwrite, inputs=setup.files, reuse=True)
-    with progress(quiet) as bar:
-        task = bar.add_task("import", total=len(setup.shots), item="shots")
-        info = import_object(
-            setup.path,
-            out,
-            chunk_points=chunk,
-            overwrite=overwrite,
-            exit_law=exit_law,
-            progress=lambda done, total: bar.update(task, completed=done),
-        )
-    ds = open_mesh_dataset(out)
-    mb = info["bytes_read"] / 2**20
-    summary = {
-        "command": "import object",
-        "out": out,
-        "points": ds.n_points,
-        "vertices": int(ds.header["n_vertices"]),
-        "cameras": info["cameras"],
-        "exit_law": info["exit_law"],
-        "flags": info["flags"],
-        "energy": info["energy"],
-        "images_MB": mb,
-        "seconds": info["seconds"],
-        "throughput_MB_s": mb / max(info["seconds"], 1e-9),
-    }
+    ds = import_object(
+        rig, out, exit_law=exit_law, chunk_points=chunk, overwrite=overwrite, reporter=RichReporter(quiet)
+    )
+    s = ds.summary
     errors = ", ".join(
-        f"{c['name']} {c['reprojection_px'].get('pose', float('nan')):.2f} px" for c in info["cameras"]
+        f"{c['name']} {c['reprojection_px'].get('pose', float('nan')):.2f} px" for c in s["cameras"]
     )
-    finish(
-        as_json,
-        quiet,
-        summary,
-        [
-            f"mesh data set: {out} ({ds.n_points} shots x {summary['vertices']:,} vertices; poses {errors}; "
-            f"exit law {info['exit_law']['law']}; unseen {info['flags']['unseen']:,} pairs filled)"
-        ],
+    line = (
+        f"mesh data set: {out} ({s['points']} shots x {s['vertices']:,} vertices; poses {errors}; "
+        f"exit law {s['exit_law']['law']}; unseen {s['flags']['unseen']:,} pairs filled)"
     )
+    finish(as_json, quiet, s, [line])

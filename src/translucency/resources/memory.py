@@ -185,7 +185,7 @@ def planar_window_pixels(window: float, pitch: float) -> int:
 
 def planar_acquisition(
     *,
-    grid: int,
+    grid: int | tuple[int, int],
     pitch: float,
     window: float,
     photons: int,
@@ -194,7 +194,7 @@ def planar_acquisition(
     dtype: str = "float32",
     batch_photons: int = 4_000_000,
 ) -> Need:
-    r"""``acquire planar``: P = grid², windows of n × n pixels (n = window/pitch, odd), k points a chunk.
+    r"""``acquire planar``: P = grid² = nx·ny, windows of n × n pixels (n = window/pitch, odd), k a chunk.
 
     .. math::
         M = M_{mi} + 100\,V_{vox} + 140\,b + 40 \cdot 3\,k n^2,
@@ -207,7 +207,8 @@ def planar_acquisition(
     :math:`D = P n^2 (3 \cdot 2\,s + 1) + 40 P` bytes (R_d and variance of ``s`` bytes, the mask).
     """
     n = planar_window_pixels(window, pitch)
-    P = grid * grid
+    gx, gy = (grid, grid) if np.isscalar(grid) else grid  # one number for both axes, or (nx, ny)
+    P = gx * gy
     k = min(chunk, P)
     b = min(k, max(1, batch_photons // photons)) * photons
     parts = {

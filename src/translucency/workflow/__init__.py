@@ -12,7 +12,9 @@ module                     functions                                   command
 =========================  ==========================================  ============================
 :mod:`.datasets`           :func:`open_dataset`                        ``info DATA``
 :mod:`.acquiring`          :func:`acquire_planar`, :func:`acquire_mesh`  ``acquire planar|mesh``
-:mod:`.importing`          :func:`import_images`                       ``import images``
+                           :func:`acquire_photographs`,                ``acquire photographs``,
+                           :func:`acquire_object_photographs`          ``acquire object-photographs``
+:mod:`.importing`          :func:`import_images`, :func:`import_object`  ``import images|object``
 :mod:`.fitting`            :func:`fit_model`                           ``fit``
 :mod:`.evaluating`         :func:`evaluate_model`                      ``evaluate``
 :mod:`.rendering`          :func:`render_model`, :func:`render_scene`  ``render``, ``render --scene``
@@ -25,13 +27,21 @@ linear RGB.
 
 import importlib
 
+from ..acquire.names import (
+    GENERATORS as GENERATORS,
+)  # cheap (plain names): the command line's --help lists them
+
 #: public name → the module of this package that defines it (loaded on first use)
 _HOMES = {
     "open_dataset": "datasets",
     "acquire_planar": "acquiring",
     "acquire_mesh": "acquiring",
     "make_sample": "acquiring",
+    "acquire_photographs": "acquiring",
+    "acquire_object_photographs": "acquiring",
+    "Photographs": "acquiring",
     "import_images": "importing",
+    "import_object": "importing",
     "Fitting": "fitting",
     "fit_model": "fitting",
     "evaluate_model": "evaluating",
@@ -43,7 +53,7 @@ _HOMES = {
     "Run": "run",
 }
 
-__all__ = sorted(_HOMES)
+__all__ = sorted([*_HOMES, "GENERATORS"])
 
 
 def __getattr__(name: str):

@@ -1,18 +1,38 @@
-"""A lab's photographs as functions: HDR photographs of a scanned laser spot into a data set."""
+"""A lab's photographs as functions: HDR photographs of a scanned laser spot into a planar data set
+(:func:`import_images`), multi-view photographs of a laser stepped over an object into a mesh data set
+(:func:`import_object`).
+
+``translucency import images|object`` are these functions: the arguments checked at the boundary, the
+output claimed (an unfinished import of the same inputs resumes; Ctrl-C keeps the chunks done), the import
+and the summary the command prints.  Units: mm, R_d in mm⁻².
+"""
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import os
 from collections.abc import Callable
+from pathlib import Path
 
-from .._validate import TranslucencyError
-from ..io.dataset import PlanarDataset
+import numpy as np
+
+from .._validate import TranslucencyError, check_option
+from ..cluster import parse_scheduler
+from ..io.dataset import PlanarDataset, open_dataset
+from ..io.mesh_dataset import MeshDataset, open_mesh_dataset
+from ..io.outputs import claim_output
 from ..rig import ImportSetup, load_calibration
 from ..rig import import_images as import_planar
-from ._arguments import as_path
+from ..rig.object.importer import import_object as import_mesh
+from ..rig.object.setup import read_object_rig
+from ._arguments import as_path, whole_number
+from .run import Reporter, Run, kept_chunks
 
-__all__ = ["import_images"]
+__all__ = ["EXIT_LAWS", "import_images", "import_object"]
+
+#: how an object's radiance becomes exitance (``import_object``'s ``exit_law``)
+EXIT_LAWS = ("from-views", "dielectric", "lambertian")
 
 
 def import_images(
@@ -23,13 +43,16 @@ def import_images(
     *,
     overwrite: bool = False,
     views=(),
+    scale: float | None = None,
     progress: Callable[[int, int], None] | None = None,
     scheduler: str | None = "threads",
+    reporter: Reporter | None = None,
     **setup,
 ) -> PlanarDataset:
     """A real rig's HDR photographs of a scanned laser spot → a planar data set.
 
-    Wraps :func:`translucency.rig.import_images` (``translucency import images``).
+    ``translucency import images`` is this function (:func:`translucency.rig.import_images` under the
+    run's checks and resuming).
 
     Parameters
     ----------
@@ -41,10 +64,17 @@ def import_images(
         Homography, radiometric scale and corrections, or its JSON file.
     out : str or Path
         The data set folder; an unfinished import of the same inputs resumes.
-    overwrite, progress, scheduler
-        As in :func:`acquire_planar`.
-    views : sequence of (folder, positions, Calibration)
-        Further cameras photographing the same laser positions.
+    overwrite : bool
+        Replace a data set of translucency made from other inputs (never anything else).
+    views : sequence of (folder, positions, Calibration or path)
+        Further cameras photographing the same laser positions, averaged onto the same windows.
+    scale : float, optional
+        Pixel value per unit exitance (W/mm²) per second: replaces every calibration's.
+    progress : callable(done, total), optional
+    scheduler : str, optional
+        ``"threads"``, ``"local:N"`` or ``"tcp://HOST:PORT"``; the data are the same bit for bit.
+    reporter : Reporter, optional
+        Hears the run's information lines (default: silent).
     **setup
         Fields of :class:`translucency.rig.ImportSetup`: ``pitch``, ``window``, ``supersample``,
         ``specular_radius``, ``dilate``, ``floor``, ``sample_size``, ``eta``, ``chunk_points``,
@@ -53,6 +83,7 @@ def import_images(
     Returns
     -------
     PlanarDataset
+        With ``.summary``: the import's numbers (points, windows, the marked points' fit).
 
     Examples
     --------
@@ -65,26 +96,187 @@ def import_images(
     >>> cal = Calibration(Homography.from_matrix([[10, 0, 0], [0, 10, 0], [0, 0, 1]]), scale=4.0)
     >>> out = Path(tempfile.mkdtemp()) / "out.zarr"
     >>> ds = tl.import_images(d, d / "pos.csv", cal, out, pitch=0.5, window=2.5)
-    >>> ds.window
-    (5, 5)
+    >>> ds.window, ds.summary["points"]
+    ((5, 5), 1)
     """
+    parse_scheduler(scheduler)  # a bad value or an unreachable cluster: one line, before work
+    setup = _import_setup(setup)
+    check_option("scale", scale, lo=0, open_lo=True)
+    folder, out = as_path("folder", folder), as_path("out", out)
+    views = [_view(v) for v in views]
+    run = Run("import images", reporter=reporter)
+    files = [p for p in (positions, calibration, *(p for v in views for p in v)) if _a_path(p)]
+    claim_output(out, "planar data set", overwrite=overwrite, inputs=[folder, *files], reuse=True)
+    calib = _calibration(calibration, scale)
+    others = [
+        (v_folder, v_positions, _calibration(v_calib, scale)) for v_folder, v_positions, v_calib in views
+    ]
+    run.kept = lambda: kept_chunks(out, open_dataset)  # Ctrl-C: the chunks kept, and how to resume
+    cal_files = [c for c in (calibration, *(v[2] for v in views)) if _a_path(c)]
+    ds = import_planar(
+        folder,
+        positions,
+        calib,
+        out,
+        setup,
+        overwrite=overwrite,
+        inputs=cal_files,
+        progress=progress,
+        views=others,
+        scheduler=scheduler,
+    )
+    ds.summary = run.summary(
+        {
+            "command": "import images",
+            "out": out,
+            "points": ds.n_points,
+            "window_pixels": ds.window,
+            "pitch": ds.pitch,
+            "rms_px": calib.source.get("rms_px"),  # the marked points' fit, if the calibration has them
+            "seconds": run.seconds(),
+        }
+    )
+    return ds
+
+
+def _a_path(value) -> bool:
+    return isinstance(value, (str, os.PathLike))
+
+
+def _import_setup(setup: dict) -> ImportSetup:
+    """The fields of :class:`ImportSetup`, checked."""
     fields = {f.name for f in dataclasses.fields(ImportSetup)}
     unknown = sorted(set(setup) - fields)
     if unknown:
         raise TranslucencyError(f"{unknown[0]}: not a field of ImportSetup ({', '.join(sorted(fields))})")
-    folder, out = as_path("folder", folder), as_path("out", out)
+    for name in ("pitch", "window", "eta"):
+        check_option(name, setup.get(name), lo=0, open_lo=True)
+    for name in ("specular_radius", "dilate", "beam_rms"):
+        check_option(name, setup.get(name), lo=0)
+    check_option("supersample", setup.get("supersample"), lo=1, hi=16)
+    if setup.get("chunk_points") is not None:
+        whole_number("chunk_points", setup["chunk_points"])
+    if setup.get("sample_size") is not None:
+        setup = {**setup, "sample_size": _sample_size(setup["sample_size"])}
+    return ImportSetup(**setup)
+
+
+def _sample_size(value) -> tuple[float, float]:
+    """The sample's (width, height) in mm, from two numbers or their text ``"20,20"``."""
+    try:
+        size = tuple(float(v) for v in (value.split(",") if isinstance(value, str) else value))
+    except (TypeError, ValueError):
+        size = ()
+    if len(size) != 2 or not all(np.isfinite(v) and v > 0 for v in size):
+        raise TranslucencyError(f"sample_size: expected width,height in mm, got {value!r}")
+    return size
+
+
+def _view(view) -> tuple:
+    """A further camera's (folder, positions, calibration), its paths checked to exist."""
+    try:
+        folder, positions, calibration = view
+    except (TypeError, ValueError):
+        raise TranslucencyError(f"views: expected (folder, positions, calibration), got {view!r}") from None
+    for what, value in (("folder", folder), ("positions", positions), ("calibration", calibration)):
+        if isinstance(value, (str, os.PathLike)) and not Path(value).exists():
+            raise TranslucencyError(f"views: {what} {value}: no such file or folder")
+    return Path(folder), positions, calibration
+
+
+def _calibration(calibration, scale: float | None):
+    """A Calibration (read from its file), with ``scale`` in place of its own when given (a caller's object
+    is copied, not changed)."""
     if isinstance(calibration, (str, os.PathLike)):
+        if not Path(calibration).is_file():
+            raise TranslucencyError(f"calibration {calibration}: no such file")
         calibration = load_calibration(calibration)
-    inputs = [folder] + ([positions] if isinstance(positions, (str, os.PathLike)) else [])
-    return import_planar(
-        folder,
-        positions,
-        calibration,
-        out,
-        ImportSetup(**setup),
-        overwrite=overwrite,
-        inputs=inputs,
-        progress=progress,
-        views=views,
-        scheduler=scheduler,
+    elif scale is not None:
+        calibration = copy.copy(calibration)
+    if scale is not None:
+        calibration.scale = scale
+    return calibration
+
+
+def import_object(
+    rig,
+    out,
+    *,
+    exit_law: str | None = None,
+    chunk_points: int = 8,
+    overwrite: bool = False,
+    progress: Callable[[int, int], None] | None = None,
+    reporter: Reporter | None = None,
+) -> MeshDataset:
+    """A lab's multi-view HDR photographs of a laser stepped over a scanned object → a mesh data set.
+
+    ``translucency import object`` is this function (:func:`translucency.rig.object.importer.import_object`
+    under the run's checks and resuming).  The data set is read by :func:`translucency.fit_model`,
+    :func:`translucency.render_model` and the report as one of :func:`acquire_mesh`'s.
+
+    Parameters
+    ----------
+    rig : path
+        The rig file ``object.json`` (or its folder): mesh, cameras, shots (docs/object-rig.md).
+    out : str or Path
+        The mesh data set folder; an unfinished import of the same inputs resumes.
+    exit_law : {"from-views", "dielectric", "lambertian"}, optional
+        Radiance to exitance: a law estimated from vertices two cameras see, the boundary's
+        F_t/(1 - F_dr), or π L; default the rig file's.
+    chunk_points : int
+        Laser shots per chunk (the unit of resuming; memory holds one chunk of images).
+    overwrite : bool
+        Replace a data set of translucency made from other inputs (never anything else).
+    progress : callable(done, total), optional
+    reporter : Reporter, optional
+        Hears the run's progress (default: silent).
+
+    Returns
+    -------
+    MeshDataset
+        With ``.summary``: cameras (their reprojection errors), the exit law, flags, energy, throughput.
+
+    Examples
+    --------
+    >>> import translucency as tl
+    >>> ds = tl.import_object("rig/object.json", "object.zarr", exit_law="dielectric")  # doctest: +SKIP
+    >>> ds.summary["exit_law"]["law"]  # doctest: +SKIP
+    'dielectric'
+    """
+    chunk_points = whole_number("chunk_points", chunk_points)
+    if exit_law is not None and exit_law not in EXIT_LAWS:
+        raise TranslucencyError(f"exit_law: one of {', '.join(EXIT_LAWS)}; got {exit_law!r}")
+    out = as_path("out", out)
+    setup = read_object_rig(rig)  # a bad rig file: one line before the output is judged
+    run = Run("import object", reporter=reporter)
+    claim_output(out, "mesh data set", overwrite=overwrite, inputs=setup.files, reuse=True)
+    run.kept = lambda: kept_chunks(out, open_mesh_dataset)  # Ctrl-C: the chunks kept, and how to resume
+    with run.reporter.progress("import", len(setup.shots)) as update:
+        update(item="shots")
+
+        def step(done: int, total: int) -> None:
+            update(completed=done)
+            if progress is not None:
+                progress(done, total)
+
+        info = import_mesh(
+            setup.path, out, chunk_points=chunk_points, overwrite=overwrite, exit_law=exit_law, progress=step
+        )
+    ds = open_mesh_dataset(out)
+    mb = info["bytes_read"] / 2**20
+    ds.summary = run.summary(
+        {
+            "command": "import object",
+            "out": out,
+            "points": ds.n_points,
+            "vertices": int(ds.header["n_vertices"]),
+            "cameras": info["cameras"],
+            "exit_law": info["exit_law"],
+            "flags": info["flags"],
+            "energy": info["energy"],
+            "images_MB": mb,
+            "seconds": info["seconds"],
+            "throughput_MB_s": mb / max(info["seconds"], 1e-9),
+        }
     )
+    return ds

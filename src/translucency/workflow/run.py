@@ -198,12 +198,13 @@ class Run:
         return round(time.perf_counter() - self.t0, 3)
 
     def summary(self, record: dict) -> dict:
-        """The run is done (its outputs stay): ``record`` with the estimates and the seconds, where it
-        states none of its own."""
+        """The run is done (its outputs stay): ``record`` with the estimates (those made) and the seconds,
+        where it states none of its own."""
         self.created.clear()
         if self in _ACTIVE:
             _ACTIVE.remove(self)
-        extra = {"estimate": self.need.as_dict(), "time_estimate": self.timing.as_dict()}
+        estimates = {"estimate": self.need, "time_estimate": self.timing}  # None: a run that estimates none
+        extra = {k: v.as_dict() for k, v in estimates.items() if v is not None}
         record = {**record, **{k: v for k, v in extra.items() if k not in record}}
         record.setdefault("seconds", self.seconds())
         return record
