@@ -1,4 +1,4 @@
-"""Calibrated cameras (rig.cameras) and the virtual checkerboards that calibrate them (rig.targets), against
+"""Calibrated cameras (rig.object.cameras) and the virtual checkerboards that calibrate them (rig.object.targets), against
 truths found another way: where Mitsuba renders a glowing sphere, the solid angle of a rectangular field
 in closed form (and of a distorted one by quadrature of the lens model), a known pose and known
 intrinsics recovered by OpenCV, and every refusal in one line naming the camera."""
@@ -288,7 +288,7 @@ def test_targets_refuse_bad_boards_in_one_line():
 
 
 def test_camera_dict_round_trip_through_json_and_from_a_rodrigues_vector():
-    import cv2  # the Rodrigues vector of the truth, independently of rig.cameras
+    import cv2  # the Rodrigues vector of the truth, independently of rig.object.cameras
 
     cam = _lens_camera(64, 48, 50.0)
     back = Camera.from_dict(json.loads(json.dumps(cam.to_dict())), name="cam B")

@@ -1,7 +1,7 @@
 """End to end (slow): photographs rendered by Mitsuba of a virtual object → ``import object`` → the same
 per-vertex data, energy and picture as the photon tally of the same object (issue 23).
 
-The photographs (:mod:`translucency.rig.object_photographs`) are Mitsuba's ``volpath``, the tally our
+The photographs (:mod:`translucency.rig.object.photographs`) are Mitsuba's ``volpath``, the tally our
 photon walk: two independent estimators of one experiment.  The photographs' own noise floor is measured
 with a second, independent set of photographs (:mod:`translucency.pipeline.object_rig_check`).  Figures
 at larger settings: ``python benchmarks/object_rig.py sphere|torus|pig`` (docs/object-rig.md).
