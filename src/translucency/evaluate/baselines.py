@@ -137,7 +137,25 @@ def fits_model(profiles: list[MaterialProfiles]) -> ExponentialModel:
 
 
 def plot_profiles(profiles: list[MaterialProfiles], path, channel: int = 1) -> None:
-    """Write a PNG with one log-scale panel of R_d(r) per material."""
+    """Write a PNG with one log-scale panel of R_d(r) per material.
+
+    Examples
+    --------
+    Four panels a row, each 4 × 3.2 inches at 110 dpi (about a second a figure, so not run here):
+
+    >>> import tempfile
+    >>> import matplotlib.image as mpimg  # doctest: +SKIP
+    >>> from pathlib import Path
+    >>> from translucency.model import material
+    >>> marble = material_profiles(material("marble"), r=np.linspace(0.1, 10.0, 60))
+    >>> path = Path(tempfile.mkdtemp()) / "profiles.png"
+    >>> plot_profiles([marble], path)  # doctest: +SKIP
+    >>> mpimg.imread(path).shape  # one row: 352 × 1760 pixels, RGBA  # doctest: +SKIP
+    (352, 1760, 4)
+    >>> plot_profiles([marble] * 5, path)  # doctest: +SKIP
+    >>> mpimg.imread(path).shape  # five materials: two rows  # doctest: +SKIP
+    (704, 1760, 4)
+    """
     plt = pyplot()
 
     n = len(profiles)

@@ -38,6 +38,23 @@ def vertex_irradiance(mesh, scene, light, eta: float = 1.0, incidence=None, at=N
     (:mod:`translucency.model.incidence`).
     ``at``: the vertices (indices) to compute it at (all by default; ``incidence`` then holds those).
     Raises a one-line error for a point light inside the object.
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> from translucency.mitsuba import mesh_scene
+    >>> from translucency.render import DirectionalLight
+    >>> ball = trimesh.creation.icosphere(2, radius=5.0)
+    >>> sun = DirectionalLight((0.0, 0.0, -1.0), irradiance=2.0)  # from straight above
+    >>> E = vertex_irradiance(ball, mesh_scene(ball), sun)
+    >>> E.shape, bool(np.allclose(E, 2.0 * np.maximum(ball.vertex_normals[:, 2], 0.0)))  # E cos⁺θ
+    ((162,), True)
+    >>> top = int(np.argmax(ball.vertices[:, 2]))
+    >>> vertex_irradiance(ball, mesh_scene(ball), sun, eta=1.4, at=[top])  # normal incidence: F_t(0)/F_t(0)
+    array([2.])
+    >>> roof = trimesh.creation.box(extents=(30.0, 30.0, 1.0)).apply_translation((0.0, 0.0, 20.0))
+    >>> float(vertex_irradiance(ball, mesh_scene(trimesh.util.concatenate([ball, roof])), sun).max())
+    0.0
     """
     v = np.asarray(mesh.vertices, dtype=np.float64)
     n = np.asarray(mesh.vertex_normals, dtype=np.float64)

@@ -27,7 +27,24 @@ def object_from_dataset(path):
 
 def object_of_model(model, header: dict):
     """(mesh, acquisition header) of a per-vertex model file: from the model itself when it carries its
-    triangles (``model.faces``, ``meta["acquisition"]``), else from its data set (older files)."""
+    triangles (``model.faces``, ``meta["acquisition"]``), else from its data set (older files).
+
+    Examples
+    --------
+    >>> from translucency.model import BurleyModel, VertexAlpha
+    >>> corners = np.array([[0.0, 0.0, 0.0], [10.0, 0.0, 0.0], [0.0, 10.0, 0.0], [0.0, 0.0, 10.0]])  # mm
+    >>> model = BurleyModel([[0.0, 0.0, 0.0]], [[0.8] * 3], [[2.0] * 3], VertexAlpha(np.ones(4), corners),
+    ...                     frame=[np.eye(3)])
+    >>> model.faces = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])  # a tetrahedron
+    >>> mesh, acquisition = object_of_model(model, {"meta": {"acquisition": {"eta": 1.4}}})
+    >>> round(float(mesh.volume), 3), bool(mesh.is_watertight), acquisition  # 10³ / 6 mm³
+    (166.667, True, {'eta': 1.4})
+    >>> model.faces = None  # an older file, its data set not recorded
+    >>> object_of_model(model, {"meta": {}})  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    translucency._validate.TranslucencyError: model: holds no mesh and its data set (none recorded) ...
+    """
     meta = header.get("meta", {})
     if model.faces is not None:
         mesh = trimesh.Trimesh(np.asarray(model.alpha.vertices), np.asarray(model.faces), process=False)
@@ -43,7 +60,21 @@ def object_of_model(model, header: dict):
 
 def volume_of_dataset(mesh, header):
     """The filling of a mesh data set: rebuilt from its description (a generated one), or read again from
-    the user's file it was acquired from, if that file is still there unchanged (``header["filling"]``)."""
+    the user's file it was acquired from, if that file is still there unchanged (``header["filling"]``).
+
+    Examples
+    --------
+    >>> box = trimesh.creation.box(extents=(10.0, 6.0, 4.0))
+    >>> header = {"sample": {"generator": "homogeneous:marble", "seed": 0},
+    ...           "request": {"volume_grid": {"voxel_mm": 1.0}}}
+    >>> volume = volume_of_dataset(box, header)  # the mesh's bounding box in 1 mm voxels, (z, y, x)
+    >>> volume.shape, volume.size_mm, volume.voxel_mm
+    ((4, 6, 10), (10.0, 6.0, 4.0), 1.0)
+    >>> volume_of_dataset(box, {"sample": {}})  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    translucency._validate.TranslucencyError: data set: its filling cannot be rebuilt (not generated ...
+    """
     d = header.get("sample", {})
     if d.get("generator") == "file":
         record = header.get("filling")
@@ -97,5 +128,13 @@ def check_light_outside(mesh, light) -> None:
 
 
 def boundary_eta(header) -> float:
-    """η of a mesh data set's boundary: 1 when it was acquired index-matched."""
+    """η of a mesh data set's boundary: 1 when it was acquired index-matched.
+
+    Examples
+    --------
+    >>> boundary_eta({"eta": 1.4}), boundary_eta({"eta": 1.4, "request": {"index_matched": True}})
+    (1.4, 1.0)
+    >>> boundary_eta({})  # none recorded: index-matched
+    1.0
+    """
     return 1.0 if header.get("request", {}).get("index_matched", False) else float(header.get("eta", 1.0))

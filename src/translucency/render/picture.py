@@ -75,12 +75,46 @@ def render_vertex_radiance(
     """Draw the mesh with radiance L (V, 3) per vertex through the camera; returns (H, W, 3).
 
     One-off :class:`VertexPicture` (see there for ``eta`` and ``light``).
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> ball = trimesh.creation.icosphere(2, radius=5.0)
+    >>> camera = Camera.looking_at(ball, width=8, height=6)
+    >>> L = np.tile([0.1, 0.2, 0.3], (len(ball.vertices), 1))  # W/(mm² sr), the same at every vertex
+    >>> picture = render_vertex_radiance(ball, L, camera, spp=1)
+    >>> picture.shape  # (height, width, RGB)
+    (6, 8, 3)
+    >>> picture[3, 4].round(6), picture[0, 0]  # the radiance itself, unshaded; nothing behind the object
+    (array([0.1, 0.2, 0.3]), array([0., 0., 0.]))
     """
     return VertexPicture(mesh, camera, spp=spp, eta=eta, light=light).draw(L)
 
 
 def coverage(mesh, camera: Camera) -> np.ndarray:
-    """(H, W) bool: pixels whose centre ray hits the object."""
+    """(H, W) bool: pixels whose centre ray hits the object.
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> box = trimesh.creation.box(extents=(10.0, 10.0, 10.0))  # its top face at z = 5 mm
+    >>> fov = 2 * np.degrees(np.arctan(10.0 / 95.0))  # 20 mm across at the top face, 95 mm below
+    >>> above = Camera((0.0, 0.0, 100.0), (0.0, 0.0, 0.0), (0.0, 1.0, 0.0), fov, width=8, height=8)
+    >>> coverage(box, above).astype(int)  # the 10 mm face: the middle 4 × 4 pixels
+    array([[0, 0, 0, 0, 0, 0, 0, 0],
+           [0, 0, 0, 0, 0, 0, 0, 0],
+           [0, 0, 1, 1, 1, 1, 0, 0],
+           [0, 0, 1, 1, 1, 1, 0, 0],
+           [0, 0, 1, 1, 1, 1, 0, 0],
+           [0, 0, 1, 1, 1, 1, 0, 0],
+           [0, 0, 0, 0, 0, 0, 0, 0],
+           [0, 0, 0, 0, 0, 0, 0, 0]])
+    >>> away = Camera((0.0, 0.0, 100.0), (0.0, 0.0, 200.0), (0.0, 1.0, 0.0), width=8, height=8)
+    >>> coverage(box, away)  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    translucency._validate.TranslucencyError: camera: sees nothing of the object; move it or point it ...
+    """
     ones = np.ones((len(mesh.vertices), 3))
     cov = render_vertex_radiance(mesh, ones, camera, spp=1)[..., 0] > 0.5
     if not cov.any():

@@ -135,6 +135,18 @@ def relight_vertices(transport: Transport, E: np.ndarray) -> np.ndarray:
     With one shared matrix the three channels go through it together (the matrix is read once,
     rows on all cores, Numba); otherwise one SciPy product per channel.  The far field (if prepared)
     adds two sparse products and one K × K product per channel.
+
+    Examples
+    --------
+    >>> T = sp.csr_matrix(np.array([[0.5, 0.1], [0.1, 0.5]], dtype=np.float32))  # 2 vertices, 1/sr
+    >>> transport = Transport(matrices=[T, T, 0.5 * T])  # blue: half of red and green
+    >>> relight_vertices(transport, np.array([2.0, 0.0]))  # L = T E: the lit vertex, and its neighbour
+    array([[1. , 1. , 0.5],
+           [0.2, 0.2, 0.1]], dtype=float32)
+    >>> own = Transport(matrices=[T, T, 0.5 * T], own=np.full((2, 3), 0.25, np.float32))
+    >>> relight_vertices(own, np.array([2.0, 0.0]))  # + own E, each vertex its own irradiance
+    array([[1.5, 1.5, 1. ],
+           [0.2, 0.2, 0.1]], dtype=float32)
     """
     E = np.asarray(E, dtype=np.float32)
     E = np.repeat(E[:, None], 3, axis=1) if E.ndim == 1 else E

@@ -35,7 +35,15 @@ AUTO_KEY = 0.8
 
 
 def tonemap(img: np.ndarray, exposure: float) -> np.ndarray:
-    """Linear RGB × exposure → sRGB in [0, 1] (clipped)."""
+    """Linear RGB × exposure → sRGB in [0, 1] (clipped).
+
+    Examples
+    --------
+    >>> tonemap(np.array([-1.0, 0.001, 0.25, 0.5, 2.0]), 1.0).round(4)  # linear toe, then 1.055 x^(1/2.4)
+    array([0.    , 0.0129, 0.5371, 0.7354, 1.    ])
+    >>> tonemap(np.array([0.25]), 2.0) == tonemap(np.array([0.5]), 1.0)  # the exposure scales the radiance
+    array([ True])
+    """
     x = np.clip(img * exposure, 0.0, 1.0)
     return np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(x, 1 / 2.4) - 0.055)
 
@@ -100,7 +108,22 @@ def parse_exposure(text: str, name: str = "exposure") -> Exposure:
 
 
 def save_images(img: np.ndarray, stem: Path, exposure: float) -> tuple[Path, Path]:
-    """``stem.exr`` (linear HDR, via Mitsuba's Bitmap/OpenEXR) and ``stem.png`` (tone-mapped), atomically."""
+    """``stem.exr`` (linear HDR, via Mitsuba's Bitmap/OpenEXR) and ``stem.png`` (tone-mapped), atomically.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from translucency.mitsuba import mitsuba
+    >>> img = np.full((2, 3, 3), 0.5)
+    >>> exr, png = save_images(img, Path(tempfile.mkdtemp()) / "picture", exposure=1.0)
+    >>> exr.name, png.name
+    ('picture.exr', 'picture.png')
+    >>> back = np.asarray(mitsuba().Bitmap(str(exr)))  # the EXR: the linear radiance, whatever the exposure
+    >>> back.shape, float(back.max())
+    ((2, 3, 3), 0.5)
+    >>> round(float(mpimg.imread(png)[0, 0, 0]) * 255)  # the PNG: sRGB of 0.5 in 8 bits (0.7354 × 255)
+    187
+    """
     mi = mitsuba()
     stem = Path(stem)
     exr, png = stem.with_suffix(".exr"), stem.with_suffix(".png")

@@ -55,6 +55,25 @@ class Reporter(Protocol):
 
     ``info(text)`` is one line of information; ``progress(description, total)`` is a context manager that
     yields ``update(**fields)`` (``completed=``, ``total=``, ``item=``: Rich's ``Progress.update`` of a task).
+
+    Examples
+    --------
+    Any object with the two methods is one (no base class):
+
+    >>> class Printer:
+    ...     def info(self, text):
+    ...         print(text)
+    ...     @contextlib.contextmanager
+    ...     def progress(self, description, total):
+    ...         print(f"{description}: 0/{total}")
+    ...         yield lambda **fields: print(f"{description}: {fields['completed']}/{total} {fields['item']}")
+    >>> run = Run("fit", reporter=Printer())
+    >>> run.info("3 incident points")
+    3 incident points
+    >>> with run.work("fit", total=3, fresh=False) as work:  # fresh=False: kept out of the calibration
+    ...     work.step()(2, 3, "point 2")
+    fit: 0/3
+    fit: 2/3 point 2
     """
 
     def info(self, text: str) -> None: ...
@@ -118,6 +137,30 @@ class Run:
     ``command`` names it in refusals and summaries; ``timer`` (default ``command``) is its entry of
     :data:`translucency.resources.TIME_TERMS` (``fit iso``, ``fit aniso``, ...); ``reporter`` hears its
     information lines and progress (default :class:`Silent`).
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from translucency.resources import Need
+    >>> Run("render", max_memory="lots")  # a bad size: refused before any work
+    Traceback (most recent call last):
+    ...
+    translucency._validate.TranslucencyError: --max-memory: expected a size such as 4G or 512M, got 'lots'
+    >>> Run("render", max_memory="1M").check(Need(memory=2**30, disk=0, what="a picture"))
+    ... # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    translucency._validate.TranslucencyError: render: needs about 1 GiB of memory (a picture), more than ...
+
+    A run that fails leaves its output folder as it was (here: absent):
+
+    >>> out = Path(tempfile.mkdtemp()) / "render"
+    >>> run = Run("render")
+    >>> _ = run.claim_folder(out, overwrite=False)
+    >>> _ = (out / "picture.png").write_bytes(b"...")  # the work writes, then fails
+    >>> failed()  # every run under way removes what it added
+    >>> out.exists()
+    False
     """
 
     def __init__(

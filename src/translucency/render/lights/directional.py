@@ -17,7 +17,22 @@ if TYPE_CHECKING:  # the placement's types, for the signatures only
 
 @dataclass(frozen=True)
 class DirectionalLight(_DeltaLight):
-    """Distant light: irradiance E (W/mm²) on a surface facing it, travelling along ``direction``."""
+    """Distant light: irradiance E (W/mm²) on a surface facing it, travelling along ``direction``.
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> from translucency.mitsuba import mesh_scene
+    >>> scene = mesh_scene(trimesh.creation.box(extents=(10.0, 10.0, 10.0)))
+    >>> x = np.array([[0.0, 0.0, 5.0], [5.0, 0.0, 0.0], [-5.0, 0.0, 0.0]])  # on the top, +x and −x faces
+    >>> n = np.array([[0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [-1.0, 0.0, 0.0]])
+    >>> theta = np.radians(60.0)  # arriving from +x, 60° from the vertical
+    >>> sun = DirectionalLight((-np.sin(theta), 0.0, -np.cos(theta)), irradiance=2.0)
+    >>> sun.irradiance_at(scene, x, n, extent=10.0).round(4)  # E cos θ: 2 cos 60°, 2 cos 30°, facing away
+    array([1.    , 1.7321, 0.    ])
+    >>> sun.irradiance_scale(1e3), sun.distant, sun.delta  # E at any distance, along one direction
+    (2.0, True, True)
+    """
 
     kind = prefix = "directional"
     forms = "directional:dx,dy,dz[,E] (the direction the light travels)"

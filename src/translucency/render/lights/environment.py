@@ -24,6 +24,18 @@ class EnvironmentLight(Light):
     Mitsuba's ``envmap`` emitter, scaled by ``radiance``; the map's up axis (+Y)
     is turned to the scene's +Z, the same for the irradiance, our picture and
     the reference.
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> from translucency.mitsuba import mesh_scene
+    >>> ball = trimesh.creation.icosphere(2, radius=5.0)
+    >>> sky = EnvironmentLight(0.5)  # W/(mm² sr) from every direction
+    >>> E = sky.irradiance_at(mesh_scene(ball), ball.vertices, ball.vertex_normals, extent=10.0)
+    >>> round(float(E.min()), 6), round(float(E.max()), 6)  # every vertex sees half the sky: π L
+    (1.570796, 1.570796)
+    >>> sky.emitter_dict(), round(sky.irradiance_scale(100.0), 6), sky.delta
+    ({'type': 'constant', 'radiance': 0.5}, 1.570796, False)
     """
 
     kind = "environment"

@@ -46,7 +46,25 @@ ANCHORS = ("camera", "back")
 
 
 class Light(ABC):
-    """What every light answers (module docstring): one subclass per kind, a frozen dataclass in mm and W."""
+    """What every light answers (module docstring): one subclass per kind, a frozen dataclass in mm and W.
+
+    Examples
+    --------
+    >>> from translucency.render.lights import EnvironmentLight, PointLight
+    >>> {prefix: kind.__name__ for prefix, kind in KINDS.items()}  # registered by stating their prefix
+    {'point': 'PointLight', 'spot': 'SpotLight', 'directional': 'DirectionalLight', 'env': 'EnvironmentLight'}
+    >>> [(kind.delta, kind.distant) for kind in KINDS.values()]
+    [(True, False), (True, False), (True, True), (False, True)]
+    >>> lamp = PointLight((0.0, 0.0, 50.0))
+    >>> isinstance(lamp, Light), lamp.record()
+    (True, {'kind': 'point', 'position': (0.0, 0.0, 50.0), 'intensity': 10000.0})
+    >>> EnvironmentLight(0.5).sh_coefficients(1).round(4)  # L_00 = ∫ L Y_00 dω = 2 √π L
+    array([[1.7725, 1.7725, 1.7725]])
+    >>> lamp.sh_coefficients(1)
+    Traceback (most recent call last):
+    ...
+    TypeError: a PointLight is not distant: no transfer (point and spot lights relight)
+    """
 
     #: its kind in records and messages ("point", "spot", "directional", "environment")
     kind: ClassVar[str]

@@ -41,7 +41,27 @@ def _from_position(scene, position, intensity, x, n) -> tuple[np.ndarray, np.nda
 
 @dataclass(frozen=True)
 class PointLight(_DeltaLight):
-    """Isotropic point light: intensity I (W/sr) at ``position`` (mm)."""
+    """Isotropic point light: intensity I (W/sr) at ``position`` (mm).
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> from translucency.mitsuba import mesh_scene
+    >>> scene = mesh_scene(trimesh.creation.box(extents=(10.0, 10.0, 10.0)))
+    >>> x = np.array([[0.0, 0.0, 5.0], [5.0, 0.0, 0.0], [-5.0, 0.0, 0.0]])  # on the top, +x and −x faces
+    >>> n = np.array([[0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [-1.0, 0.0, 0.0]])
+    >>> lamp = PointLight((20.0, 0.0, 25.0), intensity=800.0)
+    >>> lamp.irradiance_at(scene, x, n, extent=10.0).round(4)  # I cos θ / d²: 800 cos 45° / 800, ...
+    array([0.7071, 0.4842, 0.    ])
+    >>> round(800.0 * (15.0 / 850.0**0.5) / 850.0, 4)  # ... the +x face: 15 mm across, 25 up
+    0.4842
+    >>> lamp.irradiance_scale(20.0)  # I / d² on a surface facing it 20 mm away
+    2.0
+    >>> PointLight((0.0, 0.0, 0.0)).irradiance_at(scene, x, n, extent=10.0)
+    Traceback (most recent call last):
+    ...
+    translucency._validate.TranslucencyError: light: the point light at (0, 0, 0) mm is inside the object
+    """
 
     kind = prefix = "point"
     forms = "point:x,y,z[,I]"

@@ -23,6 +23,21 @@ class SpotLight(_DeltaLight):
 
     Mitsuba's falloff: full intensity within ``SPOT_BEAM_FRACTION × cutoff``, falling linearly in
     angle to 0 at ``cutoff``.
+
+    Examples
+    --------
+    >>> spot = SpotLight((0.0, 0.0, 25.0), (0.0, 0.0, 0.0), cutoff_deg=20.0, intensity=800.0)
+    >>> spot.beam_width_deg  # full intensity within 0.75 × the cutoff
+    15.0
+    >>> off_axis = lambda deg: np.array([[np.sin(np.radians(deg)), 0.0, -np.cos(np.radians(deg))]])
+    >>> [round(float(spot.falloff(off_axis(a))[0]), 3) for a in (0.0, 15.0, 17.5, 20.0, 30.0)]
+    [1.0, 1.0, 0.5, 0.0, 0.0]
+    >>> import trimesh
+    >>> from translucency.mitsuba import mesh_scene
+    >>> scene = mesh_scene(trimesh.creation.box(extents=(10.0, 10.0, 10.0)))
+    >>> top, up = np.array([[0.0, 0.0, 5.0]]), np.array([[0.0, 0.0, 1.0]])  # on its axis, 20 mm below it
+    >>> spot.irradiance_at(scene, top, up, extent=10.0)  # I / d² = 800 / 20²
+    array([2.])
     """
 
     kind = prefix = "spot"
