@@ -118,8 +118,6 @@ def _check_more_photons_never_hurt(errors, truth_noise, own):
         assert own[kind] <= min(e), f"{kind}: fitted to the truth {own[kind]}, to noisier data {e}"
 
 
-# slow (22 s of the fast suite: 2 x 2 points at 10 k to 160 k photons and a 160 k truth)
-@pytest.mark.slow
 def test_more_photons_never_hurt(tmp_path_factory):
     """2 × 2 points at 10 k, 40 k, 160 k photons against an independent 160 k truth."""
     _check_more_photons_never_hurt(*_held_out_by_photons(tmp_path_factory, 2, [10_000, 40_000, 160_000]))

@@ -87,8 +87,6 @@ def test_kernel_of_an_incident_vertex_matches_its_acquisition(ball_fit):
         np.testing.assert_allclose(area @ M, m.measured["total"][p], rtol=2e-3)
 
 
-# slow (25 s of the fast suite: a second photon-transport acquisition)
-@pytest.mark.slow
 def test_uniform_light_total_matches_photon_transport(ball_fit, tmp_path):
     """An independent acquisition (other seed, more points) predicts the exitance under uniform light."""
     ball, _, fit = ball_fit
