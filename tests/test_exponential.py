@@ -130,6 +130,8 @@ def test_angle_sampler_matches_anisotropic_profile(rng):
     assert stats.chi2.sf(chi2, 23) > 1e-3
 
 
+# slow (39 s of the fast suite: scipy's dblquad calls the pdf point by point)
+@pytest.mark.slow
 def test_pdf_integrates_to_one(rng):
     model = random_exponential_model(rng, n_points=1, m=8)
     val = dblquad(lambda r, t: r * model.pdf(0, r, t), 0, 2 * np.pi, 0, 60, epsrel=1e-7)[0]

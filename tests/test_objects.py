@@ -198,6 +198,8 @@ def test_acquire_mesh_cli_on_the_pig_and_a_users_mesh(tmp_path):
     assert res.exit_code == 2 and "no such mesh file" in res.output
 
 
+# slow (78 s of the fast suite, 2,562 vertices at 40 k photons): other per-vertex fits stay fast
+@pytest.mark.slow
 def test_fit_mesh_per_vertex(tmp_path):
     """Per-vertex isotropic fit of a photon-transport scan of an object, beside the dipole."""
     from translucency.acquire.mesh import acquire_mesh, object_volume
