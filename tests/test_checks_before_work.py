@@ -187,7 +187,7 @@ def test_ctrl_c_says_what_is_kept_and_a_resumed_run_says_it_resumes(ball, tmp_pa
     out = tmp_path / "i.zarr"
     mesh, filling = str(ball["mesh"]), str(ball["filling"])
     args = [sys.executable, "-m", "translucency", "acquire", "mesh", "--mesh", mesh, "--volume", filling,
-            "--points", "16", "--photons", "300", "--chunk", "4", "--out", str(out)]  # fmt: skip
+            "--points", "16", "--photons", "3000", "--chunk", "4", "--out", str(out)]  # fmt: skip
     env = {**os.environ, "COLUMNS": "200"}
     proc = subprocess.Popen(args, stderr=subprocess.PIPE, text=True, env=env)
     flag = out / "chunk_done" / "c" / "0"
