@@ -49,6 +49,8 @@ _WORKFLOW = (
     "render_scene",
     "import_images",
     "make_sample",
+    "describe",
+    "describe_materials",
     "Fitting",
     "Rendering",
     "SceneRendering",

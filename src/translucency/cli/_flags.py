@@ -48,6 +48,7 @@ FLAGS = {
     "samples": "--samples",
     "passes": "--passes",
     "roughness": "--roughness",
+    "eta": "--eta",
 }
 
 #: arguments that are also plain words ("out", "scale"): translated only where a message begins with

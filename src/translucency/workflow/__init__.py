@@ -39,6 +39,8 @@ _HOMES = {
     "SceneRendering": "rendering",
     "render_model": "rendering",
     "render_scene": "rendering",
+    "describe": "inspecting",
+    "describe_materials": "inspecting",
     "Reporter": "run",
     "Run": "run",
 }
