@@ -49,6 +49,8 @@ FLAGS = {
     "passes": "--passes",
     "roughness": "--roughness",
     "eta": "--eta",
+    "ply": "--ply",
+    "gltf": "--gltf",
 }
 
 #: arguments that are also plain words ("out", "scale"): translated only where a message begins with

@@ -41,6 +41,9 @@ _HOMES = {
     "render_scene": "rendering",
     "describe": "inspecting",
     "describe_materials": "inspecting",
+    "export_model": "exporting",
+    "export_ply": "exporting",
+    "export_gltf": "exporting",
     "Reporter": "run",
     "Run": "run",
 }
