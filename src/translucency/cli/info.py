@@ -1,7 +1,8 @@
 """``translucency info``: what a model file or a data set holds, its size on disk, whether it is valid.
 
 One record per path (:func:`translucency.workflow.inspecting.describe`, JSON-ready, its schema in
-:mod:`.schemas` and docs/json.md) and its display as a table (:func:`_rows`): ``--json`` prints the record, numbers as numbers, nothing cut.
+:mod:`.schemas` and docs/json.md) and its display as a table (:func:`_rows`): ``--json`` prints the
+record, numbers as numbers, nothing cut.
 """
 
 from __future__ import annotations
