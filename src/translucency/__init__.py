@@ -45,6 +45,7 @@ _WORKFLOW = (
     "open_dataset",
     "fit_model",
     "evaluate_model",
+    "evaluate_report",
     "render_model",
     "render_scene",
     "import_images",
@@ -55,6 +56,7 @@ _WORKFLOW = (
     "export_ply",
     "export_gltf",
     "Fitting",
+    "Evaluation",
     "Rendering",
     "SceneRendering",
 )

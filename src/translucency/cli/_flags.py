@@ -51,6 +51,11 @@ FLAGS = {
     "eta": "--eta",
     "ply": "--ply",
     "gltf": "--gltf",
+    "truth": "--truth",
+    "compare": "--compare",
+    "report": "--report",
+    "json_out": "--json-out",
+    "scheduler": "--scheduler",
 }
 
 #: arguments that are also plain words ("out", "scale"): translated only where a message begins with

@@ -14,7 +14,7 @@ module                     functions                                   command
 :mod:`.acquiring`          :func:`acquire_planar`, :func:`acquire_mesh`  ``acquire planar|mesh``
 :mod:`.importing`          :func:`import_images`                       ``import images``
 :mod:`.fitting`            :func:`fit_model`                           ``fit``
-:mod:`.evaluating`         :func:`evaluate_model`                      ``evaluate``
+:mod:`.evaluating`         :func:`evaluate_report`, :func:`evaluate_model`  ``evaluate``
 :mod:`.rendering`          :func:`render_model`, :func:`render_scene`  ``render``, ``render --scene``
 =========================  ==========================================  ============================
 
@@ -35,6 +35,8 @@ _HOMES = {
     "Fitting": "fitting",
     "fit_model": "fitting",
     "evaluate_model": "evaluating",
+    "evaluate_report": "evaluating",
+    "Evaluation": "evaluating",
     "Rendering": "rendering",
     "SceneRendering": "rendering",
     "render_model": "rendering",
