@@ -55,6 +55,7 @@ _WORKFLOW = (
     "export_model",
     "export_ply",
     "export_gltf",
+    "view_model",
     "Fitting",
     "Evaluation",
     "Rendering",

@@ -56,6 +56,11 @@ FLAGS = {
     "report": "--report",
     "json_out": "--json-out",
     "scheduler": "--scheduler",
+    "bands": "--bands",
+    "port": "--port",
+    "sky": "--sky",
+    "export": "--export",
+    "reference_render": "--reference",
 }
 
 #: arguments that are also plain words ("out", "scale"): translated only where a message begins with

@@ -46,6 +46,7 @@ _HOMES = {
     "export_model": "exporting",
     "export_ply": "exporting",
     "export_gltf": "exporting",
+    "view_model": "viewing",
     "Reporter": "run",
     "Run": "run",
 }

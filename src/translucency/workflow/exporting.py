@@ -71,7 +71,7 @@ def export_model(model, *, ply=None, gltf=None, light: str = DEFAULT_LIGHT, over
     2562
     """
     if ply is None and gltf is None:
-        raise TranslucencyError("export: say what to write (ply=OUT.ply or gltf=OUT.glb)")
+        raise TranslucencyError("say what to write: ply=OUT.ply or gltf=OUT.glb")
     ply = None if ply is None else _named("ply", ply, ".ply", "")
     gltf = None if gltf is None else _named("gltf", gltf, ".glb", " (binary glTF)")
     fitted, mesh, acquisition, inputs = _object(model)
