@@ -12,58 +12,67 @@ import typer
 from ._common import finish, json_option, overwrite_option, quiet_option, user_errors
 from ._run import RichReporter
 
+#: the options with long help, named here so that the command reads as its calls
+_EXPORT = typer.Option(
+    None,
+    "--export",
+    help="Write a static page into this folder (index.html, viewer.js, data.js) instead of serving: it "
+    "opens from disk in any browser, relit under a directional or environment light you turn.",
+)
+_SKY = typer.Option(
+    None,
+    "--sky",
+    metavar="ENV",
+    help="The environment light: env:L (a constant sky, W/(mm^2 sr)) or env:MAP.exr[,scale] (as render's "
+    "--light); default a constant sky giving 1/3 of the directional light's irradiance.",
+)
+_BANDS = typer.Option(
+    4,
+    "--bands",
+    help="Bands of the light basis (spherical harmonics): bands^2 "
+    "coefficients per vertex and channel; 2 to 5.",
+)
+_COMPARE = typer.Option(
+    None,
+    "--compare",
+    help="A second per-vertex model of the same mesh (another fit, another family): shown beside the "
+    "first and as their difference |B - A| / A under the same directional or environment light.",
+)
+_REFERENCE = typer.Option(
+    None,
+    "--reference",
+    help="A render folder with its path-traced reference (translucency render --reference, or the main "
+    "job's results/report): its error map (FLIP) and numbers beside the model.",
+)
+_TRUTH = typer.Option(
+    None,
+    "--truth",
+    help="A planar model's independent acquisition (another seed of the same points): its ring means "
+    "beside the data's in each point's profile.",
+)
+_RADIUS = typer.Option(
+    None,
+    "--radius",
+    help="Near radius of the transport, mm (default as render's: the 99% energy radius).",
+)
+
 
 @user_errors
 def view(
     model: Path = typer.Argument(
         ..., help="A model file: per-vertex (fit on a mesh data set) or planar (fit on a planar data set)."
     ),
-    export: Path = typer.Option(
-        None,
-        "--export",
-        help="Write a static page into this folder (index.html, viewer.js, data.js) instead of serving: it "
-        "opens from disk in any browser, relit under a directional or environment light you turn.",
-    ),
+    export: Path = _EXPORT,
     port: int = typer.Option(8080, "--port", help="Serve on this port (another is taken if it is in use)."),
     open_browser: bool = typer.Option(
         True, "--browser/--no-browser", help="Open the page in the default browser (else print the address)."
     ),
-    sky: str = typer.Option(
-        None,
-        "--sky",
-        metavar="ENV",
-        help="The environment light: env:L (a constant sky, W/(mm^2 sr)) or env:MAP.exr[,scale] (as render's "
-        "--light); default a constant sky giving 1/3 of the directional light's irradiance.",
-    ),
-    bands: int = typer.Option(
-        4,
-        "--bands",
-        help="Bands of the light basis (spherical harmonics): bands^2 "
-        "coefficients per vertex and channel; 2 to 5.",
-    ),
-    compare: Path = typer.Option(
-        None,
-        "--compare",
-        help="A second per-vertex model of the same mesh (another fit, another family): shown beside the "
-        "first and as their difference |B - A| / A under the same directional or environment light.",
-    ),
-    reference: Path = typer.Option(
-        None,
-        "--reference",
-        help="A render folder with its path-traced reference (translucency render --reference, or the main "
-        "job's results/report): its error map (FLIP) and numbers beside the model.",
-    ),
-    truth: Path = typer.Option(
-        None,
-        "--truth",
-        help="A planar model's independent acquisition (another seed of the same points): its ring means "
-        "beside the data's in each point's profile.",
-    ),
-    radius: float = typer.Option(
-        None,
-        "--radius",
-        help="Near radius of the transport, mm (default as render's: the 99% energy radius).",
-    ),
+    sky: str = _SKY,
+    bands: int = _BANDS,
+    compare: Path = _COMPARE,
+    reference: Path = _REFERENCE,
+    truth: Path = _TRUTH,
+    radius: float = _RADIUS,
     seconds: float = typer.Option(
         0.0, "--seconds", help="Serve this long, then stop (0: until Ctrl-C; for scripts and tests)."
     ),
@@ -92,11 +101,16 @@ def view(
     if export is None:  # served: the address was said while serving
         finish(as_json, True, summary)
         return
+    finish(as_json, quiet, summary, _page_lines(summary, PAGE_BUDGET_MB))
+
+
+def _page_lines(summary: dict, budget_mb: float) -> list[str]:
+    """Where the page is and how large, the relighting's error against render, a note over ``budget_mb``."""
     total_mb = summary["page_mb"]
     lines = [f"page: {summary['page']} ({total_mb:.1f} MB; open it in a browser, no server needed)"]
     if "error_vs_render" in summary:
         errors = ", ".join(f"{k} {v:.3f}" for k, v in summary["error_vs_render"].items())
         lines.append(f"relative RMSE against render for the same light: {errors}")
-    if total_mb > PAGE_BUDGET_MB:
-        lines.append(f"note: the page is over {PAGE_BUDGET_MB:g} MB; --bands 3 makes it smaller")
-    finish(as_json, quiet, summary, lines)
+    if total_mb > budget_mb:
+        lines.append(f"note: the page is over {budget_mb:g} MB; --bands 3 makes it smaller")
+    return lines
