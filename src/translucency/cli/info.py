@@ -13,7 +13,6 @@ from pathlib import Path
 import typer
 from rich.table import Table
 
-from ..workflow.inspecting import MODEL_FIELDS, describe
 from ._common import console, jsonable, user_errors
 
 
@@ -23,6 +22,8 @@ def info(
     as_json: bool = typer.Option(False, "--json", help="Print the fields as one JSON object (for scripts)."),
 ):
     """Describe a model file or a data set: what it holds, its size on disk, whether it is valid."""
+    from ..workflow.inspecting import describe  # Zarr and NumPy: what reading the file needs
+
     fields = describe(path)
     if as_json:
         print(json.dumps(jsonable(fields), allow_nan=False, indent=2))  # plain: no wrapping
@@ -105,6 +106,8 @@ def _dataset_rows(fields: dict, size_text: str, bounds: list):
 
 def _model_rows(fields: dict, size_text: str, bounds: list):
     """The rows of a model file."""
+    from ..workflow.inspecting import MODEL_FIELDS
+
     rows = [("size on disk", size_text)]
     rows += [(key, str(fields[key])) for key in (*MODEL_FIELDS, "dtype") if key in fields]
     if fields["meta"]:

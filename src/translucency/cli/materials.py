@@ -6,7 +6,6 @@ from __future__ import annotations
 import typer
 from rich.table import Table
 
-from ..workflow.inspecting import describe_materials
 from ._common import finish, json_option, user_errors
 
 
@@ -16,6 +15,8 @@ def materials(
     as_json: bool = json_option(),
 ):
     """Print Jensen et al. 2001's measured coefficients (mm^-1) and the dipole's R_d."""
+    from ..workflow.inspecting import describe_materials  # the model's closed forms, NumPy only
+
     record = describe_materials(eta)
     table = Table(title=f"Jensen et al. 2001 measured materials (eta = {eta})")
     for col in ("name", "sigma_s' R G B [1/mm]", "sigma_a R G B [1/mm]", "R_d dipole", "R_d published"):
