@@ -106,7 +106,7 @@ def _dataset_rows(fields: dict, size_text: str, bounds: list):
 
 def _model_rows(fields: dict, size_text: str, bounds: list):
     """The rows of a model file."""
-    from ..workflow.inspecting import MODEL_FIELDS
+    from ..workflow.inspecting import MODEL_FIELDS  # loaded by the command already (describe)
 
     rows = [("size on disk", size_text)]
     rows += [(key, str(fields[key])) for key in (*MODEL_FIELDS, "dtype") if key in fields]
