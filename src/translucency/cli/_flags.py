@@ -48,6 +48,19 @@ FLAGS = {
     "samples": "--samples",
     "passes": "--passes",
     "roughness": "--roughness",
+    "eta": "--eta",
+    "ply": "--ply",
+    "gltf": "--gltf",
+    "truth": "--truth",
+    "compare": "--compare",
+    "report": "--report",
+    "json_out": "--json-out",
+    "scheduler": "--scheduler",
+    "bands": "--bands",
+    "port": "--port",
+    "sky": "--sky",
+    "export": "--export",
+    "reference_render": "--reference",
 }
 
 #: arguments translated only where a message begins with them and a colon (``chunk_points: …``), the place

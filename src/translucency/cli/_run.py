@@ -13,10 +13,9 @@ from collections.abc import Callable, Iterator
 
 import typer
 
-from ..io.atomic import write_json
 from ..workflow import run as library
 from ..workflow.run import bytes_at, kept_chunks
-from ._common import err_console, finish, info, jsonable, progress
+from ._common import err_console, finish, info, progress
 
 __all__ = ["Run", "RichReporter", "bytes_at", "failed", "interrupted", "keeping", "kept_chunks"]
 
@@ -48,15 +47,6 @@ class Run(library.Run):
     def finish(self, as_json: bool, summary: dict, lines=()) -> None:
         """The summary with the estimates and the seconds, as one JSON object (``--json``) or ``lines``."""
         finish(as_json, self.quiet, self.summary(summary), lines)
-
-    def finish_report(self, as_json: bool, summary: dict, report, table, json_out=None) -> None:
-        """An evaluation's summary: the report's page first, written to ``json_out`` too when asked
-        (``--json-out``), then :meth:`finish` with the table and where the report is."""
-        summary = {"command": summary.get("command", "evaluate"), "report": report / "index.html", **summary}
-        summary = self.summary(summary)
-        if json_out is not None:  # --json-out: the object --json prints
-            write_json(json_out, jsonable(summary))
-        finish(as_json, self.quiet, summary, [table, f"report: {report / 'index.html'}"])
 
 
 def failed() -> None:

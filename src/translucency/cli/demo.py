@@ -7,8 +7,8 @@ from pathlib import Path
 
 import typer
 
-from ..model import MATERIALS
-from ._common import console, overwrite_option, progress, user_errors
+from ._common import console, overwrite_option, user_errors
+from ._run import RichReporter
 
 
 @user_errors
@@ -19,14 +19,8 @@ def demo(
 ):
     """The main job on the embedded default data: baselines per material, then planar fits
     (iso, aniso, dipole, Burley) with alpha and the Figure 1 report."""
-    from ..pipeline import DEMO_FITS, run_demo  # heavy: the main job loads every stage and Mitsuba
+    from ..pipeline import run_demo  # heavy: the main job loads every stage and Mitsuba
 
-    with progress() as bar:
-        task = bar.add_task("demo", total=len(MATERIALS) + len(DEMO_FITS) + 3, item="")
-
-        def step(name):
-            bar.update(task, advance=1, item=name)
-
-        outputs = run_demo(out, n_terms=terms, step=step, overwrite=overwrite)
+    outputs = run_demo(out, n_terms=terms, overwrite=overwrite, reporter=RichReporter(False))
     for what, path in outputs.items():
         console.print(f"{what:>8}: {path}")

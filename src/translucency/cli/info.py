@@ -1,7 +1,8 @@
 """``translucency info``: what a model file or a data set holds, its size on disk, whether it is valid.
 
-One record per path (:func:`record`, JSON-ready, its schema in :mod:`.schemas` and docs/json.md) and its
-display as a table (:func:`_rows`): ``--json`` prints the record, numbers as numbers, nothing cut.
+One record per path (:func:`translucency.workflow.inspecting.describe`, JSON-ready, its schema in
+:mod:`.schemas` and docs/json.md) and its display as a table (:func:`_rows`): ``--json`` prints the
+record, numbers as numbers, nothing cut.
 """
 
 from __future__ import annotations
@@ -9,20 +10,10 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-import numpy as np
 import typer
 from rich.table import Table
 
-from ..geometry import object_bounds
-from ..io.dataset import describe, open_dataset
-from ..io.inputs import expect_input
-from ..io.mesh_dataset import describe_mesh, is_mesh_dataset, open_mesh_dataset
-from ..io.model_file import ModelFileError, load_model, read_header
-from ..model import check_physics
 from ._common import console, jsonable, user_errors
-
-#: the header fields of a model file that ``info`` lists, in order
-_MODEL_FIELDS = ("format", "version", "kind", "geometry", "n_points", "n_terms", "n_directions", "colour")
 
 
 @user_errors
@@ -31,7 +22,9 @@ def info(
     as_json: bool = typer.Option(False, "--json", help="Print the fields as one JSON object (for scripts)."),
 ):
     """Describe a model file or a data set: what it holds, its size on disk, whether it is valid."""
-    fields = record(path)
+    from ..workflow.inspecting import describe  # Zarr and NumPy: what reading the file needs
+
+    fields = describe(path)
     if as_json:
         print(json.dumps(jsonable(fields), allow_nan=False, indent=2))  # plain: no wrapping
     else:
@@ -43,61 +36,12 @@ def info(
         raise typer.Exit(1)
 
 
-def record(path: Path) -> dict:
-    """``info``'s record of ``path``: a model file, a planar or a mesh data set."""
-    expect_input(path, ("model file", "planar data set", "mesh data set"))
-    if path.is_dir():
-        if is_mesh_dataset(path):
-            return {
-                "command": "info",
-                "path": path,
-                "what": "mesh data set",
-                **describe_mesh(open_mesh_dataset(path)),
-            }
-        return {"command": "info", "path": path, "what": "planar data set", **describe(open_dataset(path))}
-    return {"command": "info", "path": path, "what": "model", **_model_record(path)}
-
-
-def _model_record(path: Path) -> dict:
-    """The record of a model file: its header, whether it is intact and physical, its ranges."""
-    header = read_header(path)  # a ModelFileError is a TranslucencyError: one line, exit 2
-    fields = {"size_bytes": path.stat().st_size}
-    fields.update({key: header[key] for key in (*_MODEL_FIELDS, "dtype") if key in header})
-    fields["meta"] = header.get("meta") or {}
-    try:
-        model = load_model(path)
-    except ModelFileError as exc:
-        return {**fields, "valid": False, "intact": False, "problem": str(exc)}
-    physics = check_physics(model)
-    values = model.alpha.values
-    fields.update(
-        valid=bool(physics.ok),
-        intact=True,
-        problem=None if physics.ok else "the file is intact, but the model is not physical",
-        physical={"ok": bool(physics.ok), "description": physics.describe(), **physics.summary()},
-        alpha={"shape": list(model.alpha.shape), "min": float(values.min()), "max": float(values.max())},
-        total_reflectance_mean=physics.total.mean(axis=0).tolist(),
-        energy_radius_mm={"min": float(np.min(physics.radius)), "max": float(np.max(physics.radius))},
-        object_size_mm=float(physics.size_mm) if np.isfinite(physics.size_mm) else None,
-        object=physics.summary()["object"],
-        beyond_object_max=float(np.max(physics.beyond)) if len(physics.beyond) else 0.0,
-        beyond_object_bound=float(physics.beyond_bound),
-        # what the model carries beside the paper's parameters (the renderer's measured near field, the
-        # through-body table of model/through.py)
-        measured=sorted((model.measured or {}).keys()),
-    )
-    if model.geometry == "mesh":
-        fields.update(object_bounds(model.alpha.vertices))
-    return fields
-
-
 def _mm(v) -> str:
     return ", ".join(f"{x:.4g}" for x in v)
 
 
 def _rows(fields: dict):
     """(label, text) rows of the table a person reads; the record keeps every value in full."""
-    what = fields["what"]
     size = fields["size_bytes"]
     size_text = f"{size:,} bytes ({size / 1e6:.3f} MB)"
     if "bounds_mm" in fields:
@@ -111,49 +55,61 @@ def _rows(fields: dict):
         ]
     else:
         bounds = []
-    if what != "model":
-        damaged = fields["damaged"]
-        rows = [
-            ("format", f"{fields['format']} v{fields['version']}"),
-            ("incident points", str(fields["n_points"])),
-        ]
-        if what == "planar data set":
-            h, w = fields["window_px"]
-            rows += [("window", f"{h} x {w} px at {fields['pitch_mm']} mm"), ("dtype", fields["dtype"])]
-        else:
-            rows += [
-                ("mesh", f"{fields['n_vertices']:,} vertices, {fields['n_faces']:,} faces"),
-                *bounds,
-                ("index matched", str(fields["index_matched"])),
-            ]
-            if fields.get("source") == "photographs":
-                rows += [
-                    (
-                        "source",
-                        f"photographs, {len(fields['cameras'])} cameras, exit law {fields['exit_law']}",
-                    ),
-                ]
+    if fields["what"] != "model":
+        return _dataset_rows(fields, size_text, bounds)
+    return _model_rows(fields, size_text, bounds)
+
+
+def _dataset_rows(fields: dict, size_text: str, bounds: list):
+    """The rows of a planar or a mesh data set."""
+    damaged = fields["damaged"]
+    rows = [
+        ("format", f"{fields['format']} v{fields['version']}"),
+        ("incident points", str(fields["n_points"])),
+    ]
+    if fields["what"] == "planar data set":
+        h, w = fields["window_px"]
+        rows += [("window", f"{h} x {w} px at {fields['pitch_mm']} mm"), ("dtype", fields["dtype"])]
+    else:
         rows += [
-            (
-                "damaged",
-                ", ".join(f"{k} chunks {v}" for k, v in damaged.items())
-                or "none (every finished chunk present and decodable)",
-            ),
-            ("sample", _short(fields["sample"])),
-            (
-                "photons per point",
-                f"{fields['photons']:,.0f} (equivalent: the measured noise)"
-                if fields.get("source") == "photographs"
-                else str(fields["photons"]),
-            ),
-            ("seed", str(fields["seed"])),
-            ("complete", f"{fields['chunks_done']}/{fields['chunks']} chunks"),
-            ("size on disk", size_text),
-            ("software", json.dumps(fields["software"])),
+            ("mesh", f"{fields['n_vertices']:,} vertices, {fields['n_faces']:,} faces"),
+            *bounds,
+            ("index matched", str(fields["index_matched"])),
         ]
-        return rows
+        if fields.get("source") == "photographs":
+            rows += [
+                (
+                    "source",
+                    f"photographs, {len(fields['cameras'])} cameras, exit law {fields['exit_law']}",
+                ),
+            ]
+    rows += [
+        (
+            "damaged",
+            ", ".join(f"{k} chunks {v}" for k, v in damaged.items())
+            or "none (every finished chunk present and decodable)",
+        ),
+        ("sample", _short(fields["sample"])),
+        (
+            "photons per point",
+            f"{fields['photons']:,.0f} (equivalent: the measured noise)"
+            if fields.get("source") == "photographs"
+            else str(fields["photons"]),
+        ),
+        ("seed", str(fields["seed"])),
+        ("complete", f"{fields['chunks_done']}/{fields['chunks']} chunks"),
+        ("size on disk", size_text),
+        ("software", json.dumps(fields["software"])),
+    ]
+    return rows
+
+
+def _model_rows(fields: dict, size_text: str, bounds: list):
+    """The rows of a model file."""
+    from ..workflow.inspecting import MODEL_FIELDS  # loaded by the command already (describe)
+
     rows = [("size on disk", size_text)]
-    rows += [(key, str(fields[key])) for key in (*_MODEL_FIELDS, "dtype") if key in fields]
+    rows += [(key, str(fields[key])) for key in (*MODEL_FIELDS, "dtype") if key in fields]
     if fields["meta"]:
         rows.append(("meta", _short(fields["meta"])))
     if not fields["intact"]:

@@ -14,6 +14,7 @@
 
 from __future__ import annotations
 
+import itertools
 import json
 from collections.abc import Callable
 
@@ -26,6 +27,7 @@ from ..io.dataset import open_dataset
 from ..io.model_file import save_model
 from ..io.outputs import claim_folder
 from ..model import MATERIALS
+from ..workflow.run import Reporter
 from .default_data import demo_volume
 from .figure2 import run_figure2
 from .relight_check import relight_check
@@ -37,6 +39,8 @@ DEMO_FITS = {
     "dipole": dict(model="dipole"),
     "burley": dict(model="burley"),
 }
+#: the steps of the main job: each material, each fit, the relighting, the report and Figure 2
+DEMO_STEPS = len(MATERIALS) + len(DEMO_FITS) + 3
 
 
 def run_demo(
@@ -47,8 +51,13 @@ def run_demo(
     dataset=None,
     max_rounds: int = 3,
     overwrite: bool = False,
+    reporter: Reporter | None = None,
 ) -> dict:
     """Run the main job and write its outputs under ``out_dir``.
+
+    ``translucency demo`` is this function.  ``step(name)`` is told as each step begins; a ``reporter``
+    (:class:`translucency.workflow.run.Reporter`) shows the steps as one progress of
+    :data:`DEMO_STEPS`.
 
     Outputs
     -------
@@ -88,6 +97,23 @@ def run_demo(
     ...
     translucency._validate.TranslucencyError: out ...: exists and is not a translucency output folder; ...
     """
+    if reporter is not None:
+        with reporter.progress("demo", DEMO_STEPS) as update:
+            begun = itertools.count(1)
+
+            def told(name: str) -> None:
+                if step:
+                    step(name)
+                update(completed=next(begun), item=name)
+
+            return run_demo(
+                out_dir,
+                n_terms=n_terms,
+                step=told,
+                dataset=dataset,
+                max_rounds=max_rounds,
+                overwrite=overwrite,
+            )
     out_dir = claim_folder(out_dir, overwrite=overwrite, inputs=[dataset])
     profiles = []
     for name, mat in MATERIALS.items():

@@ -180,7 +180,7 @@ def _exposure(exposure: Exposure, model, mesh, light, out: dict, auto) -> float:
 
 def plot_comparison(ref_ldr, our_ldr, error_map, path, titles) -> None:
     """reference | ours | an error map (0..1, NaN where not compared) side by side into ``path``;
-    ``titles``: the three panels' titles (also :mod:`translucency.cli.render_scene`'s figure)."""
+    ``titles``: the three panels' titles (also :func:`translucency.workflow.render_scene`'s figure)."""
     plt = pyplot()
 
     fig, ax = plt.subplots(1, 3, figsize=(13, 3.8))

@@ -7,22 +7,24 @@ before any work (:mod:`.run`), claims its outputs (never replacing what transluc
 works under a :class:`~.run.Reporter` (silent by default; the command line draws progress bars) and
 returns what it made with the summary the command prints.
 
-=========================  ==========================================  ============================
-module                     functions                                   command
-=========================  ==========================================  ============================
-:mod:`.datasets`           :func:`open_dataset`                        ``info DATA``
-:mod:`.acquiring`          :func:`acquire_planar`, :func:`acquire_mesh`  ``acquire planar|mesh``
-                           :func:`acquire_photographs`,                ``acquire photographs``,
-                           :func:`acquire_object_photographs`          ``acquire object-photographs``
-:mod:`.importing`          :func:`import_images`, :func:`import_object`  ``import images|object``
-:mod:`.fitting`            :func:`fit_model`                           ``fit``
-:mod:`.evaluating`         :func:`evaluate_model`                      ``evaluate``
-:mod:`.rendering`          :func:`render_model`, :func:`render_scene`  ``render``, ``render --scene``
-=========================  ==========================================  ============================
+==================  =============================================================  ===========================
+module              functions                                                      command
+==================  =============================================================  ===========================
+:mod:`.datasets`    :func:`open_dataset`                                           ``info DATA``
+:mod:`.inspecting`  :func:`describe`, :func:`describe_materials`                   ``info``, ``materials``
+:mod:`.acquiring`   :func:`acquire_planar`, :func:`acquire_mesh`,                  ``acquire planar|mesh``,
+                    :func:`acquire_photographs`, :func:`acquire_object_photographs`  ``acquire photographs``, …
+:mod:`.importing`   :func:`import_images`, :func:`import_object`                   ``import images|object``
+:mod:`.fitting`     :func:`fit_model`                                              ``fit``
+:mod:`.evaluating`  :func:`evaluate_report`, :func:`evaluate_model`                ``evaluate``
+:mod:`.rendering`   :func:`render_model`, :func:`render_scene`                     ``render [--scene]``
+:mod:`.exporting`   :func:`export_model`, :func:`export_ply`, :func:`export_gltf`  ``export``
+:mod:`.viewing`     :func:`view_model`                                             ``view``
+==================  =============================================================  ===========================
 
-The modules load on first use of one of their names (the stages load Dask, Matplotlib and Mitsuba's
-wrappers), so that :mod:`.run` stays cheap for the command line's start-up.  Units: mm, R_d in mm⁻²,
-linear RGB.
+``translucency demo`` is :func:`translucency.pipeline.run_demo` (the main job).  The modules load on
+first use of one of their names (the stages load Dask, Matplotlib and Mitsuba's wrappers), so that
+:mod:`.run` stays cheap for the command line's start-up.  Units: mm, R_d in mm⁻², linear RGB.
 """
 
 import importlib
@@ -45,10 +47,18 @@ _HOMES = {
     "Fitting": "fitting",
     "fit_model": "fitting",
     "evaluate_model": "evaluating",
+    "evaluate_report": "evaluating",
+    "Evaluation": "evaluating",
     "Rendering": "rendering",
     "SceneRendering": "rendering",
     "render_model": "rendering",
     "render_scene": "rendering",
+    "describe": "inspecting",
+    "describe_materials": "inspecting",
+    "export_model": "exporting",
+    "export_ply": "exporting",
+    "export_gltf": "exporting",
+    "view_model": "viewing",
     "Reporter": "run",
     "Run": "run",
 }

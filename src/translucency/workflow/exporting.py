@@ -1,0 +1,239 @@
+"""Export as functions: a per-vertex model taken to other tools.
+
+:func:`export_ply` writes its mesh as a PLY for a Mitsuba scene (``render_scene``), in the model's
+millimetres and vertex order; :func:`export_gltf` writes glTF 2.0 for Blender and three.js: the mesh, the
+exitance under a light baked as vertex colours (the render stage's chain) and each vertex's profile reduced
+to Christensen–Burley's albedo and mean free path per channel (with the reduction's error).
+:func:`export_model` is ``translucency export``: either or both, every check before any file is written.
+Units: mm (glTF positions in metres), radiance in W/(mm² sr), linear RGB.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+
+from .._validate import TranslucencyError
+from ..io.atomic import atomic_path
+from ..io.gltf import MM_PER_GLTF_UNIT, write_glb
+from ..io.inputs import expect_input
+from ..io.outputs import PLY_COMMENT, claim_output
+from ..model.burley import burley_of_exponentials, burley_shape
+from ..render import boundary_eta, object_of_model, relight_vertices, transport_matrices, vertex_irradiance
+from ..render.lights import Placement, parse_light, place_light
+from ..render.transport import vertex_parameters
+from ._arguments import as_path, model_and_record
+
+__all__ = ["DEFAULT_LIGHT", "export_gltf", "export_model", "export_ply"]
+
+#: the light baked into a glTF when none is given (render's default light), mm
+DEFAULT_LIGHT = "point:60,-80,120,2e4"
+
+
+def export_model(model, *, ply=None, gltf=None, light: str = DEFAULT_LIGHT, overwrite: bool = False) -> dict:
+    """Take a per-vertex model to other tools: its mesh as PLY and/or glTF with the bake.
+
+    ``translucency export MODEL [--ply OUT.ply] [--gltf OUT.glb]`` is this function: the names and the
+    model checked before any file is written, then the PLY, then the glTF.
+
+    Parameters
+    ----------
+    model : FitResult, ReflectanceModel or path
+        A per-vertex model (a fit on a mesh data set) that carries its mesh.
+    ply : str or Path, optional
+        Write the model's mesh here (binary PLY, mm, the model's vertex order): the shape a Mitsuba scene
+        places with its ``to_world`` for :func:`render_scene`.
+    gltf : str or Path, optional
+        Write glTF 2.0 binary here (``.glb``, metres): see :func:`export_gltf`.
+    light : str
+        With ``gltf``: the light baked (as :func:`render_model`'s).
+    overwrite : bool
+        Replace an earlier mesh file of translucency at ``ply`` or ``gltf`` (never anything else).
+
+    Returns
+    -------
+    dict
+        The summary of ``translucency export --json``: ``model``, ``vertices``, ``faces``, and ``ply``,
+        ``gltf`` with the bake's ``colour_scale`` and the Burley reduction's ``reduction_error_median``,
+        ``reduction_error_p95`` for what was written.
+
+    Raises
+    ------
+    TranslucencyError
+        Nothing to write, a wrong file name, a planar model, an output that is not translucency's.
+
+    Examples
+    --------
+    >>> import translucency as tl
+    >>> tl.export_model("ball.model.zip", ply="ball.ply")["vertices"]  # doctest: +SKIP
+    2562
+    """
+    if ply is None and gltf is None:
+        raise TranslucencyError("say what to write: ply=OUT.ply or gltf=OUT.glb")
+    ply = None if ply is None else _named("ply", ply, ".ply", "")
+    gltf = None if gltf is None else _named("gltf", gltf, ".glb", " (binary glTF)")
+    fitted, mesh, acquisition, inputs = _object(model)
+    summary = {"command": "export", "model": model, "vertices": len(mesh.vertices), "faces": len(mesh.faces)}
+    if ply is not None:
+        claim_output(ply, "mesh file", overwrite=overwrite, inputs=inputs, option="ply")
+        _write_ply(mesh, ply)
+        summary["ply"] = ply
+    if gltf is not None:
+        claim_output(gltf, "mesh file", overwrite=overwrite, inputs=inputs, option="gltf")
+        record = _bake(fitted, mesh, acquisition, gltf, light)
+        summary.update(gltf=gltf, **record)
+    return summary
+
+
+def export_ply(model, out, *, overwrite: bool = False) -> Path:
+    """Write a per-vertex model's mesh as a binary PLY (mm, the model's vertex order).
+
+    The shape a Mitsuba scene places with its ``to_world`` for :func:`render_scene`.
+
+    Parameters
+    ----------
+    model : FitResult, ReflectanceModel or path
+        A per-vertex model that carries its mesh.
+    out : str or Path
+        The PLY to write (``.ply``).
+    overwrite : bool
+        Replace an earlier mesh file of translucency at ``out`` (never anything else).
+
+    Returns
+    -------
+    Path
+        ``out``.
+
+    Examples
+    --------
+    >>> import translucency as tl
+    >>> tl.export_ply("ball.model.zip", "ball.ply")  # doctest: +SKIP
+    PosixPath('ball.ply')
+    """
+    return export_model(model, ply=as_path("out", out), overwrite=overwrite)["ply"]
+
+
+def export_gltf(model, out, *, light: str = DEFAULT_LIGHT, overwrite: bool = False) -> dict:
+    """Write a per-vertex model as glTF 2.0 binary (``.glb``) for Blender and three.js.
+
+    The mesh (metres, +Y up), the exitance under ``light`` baked as vertex colours (``COLOR_0``, linear,
+    scaled into [0, 1]: the scale in the file's extras) and per-vertex attributes ``_ALBEDO``,
+    ``_MFP_MM``, ``_BURLEY_S`` (Christensen–Burley per channel) and ``_REDUCTION_ERROR``.
+
+    Parameters
+    ----------
+    model : FitResult, ReflectanceModel or path
+        A per-vertex model that carries its mesh.
+    out : str or Path
+        The file to write (``.glb``).
+    light : str
+        The light baked, in the object's frame (as :func:`render_model`'s).
+    overwrite : bool
+        Replace an earlier mesh file of translucency at ``out`` (never anything else).
+
+    Returns
+    -------
+    dict
+        ``gltf``, ``colour_scale`` and the Burley reduction's ``reduction_error_median`` and
+        ``reduction_error_p95`` (with the mesh's ``vertices`` and ``faces``).
+
+    Examples
+    --------
+    >>> import translucency as tl
+    >>> tl.export_gltf("ball.model.zip", "ball.glb")["reduction_error_median"]  # doctest: +SKIP
+    0.04
+    """
+    return export_model(model, gltf=as_path("out", out), light=light, overwrite=overwrite)
+
+
+def _named(name: str, path, suffix: str, what: str) -> Path:
+    """``path`` as a Path whose name ends in ``suffix``, or one line naming the argument."""
+    path = as_path(name, path)
+    if path.suffix.lower() != suffix:
+        raise TranslucencyError(f"{name} {path}: the file name must end in {suffix}{what}")
+    return path
+
+
+def _object(model):
+    """(the model, its mesh, its acquisition, the inputs an output must stay out of) of a per-vertex
+    model, or one line why it has no mesh to export."""
+    is_path = isinstance(model, (str, os.PathLike))
+    if is_path:
+        expect_input(Path(model), ("model file",))
+    fitted, record = model_and_record("model", model)
+    if getattr(fitted, "geometry", None) != "mesh":
+        raise TranslucencyError(
+            f"{model if is_path else 'model'}: a planar model has no mesh to export; export takes a "
+            "per-vertex model"
+        )
+    mesh, acquisition = object_of_model(fitted, {"meta": record})
+    return fitted, mesh, acquisition, [model] if is_path else []
+
+
+def _write_ply(mesh, path: Path) -> None:
+    """The mesh as a binary PLY, written atomically."""
+    from ..mitsuba import write_ply  # Mitsuba's scene helpers: loaded only to write
+
+    with atomic_path(path) as tmp:
+        write_ply(tmp, mesh.vertices, mesh.faces, comment=PLY_COMMENT)
+
+
+def _bake(model, mesh, acquisition: dict, path, light_text: str) -> dict:
+    """Write ``path`` (glTF) and return what the summary states (the reduction's error, the colour's
+    scale)."""
+    albedo, mfp, burley_s, error = _burley(model, mesh)
+    radiance = _baked_radiance(model, mesh, acquisition, light_text)
+    top = float(np.quantile(radiance, 0.99)) if np.any(radiance > 0) else 1.0
+    scale = 1.0 / top if top > 0 else 1.0
+    extras = {
+        "written_by": "translucency",
+        "units": {"positions": "m", "_MFP_MM": "mm", "_BURLEY_S": "1/mm"},
+        "up": "+Y, our +z: (x, y, z) -> (x, z, -y)",
+        "colour": "COLOR_0 = radiance x colour_scale (linear; Lambertian exit), clipped to 1",
+        "colour_scale": scale,
+        "light": light_text,
+        "burley": "R(r) = A s (exp(-s r) + exp(-s r/3)) / (8 pi r); _MFP_MM = searchlight s~(A) / s",
+        "mm_per_unit": MM_PER_GLTF_UNIT,
+    }
+    attributes = {
+        "_ALBEDO": albedo,
+        "_MFP_MM": np.nan_to_num(mfp, nan=0.0, posinf=0.0),
+        "_BURLEY_S": np.nan_to_num(burley_s, nan=0.0, posinf=0.0),
+        "_REDUCTION_ERROR": np.nan_to_num(error, nan=1.0),
+    }
+    write_glb(path, mesh.vertices, mesh.faces, radiance * scale, attributes, extras)
+    finite = error[np.isfinite(error)]
+    return {
+        "colour_scale": scale,
+        "reduction_error_median": float(np.median(finite)) if finite.size else float("nan"),
+        "reduction_error_p95": float(np.quantile(finite, 0.95)) if finite.size else float("nan"),
+    }
+
+
+def _burley(model, mesh):
+    """Each vertex's profile (α × colour scale × the blended sum of exponentials, render's blend) reduced
+    to Christensen–Burley: (albedo, mean free path mm, s 1/mm, the reduction's error), each (V, 3)."""
+    c, d, s = vertex_parameters(model, mesh)
+    alpha = np.asarray(model.alpha.values, dtype=np.float64)
+    A, burley_s, error = burley_of_exponentials(c, d)  # (V, C)
+    A = A if A.shape[1] == 3 else np.repeat(A, 3, axis=1)
+    burley_s = burley_s if burley_s.shape[1] == 3 else np.repeat(burley_s, 3, axis=1)
+    error = error if error.shape[1] == 3 else np.repeat(error, 3, axis=1)
+    albedo = np.clip(alpha[:, None] * s * A, 0.0, None)
+    mfp = burley_shape(np.clip(albedo, 0.0, 1.0), 1.0) / burley_s  # ℓ = s̃(A)/s, mm (searchlight)
+    return albedo, mfp, burley_s, error
+
+
+def _baked_radiance(model, mesh, acquisition: dict, light_text: str) -> np.ndarray:
+    """The exitance under the light, W/(mm² sr) per vertex: the irradiance with shadows and the transport
+    (render's chain, a Lambertian exit)."""
+    from ..mitsuba import mesh_scene  # Mitsuba loads only to bake
+
+    eta = boundary_eta(acquisition)
+    transport = transport_matrices(model, mesh)
+    lit = place_light(parse_light(light_text), Placement.of(mesh, (1.0, -1.6, 0.7)))
+    law = transport.incidence("half-space", eta)
+    E = vertex_irradiance(mesh, mesh_scene(mesh), lit, eta, law)
+    return relight_vertices(transport, E).astype(np.float64)
