@@ -1,7 +1,8 @@
-"""Calibrated cameras (rig.object.cameras) and the virtual checkerboards that calibrate them (rig.object.targets), against
-truths found another way: where Mitsuba renders a glowing sphere, the solid angle of a rectangular field
-in closed form (and of a distorted one by quadrature of the lens model), a known pose and known
-intrinsics recovered by OpenCV, and every refusal in one line naming the camera."""
+"""Calibrated cameras (rig.object.cameras) and the virtual checkerboards that calibrate them
+(rig.object.targets), against truths found another way: where Mitsuba renders a glowing sphere, the
+solid angle of a rectangular field in closed form (and of a distorted one by quadrature of the lens
+model), a known pose and known intrinsics recovered by OpenCV, and every refusal in one line naming the
+camera."""
 
 import json
 

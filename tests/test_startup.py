@@ -135,6 +135,6 @@ def test_the_lazy_names_of_the_package_are_its_own():
 
     assert tl.load_model is load_model and tl.ExponentialModel is ExponentialModel
     assert tl.MATERIALS is MATERIALS and tl.data.default_dataset_path().exists()
-    assert {"load_model", "data", "fit"} <= set(dir(tl))
+    assert {"load_model", "data", "fit_model"} <= set(dir(tl))
     with pytest.raises(AttributeError):
         tl.no_such_name  # noqa: B018

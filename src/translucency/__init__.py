@@ -59,6 +59,7 @@ _WORKFLOW = (
     "export_ply",
     "export_gltf",
     "view_model",
+    "run_demo",
     "Fitting",
     "Photographs",
     "Evaluation",

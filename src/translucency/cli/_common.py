@@ -12,7 +12,7 @@ from rich.console import Console
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 
 from .._validate import TranslucencyError
-from ..io.records import jsonable
+from ..workflow.run import jsonable
 from ._flags import cli_words
 
 console = Console()

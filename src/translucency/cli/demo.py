@@ -1,5 +1,5 @@
 """``translucency demo``: the main job on the embedded default data
-(:func:`translucency.pipeline.run_demo`)."""
+(:func:`translucency.workflow.run_demo`)."""
 
 from __future__ import annotations
 
@@ -19,7 +19,7 @@ def demo(
 ):
     """The main job on the embedded default data: baselines per material, then planar fits
     (iso, aniso, dipole, Burley) with alpha and the Figure 1 report."""
-    from ..pipeline import run_demo  # heavy: the main job loads every stage and Mitsuba
+    from ..workflow.demo import run_demo  # heavy: the main job loads every stage and Mitsuba
 
     outputs = run_demo(out, n_terms=terms, overwrite=overwrite, reporter=RichReporter(False))
     for what, path in outputs.items():

@@ -27,7 +27,7 @@ from ..io.dataset import open_dataset
 from ..io.model_file import save_model
 from ..io.outputs import claim_folder
 from ..model import MATERIALS
-from ..workflow.run import Reporter
+from ..resources.run import Reporter
 from .default_data import demo_volume
 from .figure2 import run_figure2
 from .relight_check import relight_check
@@ -56,7 +56,7 @@ def run_demo(
     """Run the main job and write its outputs under ``out_dir``.
 
     ``translucency demo`` is this function.  ``step(name)`` is told as each step begins; a ``reporter``
-    (:class:`translucency.workflow.run.Reporter`) shows the steps as one progress of
+    (:class:`translucency.resources.run.Reporter`) shows the steps as one progress of
     :data:`DEMO_STEPS`.
 
     Outputs

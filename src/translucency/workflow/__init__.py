@@ -13,16 +13,18 @@ module              functions                                                   
 :mod:`.datasets`    :func:`open_dataset`                                           ``info DATA``
 :mod:`.inspecting`  :func:`describe`, :func:`describe_materials`                   ``info``, ``materials``
 :mod:`.acquiring`   :func:`acquire_planar`, :func:`acquire_mesh`,                  ``acquire planar|mesh``,
-                    :func:`acquire_photographs`, :func:`acquire_object_photographs`  ``acquire photographs``, …
+                    :func:`acquire_photographs`,                                   ``acquire photographs``,
+                    :func:`acquire_object_photographs`                             ``… object-photographs``
 :mod:`.importing`   :func:`import_images`, :func:`import_object`                   ``import images|object``
 :mod:`.fitting`     :func:`fit_model`                                              ``fit``
 :mod:`.evaluating`  :func:`evaluate_report`, :func:`evaluate_model`                ``evaluate``
 :mod:`.rendering`   :func:`render_model`, :func:`render_scene`                     ``render [--scene]``
 :mod:`.exporting`   :func:`export_model`, :func:`export_ply`, :func:`export_gltf`  ``export``
 :mod:`.viewing`     :func:`view_model`                                             ``view``
+:mod:`.demo`        :func:`run_demo` (the main job, :mod:`translucency.pipeline`)   ``demo``
 ==================  =============================================================  ===========================
 
-``translucency demo`` is :func:`translucency.pipeline.run_demo` (the main job).  The modules load on
+The modules load on
 first use of one of their names (the stages load Dask, Matplotlib and Mitsuba's wrappers), so that
 :mod:`.run` stays cheap for the command line's start-up.  Units: mm, R_d in mm⁻², linear RGB.
 """
@@ -59,6 +61,7 @@ _HOMES = {
     "export_ply": "exporting",
     "export_gltf": "exporting",
     "view_model": "viewing",
+    "run_demo": "demo",
     "Reporter": "run",
     "Run": "run",
 }

@@ -33,10 +33,10 @@ from ..io.inputs import expect_input
 from ..io.mesh import check_mesh_file, load_mesh
 from ..io.mesh_dataset import MeshDataset, open_mesh_dataset
 from ..io.outputs import claim_output
+from ..resources.run import Reporter, Run, bytes_at, kept_chunks
 from ..rig.object.photographs import LaserBeam, photograph_object
 from ..rig.planar.photographs import VirtualCamera, photograph_sample
 from ._arguments import as_path, one_or_two, volume_of, whole_number
-from .run import Reporter, Run, bytes_at, kept_chunks
 
 __all__ = [
     "Photographs",

@@ -24,9 +24,9 @@ from ..io.mesh_dataset import MeshDataset, is_mesh_dataset, open_mesh_dataset
 from ..io.model_file import load_model, read_header
 from ..io.outputs import claim_output
 from ..io.records import jsonable
+from ..resources.run import Reporter, Run
 from ._arguments import as_path, model_and_record, whole_number
 from .datasets import open_dataset
-from .run import Reporter, Run
 
 __all__ = ["Evaluation", "evaluate_model", "evaluate_report"]
 

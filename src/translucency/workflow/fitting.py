@@ -35,8 +35,8 @@ from ..io.mesh_dataset import MeshDataset
 from ..io.model_file import read_header, save_model
 from ..io.outputs import claim_output
 from ..model import check_physics
+from ..resources.run import Reporter, Run
 from ._arguments import refuse_unknown, whole_number
-from .run import Reporter, Run
 
 __all__ = ["Fitting", "fit_model"]
 

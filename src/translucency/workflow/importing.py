@@ -22,12 +22,12 @@ from ..cluster import parse_scheduler
 from ..io.dataset import PlanarDataset, open_dataset
 from ..io.mesh_dataset import MeshDataset, open_mesh_dataset
 from ..io.outputs import claim_output
+from ..resources.run import Reporter, Run, kept_chunks
 from ..rig import ImportSetup, load_calibration
 from ..rig import import_images as import_planar
 from ..rig.object.importer import import_object as import_mesh
 from ..rig.object.setup import read_object_rig
 from ._arguments import as_path, whole_number
-from .run import Reporter, Run, kept_chunks
 
 __all__ = ["EXIT_LAWS", "import_images", "import_object"]
 

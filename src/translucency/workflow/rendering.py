@@ -32,12 +32,12 @@ from ..render.object import boundary_eta, check_light_outside, object_of_model, 
 from ..render.reference import check_reference
 from ..render.tonemap import auto_exposure, parse_exposure, save_images, tonemap
 from ..resources.memory import transport_pairs
+from ..resources.run import Reporter, Run
 from ..rig.shared.hdr import read_hdr
 from ..scene import FittedScene
 from ..scene.compare import lit_pixels, object_pixels, scene_errors
 from ..scene.reference import converged_scene_reference
 from ._arguments import model_and_record, whole_number
-from .run import Reporter, Run
 
 __all__ = ["DEFAULT_LIGHT", "Rendering", "SceneRendering", "render_model", "render_scene"]
 

@@ -23,8 +23,8 @@ from ..io.inputs import expect_input
 from ..io.mesh_dataset import is_mesh_dataset, open_mesh_dataset
 from ..io.model_file import load_model, read_header
 from ..io.outputs import claim_folder, kind_of
+from ..resources.run import Reporter, Silent
 from ..view.page import write_page
-from .run import Reporter, Silent
 
 __all__ = ["PAGE_BUDGET_MB", "view_model"]
 

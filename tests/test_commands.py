@@ -1,0 +1,90 @@
+"""The command line only parses and prints: each command calls one library function (docs/api.md's table),
+and each of its options is an argument of that function, so a Python user can do what the command does."""
+
+import inspect
+import re
+from pathlib import Path
+
+import pytest
+import typer
+
+import translucency as tl
+from translucency.cli import _flags
+from translucency.cli.app import app
+
+API = Path(__file__).resolve().parents[1] / "docs" / "api.md"
+
+#: options every working command has that are the command line's own (how it prints), not the library's
+PRINTING = {"--help", "--quiet", "--json", "--version"}
+
+#: flags whose Python argument has another name than the messages' tables say: the library's ``sample``
+#: takes a generator's name (``--material``) as well as a volume's file (``--volume``)
+ALIASES = {"--material": {"sample"}}
+
+#: a table row: | `translucency CMD` | `tl.function` (, `tl.other`) | …
+_ROW = re.compile(r"^\|\s*`translucency ([a-z -]+?)`\s*\|\s*([^|]+)\|")
+
+
+def _table() -> dict[str, list[str]]:
+    rows = {}
+    for line in API.read_text().splitlines():
+        match = _ROW.match(line)
+        if match:
+            rows[match.group(1).strip()] = re.findall(r"`tl\.(\w+)`", match.group(2))
+    return rows
+
+
+def _commands(group=None, prefix=()):
+    group = group or typer.main.get_command(app)
+    for name, command in group.commands.items():
+        if hasattr(command, "commands"):
+            yield from _commands(command, (*prefix, name))
+        else:
+            yield " ".join((*prefix, name)), command
+
+
+def _python_names(option: str, param) -> set[str]:
+    """The Python arguments a flag may be: its parameter's name, and every name the messages translate to
+    it (``cli/_flags.py``)."""
+    tables = [_flags.FLAGS, getattr(_flags, "AT_START", {}), getattr(_flags, "PATHS", {})]
+    names = {param.name, option.lstrip("-").replace("-", "_")} | ALIASES.get(option, set())
+    names |= {py for table in tables for py, flag in table.items() if flag == option}
+    return names
+
+
+def test_every_command_is_in_the_table():
+    commands = {name for name, _ in _commands()}
+    table = _table()
+    assert commands <= set(table), f"commands missing from docs/api.md: {sorted(commands - set(table))}"
+    assert set(table) <= commands, f"docs/api.md names no such command: {sorted(set(table) - commands)}"
+
+
+@pytest.mark.parametrize("name,command", list(_commands()), ids=[n for n, _ in _commands()])
+def test_every_option_is_an_argument_of_the_library_function(name, command):
+    functions = [getattr(tl, f) for f in _table()[name]]
+    assert functions, f"docs/api.md names no library function for translucency {name}"
+    arguments = {p for f in functions for p in inspect.signature(f).parameters}
+    # a function that takes further keywords (``**setup``) names each in its docstring
+    keywords = {
+        word
+        for f in functions
+        if any(p.kind is p.VAR_KEYWORD for p in inspect.signature(f).parameters.values())
+        for word in re.findall(r"``(\w+)``", f.__doc__ or "")
+    }
+    missing = []
+    arguments_given = [p for p in command.params if p.param_type_name == "argument"]
+    positional = [
+        p
+        for p in inspect.signature(functions[0]).parameters.values()
+        if p.kind in (p.POSITIONAL_ONLY, p.POSITIONAL_OR_KEYWORD)
+    ]
+    assert len(positional) >= len(arguments_given), f"translucency {name}: its arguments, by position"
+    for param in command.params:
+        if param.param_type_name == "argument":
+            continue
+        options = [o for o in param.opts if o.startswith("--")]
+        if set(options) & PRINTING:
+            continue
+        if not any(_python_names(o, param) & (arguments | keywords) for o in options):
+            missing.append(options[0])
+    assert not missing, f"translucency {name}: no Python argument of {_table()[name]} for {missing}"
