@@ -19,7 +19,7 @@ demo: $(STAMP)
 	$(VENV)/bin/translucency demo --out $(OUT) --overwrite
 
 test: $(STAMP)
-	$(VENV)/bin/ruff check src tests benchmarks && $(VENV)/bin/ruff format --check src tests benchmarks && $(PY) -m pytest -q -m "not slow"
+	$(VENV)/bin/ruff check src tests benchmarks && $(VENV)/bin/ruff format --check src tests benchmarks && $(PY) -m pytest -q -m "not slow" -n auto
 
 test-slow: $(STAMP)
 	$(PY) -m pytest -q -m slow

@@ -88,7 +88,7 @@ def acquire_photographs_cmd(
 ):
     """Photograph a virtual sample with Mitsuba 3 (narrow beam per point, oblique perspective camera,
     sensor noise, dark offset, vignetting, saturation): a lab's hand-over for `translucency import images`."""
-    from ..workflow.acquiring import acquire_photographs  # heavy: Mitsuba loads only when it runs
+    from ..workflow.photographing import acquire_photographs  # heavy: Mitsuba loads only when it runs
 
     shots = acquire_photographs(
         _one_sample(material, volume),

@@ -62,7 +62,7 @@ def acquire_object_photographs_cmd(
     """Photograph a virtual object with Mitsuba 3 (a laser spot per point, N calibrated cameras, sensor noise,
     dark offset, vignetting, a saturated spot, drifting power): a lab's hand-over for `import object`."""
     # heavy: Mitsuba and trimesh load only when it runs
-    from ..workflow.acquiring import acquire_object_photographs
+    from ..workflow.photographing import acquire_object_photographs
 
     shots = acquire_object_photographs(
         mesh,

@@ -12,8 +12,8 @@ module              functions                                                   
 ==================  =============================================================  ===========================
 :mod:`.datasets`    :func:`open_dataset`                                           ``info DATA``
 :mod:`.inspecting`  :func:`describe`, :func:`describe_materials`                   ``info``, ``materials``
-:mod:`.acquiring`   :func:`acquire_planar`, :func:`acquire_mesh`,                  ``acquire planar|mesh``,
-                    :func:`acquire_photographs`,                                   ``acquire photographs``,
+:mod:`.acquiring`   :func:`acquire_planar`, :func:`acquire_mesh`                   ``acquire planar|mesh``
+:mod:`.photographing` :func:`acquire_photographs`,                                 ``acquire photographs``,
                     :func:`acquire_object_photographs`                             ``… object-photographs``
 :mod:`.importing`   :func:`import_images`, :func:`import_object`                   ``import images|object``
 :mod:`.fitting`     :func:`fit_model`                                              ``fit``
@@ -41,9 +41,9 @@ _HOMES = {
     "acquire_planar": "acquiring",
     "acquire_mesh": "acquiring",
     "make_sample": "acquiring",
-    "acquire_photographs": "acquiring",
-    "acquire_object_photographs": "acquiring",
-    "Photographs": "acquiring",
+    "acquire_photographs": "photographing",
+    "acquire_object_photographs": "photographing",
+    "Photographs": "photographing",
     "import_images": "importing",
     "import_object": "importing",
     "Fitting": "fitting",

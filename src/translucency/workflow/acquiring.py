@@ -12,9 +12,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
-import os
 from collections.abc import Callable
-from dataclasses import dataclass
 from pathlib import Path
 from typing import NamedTuple
 
@@ -26,41 +24,27 @@ from ..acquire import PlanarSetup, Volume, estimate_seconds, load_volume, make_s
 from ..acquire import acquire_planar as scan_planar
 from ..acquire.mesh import acquire_mesh as scan_mesh
 from ..acquire.mesh import check_filling, object_volume
-from ..acquire.objects import make_pig
 from ..cluster import parse_scheduler
 from ..io.dataset import PlanarDataset, open_dataset
-from ..io.inputs import expect_input
-from ..io.mesh import check_mesh_file, load_mesh
 from ..io.mesh_dataset import MeshDataset, open_mesh_dataset
 from ..io.outputs import claim_output
 from ..resources.run import Reporter, Run, bytes_at, kept_chunks
-from ..rig.object.photographs import LaserBeam, photograph_object
-from ..rig.planar.photographs import VirtualCamera, photograph_sample
-from ._arguments import as_path, one_or_two, volume_of, whole_number
+from ._arguments import (
+    UP_AXES,
+    as_path,
+    mesh_file_of,
+    object_of,
+    one_or_two,
+    sample_of,
+    slab_of,
+    whole_number,
+)
 
 __all__ = [
-    "Photographs",
     "acquire_mesh",
-    "acquire_object_photographs",
-    "acquire_photographs",
     "acquire_planar",
     "make_sample",
 ]
-
-#: the up axes a mesh file may have (turned to +z)
-UP_AXES = ("z", "y", "x")
-#: the image formats of a virtual rig's photographs
-IMAGE_FORMATS = ("pfm", "exr")
-
-
-@dataclass
-class Photographs:
-    """What :func:`acquire_photographs` or :func:`acquire_object_photographs` wrote: the folder a lab would
-    hand over, the rig's record of it and the run's summary."""
-
-    folder: Path
-    record: dict  # a sample's: homography (true), marked, rms_px, power; an object's: incident, cameras
-    summary: dict  # the numbers ``translucency acquire photographs|object-photographs --json`` prints
 
 
 def acquire_planar(
@@ -156,9 +140,9 @@ def acquire_planar(
     out = as_path("out", out)
     setup = _planar_setup(grid, span, pitch, window, photons, seed, angle, index_matched, chunk_points, dtype)
     sample_seed = whole_number("sample_seed", seed if sample_seed is None else sample_seed, lo=0)
-    size, voxel_mm, g = _slab(size, voxel_mm, g)
+    size, voxel_mm, g = slab_of(size, voxel_mm, g)
     run = Run("acquire planar", max_memory=max_memory, reporter=reporter)
-    name, volume, path = _sample(sample)
+    name, volume, path = sample_of(sample)
 
     def need(voxels):
         n = resources.memory.planar_acquisition(
@@ -229,27 +213,6 @@ def _planar_setup(grid, span, pitch, window, photons, seed, angle, index_matched
         chunk_points=whole_number("chunk_points", chunk_points),
         dtype=dtype,
     )
-
-
-def _slab(size, voxel_mm, g) -> tuple[tuple[float, ...], float, float]:
-    """A generated slab's size (mm), voxel (mm) and anisotropy, checked."""
-    size = tuple(float(check_option("size", v, lo=0, open_lo=True, hi=1e5)) for v in np.atleast_1d(size))
-    if len(size) != 3:
-        raise TranslucencyError(f"size: expected (width, height, thickness) in mm, got {size!r}")
-    voxel_mm = float(check_option("voxel_mm", voxel_mm, lo=0, open_lo=True))
-    check_option("voxel_mm", voxel_mm, hi=min(size))  # at least one voxel across the thinnest side
-    return size, voxel_mm, float(check_option("g", g, lo=-1, hi=1, open_lo=True, open_hi=True))
-
-
-def _sample(sample) -> tuple[str | None, Volume | None, Path | None]:
-    """(generator name, Volume, .npz path) of ``sample``: exactly one of them is not None."""
-    if isinstance(sample, str) and Path(sample).suffix != ".npz":
-        return sample, None, None
-    if isinstance(sample, (str, os.PathLike)):
-        path = Path(sample)
-        expect_input(path, ("volume file",), "sample")  # a mesh, a data set, a model: named as such
-        return None, None, path
-    return None, volume_of("sample", sample), None
 
 
 def _timed_planar(run: Run, volume: Volume, setup: PlanarSetup, out: Path, estimate) -> Resumed | None:
@@ -345,10 +308,10 @@ def acquire_mesh(
     if up not in UP_AXES:  # an option: before the mesh is read
         raise TranslucencyError(f"up: expected one of z, y, x, got {up!r}")
     run = Run("acquire mesh", max_memory=max_memory, reporter=reporter)
-    name, volume, path = _sample(sample)
-    mesh_file = _mesh_file(mesh)
+    name, volume, path = sample_of(sample)
+    mesh_file = mesh_file_of(mesh)
     claim_output(out, "mesh data set", overwrite=overwrite, inputs=[mesh_file, path], reuse=True)
-    obj = _object(mesh, mesh_file, scale_mm, up)
+    obj = object_of(mesh, mesh_file, scale_mm, up)
     V = len(obj.vertices)
     if points > V:  # before any estimate: the incident points are vertices of the mesh
         raise TranslucencyError(
@@ -416,26 +379,6 @@ def acquire_mesh(
     return ds
 
 
-def _mesh_file(mesh) -> Path | None:
-    """The mesh file of ``mesh``, checked (a folder, a missing file or a data set named before the output is
-    judged); None for a Trimesh or None (the procedural pig)."""
-    if isinstance(mesh, (str, os.PathLike)):
-        path = Path(mesh)
-        expect_input(path, ("mesh file",), "mesh")
-        return check_mesh_file(path, "mesh")
-    if mesh is not None and not (hasattr(mesh, "vertices") and hasattr(mesh, "faces")):
-        raise TranslucencyError(f"mesh: expected a trimesh.Trimesh or a mesh file, got {type(mesh).__name__}")
-    return None
-
-
-def _object(mesh, path: Path | None, scale_mm: float, up: str):
-    """The object: the mesh file at ``path`` read with ``scale_mm`` and ``up``, the Trimesh ``mesh``, or the
-    procedural pig for None."""
-    if path is not None:
-        return load_mesh(path, scale_mm=scale_mm, up=up)
-    return make_pig() if mesh is None else mesh
-
-
 def _steps(work, progress: Callable[[int, int], None] | None) -> Callable[[int, int], None]:
     """The stage's ``progress(done, total)``: the run's progress bar, and the caller's ``progress``."""
 
@@ -445,241 +388,6 @@ def _steps(work, progress: Callable[[int, int], None] | None) -> Callable[[int, 
             progress(done, total)
 
     return step
-
-
-def acquire_photographs(
-    sample,
-    out,
-    *,
-    grid: int = 2,
-    span: float = 4.0,
-    size=(12.0, 12.0, 4.0),
-    voxel_mm: float = 0.5,
-    camera=(0.0, -8.0, 11.0),
-    fov: float = 40.0,
-    resolution=(64, 64),
-    spp: int = 64,
-    seed: int = 0,
-    image_format: str = "pfm",
-    overwrite: bool = False,
-    reporter: Reporter | None = None,
-) -> Photographs:
-    """Photograph a virtual planar sample with Mitsuba 3, as a lab's rig would for
-    :func:`translucency.import_images`.
-
-    A narrow beam per incident point, an oblique perspective camera, sensor noise, a dark offset,
-    vignetting and saturation; the folder holds ``shot_NNN.pfm|exr``, ``positions.csv``,
-    ``calibration.json`` (marked points found in ``markers.pfm``), ``dark.pfm`` and ``flat.pfm``.
-    ``translucency acquire photographs`` is this function.
-
-    Parameters
-    ----------
-    sample : str, Volume or path
-        A generator name made at ``size`` and ``voxel_mm`` with ``seed``, a Volume or a ``.npz`` volume.
-    out : str or Path
-        The folder to write.
-    grid : int
-        Incident points per axis (1–64).
-    span : float
-        Side of the incident grid, mm, centred on the sample.
-    size : (float, float, float)
-        A generated slab's width, height and thickness, mm.
-    voxel_mm : float
-        A generated sample's voxel size, mm.
-    camera : (float, float, float)
-        The camera's position relative to the sample's centre, mm (it looks at the centre).
-    fov : float
-        Horizontal field of view, degrees (1–120).
-    resolution : (int, int)
-        Image width and height, pixels (8–8192).
-    spp, seed : int
-        Samples per pixel of Mitsuba's volpath; the random seed of the sample, the renders and the sensor.
-    image_format : {"pfm", "exr"}
-    overwrite : bool
-        Replace an earlier output folder of translucency (never anything else).
-    reporter : Reporter, optional
-        Hears the run's information line (default: silent).
-
-    Returns
-    -------
-    Photographs
-        ``.folder``, ``.record`` (the true homography, the marked points' ``rms_px``, …), ``.summary``.
-
-    Examples
-    --------
-    >>> import tempfile, translucency as tl
-    >>> shots = tl.acquire_photographs("homogeneous:skin1", tempfile.mkdtemp() + "/shots", grid=1,
-    ...                                size=(8, 8, 3), voxel_mm=1.0, spp=8)  # doctest: +SKIP
-    >>> ds = tl.import_images(shots.folder, shots.folder / "positions.csv",
-    ...                       shots.folder / "calibration.json", "d.zarr", scale=1e5)  # doctest: +SKIP
-    """
-    grid = int(check_option("grid", whole_number("grid", grid), hi=64))
-    spp, seed = whole_number("spp", spp), whole_number("seed", seed, lo=0)
-    fov = float(check_option("fov", fov, lo=1, hi=120))
-    resolution = _resolution(resolution)
-    image_format = _image_format(image_format)
-    size, voxel_mm, _ = _slab(size, voxel_mm, 0.0)
-    out = as_path("out", out)
-    run = Run("acquire photographs", reporter=reporter)
-    name, volume, path = _sample(sample)
-    run.claim_folder(out, overwrite=overwrite, inputs=[path])
-    if name is not None:
-        volume = make_sample(name, size, voxel_mm, seed=seed)
-    elif path is not None:
-        volume = load_volume(path)
-    W, H, _ = volume.size_mm
-    setup = PlanarSetup(grid=(grid, grid), span=(span, span), pitch=0.25, window=min(W, H) / 2)
-    setup.check(volume)
-    x_i = setup.incident_points(volume)
-    centre = np.array([W / 2, H / 2, 0.0])
-    cam = VirtualCamera(tuple(centre + np.asarray(camera)), tuple(centre), fov, *resolution)
-    run.info(f"{len(x_i)} photographs x 3 channels at {spp} spp ({resolution[0]} x {resolution[1]} px)")
-    record = photograph_sample(volume, x_i, out, camera=cam, spp=spp, seed=seed, image_format=image_format)
-    summary = {
-        "command": "acquire photographs",
-        "out": out,
-        "photographs": len(x_i),
-        "rms_px": record["rms_px"],
-        "homography": np.round(record["homography"].matrix, 4).tolist(),  # the true one, from the pose
-        "seconds": run.seconds(),
-    }
-    return Photographs(out, record, run.summary(summary))
-
-
-def _resolution(resolution) -> tuple[int, int]:
-    """Image width and height, pixels (8–8192)."""
-    values = tuple(
-        int(check_option("resolution", whole_number("resolution", v), lo=8, hi=8192))
-        for v in np.atleast_1d(resolution)
-    )
-    if len(values) != 2:
-        raise TranslucencyError(f"resolution: expected (width, height), got {resolution!r}")
-    return values
-
-
-def _image_format(image_format: str) -> str:
-    if image_format not in IMAGE_FORMATS:
-        raise TranslucencyError(f"image_format: pfm or exr, got {image_format!r}")
-    return image_format
-
-
-def acquire_object_photographs(
-    mesh,
-    out,
-    *,
-    sample: str = "marble",
-    scale_mm: float = 1.0,
-    up: str = "z",
-    voxel_mm: float = 0.5,
-    points: int = 8,
-    cameras: int = 6,
-    resolution=(128, 128),
-    spp: int = 64,
-    beam_mm: float = 0.3,
-    checkerboards: bool = False,
-    seed: int = 0,
-    image_format: str = "pfm",
-    overwrite: bool = False,
-    progress: Callable[[int, int], None] | None = None,
-    reporter: Reporter | None = None,
-) -> Photographs:
-    """Photograph a virtual object with Mitsuba 3, as a lab's object rig would for
-    :func:`translucency.import_object`.
-
-    A laser spot per point, calibrated cameras on a sphere around the object, sensor noise, a dark offset,
-    vignetting, a saturated spot and drifting power; the folder holds ``object.json`` (the rig file),
-    ``object.ply``, the cameras and the shots.  ``translucency acquire object-photographs`` is this
-    function.
-
-    Parameters
-    ----------
-    mesh : trimesh.Trimesh, path or None
-        A closed surface in mm, a mesh file read with ``scale_mm`` and ``up``, or None: the pig.
-    out : str or Path
-        The folder to write.
-    sample : str
-        The filling's generator name, made over the mesh's bounding box at ``voxel_mm`` with ``seed``.
-    points, cameras : int
-        Laser positions (a farthest-point sample of the vertices) and cameras (1–64).
-    resolution : (int, int)
-        Image width and height, pixels (8–8192).
-    spp : int
-        Samples per pixel of each of the two repeated frames.
-    beam_mm : float
-        Radius of the laser's spot on the surface, mm.
-    checkerboards : bool
-        Give the intrinsics as checkerboard photographs (OpenCV calibrates them on import).
-    seed : int
-        Random seed of the filling, the renders and the sensor.
-    image_format : {"pfm", "exr"}
-    overwrite, progress, reporter
-        As in :func:`acquire_photographs` (``progress(done, total)``: shots photographed).
-
-    Returns
-    -------
-    Photographs
-        ``.folder``, ``.record`` (``incident`` vertices, true ``cameras``, ``seconds``), ``.summary``.
-
-    Examples
-    --------
-    >>> import tempfile, translucency as tl
-    >>> shots = tl.acquire_object_photographs(None, tempfile.mkdtemp() + "/rig", points=2, cameras=3,
-    ...                                       resolution=(64, 64), spp=8)  # doctest: +SKIP
-    >>> ds = tl.import_object(shots.folder / "object.json", "pig.zarr")  # doctest: +SKIP
-    """
-    points = whole_number("points", points)
-    cameras = int(check_option("cameras", whole_number("cameras", cameras), hi=64))
-    spp, seed = whole_number("spp", spp), whole_number("seed", seed, lo=0)
-    beam_mm = float(check_option("beam_mm", beam_mm, lo=0, open_lo=True))
-    voxel_mm = float(check_option("voxel_mm", voxel_mm, lo=0, open_lo=True))
-    scale_mm = float(check_option("scale_mm", scale_mm, lo=0, open_lo=True))
-    resolution, image_format = _resolution(resolution), _image_format(image_format)
-    if up not in UP_AXES:
-        raise TranslucencyError(f"up: expected one of z, y, x, got {up!r}")
-    out, mesh_file = as_path("out", out), _mesh_file(mesh)
-    run = Run("acquire object-photographs", reporter=reporter)
-    run.claim_folder(out, overwrite=overwrite, inputs=[mesh_file])
-    obj = _object(mesh, mesh_file, scale_mm, up)
-    if points > len(obj.vertices):
-        raise TranslucencyError(f"points: need 1 to {len(obj.vertices):,} laser positions, got {points:,}")
-    volume = object_volume(sample, obj, voxel_mm, seed=seed)
-    check_filling(obj, volume)
-    run.info(
-        f"{points} laser positions x {cameras} cameras x 3 channels x 2 frames at {spp} spp "
-        f"({resolution[0]} x {resolution[1]} px), mesh of {len(obj.vertices):,} vertices"
-    )
-    with run.reporter.progress("photograph", points) as update:
-        update(item="shots")
-
-        def step(done: int, total: int) -> None:
-            update(completed=done)
-            if progress is not None:
-                progress(done, total)
-
-        record = photograph_object(
-            obj,
-            volume,
-            out,
-            n_points=points,
-            n_cameras=cameras,
-            resolution=resolution,
-            spp=spp,
-            seed=seed,
-            beam=LaserBeam(radius_mm=beam_mm),
-            image_format=image_format,
-            checkerboards=bool(checkerboards),
-            spot_radius_mm=max(0.5, 2 * beam_mm),
-            progress=step,
-        )
-    summary = {
-        "command": "acquire object-photographs",
-        "out": out,
-        "points": points,
-        "cameras": cameras,
-        "incident": record["incident"],
-        "seconds": record["seconds"],
-    }
-    return Photographs(out, record, run.summary(summary))
 
 
 # -- resuming -------------------------------------------------------------------------------------------
