@@ -201,7 +201,8 @@ def fit_model(
     if out is not None:
         dtype = "float16" if float16 else "float32"
         path = save_model(result.model, out, dtype=dtype, meta=meta, overwrite=overwrite)
-    return Fitting(result, path, run.summary(_record(result, path, data, on_mesh)))
+    record = _record(result, path, data, on_mesh)  # the warnings for flagged and unphysical points too
+    return Fitting(result, path, run.summary(record))
 
 
 def _data_set(dataset) -> PlanarDataset | MeshDataset:
