@@ -319,6 +319,25 @@ def _read(out):
     return ds, np.asarray(g["R_d"][...]), np.asarray(g["R_d_var"][...]), np.asarray(g["flags"][...])
 
 
+def test_a_spot_radius_of_zero_flags_nothing_and_the_hit_vertex_is_measured(tmp_path):
+    rig = write_rig(tmp_path / "rig", eta=1.0)
+    spec = json.loads((rig.folder / "object.json").read_text())
+    spec["spot_radius_mm"] = 0.0  # no spot stated: the laser's own vertex is measured like any other
+    (rig.folder / "object.json").write_text(json.dumps(spec))
+    import_object(rig.folder, tmp_path / "ball.zarr", exit_law="lambertian")
+    _, R, _, flags = _read(tmp_path / "ball.zarr")
+    verts = np.asarray(rig.mesh.vertices)
+    assert not (flags & SPOT).any()
+    measured = 0
+    for j, hit in enumerate(rig.hits):
+        v = int(np.argmin(np.linalg.norm(verts - hit, axis=1)))
+        truth, _ = fine_cell_means(rig.mesh, exitance(hit))
+        if flags[j, v] == 0:  # seen well by some camera: its cell mean, not a fill
+            measured += 1
+            assert abs(R[j, v, 0] / (truth[v] * COLOUR[0]) - 1) < 0.02, (j, R[j, v, 0], truth[v])
+    assert measured >= 2
+
+
 @pytest.mark.parametrize("eta", [1.0, 1.4])
 def test_import_recovers_the_cell_means_of_an_analytic_field(tmp_path, eta):
     rig = write_rig(tmp_path / "rig", eta=eta)

@@ -17,7 +17,8 @@ pair, its variance (``R_d_var``) and what kept it from being measured (``flags``
    frames share an exposure — the larger of it and the frames' own scatter (which also holds what the
    noise model does not know, e.g. a renderer's Monte Carlo noise).
 4. **Exitance per camera and vertex**: :math:`M_{vc} = \pi \bar L_{vc}/\gamma(\mu_{vc}, r)` with the
-   exit's angular law γ (:mod:`.exit_law`; from the views by default, for an index-matched boundary,
+   exit's angular law γ (:mod:`.exit_law`: the rig file's ``exit_law``, by default ``lambertian`` for an
+   index-matched boundary and ``dielectric`` behind one; ``from-views`` estimates it from the views,
    :mod:`.law_estimate`).
 5. **Fusion over cameras** (:mod:`.fusion`) that see at least ``min_coverage`` of the vertex's cell
    with usable pixels: weights :math:`w_c = n_c\,\gamma_c` (:math:`n_c = (\sum_p W)^2/\sum_p W^2` the
@@ -276,7 +277,8 @@ class ObjectImport:
                 per_cam, nbytes = shot_cell_means(shot, cameras, setup, law, hits[j])
                 self.bytes_read += nbytes
                 Rj, vj, fj = fuse(per_cam, cameras, area, setup)
-                fj[r <= setup.spot_radius_mm] |= SPOT
+                if setup.spot_radius_mm > 0:  # within a stated spot; 0: none (the hit vertex is measured)
+                    fj[r <= setup.spot_radius_mm] |= SPOT
                 Rj = fill(Rj, (fj & (UNSEEN | SATURATED)) != 0)
                 vj[~np.isfinite(vj)] = 0.0
                 R[j - lo], var[j - lo], flags[j - lo] = Rj, vj, fj
