@@ -338,6 +338,35 @@ def test_a_spot_radius_of_zero_flags_nothing_and_the_hit_vertex_is_measured(tmp_
     assert measured >= 2
 
 
+@pytest.mark.parametrize(
+    "wrong,says",
+    [
+        (lambda R, t, other: {"R": R.T.tolist(), "t": t.tolist()}, "with R transposed the spots lie"),
+        (lambda R, t, other: {"R": R.tolist(), "t": (-t).tolist()}, "with t's sign swapped the spots lie"),
+        (lambda R, t, other: other, "another camera's"),
+    ],
+    ids=["R transposed", "t negated", "another camera's pose"],
+)
+def test_a_wrong_pose_is_refused_by_its_laser_spots(tmp_path, wrong, says):
+    rig = write_rig(tmp_path / "rig")
+    spec = json.loads((rig.folder / "object.json").read_text())
+    cam = rig.cameras[1]
+    spec["cameras"][1]["pose"] = wrong(cam.R, cam.t, spec["cameras"][2]["pose"])
+    (rig.folder / "object.json").write_text(json.dumps(spec))
+    with pytest.raises(TranslucencyError, match="camera cam1: its pose") as refused:
+        import_object(rig.folder, tmp_path / "ball.zarr", exit_law="lambertian")
+    assert says in str(refused.value) and "\n" not in str(refused.value)
+    assert not (tmp_path / "ball.zarr").exists()
+
+
+def test_right_poses_put_the_laser_spots_within_a_pixel(tmp_path):
+    rig = write_rig(tmp_path / "rig")
+    info = import_object(rig.folder, tmp_path / "ball.zarr", exit_law="lambertian")
+    misses = {c["name"]: c["reprojection_px"].get("laser_spot") for c in info["cameras"]}
+    checked = [m for m in misses.values() if m is not None]
+    assert len(checked) >= 3 and max(checked) < 1.0, misses
+
+
 @pytest.mark.parametrize("eta", [1.0, 1.4])
 def test_import_recovers_the_cell_means_of_an_analytic_field(tmp_path, eta):
     rig = write_rig(tmp_path / "rig", eta=eta)

@@ -37,11 +37,20 @@ def import_object_cmd(
         rig, out, exit_law=exit_law, chunk_points=chunk, overwrite=overwrite, reporter=RichReporter(quiet)
     )
     s = ds.summary
-    errors = ", ".join(
-        f"{c['name']} {c['reprojection_px'].get('pose', float('nan')):.2f} px" for c in s["cameras"]
-    )
+    errors = ", ".join(f"{c['name']} {_pose_check(c['reprojection_px'])}" for c in s["cameras"])
     line = (
         f"mesh data set: {out} ({s['points']} shots x {s['vertices']:,} vertices; poses {errors}; "
         f"exit law {s['exit_law']['law']}; unseen {s['flags']['unseen']:,} pairs filled)"
     )
     finish(as_json, quiet, s, [line])
+
+
+def _pose_check(report: dict) -> str:
+    """What checked a camera's pose: its marks' reprojection error and its laser spots' miss, px (a pose
+    given as R, t has no marks; a camera that sees no hit, no spots)."""
+    parts = [
+        f"{what} {report[key]:.2f} px"
+        for key, what in (("pose", "marks"), ("laser_spot", "spots"))
+        if key in report
+    ]
+    return " / ".join(parts) or "given, unchecked"

@@ -59,6 +59,7 @@ from .hits import incident_vertices
 from .law_estimate import estimate_law
 from .radiance import shot_cell_means
 from .setup import ObjectRig, calibrated_camera, read_object_rig
+from .spot_check import check_spots
 from .views import CameraView, check_mesh_seen, prepare_view
 
 
@@ -197,8 +198,12 @@ class ObjectImport:
         V = len(mesh.vertices)
         posed = [calibrated_camera(c, setup.folder, setup.max_reprojection_px) for c in setup.cameras]
         check_mesh_seen(mesh, posed, setup)  # before the maps: a wrong mesh is named as such, not as a camera
-        cameras = [prepare_view(c, cam, setup, mesh, scene) for c, cam in zip(setup.cameras, posed)]
         incident, hits = incident_vertices(setup, mesh, scene)
+        # the poses checked by the data before the maps: each camera's laser spots against its projected hits
+        for camera, miss in zip(posed, _spot_misses(setup, posed, hits, scene)):
+            if miss is not None:
+                camera.reprojection_px["laser_spot"] = miss
+        cameras = [prepare_view(c, cam, setup, mesh, scene) for c, cam in zip(setup.cameras, posed)]
         P = len(incident)
         if fixed_law is None and len(cameras) < 2:
             raise TranslucencyError(
@@ -324,6 +329,12 @@ def _equivalent_photons(root, area, flags) -> float:
         return 1.0
     A = np.broadcast_to(area[None], R.shape)
     return float(np.median(R[ok] / (var[ok] * A[ok])))
+
+
+def _spot_misses(setup: ObjectRig, posed: list, hits: np.ndarray, scene) -> list:
+    """Each camera's median laser-spot miss (px), or None for a camera that sees no hit."""
+    misses = check_spots(setup, posed, hits, scene)
+    return [misses.get(camera.name) for camera in posed]
 
 
 def _provenance(rig: ObjectRig, cameras: list[CameraView], hits: np.ndarray, law: ExitLaw) -> dict:
