@@ -134,7 +134,17 @@ ACCEPTS = (
 
 @dataclass
 class Evaluation:
-    """What :func:`evaluate_report` made: the report's folder and the summary of ``evaluate --json``."""
+    """What :func:`evaluate_report` made: the report's folder and the summary of ``evaluate --json``.
+
+    Examples
+    --------
+    >>> import translucency as tl
+    >>> ev = tl.evaluate_report("iso.model.zip", "m.zarr", truth="truth.zarr")  # doctest: +SKIP
+    >>> ev.geometry, (ev.report / "index.html").is_file()  # doctest: +SKIP
+    ('planar', True)
+    >>> ev.summary["models"]["iso"]["rel_l2"] >= ev.summary["noise_floor"]["all"]  # doctest: +SKIP
+    True
+    """
 
     summary: dict  # rel_l2, rel_l2_near/mid/far per model, noise_floor, estimates, seconds, report
     report: Path  # the folder with index.html, the figures and report.json

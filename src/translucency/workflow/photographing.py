@@ -39,7 +39,15 @@ IMAGE_FORMATS = ("pfm", "exr")
 @dataclass
 class Photographs:
     """What :func:`acquire_photographs` or :func:`acquire_object_photographs` wrote: the folder a lab would
-    hand over, the rig's record of it and the run's summary."""
+    hand over, the rig's record of it and the run's summary.
+
+    Examples
+    --------
+    >>> import translucency as tl
+    >>> shots = tl.acquire_object_photographs("cow.obj", "cow-rig", scale_mm=10, points=4)  # doctest: +SKIP
+    >>> (shots.folder / "object.json").is_file(), len(shots.record["incident"])  # doctest: +SKIP
+    (True, 4)
+    """
 
     folder: Path
     record: dict  # a sample's: homography (true), marked, rms_px, power; an object's: incident, cameras
