@@ -22,6 +22,7 @@ from translucency.fit.mesh import read_pairs
 from translucency.geometry import vertex_areas
 from translucency.io.mesh import load_mesh
 from translucency.io.mesh_dataset import open_mesh_dataset
+from translucency.mitsuba import mesh_scene, rays
 from translucency.rig.object import SPOT, UNSEEN, import_object
 from translucency.rig.object.cameras import Camera
 from translucency.rig.object.exit_law import (
@@ -220,32 +221,35 @@ def _ray_to(mesh, face: int, point: np.ndarray) -> dict:
     return {"origin": origin.tolist(), "direction": (point - origin).tolist()}
 
 
-def write_rig(folder, *, eta=1.0, noise_seed=None, geometry_seed=1) -> SyntheticRig:
+def write_rig(
+    folder, *, eta=1.0, noise_seed=None, geometry_seed=1, size=SIZE, subdivisions=3, saturation=SATURATION
+) -> SyntheticRig:
     """A lab's folder for an icosphere (r = 6 mm) photographed by four cameras around it: K given, cam0's
     pose by 12 marked vertices (0.1 px noise), the others' as R, t; dark frames, flat fields (not of mean 1),
     vignetting; three shots (hit as vertex, point, ray) of different powers and exposures; each frame
     raw = k t vig flat P L + dark with L = M(y_p) COLOUR γ(μ_p)/π (γ = 1, or the dielectric law of
-    ``eta``), and with ``noise_seed`` the sensor's photon and read noise."""
+    ``eta``), and with ``noise_seed`` the sensor's photon and read noise; ``size`` px square images,
+    the icosphere's ``subdivisions``, the sensor's ``saturation`` (raw values above it clipped)."""
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
-    trimesh.creation.icosphere(3, radius=6.0).export(folder / "ball.ply")
+    trimesh.creation.icosphere(subdivisions, radius=6.0).export(folder / "ball.ply")
     mesh = load_mesh(folder / "ball.ply")  # as the importer reads it (the vertex order it uses)
     verts, faces = np.asarray(mesh.vertices), np.asarray(mesh.faces)
     rng = np.random.default_rng(geometry_seed)
     noise = np.random.default_rng(noise_seed)
     dirs = np.array([(1, 1, 1), (1, -1, -1), (-1, 1, -1), (-1, -1, 1)], np.float64) / np.sqrt(3)
     cams = [
-        Camera.looking_at(40.0 * d, (0.0, 0.0, 0.0), SIZE, SIZE, fov_deg=22.0, name=f"cam{i}")
+        Camera.looking_at(40.0 * d, (0.0, 0.0, 0.0), size, size, fov_deg=22.0, name=f"cam{i}")
         for i, d in enumerate(dirs)
     ]
     law = Dielectric(eta) if eta > 1 else Lambertian()
-    vig = vignetting(SIZE, SIZE, *VIGNETTING)[..., None]
+    vig = vignetting(size, size, *VIGNETTING)[..., None]
     entries, flats, darks, maps = [], [], [], []
     for i, c in enumerate(cams):
         (folder / c.name).mkdir(exist_ok=True)
-        flat = 1 + 0.05 * rng.standard_normal((SIZE, SIZE, 3))
+        flat = 1 + 0.05 * rng.standard_normal((size, size, 3))
         flat /= flat.mean()  # the true relative response; the file holds it × 2.5
-        dark = 0.5 + 0.02 * rng.random((SIZE, SIZE, 3))
+        dark = 0.5 + 0.02 * rng.random((size, size, 3))
         write_pfm(folder / c.name / "flat.pfm", 2.5 * flat)
         write_pfm(folder / c.name / "dark.pfm", dark)
         flats.append(flat)
@@ -253,8 +257,8 @@ def write_rig(folder, *, eta=1.0, noise_seed=None, geometry_seed=1) -> Synthetic
         maps.append(surface_map(mesh, c))
         entry = {
             "name": c.name,
-            "width": SIZE,
-            "height": SIZE,
+            "width": size,
+            "height": size,
             "intrinsics": {"K": c.K.tolist(), "dist": [0.0] * 5},
             "pose": {"R": c.R.tolist(), "t": c.t.tolist()},
             "radiometry": {
@@ -264,7 +268,7 @@ def write_rig(folder, *, eta=1.0, noise_seed=None, geometry_seed=1) -> Synthetic
                 "vignetting": list(VIGNETTING),
                 "gain": GAIN,
                 "read_noise": READ_NOISE,
-                "saturation": SATURATION,
+                "saturation": saturation,
             },
         }
         if i == 0:
@@ -287,14 +291,13 @@ def write_rig(folder, *, eta=1.0, noise_seed=None, geometry_seed=1) -> Synthetic
         field = exitance(hit)
         images = {}
         for i, (c, m) in enumerate(zip(cams, maps)):
-            seen = np.isfinite(m.position[:, 0])
-            M = np.zeros(SIZE * SIZE)
-            M[seen] = field(m.position[seen])
-            L = (M[:, None] * COLOUR * law.factor(m.mu, 0 * m.mu, 0 * m.mu) / np.pi).reshape(SIZE, SIZE, 3)
+            M = _pixel_means(mesh, c, field, 1 if subdivisions <= 3 else 4)
+            L = (M[:, None] * COLOUR * law.factor(m.mu, 0 * m.mu, 0 * m.mu) / np.pi).reshape(size, size, 3)
             signal = K_GAIN * t * vig * flats[i] * power * L
             raw = signal + darks[i]
             if noise_seed is not None:
                 raw = raw + np.sqrt(GAIN * signal + READ_NOISE**2) * noise.standard_normal(raw.shape)
+            raw = np.minimum(raw, saturation)  # the sensor clips
             name = f"shots/{j}_{c.name}.pfm"
             write_pfm(folder / name, raw)
             images[c.name] = [{"file": name, "exposure_s": t}]
@@ -311,6 +314,17 @@ def write_rig(folder, *, eta=1.0, noise_seed=None, geometry_seed=1) -> Synthetic
     }
     (folder / "object.json").write_text(json.dumps(rig))
     return SyntheticRig(folder, mesh, cams, maps, hits, rig)
+
+
+def _pixel_means(mesh, camera, field, sub):
+    """Each pixel's mean of ``field`` over its footprint (H·W,): ``sub`` × ``sub`` rays a pixel cast by
+    Mitsuba, a ray that misses counting 0 (sub = 1: the value at the centre)."""
+    o, d, _ = camera.pixel_rays(sub)
+    si = mesh_scene(mesh).ray_intersect(rays(o, d))
+    hit = np.asarray(si.is_valid(), dtype=bool)
+    value = np.zeros(len(d))
+    value[hit] = field(o[hit] + np.asarray(si.t, np.float64)[hit, None] * d[hit])
+    return value.reshape(-1, sub * sub).mean(axis=1)
 
 
 def _read(out):

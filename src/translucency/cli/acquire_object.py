@@ -32,6 +32,11 @@ class ObjectPhotographsOptions:
     checkerboards = typer.Option(
         False, "--checkerboards", help="Give intrinsics as checkerboard photographs (OpenCV calibrates)."
     )
+    exposures = typer.Option(
+        "brackets",
+        "--exposures",
+        help="brackets (two long exposures and a short one a camera and shot) or single (the spot clipped).",
+    )
     seed = typer.Option(0, "--seed", help="Random seed of the filling, the renders and the sensor.")
     image_format = typer.Option("pfm", "--format", help="pfm or exr.")
     overwrite = overwrite_option()
@@ -53,6 +58,7 @@ def acquire_object_photographs_cmd(
     spp: int = ObjectPhotographsOptions.spp,
     beam: float = ObjectPhotographsOptions.beam,
     checkerboards: bool = ObjectPhotographsOptions.checkerboards,
+    exposures: str = ObjectPhotographsOptions.exposures,
     seed: int = ObjectPhotographsOptions.seed,
     image_format: str = ObjectPhotographsOptions.image_format,
     overwrite: bool = ObjectPhotographsOptions.overwrite,
@@ -77,6 +83,7 @@ def acquire_object_photographs_cmd(
         spp=spp,
         beam_mm=beam,
         checkerboards=checkerboards,
+        exposures=exposures,
         seed=seed,
         image_format=image_format,
         overwrite=overwrite,

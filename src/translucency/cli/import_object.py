@@ -40,7 +40,9 @@ def import_object_cmd(
     errors = ", ".join(f"{c['name']} {_pose_check(c['reprojection_px'])}" for c in s["cameras"])
     line = (
         f"mesh data set: {out} ({s['points']} shots x {s['vertices']:,} vertices; poses {errors}; "
-        f"exit law {s['exit_law']['law']}; unseen {s['flags']['unseen']:,} pairs filled)"
+        f"exit law {s['exit_law']['law']}; unseen {s['flags']['unseen']:,} pairs filled; "
+        f"saturated {s['flags']['saturated']:,} pairs ({s['saturated_views']:,} views dropped), "
+        f"spot {s['flags']['spot']:,}: {s['near_peak']:,} from the near-peak model)"
     )
     finish(as_json, quiet, s, [line])
 

@@ -184,6 +184,7 @@ def acquire_object_photographs(
     spp: int = 64,
     beam_mm: float = 0.3,
     checkerboards: bool = False,
+    exposures: str = "brackets",
     seed: int = 0,
     image_format: str = "pfm",
     overwrite: bool = False,
@@ -216,6 +217,9 @@ def acquire_object_photographs(
         Radius of the laser's spot on the surface, mm.
     checkerboards : bool
         Give the intrinsics as checkerboard photographs (OpenCV calibrates them on import).
+    exposures : {"brackets", "single"}
+        Per camera and shot, two repeated long exposures and a short one, or one long exposure with the
+        spot clipped (a lab's single exposure: ``import object`` recovers the spot from its ring).
     seed : int
         Random seed of the filling, the renders and the sensor.
     image_format : {"pfm", "exr"}
@@ -241,6 +245,8 @@ def acquire_object_photographs(
     voxel_mm = float(check_option("voxel_mm", voxel_mm, lo=0, open_lo=True))
     scale_mm = float(check_option("scale_mm", scale_mm, lo=0, open_lo=True))
     resolution, image_format = _resolution(resolution), _image_format(image_format)
+    if exposures not in ("brackets", "single"):
+        raise TranslucencyError(f"exposures: brackets or single, got {exposures!r}")
     if up not in UP_AXES:
         raise TranslucencyError(f"up: expected one of z, y, x, got {up!r}")
     out, mesh_file = as_path("out", out), mesh_file_of(mesh)
@@ -252,7 +258,8 @@ def acquire_object_photographs(
     volume = object_volume(sample, obj, voxel_mm, seed=seed)
     check_filling(obj, volume)
     run.info(
-        f"{points} laser positions x {cameras} cameras x 3 channels x 2 frames at {spp} spp "
+        f"{points} laser positions x {cameras} cameras x 3 channels x {2 if exposures == 'brackets' else 1} "
+        f"frames at {spp} spp "
         f"({resolution[0]} x {resolution[1]} px), mesh of {len(obj.vertices):,} vertices"
     )
     with run.reporter.progress("photograph", points) as update:
@@ -275,6 +282,7 @@ def acquire_object_photographs(
             beam=LaserBeam(radius_mm=beam_mm),
             image_format=image_format,
             checkerboards=bool(checkerboards),
+            exposures=exposures,
             spot_radius_mm=max(0.5, 2 * beam_mm),
             progress=step,
         )

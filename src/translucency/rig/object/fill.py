@@ -2,7 +2,9 @@ r"""The fill of unseen cells: R_d over the mesh graph where no camera measured i
 
 The harmonic fill holds the measured values and gives each missing one the mean of its neighbours' on
 the mesh's edge graph, :math:`(I - N_{UU}) x_U = N_{UK} x_K`.  Units those of R_d (mm⁻²); the fit
-leaves the filled pairs out, the stored value keeps the energy bookkeeping whole.
+leaves the filled pairs out, the stored value keeps the energy bookkeeping whole, and its variance
+(:meth:`HarmonicFill.variance`) says how well: the neighbours' variances filled the same way plus the
+local spread of the filled field, :math:`(N x^2)_v - (N x)_v^2`.
 """
 
 from __future__ import annotations
@@ -49,3 +51,16 @@ class HarmonicFill:
         if len(U):
             x[U] = lu.solve(np.asarray(NUK @ x[K]))
         return x.astype(np.float32)
+
+    def variance(self, R: np.ndarray, var: np.ndarray, missing: np.ndarray) -> np.ndarray:
+        """The variance of the filled values ``R`` (as returned by the call) at the ``missing`` cells: the
+        measured variances ``var`` filled harmonically, plus the spread of R over each cell's neighbours
+        (mm⁻⁴); ``var`` elsewhere."""
+        out = np.where(np.isfinite(var), var, 0.0)
+        if not missing.any():
+            return out.astype(np.float32)
+        filled = self(out, missing).astype(np.float64)
+        x = np.asarray(R, dtype=np.float64)
+        spread = np.maximum(self.N @ (x * x) - (self.N @ x) ** 2, 0.0)
+        out[missing] = filled[missing] + spread[missing]
+        return out.astype(np.float32)

@@ -1,12 +1,15 @@
 r"""Fusion of the cameras' cell means into one exitance per vertex, and its flags (steps 5–6 of
 :mod:`.importer`).
 
-A camera counts for a vertex where it sees at least ``min_coverage`` of the cell with usable pixels and
-at least :data:`FUSED_COVERAGE` of what the best camera covers; the weights
+A camera counts for a vertex where it sees at least ``min_coverage`` of the cell with usable pixels, at
+least :data:`FUSED_COVERAGE` of what the best camera covers, and lost none of it to saturated pixels (a
+cell averaged over its unsaturated part only would read low: that camera's view of it is dropped and
+counted); the weights
 :math:`w_c = n_c\,\gamma_c` (:math:`n_c` the cell's effective number of pixels) do not depend on the
 measured values.  R in mm⁻² per unit incident power, its variance in mm⁻⁴; the flag bits
 (:data:`UNSEEN`, :data:`SATURATED`, :data:`GRAZING`, :data:`SPOT`) say what kept a pair from being
-measured.
+measured: a cell no camera measured because of saturation is :data:`SATURATED` (recovered near the
+hit by :mod:`.near_peak`), one no camera saw well is :data:`UNSEEN` (filled, :mod:`.fill`).
 """
 
 from __future__ import annotations
@@ -24,9 +27,13 @@ UNSEEN, SATURATED, GRAZING, SPOT = 1, 2, 4, 8
 FUSED_COVERAGE = 0.9
 
 
+#: a camera's view of a cell that lost more than this fraction of its weight to saturated pixels is dropped
+SATURATED_LOSS = 1e-6
+
+
 def fuse(per_cam, cameras: list[CameraView], area, rig: ObjectRig):
     """Exitance per vertex fused over cameras (steps 4–5 of :mod:`.importer`): R (V, 3), variance (V, 3),
-    flags (V,)."""
+    flags (V,), and the number of cameras' views of a cell dropped for saturated pixels."""
     V = len(area)
     num = np.zeros((V, 3))
     den = np.zeros(V)
@@ -35,6 +42,7 @@ def fuse(per_cam, cameras: list[CameraView], area, rig: ObjectRig):
     grazing = np.zeros(V, dtype=bool)
     saturated = np.zeros(V, dtype=bool)
     weights = []
+    dropped = 0
     best = np.zeros(V)  # the largest usable coverage of each cell by any camera
     for cm in per_cam:
         if cm is not None:
@@ -47,8 +55,10 @@ def fuse(per_cam, cameras: list[CameraView], area, rig: ObjectRig):
         grazing |= m.grazing
         seen = m.den / np.maximum(area, 1e-30) >= rig.min_coverage
         cover = used / np.maximum(area, 1e-30)
-        good = seen & (cover >= rig.min_coverage)
-        saturated |= seen & ~good
+        lost = seen & (m.den - used > SATURATED_LOSS * m.den)  # a saturated pixel covers part of the cell
+        good = seen & ~lost & (cover >= rig.min_coverage)
+        saturated |= lost
+        dropped += int(lost.sum())
         good &= cover >= FUSED_COVERAGE * np.minimum(best, 1.0)
         w = np.where(good, m.n_eff * np.nan_to_num(gamma).mean(axis=1), 0.0)
         M = np.where(good[:, None], np.nan_to_num(M), 0.0)
@@ -62,7 +72,7 @@ def fuse(per_cam, cameras: list[CameraView], area, rig: ObjectRig):
         for w, vM in weights:
             var += (w[:, None] ** 2) * vM
         var = np.where(measured[:, None], var / (den**2)[:, None], np.nan)
-    flags[~measured] |= UNSEEN
     flags[~measured & saturated] |= SATURATED
+    flags[~measured & ~saturated] |= UNSEEN
     flags[~measured & grazing] |= GRAZING
-    return R, var, flags
+    return R, var, flags, dropped

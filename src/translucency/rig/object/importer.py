@@ -24,10 +24,13 @@ pair, its variance (``R_d_var``) and what kept it from being measured (``flags``
    with usable pixels: weights :math:`w_c = n_c\,\gamma_c` (:math:`n_c = (\sum_p W)^2/\sum_p W^2` the
    cell's effective number of pixels: with photon noise, Var M ∝ 1/(n γ)), which do not depend on the
    measured values (inverse *measured* variances would favour the camera that read low).
-6. **Flags** (bits): :data:`UNSEEN` no camera sees the cell well (its value is filled over the mesh
-   graph from measured neighbours, harmonic fill: :mod:`.fill`), :data:`SATURATED` a camera saw it
-   saturated, :data:`GRAZING` only at grazing angles, :data:`SPOT` within ``spot_radius_mm`` of the
-   hit.  The per-vertex fit leaves flagged pairs out; the stored value keeps the energy bookkeeping whole.
+6. **Flags** (bits): :data:`SATURATED` no camera saw the cell without a saturated pixel (each camera's
+   view that lost one is dropped, and counted), :data:`SPOT` within ``spot_radius_mm`` of the hit (0:
+   none), :data:`UNSEEN` no camera sees the cell well, :data:`GRAZING` only at grazing angles.  The
+   saturated and spot cells, and the unseen ones among them, come from a model of the near peak fitted
+   to the measured ring around them (:mod:`.near_peak`); the other unseen cells are filled over the mesh
+   graph from measured neighbours (harmonic fill: :mod:`.fill`); both carry their variance.  The
+   per-vertex fit leaves flagged pairs out; the stored value keeps the energy bookkeeping whole.
 
 The laser hits are snapped to vertices by :mod:`.hits`.  Laser shots are processed in chunks (the
 unit of resuming and of memory) by :class:`ObjectImport`, the importers' contract of
@@ -57,6 +60,7 @@ from .fill import HarmonicFill
 from .fusion import GRAZING, SATURATED, SPOT, UNSEEN, fuse
 from .hits import incident_vertices
 from .law_estimate import estimate_law
+from .near_peak import recover_near_peak
 from .radiance import shot_cell_means
 from .setup import ObjectRig, calibrated_camera, read_object_rig
 from .spot_check import check_spots
@@ -136,6 +140,9 @@ def import_object(
         "exit_law": importer.law.describe(),
         "energy": importer.energy.tolist(),
         "flags": dict(zip(("unseen", "saturated", "grazing", "spot"), flag_counts.tolist())),
+        "saturated_views": importer.saturated_views,
+        "near_peak": importer.recovered,
+        "rays_per_pixel": {c.camera.name: c.map.sub**2 for c in importer.cameras},
         "seconds": time.perf_counter() - t0,
         "bytes_read": importer.bytes_read,
         "incident": importer.incident.tolist(),
@@ -177,6 +184,8 @@ class ObjectImport:
     chunk_points: int
     energy: np.ndarray  # (P, 3) Σ_v A_v R_d per shot
     bytes_read: int = 0  # image bytes read by the chunks imported
+    saturated_views: int = 0  # cameras' views of a cell dropped for a saturated pixel (this run's chunks)
+    recovered: int = 0  # pairs from the near-peak model (this run's chunks)
 
     @property
     def n_points(self) -> int:
@@ -281,11 +290,13 @@ class ObjectImport:
                 r = np.linalg.norm(mesh.vertices - hits[j], axis=1)
                 per_cam, nbytes = shot_cell_means(shot, cameras, setup, law, hits[j])
                 self.bytes_read += nbytes
-                Rj, vj, fj = fuse(per_cam, cameras, area, setup)
+                Rj, vj, fj, dropped = fuse(per_cam, cameras, area, setup)
+                self.saturated_views += dropped
                 if setup.spot_radius_mm > 0:  # within a stated spot; 0: none (the hit vertex is measured)
                     fj[r <= setup.spot_radius_mm] |= SPOT
-                Rj = fill(Rj, (fj & (UNSEEN | SATURATED)) != 0)
-                vj[~np.isfinite(vj)] = 0.0
+                Rj, vj, missing = self._recover(Rj, vj, fj, r, hits[j])
+                Rj = fill(Rj, missing)
+                vj = fill.variance(Rj, vj, missing)
                 R[j - lo], var[j - lo], flags[j - lo] = Rj, vj, fj
                 energy[j] = area @ Rj
             root["R_d"].with_config(every)[lo:hi] = R
@@ -294,6 +305,19 @@ class ObjectImport:
             root["specular"].with_config(every)[lo:hi] = np.zeros((hi - lo, 3), np.float32)
             root["chunk_done"][c] = True
             yield chunk
+
+    def _recover(self, R, var, flags, r, hit):
+        """The cells at the hit that saturated, lie in the stated spot or went unseen there, from the
+        near-peak model (:mod:`.near_peak`); the cells still missing (to fill)."""
+        peak = (flags & (SATURATED | SPOT)) != 0
+        unseen = (flags & UNSEEN) != 0
+        if not peak.any():
+            return R, var, unseen
+        near = peak | (unseen & (r <= r[peak].max()))
+        R, var, ok = recover_near_peak(self.mesh, hit, R, var, near, flags == 0, self.setup.eta)
+        if ok:
+            self.recovered += int(near.sum())
+        return R, var, unseen & ~near if ok else unseen | near
 
     def finish(self, ds: MeshDataset, done: list[Chunk]) -> np.ndarray:
         """The energy of the shots imported before, the photon count equivalent to the measured noise (into

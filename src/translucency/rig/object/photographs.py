@@ -146,6 +146,7 @@ def photograph_object(
     image_format: str = "pfm",
     checkerboards: bool = False,
     spot_radius_mm: float = 0.5,
+    exposures: str = "brackets",
     progress=None,
 ) -> dict:
     """Photograph ``volume`` inside ``mesh`` lit at ``n_points`` vertices; write a lab's hand-over.
@@ -163,6 +164,10 @@ def photograph_object(
         Default :func:`cameras_around` (``n_cameras`` at ``resolution`` = (width, height)).
     spp : int
         Samples per pixel of each of the two repeated frames.
+    exposures : {"brackets", "single"}
+        ``"brackets"``: per camera and shot, two repeated long exposures and a short one (the spot
+        unsaturated in it); ``"single"``: one long exposure, the spot clipped, as a lab's single
+        exposure is.
     sensor : Sensor, optional
         The cameras' sensor; by default :class:`translucency.rig.shared.sensor.Sensor` with its gain k
         set so that the brightest 0.5 % of the first shot's brightest camera saturate in the long exposure.
@@ -201,6 +206,9 @@ def photograph_object(
         raise TranslucencyError(f"format: pfm or exr, got {image_format!r}")
     if spp < 1:
         raise TranslucencyError(f"spp: must be >= 1, got {spp}")
+    if exposures not in ("brackets", "single"):
+        raise TranslucencyError(f"exposures: brackets or single, got {exposures!r}")
+    repeats = 2 if exposures == "brackets" else 1
     k_auto = sensor is None
     sensor = sensor or Sensor()
     beam = beam or LaserBeam()
@@ -268,12 +276,12 @@ def photograph_object(
                     seed=seed * 1000 + 2 * j + rep,
                     scene=scene,
                 )
-                for rep in range(2)
+                for rep in range(repeats)
             ]
             for c in cameras
         ]
         if k_auto:  # the first shot sets the gain: the brightest 0.5 % of its brightest camera saturate
-            top = [float(np.percentile(L[L > 0], 99.5)) for L, _ in radiance if (L > 0).any()]
+            top = [float(np.percentile(L[L > 0], 99.5)) for L, *_ in radiance if (L > 0).any()]
             k = 0.8 * sensor.saturation / max(top) if top else sensor.k
             sensor = Sensor(**{**sensor.__dict__, "k": k})
             for entry in cam_entries:
@@ -288,7 +296,7 @@ def photograph_object(
                 name = f"shots/{j:03d}_{c.name}_{'ab'[rep]}.{image_format}"
                 write_hdr(folder / name, raw)
                 frames.append({"file": name, "exposure_s": 1.0})
-                if rep == 0:  # the short exposure, from the same radiance
+                if rep == 0 and exposures == "brackets":  # the short exposure, from the same radiance
                     raw = _expose(sensor, L * power, SHORT_EXPOSURE, noise + 2, i)
                     name = f"shots/{j:03d}_{c.name}_short.{image_format}"
                     write_hdr(folder / name, raw)

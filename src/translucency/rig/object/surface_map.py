@@ -6,18 +6,25 @@ Where the per-vertex value is defined: as :mod:`translucency.acquire.mesh` talli
 .. math:: R_d(x_i, v) = \frac{\int \phi_v(y)\, R_d(x_i, y)\, dA(y)}{\int \phi_v\, dA},
 
 with :math:`\phi_v` the barycentric hat function of v.  A camera samples the surface at the points
-:math:`y_p` its pixel centres' rays hit first (Mitsuba ray casting against the mesh: depth-tested by
-construction), each standing for the footprint :math:`a_p = \Omega_p d_p^2/\mu_p` (the pixel's solid
-angle Ω_p, the distance d_p, the cosine μ_p between the view and the face normal), so
+:math:`y_s` its rays hit first (Mitsuba ray casting against the mesh: depth-tested by construction),
+``sub`` × ``sub`` rays through each pixel, each standing for its share of the pixel's footprint
+:math:`a_s = \Omega_s d_s^2/\mu_s` (the ray's solid angle Ω_s, the distance d_s, the cosine μ_s between
+the view and the face normal) and carrying its pixel's value :math:`M_{p(s)}`, so
 
-.. math:: \hat R_d(x_i, v) = \frac{\sum_p \phi_v(y_p)\, a_p\, M(y_p)}{\sum_p \phi_v(y_p)\, a_p}
+.. math:: \hat R_d(x_i, v) = \frac{\sum_s \phi_v(y_s)\, a_s\, M_{p(s)}}{\sum_s \phi_v(y_s)\, a_s}
 
-is the same integral by quadrature over the part of the cell the camera sees — the import and the
-tally agree by construction where the cell is seen whole (``coverage`` = Σ φ_v a_p / A_v near 1).
-Pixels on back faces (μ ≤ 0) do not occur for a closed mesh; pixels at grazing views (μ below
+is the same integral by quadrature over the part of the cell the camera sees, of M averaged over a
+pixel's footprint — the import and the tally agree where the cell is seen whole (``coverage`` =
+Σ φ_v a_s / A_v near 1), and since every pixel's footprint is shared among all the cells it covers,
+:math:`\sum_v A_v \hat R_d` = Σ_p a_p M_p keeps a shot's energy whatever the cells' size.  The
+resolution rule (:func:`subpixels`): rays enough that the finer cells get :data:`RAYS_PER_CELL` each
+(one ray a pixel where cells span several pixels; a cell of a quarter pixel gets 4 × 4 rays a pixel).
+Below :data:`MAX_SUB` ² rays a pixel a cell is still measured, by fewer rays.  A cell finer than a pixel
+holds its pixels' mean: its value is blurred over a footprint (its energy kept).
+Pixels on back faces (μ ≤ 0) do not occur for a closed mesh; rays at grazing views (μ below
 cos ``grazing_deg``) are left out and counted.  The map is the sparse matrix
-:math:`W_{vp} = \phi_v(y_p) a_p` (V × pixels), built once per camera; every photograph is then a
-sparse product.
+:math:`W_{vp} = \sum_{s \in p} \phi_v(y_s) a_s` (V × pixels), built once per camera; every photograph
+is then a sparse product.
 """
 
 from __future__ import annotations
@@ -33,6 +40,10 @@ from .cameras import Camera
 
 #: pixels seen at more than this angle from the normal are not used (degrees)
 GRAZING_DEG = 75.0
+#: the rays a fine cell should get from a camera (the resolution rule of :func:`subpixels`)
+RAYS_PER_CELL = 4
+#: the most rays a pixel side (MAX_SUB² a pixel)
+MAX_SUB = 6
 
 
 @dataclass
@@ -60,6 +71,8 @@ class SurfaceMap:
         Vertices hit by the camera's rays only at grazing angles.
     mu_v : ndarray, shape (V,)
         The W-weighted mean cosine per vertex (0 where unseen).
+    sub : int
+        Rays a pixel side that built W (sub² a pixel).
     """
 
     camera: Camera
@@ -72,6 +85,7 @@ class SurfaceMap:
     den: np.ndarray
     grazing: np.ndarray
     mu_v: np.ndarray
+    sub: int = 1
 
     def __post_init__(self):
         self._used = np.flatnonzero(np.diff(self.W.tocsc().indptr) > 0)  # the columns W uses
@@ -116,10 +130,15 @@ class SurfaceMap:
         return mean, var, den
 
 
-def surface_map(mesh, camera: Camera, *, grazing_deg: float = GRAZING_DEG, scene=None) -> SurfaceMap:
-    """Cast a ray through every pixel centre of ``camera`` against ``mesh`` (Mitsuba) and build its map.
+def surface_map(
+    mesh, camera: Camera, *, grazing_deg: float = GRAZING_DEG, scene=None, sub: int | None = None
+) -> SurfaceMap:
+    """Cast rays through ``camera``'s pixels against ``mesh`` (Mitsuba) and build its map.
 
-    Refuses, in one line, a camera that sees no vertex of the mesh.
+    The pixels' geometry (``position``, ``normal``, ``mu``) is that of the ray through each pixel centre;
+    the map W shares each pixel's footprint among every cell it covers, by ``sub`` × ``sub`` rays a pixel
+    (default :func:`subpixels`: enough that the finer cells get :data:`RAYS_PER_CELL` rays).  Refuses,
+    in one line, a camera that sees no vertex of the mesh.
 
     Examples
     --------
@@ -129,41 +148,36 @@ def surface_map(mesh, camera: Camera, *, grazing_deg: float = GRAZING_DEG, scene
     >>> m = surface_map(mesh, cam)
     >>> bool(m.den[np.argmax(mesh.vertices[:, 2])] > 0), bool(m.den[np.argmin(mesh.vertices[:, 2])] > 0)
     (True, False)
+    >>> m.sub  # cells of tens of pixels: one ray a pixel
+    1
     """
-    import trimesh  # heavy: trimesh loads only where a surface is mapped
-
     scene = scene if scene is not None else mesh_scene(mesh)
-    origins, directions, omega = camera.pixel_rays()
-    n_pix = len(directions)
-    si = scene.ray_intersect(rays(origins, directions))
-    hit = np.asarray(si.is_valid(), dtype=bool)
-    face = np.asarray(si.prim_index, dtype=np.int64)[hit]
-    t = np.asarray(si.t, dtype=np.float64)[hit]
-    faces = np.asarray(mesh.faces)
     verts = np.asarray(mesh.vertices, dtype=np.float64)
-    p = origins[hit] + t[:, None] * directions[hit]  # the hit in float64 from the ray's distance
-    fn = np.asarray(mesh.face_normals, dtype=np.float64)[face]
-    mu_hit = -np.einsum("ij,ij->i", directions[hit], fn)
-    position = np.full((n_pix, 3), np.nan)
-    position[hit] = p
-    normal = np.full((n_pix, 3), np.nan)
-    normal[hit] = fn
-    mu = np.zeros(n_pix)
-    mu[hit] = np.clip(mu_hit, 0.0, 1.0)
-    tri = faces[face]
-    bary = trimesh.triangles.points_to_barycentric(verts[tri], p)
-    bary = np.clip(np.nan_to_num(bary, nan=1.0 / 3.0), 0.0, None)
-    bary /= np.maximum(bary.sum(axis=1, keepdims=True), 1e-12)
-    cos_min = np.cos(np.radians(grazing_deg))
-    use = mu_hit > cos_min
-    area = omega[hit] * t**2 / np.maximum(mu_hit, 1e-6)  # the footprint a_p, mm²
-    pix = np.flatnonzero(hit)
+    faces = np.asarray(mesh.faces)
     V = len(verts)
+    cos_min = np.cos(np.radians(grazing_deg))
+    # the pixel centres: each pixel's point, normal and view
+    centre = _cast(scene, mesh, *camera.pixel_rays())
+    n_pix = len(centre.hit)
+    position = np.full((n_pix, 3), np.nan)
+    position[centre.hit] = centre.p
+    normal = np.full((n_pix, 3), np.nan)
+    normal[centre.hit] = centre.fn
+    mu = np.zeros(n_pix)
+    mu[centre.hit] = np.clip(centre.mu, 0.0, 1.0)
+    view = -centre.directions
+    # the footprints: sub × sub rays a pixel, each a_s = Ω_s d_s²/μ_s shared by barycentric weight
+    sub = int(sub) if sub is not None else subpixels(mesh, centre, cos_min)
+    rays_ = centre if sub == 1 else _cast(scene, mesh, *camera.pixel_rays(sub))
+    use = rays_.mu > cos_min
+    pixel = np.flatnonzero(rays_.hit) // sub**2
+    area = rays_.omega * rays_.t**2 / np.maximum(rays_.mu, 1e-6)  # the footprint a_s, mm²
+    tri = faces[rays_.face]
     rows = tri[use].ravel()
-    cols = np.repeat(pix[use], 3)
-    vals = (bary[use] * area[use, None]).ravel()
-    W = sp.csr_matrix((vals, (rows, cols)), shape=(V, n_pix))
-    W2 = sp.csr_matrix((vals**2, (rows, cols)), shape=(V, n_pix))
+    cols = np.repeat(pixel[use], 3)
+    vals = (rays_.bary[use] * area[use, None]).ravel()
+    W = sp.csr_matrix((vals, (rows, cols)), shape=(V, n_pix))  # duplicates (sub-rays of a pixel) summed
+    W2 = W.multiply(W).tocsr()  # the variance's weights: a pixel's value is one reading for its cell
     den = np.asarray(W.sum(axis=1)).ravel()
     if not (den > 0).any():
         raise TranslucencyError(f"{camera.name}: sees no vertex of the mesh (check its pose and the mesh)")
@@ -172,7 +186,60 @@ def surface_map(mesh, camera: Camera, *, grazing_deg: float = GRAZING_DEG, scene
     grazing = touched & (den <= 0)
     with np.errstate(invalid="ignore", divide="ignore"):
         mu_v = np.where(den > 0, (W @ mu) / den, 0.0)
-    return SurfaceMap(camera, W, W2, mu, position, normal, -directions, den, grazing, mu_v)
+    return SurfaceMap(camera, W, W2, mu, position, normal, view, den, grazing, mu_v, sub)
+
+
+@dataclass
+class _Cast:
+    """Rays cast against the mesh: which hit (N,), and for the hits the face, distance t (mm), point p,
+    face normal, cosine μ to the ray, barycentric coordinates; the rays' directions and solid angles."""
+
+    hit: np.ndarray
+    face: np.ndarray
+    t: np.ndarray
+    p: np.ndarray
+    fn: np.ndarray
+    mu: np.ndarray
+    bary: np.ndarray
+    directions: np.ndarray
+    omega: np.ndarray
+
+
+def _cast(scene, mesh, origins, directions, omega) -> _Cast:
+    import trimesh  # heavy: trimesh loads only where a surface is mapped
+
+    si = scene.ray_intersect(rays(origins, directions))
+    hit = np.asarray(si.is_valid(), dtype=bool)
+    face = np.asarray(si.prim_index, dtype=np.int64)[hit]
+    t = np.asarray(si.t, dtype=np.float64)[hit]
+    p = origins[hit] + t[:, None] * directions[hit]  # the hit in float64 from the ray's distance
+    fn = np.asarray(mesh.face_normals, dtype=np.float64)[face]
+    mu = -np.einsum("ij,ij->i", directions[hit], fn)
+    tri = np.asarray(mesh.faces)[face]
+    bary = trimesh.triangles.points_to_barycentric(np.asarray(mesh.vertices, dtype=np.float64)[tri], p)
+    bary = np.clip(np.nan_to_num(bary, nan=1.0 / 3.0), 0.0, None)
+    bary /= np.maximum(bary.sum(axis=1, keepdims=True), 1e-12)
+    return _Cast(hit, face, t, p, fn, mu, bary, directions, omega[hit])
+
+
+def subpixels(mesh, centre: _Cast, cos_min: float) -> int:
+    r"""Rays a pixel side so that the finer cells a camera sees get :data:`RAYS_PER_CELL` rays: the
+    resolution rule.
+
+    With :math:`\bar a` the median footprint of a pixel on the surface and :math:`A_{10}` the 10th
+    percentile of the seen vertices' cell areas, ``sub`` = ⌈√(RAYS_PER_CELL · ā / A₁₀)⌉, between 1 and
+    :data:`MAX_SUB`.  A cell finer than a pixel is then measured by the footprints that cover it, not
+    left to the fill."""
+    from ...geometry import vertex_areas  # heavy: trimesh loads only where a surface is mapped
+
+    use = centre.mu > cos_min
+    if not use.any():
+        return 1
+    footprint = centre.omega[use] * centre.t[use] ** 2 / centre.mu[use]
+    seen = np.unique(np.asarray(mesh.faces)[centre.face[use]].ravel())
+    A = np.percentile(vertex_areas(mesh)[seen], 10)
+    need = np.sqrt(RAYS_PER_CELL * np.median(footprint) / max(A, 1e-30))
+    return int(np.clip(np.ceil(need), 1, MAX_SUB))
 
 
 def projects_inside(mesh, camera: Camera) -> np.ndarray:
@@ -188,4 +255,12 @@ def projects_inside(mesh, camera: Camera) -> np.ndarray:
     return inside
 
 
-__all__ = ["SurfaceMap", "surface_map", "projects_inside", "GRAZING_DEG"]
+__all__ = [
+    "SurfaceMap",
+    "surface_map",
+    "subpixels",
+    "projects_inside",
+    "GRAZING_DEG",
+    "RAYS_PER_CELL",
+    "MAX_SUB",
+]
