@@ -22,6 +22,7 @@ against the photographs' own noise floor (two imports of two independent photogr
 from __future__ import annotations
 
 import json
+import shutil
 import sys
 import tempfile
 import time
@@ -125,7 +126,8 @@ def main(argv) -> None:
             if not (o["reuse"] and (rig / "object.json").is_file()):
                 _generate(gen, mesh, volume, rig, incident, W, H, o, seed)
             t2 = time.perf_counter()
-            info = import_object(rig, folder / f"{gen}{seed}.zarr", overwrite=True)
+            shutil.rmtree(folder / f"{gen}{seed}.zarr", ignore_errors=True)  # (same arguments would resume)
+            info = import_object(rig, folder / f"{gen}{seed}.zarr")
             Rs.append(
                 np.asarray(open_mesh_dataset(folder / f"{gen}{seed}.zarr")["R_d"][...], dtype=np.float64)
             )

@@ -4,7 +4,8 @@ r"""Fusion of the cameras' cell means into one exitance per vertex, and its flag
 A camera counts for a vertex where it sees at least ``min_coverage`` of the cell with usable pixels, at
 least :data:`FUSED_COVERAGE` of what the best camera covers, and lost none of it to saturated pixels (a
 cell averaged over its unsaturated part only would read low: that camera's view of it is dropped and
-counted); the weights
+counted; a cell one camera saw saturated counts as measured only where another saw it whole); the
+weights
 :math:`w_c = n_c\,\gamma_c` (:math:`n_c` the cell's effective number of pixels) do not depend on the
 measured values.  R in mm⁻² per unit incident power, its variance in mm⁻⁴; the flag bits
 (:data:`UNSEEN`, :data:`SATURATED`, :data:`GRAZING`, :data:`SPOT`) say what kept a pair from being
@@ -43,6 +44,7 @@ def fuse(per_cam, cameras: list[CameraView], area, rig: ObjectRig):
     saturated = np.zeros(V, dtype=bool)
     weights = []
     dropped = 0
+    whole = np.zeros(V, dtype=bool)  # some camera measured the cell whole, unsaturated
     best = np.zeros(V)  # the largest usable coverage of each cell by any camera
     for cm in per_cam:
         if cm is not None:
@@ -65,8 +67,11 @@ def fuse(per_cam, cameras: list[CameraView], area, rig: ObjectRig):
         vM = np.where(good[:, None], np.nan_to_num(vM), 0.0)
         num += w[:, None] * M
         den += w
+        whole |= good & (cover >= FUSED_COVERAGE)
         weights.append((w, vM))
-    measured = den > 0
+    # a cell some camera saw saturated is measured only where another saw it whole: a part of it seen
+    # unsaturated is its dimmer part
+    measured = (den > 0) & (~saturated | whole)
     with np.errstate(invalid="ignore", divide="ignore"):
         R = np.where(measured[:, None], num / den[:, None], 0.0)
         for w, vM in weights:

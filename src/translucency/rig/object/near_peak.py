@@ -10,12 +10,13 @@ measured ring around it:
 * the **ring**: the measured cells beyond the farthest target cell, out to :data:`RING_MM` further and at
   least :data:`RING_CELLS` of them;
 * the **model**: Jensen's dipole profile :math:`s\,R_d^{dip}(r; \sigma_a, \sigma_s', \eta)` with a free
-  scale s (three parameters a channel, fitted to the ring's cell means in log space);
+  scale s (three parameters a channel, fitted to the ring's cell means in log space) — or, where it fits
+  the ring worse or its whole profile would return more light than came in
+  (:math:`s\,R^{dip} > 1`: energy is conserved), the exponential :math:`a e^{-b r}`;
 * the **value**: the model's own cell mean :math:`\int \phi_v\, s R_d^{dip}\, dA / A_v` over each target
   cell (:func:`cell_quadrature`, r the distance from the hit, mm);
-* its **variance**: half the difference from an exponential :math:`a e^{-b r}` fitted to the same ring,
-  squared (the model's form is what is least known), plus the ring's relative residual scatter applied to
-  the value.
+* its **variance**: half the difference between the two models, squared (the model's form is what is
+  least known), plus the ring's relative residual scatter applied to the value.
 
 Units: mm, R_d in mm⁻² per unit incident power.
 """
@@ -24,7 +25,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...model.dipole import dipole_R_d
+from ...model.dipole import dipole_R_d, dipole_total_reflectance
 
 #: the ring reaches this far beyond the farthest target cell, mm (or further, for :data:`RING_CELLS`)
 RING_MM = 2.0
@@ -106,8 +107,12 @@ def _near_peak_channel(y, r_ring, mean_of, eta):
     )
     efit = least_squares(residual(exponential), [y.max(), sigma_tr], bounds=([-50, 0], [50, 50]))
     dip, expo = dipole(fit.x)[n_ring:], exponential(efit.x)[n_ring:]
-    scatter = float(np.sqrt(np.mean(fit.fun**2)))  # the ring's relative residual
-    return dip, (0.5 * (dip - expo)) ** 2 + (scatter * dip) ** 2
+    # the dipole unless it fits the ring worse or its profile would return more light than came in
+    albedo = np.exp(fit.x[2]) * float(dipole_total_reflectance(np.exp(fit.x[0]), np.exp(fit.x[1]), eta))
+    use_dipole = albedo <= 1.0 and fit.cost <= efit.cost
+    value, chosen = (dip, fit) if use_dipole else (expo, efit)
+    scatter = float(np.sqrt(np.mean(chosen.fun**2)))  # the ring's relative residual
+    return value, (0.5 * (dip - expo)) ** 2 + (scatter * value) ** 2
 
 
 def recover_near_peak(mesh, hit, R, var, target, measured, eta: float):
