@@ -34,7 +34,8 @@ SATURATED_LOSS = 1e-6
 
 def fuse(per_cam, cameras: list[CameraView], area, rig: ObjectRig):
     """Exitance per vertex fused over cameras (steps 4–5 of :mod:`.importer`): R (V, 3), variance (V, 3),
-    flags (V,), and the number of cameras' views of a cell dropped for saturated pixels."""
+    flags (V,), the number of cameras' views of a cell dropped for saturated pixels, and the least value
+    the clipped pixels over each cell allow (V, 3; 0 where none clipped)."""
     V = len(area)
     num = np.zeros((V, 3))
     den = np.zeros(V)
@@ -45,6 +46,7 @@ def fuse(per_cam, cameras: list[CameraView], area, rig: ObjectRig):
     weights = []
     dropped = 0
     whole = np.zeros(V, dtype=bool)  # some camera measured the cell whole, unsaturated
+    bound = np.full((V, 3), np.nan)  # the least value clipped pixels allow
     best = np.zeros(V)  # the largest usable coverage of each cell by any camera
     for cm in per_cam:
         if cm is not None:
@@ -52,7 +54,8 @@ def fuse(per_cam, cameras: list[CameraView], area, rig: ObjectRig):
     for cam, cm in zip(cameras, per_cam):
         if cm is None:
             continue
-        M, vM, used, gamma = cm
+        M, vM, used, gamma, least = cm
+        bound = np.fmax(bound, least)
         m = cam.map
         grazing |= m.grazing
         seen = m.den / np.maximum(area, 1e-30) >= rig.min_coverage
@@ -80,4 +83,4 @@ def fuse(per_cam, cameras: list[CameraView], area, rig: ObjectRig):
     flags[~measured & saturated] |= SATURATED
     flags[~measured & ~saturated] |= UNSEEN
     flags[~measured & grazing] |= GRAZING
-    return R, var, flags, dropped
+    return R, var, flags, dropped, np.nan_to_num(bound)

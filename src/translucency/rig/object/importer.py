@@ -290,11 +290,11 @@ class ObjectImport:
                 r = np.linalg.norm(mesh.vertices - hits[j], axis=1)
                 per_cam, nbytes = shot_cell_means(shot, cameras, setup, law, hits[j])
                 self.bytes_read += nbytes
-                Rj, vj, fj, dropped = fuse(per_cam, cameras, area, setup)
+                Rj, vj, fj, dropped, least = fuse(per_cam, cameras, area, setup)
                 self.saturated_views += dropped
                 if setup.spot_radius_mm > 0:  # within a stated spot; 0: none (the hit vertex is measured)
                     fj[r <= setup.spot_radius_mm] |= SPOT
-                Rj, vj, missing = self._recover(Rj, vj, fj, r, hits[j])
+                Rj, vj, missing = self._recover(Rj, vj, fj, r, hits[j], least)
                 Rj = fill(Rj, missing)
                 vj = fill.variance(Rj, vj, missing)
                 R[j - lo], var[j - lo], flags[j - lo] = Rj, vj, fj
@@ -306,15 +306,19 @@ class ObjectImport:
             root["chunk_done"][c] = True
             yield chunk
 
-    def _recover(self, R, var, flags, r, hit):
+    def _recover(self, R, var, flags, r, hit, least):
         """The cells at the hit that saturated, lie in the stated spot or went unseen there, from the
-        near-peak model (:mod:`.near_peak`); the cells still missing (to fill)."""
+        near-peak model (:mod:`.near_peak`); where the model is below what their clipped pixels show
+        (``least``: a pixel's mean, not each cell's) its standard deviation reaches up to it (the profile
+        is steeper than the ring tells); the cells still missing (to fill)."""
         peak = (flags & (SATURATED | SPOT)) != 0
         unseen = (flags & UNSEEN) != 0
         if not peak.any():
             return R, var, unseen
         near = peak | (unseen & (r <= r[peak].max()))
         R, var, ok = recover_near_peak(self.mesh, hit, R, var, near, flags == 0, self.setup.eta)
+        below = near[:, None] & (R < least)  # the clip says more light than the model: its σ says so too
+        var = np.where(below, np.maximum(var, (least - R) ** 2), var)
         if ok:
             self.recovered += int(near.sum())
         return R, var, unseen & ~near if ok else unseen | near

@@ -23,8 +23,8 @@ from .views import CameraView, read_frame
 
 def view_radiance(shot: ObjectShot, cam: CameraView, rig: ObjectRig):
     """One camera's frames of a shot as radiance per unit power at the pixels its map uses (n, 3), its
-    variance and the usable pixels (n,) (step 3 of :mod:`.importer`); and the bytes read.  float32
-    throughout."""
+    variance, the usable pixels (n,), the least radiance of the pixels every frame clipped (n, 3; 0 for
+    the usable) (step 3 of :mod:`.importer`); and the bytes read.  float32 throughout."""
     setup = cam.setup
     rad = setup.radiometry
     shape = (setup.height, setup.width)
@@ -38,6 +38,8 @@ def view_radiance(shot: ObjectShot, cam: CameraView, rig: ObjectRig):
     rep_n = np.zeros(len(used), np.float32)  # repeated frames of the longest exposure: n, Σ L, Σ L²
     rep_s = np.zeros_like(num)
     rep_s2 = np.zeros_like(num)
+    floor = np.zeros_like(num)  # where every frame clipped a channel: the radiance it must at least have
+    all_clipped = np.ones(num.shape, dtype=bool)
     nbytes = 0
     for f in frames:
         raw = read_frame(f.file, shape, "photograph")
@@ -47,6 +49,9 @@ def view_radiance(shot: ObjectShot, cam: CameraView, rig: ObjectRig):
         signal = raw - dark
         scale = 1.0 / (gain * np.float32(f.exposure_s * shot.power))  # value → radiance per unit power
         L = signal * scale
+        clipped = raw >= rad.saturation
+        all_clipped &= clipped
+        floor = np.maximum(floor, np.where(clipped, (rad.saturation - dark) * scale, 0.0))
         w = np.float32(f.exposure_s) * ok[:, None]  # photon noise: weight ∝ exposure
         num += w * L
         wsum += w
@@ -62,11 +67,13 @@ def view_radiance(shot: ObjectShot, cam: CameraView, rig: ObjectRig):
         n = rep_n[:, None]
         scatter = (rep_s2 - rep_s * rep_s / n) / (n - 1) / n  # the scatter of the repeated frames' mean
     var = np.where((n >= 2) & np.isfinite(scatter), np.maximum(var, scatter), var)
-    return L, var, usable, nbytes
+    floor = np.where(all_clipped & ~usable[:, None], floor, 0.0).astype(np.float32)
+    return L, var, usable, floor, nbytes
 
 
 def shot_cell_means(shot: ObjectShot, cameras: list[CameraView], rig: ObjectRig, law=None, hit=None):
-    """Per camera: (cell mean (V, 3), its variance, usable weight (V,), mean γ (V, 3)) of the radiance —
+    """Per camera: (cell mean (V, 3), its variance, usable weight (V,), mean γ (V, 3), the clipped pixels'
+    least value over each cell (V, 3), NaN where none) of the radiance —
     or, with ``law``, of the exitance πL/γ converted pixel by pixel (γ at each pixel's cosine, slant
     and distance from ``hit``: the law varies across a cell near the hit); and the bytes read.  The
     cameras run on threads (reading, NumPy and the sparse products release the GIL)."""
@@ -74,10 +81,11 @@ def shot_cell_means(shot: ObjectShot, cameras: list[CameraView], rig: ObjectRig,
     def one(cam: CameraView):
         if cam.setup.name not in shot.frames:
             return None, 0
-        L, var, usable, nb = view_radiance(shot, cam, rig)
+        L, var, usable, floor, nb = view_radiance(shot, cam, rig)
         m = cam.map
+        clipped = ~usable
         if law is None:
-            return (*m.cell_means(L, var, usable), None), nb
+            return (*m.cell_means(L, var, usable), None, m.cell_means(floor, 0 * floor, clipped)[0]), nb
         u = m.used
         if law.needs_direction:  # the slant and the distance of every pixel used
             r, slant = np.linalg.norm(m.position[u] - hit, axis=1), m.slant(hit, u)
@@ -89,7 +97,8 @@ def shot_cell_means(shot: ObjectShot, cameras: list[CameraView], rig: ObjectRig,
             g_mean = np.ones((len(m.den), 3), np.float32)
         else:
             g_mean = m.cell_means(gamma, np.zeros_like(gamma), usable)[0]
-        return (*m.cell_means(E, vE, usable), g_mean), nb
+        E_floor = np.float32(np.pi) * floor / gamma
+        return (*m.cell_means(E, vE, usable), g_mean, m.cell_means(E_floor, 0 * E_floor, clipped)[0]), nb
 
     with ThreadPoolExecutor(min(len(cameras), os.cpu_count() or 1)) as pool:
         results = list(pool.map(one, cameras))
