@@ -101,10 +101,11 @@ def acquire_mesh(
         n_vertices=V,
         photons=photons,
         seed=seed,
-        eta=volume.eta,
+        eta=volume.eta,  # the medium's own index
         g=volume.g,
         sample=volume.description,
         request=request,
+        boundary_eta=1.0 if index_matched else float(volume.eta),  # what light crosses at the surface
     )
     if volume.description.get("generator") == "file":  # a user's filling: where it is and what it was
         header["filling"] = filling_record(volume.description["path"])

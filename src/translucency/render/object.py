@@ -128,13 +128,18 @@ def check_light_outside(mesh, light) -> None:
 
 
 def boundary_eta(header) -> float:
-    """η of a mesh data set's boundary: 1 when it was acquired index-matched.
+    """η of a mesh data set's boundary: its header's ``boundary_eta`` — or, in data sets written before
+    it was recorded, 1 when acquired index-matched, else the medium's η.
 
     Examples
     --------
     >>> boundary_eta({"eta": 1.4}), boundary_eta({"eta": 1.4, "request": {"index_matched": True}})
     (1.4, 1.0)
+    >>> boundary_eta({"eta": 1.4, "boundary_eta": 1.0})
+    1.0
     >>> boundary_eta({})  # none recorded: index-matched
     1.0
     """
+    if "boundary_eta" in header:
+        return float(header["boundary_eta"])
     return 1.0 if header.get("request", {}).get("index_matched", False) else float(header.get("eta", 1.0))

@@ -254,6 +254,7 @@ class ObjectImport:
             sample=sample.get("description", {"source": "photographs"}),
             request=request,
             source="photographs",
+            boundary_eta=float(setup.eta),  # what light crosses at the surface (1: index-matched)
             photographs=_provenance(setup, cameras, hits, law),
         )
         return cls(setup, mesh, area, cameras, incident, hits, law, header, chunk_points, np.zeros((P, 3)))
