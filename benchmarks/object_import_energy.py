@@ -9,7 +9,8 @@ material and incident vertices (``acquire mesh``, index-matched, another seed):
   pinhole model with a Lambertian exit law, its own z-buffer and sensor, one clipped exposure a shot.
 
     python benchmarks/object_import_energy.py [MESH.obj] [--size=30] [--cameras=8] [--resolution=96x72]
-        [--points=3] [--spp=256] [--photons=200000] [--generators=rig,splat] [--folder=DIR] [--reuse]
+        [--points=3] [--spp=256] [--photons=200000] [--generators=rig,splat] [--exposure=single|brackets]
+        [--folder=DIR] [--reuse]
 
 MESH defaults to an icosphere of 10,242 vertices at 30 mm (cells of 0.28 mm², about a quarter of a
 pixel's footprint at 96 x 72); the issue's case is ``../shared/meshes/spot.obj`` (2,930 vertices, cells
@@ -51,6 +52,7 @@ def _args(argv):
         "generators": "rig,splat",
         "folder": None,
         "material": "homogeneous:skin1",
+        "exposure": "single",
     }
     mesh = None
     for a in argv[1:]:
@@ -72,7 +74,7 @@ def _mesh(path, size):
     return m
 
 
-def _compare(A, B, T, area, incident):
+def _compare(A, B, T, area, incident, E=None, sigma=None):
     """The numbers of one generator: per shot and channel energy ratio, hit share ratio, rel L2."""
     eA, eT = np.einsum("pvk,v->pk", A, area), np.einsum("pvk,v->pk", T, area)
     own = np.arange(len(incident))
@@ -89,6 +91,9 @@ def _compare(A, B, T, area, incident):
         "hit_share_ratio": np.round(shareA / shareT, 3).tolist(),
         "rel_l2": np.round(l2, 3).tolist(),
         "noise_floor": None if floor is None else np.round(floor, 3).tolist(),
+        # the import's own statement of each shot's energy uncertainty, against the truth
+        "energy_sigma_rel": None if sigma is None else np.round(sigma / E, 3).tolist(),
+        "energy_z": None if sigma is None else np.round((E - eT) / sigma, 2).tolist(),
     }
 
 
@@ -121,16 +126,15 @@ def main(argv) -> None:
     for gen in o["generators"].split(","):
         Rs, infos = [], []
         for seed in (0, 1):
-            rig = folder / f"{gen}{seed}"
             t1 = time.perf_counter()
+            rig = folder / f"{gen}-{o['exposure']}{seed}"
             if not (o["reuse"] and (rig / "object.json").is_file()):
                 _generate(gen, mesh, volume, rig, incident, W, H, o, seed)
             t2 = time.perf_counter()
-            shutil.rmtree(folder / f"{gen}{seed}.zarr", ignore_errors=True)  # (same arguments would resume)
-            info = import_object(rig, folder / f"{gen}{seed}.zarr")
-            Rs.append(
-                np.asarray(open_mesh_dataset(folder / f"{gen}{seed}.zarr")["R_d"][...], dtype=np.float64)
-            )
+            zarr = rig.with_suffix(".zarr")
+            shutil.rmtree(zarr, ignore_errors=True)  # (same arguments would resume)
+            info = import_object(rig, zarr)
+            Rs.append(np.asarray(open_mesh_dataset(zarr)["R_d"][...], dtype=np.float64))
             infos.append(info)
             print(
                 f"{gen} seed {seed}: generated {t2 - t1:.0f} s, imported {info['seconds']:.0f} s; "
@@ -138,9 +142,11 @@ def main(argv) -> None:
                 f"saturated views {info['saturated_views']}; near peak {info['near_peak']}",
                 file=sys.stderr,
             )
-        res = _compare(Rs[0], Rs[1], Rt, area, incident)
+        E0, s0 = (np.asarray(infos[0][k]) for k in ("energy", "energy_sigma"))
+        res = _compare(Rs[0], Rs[1], Rt, area, incident, E0, s0)
         res.update(
             generator=gen,
+            exposure=o["exposure"],
             vertices=len(mesh.vertices),
             cameras=o["cameras"],
             resolution=[W, H],
@@ -170,7 +176,7 @@ def _generate(gen, mesh, volume, rig, incident, W, H, o, seed):
             cameras=cams,
             spp=o["spp"],
             seed=seed,
-            exposures="single",
+            exposures=o["exposure"],
             spot_radius_mm=0.0,
         )
     else:
@@ -185,7 +191,7 @@ def _generate(gen, mesh, volume, rig, incident, W, H, o, seed):
             cameras=cams,
             photons=o["photons"],
             seed=100 + seed,
-            exposure="single",
+            exposure=o["exposure"],
         )
 
 

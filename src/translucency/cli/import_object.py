@@ -42,9 +42,16 @@ def import_object_cmd(
         f"mesh data set: {out} ({s['points']} shots x {s['vertices']:,} vertices; poses {errors}; "
         f"exit law {s['exit_law']['law']}; unseen {s['flags']['unseen']:,} pairs filled; "
         f"saturated {s['flags']['saturated']:,} pairs ({s['saturated_views']:,} views dropped), "
-        f"spot {s['flags']['spot']:,}: {s['near_peak']:,} from the near-peak model)"
+        f"spot {s['flags']['spot']:,}: {s['near_peak']:,} from the near-peak model; "
+        f"energy per shot known to {_worst_share(s['energy_sigma'], s['energy']):.0%} at worst)"
     )
     finish(as_json, quiet, s, [line])
+
+
+def _worst_share(sigma, energy) -> float:
+    """The largest σ_E / E over shots and channels (0 for no shot)."""
+    shares = [s / max(e, 1e-30) for ss, ee in zip(sigma, energy) for s, e in zip(ss, ee)]
+    return max(shares, default=0.0)
 
 
 def _pose_check(report: dict) -> str:

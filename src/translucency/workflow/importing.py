@@ -277,6 +277,7 @@ def import_object(
             "near_peak": info["near_peak"],
             "rays_per_pixel": info["rays_per_pixel"],
             "energy": info["energy"],
+            "energy_sigma": info["energy_sigma"],
             "images_MB": mb,
             "seconds": info["seconds"],
             "throughput_MB_s": mb / max(info["seconds"], 1e-9),

@@ -93,7 +93,8 @@ def import_object(
     -------
     dict
         ``path``, ``cameras`` (reprojection errors, vertices seen), ``exit_law``, ``energy`` (per shot:
-        Σ_v A_v R_d per channel), ``flags`` (counts), ``seconds`` and ``bytes_read`` (image bytes).
+        Σ_v A_v R_d per channel) and ``energy_sigma`` (its standard deviation, :func:`shot_energy`),
+        ``flags`` (counts), ``seconds`` and ``bytes_read`` (image bytes).
 
     Raises
     ------
@@ -139,6 +140,7 @@ def import_object(
         ],
         "exit_law": importer.law.describe(),
         "energy": importer.energy.tolist(),
+        "energy_sigma": importer.energy_sigma.tolist(),
         "flags": dict(zip(("unseen", "saturated", "grazing", "spot"), flag_counts.tolist())),
         "saturated_views": importer.saturated_views,
         "near_peak": importer.recovered,
@@ -183,6 +185,7 @@ class ObjectImport:
     header: dict
     chunk_points: int
     energy: np.ndarray  # (P, 3) Σ_v A_v R_d per shot
+    energy_sigma: np.ndarray  # (P, 3) its standard deviation (shot_energy)
     bytes_read: int = 0  # image bytes read by the chunks imported
     saturated_views: int = 0  # cameras' views of a cell dropped for a saturated pixel (this run's chunks)
     recovered: int = 0  # pairs from the near-peak model (this run's chunks)
@@ -257,7 +260,8 @@ class ObjectImport:
             boundary_eta=float(setup.eta),  # what light crosses at the surface (1: index-matched)
             photographs=_provenance(setup, cameras, hits, law),
         )
-        return cls(setup, mesh, area, cameras, incident, hits, law, header, chunk_points, np.zeros((P, 3)))
+        E = np.zeros((P, 3))
+        return cls(setup, mesh, area, cameras, incident, hits, law, header, chunk_points, E, E.copy())
 
     def create(self, out, *, overwrite: bool) -> MeshDataset:
         """The mesh data set at ``out``: the mesh, its vertex areas and the incident vertices."""
@@ -289,17 +293,17 @@ class ObjectImport:
             for j in range(lo, hi):
                 shot = setup.shots[j]
                 r = np.linalg.norm(mesh.vertices - hits[j], axis=1)
-                per_cam, nbytes = shot_cell_means(shot, cameras, setup, law, hits[j])
+                per_cam, views, nbytes = shot_cell_means(shot, cameras, setup, law, hits[j], pixels=True)
                 self.bytes_read += nbytes
                 Rj, vj, fj, dropped, least = fuse(per_cam, cameras, area, setup)
                 self.saturated_views += dropped
                 if setup.spot_radius_mm > 0:  # within a stated spot; 0: none (the hit vertex is measured)
                     fj[r <= setup.spot_radius_mm] |= SPOT
-                Rj, vj, missing = self._recover(Rj, vj, fj, r, hits[j], least)
+                Rj, vj, missing = self._recover(Rj, vj, fj, r, hits[j], least, [v for v in views if v])
                 Rj = fill(Rj, missing)
                 vj = fill.variance(Rj, vj, missing)
                 R[j - lo], var[j - lo], flags[j - lo] = Rj, vj, fj
-                energy[j] = area @ Rj
+                energy[j], self.energy_sigma[j] = shot_energy(Rj, vj, fj, area)
             root["R_d"].with_config(every)[lo:hi] = R
             root["R_d_var"].with_config(every)[lo:hi] = var
             root["flags"].with_config(every)[lo:hi] = flags
@@ -307,19 +311,32 @@ class ObjectImport:
             root["chunk_done"][c] = True
             yield chunk
 
-    def _recover(self, R, var, flags, r, hit, least):
+    def _recover(self, R, var, flags, r, hit, least, views):
         """The cells at the hit that saturated, lie in the stated spot or went unseen there, from the
-        near-peak model (:mod:`.near_peak`); where the model is below what their clipped pixels show
-        (``least``: a pixel's mean, not each cell's) its standard deviation reaches up to it (the profile
-        is steeper than the ring tells); the cells still missing (to fill)."""
+        near-peak model (:mod:`.near_peak`, fitted to the pixels of ``views`` that see them and their
+        ring); where the model is below what their clipped pixels show (``least``: a pixel's mean, not
+        each cell's) its standard deviation reaches up to it, and where the model reads short of the
+        clipped pixels as a whole (``short``), the clip's value, with a standard deviation that spreads half
+        the light energy conservation leaves unaccounted for over those cells; the cells still missing
+        (to fill)."""
         peak = (flags & (SATURATED | SPOT)) != 0
         unseen = (flags & UNSEEN) != 0
         if not peak.any():
             return R, var, unseen
         near = peak | (unseen & (r <= r[peak].max()))
-        R, var, ok = recover_near_peak(self.mesh, hit, R, var, near, flags == 0, self.setup.eta)
-        below = near[:, None] & (R < least)  # the clip says more light than the model: its σ says so too
-        var = np.where(below, np.maximum(var, (least - R) ** 2), var)
+        R, var, ok, short = recover_near_peak(self.mesh, hit, R, var, near, flags == 0, self.setup.eta, views)
+        below = near[:, None] & (R < least)
+        var = np.where(
+            below, np.maximum(var, (least - R) ** 2), var
+        )  # the clip says more light than the model
+        # where the model reads short of the clipped pixels, the peak is steeper than any the ring implies
+        # (a horn's tip, a thin part): its cells hold at least the clip's value, and how much more only
+        # energy conservation bounds — the light not yet accounted for, Σ_v A_v R_v ≤ 1 per W
+        below &= short[None, :]
+        R = np.where(below, least, R)
+        unknown = np.maximum(0.0, 1.0 - self.area @ R)  # (3,)
+        share = np.maximum((self.area[:, None] * below).sum(axis=0), 1e-30)
+        var = np.where(below, np.maximum(var, (0.5 * unknown / share) ** 2), var)
         if ok:
             self.recovered += int(near.sum())
         return R, var, unseen & ~near if ok else unseen | near
@@ -329,8 +346,9 @@ class ObjectImport:
         the header); the pairs of each flag counted (UNSEEN, SATURATED, GRAZING, SPOT)."""
         root, area = ds.group, self.area
         for chunk in done:
-            R = np.asarray(root["R_d"][chunk.lo : chunk.hi], dtype=np.float64)
-            self.energy[chunk.lo : chunk.hi] = np.einsum("pvk,v->pk", R, area)
+            for j in range(chunk.lo, chunk.hi):
+                R, var = (np.asarray(root[k][j], dtype=np.float64) for k in ("R_d", "R_d_var"))
+                self.energy[j], self.energy_sigma[j] = shot_energy(R, var, np.asarray(root["flags"][j]), area)
         flag_counts = np.zeros(4, dtype=np.int64)
         flags_all = np.asarray(root["flags"][...])
         for b, bit in enumerate((UNSEEN, SATURATED, GRAZING, SPOT)):
@@ -338,6 +356,30 @@ class ObjectImport:
         self.header["photons"] = _equivalent_photons(root, area, flags_all)
         root.attrs.update({"translucency_mesh_dataset": self.header})
         return flag_counts
+
+
+def shot_energy(R, var, flags, area):
+    r"""A shot's energy :math:`E = \sum_v A_v R_v` per channel and its standard deviation.
+
+    The measured cells' errors are independent (photon and read noise): they add in quadrature. The
+    flagged cells' come from one model (the near peak) or one fill over their neighbours: their errors
+    move together, so their standard deviations add linearly —
+    :math:`\sigma_E = \sum_{v\,\text{flagged}} A_v \sigma_v
+    + (\sum_{v\,\text{measured}} A_v^2 \sigma_v^2)^{1/2}`.
+
+    Examples
+    --------
+    >>> area = np.array([1.0, 2.0, 1.0])
+    >>> R = np.full((3, 3), 0.1)
+    >>> var = np.array([[0.01] * 3, [0.0001] * 3, [0.0001] * 3])
+    >>> E, s = shot_energy(R, var, np.array([1, 0, 0], np.uint8), area)
+    >>> np.round(E, 3).tolist(), np.round(s, 4).tolist()  # 0.1 + sqrt(4e-4 + 1e-4)
+    ([0.4, 0.4, 0.4], [0.1224, 0.1224, 0.1224])
+    """
+    sd = np.sqrt(np.maximum(np.nan_to_num(var), 0.0))
+    flagged = flags != 0
+    sigma = area[flagged] @ sd[flagged] + np.sqrt((area[~flagged] ** 2) @ (sd[~flagged] ** 2))
+    return area @ R, sigma
 
 
 def _finished_any(out) -> bool:
@@ -388,4 +430,4 @@ def _provenance(rig: ObjectRig, cameras: list[CameraView], hits: np.ndarray, law
     }
 
 
-__all__ = ["import_object", "ObjectImport", "UNSEEN", "SATURATED", "GRAZING", "SPOT"]
+__all__ = ["import_object", "ObjectImport", "shot_energy", "UNSEEN", "SATURATED", "GRAZING", "SPOT"]

@@ -26,13 +26,25 @@ from __future__ import annotations
 import numpy as np
 
 from ...model.dipole import dipole_R_d, dipole_total_reflectance
+from ...model.half_space import albedo_range, half_space_R_d
 
 #: the ring reaches this far beyond the farthest target cell, mm (or further, for :data:`RING_CELLS`)
 RING_MM = 2.0
 #: the fewest measured cells a ring holds
 RING_CELLS = 12
+#: starting albedos of the half-space's fit, and how close to the best a fit's cost must be to count
+STARTS = 6
+COST_TOLERANCE = 0.1
+#: a pixel is evidence on the near peak when this much of its footprint lies on the zone's cells
+ZONE_SHARE = 0.5
+#: the profile's form is known to this relative error (a bright pixel's weight is capped by it)
+MODEL_FLOOR = 0.05
+#: a near-peak model reading below this share of the clipped pixels' value (median) cannot hold the peak
+CLIP_REACH = 0.8
 #: sub-triangles a face side of the cells' quadrature (n² centroids a face)
 QUADRATURE_N = 6
+#: halvings of the graded rule towards the hit
+GRADED_LEVELS = 8
 
 
 def subtriangle_centroids(n: int = QUADRATURE_N) -> np.ndarray:
@@ -51,9 +63,45 @@ def subtriangle_centroids(n: int = QUADRATURE_N) -> np.ndarray:
     return np.column_stack([ab, 1.0 - ab.sum(axis=1)])
 
 
-def cell_quadrature(mesh, vertices, n: int = QUADRATURE_N):
+def graded_centroids(n: int = QUADRATURE_N, levels: int = GRADED_LEVELS):
+    """Barycentric points (K, 3) and weights (K,) summing to 1 over a triangle, graded towards its first
+    corner: the triangle is cut in four, the three children away from the corner take
+    :func:`subtriangle_centroids`, the corner's child is cut again, ``levels`` times.  For a profile with a
+    1/r core at that corner (the first scattering's) the plain rule misses most of the core's share.
+
+    Examples
+    --------
+    ∫ 1/r over the unit right triangle with the corner at r = 0 is √2 ln(1 + √2); the rule's share of it,
+    plain and graded three times:
+
+    >>> exact = np.sqrt(2) * np.log(1 + np.sqrt(2))
+    >>> for levels in (0, 3):
+    ...     b, w = graded_centroids(4, levels)
+    ...     share = float(w @ (1 / np.hypot(b[:, 1], b[:, 2]))) / 2 / exact
+    ...     print(levels, round(share, 3), round(w.sum(), 6))
+    0 0.965 1.0
+    3 0.996 1.0
+    """
+    rule = subtriangle_centroids(n)
+    corner = np.eye(3)
+    points, weights, scale = [], [], 1.0
+    for _ in range(levels):
+        A, B, C = corner
+        ab, ac, bc = (A + B) / 2, (A + C) / 2, (B + C) / 2
+        for child in ((ab, B, bc), (ac, bc, C), (ab, bc, ac)):
+            points.append(rule @ np.array(child))
+            weights.append(np.full(len(rule), scale / 4 / len(rule)))
+        corner, scale = np.array([A, ab, ac]), scale / 4
+    points.append(rule @ corner)
+    weights.append(np.full(len(rule), scale / len(rule)))
+    return np.concatenate(points), np.concatenate(weights)
+
+
+def cell_quadrature(mesh, vertices, n: int = QUADRATURE_N, toward=None):
     r"""Points and weights over the cells of ``vertices``: for a function f on the surface,
     :math:`\int \phi_v f\, dA \approx \sum_k w_k f(y_k)` over the points k of v, so Σ_k w_k = A_v.
+    With ``toward`` (a point, mm), the faces with a corner there (within a thousandth of their longest
+    edge) take the rule graded towards it (:func:`graded_centroids`): the hit's 1/r core.
 
     Returns ``points`` (K, 3) mm, ``weights`` (K,) mm² and ``owner`` (K,): the index into ``vertices``.
 
@@ -67,6 +115,7 @@ def cell_quadrature(mesh, vertices, n: int = QUADRATURE_N):
     True
     """
     bary = subtriangle_centroids(n)
+    graded, graded_w = graded_centroids(n) if toward is not None else (None, None)
     faces = np.asarray(mesh.faces)
     verts = np.asarray(mesh.vertices, dtype=np.float64)
     face_area = np.asarray(mesh.area_faces, dtype=np.float64)
@@ -79,17 +128,149 @@ def cell_quadrature(mesh, vertices, n: int = QUADRATURE_N):
         corner = np.argmax(tri == v, axis=1)  # where v sits in each face
         P = np.einsum("kc,fcd->fkd", bary, verts[tri])  # (F, n², 3)
         phi = bary[:, corner].T  # (F, n²): v's barycentric coordinate at each point
-        points.append(P.reshape(-1, 3))
-        weights.append((phi * face_area[fs, None] / len(bary)).ravel())
-        owner.append(np.full(phi.size, k))
+        keep = np.ones(len(fs), dtype=bool)
+        if toward is not None:  # faces with a corner at the hit: the graded rule, rolled to that corner
+            dist = np.linalg.norm(verts[tri] - np.asarray(toward), axis=2)  # (F, 3)
+            edge = np.linalg.norm(verts[tri] - verts[np.roll(tri, 1, axis=1)], axis=2).max(axis=1)
+            at = np.argmin(dist, axis=1)
+            keep = dist[np.arange(len(fs)), at] > 1e-3 * edge
+            for f in np.flatnonzero(~keep):
+                b = np.roll(graded, at[f], axis=1)  # the graded corner moved to corner `at`
+                points.append(b @ verts[tri[f]])
+                weights.append(b[:, corner[f]] * graded_w * face_area[fs[f]])
+                owner.append(np.full(len(b), k))
+        points.append(P[keep].reshape(-1, 3))
+        weights.append((phi[keep] * face_area[fs[keep], None] / len(bary)).ravel())
+        owner.append(np.full(int(keep.sum()) * len(bary), k))
     return np.concatenate(points), np.concatenate(weights), np.concatenate(owner)
 
 
-def _near_peak_channel(y, r_ring, mean_of, eta):
+def _half_space_channel(y, r_ring, mean_of, misfit=None):
+    """One channel through an index-matched boundary: the half-space's own profile (σ_t, α) fitted at its
+    calibrated level (no free scale: the laser's power is known); the target cells' values and variances.
+
+    The fit is to the ring's log cell means ``y`` — or, with ``misfit`` (the residuals of a radial profile
+    against the pixels that see the zone, :class:`PixelEvidence`), to the pixels themselves: their
+    footprints blur the peak into the ring, and the clipped ones say how bright the core at least is.
+    The ring holds two numbers well (its level and its slope) and (σ_t, α) can trade one for the other,
+    so the fit starts from :data:`STARTS` albedos (σ_t from the ring's slope, σ_tr = σ_t √(3(1 − α))) and
+    keeps the best; the variance takes half the spread of the core among the fits as good as the best
+    (within :data:`COST_TOLERANCE`), half the difference from the same profile fitted with a free scale
+    (what the data say against the calibrated level), and the ring's relative scatter plus
+    :data:`MODEL_FLOOR` (the profile's form), in quadrature."""
+    from scipy.optimize import least_squares
+
+    n_ring = len(y)
+    lo, hi = albedo_range()
+    bounds = ([-8.0, np.log1p(-hi)], [5.0, np.log1p(-lo)])  # log σ_t, u = log(1 − α)
+
+    def profile(x):  # log σ_t, u, [log s]
+        s = np.exp(x[2]) if len(x) > 2 else 1.0
+        return lambda d: s * half_space_R_d(d, np.exp(x[0]), -np.expm1(x[1]))
+
+    def model(x):
+        return mean_of(profile(x))
+
+    def ring_misfit(values):
+        return np.log(np.maximum(values[:n_ring], 1e-300)) - y
+
+    def residual(x):
+        return misfit(profile(x)) if misfit else ring_misfit(model(x))
+
+    sigma_tr = float(np.clip(-np.polyfit(r_ring, y, 1)[0], 1e-3, 50.0))
+    fits = []
+    for albedo in np.linspace(lo, hi, STARTS + 2)[1:-1] if STARTS > 1 else [0.5 * (lo + hi)]:
+        x0 = np.clip([np.log(sigma_tr / np.sqrt(3 * (1 - albedo))), np.log1p(-albedo)], *bounds)
+        fits.append(least_squares(residual, x0, bounds=bounds))
+    costs = np.array([f.cost for f in fits])
+    best = fits[int(np.argmin(costs))]
+    value = model(best.x)[n_ring:]
+    good = [model(f.x)[n_ring:] for f in fits if f.cost <= costs.min() * (1 + COST_TOLERANCE) + 1e-12]
+    spread = 0.5 * (np.max(good, axis=0) - np.min(good, axis=0))
+    free = least_squares(residual, [*best.x, 0.0], bounds=([*bounds[0], -5.0], [*bounds[1], 5.0]))
+    scatter = float(np.sqrt(np.mean(ring_misfit(model(best.x)) ** 2)))  # the ring's relative scatter
+    variance = (
+        spread**2 + (0.5 * (value - model(free.x)[n_ring:])) ** 2 + ((scatter + MODEL_FLOOR) * value) ** 2
+    )
+    return value, variance, bool(misfit) and misfit.short_of_clip(profile(best.x))
+
+
+class PixelEvidence:
+    r"""The pixels whose whole footprint lies within ``r_zone`` of the hit, one channel at a time: the
+    misfit of a radial profile f against them.
+
+    A pixel reads its footprint's mean, :math:`m_p = \sum_s a_s f(|y_s - x_i|) / \sum_s a_s` over the
+    rays s that built its map (:attr:`.surface_map.SurfaceMap.rays`) — exact for a profile as steep as
+    the near peak, where interpolating cell means would not be.  Usable pixels give
+    :math:`(m_p - E_p)/\sqrt{\mathrm{Var}\,E_p + (\epsilon E_p)^2}` (ε = :data:`MODEL_FLOOR`: the
+    profile's form is known to a few per cent, not to the photon noise of a bright pixel); clipped ones
+    count only where the profile falls below what they show,
+    :math:`\min(0, m_p - E^{clip}_p)/(\epsilon E^{clip}_p)`.
+    """
+
+    def __init__(self, views, hit, r_zone: float):
+        self.parts = []
+        for m, E, var, usable, floor in views:
+            pixel, y, a_s = m.rays
+            col = np.searchsorted(m.used, pixel)  # each ray's pixel among the used ones
+            r_s = np.linalg.norm(y.astype(np.float64) - hit, axis=1)
+            n = len(m.used)
+            far = np.bincount(col, weights=(r_s > r_zone).astype(float), minlength=n) > 0
+            clipped = ~usable & (floor > 0).any(axis=1)
+            inside = np.bincount(col, minlength=n) > 0
+            keep = inside & ~far & (usable | clipped)
+            rays = keep[col]
+            if not keep.any():
+                continue
+            index = np.cumsum(keep) - 1  # the kept pixels renumbered
+            self.parts.append(
+                (
+                    index[col[rays]],
+                    r_s[rays],
+                    a_s[rays].astype(np.float64),
+                    int(keep.sum()),
+                    E[keep],
+                    var[keep],
+                    usable[keep],
+                    floor[keep],
+                )
+            )
+        self.channel = 0
+
+    def __bool__(self):
+        return bool(self.parts)
+
+    def short_of_clip(self, profile) -> bool:
+        """Whether the profile reads below :data:`CLIP_REACH` of what the clipped pixels show (median over
+        them): the near peak is steeper than any half-space's (a horn's tip, a thin part)."""
+        ratios = []
+        for col, r_s, a_s, n, _E, _var, usable, floor in self.parts:
+            m = np.bincount(col, weights=a_s * profile(r_s), minlength=n) / np.bincount(col, a_s, minlength=n)
+            f = floor[:, self.channel]
+            clip = ~usable & (f > 0)
+            ratios.append(m[clip] / f[clip])
+        ratios = np.concatenate(ratios) if ratios else np.zeros(0)
+        return bool(len(ratios)) and float(np.median(ratios)) < CLIP_REACH
+
+    def __call__(self, profile):
+        ch, out = self.channel, []
+        for col, r_s, a_s, n, E, var, usable, floor in self.parts:
+            m = np.bincount(col, weights=a_s * profile(r_s), minlength=n) / np.bincount(col, a_s, minlength=n)
+            e, f = E[:, ch], floor[:, ch]
+            scale = np.sqrt(np.maximum(var[:, ch], 0) + (MODEL_FLOOR * e) ** 2) + 1e-30
+            out.append(np.where(usable, (m - e) / scale, 0.0))
+            clip = ~usable & (f > 0)
+            out.append(np.where(clip, np.minimum(0.0, m - f) / (MODEL_FLOOR * f + 1e-30), 0.0))
+        return np.concatenate(out)
+
+
+def _near_peak_channel(y, r_ring, mean_of, eta, misfit=None):
     """One channel: the dipole fitted to the ring's log cell means ``y``; the target cells' values and
     variances (``mean_of`` gives the cell means of a radial profile, ring cells first)."""
     from scipy.optimize import least_squares  # heavy: SciPy's optimisers load where a peak is recovered
 
+    if eta == 1.0:  # index-matched: the half-space's own profile (the dipole misses its near peak)
+        return _half_space_channel(y, r_ring, mean_of, misfit)
     n_ring = len(y)
 
     def dipole(x):  # s R_dip(σ_a, σ_s'): parameters log σ_a, log σ_s', log s
@@ -112,10 +293,10 @@ def _near_peak_channel(y, r_ring, mean_of, eta):
     use_dipole = albedo <= 1.0 and fit.cost <= efit.cost
     value, chosen = (dip, fit) if use_dipole else (expo, efit)
     scatter = float(np.sqrt(np.mean(chosen.fun**2)))  # the ring's relative residual
-    return value, (0.5 * (dip - expo)) ** 2 + (scatter * value) ** 2
+    return value, (0.5 * (dip - expo)) ** 2 + (scatter * value) ** 2, False
 
 
-def recover_near_peak(mesh, hit, R, var, target, measured, eta: float):
+def recover_near_peak(mesh, hit, R, var, target, measured, eta: float, views=()):
     r"""R_d and its variance at the ``target`` cells from the near-peak model fitted to the measured ring.
 
     Parameters
@@ -137,6 +318,9 @@ def recover_near_peak(mesh, hit, R, var, target, measured, eta: float):
         With the target cells' model values and variances.
     recovered : bool
         False where no ring of :data:`RING_CELLS` measured cells surrounds the targets (R, var unchanged).
+    short : ndarray of bool, shape (3,)
+        Per channel, whether the model reads below what the clipped pixels of ``views`` show
+        (:meth:`PixelEvidence.short_of_clip`): the peak is steeper than the model can be.
 
     Examples
     --------
@@ -148,29 +332,29 @@ def recover_near_peak(mesh, hit, R, var, target, measured, eta: float):
     >>> hit = np.asarray(mesh.vertices[0])
     >>> truth = lambda y: dipole_R_d(np.linalg.norm(y - hit, axis=1), 0.05, 1.0, 1.3)
     >>> V = len(mesh.vertices)
-    >>> pts, w, owner = cell_quadrature(mesh, np.arange(V))
+    >>> pts, w, owner = cell_quadrature(mesh, np.arange(V), toward=hit)
     >>> mean = np.bincount(owner, w * truth(pts), minlength=V) / np.bincount(owner, w, minlength=V)
     >>> R = np.repeat(mean[:, None], 3, axis=1)
     >>> target = np.arange(V) == 0
-    >>> out, v, ok = recover_near_peak(mesh, hit, R * ~target[:, None], 0 * R, target, ~target, 1.3)
+    >>> out, v, ok, short = recover_near_peak(mesh, hit, R * ~target[:, None], 0 * R, target, ~target, 1.3)
     >>> round(float(out[0, 0] / R[0, 0]), 2)
     1.0
     """
     R, var = R.copy(), var.copy()
     targets = np.flatnonzero(target)
     if not len(targets):
-        return R, var, True
+        return R, var, True, np.zeros(3, dtype=bool)
     verts = np.asarray(mesh.vertices, dtype=np.float64)
     r = np.linalg.norm(verts - hit, axis=1)
     r_in = r[targets].max()
     outside = np.flatnonzero(measured & (r > r_in) & np.all(R > 0, axis=1))
     if len(outside) < RING_CELLS:
-        return R, var, False
+        return R, var, False, np.zeros(3, dtype=bool)
     order = outside[np.argsort(r[outside])]
     r_out = max(r_in + RING_MM, r[order[RING_CELLS - 1]])
     ring = order[r[order] <= r_out]
     cells = np.concatenate([ring, targets])
-    pts, w, owner = cell_quadrature(mesh, cells)
+    pts, w, owner = cell_quadrature(mesh, cells, toward=hit)
     dist = np.linalg.norm(pts - hit, axis=1)
 
     def mean_of(profile):  # the cell means (len(cells),) of a radial profile
@@ -178,10 +362,16 @@ def recover_near_peak(mesh, hit, R, var, target, measured, eta: float):
             owner, weights=w, minlength=len(cells)
         )
 
+    pixels = PixelEvidence(views, hit, r_out) if views else None
+    short = np.zeros(3, dtype=bool)
     for ch in range(3):
-        value, variance = _near_peak_channel(np.log(R[ring, ch]), r[ring], mean_of, eta)
+        if pixels:
+            pixels.channel = ch
+        value, variance, short[ch] = _near_peak_channel(
+            np.log(R[ring, ch]), r[ring], mean_of, eta, pixels or None
+        )
         R[targets, ch], var[targets, ch] = value, variance
-    return R, var, True
+    return R, var, True, short
 
 
 __all__ = ["recover_near_peak", "cell_quadrature", "subtriangle_centroids", "RING_MM", "RING_CELLS"]

@@ -71,21 +71,30 @@ def view_radiance(shot: ObjectShot, cam: CameraView, rig: ObjectRig):
     return L, var, usable, floor, nbytes
 
 
-def shot_cell_means(shot: ObjectShot, cameras: list[CameraView], rig: ObjectRig, law=None, hit=None):
+def shot_cell_means(
+    shot: ObjectShot, cameras: list[CameraView], rig: ObjectRig, law=None, hit=None, *, pixels: bool = False
+):
     """Per camera: (cell mean (V, 3), its variance, usable weight (V,), mean γ (V, 3), the clipped pixels'
     least value over each cell (V, 3), NaN where none) of the radiance —
     or, with ``law``, of the exitance πL/γ converted pixel by pixel (γ at each pixel's cosine, slant
-    and distance from ``hit``: the law varies across a cell near the hit); and the bytes read.  The
+    and distance from ``hit``: the law varies across a cell near the hit); and the bytes read.  With
+    ``pixels`` (and ``law``), also per camera the pixels themselves: (its surface map, the exitance of
+    its used pixels (n, 3), its variance, usable (n,), the clipped pixels' least exitance (n, 3)), None
+    for a camera
+    without frames — the near peak's evidence (:class:`.near_peak.PixelEvidence`).  The
     cameras run on threads (reading, NumPy and the sparse products release the GIL)."""
 
     def one(cam: CameraView):
         if cam.setup.name not in shot.frames:
-            return None, 0
+            return (None, None), 0
         L, var, usable, floor, nb = view_radiance(shot, cam, rig)
         m = cam.map
         clipped = ~usable
         if law is None:
-            return (*m.cell_means(L, var, usable), None, m.cell_means(floor, 0 * floor, clipped)[0]), nb
+            return (
+                (*m.cell_means(L, var, usable), None, m.cell_means(floor, 0 * floor, clipped)[0]),
+                None,
+            ), nb
         u = m.used
         if law.needs_direction:  # the slant and the distance of every pixel used
             r, slant = np.linalg.norm(m.position[u] - hit, axis=1), m.slant(hit, u)
@@ -98,8 +107,16 @@ def shot_cell_means(shot: ObjectShot, cameras: list[CameraView], rig: ObjectRig,
         else:
             g_mean = m.cell_means(gamma, np.zeros_like(gamma), usable)[0]
         E_floor = np.float32(np.pi) * floor / gamma
-        return (*m.cell_means(E, vE, usable), g_mean, m.cell_means(E_floor, 0 * E_floor, clipped)[0]), nb
+        view = (m, E, vE, usable, E_floor) if pixels else None
+        return (
+            (*m.cell_means(E, vE, usable), g_mean, m.cell_means(E_floor, 0 * E_floor, clipped)[0]),
+            view,
+        ), nb
 
     with ThreadPoolExecutor(min(len(cameras), os.cpu_count() or 1)) as pool:
         results = list(pool.map(one, cameras))
-    return [r for r, _ in results], sum(nb for _, nb in results)
+    per_cam = [r for (r, _), _ in results]
+    nbytes = sum(nb for _, nb in results)
+    if pixels:
+        return per_cam, [v for (_, v), _ in results], nbytes
+    return per_cam, nbytes

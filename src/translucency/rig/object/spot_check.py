@@ -25,13 +25,16 @@ from .views import read_frame
 MAX_SPOT_MISS_PX = 3.0
 #: the pixels that make the spot: within this fraction of the frame's brightest luminance
 PEAK_FRACTION = 0.9
+#: a spot counts where the frame's brightest stands this many read-noise deviations above the dark
+SPOT_SNR = 20.0
 #: the shots whose spots check a camera's pose: the first this many that it sees (each read once)
 SHOTS_CHECKED = 4
 
 
-def spot_pixel(image: np.ndarray) -> np.ndarray:
-    """The laser spot of a frame (H, W, 3): the centroid (u, v) of its pixels within :data:`PEAK_FRACTION`
-    of the brightest luminance, px.
+def spot_pixel(image: np.ndarray, noise: float = 0.0) -> np.ndarray | None:
+    """The laser spot of a frame (H, W, 3), its dark frame taken off: the centroid (u, v) of its pixels
+    within :data:`PEAK_FRACTION` of the brightest luminance, px; None where the brightest stands less than
+    :data:`SPOT_SNR` times the read ``noise`` above zero (no spot to find: that shot does not check the pose).
 
     Examples
     --------
@@ -42,6 +45,8 @@ def spot_pixel(image: np.ndarray) -> np.ndarray:
     [12.5, 5.0]
     """
     luminance = np.asarray(image, dtype=np.float64).mean(axis=2)
+    if luminance.max() <= SPOT_SNR * noise:
+        return None
     v, u = np.nonzero(luminance >= PEAK_FRACTION * luminance.max())
     return np.array([u.mean(), v.mean()])
 
@@ -109,8 +114,24 @@ class _Spots:
                 frame = max(frames, key=lambda f: f.exposure_s)
                 shape = (self.setup.height, self.setup.width)
                 image = read_frame(frame.file, shape, "photograph").reshape(*shape, 3)
-            self.found[j] = None if image is None else spot_pixel(image)
+            self.found[j] = None if image is None else spot_pixel(image - self._dark(), self._noise())
         return self.found[j]
+
+    def _dark(self) -> np.ndarray:
+        """The camera's dark frame (H, W, 3), 0 without one: a faint spot over a dark frame's fixed
+        pattern is found after it is taken off."""
+        rad = self.setup.radiometry
+        if not hasattr(self, "_dark_frame"):
+            shape = (self.setup.height, self.setup.width)
+            self._dark_frame = (
+                read_frame(rad.dark, shape, "dark frame").reshape(*shape, 3)
+                if rad.dark
+                else np.zeros((*shape, 3))
+            )
+        return self._dark_frame
+
+    def _noise(self) -> float:
+        return float(self.setup.radiometry.read_noise)
 
     def shots(self, camera: Camera) -> list[int]:
         """The first :data:`SHOTS_CHECKED` shots whose hit ``camera`` sees and that it photographed."""

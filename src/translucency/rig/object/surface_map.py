@@ -73,6 +73,9 @@ class SurfaceMap:
         The W-weighted mean cosine per vertex (0 where unseen).
     sub : int
         Rays a pixel side that built W (sub² a pixel).
+    rays : tuple of ndarray
+        The rays that built W: their pixel (n,), where they hit (n, 3) mm and their footprint a_s
+        (n,) mm² — a pixel's reading of a field f is Σ_s a_s f(y_s) / Σ_s a_s.
     """
 
     camera: Camera
@@ -86,6 +89,7 @@ class SurfaceMap:
     grazing: np.ndarray
     mu_v: np.ndarray
     sub: int = 1
+    rays: tuple = ()
 
     def __post_init__(self):
         self._used = np.flatnonzero(np.diff(self.W.tocsc().indptr) > 0)  # the columns W uses
@@ -186,7 +190,8 @@ def surface_map(
     grazing = touched & (den <= 0)
     with np.errstate(invalid="ignore", divide="ignore"):
         mu_v = np.where(den > 0, (W @ mu) / den, 0.0)
-    return SurfaceMap(camera, W, W2, mu, position, normal, view, den, grazing, mu_v, sub)
+    rays = (pixel[use], rays_.p[use].astype(np.float32), area[use].astype(np.float32))
+    return SurfaceMap(camera, W, W2, mu, position, normal, view, den, grazing, mu_v, sub, rays)
 
 
 @dataclass

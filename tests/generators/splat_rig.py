@@ -1,0 +1,355 @@
+r"""A second generator of a lab's object photographs, sharing no code with the virtual rig (issue 35).
+
+The virtual rig (:mod:`translucency.rig.object.photographs`) renders its photographs with Mitsuba's
+``volpath`` and its own laser, camera and sensor models.  This one knows nothing of them: it takes the
+**photon walks' exits** of a tally (:func:`translucency.acquire.mesh_walk.mesh_random_walk`, the same
+transport as ``acquire mesh``, its own seed) and **splats** each exit into every camera that sees it,
+through a plain pinhole written here, with a **Lambertian exit law** it knows exactly:
+
+    an exit of weight w (W, per W of laser power) at y, on a face of normal n, seen by a camera at c
+    at distance d = |c − y| with μ = n · (c − y)/d > 0, adds to the pixel its projection falls in
+
+        ΔL = w μ / (π Ω_p d²)            [W mm⁻² sr⁻¹ per W]
+
+because a pixel reads the mean radiance over its footprint A_f = Ω_p d² / μ and a Lambertian
+exitance M has radiance M / π.  Ω_p is the pixel's solid angle, cos³θ / (f_x f_y) for a pinhole.
+
+Visibility is its own z-buffer: every triangle rasterised in NumPy at ``ZBUF_SUB`` × ``ZBUF_SUB``
+samples a pixel, depth from the ray–plane intersection; an exit is seen when it lies within
+``DEPTH_TOL_MM`` of the nearest surface at its sample and faces the camera.  The sensor is its own
+too: Z = k t vig(ρ) flat L P + dark, with photon (Poisson, ``ELECTRONS_AT_FULL`` at saturation) and
+read noise, clipped at ``SATURATION``; one exposure a shot, set so that the spot clips.  Frames are
+written by its own PFM writer.
+
+What it writes, the hand-over a lab would give (``object.json``, ``scan.ply``, the frames, dark and
+flat fields) plus ``truth.npz``: the exits' own tally (R_d per incident vertex, mm⁻² per W, shared
+among vertices by barycentric weight and divided by the vertex's area, as ``acquire mesh`` counts)
+and the incident vertices — the exact answer for the sample the photographs were made from.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from translucency.acquire.mesh_walk import EXIT, mesh_random_walk
+from translucency.mitsuba import mesh_scene
+
+ZBUF_SUB = 4  # z-buffer samples a pixel side
+DEPTH_TOL_MM = 0.05  # an exit this close to the nearest surface at its sample is seen
+SATURATION = 60.0  # raw value where the sensor clips
+ELECTRONS_AT_FULL = 20_000.0  # photo-electrons at saturation: gain = SATURATION / ELECTRONS_AT_FULL
+READ_NOISE = 0.01  # raw units
+BRACKET = 50.0  # the short frame of a bracket: this many times shorter
+DARK = 0.6  # raw units, with a fixed pattern of ±10 %
+VIGNETTING = (-0.08, 0.0)  # k1, k2 of vig(ρ) = 1 + k1 ρ² + k2 ρ⁴, ρ in half-diagonals
+
+
+@dataclass(frozen=True)
+class Pinhole:
+    """An OpenCV pinhole without distortion: x_c = R X + t; (u, v) = (f x/z + c_x, f y/z + c_y)."""
+
+    name: str
+    width: int
+    height: int
+    K: np.ndarray
+    R: np.ndarray
+    t: np.ndarray
+
+    @property
+    def centre(self) -> np.ndarray:
+        return -self.R.T @ self.t
+
+    def project(self, X: np.ndarray):
+        """(u, v, z): pixel coordinates (integer = a pixel's centre) and depth along the axis, mm."""
+        x = X @ self.R.T + self.t
+        z = x[:, 2]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            u = self.K[0, 0] * x[:, 0] / z + self.K[0, 2]
+            v = self.K[1, 1] * x[:, 1] / z + self.K[1, 2]
+        return u, v, z
+
+    def pixel_solid_angle(self) -> np.ndarray:
+        """Ω_p (H, W), sr: cos³θ / (f_x f_y) at each pixel's centre."""
+        fx, fy, cx, cy = self.K[0, 0], self.K[1, 1], self.K[0, 2], self.K[1, 2]
+        v, u = np.mgrid[0 : self.height, 0 : self.width].astype(np.float64)
+        cos = 1.0 / np.sqrt(1.0 + ((u - cx) / fx) ** 2 + ((v - cy) / fy) ** 2)
+        return cos**3 / (fx * fy)
+
+
+def cameras_on_sphere(mesh, n: int, width: int, height: int, *, seed: int = 0, fill: float = 0.8) -> list:
+    """``n`` pinholes on a sphere around the mesh (golden-angle directions turned by ``seed``), each
+    aimed at the bounding box's centre, its bounding sphere filling ``fill`` of the narrower half-field
+    from three radii away."""
+    lo, hi = np.asarray(mesh.bounds, dtype=np.float64)
+    centre, radius = 0.5 * (lo + hi), 0.5 * float(np.linalg.norm(hi - lo))
+    dist = 3.0 * radius
+    f = fill * 0.5 * min(width, height) * dist / radius  # the sphere's radius spans fill × half the field
+    K = np.array([[f, 0, (width - 1) / 2], [0, f, (height - 1) / 2], [0, 0, 1.0]])
+    rng = np.random.default_rng(seed)
+    turn = rng.uniform(0, 2 * np.pi)
+    cams = []
+    for i in range(n):
+        z = 0.85 * (1 - 2 * (i + 0.5) / n)  # stay off the poles, where "up" is undefined
+        phi = i * np.pi * (3 - 5**0.5) + turn
+        d = np.array([np.sqrt(1 - z * z) * np.cos(phi), np.sqrt(1 - z * z) * np.sin(phi), z])
+        C = centre + dist * d
+        ez = (centre - C) / np.linalg.norm(centre - C)  # optical axis
+        up = np.array([0.0, 0.0, 1.0])
+        ey = -(up - (up @ ez) * ez)  # image y points down
+        ey /= np.linalg.norm(ey)
+        ex = np.cross(ey, ez)  # right-handed: x = y × z
+        R = np.stack([ex, ey, ez])
+        cams.append(Pinhole(f"cam{i}", width, height, K, R, -R @ C))
+    return cams
+
+
+def z_buffer(mesh, cam: Pinhole, sub: int = ZBUF_SUB):
+    """The nearest triangle at sub × sub samples a pixel: depth along the axis (mm; inf where empty) and
+    the triangle's index (−1), each (H·sub, W·sub).
+
+    Sample (i, j) sits at pixel coordinates ((j + ½)/sub − ½, (i + ½)/sub − ½); each triangle in front
+    is rasterised over its bounding box (edge functions), its depth at a sample the ray–plane hit.
+    """
+    V = np.asarray(mesh.vertices, dtype=np.float64)
+    F = np.asarray(mesh.faces)
+    u, v, z = cam.project(V)
+    Hs, Ws = cam.height * sub, cam.width * sub
+    zb = np.full((Hs, Ws), np.inf)
+    fid = np.full((Hs, Ws), -1, np.int64)
+    us, vs = (u + 0.5) * sub - 0.5, (v + 0.5) * sub - 0.5  # in sample units
+    Kinv = np.linalg.inv(cam.K)
+    xc = V @ cam.R.T + cam.t  # camera-frame vertices
+    for f, (a, b, c) in enumerate(F):
+        if min(z[a], z[b], z[c]) <= 1e-6:
+            continue
+        x0, x1 = int(np.floor(min(us[a], us[b], us[c]))), int(np.ceil(max(us[a], us[b], us[c])))
+        y0, y1 = int(np.floor(min(vs[a], vs[b], vs[c]))), int(np.ceil(max(vs[a], vs[b], vs[c])))
+        x0, y0, x1, y1 = max(x0, 0), max(y0, 0), min(x1, Ws - 1), min(y1, Hs - 1)
+        if x0 > x1 or y0 > y1:
+            continue
+        yy, xx = np.mgrid[y0 : y1 + 1, x0 : x1 + 1].astype(np.float64)
+        p = np.array([[us[a], vs[a]], [us[b], vs[b]], [us[c], vs[c]]])
+        area = (p[1, 0] - p[0, 0]) * (p[2, 1] - p[0, 1]) - (p[2, 0] - p[0, 0]) * (p[1, 1] - p[0, 1])
+        if abs(area) < 1e-12:
+            continue
+        w0 = (p[1, 0] - xx) * (p[2, 1] - yy) - (p[2, 0] - xx) * (p[1, 1] - yy)
+        w1 = (p[2, 0] - xx) * (p[0, 1] - yy) - (p[0, 0] - xx) * (p[2, 1] - yy)
+        w2 = (p[0, 0] - xx) * (p[1, 1] - yy) - (p[1, 0] - xx) * (p[0, 1] - yy)
+        s = np.sign(area)
+        inside = (w0 * s >= 0) & (w1 * s >= 0) & (w2 * s >= 0)
+        if not inside.any():
+            continue
+        # depth: the ray through the sample meets the triangle's plane n·x = n·x_a
+        n = np.cross(xc[b] - xc[a], xc[c] - xc[a])
+        pu, pv = (xx[inside] + 0.5) / sub - 0.5, (yy[inside] + 0.5) / sub - 0.5
+        ray = np.stack([pu, pv, np.ones_like(pu)], axis=1) @ Kinv.T  # direction with z = 1
+        denom = ray @ n
+        with np.errstate(divide="ignore", invalid="ignore"):
+            depth = (n @ xc[a]) / denom  # z of the hit (ray has unit z)
+        depth = np.where(np.isfinite(depth) & (depth > 0), depth, np.inf)
+        rows, cols = yy[inside].astype(int), xx[inside].astype(int)
+        nearer = depth < zb[rows, cols]  # a triangle covers each sample once: plain assignment
+        zb[rows[nearer], cols[nearer]] = depth[nearer]
+        fid[rows[nearer], cols[nearer]] = f
+    return zb, fid
+
+
+def splat_image(mesh, cam: Pinhole, zbuf, position, face, weight, sub: int = ZBUF_SUB):
+    """Radiance (H, W) per W of laser power from exits at ``position`` on ``face`` with a Lambertian law.
+
+    An exit is seen when the nearest triangle at its z-buffer sample, extended to its plane, does not lie
+    in front of it along the camera's ray through the exit (so a sloped face hides none of its own exits).
+    """
+    zb, fid = zbuf
+    V = np.asarray(mesh.vertices, dtype=np.float64)
+    face_normal = np.asarray(mesh.face_normals, dtype=np.float64)[face]
+    u, v, z = cam.project(position)
+    to_cam = cam.centre - position
+    d = np.linalg.norm(to_cam, axis=1)
+    mu = np.einsum("ij,ij->i", face_normal, to_cam) / d
+    col, row = np.floor(u + 0.5).astype(np.int64), np.floor(v + 0.5).astype(np.int64)
+    ok = (z > 0) & (mu > 0) & (col >= 0) & (col < cam.width) & (row >= 0) & (row < cam.height)
+    si = np.clip(np.floor((v + 0.5) * sub).astype(np.int64), 0, cam.height * sub - 1)
+    sj = np.clip(np.floor((u + 0.5) * sub).astype(np.int64), 0, cam.width * sub - 1)
+    front = fid[si, sj]
+    # depth, along the ray through the exit, of the front triangle's plane: y + s (c − y) on it
+    f = np.where(front >= 0, front, face)
+    n_f = np.asarray(mesh.face_normals, dtype=np.float64)[f]
+    a_f = V[np.asarray(mesh.faces)[f, 0]]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        s = np.einsum("ij,ij->i", n_f, a_f - position) / np.einsum("ij,ij->i", n_f, to_cam)
+    hidden = (front >= 0) & (front != face) & np.isfinite(s) & (s > DEPTH_TOL_MM / d) & (s < 1)
+    ok &= ~hidden & np.isfinite(zb[si, sj])
+    omega = cam.pixel_solid_angle()
+    L = np.zeros(cam.height * cam.width)
+    idx = row[ok] * cam.width + col[ok]
+    np.add.at(L, idx, weight[ok] * mu[ok] / (np.pi * omega.ravel()[idx] * d[ok] ** 2))
+    return L.reshape(cam.height, cam.width)
+
+
+def write_pfm(path: Path, image: np.ndarray) -> None:
+    """A colour PFM (little endian, rows bottom to top, as the format says), written whole then renamed."""
+    image = np.asarray(image, dtype="<f4")
+    h, w = image.shape[:2]
+    tmp = path.with_name(path.name + ".part")
+    with open(tmp, "wb") as f:
+        f.write(f"PF\n{w} {h}\n-1.0\n".encode("ascii"))
+        f.write(np.ascontiguousarray(image[::-1]).tobytes())
+    tmp.replace(path)
+
+
+def exits_tally(mesh, point, face, position, n_points: int) -> np.ndarray:
+    """(n_points, V) barycentric shares of the exits per vertex (the count ``acquire mesh`` divides)."""
+    V = np.asarray(mesh.vertices, dtype=np.float64)
+    tri = np.asarray(mesh.faces)[face]
+    a, b, c = V[tri[:, 0]], V[tri[:, 1]], V[tri[:, 2]]
+    # barycentric coordinates by sub-areas (the exit lies on its face)
+    n = np.cross(b - a, c - a)
+    nn = np.einsum("ij,ij->i", n, n)
+    la = np.einsum("ij,ij->i", np.cross(c - b, position - b), n) / nn
+    lb = np.einsum("ij,ij->i", np.cross(a - c, position - c), n) / nn
+    bary = np.clip(np.stack([la, lb, 1 - la - lb], axis=1), 0, None)
+    bary /= bary.sum(axis=1, keepdims=True)
+    out = np.zeros(n_points * len(V))
+    np.add.at(out, (np.asarray(point)[:, None] * len(V) + tri).ravel(), bary.ravel())
+    return out.reshape(n_points, len(V))
+
+
+def _sensor_fields(cam: Pinhole, rng):
+    """Dark frame (raw) and flat field (mean 1), and vig(ρ) (H, W)."""
+    h, w = cam.height, cam.width
+    dark = DARK * (1 + 0.1 * rng.uniform(-1, 1, (h, w)))
+    flat = 1 + 0.05 * rng.standard_normal((h, w))
+    flat /= flat.mean()
+    v, u = np.mgrid[0:h, 0:w].astype(np.float64)
+    rho2 = ((u - (w - 1) / 2) ** 2 + (v - (h - 1) / 2) ** 2) / (0.25 * (w * w + h * h))
+    vig = 1 + VIGNETTING[0] * rho2 + VIGNETTING[1] * rho2**2
+    return dark, flat, vig
+
+
+def splat_rig(
+    mesh,
+    volume,
+    folder,
+    *,
+    incident,
+    cameras,
+    photons: int,
+    seed: int = 0,
+    exposure: str = "single",
+    clip_fraction: float = 0.003,
+) -> Path:
+    """Write a lab's hand-over for ``mesh`` filled with ``volume`` (index-matched), one shot a vertex
+    of ``incident``, photographed by ``cameras`` (:class:`Pinhole`).
+
+    ``exposure="single"``: one frame a shot and camera, its gain set on the first shot so that the
+    brightest ``clip_fraction`` of the lit pixels (over every camera) clip — the spot is saturated, as
+    in a lab's single exposure.  ``"brackets"``: that frame and a second of 1/:data:`BRACKET` its
+    exposure time, in which nothing clips.
+    """
+    folder = Path(folder)
+    (folder / "frames").mkdir(parents=True, exist_ok=True)
+    incident = np.asarray(incident, dtype=np.int64)
+    P = len(incident)
+    mesh.export(folder / "scan.ply", file_type="ply")
+    scene = mesh_scene(mesh)
+    V = np.asarray(mesh.vertices, dtype=np.float64)
+    normals = np.asarray(mesh.vertex_normals, dtype=np.float64)
+    area = np.zeros(len(V))
+    np.add.at(area, np.asarray(mesh.faces).ravel(), np.repeat(np.asarray(mesh.area_faces) / 3, 3))
+
+    # -- the photon walks: exits per shot and channel (power 1 W, weight 1/photons each) ------------
+    exits, truth = [], np.zeros((P, len(V), 3))
+    for ch in range(3):
+        res = mesh_random_walk(
+            scene,
+            mesh.bounds,
+            volume,
+            ch,
+            V[incident],
+            normals[incident],
+            photons,
+            seed=int(seed) * 31 + 977 * ch + 5,
+            index_matched=True,
+        )
+        point = np.repeat(np.arange(P), photons)
+        ok = res.code == EXIT
+        exits.append((point[ok], res.face[ok], res.position[ok].astype(np.float64)))
+        truth[..., ch] = exits_tally(mesh, point[ok], res.face[ok], exits[-1][2], P) / (photons * area)
+
+    # -- radiance per camera and shot ------------------------------------------------------------------
+    radiance = np.zeros((P, len(cameras), cameras[0].height, cameras[0].width, 3))
+    for i, cam in enumerate(cameras):
+        zbuf = z_buffer(mesh, cam)
+        for ch, (point, face, pos) in enumerate(exits):
+            for j in range(P):
+                m = point == j
+                radiance[j, i, ..., ch] = splat_image(
+                    mesh, cam, zbuf, pos[m], face[m], np.full(m.sum(), 1 / photons)
+                )
+
+    # -- the sensor: one exposure of 1 s a shot, the spot clipped --------------------------------------
+    rng = np.random.default_rng(10_000 + int(seed))
+    lit = radiance[0][radiance[0] > 0]
+    k = SATURATION / np.quantile(lit, 1 - clip_fraction)  # raw per (W mm⁻² sr⁻¹) per s
+    gain = SATURATION / ELECTRONS_AT_FULL
+    power = 1.0 + 0.05 * np.cos(np.arange(P))  # the laser drifts; the power monitor records it
+    cam_entries, fields = [], []
+    for cam in cameras:
+        dark, flat, vig = _sensor_fields(cam, rng)
+        fields.append((dark, flat, vig))
+        (folder / cam.name).mkdir(exist_ok=True)
+        write_pfm(folder / cam.name / "dark.pfm", np.repeat(dark[..., None], 3, axis=2))
+        write_pfm(folder / cam.name / "flat.pfm", np.repeat(flat[..., None], 3, axis=2))
+        cam_entries.append(
+            {
+                "name": cam.name,
+                "width": cam.width,
+                "height": cam.height,
+                "intrinsics": {"K": cam.K.tolist(), "dist": [0.0] * 5},
+                "pose": {"R": cam.R.tolist(), "t": cam.t.tolist()},
+                "radiometry": {
+                    "k": float(k),
+                    "dark": f"{cam.name}/dark.pfm",
+                    "flat": f"{cam.name}/flat.pfm",
+                    "vignetting": list(VIGNETTING),
+                    "gain": gain,
+                    "read_noise": READ_NOISE,
+                    "saturation": SATURATION,
+                },
+            }
+        )
+    shots = []
+    for j in range(P):
+        images = {}
+        for i, cam in enumerate(cameras):
+            dark, flat, vig = fields[i]
+            images[cam.name] = []
+            for t in (1.0, 1.0 / BRACKET) if exposure == "brackets" else (1.0,):
+                signal = k * t * (vig * flat)[..., None] * radiance[j, i] * power[j]  # raw
+                electrons = rng.poisson(np.maximum(signal, 0) / gain)
+                Z = electrons * gain + dark[..., None] + READ_NOISE * rng.standard_normal(signal.shape)
+                Z = np.minimum(Z, SATURATION)
+                name = f"frames/{j:03d}_{cam.name}_{t:g}s.pfm"
+                write_pfm(folder / name, Z)
+                images[cam.name].append({"file": name, "exposure_s": t})
+        shots.append({"hit": {"vertex": int(incident[j])}, "power": float(power[j]), "images": images})
+    rig = {
+        "format": "translucency-object-rig",
+        "version": 1,
+        "mesh": {"file": "scan.ply", "scale_mm": 1.0, "up": "z"},
+        "boundary": {"eta": 1.0},
+        "exit_law": "lambertian",
+        "spot_radius_mm": 0.0,
+        "cameras": cam_entries,
+        "shots": shots,
+    }
+    np.savez(folder / "truth.npz", R_d=truth, incident=incident, area=area)
+    tmp = folder / "object.json.part"
+    tmp.write_text(json.dumps(rig, indent=1))
+    tmp.replace(folder / "object.json")
+    return folder
