@@ -158,7 +158,7 @@ def _half_space_channel(y, r_ring, mean_of, misfit=None):
     (within :data:`COST_TOLERANCE`), half the difference from the same profile fitted with a free scale
     (what the data say against the calibrated level), and the ring's relative scatter plus
     :data:`MODEL_FLOOR` (the profile's form), in quadrature."""
-    from scipy.optimize import least_squares
+    from scipy.optimize import least_squares  # heavy: SciPy's optimisers load where a peak is recovered
 
     n_ring = len(y)
     lo, hi = albedo_range()

@@ -2,9 +2,10 @@ r"""The radiance of a view (step 3 of :mod:`.importer`) and its cell means per c
 
 One camera's frames of a shot become the radiance per unit laser power at the pixels its map uses,
 :math:`L = (Z - \text{dark})/(k\,t\,\text{vig}\,\text{flat})/P` in W mm⁻² sr⁻¹ per W; saturated pixels
-are unusable; frames are combined per pixel weighted by exposure time (photon noise); the variance is
-the noise model's — or, where two or more frames share the longest exposure, the larger of it and the
-frames' own scatter.  The surface map then takes cell means over each vertex's cell: of L, or of the
+are unusable; frames are combined per pixel weighted by exposure time (photon noise); a pixel on the
+silhouette is divided by the share of its solid angle on the surface (the background is dark); the
+variance is the noise model's — or, where two or more frames share the longest exposure, the larger of it
+and the frames' own scatter.  The surface map then takes cell means over each vertex's cell: of L, or of the
 exitance :math:`M = \pi L/\gamma(\mu, s, r)` converted pixel by pixel with the exit law γ
 (:mod:`.exit_law`).  float32 throughout.
 """
@@ -89,6 +90,9 @@ def shot_cell_means(
             return (None, None), 0
         L, var, usable, floor, nb = view_radiance(shot, cam, rig)
         m = cam.map
+        if m.hit_share is not None:  # a silhouette's pixel: its reading over the part on the surface
+            h = np.maximum(m.hit_share[m.used], 1e-6).astype(np.float32)[:, None]
+            L, var, floor = L / h, var / (h * h), floor / h
         clipped = ~usable
         if law is None:
             return (

@@ -76,6 +76,10 @@ class SurfaceMap:
     rays : tuple of ndarray
         The rays that built W: their pixel (n,), where they hit (n, 3) mm and their footprint a_s
         (n,) mm² — a pixel's reading of a field f is Σ_s a_s f(y_s) / Σ_s a_s.
+    hit_share : ndarray, shape (H·W,)
+        The share of each pixel's solid angle whose rays meet the mesh (by its sub-pixel rays; 0 or 1 at
+        one ray a pixel): a pixel on the silhouette reads the mean over its whole solid angle, the dark
+        background included, so its reading over the surface is the value divided by this share.
     """
 
     camera: Camera
@@ -90,6 +94,7 @@ class SurfaceMap:
     mu_v: np.ndarray
     sub: int = 1
     rays: tuple = ()
+    hit_share: np.ndarray | None = None
 
     def __post_init__(self):
         self._used = np.flatnonzero(np.diff(self.W.tocsc().indptr) > 0)  # the columns W uses
@@ -172,7 +177,13 @@ def surface_map(
     view = -centre.directions
     # the footprints: sub × sub rays a pixel, each a_s = Ω_s d_s²/μ_s shared by barycentric weight
     sub = int(sub) if sub is not None else subpixels(mesh, centre, cos_min)
-    rays_ = centre if sub == 1 else _cast(scene, mesh, *camera.pixel_rays(sub))
+    if sub == 1:
+        rays_, hit_share = centre, centre.hit.astype(np.float64)
+    else:  # the share of each pixel's solid angle that meets the mesh (a silhouette's pixel: part of it)
+        origins, directions, omega = camera.pixel_rays(sub)  # sub² rays a pixel, pixel after pixel
+        rays_ = _cast(scene, mesh, origins, directions, omega)
+        met = np.bincount(np.flatnonzero(rays_.hit) // sub**2, weights=rays_.omega, minlength=n_pix)
+        hit_share = met / omega.reshape(n_pix, sub**2).sum(axis=1)
     use = rays_.mu > cos_min
     pixel = np.flatnonzero(rays_.hit) // sub**2
     area = rays_.omega * rays_.t**2 / np.maximum(rays_.mu, 1e-6)  # the footprint a_s, mm²
@@ -191,7 +202,7 @@ def surface_map(
     with np.errstate(invalid="ignore", divide="ignore"):
         mu_v = np.where(den > 0, (W @ mu) / den, 0.0)
     rays = (pixel[use], rays_.p[use].astype(np.float32), area[use].astype(np.float32))
-    return SurfaceMap(camera, W, W2, mu, position, normal, view, den, grazing, mu_v, sub, rays)
+    return SurfaceMap(camera, W, W2, mu, position, normal, view, den, grazing, mu_v, sub, rays, hit_share)
 
 
 @dataclass
