@@ -240,12 +240,19 @@ class PixelEvidence:
     def __bool__(self):
         return bool(self.parts)
 
+    def _readings(self, profile):
+        """Each kept pixel's reading of ``profile``: Σ_s a_s f(r_s) / Σ_s a_s, per camera."""
+        for col, r_s, a_s, n, *_ in self.parts:
+            yield np.bincount(col, weights=a_s * profile(r_s), minlength=n) / np.bincount(
+                col, a_s, minlength=n
+            )
+
     def short_of_clip(self, profile) -> bool:
         """Whether the profile reads below :data:`CLIP_REACH` of what the clipped pixels show (median over
         them): the near peak is steeper than any half-space's (a horn's tip, a thin part)."""
         ratios = []
-        for col, r_s, a_s, n, _E, _var, usable, floor in self.parts:
-            m = np.bincount(col, weights=a_s * profile(r_s), minlength=n) / np.bincount(col, a_s, minlength=n)
+        for part, m in zip(self.parts, self._readings(profile)):
+            usable, floor = part[6], part[7]
             f = floor[:, self.channel]
             clip = ~usable & (f > 0)
             ratios.append(m[clip] / f[clip])
@@ -254,8 +261,7 @@ class PixelEvidence:
 
     def __call__(self, profile):
         ch, out = self.channel, []
-        for col, r_s, a_s, n, E, var, usable, floor in self.parts:
-            m = np.bincount(col, weights=a_s * profile(r_s), minlength=n) / np.bincount(col, a_s, minlength=n)
+        for (*_, E, var, usable, floor), m in zip(self.parts, self._readings(profile)):
             e, f = E[:, ch], floor[:, ch]
             scale = np.sqrt(np.maximum(var[:, ch], 0) + (MODEL_FLOOR * e) ** 2) + 1e-30
             out.append(np.where(usable, (m - e) / scale, 0.0))
