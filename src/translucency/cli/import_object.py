@@ -43,7 +43,7 @@ def import_object_cmd(
         f"exit law {s['exit_law']['law']}; unseen {s['flags']['unseen']:,} pairs filled; "
         f"saturated {s['flags']['saturated']:,} pairs ({s['saturated_views']:,} views dropped), "
         f"spot {s['flags']['spot']:,}: {s['near_peak']:,} from the near-peak model; "
-        f"energy per shot known to {_worst_share(s['energy_sigma'], s['energy']):.0%} at worst)"
+        f"a shot's energy uncertain by up to {_worst_share(s['energy_sigma'], s['energy']):.0%} (1 σ))"
     )
     finish(as_json, quiet, s, [line])
 
