@@ -15,11 +15,11 @@ because a pixel reads the mean radiance over its footprint A_f = Ω_p d² / μ a
 exitance M has radiance M / π.  Ω_p is the pixel's solid angle, cos³θ / (f_x f_y) for a pinhole.
 
 Visibility is its own z-buffer: every triangle rasterised in NumPy at ``ZBUF_SUB`` × ``ZBUF_SUB``
-samples a pixel, depth from the ray–plane intersection; an exit is seen when it lies within
-``DEPTH_TOL_MM`` of the nearest surface at its sample and faces the camera.  The sensor is its own
-too: Z = k t vig(ρ) flat L P + dark, with photon (Poisson, ``ELECTRONS_AT_FULL`` at saturation) and
-read noise, clipped at ``SATURATION``; one exposure a shot, set so that the spot clips.  Frames are
-written by its own PFM writer.
+samples a pixel, keeping the nearest triangle at each; an exit faces the camera and is seen unless that
+triangle's plane, met along the ray from the exit to the camera, lies more than ``DEPTH_TOL_MM`` in
+front of it.  The sensor is its own too: Z = k t vig(ρ) flat L P + dark, with photon (Poisson,
+``ELECTRONS_AT_FULL`` at saturation) and read noise, clipped at ``SATURATION``; one exposure a shot set
+so that the spot clips, or brackets.  Frames are written by its own PFM writer.
 
 What it writes, the hand-over a lab would give (``object.json``, ``scan.ply``, the frames, dark and
 flat fields) plus ``truth.npz``: the exits' own tally (R_d per incident vertex, mm⁻² per W, shared

@@ -325,10 +325,8 @@ class ObjectImport:
             return R, var, unseen
         near = peak | (unseen & (r <= r[peak].max()))
         R, var, ok, short = recover_near_peak(self.mesh, hit, R, var, near, flags == 0, self.setup.eta, views)
-        below = near[:, None] & (R < least)
-        var = np.where(
-            below, np.maximum(var, (least - R) ** 2), var
-        )  # the clip says more light than the model
+        below = near[:, None] & (R < least)  # the clip says more light than the model: its σ says so too
+        var = np.where(below, np.maximum(var, (least - R) ** 2), var)
         # where the model reads short of the clipped pixels, the peak is steeper than any the ring implies
         # (a horn's tip, a thin part): its cells hold at least the clip's value, and how much more only
         # energy conservation bounds — the light not yet accounted for, Σ_v A_v R_v ≤ 1 per W
@@ -346,9 +344,13 @@ class ObjectImport:
         the header); the pairs of each flag counted (UNSEEN, SATURATED, GRAZING, SPOT)."""
         root, area = ds.group, self.area
         for chunk in done:
-            for j in range(chunk.lo, chunk.hi):
-                R, var = (np.asarray(root[k][j], dtype=np.float64) for k in ("R_d", "R_d_var"))
-                self.energy[j], self.energy_sigma[j] = shot_energy(R, var, np.asarray(root["flags"][j]), area)
+            lo, hi = chunk.lo, chunk.hi
+            R, var = (np.asarray(root[k][lo:hi], dtype=np.float64) for k in ("R_d", "R_d_var"))
+            flags = np.asarray(root["flags"][lo:hi])
+            for j in range(lo, hi):
+                self.energy[j], self.energy_sigma[j] = shot_energy(
+                    R[j - lo], var[j - lo], flags[j - lo], area
+                )
         flag_counts = np.zeros(4, dtype=np.int64)
         flags_all = np.asarray(root["flags"][...])
         for b, bit in enumerate((UNSEEN, SATURATED, GRAZING, SPOT)):

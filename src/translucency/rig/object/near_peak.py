@@ -9,14 +9,19 @@ measured ring around it:
 
 * the **ring**: the measured cells beyond the farthest target cell, out to :data:`RING_MM` further and at
   least :data:`RING_CELLS` of them;
-* the **model**: Jensen's dipole profile :math:`s\,R_d^{dip}(r; \sigma_a, \sigma_s', \eta)` with a free
-  scale s (three parameters a channel, fitted to the ring's cell means in log space) — or, where it fits
-  the ring worse or its whole profile would return more light than came in
-  (:math:`s\,R^{dip} > 1`: energy is conserved), the exponential :math:`a e^{-b r}`;
-* the **value**: the model's own cell mean :math:`\int \phi_v\, s R_d^{dip}\, dA / A_v` over each target
-  cell (:func:`cell_quadrature`, r the distance from the hit, mm);
-* its **variance**: half the difference between the two models, squared (the model's form is what is
-  least known), plus the ring's relative residual scatter applied to the value.
+* the **model**, through an index-matched boundary: the half-space's own profile
+  :math:`\sigma_t^2 f(\sigma_t r; \alpha)` (:mod:`translucency.model.half_space`) at its calibrated level,
+  fitted to the pixels that see the ring and the peak (:class:`PixelEvidence`; the clipped ones as lower
+  bounds) or, without them, to the ring's cell means (:func:`_half_space_channel`); behind a dielectric:
+  Jensen's dipole profile :math:`s\,R_d^{dip}(r; \sigma_a, \sigma_s', \eta)` with a free scale s (three
+  parameters a channel, fitted to the ring's cell means in log space) — or, where it fits the ring worse
+  or its whole profile would return more light than came in (:math:`s\,R^{dip} > 1`: energy is
+  conserved), the exponential :math:`a e^{-b r}`;
+* the **value**: the model's own cell mean :math:`\int \phi_v\, R\, dA / A_v` over each target cell
+  (:func:`cell_quadrature`, graded towards the hit; r the distance from the hit, mm);
+* its **variance**: for the half-space, :func:`_half_space_channel`'s; for the dipole, half the difference
+  between the two models, squared (the model's form is what is least known), plus the ring's relative
+  residual scatter applied to the value.
 
 Units: mm, R_d in mm⁻² per unit incident power.
 """
@@ -35,8 +40,6 @@ RING_CELLS = 12
 #: starting albedos of the half-space's fit, and how close to the best a fit's cost must be to count
 STARTS = 6
 COST_TOLERANCE = 0.1
-#: a pixel is evidence on the near peak when this much of its footprint lies on the zone's cells
-ZONE_SHARE = 0.5
 #: the profile's form is known to this relative error (a bright pixel's weight is capped by it)
 MODEL_FLOOR = 0.05
 #: a near-peak model reading below this share of the clipped pixels' value (median) cannot hold the peak
@@ -67,7 +70,7 @@ def graded_centroids(n: int = QUADRATURE_N, levels: int = GRADED_LEVELS):
     """Barycentric points (K, 3) and weights (K,) summing to 1 over a triangle, graded towards its first
     corner: the triangle is cut in four, the three children away from the corner take
     :func:`subtriangle_centroids`, the corner's child is cut again, ``levels`` times.  For a profile with a
-    1/r core at that corner (the first scattering's) the plain rule misses most of the core's share.
+    1/r core at that corner (the first scattering's) the plain rule misses part of the core's share.
 
     Examples
     --------
@@ -271,8 +274,10 @@ class PixelEvidence:
 
 
 def _near_peak_channel(y, r_ring, mean_of, eta, misfit=None):
-    """One channel: the dipole fitted to the ring's log cell means ``y``; the target cells' values and
-    variances (``mean_of`` gives the cell means of a radial profile, ring cells first)."""
+    """One channel: the target cells' values, variances and whether the model reads short of the clip
+    (``mean_of`` gives the cell means of a radial profile, ring cells first) — through an index-matched
+    boundary the half-space's profile (:func:`_half_space_channel`), else the dipole fitted to the ring's
+    log cell means ``y``."""
     from scipy.optimize import least_squares  # heavy: SciPy's optimisers load where a peak is recovered
 
     if eta == 1.0:  # index-matched: the half-space's own profile (the dipole misses its near peak)

@@ -81,8 +81,7 @@ def shot_cell_means(
     and distance from ``hit``: the law varies across a cell near the hit); and the bytes read.  With
     ``pixels`` (and ``law``), also per camera the pixels themselves: (its surface map, the exitance of
     its used pixels (n, 3), its variance, usable (n,), the clipped pixels' least exitance (n, 3)), None
-    for a camera
-    without frames — the near peak's evidence (:class:`.near_peak.PixelEvidence`).  The
+    for a camera without frames — the near peak's evidence (:class:`.near_peak.PixelEvidence`).  The
     cameras run on threads (reading, NumPy and the sparse products release the GIL)."""
 
     def one(cam: CameraView):

@@ -13,6 +13,8 @@ front of it, inside its image, and the ray from its centre reaches the hit unblo
 
 from __future__ import annotations
 
+from functools import cached_property
+
 import numpy as np
 
 from ..._validate import TranslucencyError
@@ -106,7 +108,7 @@ class _Spots:
         self.found: dict[int, np.ndarray | None] = {}
 
     def spot(self, j: int) -> np.ndarray | None:
-        """The spot of shot ``j`` in the camera's longest exposure, or None without a frame."""
+        """The spot of shot ``j`` in the camera's longest exposure, or None without a frame or a spot."""
         if j not in self.found:
             frames = self.rig.shots[j].frames.get(self.setup.name, [])
             image = None
@@ -114,24 +116,20 @@ class _Spots:
                 frame = max(frames, key=lambda f: f.exposure_s)
                 shape = (self.setup.height, self.setup.width)
                 image = read_frame(frame.file, shape, "photograph").reshape(*shape, 3)
-            self.found[j] = None if image is None else spot_pixel(image - self._dark(), self._noise())
+            noise = float(self.setup.radiometry.read_noise)
+            self.found[j] = None if image is None else spot_pixel(image - self.dark, noise)
         return self.found[j]
 
-    def _dark(self) -> np.ndarray:
+    @cached_property
+    def dark(self) -> np.ndarray:
         """The camera's dark frame (H, W, 3), 0 without one: a faint spot over a dark frame's fixed
         pattern is found after it is taken off."""
-        rad = self.setup.radiometry
-        if not hasattr(self, "_dark_frame"):
-            shape = (self.setup.height, self.setup.width)
-            self._dark_frame = (
-                read_frame(rad.dark, shape, "dark frame").reshape(*shape, 3)
-                if rad.dark
-                else np.zeros((*shape, 3))
-            )
-        return self._dark_frame
-
-    def _noise(self) -> float:
-        return float(self.setup.radiometry.read_noise)
+        rad, shape = self.setup.radiometry, (self.setup.height, self.setup.width)
+        return (
+            read_frame(rad.dark, shape, "dark frame").reshape(*shape, 3)
+            if rad.dark
+            else np.zeros((*shape, 3))
+        )
 
     def shots(self, camera: Camera) -> list[int]:
         """The first :data:`SHOTS_CHECKED` shots whose hit ``camera`` sees and that it photographed."""

@@ -179,13 +179,14 @@ def surface_map(
     sub = int(sub) if sub is not None else subpixels(mesh, centre, cos_min)
     if sub == 1:
         rays_, hit_share = centre, centre.hit.astype(np.float64)
-    else:  # the share of each pixel's solid angle that meets the mesh (a silhouette's pixel: part of it)
+    else:
         origins, directions, omega = camera.pixel_rays(sub)  # sub² rays a pixel, pixel after pixel
         rays_ = _cast(scene, mesh, origins, directions, omega)
-        met = np.bincount(np.flatnonzero(rays_.hit) // sub**2, weights=rays_.omega, minlength=n_pix)
-        hit_share = met / omega.reshape(n_pix, sub**2).sum(axis=1)
     use = rays_.mu > cos_min
     pixel = np.flatnonzero(rays_.hit) // sub**2
+    if sub > 1:  # the share of each pixel's solid angle that meets the mesh (a silhouette's pixel: part)
+        met = np.bincount(pixel, weights=rays_.omega, minlength=n_pix)
+        hit_share = met / omega.reshape(n_pix, sub**2).sum(axis=1)
     area = rays_.omega * rays_.t**2 / np.maximum(rays_.mu, 1e-6)  # the footprint a_s, mm²
     tri = faces[rays_.face]
     rows = tri[use].ravel()
