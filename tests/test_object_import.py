@@ -36,6 +36,7 @@ from translucency.rig.object.exit_law import (
     Lambertian,
     fit_from_views,
 )
+from translucency.rig.object.shape_gain import MeshWalkGain
 from translucency.rig.object.surface_map import GRAZING_DEG, surface_map
 from translucency.rig.shared.hdr import write_pfm
 
@@ -602,10 +603,25 @@ def _two_scales(hit):
 
 
 def _half_space(hit):
-    """The profile of an index-matched half-space, σ_t = 1.2 mm⁻¹ and albedo 0.95 (mm⁻²): what the
-    near-peak model of an index-matched object assumes."""
+    """What the near-peak model of an index-matched object assumes, mm⁻²: the profile of an index-matched
+    half-space (σ_t = 1.2 mm⁻¹, albedo 0.95) times the ball's own gain at that material (a photon walk on
+    the ball against the flat profile, rig/object/shape_gain.py; its own seed, the importer's walks follow
+    their fit), on the cell of the nearest vertex."""
+    from scipy.spatial import cKDTree  # the cell each point lies in
+
     hit = np.asarray(hit, np.float64)
-    return lambda y: half_space_R_d(np.linalg.norm(y - hit, axis=1), 1.2, 0.95)
+    ball = load_mesh_of_rig()
+    v = np.asarray(ball.vertices)
+    at = int(np.argmin(np.linalg.norm(v - hit, axis=1)))
+    walk = MeshWalkGain(ball, mesh_scene(ball), hit, ball.vertex_normals[at], seed=777)
+    G = walk.gain([(1.2, 0.95)] * 3, reach=6.0)
+    tree = cKDTree(v)
+    return lambda y: G[tree.query(y)[1], 0] * half_space_R_d(np.linalg.norm(y - hit, axis=1), 1.2, 0.95)
+
+
+def load_mesh_of_rig():
+    """The ball of :func:`write_rig` (default subdivisions), as the importer reads it."""
+    return trimesh.creation.icosphere(3, radius=6.0)
 
 
 @pytest.mark.parametrize(
@@ -642,4 +658,7 @@ def test_a_clipped_spot_is_flagged_counted_and_recovered_within_its_variance(tmp
         elif field is _half_space:  # index-matched: the half-space's own profile, at its calibrated level
             assert (z < 3).all() and (bias < 0.03).all(), (j, z.max(), bias)
         else:  # the core is steeper than the ring: the energy short, and the model's error beyond its σ
-            assert (bias < 0.25).all(), (j, bias)
+            # (on this 6 mm ball the model takes the ball's gain, brighter away from the hit, which the flat
+            # field lacks: the ring then implies a shallower core, and the miss is 8-27 % where flat it was
+            # up to 16 %)
+            assert (bias < 0.3).all(), (j, bias)

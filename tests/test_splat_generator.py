@@ -105,12 +105,13 @@ def test_bracketed_splat_photographs_keep_every_shots_energy(splat_photographs):
 @pytest.mark.slow
 def test_one_clipped_exposure_is_flagged_and_its_energy_uncertainty_honest(splat_photographs):
     """One exposure a shot, the brightest 0.3 % of the lit pixels clipped: saturated cells flagged and
-    counted, recovered by the half-space's near peak fitted to the pixels; each shot's energy within 3 of
-    its stated standard deviations of the truth, and within 25 % (measured 0.78-1.06: the 5 % target of
-    issue 35 is not met with one clipped exposure; brackets meet it, as the test above shows)."""
+    counted, recovered by the near peak (the half-space's profile times the ball's own gain, fitted to the
+    pixels that face the camera, sampled finely); each shot's energy within 3 of its stated standard
+    deviations of the truth, and within 8 % (measured 0.998-1.053; 0.78-1.06 before the ball's gain, the
+    pixels' solid-angle readings and the grazing views left out)."""
     info, ds, truth = splat_photographs["single"]
     E, sigma, E_truth = _energies(info, truth)
     flags = np.asarray(ds.group["flags"][...])
     assert info["saturated_views"] > 0 and ((flags & SATURATED) != 0).any(axis=1).all()
     assert (np.abs(E - E_truth) < 3 * sigma).all(), (E - E_truth) / sigma
-    assert np.abs(E / E_truth - 1).max() < 0.25, E / E_truth
+    assert np.abs(E / E_truth - 1).max() < 0.08, E / E_truth

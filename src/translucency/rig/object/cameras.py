@@ -159,10 +159,11 @@ class Camera:
         """z_c (mm) of object points: positive in front of the camera."""
         return (np.asarray(points, dtype=np.float64).reshape(-1, 3) @ self.R.T + self.t)[:, 2]
 
-    def pixel_rays(self, sub: int = 1) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def pixel_rays(self, sub: int = 1, pixels=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         r"""The ray through every pixel centre, row by row — or, with ``sub`` > 1, through the centres of
         each pixel's ``sub`` × ``sub`` sub-pixels (pixel k's at rows k·sub² … (k+1)·sub² − 1): origins
-        (N, 3), unit directions (N, 3) in the object frame, and each ray's solid angle (sr).
+        (N, 3), unit directions (N, 3) in the object frame, and each ray's solid angle (sr).  With
+        ``pixels`` (indices row by row), only theirs, in that order.
 
         A pixel's undistorted normalised coordinates (x, y) are those the lens model maps onto its centre
         (:meth:`undistort`).  The solid angle of a pixel is
@@ -181,6 +182,8 @@ class Camera:
         sub = int(sub)
         v, u = np.mgrid[0 : self.height, 0 : self.width].astype(np.float64)
         uv = np.stack([u.ravel(), v.ravel()], axis=1)
+        if pixels is not None:
+            uv = uv[np.asarray(pixels, dtype=np.int64)]
         if sub > 1:  # the sub-pixel centres, pixel by pixel
             j, i = np.mgrid[0:sub, 0:sub].astype(np.float64)
             offset = (np.stack([i.ravel(), j.ravel()], axis=1) + 0.5) / sub - 0.5

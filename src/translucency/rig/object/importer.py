@@ -63,6 +63,7 @@ from .law_estimate import estimate_law
 from .near_peak import recover_near_peak
 from .radiance import shot_cell_means
 from .setup import ObjectRig, calibrated_camera, read_object_rig
+from .shape_gain import MeshWalkGain
 from .spot_check import check_spots
 from .views import CameraView, check_mesh_seen, prepare_view
 
@@ -177,6 +178,7 @@ class ObjectImport:
 
     setup: ObjectRig
     mesh: object  # trimesh.Trimesh, mm
+    scene: object  # its Mitsuba scene (the near peak's walks)
     area: np.ndarray  # (V,) vertex areas A_v, mm²
     cameras: list[CameraView]
     incident: np.ndarray  # (P,) the vertex nearest each hit
@@ -261,7 +263,7 @@ class ObjectImport:
             photographs=_provenance(setup, cameras, hits, law),
         )
         E = np.zeros((P, 3))
-        return cls(setup, mesh, area, cameras, incident, hits, law, header, chunk_points, E, E.copy())
+        return cls(setup, mesh, scene, area, cameras, incident, hits, law, header, chunk_points, E, E.copy())
 
     def create(self, out, *, overwrite: bool) -> MeshDataset:
         """The mesh data set at ``out``: the mesh, its vertex areas and the incident vertices."""
@@ -299,7 +301,7 @@ class ObjectImport:
                 self.saturated_views += dropped
                 if setup.spot_radius_mm > 0:  # within a stated spot; 0: none (the hit vertex is measured)
                     fj[r <= setup.spot_radius_mm] |= SPOT
-                Rj, vj, missing = self._recover(Rj, vj, fj, r, hits[j], least, [v for v in views if v])
+                Rj, vj, missing = self._recover(Rj, vj, fj, r, j, least, [v for v in views if v])
                 Rj = fill(Rj, missing)
                 vj = fill.variance(Rj, vj, missing)
                 R[j - lo], var[j - lo], flags[j - lo] = Rj, vj, fj
@@ -311,12 +313,11 @@ class ObjectImport:
             root["chunk_done"][c] = True
             yield chunk
 
-    def _recover(self, R, var, flags, r, hit, least, views):
+    def _recover(self, R, var, flags, r, j, least, views):
         """The cells at the hit that saturated, lie in the stated spot or went unseen there, from the
         near-peak model (:mod:`.near_peak`, fitted to the pixels of ``views`` that see them and their
-        ring); where the model is below what their clipped pixels show (``least``: a pixel's mean, not
-        each cell's) its standard deviation reaches up to it, and where the model reads short of the
-        clipped pixels as a whole (``short``), the clip's value, with a standard deviation that spreads half
+        ring, the clipped ones as lower bounds); where the model reads short of the clipped pixels as a
+        whole (``short``), the clip's value (``least``), with a standard deviation that spreads half
         the light energy conservation leaves unaccounted for over those cells; the cells still missing
         (to fill)."""
         peak = (flags & (SATURATED | SPOT)) != 0
@@ -324,13 +325,20 @@ class ObjectImport:
         if not peak.any():
             return R, var, unseen
         near = peak | (unseen & (r <= r[peak].max()))
-        R, var, ok, short = recover_near_peak(self.mesh, hit, R, var, near, flags == 0, self.setup.eta, views)
-        below = near[:, None] & (R < least)  # the clip says more light than the model: its σ says so too
-        var = np.where(below, np.maximum(var, (least - R) ** 2), var)
+        hit, mesh = self.hits[j], self.mesh
+        # the scan's own shape: photon walks on it at the fitted material (seeded by the shot: resumable)
+        normal = mesh.vertex_normals[self.incident[j]]
+        shape = MeshWalkGain(mesh, self.scene, hit, normal, seed=1 + 104729 * j)
+        measured = flags == 0
+        R, var, ok, short = recover_near_peak(
+            mesh, hit, R, var, near, measured, self.setup.eta, views, shape, self.scene
+        )
         # where the model reads short of the clipped pixels, the peak is steeper than any the ring implies
         # (a horn's tip, a thin part): its cells hold at least the clip's value, and how much more only
-        # energy conservation bounds — the light not yet accounted for, Σ_v A_v R_v ≤ 1 per W
-        below &= short[None, :]
+        # energy conservation bounds — the light not yet accounted for, Σ_v A_v R_v ≤ 1 per W.  (Elsewhere
+        # the fit honoured each clipped pixel as a lower bound on its footprint's mean; a cell's `least` is
+        # that pixel's mean, not the cell's own, and no bound on it.)
+        below = near[:, None] & (R < least) & short[None, :]
         R = np.where(below, least, R)
         unknown = np.maximum(0.0, 1.0 - self.area @ R)  # (3,)
         share = np.maximum((self.area[:, None] * below).sum(axis=0), 1e-30)

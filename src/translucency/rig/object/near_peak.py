@@ -32,6 +32,7 @@ import numpy as np
 
 from ...model.dipole import dipole_R_d, dipole_total_reflectance
 from ...model.half_space import albedo_range, half_space_R_d
+from .surface_map import GRAZING_DEG
 
 #: the ring reaches this far beyond the farthest target cell, mm (or further, for :data:`RING_CELLS`)
 RING_MM = 2.0
@@ -48,6 +49,19 @@ CLIP_REACH = 0.8
 QUADRATURE_N = 6
 #: halvings of the graded rule towards the hit
 GRADED_LEVELS = 8
+#: rays a pixel side when the near peak's pixels are sampled again
+PIXEL_SUB = 12
+#: a ray this many footprint radii from the hit or nearer reads the mean of the profile over its footprint
+CORE_FOOTPRINTS = 3.0
+#: points of equal area over the unit disc (a sunflower): a footprint's mean
+_DISC = (
+    lambda k: (
+        np.sqrt((k + 0.5) / len(k))[:, None]
+        * np.column_stack([np.cos(k * 2.39996323), np.sin(k * 2.39996323)])
+    )
+)(np.arange(64.0))
+#: refits with the scan's shape (:mod:`.shape_gain`): each takes a walk at the last fit's material
+SHAPE_ITERATIONS = 2
 
 
 def subtriangle_centroids(n: int = QUADRATURE_N) -> np.ndarray:
@@ -150,7 +164,8 @@ def cell_quadrature(mesh, vertices, n: int = QUADRATURE_N, toward=None):
 
 def _half_space_channel(y, r_ring, mean_of, misfit=None):
     """One channel through an index-matched boundary: the half-space's own profile (σ_t, α) fitted at its
-    calibrated level (no free scale: the laser's power is known); the target cells' values and variances.
+    calibrated level (no free scale: the laser's power is known); the target cells' values and variances,
+    whether the profile reads short of the clipped pixels, and the fitted (σ_t, α).
 
     The fit is to the ring's log cell means ``y`` — or, with ``misfit`` (the residuals of a radial profile
     against the pixels that see the zone, :class:`PixelEvidence`), to the pixels themselves: their
@@ -159,8 +174,9 @@ def _half_space_channel(y, r_ring, mean_of, misfit=None):
     so the fit starts from :data:`STARTS` albedos (σ_t from the ring's slope, σ_tr = σ_t √(3(1 − α))) and
     keeps the best; the variance takes half the spread of the core among the fits as good as the best
     (within :data:`COST_TOLERANCE`), half the difference from the same profile fitted with a free scale
-    (what the data say against the calibrated level), and the ring's relative scatter plus
-    :data:`MODEL_FLOOR` (the profile's form), in quadrature."""
+    (what the data say against the calibrated level), and the relative scatter of the data about it
+    beyond their noise (the pixels', :meth:`PixelEvidence.relative_scatter`, or the ring's cell means')
+    plus :data:`MODEL_FLOOR` (the profile's form), in quadrature."""
     from scipy.optimize import least_squares  # heavy: SciPy's optimisers load where a peak is recovered
 
     n_ring = len(y)
@@ -191,46 +207,71 @@ def _half_space_channel(y, r_ring, mean_of, misfit=None):
     good = [model(f.x)[n_ring:] for f in fits if f.cost <= costs.min() * (1 + COST_TOLERANCE) + 1e-12]
     spread = 0.5 * (np.max(good, axis=0) - np.min(good, axis=0))
     free = least_squares(residual, [*best.x, 0.0], bounds=([*bounds[0], -5.0], [*bounds[1], 5.0]))
-    scatter = float(np.sqrt(np.mean(ring_misfit(model(best.x)) ** 2)))  # the ring's relative scatter
+    # the model's relative scatter about the data beyond their noise: the pixels' where fitted to them
+    scatter = (
+        misfit.relative_scatter(profile(best.x))
+        if misfit
+        else float(np.sqrt(np.mean(ring_misfit(model(best.x)) ** 2)))  # the ring's cell means'
+    )
     variance = (
         spread**2 + (0.5 * (value - model(free.x)[n_ring:])) ** 2 + ((scatter + MODEL_FLOOR) * value) ** 2
     )
-    return value, variance, bool(misfit) and misfit.short_of_clip(profile(best.x))
+    sigma_t, albedo = np.exp(best.x[0]), -np.expm1(best.x[1])
+    return value, variance, bool(misfit) and misfit.short_of_clip(profile(best.x)), (sigma_t, albedo)
 
 
 class PixelEvidence:
-    r"""The pixels whose whole footprint lies within ``r_zone`` of the hit, one channel at a time: the
-    misfit of a radial profile f against them.
+    r"""The pixels whose whole footprint lies within ``r_zone`` of the hit, seen within
+    :data:`~.surface_map.GRAZING_DEG` of the normal, one channel at a time: the misfit of a radial
+    profile f against them.
 
-    A pixel reads its footprint's mean, :math:`m_p = \sum_s a_s f(|y_s - x_i|) / \sum_s a_s` over the
-    rays s that built its map (:attr:`.surface_map.SurfaceMap.rays`) — exact for a profile as steep as
-    the near peak, where interpolating cell means would not be.  Usable pixels give
+    A pixel reads the solid-angle mean of what its rays see, :math:`m_p = \sum_s \Omega_s G_s
+    f(|y_s - x_i|) / \sum_s \Omega_s` over its sub-pixel rays s that meet the mesh
+    (:attr:`.surface_map.SurfaceMap.rays`, grazing ones included; G_s the gain of the ray's cell,
+    :mod:`.shape_gain`, 1 without) — exact for a profile as steep as the near peak, where interpolating
+    cell means would not be, and for a pixel that sees the surface at grazing angles in part, where a
+    footprint-weighted mean would not be.  Usable pixels give
     :math:`(m_p - E_p)/\sqrt{\mathrm{Var}\,E_p + (\epsilon E_p)^2}` (ε = :data:`MODEL_FLOOR`: the
     profile's form is known to a few per cent, not to the photon noise of a bright pixel); clipped ones
     count only where the profile falls below what they show,
     :math:`\min(0, m_p - E^{clip}_p)/(\epsilon E^{clip}_p)`.
+
+    The map's rays (a few a pixel, enough for its cells) are too few for a pixel over the peak: with
+    ``sample`` (a function of a map and pixels giving the rays of those pixels, as :attr:`rays`) the kept
+    pixels are sampled again, :data:`PIXEL_SUB` × :data:`PIXEL_SUB` rays each; a ray within
+    :data:`CORE_FOOTPRINTS` of its footprint's radius of the hit reads the profile's mean over its
+    footprint (a disc of the same area).
     """
 
-    def __init__(self, views, hit, r_zone: float):
-        self.parts = []
+    def __init__(self, views, hit, r_zone: float, nearest=None, sample=None):
+        self.parts, self.cells, self.radii = [], [], []
         for m, E, var, usable, floor in views:
-            pixel, y, a_s = m.rays
-            col = np.searchsorted(m.used, pixel)  # each ray's pixel among the used ones
-            r_s = np.linalg.norm(y.astype(np.float64) - hit, axis=1)
+            pixel, y, omega, a_s = m.rays  # each ray's solid angle (the weight of its reading), footprint
             n = len(m.used)
+            col = np.minimum(np.searchsorted(m.used, pixel), n - 1)  # each ray's pixel among the used ones
+            read = m.used[col] == pixel  # (a pixel whose rays all graze is not read: no value to fit)
+            pixel, y, omega, a_s, col = pixel[read], y[read], omega[read], a_s[read], col[read]
+            r_s = np.linalg.norm(y.astype(np.float64) - hit, axis=1)
             far = np.bincount(col, weights=(r_s > r_zone).astype(float), minlength=n) > 0
             clipped = ~usable & (floor > 0).any(axis=1)
             inside = np.bincount(col, minlength=n) > 0
-            keep = inside & ~far & (usable | clipped)
-            rays = keep[col]
+            # a pixel seen at a grazing angle (its centre's) is left out, as the cells' fusion leaves it out:
+            # there the exit law is least known and a footprint longest
+            facing = m.mu[m.used] > np.cos(np.radians(GRAZING_DEG))
+            keep = inside & ~far & facing & (usable | clipped)
             if not keep.any():
                 continue
+            if sample is not None:  # the kept pixels sampled finely: a few rays miss the core's share
+                pixel, y, omega, a_s = sample(m, m.used[keep])
+                col = np.searchsorted(m.used, pixel)
+                r_s = np.linalg.norm(y.astype(np.float64) - hit, axis=1)
+            rays = keep[col]
             index = np.cumsum(keep) - 1  # the kept pixels renumbered
             self.parts.append(
                 (
                     index[col[rays]],
                     r_s[rays],
-                    a_s[rays].astype(np.float64),
+                    omega[rays].astype(np.float64),
                     int(keep.sum()),
                     E[keep],
                     var[keep],
@@ -238,17 +279,27 @@ class PixelEvidence:
                     floor[keep],
                 )
             )
+            # each ray's cell (its nearest vertex): where a per-cell gain multiplies the profile
+            self.cells.append(nearest(y[rays]) if nearest is not None else None)
+            self.radii.append(np.sqrt(a_s[rays].astype(np.float64) / np.pi))  # its footprint's radius, mm
         self.channel = 0
+        #: (V, 3) per-cell gains of the profile (:mod:`.shape_gain`), or None
+        self.gain = None
 
     def __bool__(self):
         return bool(self.parts)
 
     def _readings(self, profile):
-        """Each kept pixel's reading of ``profile``: Σ_s a_s f(r_s) / Σ_s a_s, per camera."""
-        for col, r_s, a_s, n, *_ in self.parts:
-            yield np.bincount(col, weights=a_s * profile(r_s), minlength=n) / np.bincount(
-                col, a_s, minlength=n
-            )
+        """Each kept pixel's reading of ``profile``: Σ_s Ω_s G_s f(r_s) / Σ_s Ω_s, per camera."""
+        for (col, r_s, omega, n, *_), cell, rho in zip(self.parts, self.cells, self.radii):
+            f = profile(r_s)
+            core = r_s < CORE_FOOTPRINTS * rho  # the 1/r core within a footprint or two: its disc's mean
+            if core.any():
+                d = np.hypot(r_s[core, None] + rho[core, None] * _DISC[:, 0], rho[core, None] * _DISC[:, 1])
+                f[core] = profile(d.ravel()).reshape(d.shape).mean(axis=1)
+            if self.gain is not None and cell is not None:
+                f = f * self.gain[cell, self.channel]
+            yield np.bincount(col, weights=omega * f, minlength=n) / np.bincount(col, omega, minlength=n)
 
     def short_of_clip(self, profile) -> bool:
         """Whether the profile reads below :data:`CLIP_REACH` of what the clipped pixels show (median over
@@ -262,6 +313,22 @@ class PixelEvidence:
         ratios = np.concatenate(ratios) if ratios else np.zeros(0)
         return bool(len(ratios)) and float(np.median(ratios)) < CLIP_REACH
 
+    def relative_scatter(self, profile) -> float:
+        r"""The usable pixels' relative scatter about ``profile`` beyond their own noise,
+        :math:`\big(\sum_p w_p (\rho_p^2 - v_p) / \sum_p w_p\big)^{1/2}` with
+        :math:`\rho_p = (m_p - E_p)/E_p`, :math:`v_p = \mathrm{Var}\,E_p / E_p^2` and
+        :math:`w_p = 1/(v_p + \epsilon^2)` (0 where the noise explains it all)."""
+        num = den = 0.0
+        for (*_, E, var, usable, _floor), m in zip(self.parts, self._readings(profile)):
+            e = E[usable, self.channel].astype(np.float64)
+            ok = e > 0
+            e, mm = e[ok], m[usable][ok]
+            v = np.maximum(var[usable, self.channel][ok], 0) / e**2
+            w = 1.0 / (v + MODEL_FLOOR**2)
+            num += float(w @ (((mm - e) / e) ** 2 - v))
+            den += float(w.sum())
+        return float(np.sqrt(max(num, 0.0) / den)) if den > 0 else 0.0
+
     def __call__(self, profile):
         ch, out = self.channel, []
         for (*_, E, var, usable, floor), m in zip(self.parts, self._readings(profile)):
@@ -274,10 +341,10 @@ class PixelEvidence:
 
 
 def _near_peak_channel(y, r_ring, mean_of, eta, misfit=None):
-    """One channel: the target cells' values, variances and whether the model reads short of the clip
-    (``mean_of`` gives the cell means of a radial profile, ring cells first) — through an index-matched
-    boundary the half-space's profile (:func:`_half_space_channel`), else the dipole fitted to the ring's
-    log cell means ``y``."""
+    """One channel: the target cells' values, variances, whether the model reads short of the clip and the
+    half-space's fitted (σ_t, α) (None for the dipole) — ``mean_of`` gives the cell means of a radial
+    profile, ring cells first; through an index-matched boundary the half-space's profile
+    (:func:`_half_space_channel`), else the dipole fitted to the ring's log cell means ``y``."""
     from scipy.optimize import least_squares  # heavy: SciPy's optimisers load where a peak is recovered
 
     if eta == 1.0:  # index-matched: the half-space's own profile (the dipole misses its near peak)
@@ -304,10 +371,10 @@ def _near_peak_channel(y, r_ring, mean_of, eta, misfit=None):
     use_dipole = albedo <= 1.0 and fit.cost <= efit.cost
     value, chosen = (dip, fit) if use_dipole else (expo, efit)
     scatter = float(np.sqrt(np.mean(chosen.fun**2)))  # the ring's relative residual
-    return value, (0.5 * (dip - expo)) ** 2 + (scatter * value) ** 2, False
+    return value, (0.5 * (dip - expo)) ** 2 + (scatter * value) ** 2, False, None
 
 
-def recover_near_peak(mesh, hit, R, var, target, measured, eta: float, views=()):
+def recover_near_peak(mesh, hit, R, var, target, measured, eta: float, views=(), shape=None, scene=None):
     r"""R_d and its variance at the ``target`` cells from the near-peak model fitted to the measured ring.
 
     Parameters
@@ -322,6 +389,16 @@ def recover_near_peak(mesh, hit, R, var, target, measured, eta: float, views=())
         The cells to recover; the cells measured (no flag).
     eta : float
         The medium's index (the dipole's boundary term).
+    views : sequence
+        Per camera (map, E, Var E, usable, clip floor) from :func:`.radiance.shot_cell_means`: the pixels
+        the index-matched fit reads (:class:`PixelEvidence`).
+    shape : object with ``gain(params, reach)``, optional
+        The scan's own shape (:class:`.shape_gain.MeshWalkGain`): through an index-matched boundary the
+        half-space's profile takes its per-cell gains at the fitted material, refitted
+        :data:`SHAPE_ITERATIONS` times.
+    scene : mitsuba.Scene, optional
+        The mesh's scene: the pixels of ``views`` near the hit sampled again, finely
+        (:data:`PIXEL_SUB`).
 
     Returns
     -------
@@ -367,22 +444,48 @@ def recover_near_peak(mesh, hit, R, var, target, measured, eta: float, views=())
     cells = np.concatenate([ring, targets])
     pts, w, owner = cell_quadrature(mesh, cells, toward=hit)
     dist = np.linalg.norm(pts - hit, axis=1)
+    gain = np.ones((len(verts), 3))  # the shape's gain per cell (1: the flat half-space's profile)
+    ch = 0
 
-    def mean_of(profile):  # the cell means (len(cells),) of a radial profile
-        return np.bincount(owner, weights=w * profile(dist), minlength=len(cells)) / np.bincount(
-            owner, weights=w, minlength=len(cells)
+    def mean_of(profile):  # the cell means (len(cells),) of a radial profile, times each cell's gain
+        return (
+            np.bincount(owner, weights=w * profile(dist), minlength=len(cells))
+            / np.bincount(owner, weights=w, minlength=len(cells))
+            * gain[cells, ch]
         )
 
-    pixels = PixelEvidence(views, hit, r_out) if views else None
+    nearest = _nearest_vertex(verts) if shape is not None else None
+    sample = None
+    if scene is not None:
+
+        def sample(m, pixels):  # the rays of a camera's pixels, PIXEL_SUB² each
+            return m.sample_pixels(pixels, PIXEL_SUB, scene, mesh)
+
+    pixels = PixelEvidence(views, hit, r_out, nearest, sample) if views else None
     short = np.zeros(3, dtype=bool)
-    for ch in range(3):
-        if pixels:
-            pixels.channel = ch
-        value, variance, short[ch] = _near_peak_channel(
-            np.log(R[ring, ch]), r[ring], mean_of, eta, pixels or None
-        )
-        R[targets, ch], var[targets, ch] = value, variance
+    params = [None, None, None]
+    # the flat fit first; then, with the scan's shape, the walk's gains at the fitted material, refitted
+    for walk in range(1 + (SHAPE_ITERATIONS if shape is not None and eta == 1.0 else 0)):
+        if walk:
+            gain = shape.gain(params, reach=r_out + 1.0)
+            if pixels:
+                pixels.gain = gain
+        for ch in range(3):
+            if pixels:
+                pixels.channel = ch
+            value, variance, short[ch], params[ch] = _near_peak_channel(
+                np.log(R[ring, ch]), r[ring], mean_of, eta, pixels or None
+            )
+            R[targets, ch], var[targets, ch] = value, variance
     return R, var, True, short
+
+
+def _nearest_vertex(verts):
+    """A function from points (K, 3) to their nearest vertex (K,): the cell each lies in."""
+    from scipy.spatial import cKDTree  # heavy: SciPy's spatial index loads where a peak is recovered
+
+    tree = cKDTree(verts)
+    return lambda y: tree.query(np.asarray(y, dtype=np.float64))[1]
 
 
 __all__ = ["recover_near_peak", "cell_quadrature", "subtriangle_centroids", "RING_MM", "RING_CELLS"]

@@ -74,8 +74,10 @@ class SurfaceMap:
     sub : int
         Rays a pixel side that built W (sub² a pixel).
     rays : tuple of ndarray
-        The rays that built W: their pixel (n,), where they hit (n, 3) mm and their footprint a_s
-        (n,) mm² — a pixel's reading of a field f is Σ_s a_s f(y_s) / Σ_s a_s.
+        The rays that meet the mesh (grazing ones too): their pixel (n,), where they hit (n, 3) mm,
+        their solid angle Ω_s (n,) sr and footprint a_s (n,) mm² — a pixel's reading of the exitance M
+        of a Lambertian surface is its radiance times π, :math:`\sum_s \Omega_s M(y_s) / \sum_s
+        \Omega_s` over its rays that meet the mesh (the silhouette's share divided out, ``hit_share``).
     hit_share : ndarray, shape (H·W,)
         The share of each pixel's solid angle whose rays meet the mesh (by its sub-pixel rays; 0 or 1 at
         one ray a pixel): a pixel on the silhouette reads the mean over its whole solid angle, the dark
@@ -112,6 +114,13 @@ class SurfaceMap:
         t -= np.einsum("ij,ij->i", t, n)[:, None] * n
         t /= np.maximum(np.linalg.norm(t, axis=1, keepdims=True), 1e-12)
         return np.nan_to_num(np.einsum("ij,ij->i", self.view[pixels], t))
+
+    def sample_pixels(self, pixels: np.ndarray, sub: int, scene, mesh) -> tuple:
+        """The rays through ``pixels`` (indices, ascending), ``sub`` × ``sub`` each, that meet the mesh: as
+        :attr:`rays` (pixel, point, solid angle, footprint)."""
+        origins, directions, omega = self.camera.pixel_rays(sub, pixels=pixels)
+        cast = _cast(scene, mesh, origins, directions, omega)
+        return _ray_readings(np.repeat(np.asarray(pixels), sub * sub)[cast.hit], cast)
 
     def coverage(self, area: np.ndarray) -> np.ndarray:
         """Σ_p W_vp / A_v: the fraction of each vertex's cell this camera measures."""
@@ -202,8 +211,15 @@ def surface_map(
     grazing = touched & (den <= 0)
     with np.errstate(invalid="ignore", divide="ignore"):
         mu_v = np.where(den > 0, (W @ mu) / den, 0.0)
-    rays = (pixel[use], rays_.p[use].astype(np.float32), area[use].astype(np.float32))
+    # every ray that meets the mesh, grazing ones too: a pixel reads the solid-angle mean of what its rays see
+    rays = _ray_readings(pixel, rays_)
     return SurfaceMap(camera, W, W2, mu, position, normal, view, den, grazing, mu_v, sub, rays, hit_share)
+
+
+def _ray_readings(pixel, c: _Cast) -> tuple:
+    """(pixel, point, solid angle, footprint a_s = Ω t²/μ mm²) of the rays that met the mesh."""
+    footprint = c.omega * c.t**2 / np.maximum(np.abs(c.mu), 0.05)
+    return pixel, c.p.astype(np.float32), c.omega.astype(np.float32), footprint.astype(np.float32)
 
 
 @dataclass
