@@ -212,13 +212,20 @@ def splat_exits(mesh, point: np.ndarray, face: np.ndarray, position: np.ndarray,
     the :math:`\phi_v`-weighted mean of R_d around v — the count and the area agree by construction.
     """
     V = len(mesh.vertices)
+    tri, bary = exit_barycentric(mesh, face, position)
+    index = (np.asarray(point)[:, None] * V + tri).ravel()
+    return np.bincount(index, weights=bary.ravel(), minlength=n_points * V).reshape(n_points, V)
+
+
+def exit_barycentric(mesh, face: np.ndarray, position: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Each exit's triangle's vertices (n, 3) and its barycentric coordinates there (n, 3), clipped to the
+    triangle and summing to 1 (exits lie on their face up to round-off)."""
     tri = np.asarray(mesh.faces)[face]  # (n, 3) vertex indices
     corners = np.asarray(mesh.vertices, dtype=np.float64)[tri]  # (n, 3, 3)
     bary = trimesh.triangles.points_to_barycentric(corners, np.asarray(position, dtype=np.float64))
-    bary = np.clip(np.nan_to_num(bary, nan=1.0 / 3.0), 0.0, None)  # exits lie on the face up to round-off
+    bary = np.clip(np.nan_to_num(bary, nan=1.0 / 3.0), 0.0, None)
     bary /= np.maximum(bary.sum(axis=1, keepdims=True), 1e-12)
-    index = (np.asarray(point)[:, None] * V + tri).ravel()
-    return np.bincount(index, weights=bary.ravel(), minlength=n_points * V).reshape(n_points, V)
+    return tri, bary
 
 
 def object_volume(name: str, mesh, voxel_mm: float, *, g: float = 0.0, seed: int = 0) -> Volume:

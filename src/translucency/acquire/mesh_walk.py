@@ -39,6 +39,7 @@ class MeshWalkResult:
     face: np.ndarray  # (n,) triangle the photon left through (EXIT only)
     direction: np.ndarray  # (n, 3) flight direction at the end (EXIT: the exit direction, outwards)
     steps: int
+    scatters: np.ndarray | None = None  # (n,) real scattering events of each photon (albedo reweighting)
 
 
 def mesh_random_walk(
@@ -101,11 +102,12 @@ def mesh_random_walk(
     code = dr.select(specular, UInt32(EXIT + 100), UInt32(ACTIVE))
     steps = UInt32(0)
     face = UInt32(0)
+    scatters = UInt32(0)
 
-    def cond(pos, direction, rng, code, steps, face):
+    def cond(pos, direction, rng, code, steps, face, scatters):
         return code == ACTIVE
 
-    def body(pos, direction, rng, code, steps, face):
+    def body(pos, direction, rng, code, steps, face, scatters):
         active = code == ACTIVE
         # tentative free flight against the majorant, and the distance to the surface
         t = -dr.log(1.0 - rng.next_float32()) / majorant
@@ -151,13 +153,17 @@ def mesh_random_walk(
         code = dr.select(leave, UInt32(EXIT), code)
         code = dr.select(escaped, UInt32(KILLED), code)
         steps = steps + dr.select(active, 1, 0)
+        scatters = scatters + dr.select(scatter, 1, 0)
         code = dr.select((code == ACTIVE) & (steps >= max_steps), UInt32(KILLED), code)
-        return pos, direction, rng, code, steps, face
+        return pos, direction, rng, code, steps, face, scatters
 
-    pos, direction, rng, code, steps, face = dr.while_loop(
-        state=(pos, direction, rng, code, steps, face), cond=cond, body=body, label="mesh_photon_walk"
+    pos, direction, rng, code, steps, face, scatters = dr.while_loop(
+        state=(pos, direction, rng, code, steps, face, scatters),
+        cond=cond,
+        body=body,
+        label="mesh_photon_walk",
     )
-    dr.eval(pos, code, steps, face)
+    dr.eval(pos, code, steps, face, scatters)
     code_np = np.asarray(code).astype(np.int64)
     code_np[code_np == EXIT + 100] = -1
     position = np.stack([np.asarray(pos.x), np.asarray(pos.y), np.asarray(pos.z)], axis=1)
@@ -168,4 +174,5 @@ def mesh_random_walk(
         face=np.asarray(face).astype(np.int64),
         direction=flight,
         steps=int(dr.sum(steps)[0]),
+        scatters=np.asarray(scatters).astype(np.int64),
     )

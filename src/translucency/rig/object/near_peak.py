@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ...acquire.mesh import exit_barycentric
 from ...model.dipole import dipole_R_d, dipole_total_reflectance
 from ...model.half_space import albedo_range, half_space_R_d
 from .surface_map import GRAZING_DEG
@@ -60,8 +61,8 @@ _DISC = (
         * np.column_stack([np.cos(k * 2.39996323), np.sin(k * 2.39996323)])
     )
 )(np.arange(64.0))
-#: refits with the scan's shape (:mod:`.shape_gain`): each takes a walk at the last fit's material
-SHAPE_ITERATIONS = 2
+#: the ratio between neighbouring σ_t of the scan's table of walks (:mod:`.shape_gain`)
+SIGMA_STEP = 1.6
 
 
 def subtriangle_centroids(n: int = QUADRATURE_N) -> np.ndarray:
@@ -162,7 +163,7 @@ def cell_quadrature(mesh, vertices, n: int = QUADRATURE_N, toward=None):
     return np.concatenate(points), np.concatenate(weights), np.concatenate(owner)
 
 
-def _half_space_channel(y, r_ring, mean_of, misfit=None):
+def _half_space_channel(y, r_ring, mean_of, misfit=None, shape=None):
     """One channel through an index-matched boundary: the half-space's own profile (σ_t, α) fitted at its
     calibrated level (no free scale: the laser's power is known); the target cells' values and variances,
     whether the profile reads short of the clipped pixels, and the fitted (σ_t, α).
@@ -182,9 +183,15 @@ def _half_space_channel(y, r_ring, mean_of, misfit=None):
     n_ring = len(y)
     lo, hi = albedo_range()
     bounds = ([-8.0, np.log1p(-hi)], [5.0, np.log1p(-lo)])  # log σ_t, u = log(1 − α)
+    if shape is not None:  # the scan's gains are known over the table's σ_t and up to its albedo
+        set_gain, sigma_ts, albedo_walk, start = shape
+        hi = min(hi, albedo_walk)
+        bounds = ([np.log(sigma_ts[0]), np.log1p(-hi)], [np.log(sigma_ts[-1]), np.log1p(-lo)])
 
-    def profile(x):  # log σ_t, u, [log s]
+    def profile(x):  # log σ_t, u, [log s]; the scan's gains at (σ_t, α) set where it has them
         s = np.exp(x[2]) if len(x) > 2 else 1.0
+        if shape is not None:
+            set_gain(np.exp(x[0]), -np.expm1(x[1]))
         return lambda d: s * half_space_R_d(d, np.exp(x[0]), -np.expm1(x[1]))
 
     def model(x):
@@ -197,10 +204,13 @@ def _half_space_channel(y, r_ring, mean_of, misfit=None):
         return misfit(profile(x)) if misfit else ring_misfit(model(x))
 
     sigma_tr = float(np.clip(-np.polyfit(r_ring, y, 1)[0], 1e-3, 50.0))
-    fits = []
-    for albedo in np.linspace(lo, hi, STARTS + 2)[1:-1] if STARTS > 1 else [0.5 * (lo + hi)]:
-        x0 = np.clip([np.log(sigma_tr / np.sqrt(3 * (1 - albedo))), np.log1p(-albedo)], *bounds)
-        fits.append(least_squares(residual, x0, bounds=bounds))
+    starts = [
+        [np.log(sigma_tr / np.sqrt(3 * (1 - albedo))), np.log1p(-albedo)]
+        for albedo in (np.linspace(lo, hi, STARTS + 2)[1:-1] if STARTS > 1 else [0.5 * (lo + hi)])
+    ]
+    if shape is not None:  # and the flat fit's material
+        starts.append([np.log(start[0]), np.log1p(-start[1])])
+    fits = [least_squares(residual, np.clip(x0, *bounds), bounds=bounds) for x0 in starts]
     costs = np.array([f.cost for f in fits])
     best = fits[int(np.argmin(costs))]
     value = model(best.x)[n_ring:]
@@ -217,7 +227,8 @@ def _half_space_channel(y, r_ring, mean_of, misfit=None):
         spread**2 + (0.5 * (value - model(free.x)[n_ring:])) ** 2 + ((scatter + MODEL_FLOOR) * value) ** 2
     )
     sigma_t, albedo = np.exp(best.x[0]), -np.expm1(best.x[1])
-    return value, variance, bool(misfit) and misfit.short_of_clip(profile(best.x)), (sigma_t, albedo)
+    short = bool(misfit) and misfit.short_of_clip(profile(best.x))  # (the gains left at the best fit's)
+    return value, variance, short, (sigma_t, albedo)
 
 
 class PixelEvidence:
@@ -225,12 +236,12 @@ class PixelEvidence:
     :data:`~.surface_map.GRAZING_DEG` of the normal, one channel at a time: the misfit of a radial
     profile f against them.
 
-    A pixel reads the solid-angle mean of what its rays see, :math:`m_p = \sum_s \Omega_s G_s
-    f(|y_s - x_i|) / \sum_s \Omega_s` over its sub-pixel rays s that meet the mesh
-    (:attr:`.surface_map.SurfaceMap.rays`, grazing ones included; G_s the gain of the ray's cell,
-    :mod:`.shape_gain`, 1 without) — exact for a profile as steep as the near peak, where interpolating
-    cell means would not be, and for a pixel that sees the surface at grazing angles in part, where a
-    footprint-weighted mean would not be.  Usable pixels give
+    A pixel reads the solid-angle mean of what its rays see, :math:`m_p = \sum_s \Omega_s G_s f(|y_s -
+    x_i|) / \sum_s \Omega_s` over its sub-pixel rays s that meet the mesh
+    (:attr:`.surface_map.SurfaceMap.rays`, grazing ones included; G_s the cells' gains,
+    :mod:`.shape_gain`, interpolated over the ray's face, 1 without) — exact for a profile as steep as the
+    near peak, where interpolating cell means would not be, and for a pixel that sees the surface at
+    grazing angles in part, where a footprint-weighted mean would not be.  Usable pixels give
     :math:`(m_p - E_p)/\sqrt{\mathrm{Var}\,E_p + (\epsilon E_p)^2}` (ε = :data:`MODEL_FLOOR`: the
     profile's form is known to a few per cent, not to the photon noise of a bright pixel); clipped ones
     count only where the profile falls below what they show,
@@ -243,14 +254,21 @@ class PixelEvidence:
     footprint (a disc of the same area).
     """
 
-    def __init__(self, views, hit, r_zone: float, nearest=None, sample=None):
+    def __init__(self, views, hit, r_zone: float, mesh=None, sample=None):
         self.parts, self.cells, self.radii = [], [], []
         for m, E, var, usable, floor in views:
-            pixel, y, omega, a_s = m.rays  # each ray's solid angle (the weight of its reading), footprint
+            pixel, y, omega, a_s, face = m.rays  # each ray's solid angle (its reading's weight), footprint
             n = len(m.used)
             col = np.minimum(np.searchsorted(m.used, pixel), n - 1)  # each ray's pixel among the used ones
             read = m.used[col] == pixel  # (a pixel whose rays all graze is not read: no value to fit)
-            pixel, y, omega, a_s, col = pixel[read], y[read], omega[read], a_s[read], col[read]
+            pixel, y, omega, a_s, face, col = (
+                pixel[read],
+                y[read],
+                omega[read],
+                a_s[read],
+                face[read],
+                col[read],
+            )
             r_s = np.linalg.norm(y.astype(np.float64) - hit, axis=1)
             far = np.bincount(col, weights=(r_s > r_zone).astype(float), minlength=n) > 0
             clipped = ~usable & (floor > 0).any(axis=1)
@@ -262,7 +280,7 @@ class PixelEvidence:
             if not keep.any():
                 continue
             if sample is not None:  # the kept pixels sampled finely: a few rays miss the core's share
-                pixel, y, omega, a_s = sample(m, m.used[keep])
+                pixel, y, omega, a_s, face = sample(m, m.used[keep])
                 col = np.searchsorted(m.used, pixel)
                 r_s = np.linalg.norm(y.astype(np.float64) - hit, axis=1)
             rays = keep[col]
@@ -279,8 +297,10 @@ class PixelEvidence:
                     floor[keep],
                 )
             )
-            # each ray's cell (its nearest vertex): where a per-cell gain multiplies the profile
-            self.cells.append(nearest(y[rays]) if nearest is not None else None)
+            # each ray's face's corners and its barycentric weights there: where the cells' gains multiply
+            # the profile (the face, not the nearest vertex: across a sheet thinner than a cell that is
+            # the far side's)
+            self.cells.append(exit_barycentric(mesh, face[rays], y[rays]) if mesh is not None else None)
             self.radii.append(np.sqrt(a_s[rays].astype(np.float64) / np.pi))  # its footprint's radius, mm
         self.channel = 0
         #: (V, 3) per-cell gains of the profile (:mod:`.shape_gain`), or None
@@ -298,7 +318,8 @@ class PixelEvidence:
                 d = np.hypot(r_s[core, None] + rho[core, None] * _DISC[:, 0], rho[core, None] * _DISC[:, 1])
                 f[core] = profile(d.ravel()).reshape(d.shape).mean(axis=1)
             if self.gain is not None and cell is not None:
-                f = f * self.gain[cell, self.channel]
+                tri, bary = cell
+                f = f * np.einsum("ij,ij->i", bary, self.gain[tri, self.channel])
             yield np.bincount(col, weights=omega * f, minlength=n) / np.bincount(col, omega, minlength=n)
 
     def short_of_clip(self, profile) -> bool:
@@ -340,7 +361,7 @@ class PixelEvidence:
         return np.concatenate(out)
 
 
-def _near_peak_channel(y, r_ring, mean_of, eta, misfit=None):
+def _near_peak_channel(y, r_ring, mean_of, eta, misfit=None, shape=None):
     """One channel: the target cells' values, variances, whether the model reads short of the clip and the
     half-space's fitted (σ_t, α) (None for the dipole) — ``mean_of`` gives the cell means of a radial
     profile, ring cells first; through an index-matched boundary the half-space's profile
@@ -348,7 +369,7 @@ def _near_peak_channel(y, r_ring, mean_of, eta, misfit=None):
     from scipy.optimize import least_squares  # heavy: SciPy's optimisers load where a peak is recovered
 
     if eta == 1.0:  # index-matched: the half-space's own profile (the dipole misses its near peak)
-        return _half_space_channel(y, r_ring, mean_of, misfit)
+        return _half_space_channel(y, r_ring, mean_of, misfit, shape)
     n_ring = len(y)
 
     def dipole(x):  # s R_dip(σ_a, σ_s'): parameters log σ_a, log σ_s', log s
@@ -392,10 +413,10 @@ def recover_near_peak(mesh, hit, R, var, target, measured, eta: float, views=(),
     views : sequence
         Per camera (map, E, Var E, usable, clip floor) from :func:`.radiance.shot_cell_means`: the pixels
         the index-matched fit reads (:class:`PixelEvidence`).
-    shape : object with ``gain(params, reach)``, optional
+    shape : object with ``table(sigma_ts, reach)``, optional
         The scan's own shape (:class:`.shape_gain.MeshWalkGain`): through an index-matched boundary the
-        half-space's profile takes its per-cell gains at the fitted material, refitted
-        :data:`SHAPE_ITERATIONS` times.
+        half-space's profile times the walks' per-cell gains, fitted jointly (σ_t and α move the gains
+        too; a table of walks over σ_t around the flat fit's, :data:`SIGMA_STEP` apart).
     scene : mitsuba.Scene, optional
         The mesh's scene: the pixels of ``views`` near the hit sampled again, finely
         (:data:`PIXEL_SUB`).
@@ -454,38 +475,45 @@ def recover_near_peak(mesh, hit, R, var, target, measured, eta: float, views=(),
             * gain[cells, ch]
         )
 
-    nearest = _nearest_vertex(verts) if shape is not None else None
     sample = None
     if scene is not None:
 
         def sample(m, pixels):  # the rays of a camera's pixels, PIXEL_SUB² each
             return m.sample_pixels(pixels, PIXEL_SUB, scene, mesh)
 
-    pixels = PixelEvidence(views, hit, r_out, nearest, sample) if views else None
+    pixels = PixelEvidence(views, hit, r_out, mesh if shape is not None else None, sample) if views else None
     short = np.zeros(3, dtype=bool)
     params = [None, None, None]
-    # the flat fit first; then, with the scan's shape, the walk's gains at the fitted material, refitted
-    for walk in range(1 + (SHAPE_ITERATIONS if shape is not None and eta == 1.0 else 0)):
-        if walk:
-            gain = shape.gain(params, reach=r_out + 1.0)
-            if pixels:
-                pixels.gain = gain
+    # the flat fit first; then, with the scan's shape, the profile times the walks' gains fitted jointly
+    # (a table of walks over σ_t around the flat fit's, reweighted for the albedo)
+    for walk in range(1 + (shape is not None and eta == 1.0)):
+        table = shape.table(_sigma_grid(params), reach=r_out + 1.0) if walk else None
+        if pixels:
+            pixels.gain = gain
         for ch in range(3):
             if pixels:
                 pixels.channel = ch
+            shape_ch = None
+            if table is not None:
+
+                def set_gain(sigma_t, albedo, ch=ch, table=table):  # channel ch's near gains at (σ_t, α)
+                    gain[table.cells.near, ch] = table(sigma_t, albedo)
+
+                shape_ch = (set_gain, table.sigma_ts, table.albedo_walk, params[ch])
             value, variance, short[ch], params[ch] = _near_peak_channel(
-                np.log(R[ring, ch]), r[ring], mean_of, eta, pixels or None
+                np.log(R[ring, ch]), r[ring], mean_of, eta, pixels or None, shape_ch
             )
             R[targets, ch], var[targets, ch] = value, variance
     return R, var, True, short
 
 
-def _nearest_vertex(verts):
-    """A function from points (K, 3) to their nearest vertex (K,): the cell each lies in."""
-    from scipy.spatial import cKDTree  # heavy: SciPy's spatial index loads where a peak is recovered
-
-    tree = cKDTree(verts)
-    return lambda y: tree.query(np.asarray(y, dtype=np.float64))[1]
+def _sigma_grid(params) -> np.ndarray:
+    """σ_t (mm⁻¹) of the walks a shape's table takes: from a quarter of the flat fits' least to twice
+    their largest, :data:`SIGMA_STEP` apart in ratio."""
+    sigma_t = [p[0] for p in params if p is not None]
+    lo, hi = max(0.25 * min(sigma_t), 0.02), min(2.0 * max(sigma_t), 30.0)
+    n = max(2, int(np.ceil(np.log(hi / lo) / np.log(SIGMA_STEP))) + 1)
+    return np.geomspace(lo, hi, n)
 
 
 __all__ = ["recover_near_peak", "cell_quadrature", "subtriangle_centroids", "RING_MM", "RING_CELLS"]

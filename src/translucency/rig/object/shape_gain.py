@@ -12,19 +12,24 @@ The gain of a cell v is the ratio of a photon walk on the mesh itself
 (:func:`translucency.acquire.mesh_walk.mesh_random_walk`, index-matched, entering at the hit along the
 inward normal, a homogeneous medium of the fitted σ_t and α) to the half-space's cell means, summed over
 the cells within :math:`h_v = \max(\bar e, \beta\, r_v)` of v (ē the mean edge, r_v the distance from the
-hit, β = :data:`NEIGHBOURHOOD`) so that a cell far from the hit still holds enough exits:
+hit, β = :data:`NEIGHBOURHOOD`) on the same side of the surface (normals within 60°: across a sheet
+thinner than h the far side is near too) so that a cell far from the hit still holds enough exits:
 
 .. math::  G_v = \frac{\sum_{|x_u - x_v| \le h_v} A_u R^{walk}_u}{\sum_{|x_u - x_v| \le h_v} A_u H_u},
    \qquad H_u = \frac{1}{A_u}\int \phi_u\, \sigma_t^2 f(\sigma_t |y - x_i|; \alpha)\, dA(y).
 
-The near-peak model is then :math:`G_v \cdot \sigma_t^2 f(\sigma_t r; \alpha)` on cell v, refitted; the
-walk's material follows the fit (:data:`.near_peak.SHAPE_ITERATIONS` times).  A profile steeper than the
-half-space's at the same material (a horn's tip, a thin part) shows as a gain above 1 too.
+The near-peak model is then :math:`G_v(\sigma_t, \alpha) \cdot \sigma_t^2 f(\sigma_t r; \alpha)` on cell v,
+fitted with the gains moving with the material (:class:`GainTable`: walks at a grid of σ_t and one
+albedo, any albedo below it by reweighting each exit by its scatterings).  A profile unlike the
+half-space's at the same material — a horn's tip, a sheet the light crosses unscattered — shows as a
+gain far from 1, and is fitted as such.
 
 Units: mm, R_d in mm⁻² per unit incident power.
 """
 
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -37,8 +42,14 @@ from .near_peak import cell_quadrature
 PHOTONS = 200_000
 #: the neighbourhood a gain is summed over, as a share of the cell's distance from the hit
 NEIGHBOURHOOD = 0.3
-#: a gain is kept within these bounds (a cell with no exit nearby is not made dark by the walk's noise)
-GAIN_RANGE = (0.25, 4.0)
+#: a gain is kept within these bounds (a cell with no exit nearby is not made dark by the walk's noise;
+#: a thin part's far side, where light crosses a sheet unscattered, may be a hundred times the flat's)
+GAIN_RANGE = (0.02, 1000.0)
+#: a neighbour counts towards a cell's gain where their normals agree this well (cos): the same side
+SAME_SIDE = 0.5
+#: the albedo of the walks a table reweights (any albedo up to it is reached), and their longest walk
+WALK_ALBEDO = 0.999
+MAX_STEPS = 20_000
 
 
 class MeshWalkGain:
@@ -81,45 +92,121 @@ class MeshWalkGain:
     def gain(self, params, reach: float) -> np.ndarray:
         """(V, 3) gains: per channel, the walk at ``params[ch]`` = (σ_t mm⁻¹, α) against the half-space at
         the same; 1 beyond ``reach`` mm of the hit and in a channel whose params are None."""
-        from scipy.spatial import cKDTree  # heavy: SciPy's spatial index loads where a peak is recovered
-
-        from ...acquire.mesh import splat_exits  # the tally's own rule: an exit shared among its corners
-
-        mesh = self.mesh
-        verts = np.asarray(mesh.vertices, dtype=np.float64)
-        V = len(verts)
-        r = np.linalg.norm(verts - self.hit, axis=1)
-        edge = float(np.mean(mesh.edges_unique_length))
-        near = np.flatnonzero(r <= reach)
-        h = np.maximum(edge, NEIGHBOURHOOD * r[near])  # each gain's neighbourhood radius, mm
-        # the cells any neighbourhood reaches: their half-space cell means are needed too
-        zone = np.flatnonzero(r <= reach + NEIGHBOURHOOD * reach + edge)
-        pts, w, owner = cell_quadrature(mesh, zone, toward=self.hit)
-        dist = np.linalg.norm(pts - self.hit, axis=1)
-        tree = cKDTree(verts[zone])
-        neighbours = tree.query_ball_point(verts[near], h)
-        G = np.ones((V, 3))
+        cells = _Cells(self.mesh, self.hit, reach)
+        G = np.ones((len(self.mesh.vertices), 3))
         for ch, p in enumerate(params):
-            if p is None:
-                continue
-            sigma_t, albedo = (float(v) for v in p)
-            volume = Volume.homogeneous(
-                (1, 1, 1), float(np.max(mesh.extents)) + 1.0, [albedo * sigma_t] * 3,
-                [(1 - albedo) * sigma_t] * 3, eta=1.0,
-            )  # fmt: skip
-            walk = mesh_random_walk(
-                self.scene, mesh.bounds, volume, ch, self.hit[None], self.normal[None], self.photons,
-                seed=self.seed + 7919 * ch, index_matched=True,
-            )  # fmt: skip
-            out = walk.code == EXIT
-            point = np.zeros(int(out.sum()), dtype=np.int64)  # one entry point
-            counts = splat_exits(mesh, point, walk.face[out], walk.position[out], 1)[0]
-            walked = counts[zone] / self.photons  # A_u R^walk_u per cell (the share of the photons)
-            H = half_space_R_d(dist, sigma_t, albedo)
-            flat = np.bincount(owner, w * H, minlength=len(zone))  # A_u H_u: the half-space per cell
-            ratio = [walked[n].sum() / max(flat[n].sum(), 1e-300) for n in neighbours]
-            G[near, ch] = np.clip(ratio, *GAIN_RANGE)
+            if p is not None:
+                sigma_t, albedo = (float(v) for v in p)
+                walk = self._walk(sigma_t, albedo, self.seed + 7919 * ch, cells)
+                G[cells.near, ch] = cells.gain(
+                    walk.exits @ np.ones(walk.exits.shape[1]) / self.photons, sigma_t, albedo
+                )
         return G
 
+    def table(self, sigma_ts, reach: float, albedo_walk: float = WALK_ALBEDO) -> GainTable:
+        """Walks at each of ``sigma_ts`` (mm⁻¹, ascending) and the albedo ``albedo_walk``: the gains at any
+        (σ_t, α ≤ albedo_walk) between them (:class:`GainTable`)."""
+        cells = _Cells(self.mesh, self.hit, reach)
+        walks = [
+            self._walk(float(st), albedo_walk, self.seed + 7919 * j, cells) for j, st in enumerate(sigma_ts)
+        ]
+        return GainTable(np.asarray(sigma_ts, dtype=np.float64), albedo_walk, walks, cells, self.photons)
 
-__all__ = ["MeshWalkGain", "PHOTONS"]
+    def _walk(self, sigma_t: float, albedo: float, seed: int, cells: _Cells) -> _Walk:
+        """One walk from the hit in a homogeneous medium: each exit shared among the zone's cells by its
+        barycentric weights (the tally's rule, :func:`~translucency.acquire.mesh.splat_exits`), and its
+        scatterings."""
+        import scipy.sparse as sp  # heavy: SciPy's sparse matrices load where a peak is recovered
+
+        from ...acquire.mesh import exit_barycentric  # the tally's own rule: an exit shared among its corners
+
+        mesh = self.mesh
+        volume = Volume.homogeneous(
+            (1, 1, 1), float(np.max(mesh.extents)) + 1.0, [albedo * sigma_t] * 3,
+            [(1 - albedo) * sigma_t] * 3, eta=1.0,
+        )  # fmt: skip
+        walk = mesh_random_walk(
+            self.scene, mesh.bounds, volume, 0, self.hit[None], self.normal[None], self.photons, seed=seed,
+            index_matched=True, max_steps=MAX_STEPS,
+        )  # fmt: skip
+        out = np.flatnonzero(walk.code == EXIT)
+        tri, bary = exit_barycentric(mesh, walk.face[out], walk.position[out])
+        row = cells.index[tri]  # each corner's row among the zone's cells (-1: outside)
+        inside = row >= 0
+        col = np.repeat(np.arange(len(out)), 3).reshape(-1, 3)
+        exits = sp.csr_matrix(
+            (bary[inside], (row[inside], col[inside])), shape=(len(cells.zone), len(out))
+        )  # zone cells × exits: Σ_exits gives N A_u R_u
+        return _Walk(exits, walk.scatters[out])
+
+
+class _Cells:
+    """The cells within ``reach`` of the hit (``near``, whose gains are made), the wider ``zone`` their
+    neighbourhoods reach, the zone's quadrature and the neighbourhood sums (a sparse near × zone)."""
+
+    def __init__(self, mesh, hit, reach: float):
+        import scipy.sparse as sp  # heavy: SciPy loads where a peak is recovered
+        from scipy.spatial import cKDTree
+
+        verts = np.asarray(mesh.vertices, dtype=np.float64)
+        r = np.linalg.norm(verts - hit, axis=1)
+        edge = float(np.mean(mesh.edges_unique_length))
+        self.near = np.flatnonzero(r <= reach)
+        h = np.maximum(edge, NEIGHBOURHOOD * r[self.near])  # each gain's neighbourhood radius, mm
+        self.zone = np.flatnonzero(r <= reach + NEIGHBOURHOOD * reach + edge)
+        self.index = np.full(len(verts), -1)
+        self.index[self.zone] = np.arange(len(self.zone))
+        pts, self.w, self.owner = cell_quadrature(mesh, self.zone, toward=hit)
+        self.dist = np.linalg.norm(pts - hit, axis=1)
+        neighbours = cKDTree(verts[self.zone]).query_ball_point(verts[self.near], h)
+        rows = np.repeat(np.arange(len(self.near)), [len(n) for n in neighbours])
+        cols = np.concatenate([np.asarray(n, dtype=np.int64) for n in neighbours])
+        # on the same side only: across a sheet thinner than h the far side's cells face away
+        normals = np.asarray(mesh.vertex_normals, dtype=np.float64)
+        side = np.einsum("ij,ij->i", normals[self.near[rows]], normals[self.zone[cols]]) > SAME_SIDE
+        rows, cols = rows[side], cols[side]
+        self.S = sp.csr_matrix((np.ones(len(cols)), (rows, cols)), shape=(len(self.near), len(self.zone)))
+
+    def gain(self, walked: np.ndarray, sigma_t: float, albedo: float) -> np.ndarray:
+        """G over the near cells from the walk's A_u R_u (zone,) and the half-space's at (σ_t, α)."""
+        flat = np.bincount(
+            self.owner, self.w * half_space_R_d(self.dist, sigma_t, albedo), minlength=len(self.zone)
+        )
+        return np.clip((self.S @ walked) / np.maximum(self.S @ flat, 1e-300), *GAIN_RANGE)
+
+
+@dataclass
+class _Walk:
+    exits: object  # sparse (zone cells, exits): each exit's barycentric weights
+    scatters: np.ndarray  # (exits,) real scatterings
+
+
+@dataclass
+class GainTable:
+    r"""Gains at any (σ_t, α) from walks at a grid of σ_t and one albedo α_w, by reweighting: a photon
+    that scattered k times before leaving would have left with probability :math:`(\alpha/\alpha_w)^k`
+    as likely at albedo α (the same flights, the same σ_t), so the walk's
+    :math:`A_u R_u = \sum_{\text{exits}} \phi_u (\alpha/\alpha_w)^k / N`; between the grid's σ_t the
+    gains are interpolated linearly in log σ_t.  What :func:`.near_peak.recover_near_peak` fits with."""
+
+    sigma_ts: np.ndarray
+    albedo_walk: float
+    walks: list
+    cells: _Cells
+    photons: int
+
+    def __call__(self, sigma_t: float, albedo: float) -> np.ndarray:
+        """(near,) gains of the cells within the reach at (σ_t mm⁻¹, α)."""
+        x = np.clip(np.log(sigma_t), np.log(self.sigma_ts[0]), np.log(self.sigma_ts[-1]))
+        j = int(np.clip(np.searchsorted(np.log(self.sigma_ts), x) - 1, 0, len(self.sigma_ts) - 2))
+        t = (x - np.log(self.sigma_ts[j])) / (np.log(self.sigma_ts[j + 1]) - np.log(self.sigma_ts[j]))
+        a = min(float(albedo), self.albedo_walk)
+        G = []
+        for k in (j, j + 1):
+            walk = self.walks[k]
+            weights = np.exp(walk.scatters * (np.log(a) - np.log(self.albedo_walk)))
+            G.append(self.cells.gain(walk.exits @ weights / self.photons, self.sigma_ts[k], a))
+        return (1 - t) * G[0] + t * G[1]
+
+
+__all__ = ["MeshWalkGain", "GainTable", "PHOTONS"]

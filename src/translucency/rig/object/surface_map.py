@@ -75,9 +75,10 @@ class SurfaceMap:
         Rays a pixel side that built W (sub² a pixel).
     rays : tuple of ndarray
         The rays that meet the mesh (grazing ones too): their pixel (n,), where they hit (n, 3) mm,
-        their solid angle Ω_s (n,) sr and footprint a_s (n,) mm² — a pixel's reading of the exitance M
-        of a Lambertian surface is its radiance times π, :math:`\sum_s \Omega_s M(y_s) / \sum_s
-        \Omega_s` over its rays that meet the mesh (the silhouette's share divided out, ``hit_share``).
+        their solid angle Ω_s (n,) sr, footprint a_s (n,) mm² and face (n,) — a pixel's reading of the
+        exitance M of a Lambertian surface is its radiance times π, :math:`\sum_s \Omega_s M(y_s) /
+        \sum_s \Omega_s` over its rays that meet the mesh (the silhouette's share divided out,
+        ``hit_share``).
     hit_share : ndarray, shape (H·W,)
         The share of each pixel's solid angle whose rays meet the mesh (by its sub-pixel rays; 0 or 1 at
         one ray a pixel): a pixel on the silhouette reads the mean over its whole solid angle, the dark
@@ -117,7 +118,7 @@ class SurfaceMap:
 
     def sample_pixels(self, pixels: np.ndarray, sub: int, scene, mesh) -> tuple:
         """The rays through ``pixels`` (indices, ascending), ``sub`` × ``sub`` each, that meet the mesh: as
-        :attr:`rays` (pixel, point, solid angle, footprint)."""
+        :attr:`rays` (pixel, point, solid angle, footprint, face)."""
         origins, directions, omega = self.camera.pixel_rays(sub, pixels=pixels)
         cast = _cast(scene, mesh, origins, directions, omega)
         return _ray_readings(np.repeat(np.asarray(pixels), sub * sub)[cast.hit], cast)
@@ -217,9 +218,9 @@ def surface_map(
 
 
 def _ray_readings(pixel, c: _Cast) -> tuple:
-    """(pixel, point, solid angle, footprint a_s = Ω t²/μ mm²) of the rays that met the mesh."""
+    """(pixel, point, solid angle, footprint a_s = Ω t²/μ mm², face) of the rays that met the mesh."""
     footprint = c.omega * c.t**2 / np.maximum(np.abs(c.mu), 0.05)
-    return pixel, c.p.astype(np.float32), c.omega.astype(np.float32), footprint.astype(np.float32)
+    return pixel, c.p.astype(np.float32), c.omega.astype(np.float32), footprint.astype(np.float32), c.face
 
 
 @dataclass
