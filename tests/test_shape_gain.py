@@ -46,3 +46,39 @@ def test_on_a_ball_the_walk_is_brighter_away_from_the_hit():
     assert (np.abs(G[0] - 1) < 0.15).all(), G[0]
     bands = [np.median(G[(r > lo) & (r < hi)], axis=0) for lo, hi in ((0.1, 0.6), (0.6, 1.5), (1.5, 3.0))]
     assert (np.diff(bands, axis=0) > 0).all() and (bands[-1] > 1.5).all(), bands
+
+
+def test_the_table_reweighted_for_the_albedo_is_the_walk_at_that_albedo():
+    """Walks at albedo 0.999 over a grid of σ_t, each exit weighted (α/0.999)^k for its k scatterings,
+    against analog walks at (σ_t, α) itself (another seed): the same gains within their photon noise, on
+    the grid and between its points."""
+    mesh = trimesh.creation.icosphere(subdivisions=4, radius=3.0)
+    v = np.asarray(mesh.vertices)
+    shape = MeshWalkGain(mesh, mesh_scene(mesh), v[0], mesh.vertex_normals[0], seed=5)
+    table = shape.table([0.5, 1.0, 2.0], reach=3.0)
+    r = np.linalg.norm(v[table.cells.near] - v[0], axis=1)
+    for sigma_t, albedo in ((1.0, 0.95), (1.0, 0.7), (1.41, 0.9)):
+        G_table = table(sigma_t, albedo)
+        G_walk = shape.gain([(sigma_t, albedo), None, None], reach=3.0)[table.cells.near, 0]
+        for lo, hi in ((0.0, 0.6), (0.6, 1.5), (1.5, 3.0)):
+            band = (r >= lo) & (r < hi)
+            ratio = np.median(G_table[band]) / np.median(G_walk[band])
+            assert abs(ratio - 1) < 0.03, (sigma_t, albedo, lo, ratio)
+
+
+def test_light_through_a_thin_sheet_leaves_unscattered_as_beer_lambert_says():
+    """A sheet 0.5 mm thick (20 × 20 mm), lit at its top's centre: the light that leaves unscattered is
+    e^{−σ_t L} of the beam, at the point below the hit — on the table's σ_t and between them (its log is
+    linear in σ_t) — and kept apart from the gains (a point, not spread over a neighbourhood)."""
+    box = trimesh.creation.box(extents=(20.0, 20.0, 0.5))
+    v, f = trimesh.remesh.subdivide_to_size(box.vertices, box.faces, max_edge=1.0)
+    mesh = trimesh.Trimesh(v, f, process=True)
+    top = np.flatnonzero(np.isclose(mesh.vertices[:, 2], 0.25))
+    hit = top[np.argmin(np.linalg.norm(mesh.vertices[top, :2], axis=1))]
+    shape = MeshWalkGain(mesh, mesh_scene(mesh), mesh.vertices[hit], mesh.vertex_normals[hit], seed=2)
+    table = shape.table([1.0, 2.0, 4.0], reach=2.0)
+    for sigma_t in (1.0, 2.0, 2.8):
+        cells, point = table.ballistic(sigma_t)
+        expected = np.exp(-sigma_t * 0.5)
+        assert abs(cells.sum() / expected - 1) < 0.02, (sigma_t, cells.sum(), expected)
+        assert np.allclose(point, mesh.vertices[hit] - [0, 0, 0.5], atol=1e-3)

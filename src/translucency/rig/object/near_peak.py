@@ -62,7 +62,7 @@ _DISC = (
     )
 )(np.arange(64.0))
 #: the ratio between neighbouring σ_t of the scan's table of walks (:mod:`.shape_gain`)
-SIGMA_STEP = 1.6
+SIGMA_STEP = 1.8
 
 
 def subtriangle_centroids(n: int = QUADRATURE_N) -> np.ndarray:
@@ -204,11 +204,11 @@ def _half_space_channel(y, r_ring, mean_of, misfit=None, shape=None):
         return misfit(profile(x)) if misfit else ring_misfit(model(x))
 
     sigma_tr = float(np.clip(-np.polyfit(r_ring, y, 1)[0], 1e-3, 50.0))
-    starts = [
-        [np.log(sigma_tr / np.sqrt(3 * (1 - albedo))), np.log1p(-albedo)]
-        for albedo in (np.linspace(lo, hi, STARTS + 2)[1:-1] if STARTS > 1 else [0.5 * (lo + hi)])
-    ]
-    if shape is not None:  # and the flat fit's material
+    albedos = np.linspace(lo, hi, STARTS + 2)[1:-1] if STARTS > 1 else [0.5 * (lo + hi)]
+    if shape is not None:  # the flat fit's material, and two more (each evaluation reweights the walks)
+        albedos = albedos[[1, -2]]
+    starts = [[np.log(sigma_tr / np.sqrt(3 * (1 - albedo))), np.log1p(-albedo)] for albedo in albedos]
+    if shape is not None:
         starts.append([np.log(start[0]), np.log1p(-start[1])])
     fits = [least_squares(residual, np.clip(x0, *bounds), bounds=bounds) for x0 in starts]
     costs = np.array([f.cost for f in fits])
@@ -255,7 +255,7 @@ class PixelEvidence:
     """
 
     def __init__(self, views, hit, r_zone: float, mesh=None, sample=None):
-        self.parts, self.cells, self.radii = [], [], []
+        self.parts, self.cells, self.radii, self.points = [], [], [], []
         for m, E, var, usable, floor in views:
             pixel, y, omega, a_s, face = m.rays  # each ray's solid angle (its reading's weight), footprint
             n = len(m.used)
@@ -302,16 +302,40 @@ class PixelEvidence:
             # the far side's)
             self.cells.append(exit_barycentric(mesh, face[rays], y[rays]) if mesh is not None else None)
             self.radii.append(np.sqrt(a_s[rays].astype(np.float64) / np.pi))  # its footprint's radius, mm
+            self.points.append((y[rays].astype(np.float64), self.radii[-1]))
         self.channel = 0
         #: (V, 3) per-cell gains of the profile (:mod:`.shape_gain`), or None
         self.gain = None
+        #: per channel the power of light leaving at one point (:meth:`delta`), and the pixels that see it
+        self.deltas, self.delta_pixels = [None, None, None], None
 
     def __bool__(self):
         return bool(self.parts)
 
+    def delta(self, ch: int, point, power: float) -> None:
+        """Light of ``power`` (per unit incident) leaving at one ``point`` (mm), in channel ``ch``: the
+        pixel whose rays come nearest it (within two of their footprint radii) reads power / its
+        footprint's area; the others nothing."""
+        if point is None or power <= 0:
+            self.deltas[ch] = None
+            return
+        if self.delta_pixels is None:  # where the point is seen: the same for every σ_t
+            self.delta_pixels = []
+            for (col, *_), (y, rho) in zip(self.parts, self.points):
+                d = np.linalg.norm(y - point, axis=1)
+                s = int(np.argmin(d))
+                if d[s] > 2 * rho[s]:
+                    self.delta_pixels.append(None)
+                    continue
+                p = col[s]
+                self.delta_pixels.append((p, 1.0 / float(np.pi * np.sum(rho[col == p] ** 2))))
+        self.deltas[ch] = power
+
     def _readings(self, profile):
-        """Each kept pixel's reading of ``profile``: Σ_s Ω_s G_s f(r_s) / Σ_s Ω_s, per camera."""
-        for (col, r_s, omega, n, *_), cell, rho in zip(self.parts, self.cells, self.radii):
+        """Each kept pixel's reading of ``profile``: Σ_s Ω_s G_s f(r_s) / Σ_s Ω_s (plus the point of
+        unscattered light, :meth:`delta`), per camera."""
+        power = self.deltas[self.channel]
+        for k, ((col, r_s, omega, n, *_), cell, rho) in enumerate(zip(self.parts, self.cells, self.radii)):
             f = profile(r_s)
             core = r_s < CORE_FOOTPRINTS * rho  # the 1/r core within a footprint or two: its disc's mean
             if core.any():
@@ -320,7 +344,11 @@ class PixelEvidence:
             if self.gain is not None and cell is not None:
                 tri, bary = cell
                 f = f * np.einsum("ij,ij->i", bary, self.gain[tri, self.channel])
-            yield np.bincount(col, weights=omega * f, minlength=n) / np.bincount(col, omega, minlength=n)
+            m = np.bincount(col, weights=omega * f, minlength=n) / np.bincount(col, omega, minlength=n)
+            seen = self.delta_pixels[k] if power and self.delta_pixels else None
+            if seen is not None:  # the point of unscattered light, in the one pixel that sees it
+                m[seen[0]] += power * seen[1]
+            yield m
 
     def short_of_clip(self, profile) -> bool:
         """Whether the profile reads below :data:`CLIP_REACH` of what the clipped pixels show (median over
@@ -466,14 +494,15 @@ def recover_near_peak(mesh, hit, R, var, target, measured, eta: float, views=(),
     pts, w, owner = cell_quadrature(mesh, cells, toward=hit)
     dist = np.linalg.norm(pts - hit, axis=1)
     gain = np.ones((len(verts), 3))  # the shape's gain per cell (1: the flat half-space's profile)
+    straight = np.zeros((len(verts), 3))  # A_v R_v of the light that crosses a sheet unscattered
     ch = 0
 
+    area = np.bincount(owner, weights=w, minlength=len(cells))  # A_v
+
     def mean_of(profile):  # the cell means (len(cells),) of a radial profile, times each cell's gain
-        return (
-            np.bincount(owner, weights=w * profile(dist), minlength=len(cells))
-            / np.bincount(owner, weights=w, minlength=len(cells))
-            * gain[cells, ch]
-        )
+        # (plus the unscattered light where a sheet lets it through: A_v R_v / A_v)
+        flat = np.bincount(owner, weights=w * profile(dist), minlength=len(cells)) / area
+        return flat * gain[cells, ch] + straight[cells, ch] / area
 
     sample = None
     if scene is not None:
@@ -498,6 +527,9 @@ def recover_near_peak(mesh, hit, R, var, target, measured, eta: float, views=(),
 
                 def set_gain(sigma_t, albedo, ch=ch, table=table):  # channel ch's near gains at (σ_t, α)
                     gain[table.cells.near, ch] = table(sigma_t, albedo)
+                    straight[:, ch], point = table.ballistic(sigma_t)
+                    if pixels:
+                        pixels.delta(ch, point, float(straight[:, ch].sum()))
 
                 shape_ch = (set_gain, table.sigma_ts, table.albedo_walk, params[ch])
             value, variance, short[ch], params[ch] = _near_peak_channel(
@@ -508,10 +540,10 @@ def recover_near_peak(mesh, hit, R, var, target, measured, eta: float, views=(),
 
 
 def _sigma_grid(params) -> np.ndarray:
-    """σ_t (mm⁻¹) of the walks a shape's table takes: from a quarter of the flat fits' least to twice
-    their largest, :data:`SIGMA_STEP` apart in ratio."""
+    """σ_t (mm⁻¹) of the walks a shape's table takes: from a seventh of the flat fits' least to twice
+    their largest (a thin part's flat fit reads σ_t up to 4× high), :data:`SIGMA_STEP` apart in ratio."""
     sigma_t = [p[0] for p in params if p is not None]
-    lo, hi = max(0.25 * min(sigma_t), 0.02), min(2.0 * max(sigma_t), 30.0)
+    lo, hi = max(min(sigma_t) / 7.0, 0.02), min(2.0 * max(sigma_t), 30.0)
     n = max(2, int(np.ceil(np.log(hi / lo) / np.log(SIGMA_STEP))) + 1)
     return np.geomspace(lo, hi, n)
 

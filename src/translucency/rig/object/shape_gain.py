@@ -38,8 +38,8 @@ from ...acquire.volume import Volume
 from ...model.half_space import half_space_R_d
 from .near_peak import cell_quadrature
 
-#: photons a channel of each walk
-PHOTONS = 200_000
+#: photons of each walk
+PHOTONS = 100_000
 #: the neighbourhood a gain is summed over, as a share of the cell's distance from the hit
 NEIGHBOURHOOD = 0.3
 #: a gain is kept within these bounds (a cell with no exit nearby is not made dark by the walk's noise;
@@ -47,9 +47,11 @@ NEIGHBOURHOOD = 0.3
 GAIN_RANGE = (0.02, 1000.0)
 #: a neighbour counts towards a cell's gain where their normals agree this well (cos): the same side
 SAME_SIDE = 0.5
-#: the albedo of the walks a table reweights (any albedo up to it is reached), and their longest walk
+#: the albedo of the walks a table reweights (any albedo up to it is reached), and their longest walk in
+#: collisions (a photon still inside after it is dropped: its weight at albedo α ≤ 0.99 below 10⁻¹¹,
+#: at 0.998 below 0.01 — the cost of the walks is mostly such photons' long paths)
 WALK_ALBEDO = 0.999
-MAX_STEPS = 20_000
+MAX_STEPS = 3_000
 
 
 class MeshWalkGain:
@@ -132,12 +134,19 @@ class MeshWalkGain:
         out = np.flatnonzero(walk.code == EXIT)
         tri, bary = exit_barycentric(mesh, walk.face[out], walk.position[out])
         row = cells.index[tri]  # each corner's row among the zone's cells (-1: outside)
+        # the light that left unscattered (through a sheet thinner than the beam's free path) is a point:
+        # kept apart, not spread over a neighbourhood (its cells' share exactly, and where it left)
+        straight = walk.scatters[out] == 0
+        row = np.where(straight[:, None], -1, row)
         inside = row >= 0
         col = np.repeat(np.arange(len(out)), 3).reshape(-1, 3)
         exits = sp.csr_matrix(
             (bary[inside], (row[inside], col[inside])), shape=(len(cells.zone), len(out))
-        )  # zone cells × exits: Σ_exits gives N A_u R_u
-        return _Walk(exits, walk.scatters[out])
+        )  # zone cells × exits: Σ_exits gives N A_u R_u (scattered light)
+        ballistic = np.zeros(len(mesh.vertices))
+        np.add.at(ballistic, tri[straight].ravel(), bary[straight].ravel())
+        point = walk.position[out][straight].mean(axis=0) if straight.any() else None
+        return _Walk(exits, walk.scatters[out], ballistic / self.photons, point)
 
 
 class _Cells:
@@ -177,8 +186,10 @@ class _Cells:
 
 @dataclass
 class _Walk:
-    exits: object  # sparse (zone cells, exits): each exit's barycentric weights
+    exits: object  # sparse (zone cells, exits): each scattered exit's barycentric weights
     scatters: np.ndarray  # (exits,) real scatterings
+    ballistic: np.ndarray  # (V,) A_v R_v of the light that left unscattered, per unit power
+    point: np.ndarray | None  # where it left, mm (None: none did)
 
 
 @dataclass
@@ -194,6 +205,22 @@ class GainTable:
     walks: list
     cells: _Cells
     photons: int
+
+    def ballistic(self, sigma_t: float) -> tuple[np.ndarray, np.ndarray | None]:
+        r"""The unscattered light at σ_t: A_v R_v per cell (V,) and where it leaves (None: nowhere). Its
+        power falls as :math:`e^{-\sigma_t L}` (L the sheet's thickness along the beam), so it is
+        interpolated linearly in σ_t on a log scale; it does not depend on the albedo."""
+        points = [w.point for w in self.walks if w.point is not None]
+        if not points:
+            return np.zeros_like(self.walks[0].ballistic), None
+        s = float(np.clip(sigma_t, self.sigma_ts[0], self.sigma_ts[-1]))
+        j = int(np.clip(np.searchsorted(self.sigma_ts, s) - 1, 0, len(self.sigma_ts) - 2))
+        t = (s - self.sigma_ts[j]) / (self.sigma_ts[j + 1] - self.sigma_ts[j])
+        a, b = self.walks[j].ballistic, self.walks[j + 1].ballistic
+        both = (a > 0) & (b > 0)  # 0 where either walk had none there
+        mixed = np.zeros_like(a)
+        mixed[both] = np.exp((1 - t) * np.log(a[both]) + t * np.log(b[both]))
+        return mixed, points[0]
 
     def __call__(self, sigma_t: float, albedo: float) -> np.ndarray:
         """(near,) gains of the cells within the reach at (σ_t mm⁻¹, α)."""
