@@ -15,7 +15,9 @@ PARAMS = [(2.0, 0.9), (2.0, 0.7), (3.0, 0.5)]  # (σ_t mm⁻¹, albedo) per chan
 
 def _gains(mesh, hit_vertex, reach):
     v = np.asarray(mesh.vertices)
-    shape = MeshWalkGain(mesh, mesh_scene(mesh), v[hit_vertex], mesh.vertex_normals[hit_vertex], seed=3)
+    shape = MeshWalkGain(
+        mesh, mesh_scene(mesh), v[hit_vertex], mesh.vertex_normals[hit_vertex], seed=3, photons=200_000
+    )
     r = np.linalg.norm(v - v[hit_vertex], axis=1)
     return shape.gain(PARAMS, reach=reach), r
 

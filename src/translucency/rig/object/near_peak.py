@@ -51,7 +51,7 @@ QUADRATURE_N = 6
 #: halvings of the graded rule towards the hit
 GRADED_LEVELS = 8
 #: rays a pixel side when the near peak's pixels are sampled again
-PIXEL_SUB = 12
+PIXEL_SUB = 8
 #: a ray this many footprint radii from the hit or nearer reads the mean of the profile over its footprint
 CORE_FOOTPRINTS = 3.0
 #: points of equal area over the unit disc (a sunflower): a footprint's mean
@@ -62,7 +62,7 @@ _DISC = (
     )
 )(np.arange(64.0))
 #: the ratio between neighbouring σ_t of the scan's table of walks (:mod:`.shape_gain`)
-SIGMA_STEP = 1.8
+SIGMA_STEP = 2.0
 
 
 def subtriangle_centroids(n: int = QUADRATURE_N) -> np.ndarray:
@@ -163,7 +163,7 @@ def cell_quadrature(mesh, vertices, n: int = QUADRATURE_N, toward=None):
     return np.concatenate(points), np.concatenate(weights), np.concatenate(owner)
 
 
-def _half_space_channel(y, r_ring, mean_of, misfit=None, shape=None):
+def _half_space_channel(y, r_ring, mean_of, misfit=None, shape=None, quick=False):
     """One channel through an index-matched boundary: the half-space's own profile (σ_t, α) fitted at its
     calibrated level (no free scale: the laser's power is known); the target cells' values and variances,
     whether the profile reads short of the clipped pixels, and the fitted (σ_t, α).
@@ -205,7 +205,7 @@ def _half_space_channel(y, r_ring, mean_of, misfit=None, shape=None):
 
     sigma_tr = float(np.clip(-np.polyfit(r_ring, y, 1)[0], 1e-3, 50.0))
     albedos = np.linspace(lo, hi, STARTS + 2)[1:-1] if STARTS > 1 else [0.5 * (lo + hi)]
-    if shape is not None:  # the flat fit's material, and two more (each evaluation reweights the walks)
+    if shape is not None or quick:  # fewer starts: each evaluation reweights walks, or a refit follows
         albedos = albedos[[1, -2]]
     starts = [[np.log(sigma_tr / np.sqrt(3 * (1 - albedo))), np.log1p(-albedo)] for albedo in albedos]
     if shape is not None:
@@ -216,7 +216,9 @@ def _half_space_channel(y, r_ring, mean_of, misfit=None, shape=None):
     value = model(best.x)[n_ring:]
     good = [model(f.x)[n_ring:] for f in fits if f.cost <= costs.min() * (1 + COST_TOLERANCE) + 1e-12]
     spread = 0.5 * (np.max(good, axis=0) - np.min(good, axis=0))
-    free = least_squares(residual, [*best.x, 0.0], bounds=([*bounds[0], -5.0], [*bounds[1], 5.0]))
+    free = best  # (a quick fit, refitted next, states no variance of its own)
+    if not quick:
+        free = least_squares(residual, [*best.x, 0.0], bounds=([*bounds[0], -5.0], [*bounds[1], 5.0]))
     # the model's relative scatter about the data beyond their noise: the pixels' where fitted to them
     scatter = (
         misfit.relative_scatter(profile(best.x))
@@ -389,7 +391,7 @@ class PixelEvidence:
         return np.concatenate(out)
 
 
-def _near_peak_channel(y, r_ring, mean_of, eta, misfit=None, shape=None):
+def _near_peak_channel(y, r_ring, mean_of, eta, misfit=None, shape=None, quick=False):
     """One channel: the target cells' values, variances, whether the model reads short of the clip and the
     half-space's fitted (σ_t, α) (None for the dipole) — ``mean_of`` gives the cell means of a radial
     profile, ring cells first; through an index-matched boundary the half-space's profile
@@ -397,7 +399,7 @@ def _near_peak_channel(y, r_ring, mean_of, eta, misfit=None, shape=None):
     from scipy.optimize import least_squares  # heavy: SciPy's optimisers load where a peak is recovered
 
     if eta == 1.0:  # index-matched: the half-space's own profile (the dipole misses its near peak)
-        return _half_space_channel(y, r_ring, mean_of, misfit, shape)
+        return _half_space_channel(y, r_ring, mean_of, misfit, shape, quick)
     n_ring = len(y)
 
     def dipole(x):  # s R_dip(σ_a, σ_s'): parameters log σ_a, log σ_s', log s
@@ -515,8 +517,10 @@ def recover_near_peak(mesh, hit, R, var, target, measured, eta: float, views=(),
     params = [None, None, None]
     # the flat fit first; then, with the scan's shape, the profile times the walks' gains fitted jointly
     # (a table of walks over σ_t around the flat fit's, reweighted for the albedo)
-    for walk in range(1 + (shape is not None and eta == 1.0)):
+    walks = shape is not None and eta == 1.0
+    for walk in range(1 + walks):
         table = shape.table(_sigma_grid(params), reach=r_out + 1.0) if walk else None
+        refit = walks and not walk  # the flat fit only starts the joint one
         if pixels:
             pixels.gain = gain
         for ch in range(3):
@@ -533,17 +537,17 @@ def recover_near_peak(mesh, hit, R, var, target, measured, eta: float, views=(),
 
                 shape_ch = (set_gain, table.sigma_ts, table.albedo_walk, params[ch])
             value, variance, short[ch], params[ch] = _near_peak_channel(
-                np.log(R[ring, ch]), r[ring], mean_of, eta, pixels or None, shape_ch
+                np.log(R[ring, ch]), r[ring], mean_of, eta, pixels or None, shape_ch, refit
             )
             R[targets, ch], var[targets, ch] = value, variance
     return R, var, True, short
 
 
 def _sigma_grid(params) -> np.ndarray:
-    """σ_t (mm⁻¹) of the walks a shape's table takes: from a seventh of the flat fits' least to twice
+    """σ_t (mm⁻¹) of the walks a shape's table takes: from a fifth of the flat fits' least to twice
     their largest (a thin part's flat fit reads σ_t up to 4× high), :data:`SIGMA_STEP` apart in ratio."""
     sigma_t = [p[0] for p in params if p is not None]
-    lo, hi = max(min(sigma_t) / 7.0, 0.02), min(2.0 * max(sigma_t), 30.0)
+    lo, hi = max(min(sigma_t) / 5.0, 0.02), min(2.0 * max(sigma_t), 30.0)
     n = max(2, int(np.ceil(np.log(hi / lo) / np.log(SIGMA_STEP))) + 1)
     return np.geomspace(lo, hi, n)
 

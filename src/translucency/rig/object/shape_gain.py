@@ -39,7 +39,7 @@ from ...model.half_space import half_space_R_d
 from .near_peak import cell_quadrature
 
 #: photons of each walk
-PHOTONS = 100_000
+PHOTONS = 50_000
 #: the neighbourhood a gain is summed over, as a share of the cell's distance from the hit
 NEIGHBOURHOOD = 0.3
 #: a gain is kept within these bounds (a cell with no exit nearby is not made dark by the walk's noise;
