@@ -48,8 +48,9 @@ MAY_IMPORT: dict[str, frozenset[str]] = {
     "scene": _BASE | {"acquire", "fit", "evaluate", "render"},
     # looking at a fitted model: the page and the live viewer, on the render stage's transport and transfer
     "view": _BASE | {"acquire", "fit", "evaluate", "render"},
-    # a real rig: photographs → a planar data set as acquire writes it (acquire's place in the pipeline)
-    "rig": _BASE,
+    # a real rig: photographs → a data set as acquire writes it (acquire's place in the pipeline); its
+    # near peak walks photons on the scan with acquire's own mesh walk (the same stage, sideways)
+    "rig": _BASE | {"acquire"},
     # cross-checks beside the pipeline (tests, benchmarks)
     "validate": _BASE | {"acquire", "fit", "evaluate", "render"},
     # on top: the workflow as functions (``translucency.fit(...)``), the main job, the commands,
