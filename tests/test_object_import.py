@@ -444,6 +444,7 @@ def test_import_variance_matches_the_scatter_of_two_imports(tmp_path):
     outs = []
     for seed in (11, 12):
         rig = write_rig(tmp_path / f"rig{seed}", noise_seed=seed)
+        _no_spot(rig)  # (the measured cells' variance is the question: no near peak to fit)
         import_object(rig.folder, tmp_path / f"{seed}.zarr")
         outs.append(_read(tmp_path / f"{seed}.zarr"))
     (_, Ra, va, fa), (_, Rb, vb, fb) = outs
@@ -626,8 +627,8 @@ def load_mesh_of_rig():
 
 @pytest.mark.parametrize(
     "field, eta",
-    [(exitance, 1.4), (_half_space, 1.0), (_two_scales, 1.0)],
-    ids=["exponential behind glass", "half-space", "steep core"],
+    [(exitance, 1.4), (_half_space, 1.0), pytest.param(_two_scales, 1.0, marks=pytest.mark.slow)],
+    ids=["exponential behind glass", "half-space", "steep core"],  # (the limit's case: a minute, slow)
 )
 def test_a_clipped_spot_is_flagged_counted_and_recovered_within_its_variance(tmp_path, field, eta):
     """One exposure a shot, the spot clipped (saturation 15 of peaks of 10-100): the cells under clipped
