@@ -518,11 +518,11 @@ def recover_near_peak(mesh, hit, R, var, target, measured, eta: float, views=(),
     # the flat fit first; then, with the scan's shape, the profile times the walks' gains fitted jointly
     # (a table of walks over σ_t around the flat fit's, reweighted for the albedo)
     walks = shape is not None and eta == 1.0
+    if pixels:
+        pixels.gain = gain  # (the same array: the gains set below are the pixels' too)
     for walk in range(1 + walks):
         table = shape.table(_sigma_grid(params), reach=r_out + 1.0) if walk else None
         refit = walks and not walk  # the flat fit only starts the joint one
-        if pixels:
-            pixels.gain = gain
         for ch in range(3):
             if pixels:
                 pixels.channel = ch

@@ -33,6 +33,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ...acquire.mesh import exit_barycentric
 from ...acquire.mesh_walk import EXIT, mesh_random_walk
 from ...acquire.volume import Volume
 from ...model.half_space import half_space_R_d
@@ -119,8 +120,6 @@ class MeshWalkGain:
         barycentric weights (the tally's rule, :func:`~translucency.acquire.mesh.splat_exits`), and its
         scatterings."""
         import scipy.sparse as sp  # heavy: SciPy's sparse matrices load where a peak is recovered
-
-        from ...acquire.mesh import exit_barycentric  # the tally's own rule: an exit shared among its corners
 
         mesh = self.mesh
         volume = Volume.homogeneous(

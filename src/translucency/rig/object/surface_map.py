@@ -197,7 +197,7 @@ def surface_map(
     if sub > 1:  # the share of each pixel's solid angle that meets the mesh (a silhouette's pixel: part)
         met = np.bincount(pixel, weights=rays_.omega, minlength=n_pix)
         hit_share = met / omega.reshape(n_pix, sub**2).sum(axis=1)
-    area = rays_.omega * rays_.t**2 / np.maximum(rays_.mu, 1e-6)  # the footprint a_s, mm²
+    area = rays_.footprint(1e-6)  # a_s, mm² (the rays W uses face the camera)
     tri = faces[rays_.face]
     rows = tri[use].ravel()
     cols = np.repeat(pixel[use], 3)
@@ -218,9 +218,10 @@ def surface_map(
 
 
 def _ray_readings(pixel, c: _Cast) -> tuple:
-    """(pixel, point, solid angle, footprint a_s = Ω t²/μ mm², face) of the rays that met the mesh."""
-    footprint = c.omega * c.t**2 / np.maximum(np.abs(c.mu), 0.05)
-    return pixel, c.p.astype(np.float32), c.omega.astype(np.float32), footprint.astype(np.float32), c.face
+    """(pixel, point, solid angle, footprint a_s mm², face) of the rays that met the mesh (a grazing
+    ray's footprint long, not infinite: μ held at 0.05 or more)."""
+    footprint = c.footprint(0.05).astype(np.float32)
+    return pixel, c.p.astype(np.float32), c.omega.astype(np.float32), footprint, c.face
 
 
 @dataclass
@@ -237,6 +238,10 @@ class _Cast:
     bary: np.ndarray
     directions: np.ndarray
     omega: np.ndarray
+
+    def footprint(self, mu_floor: float) -> np.ndarray:
+        """Each hit's footprint on the surface a_s = Ω t²/μ, mm², μ held at ``mu_floor`` or more."""
+        return self.omega * self.t**2 / np.maximum(np.abs(self.mu), mu_floor)
 
 
 def _cast(scene, mesh, origins, directions, omega) -> _Cast:
