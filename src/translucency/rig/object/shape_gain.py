@@ -11,9 +11,11 @@ ring fitted with the flat profile reads that excess as a shallower profile, and 
 The gain of a cell v is the ratio of a photon walk on the mesh itself
 (:func:`translucency.acquire.mesh_walk.mesh_random_walk`, index-matched, entering at the hit along the
 inward normal, a homogeneous medium of the fitted σ_t and α) to the half-space's cell means, summed over
-the cells within :math:`h_v = \max(\bar e, \beta\, r_v)` of v (ē the mean edge, r_v the distance from the
-hit, β = :data:`NEIGHBOURHOOD`) on the same side of the surface (normals within 60°: across a sheet
-thinner than h the far side is near too) so that a cell far from the hit still holds enough exits:
+the cells within :math:`h_v = \max(\bar e_v / 2, \beta\, r_v)` of v (ē_v the mean length of v's own
+edges, r_v the distance from the hit, β = :data:`NEIGHBOURHOOD`) on the same side of the surface
+(normals within 60°: across a sheet thinner than h the far side is near too), so that a cell far from
+the hit still holds enough exits and one at the hit is its own (a scan's cells are finest where its
+detail is, a horn's tip: a neighbourhood of the mesh's mean edge there smooths the tip away):
 
 .. math::  G_v = \frac{\sum_{|x_u - x_v| \le h_v} A_u R^{walk}_u}{\sum_{|x_u - x_v| \le h_v} A_u H_u},
    \qquad H_u = \frac{1}{A_u}\int \phi_u\, \sigma_t^2 f(\sigma_t |y - x_i|; \alpha)\, dA(y).
@@ -41,8 +43,10 @@ from .near_peak import cell_quadrature
 
 #: photons of each walk
 PHOTONS = 50_000
-#: the neighbourhood a gain is summed over, as a share of the cell's distance from the hit
+#: the neighbourhood a gain is summed over, as a share of the cell's distance from the hit, and at least
+#: this share of the cell's own mean edge (half: near the hit a cell's gain is its own)
 NEIGHBOURHOOD = 0.3
+OWN_EDGE = 0.5
 #: a gain is kept within these bounds (a cell with no exit nearby is not made dark by the walk's noise;
 #: a thin part's far side, where light crosses a sheet unscattered, may be a hundred times the flat's)
 GAIN_RANGE = (0.02, 1000.0)
@@ -158,10 +162,12 @@ class _Cells:
 
         verts = np.asarray(mesh.vertices, dtype=np.float64)
         r = np.linalg.norm(verts - hit, axis=1)
-        edge = float(np.mean(mesh.edges_unique_length))
         self.near = np.flatnonzero(r <= reach)
-        h = np.maximum(edge, NEIGHBOURHOOD * r[self.near])  # each gain's neighbourhood radius, mm
-        self.zone = np.flatnonzero(r <= reach + NEIGHBOURHOOD * reach + edge)
+        # each cell's own edges' mean length ē_v: a scan's cells are finest where its detail is
+        ends, length = mesh.edges_unique.ravel(), np.repeat(mesh.edges_unique_length, 2)
+        e_v = np.bincount(ends, length, len(verts)) / np.maximum(np.bincount(ends, minlength=len(verts)), 1)
+        h = np.maximum(OWN_EDGE * e_v[self.near], NEIGHBOURHOOD * r[self.near])  # neighbourhood radius, mm
+        self.zone = np.flatnonzero(r <= reach + h.max())  # every neighbourhood within it
         self.index = np.full(len(verts), -1)
         self.index[self.zone] = np.arange(len(self.zone))
         pts, self.w, self.owner = cell_quadrature(mesh, self.zone, toward=hit)
