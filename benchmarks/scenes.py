@@ -8,7 +8,10 @@ errors over the object, over the pixels the object lights and over the rest, the
 seconds of a relight (the two passes and a 16-spp picture, after the one-off transport; the comparison
 uses a picture of ``--picture-spp``) and volpath's seconds at the error ours has:
 
-    python benchmarks/scenes.py WORK --meshes ../shared/meshes [--case pig|cow|spot ...]
+    python benchmarks/scenes.py WORK --meshes ../shared/meshes [--case pig|cow|spot ...] [--unit MM ...]
+
+``--unit 1000`` writes the same scenes in metres (every length / 1000, a point or spot's intensity / 10⁶)
+and renders them with ``scene_unit_mm`` 1000: ours and the reference should not move.
 
 Cases (models acquired and fitted into WORK on first use, index-matched, isotropic):
 
@@ -33,11 +36,13 @@ import json
 import subprocess
 import sys
 import time
+import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import numpy as np
 
 from translucency.mitsuba import mitsuba
+from translucency.mitsuba.scene_frame import SceneFrame
 from translucency.render.tonemap import auto_exposure, save_images, tonemap
 from translucency.scene import FittedScene
 from translucency.scene.compare import lit_pixels, object_pixels, scene_errors
@@ -180,27 +185,40 @@ def scene_xml(case: str, folder: Path, size) -> str:
     return f'<scene version="3.0.0">\n  {sensor}\n  {obj}{rest}\n</scene>\n'
 
 
-def scene_folder(case: str, folder: Path, model: Path, size) -> Path:
+def scene_folder(case: str, folder: Path, model: Path, size, unit_mm: float = 1.0) -> Path:
     """``folder`` with the case's scene: the model (linked), its mesh (``export --ply``) and
-    ``scene.xml`` at ``size``; returns the scene file."""
+    ``scene.xml`` at ``size``, written with ``unit_mm`` millimetres a unit (every length / unit_mm, a
+    point or spot's intensity / unit_mm²: the same picture); returns the scene file."""
     folder.mkdir(parents=True, exist_ok=True)
     (folder / "model.zip").unlink(missing_ok=True)
     (folder / "model.zip").symlink_to(model.resolve())
     subprocess.run(
         TL + ["export", str(model), "--ply", str(folder / "object.ply"), "--overwrite", "--quiet"], check=True
     )
-    (folder / "scene.xml").write_text(scene_xml(case, folder, size))
+    text = scene_xml(case, folder, size)
+    if unit_mm != 1.0:  # the millimetre scene carried into the unit (the inverse of the reference's frame)
+        root = SceneFrame(1.0 / unit_mm, (0.0, 0.0, 0.0)).xml(ET.fromstring(text))
+        text = ET.tostring(root, encoding="unicode")
+    (folder / "scene.xml").write_text(text)
     return folder / "scene.xml"
 
 
 def run_case(
-    case: str, work: Path, meshes: Path, size, spp_ref: int, samples: int, pig_model, picture_spp: int = 64
+    case: str,
+    work: Path,
+    meshes: Path,
+    size,
+    spp_ref: int,
+    samples: int,
+    pig_model,
+    picture_spp: int = 64,
+    unit_mm: float = 1.0,
 ) -> dict:
-    folder = work / case
+    folder = work / (case if unit_mm == 1.0 else f"{case}-unit{unit_mm:g}")
     model = _model(case, work, meshes, pig_model if case == "pig" else None)
-    scene_folder(case, folder, model, size)
+    scene_folder(case, folder, model, size, unit_mm)
     t = time.perf_counter()
-    fs = FittedScene(folder / "scene.xml", {"object": model}, samples=samples)
+    fs = FittedScene(folder / "scene.xml", {"object": model}, samples=samples, scene_unit_mm=unit_mm)
     fs.prepare()
     t_prepare = time.perf_counter() - t
     fs.light(seed=0)  # the first pass compiles the kernels
@@ -230,6 +248,7 @@ def run_case(
     _figure(tonemap(reference, scale), tonemap(ours, scale), errors, noise, folder / f"{case}.png", case)
     row = {
         "case": case,
+        "unit_mm": unit_mm,
         "vertices": fs.vertices,
         "size": list(size),
         "errors": errors,
@@ -300,15 +319,26 @@ def main() -> int:
     ap.add_argument("--samples", type=int, default=32)
     ap.add_argument("--picture-spp", type=int, default=64, help="our picture's samples for the comparison")
     ap.add_argument("--pig-model", type=Path, default=None)
+    ap.add_argument(
+        "--unit", type=float, action="append", help="mm a scene unit (repeat: 1000 metres, 10 cm, 25.4 in)"
+    )
     args = ap.parse_args()
     args.work.mkdir(parents=True, exist_ok=True)
-    for case in args.case or sorted(ACQUISITIONS):
+    for case, unit in ((c, u) for c in args.case or sorted(ACQUISITIONS) for u in args.unit or [1.0]):
         row = run_case(
-            case, args.work, args.meshes, tuple(args.size), args.spp_reference, args.samples, args.pig_model
+            case,
+            args.work,
+            args.meshes,
+            tuple(args.size),
+            args.spp_reference,
+            args.samples,
+            args.pig_model,
+            args.picture_spp,
+            unit,
         )
         o, lit, rest = row["errors"]["object"], row["errors"]["lit"], row["errors"]["rest"]
         print(
-            f"{case}: object rel. RMSE {o['rel_rmse']:.3f} FLIP {o['flip']:.3f} "
+            f"{case} (unit {unit:g} mm): object rel. RMSE {o['rel_rmse']:.3f} FLIP {o['flip']:.3f} "
             f"brightness {o['brightness']:.3f} | lit by it {lit.get('rel_rmse', float('nan')):.3f} "
             f"({lit['pixels']} px) | rest {rest['rel_rmse']:.3f} | "
             f"reference noise {row['reference_noise']:.3f} at 2 x {row['reference_spp']} spp | relight "

@@ -342,6 +342,123 @@ def test_bad_scene_input_is_one_line(fitted_ball, tmp_path, case, expected):
     assert not (tmp_path / "r").exists()  # refused before any output
 
 
+SPOT = """<emitter type="spot">
+    <transform name="to_world"><lookat origin="0, -30, 30" target="2, 0, 6.5" up="0, 0, 1"/></transform>
+    <float name="cutoff_angle" value="20"/><rgb name="intensity" value="2000, 2000, 2000"/>
+  </emitter>"""
+
+
+def _scene_in_unit(folder, unit_mm: float, light: str, offset=(0.0, 0.0, 0.0)):
+    """The test's SCENE written with ``unit_mm`` millimetres a unit and moved by ``offset`` (mm): every
+    length / unit_mm, a point-like light's intensity / unit_mm² (the same irradiance per unit area), radiance
+    kept."""
+    u, oz = float(unit_mm), offset[2]
+
+    def mm(*xyz):
+        return ", ".join(repr(v / u) for v in xyz)
+
+    def moved(*xyz):
+        return mm(*(v + o for v, o in zip(xyz, offset)))
+
+    text = SCENE.format(angle=30, z=6.5, light=light)
+    text = text.replace(
+        'origin="0, -40, 25" target="0, 0, 5"', f'origin="{moved(0, -40, 25)}" target="{moved(0, 0, 5)}"'
+    )
+    text = text.replace(
+        '<rotate z="1" angle="30"/><translate x="2" z="6.5"/>',
+        f'<scale value="{1 / u!r}"/><rotate z="1" angle="30"/><translate value="{moved(2, 0, 6.5)}"/>',
+    )
+    text = text.replace(
+        '<scale value="40"/></transform>',
+        f'<scale value="{40 / u!r}"/><translate value="{moved(0, 0, 0)}"/></transform>',
+    )
+    text = text.replace(
+        '<scale value="5"/><rotate x="1" angle="180"/><translate z="40"/>',
+        f'<scale value="{5 / u!r}"/><rotate x="1" angle="180"/><translate value="{moved(0, 0, 40)}"/>',
+    )
+    text = text.replace(
+        'origin="0, -30, 30" target="2, 0, 6.5"', f'origin="{moved(0, -30, 30)}" target="{moved(2, 0, 6.5)}"'
+    )
+    text = text.replace('value="2000, 2000, 2000"', f'value="{mm(2000 / u, 2000 / u, 2000 / u)}"')
+    path = folder / f"scene_{light[:20].split()[0].strip('<')}_{u:g}_{oz:g}.xml"
+    path.write_text(text)
+    return path
+
+
+@pytest.mark.parametrize(
+    "light, unit_mm, offset",
+    [
+        pytest.param("lamp", 1000.0, (0, 0, 0), id="lamp-metres"),
+        pytest.param("spot", 1000.0, (0, 0, 0), id="spot-metres"),
+        pytest.param("lamp", 1.0, (0, 0, 1000), id="lamp-a-metre-away"),
+        # (in centimetres the offset was already small: this one passed before the frame, kept as a check)
+        pytest.param("lamp", 10.0, (0, 0, 0), id="lamp-centimetres", marks=pytest.mark.slow),
+    ],
+)
+def test_the_reference_does_not_depend_on_the_scene_unit(fitted_ball, light, unit_mm, offset):
+    """The volpath reference of one scene written in millimetres and in another unit (or a metre from the
+    origin) is the same picture: Mitsuba's ray offset, 0.09 mm of the object in metres, would skip that
+    much of the medium (a spot: blue ~5 % low) and let a nearby lamp's shadow rays hit the lamp (80 % of
+    its light lost) — the reference is traced in millimetres around the objects."""
+    from translucency.scene.reference import render_scene_reference
+
+    folder, model = fitted_ball
+    text = LAMP if light == "lamp" else SPOT
+    mm = FittedScene(_scene_in_unit(folder, 1.0, text), {"ball": model})
+    other = FittedScene(_scene_in_unit(folder, unit_mm, text, offset), {"ball": model}, scene_unit_mm=unit_mm)
+    a, _ = render_scene_reference(mm, spp=8, seed=0)
+    b, _ = render_scene_reference(other, spp=8, seed=0)
+    ball = a.sum(axis=2) > 0.05 * a.sum(axis=2).max()
+    ratio = b[ball].mean(axis=0) / a[ball].mean(axis=0)  # per channel over the lit picture
+    assert np.all(np.abs(ratio - 1) < 0.02), ratio
+
+
+def test_the_reference_frame_carries_analytic_shapes_cameras_and_lights():
+    """A scene in metres carried into millimetres around (0, 0, 1) m: an analytic sphere, cube, disk and
+    cylinder land k (x − c) from where they stood, the camera's position likewise with its frame unscaled,
+    a point light's position and intensity × k²."""
+    import xml.etree.ElementTree as ET
+
+    from translucency.mitsuba.scene_frame import SceneFrame
+
+    mi = mitsuba()
+    doc = """<scene version="3.0.0">
+      <sensor type="perspective"><float name="fov" value="40"/>
+        <transform name="to_world"><lookat origin="0, -0.1, 1.0" target="0, 0, 1" up="0, 0, 1"/></transform>
+        <film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="6"/></film>
+      </sensor>
+      <shape type="sphere" id="s">
+        <point name="center" x="0.01" y="0" z="1.0"/><float name="radius" value="0.005"/></shape>
+      <shape type="cube" id="c">
+        <transform name="to_world"><scale value="0.002"/><translate x="-0.01" z="1"/></transform></shape>
+      <shape type="disk" id="d">
+        <transform name="to_world"><scale value="0.003"/><translate y="0.02" z="1"/></transform></shape>
+      <shape type="cylinder" id="y">
+        <point name="p0" x="0" y="0" z="0.99"/><point name="p1" x="0" y="0" z="1.01"/>
+        <float name="radius" value="0.001"/></shape>
+      <emitter type="point">
+        <point name="position" x="0" y="0" z="1.05"/><float name="intensity" value="3"/></emitter>
+    </scene>"""
+    frame = SceneFrame(1000.0, [0.0, 0.0, 1.0])
+    before = mi.load_string(doc)
+    after = mi.load_string(ET.tostring(frame.xml(ET.fromstring(doc)), encoding="unicode"))
+    boxes = {}
+    for scene in (before, after):
+        for shape in scene.shapes():
+            b = shape.bbox()
+            boxes.setdefault(shape.id(), []).append(np.array([list(b.min), list(b.max)], dtype=np.float64))
+    for name, (b0, b1) in boxes.items():
+        assert np.allclose(frame.points(b0), b1, atol=1e-3), (name, frame.points(b0), b1)
+    cam0, cam1 = (
+        np.asarray(s.sensors()[0].world_transform().matrix, dtype=np.float64).reshape(4, 4)
+        for s in (before, after)
+    )
+    assert np.allclose(frame.points([cam0[:3, 3]])[0], cam1[:3, 3], atol=1e-3)
+    assert np.allclose(cam0[:3, :3], cam1[:3, :3], atol=1e-6)  # the same turn, no scale
+    light = ET.tostring(frame.xml(ET.fromstring(doc)), encoding="unicode")
+    assert 'value="3000000.0"' in light and 'z="50.0' in light
+
+
 def test_a_scene_file_names_the_renderer_as_a_mitsuba_plugin(fitted_ball):
     """``<integrator type="translucency">`` after register_mitsuba_plugin(): Mitsuba's own mi.render of
     the XML gives the picture FittedScene gives (the same estimator; two seeds' noise apart)."""

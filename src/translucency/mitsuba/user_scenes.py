@@ -169,11 +169,13 @@ def _element(description: dict, folder: Path) -> ET.Element:
     return el
 
 
-def user_scene_with_media(source, replace: dict, integrator: dict):
+def user_scene_with_media(source, replace: dict, integrator: dict, frame=None):
     """The scene ``source`` (XML path or dict) with each shape id in ``replace`` swapped for a ``ply`` of
     the triangles ``replace[id]["mesh"]`` = (vertices, faces) in the scene's frame, holding
     ``replace[id]["interior"]`` (a medium dict) behind ``replace[id]["bsdf"]`` (a BSDF dict), and its
-    integrator replaced by ``integrator``; loaded and returned."""
+    integrator replaced by ``integrator``; loaded and returned.  With ``frame`` (a
+    :class:`~.scene_frame.SceneFrame`) the user's scene is first carried into it, and ``replace``'s
+    meshes and media are given in it."""
     mi = mitsuba()
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
@@ -191,7 +193,7 @@ def user_scene_with_media(source, replace: dict, integrator: dict):
             scene = {
                 k: v for k, v in source.items() if not (isinstance(v, dict) and v.get("type") in _INTEGRATORS)
             }
-            scene = copy.copy(scene)
+            scene = frame.dict(scene, keep=shapes) if frame is not None else copy.copy(scene)
             scene.update(shapes)
             scene["integrator"] = integrator
             return load_user_scene(scene)
@@ -201,6 +203,8 @@ def user_scene_with_media(source, replace: dict, integrator: dict):
         for child in list(root):
             if child.tag == "integrator" or (child.tag == "shape" and child.get("id") in shapes):
                 root.remove(child)
+        if frame is not None:
+            frame.xml(root, source=path)
         root.insert(0, _element(integrator, folder))
         for key, shape in shapes.items():
             el = _element(shape, folder)

@@ -4,8 +4,11 @@ fitted object's volume in place of its glowing surface, rendered by Mitsuba's ``
 Each fitted shape becomes a ``ply`` of the same triangles holding the heterogeneous medium of its data
 set's filling (:func:`translucency.render.volume_of_dataset`, carried by the object's pose) behind a
 ``null`` boundary (index-matched) or a smooth ``dielectric`` of its η; the scene's own emitters, shapes
-and sensor are kept, the integrator is ``volpath`` without a depth limit and with Russian roulette only
-from depth :data:`RR_DEPTH`.  One grey channel of the media at a time, as
+and sensor are kept, the whole carried into millimetres around the objects
+(:mod:`translucency.mitsuba.scene_frame`: in a scene in metres Mitsuba's ray offset is 0.09 mm of the
+object, and volpath would skip that much of the medium and lose a nearby lamp to its shadow rays); the
+integrator is ``volpath`` without a depth limit and with Russian roulette only from depth
+:data:`RR_DEPTH`.  One grey channel of the media at a time, as
 :func:`translucency.render.render_reference` does.  A dielectric object reached by delta lights only
 (point, spot, directional) cannot be path-traced: a delta refraction is a path ``volpath`` cannot sample.
 
@@ -21,6 +24,7 @@ import time
 import numpy as np
 
 from ..mitsuba import mitsuba, slab_medium_dict
+from ..mitsuba.scene_frame import SceneFrame
 from ..mitsuba.user_scenes import user_scene_with_media
 from ..render import volume_of_dataset
 from ..render.reference import mean_of_halves
@@ -29,20 +33,31 @@ from ..render.reference import mean_of_halves
 RR_DEPTH = 1000
 
 
-def _media(fitted_scene, channel: int) -> dict:
+def reference_frame(fitted_scene) -> SceneFrame:
+    """Millimetres around the fitted objects (the centre of their boxes): where the reference is traced
+    whatever the scene's unit and wherever its objects stand (:mod:`translucency.mitsuba.scene_frame`)."""
+    units = {float(o.scene_unit_mm) for o in fitted_scene.objects}
+    if len(units) != 1:  # (FittedScene gives every object the scene's one unit)
+        raise ValueError(f"the fitted objects disagree on the scene's unit: {sorted(units)}")
+    everything = np.concatenate([o.vertices for o in fitted_scene.objects])
+    return SceneFrame(units.pop(), 0.5 * (everything.min(axis=0) + everything.max(axis=0)))
+
+
+def _media(fitted_scene, channel: int, frame: SceneFrame) -> dict:
+    """Each fitted object's volume behind its boundary, in ``frame`` (mm: coefficients per mm)."""
     out = {}
     for o in fitted_scene.objects:
         volume = volume_of_dataset(o.mesh, o.acquisition)
         lo, hi = o.mesh.bounds
-        medium = slab_medium_dict(
-            volume, channel, (lo[0], lo[1], hi[2]), placed=o.pose.matrix, unit_mm=o.scene_unit_mm
-        )
+        placed = frame.matrix @ o.pose.matrix  # model mm → scene units → the frame's mm
+        medium = slab_medium_dict(volume, channel, (lo[0], lo[1], hi[2]), placed=placed, unit_mm=1.0)
         boundary = (
             {"type": "null"}
             if o.eta == 1.0
             else {"type": "dielectric", "int_ior": float(o.eta), "ext_ior": 1.0}
         )
-        out[o.name] = {"mesh": (o.vertices, np.asarray(o.mesh.faces)), "bsdf": boundary, "interior": medium}
+        mesh = (frame.points(o.vertices), np.asarray(o.mesh.faces))
+        out[o.name] = {"mesh": mesh, "bsdf": boundary, "interior": medium}
     return out
 
 
@@ -51,9 +66,10 @@ def render_scene_reference(fitted_scene, *, spp: int = 64, seed: int = 0, sensor
     path tracing took."""
     mi = mitsuba()
     integrator = {"type": "volpath", "max_depth": -1, "rr_depth": RR_DEPTH}
+    frame = reference_frame(fitted_scene)
     seconds, channels = 0.0, []
     for ch in range(3):
-        scene = user_scene_with_media(fitted_scene.source, _media(fitted_scene, ch), integrator)
+        scene = user_scene_with_media(fitted_scene.source, _media(fitted_scene, ch, frame), integrator, frame)
         t = time.perf_counter()
         image = mi.render(scene, spp=int(spp), seed=3 * int(seed) + ch, sensor=int(sensor))
         channels.append(np.asarray(image, dtype=np.float64)[..., ch])
