@@ -304,6 +304,16 @@ def test_python_api_renders_a_scene_dict_with_two_objects(fitted_ball):
         ("other mesh", "shape 'ball': 162 vertices and 320 triangles, but the model's mesh has 642"),
         ("model twice", "--model: the shape id 'ball' is given twice"),
         ("light given", "--light: the scene file says this"),
+        ("re-ordered", "shape 'ball': re-triangulated or re-ordered — 58 of 1,280 triangles and 10 of 642"),
+        (
+            "metres in mm",
+            "pixels across from the camera 44.1 units away (its 12 mm are 0.012 scene units at 1000 mm",
+        ),
+        (
+            "camera inside",
+            "shape 'ball': the camera is inside it (its 12 mm are 1.2e+04 scene units at 0.001 mm a unit)",
+        ),
+        ("a medium", "shape 'floor': its interior medium would be ignored (the picture has no media)"),
     ],
 )
 def test_bad_scene_input_is_one_line(fitted_ball, tmp_path, case, expected):
@@ -334,6 +344,34 @@ def test_bad_scene_input_is_one_line(fitted_ball, tmp_path, case, expected):
         models = models * 2
     elif case == "light given":
         extra = ["--light", "point:0,0,50"]
+    elif case == "re-ordered":  # five pairs of vertices swapped, as an editor that re-exports may
+        mesh = trimesh.load(folder / "object.ply", process=False)
+        order = np.arange(len(mesh.vertices))
+        order[[0, 1, 100, 101, 200, 201, 300, 301, 400, 401]] = [1, 0, 101, 100, 201, 200, 301, 300, 401, 400]
+        inverse = np.argsort(order)
+        trimesh.Trimesh(mesh.vertices[order], inverse[mesh.faces], process=False).export(
+            tmp_path / "object.ply"
+        )
+        scene = _write_scene(tmp_path)
+    elif case in ("metres in mm", "camera inside"):  # the object placed for another unit than the scene's
+        unit = 1000.0 if case == "metres in mm" else 0.001
+        scene = tmp_path / "scene.xml"
+        scene.write_text(
+            (folder / "scene.xml")
+            .read_text()
+            .replace('<rotate z="1"', f'<scale value="{1 / unit}"/><rotate z="1"')
+        )
+        (tmp_path / "object.ply").symlink_to(folder / "object.ply")
+        extra = ["--scene-unit", str(unit)]
+    elif case == "a medium":
+        scene = tmp_path / "scene.xml"
+        floor = '<bsdf type="diffuse"><rgb name="reflectance" value="0.5, 0.5, 0.5"/></bsdf>'
+        scene.write_text(
+            (folder / "scene.xml")
+            .read_text()
+            .replace(floor, floor + '<medium type="homogeneous" name="interior"/>')
+        )
+        (tmp_path / "object.ply").symlink_to(folder / "object.ply")
     args = ["render", "--scene", str(scene), "--out", str(tmp_path / "r")]
     for m in models:
         args += ["--model", m]

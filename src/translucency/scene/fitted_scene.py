@@ -126,7 +126,17 @@ class FittedScene:
             raise TranslucencyError(
                 "scene: no emitters (no light, no environment); nothing lights the fitted objects"
             )
+        self._check_size(scene_unit_mm)  # (a wrong unit first: it makes the other checks' lines misleading)
         self._check_intersections()
+        self._check_media()
+        #: what of the user's scene is replaced (one line each, for the command line to print)
+        self.notes = []
+        if self.scene.integrator() is not None:
+            kind = str(self.scene.integrator()).split("[")[0].strip()
+            self.notes.append(
+                f"scene: its integrator ({kind}) is replaced by translucency's (paths of up to "
+                f"{max_depth} bounces, --max-depth)"
+            )
         self.strategy = strategy
         self.glow = None  # prepare()
         self.prepare_s = None
@@ -172,6 +182,54 @@ class FittedScene:
                 raise TranslucencyError(
                     f"shape '{o.name}': intersects shape '{other}' ({int((hit >= 0).sum())} of its edges "
                     "cross it); move one of them"
+                )
+
+    def _check_media(self) -> None:
+        """One line for a medium our picture would ignore: inside or around a shape, or the camera's (the
+        picture is traced surface to surface; a fitted object's inside is its model)."""
+        mi = mitsuba()
+        fitted = {o.name for o in self.objects}
+        for shape in self.scene.shapes():
+            for side, medium in (
+                ("interior", shape.interior_medium()),
+                ("exterior", shape.exterior_medium()),
+            ):
+                if medium is not None:
+                    why = "the model is its inside" if shape.id() in fitted else "the picture has no media"
+                    raise TranslucencyError(
+                        f"shape '{shape.id()}': its {side} medium would be ignored ({why}); remove it"
+                    )
+        for sensor in self.scene.sensors():
+            if any(k.startswith("medium.") for k in mi.traverse(sensor).keys()):
+                raise TranslucencyError(
+                    "sensor: its medium would be ignored (the picture has no media); remove it"
+                )
+
+    def _check_size(self, unit_mm: float) -> None:
+        """One line for an object the scene's unit makes absurd: the camera inside its box, or less than a
+        pixel across — with the size it became, in scene units."""
+        sensor = self.scene.sensors()[0]
+        M = np.asarray(sensor.world_transform().matrix, dtype=np.float64).reshape(4, 4)
+        eye = M[:3, 3]
+        W = self.film_size[0]
+        fov = float(np.asarray(mitsuba().traverse(sensor).get("x_fov", [45.0])).ravel()[0])
+        for o in self.objects:
+            v = o.vertices
+            lo, hi = v.min(axis=0), v.max(axis=0)
+            size = float((hi - lo).max())  # across, scene units
+            mm = size * unit_mm
+            became = f"its {mm:.3g} mm are {size:.3g} scene units at {unit_mm:g} mm a unit"
+            if np.all(eye > lo) and np.all(eye < hi):
+                raise TranslucencyError(
+                    f"shape '{o.name}': the camera is inside it ({became}); is the scene's unit right "
+                    "(--scene-unit)?"
+                )
+            distance = float(np.linalg.norm(0.5 * (lo + hi) - eye))
+            pixels = size / max(distance * 2 * np.tan(np.radians(fov) / 2), 1e-300) * W
+            if pixels < 1.0:
+                raise TranslucencyError(
+                    f"shape '{o.name}': {pixels:.2g} pixels across from the camera {distance:.3g} units "
+                    f"away ({became}); is the scene's unit right (--scene-unit)?"
                 )
 
     def light(self, *, seed: int = 0) -> list[np.ndarray]:

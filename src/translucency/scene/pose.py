@@ -83,20 +83,27 @@ def pose_of(
     if Vm != Vs or len(model_faces) != len(shape_faces):
         raise TranslucencyError(
             f"shape '{name}': {Vs:,} vertices and {len(shape_faces):,} triangles, but the model's mesh has "
-            f"{Vm:,} and {len(model_faces):,}; place the mesh 'translucency export MODEL --ply' writes"
+            f"{Vm:,} and {len(model_faces):,} ({Vs - Vm:+,} vertices: re-triangulated or re-exported?); "
+            "place the mesh 'translucency export MODEL --ply' writes"
         )
-    if not np.array_equal(np.asarray(model_faces), np.asarray(shape_faces)):
+    Fm, Fs = np.asarray(model_faces), np.asarray(shape_faces)
+    if not np.array_equal(Fm, Fs):
+        # how many corners differ, and how many vertices no longer sit where the model's would
+        moved = np.unique(np.concatenate([Fm[Fm != Fs], Fs[Fm != Fs]]))
         raise TranslucencyError(
-            f"shape '{name}': its triangles are not the model's (other vertex order); place the mesh "
-            "'translucency export MODEL --ply' writes"
+            f"shape '{name}': re-triangulated or re-ordered — {int((Fm != Fs).any(axis=1).sum()):,} of "
+            f"{len(Fm):,} triangles and {len(moved):,} of {Vm:,} vertices differ from the model's mesh; "
+            "place the mesh 'translucency export MODEL --ply' writes"
         )
     pose = similarity(model_vertices, shape_vertices)
     size = float(np.linalg.norm(np.ptp(np.asarray(shape_vertices, np.float64), axis=0)))
     if pose.residual > TOLERANCE * size:
+        off = np.linalg.norm(pose.apply(model_vertices) - np.asarray(shape_vertices, np.float64), axis=1)
         raise TranslucencyError(
-            f"shape '{name}': does not match the model's mesh (a vertex {pose.residual:.3g} scene units off "
-            "after the best rotation, scale and shift); place the mesh 'translucency export MODEL --ply' "
-            "writes, moved only by to_world"
+            f"shape '{name}': does not match the model's mesh ({int((off > TOLERANCE * size).sum()):,} of "
+            f"{Vm:,} vertices off, the worst by {pose.residual:.3g} scene units after the best rotation, "
+            "scale and shift); place the mesh 'translucency export MODEL --ply' writes, moved only by "
+            "to_world"
         )
     want = 1.0 / float(scene_unit_mm)
     if abs(pose.scale / want - 1.0) > SCALE_TOLERANCE:

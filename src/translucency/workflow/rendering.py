@@ -324,6 +324,8 @@ def render_scene(
         passes=passes,
         max_depth=max_depth,
     )
+    for note in fs.notes:
+        run.info(note)
     W, H = fs.film_size
     radii = [
         default_radius(o.model, o.mesh, max_pairs=MAX_PAIRS) if radius is None else radius for o in fs.objects
