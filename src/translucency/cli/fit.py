@@ -65,8 +65,8 @@ _ALPHA_RADIUS = typer.Option(
     None,
     "--alpha-radius",
     help="Pool alpha's statistics over the pixels (vertices) within this distance, mm. Default: alpha "
-    "per pixel on planar data (dense scans), 12 mean edge lengths on meshes. For sparse grids of "
-    "incident points or noisy data such as photographs (docs/rig.md).",
+    "per pixel on planar data (dense scans), 12 mean edge lengths on meshes (at least 4 mm). For sparse "
+    "grids of incident points or noisy data such as photographs (docs/rig.md).",
 )
 _FLOAT16 = typer.Option(False, "--float16", help="Store parameters as float16 (smaller file).")
 

@@ -20,14 +20,13 @@ import json
 import time
 
 import numpy as np
-import scipy.sparse as sp
-from scipy.spatial import cKDTree
 
 from .._validate import TranslucencyError
 from ..geometry import tangent_frames
 from ..io.mesh_dataset import open_mesh_dataset
 from ..model import VertexAlpha
 from ._rounds import alternate
+from ._vertex_pool import VertexDiscPool
 from .families import FAMILIES
 from .options import FitContext, FitResult, check_fit_options
 
@@ -36,6 +35,18 @@ from .options import FitContext, FitResult, check_fit_options
 #: 6 edges 0.070 / 0.068 / 0.071, 12 edges 0.066 / 0.068 / 0.071 — a narrower disc fits photon noise
 #: (α's spread 0.12 / 0.04 / 0.07 at 3 edges), and the error then rose with the number of points
 ALPHA_RADIUS_EDGES = 12
+
+#: ... and at least this many mm: the disc must hold as many photons on a scan finer than the pig's (at
+#: 338 k vertices, 12 edges are 2.1 mm, and α took the near peak's misfit around each incident point as
+#: discs of ±50 %, the picture blotched); the pig's 12 edges at 84-89 k vertices are 4.3 mm
+ALPHA_RADIUS_MM = 4.0
+
+
+def alpha_pool_radius(pitch: float) -> float:
+    """α's default pooling radius, mm, for a mesh of mean edge ``pitch`` mm: :data:`ALPHA_RADIUS_EDGES`
+    edges, at least :data:`ALPHA_RADIUS_MM`."""
+    return max(ALPHA_RADIUS_EDGES * float(pitch), ALPHA_RADIUS_MM)
+
 
 #: a·D for which a term (Gamma(2) in r: (1 + aD) e^{−aD}) holds 99.9 % of its energy within D
 ENERGY_RADIUS_RATE = 9.233
@@ -56,11 +67,8 @@ class _MeshSource:
         self.pitch = mean_edge_length(v, np.asarray(group["faces"][...]))  # mm
         # α's statistics pooled over a disc of alpha_radius (default ALPHA_RADIUS_EDGES edge lengths): a
         # vertex is lit by few incident points, and α from its own pairs alone is mostly photon noise
-        rad = ALPHA_RADIUS_EDGES * self.pitch if alpha_radius is None else float(alpha_radius)
-        pairs = cKDTree(v).query_pairs(rad, output_type="ndarray") if rad > 0 else np.zeros((0, 2), int)
-        n = len(v)
-        ij = np.concatenate([pairs, pairs[:, ::-1], np.repeat(np.arange(n)[:, None], 2, 1)])
-        self._pool = sp.csr_matrix((np.ones(len(ij)), (ij[:, 0], ij[:, 1])), shape=(n, n))
+        rad = alpha_pool_radius(self.pitch) if alpha_radius is None else float(alpha_radius)
+        self._pool = VertexDiscPool(v, rad)  # (through cells on a scan finer than the disc)
         photons = float(header["photons"])
         self.poisson = (1.0 / (photons * np.maximum(self.area, 1e-12)))[None, :, None].astype(np.float32)
 
@@ -70,7 +78,7 @@ class _MeshSource:
         return y, None, valid, r, np.zeros_like(r), pixel, self.poisson
 
     def smooth_alpha(self, stat: np.ndarray) -> np.ndarray:
-        return self._pool @ stat
+        return self._pool(stat)
 
     def make_alpha(self, values: np.ndarray):
         return VertexAlpha(values.copy(), self.vertices)
@@ -129,7 +137,8 @@ def fit_mesh(
         Vertices closer than this to x_i are left out; default half the mean edge length.
     alpha_radius : float, optional
         α at a vertex pools the statistics of the vertices within this distance
-        (mm; default ``ALPHA_RADIUS_EDGES`` = 12 mean edge lengths; 0: per vertex alone).
+        (mm; default ``ALPHA_RADIUS_EDGES`` = 12 mean edge lengths, at least ``ALPHA_RADIUS_MM`` = 4 mm;
+        0: per vertex alone).
     max_rate : float, optional
         Steepest fall-off |d| a term may take, mm⁻¹; default 3 / (mean edge length): a term must still
         hold e⁻³ of its value at the nearest vertices, or the data cannot tell its amplitude (a steeper
