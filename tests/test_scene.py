@@ -386,7 +386,7 @@ SPOT = """<emitter type="spot">
   </emitter>"""
 
 
-def _scene_in_unit(folder, unit_mm: float, light: str, offset=(0.0, 0.0, 0.0)):
+def _scene_in_unit(folder, unit_mm: float, light: str, offset=(0.0, 0.0, 0.0), tag: str = ""):
     """The test's SCENE written with ``unit_mm`` millimetres a unit and moved by ``offset`` (mm): every
     length / unit_mm, a point-like light's intensity / unit_mm² (the same irradiance per unit area), radiance
     kept."""
@@ -418,7 +418,7 @@ def _scene_in_unit(folder, unit_mm: float, light: str, offset=(0.0, 0.0, 0.0)):
         'origin="0, -30, 30" target="2, 0, 6.5"', f'origin="{moved(0, -30, 30)}" target="{moved(2, 0, 6.5)}"'
     )
     text = text.replace('value="2000, 2000, 2000"', f'value="{mm(2000 / u, 2000 / u, 2000 / u)}"')
-    path = folder / f"scene_{light[:20].split()[0].strip('<')}_{u:g}_{oz:g}.xml"
+    path = folder / f"scene_{tag or light[:20].split()[0].strip('<')}_{u:g}_{oz:g}.xml"
     path.write_text(text)
     return path
 
@@ -449,6 +449,48 @@ def test_the_reference_does_not_depend_on_the_scene_unit(fitted_ball, light, uni
     ball = a.sum(axis=2) > 0.05 * a.sum(axis=2).max()
     ratio = b[ball].mean(axis=0) / a[ball].mean(axis=0)  # per channel over the lit picture
     assert np.all(np.abs(ratio - 1) < 0.02), ratio
+
+
+def _emitter(kind: str, u: float, folder) -> str:
+    """One emitter of each kind the scene renderer takes, written for a scene of ``u`` mm a unit (lengths
+    / u, a point's intensity / u²; irradiance and radiance are per area already and kept)."""
+    if kind == "point":
+        return (
+            f'<emitter type="point"><point name="position" x="{5 / u!r}" y="{-20 / u!r}" z="{40 / u!r}"/>'
+            f'<rgb name="intensity" value="{3000 / u**2!r}"/></emitter>'
+        )
+    if kind == "directional":
+        return (
+            '<emitter type="directional"><vector name="direction" x="0.3" y="0.5" z="-1"/>'
+            '<rgb name="irradiance" value="1.5"/></emitter>'
+        )
+    if kind == "constant":
+        return '<emitter type="constant"><rgb name="radiance" value="0.5"/></emitter>'
+    sky = np.full((16, 32, 3), 0.2, np.float32)
+    sky[2:5, 10:14] = 40.0  # a sun high in the sky
+    mitsuba().Bitmap(sky).write(str(folder / "sky.exr"))
+    return f'<emitter type="envmap"><string name="filename" value="{folder / "sky.exr"}"/></emitter>'
+
+
+@pytest.mark.parametrize("kind", ["point", "directional", "constant", "envmap"])
+def test_every_emitter_kind_against_volpath_and_in_metres(fitted_ball, tmp_path, kind):
+    """The ball on its floor under each emitter kind: our picture against the volpath reference of the same
+    scene (over the ball, as the area lamp's case above), and that reference written in metres equal to the
+    millimetre one (the reference's frame carries each kind)."""
+    from translucency.scene.reference import render_scene_reference
+    from translucency.workflow.rendering import render_scene
+
+    folder, model = fitted_ball
+    (tmp_path / "object.ply").symlink_to(folder / "object.ply")
+    mm = _scene_in_unit(tmp_path, 1.0, _emitter(kind, 1.0, tmp_path), tag=kind)
+    shot = render_scene(mm, {"ball": model}, tmp_path / "r", reference=True, spp=32, samples=32)
+    obj = shot.summary["errors"]["object"]
+    assert 0.85 < obj["brightness"] < 1.15 and obj["rel_rmse"] < 0.35, obj
+    metres = _scene_in_unit(tmp_path, 1000.0, _emitter(kind, 1000.0, tmp_path), tag=kind)
+    a, _ = render_scene_reference(FittedScene(mm, {"ball": model}), spp=8, seed=0)
+    b, _ = render_scene_reference(FittedScene(metres, {"ball": model}, scene_unit_mm=1000.0), spp=8, seed=0)
+    lit = a.sum(axis=2) > 0.05 * a.sum(axis=2).max()
+    assert np.all(np.abs(b[lit].mean(axis=0) / a[lit].mean(axis=0) - 1) < 0.02)
 
 
 def test_the_reference_frame_carries_analytic_shapes_cameras_and_lights():
