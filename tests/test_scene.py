@@ -438,17 +438,23 @@ def test_the_reference_does_not_depend_on_the_scene_unit(fitted_ball, light, uni
     origin) is the same picture: Mitsuba's ray offset, 0.09 mm of the object in metres, would skip that
     much of the medium (a spot: blue ~5 % low) and let a nearby lamp's shadow rays hit the lamp (80 % of
     its light lost) — the reference is traced in millimetres around the objects."""
-    from translucency.scene.reference import render_scene_reference
 
     folder, model = fitted_ball
     text = LAMP if light == "lamp" else SPOT
-    mm = FittedScene(_scene_in_unit(folder, 1.0, text), {"ball": model})
-    other = FittedScene(_scene_in_unit(folder, unit_mm, text, offset), {"ball": model}, scene_unit_mm=unit_mm)
-    a, _ = render_scene_reference(mm, spp=8, seed=0)
-    b, _ = render_scene_reference(other, spp=8, seed=0)
-    ball = a.sum(axis=2) > 0.05 * a.sum(axis=2).max()
-    ratio = b[ball].mean(axis=0) / a[ball].mean(axis=0)  # per channel over the lit picture
+    mm = _scene_in_unit(folder, 1.0, text)
+    ratio = _reference_ratio(mm, _scene_in_unit(folder, unit_mm, text, offset), unit_mm, model)
     assert np.all(np.abs(ratio - 1) < 0.02), ratio
+
+
+def _reference_ratio(mm, other, unit_mm: float, model) -> np.ndarray:
+    """Per channel, the mean of the volpath reference of the scene file ``other`` (``unit_mm`` mm a unit)
+    over that of ``mm`` (the same scene in millimetres), over the pixels lit in the latter; the same seed."""
+    from translucency.scene.reference import render_scene_reference
+
+    a, _ = render_scene_reference(FittedScene(mm, {"ball": model}), spp=8, seed=0)
+    b, _ = render_scene_reference(FittedScene(other, {"ball": model}, scene_unit_mm=unit_mm), spp=8, seed=0)
+    lit = a.sum(axis=2) > 0.05 * a.sum(axis=2).max()
+    return b[lit].mean(axis=0) / a[lit].mean(axis=0)
 
 
 def _emitter(kind: str, u: float, folder) -> str:
@@ -477,7 +483,6 @@ def test_every_emitter_kind_against_volpath_and_in_metres(fitted_ball, tmp_path,
     """The ball on its floor under each emitter kind: our picture against the volpath reference of the same
     scene (over the ball, as the area lamp's case above), and that reference written in metres equal to the
     millimetre one (the reference's frame carries each kind)."""
-    from translucency.scene.reference import render_scene_reference
     from translucency.workflow.rendering import render_scene
 
     folder, model = fitted_ball
@@ -487,10 +492,8 @@ def test_every_emitter_kind_against_volpath_and_in_metres(fitted_ball, tmp_path,
     obj = shot.summary["errors"]["object"]
     assert 0.85 < obj["brightness"] < 1.15 and obj["rel_rmse"] < 0.35, obj
     metres = _scene_in_unit(tmp_path, 1000.0, _emitter(kind, 1000.0, tmp_path), tag=kind)
-    a, _ = render_scene_reference(FittedScene(mm, {"ball": model}), spp=8, seed=0)
-    b, _ = render_scene_reference(FittedScene(metres, {"ball": model}, scene_unit_mm=1000.0), spp=8, seed=0)
-    lit = a.sum(axis=2) > 0.05 * a.sum(axis=2).max()
-    assert np.all(np.abs(b[lit].mean(axis=0) / a[lit].mean(axis=0) - 1) < 0.02)
+    ratio = _reference_ratio(mm, metres, 1000.0, model)
+    assert np.all(np.abs(ratio - 1) < 0.02), ratio
 
 
 def test_the_reference_frame_carries_analytic_shapes_cameras_and_lights():

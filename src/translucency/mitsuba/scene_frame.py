@@ -54,19 +54,6 @@ _SENSOR_LENGTHS = (
 _LENGTHLESS = {"bsdf", "texture", "integrator", "sampler", "film", "rfilter", "phase", "spectrum", "rgb"}
 
 
-def offset_mm(points, unit_mm: float) -> float:
-    """The ray offset Mitsuba uses at ``points`` (N, 3, scene units) of a scene of ``unit_mm`` mm a unit,
-    in mm (module docstring).
-
-    >>> round(offset_mm([[0.0, 0.0, 0.015]], 1000.0), 3)  # a 30 mm object in a scene in metres
-    0.091
-    >>> round(offset_mm([[0.0, 0.0, 15.0]], 1.0), 4)  # the same in millimetres
-    0.0014
-    """
-    p = np.abs(np.asarray(points, dtype=np.float64))
-    return float((1.0 + p.max()) * RAY_EPSILON * unit_mm)
-
-
 class SceneFrame:
     r"""The similarity :math:`x' = k\,(x - c)` into millimetres around ``centre`` (module docstring), and
     what it does to a scene's XML document or dict.
@@ -233,4 +220,4 @@ def _times(el, f: float, source) -> None:
     el.set("value", ", ".join(repr(v * f) for v in _numbers(el, source)))
 
 
-__all__ = ["SceneFrame", "offset_mm", "RAY_EPSILON"]
+__all__ = ["SceneFrame", "RAY_EPSILON"]

@@ -87,11 +87,12 @@ def pose_of(
             "place the mesh 'translucency export MODEL --ply' writes"
         )
     Fm, Fs = np.asarray(model_faces), np.asarray(shape_faces)
-    if not np.array_equal(Fm, Fs):
-        # how many corners differ, and how many vertices no longer sit where the model's would
-        moved = np.unique(np.concatenate([Fm[Fm != Fs], Fs[Fm != Fs]]))
+    corner = Fm != Fs  # the triangles' corners that differ
+    if corner.any():
+        # how many triangles differ, and how many vertices their differing corners name
+        moved = np.unique(np.concatenate([Fm[corner], Fs[corner]]))
         raise TranslucencyError(
-            f"shape '{name}': re-triangulated or re-ordered — {int((Fm != Fs).any(axis=1).sum()):,} of "
+            f"shape '{name}': re-triangulated or re-ordered — {int(corner.any(axis=1).sum()):,} of "
             f"{len(Fm):,} triangles and {len(moved):,} of {Vm:,} vertices differ from the model's mesh; "
             "place the mesh 'translucency export MODEL --ply' writes"
         )

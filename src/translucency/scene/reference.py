@@ -43,11 +43,11 @@ def reference_frame(fitted_scene) -> SceneFrame:
     return SceneFrame(units.pop(), 0.5 * (everything.min(axis=0) + everything.max(axis=0)))
 
 
-def _media(fitted_scene, channel: int, frame: SceneFrame) -> dict:
-    """Each fitted object's volume behind its boundary, in ``frame`` (mm: coefficients per mm)."""
+def _media(fitted_scene, volumes, channel: int, frame: SceneFrame) -> dict:
+    """Each fitted object's volume (``volumes``, in the objects' order) behind its boundary, in ``frame``
+    (mm: coefficients per mm)."""
     out = {}
-    for o in fitted_scene.objects:
-        volume = volume_of_dataset(o.mesh, o.acquisition)
+    for o, volume in zip(fitted_scene.objects, volumes):
         lo, hi = o.mesh.bounds
         placed = frame.matrix @ o.pose.matrix  # model mm → scene units → the frame's mm
         medium = slab_medium_dict(volume, channel, (lo[0], lo[1], hi[2]), placed=placed, unit_mm=1.0)
@@ -67,9 +67,11 @@ def render_scene_reference(fitted_scene, *, spp: int = 64, seed: int = 0, sensor
     mi = mitsuba()
     integrator = {"type": "volpath", "max_depth": -1, "rr_depth": RR_DEPTH}
     frame = reference_frame(fitted_scene)
+    volumes = [volume_of_dataset(o.mesh, o.acquisition) for o in fitted_scene.objects]  # once, not a channel
     seconds, channels = 0.0, []
     for ch in range(3):
-        scene = user_scene_with_media(fitted_scene.source, _media(fitted_scene, ch, frame), integrator, frame)
+        media = _media(fitted_scene, volumes, ch, frame)
+        scene = user_scene_with_media(fitted_scene.source, media, integrator, frame)
         t = time.perf_counter()
         image = mi.render(scene, spp=int(spp), seed=3 * int(seed) + ch, sensor=int(sensor))
         channels.append(np.asarray(image, dtype=np.float64)[..., ch])

@@ -263,14 +263,7 @@ class PixelEvidence:
             n = len(m.used)
             col = np.minimum(np.searchsorted(m.used, pixel), n - 1)  # each ray's pixel among the used ones
             read = m.used[col] == pixel  # (a pixel whose rays all graze is not read: no value to fit)
-            pixel, y, omega, a_s, face, col = (
-                pixel[read],
-                y[read],
-                omega[read],
-                a_s[read],
-                face[read],
-                col[read],
-            )
+            pixel, y, omega, a_s, face, col = (a[read] for a in (pixel, y, omega, a_s, face, col))
             r_s = np.linalg.norm(y.astype(np.float64) - hit, axis=1)
             far = np.bincount(col, weights=(r_s > r_zone).astype(float), minlength=n) > 0
             clipped = ~usable & (floor > 0).any(axis=1)
