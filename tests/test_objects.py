@@ -131,6 +131,115 @@ def test_mesh_walk_conserves_energy_in_a_non_absorbing_sphere():
     assert np.abs(np.linalg.norm(out, axis=1) - 3.0).max() < 0.02
 
 
+def _interface_chain(F: float, start: int, n: int = 4) -> tuple[float, float]:
+    """A photon between plane interfaces 1..n (each reflecting F at normal incidence), moving right just
+    past interface ``start``: the chances it finally leaves to the left of 1 and to the right of n.
+    A plain Markov chain: x[k, d] = P(escape right | moving in d towards interface k)."""
+    # unknowns: moving right towards k (k = 2..n), moving left towards k (k = 1..n-1)
+    right = {k: i for i, k in enumerate(range(2, n + 1))}
+    left = {k: len(right) + i for i, k in enumerate(range(1, n))}
+    A = np.eye(len(right) + len(left))
+    b = np.zeros(len(A))
+    for k, i in right.items():  # at k: through (on right, or out at n), or back left towards k-1
+        if k == n:
+            b[i] += 1 - F
+        else:
+            A[i, right[k + 1]] -= 1 - F
+        A[i, left[k - 1]] -= F
+    for k, i in left.items():  # at k: through (on left, or out at 1), or back right towards k+1
+        if k > 1:
+            A[i, left[k - 1]] -= 1 - F
+        A[i, right[k + 1]] -= F
+    p_right = float(np.linalg.solve(A, b)[right[start + 1]])
+    return 1.0 - p_right, p_right
+
+
+@pytest.mark.parametrize("eta", [1.0, 1.5])
+def test_reentry_carries_light_across_a_gap_into_the_next_part(eta):
+    """Two boxes 2 mm apart, a clear medium (no collision), a beam entering the first along x: with
+    re-entry every photon crosses the gap and leaves through the second box's far face, in the shares a
+    plain chain of four Fresnel interfaces at normal incidence gives; without it, it leaves at the first
+    box's far face."""
+    from translucency.acquire.mesh_walk import EXIT, mesh_random_walk
+    from translucency.acquire.volume import Volume
+    from translucency.mitsuba import mesh_scene
+
+    a = trimesh.creation.box(bounds=[[0.0, 0.0, 0.0], [10.0, 6.0, 6.0]])
+    b = trimesh.creation.box(bounds=[[12.0, 0.0, 0.0], [22.0, 6.0, 6.0]])
+    pair = trimesh.util.concatenate([a, b])
+    vol = Volume.homogeneous((6, 6, 22), 1.0, [0.0] * 3, [1e-7] * 3, 0.0, eta)
+    N = 40_000
+    runs = {
+        reenter: mesh_random_walk(
+            mesh_scene(pair),
+            pair.bounds,
+            vol,
+            0,
+            np.array([[0.0, 3.0, 3.0]]),
+            np.array([[-1.0, 0.0, 0.0]]),
+            N,
+            seed=5,
+            index_matched=eta == 1.0,
+            reenter=reenter,
+        )  # fmt: skip
+        for reenter in (False, True)
+    }
+    F = ((eta - 1) / (eta + 1)) ** 2
+    for reenter, r in runs.items():
+        assert (r.code == 4).sum() == 0 and set(np.unique(r.code)) <= {-1, EXIT}
+        x = r.position[r.code == EXIT, 0]
+        faces = [np.isclose(x, v, atol=1e-3) for v in (0.0, 10.0, 22.0)]
+        assert np.all(faces[0] | faces[1] | faces[2])  # only through the faces the beam's line crosses
+        entered = (r.code != -1).sum()
+        shares = [f.sum() / entered for f in faces]
+        left, right = _interface_chain(F, 1, n=4 if reenter else 2)
+        expect = [left, 0.0, right] if reenter else [left, right, 0.0]
+        for got, want in zip(shares, expect):
+            sigma = np.sqrt(max(want * (1 - want), 1e-6) / entered)
+            assert abs(got - want) <= 4 * sigma + 1e-9, (shares, expect)
+
+
+def test_reentry_changes_nothing_on_a_convex_mesh_and_keeps_every_photon():
+    """On a sphere no ray from the surface outwards meets it again: with re-entry the walk is the same bit
+    for bit (an escaping photon draws no random number); between two close spheres every photon of a
+    non-absorbing medium still leaves (none lost in the air), some through the other sphere."""
+    from translucency.acquire.mesh_walk import EXIT, mesh_random_walk
+    from translucency.acquire.volume import Volume
+    from translucency.mitsuba import mesh_scene
+
+    sphere = trimesh.creation.icosphere(3, radius=3.0)
+    vol = Volume.homogeneous((14, 14, 14), 0.5, [1.5] * 3, [0.05] * 3, 0.0, 1.4)
+    top = int(np.argmax(sphere.vertices[:, 2]))
+    N = 30_000
+    r0, r1 = (
+        mesh_random_walk(
+            mesh_scene(sphere),
+            sphere.bounds,
+            vol,
+            0,
+            sphere.vertices[[top]],
+            sphere.vertex_normals[[top]],
+            N,
+            seed=1,
+            reenter=re,
+        )  # fmt: skip
+        for re in (False, True)
+    )
+    assert np.array_equal(r0.code, r1.code) and np.array_equal(r0.position, r1.position)
+    assert (r0.code == EXIT).mean() > 0.5
+
+    pair = trimesh.util.concatenate([sphere, sphere.copy().apply_translation((6.3, 0.0, 0.0))])
+    clear = Volume.homogeneous((14, 14, 28), 0.5, [1.5] * 3, [0.0] * 3, 0.0, 1.4)
+    side = int(np.argmin(sphere.vertices[:, 0]))
+    r = mesh_random_walk(
+        mesh_scene(pair), pair.bounds, clear, 0, sphere.vertices[[side]], sphere.vertex_normals[[side]], N,
+        seed=3, reenter=True,
+    )  # fmt: skip
+    assert (r.code == 4).sum() == 0 and ((r.code == EXIT) | (r.code == -1)).all()
+    far = r.position[r.code == EXIT, 0] > 3.15  # left through the second sphere
+    assert far.mean() > 0.01  # some light crossed the 0.3 mm gap and walked on in the other sphere
+
+
 def test_acquire_mesh_cli_on_the_pig_and_a_users_mesh(tmp_path):
     import zarr
     from typer.testing import CliRunner

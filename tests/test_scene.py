@@ -496,6 +496,63 @@ def test_every_emitter_kind_against_volpath_and_in_metres(fitted_ball, tmp_path,
     assert np.all(np.abs(ratio - 1) < 0.02), ratio
 
 
+def _props(u: float) -> str:
+    """Beside the ball, written for ``u`` mm a unit: an analytic sphere in a rough conductor, a cube in a
+    checkerboard-textured diffuse, a disk in rough plastic, and a cylinder group placed twice as instances."""
+
+    def mm(*xyz):
+        return ", ".join(repr(v / u) for v in xyz)
+
+    return f"""
+  <shape type="sphere" id="gold">
+    <point name="center" value="{mm(-13, 6, 5)}"/><float name="radius" value="{5 / u!r}"/>
+    <bsdf type="roughconductor"><string name="material" value="Au"/><float name="alpha" value="0.3"/></bsdf>
+  </shape>
+  <shape type="cube" id="checker">
+    <transform name="to_world"><scale value="{4 / u!r}"/><translate value="{mm(13, 8, 4)}"/></transform>
+    <bsdf type="diffuse"><texture type="checkerboard" name="reflectance">
+      <rgb name="color0" value="0.1, 0.2, 0.6"/><rgb name="color1" value="0.8, 0.7, 0.2"/>
+      <transform name="to_uv"><scale x="4" y="4"/></transform></texture></bsdf>
+  </shape>
+  <shape type="disk" id="plate">
+    <transform name="to_world"><scale value="{6 / u!r}"/><translate value="{mm(-4, 14, 0.5)}"/></transform>
+    <bsdf type="roughplastic"><float name="alpha" value="0.2"/>
+      <rgb name="diffuse_reflectance" value="0.6, 0.2, 0.2"/></bsdf>
+  </shape>
+  <shape type="shapegroup" id="post">
+    <shape type="cylinder">
+      <point name="p0" value="{mm(0, 0, 0)}"/><point name="p1" value="{mm(0, 0, 10)}"/>
+      <float name="radius" value="{1.5 / u!r}"/>
+      <bsdf type="diffuse"><rgb name="reflectance" value="0.7"/></bsdf>
+    </shape>
+  </shape>
+  <shape type="instance"><ref id="post"/>
+    <transform name="to_world"><translate value="{mm(-9, -6, 0)}"/></transform></shape>
+  <shape type="instance"><ref id="post"/>
+    <transform name="to_world"><translate value="{mm(10, -4, 0)}"/></transform></shape>
+"""
+
+
+def test_analytic_shapes_instances_textures_and_rough_bsdfs_against_volpath_in_metres(fitted_ball, tmp_path):
+    """The ball beside an analytic sphere (rough gold), a textured cube, a rough-plastic disk and two
+    instances of a cylinder group, under the area lamp: our picture against the volpath reference of the
+    same scene over the ball and over the rest (the props are drawn by the same path tracer in both, so
+    there they agree within noise), and that reference written in metres equal to the millimetre one."""
+    from translucency.workflow.rendering import render_scene
+
+    folder, model = fitted_ball
+    (tmp_path / "object.ply").symlink_to(folder / "object.ply")
+    mm = _scene_in_unit(tmp_path, 1.0, LAMP + _props(1.0), tag="props")
+    shot = render_scene(mm, {"ball": model}, tmp_path / "r", reference=True, spp=32, samples=32)
+    errors = shot.summary["errors"]
+    obj, rest = errors["object"], errors["rest"]
+    assert 0.85 < obj["brightness"] < 1.15 and obj["rel_rmse"] < 0.35, obj
+    assert 0.95 < rest["brightness"] < 1.05 and rest["rel_rmse"] < 0.35, rest
+    metres = _scene_in_unit(tmp_path, 1000.0, LAMP + _props(1000.0), tag="props")
+    ratio = _reference_ratio(mm, metres, 1000.0, model)
+    assert np.all(np.abs(ratio - 1) < 0.02), ratio
+
+
 def test_the_reference_frame_carries_analytic_shapes_cameras_and_lights():
     """A scene in metres carried into millimetres around (0, 0, 1) m: an analytic sphere, cube, disk and
     cylinder land k (x − c) from where they stood, the camera's position likewise with its frame unscaled,

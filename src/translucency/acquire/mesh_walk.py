@@ -15,6 +15,14 @@ Each pencil beam enters at a surface point along the inward normal (normal
 incidence); a photon that leaves is tallied at its exit point.  A ray that
 misses the mesh from inside means the photon escaped through a crack: it is
 reported as ``KILLED`` (none in a watertight mesh; the tests count them).
+
+**Re-entry** (``reenter=True``): on a non-convex scan light that leaves one part may fly through the air
+into another — a horn's tip 0.7 mm thick beside the head, a leg beside a leg.  A photograph sees it
+where it finally escapes, so the photon, refracted out, is followed through the air (state
+``OUTSIDE``, its last exit point kept): a ray that misses the mesh escapes and is tallied at that exit;
+one that hits it is reflected (Fresnel, staying outside) or refracted back in and walks on.  On a
+convex mesh nothing changes, bit for bit (no ray from its surface outwards meets it again, and no random
+number is drawn for a photon that escapes).
 """
 
 from __future__ import annotations
@@ -28,6 +36,7 @@ from .transport import ABSORBED, ACTIVE, KILLED, _medium_event, _walk_setup
 from .volume import Volume
 
 EXIT = 1  # left through the surface
+OUTSIDE = 5  # in flight through the air between two parts of the mesh (re-entry); not a final state
 
 
 @dataclass
@@ -54,6 +63,7 @@ def mesh_random_walk(
     seed: int = 0,
     first_point: int = 0,
     index_matched: bool = False,
+    reenter: bool = False,
     max_steps: int = 200_000,
 ) -> MeshWalkResult:
     """Trace ``n_photons`` photons from each entry point into the mesh, in one wavefront.
@@ -72,6 +82,9 @@ def mesh_random_walk(
         Entry points on the surface and their outward unit normals.
     n_photons : int
         Photons per entry point.
+    reenter : bool
+        Follow light that leaves through the air into another part of the mesh (module docstring);
+        ``False``: every photon that leaves is tallied where it first left.
 
     Returns
     -------
@@ -103,15 +116,18 @@ def mesh_random_walk(
     steps = UInt32(0)
     face = UInt32(0)
     scatters = UInt32(0)
+    exit_pos = mi.Vector3f(pos)  # the last exit point of a photon in the air (re-entry)
 
-    def cond(pos, direction, rng, code, steps, face, scatters):
-        return code == ACTIVE
+    def cond(pos, direction, rng, code, steps, face, scatters, exit_pos):
+        return (code == ACTIVE) | (code == OUTSIDE)
 
-    def body(pos, direction, rng, code, steps, face, scatters):
+    def body(pos, direction, rng, code, steps, face, scatters, exit_pos):
         active = code == ACTIVE
-        # tentative free flight against the majorant, and the distance to the surface
+        outside = code == OUTSIDE
+        # tentative free flight against the majorant, and the distance to the surface (inside, or
+        # through the air for a photon between two parts)
         t = -dr.log(1.0 - rng.next_float32()) / majorant
-        si = scene.ray_intersect(mi.Ray3f(pos, direction), active)
+        si = scene.ray_intersect(mi.Ray3f(pos, direction), active | outside)
         # a ray that misses (si.t = inf) still collides in the medium: a ray through a vertex or along an
         # edge can slip between triangles (the first flight from an icosphere's pole is one); only a photon
         # that would fly on without a surface ahead has escaped through a crack
@@ -146,19 +162,45 @@ def mesh_random_walk(
         refl_dir = direction - 2.0 * dr.dot(direction, n) * n
 
         pos = dr.select(collide, p_c, dr.select(hit, si.p - n * eps, pos))
-        pos = dr.select(leave, si.p, pos)
         face = dr.select(leave, si.prim_index, face)
         direction = dr.select(scatter, new_dir, dr.select(reflect, refl_dir, direction))
         code = dr.select(absorb, UInt32(ABSORBED), code)
-        code = dr.select(leave, UInt32(EXIT), code)
-        code = dr.select(escaped, UInt32(KILLED), code)
-        steps = steps + dr.select(active, 1, 0)
-        scatters = scatters + dr.select(scatter, 1, 0)
-        code = dr.select((code == ACTIVE) & (steps >= max_steps), UInt32(KILLED), code)
-        return pos, direction, rng, code, steps, face, scatters
+        if reenter:
+            # -- leaving: refracted out into the air, the exit point kept for the tally ----------
+            exit_pos = dr.select(leave, si.p, exit_pos)
+            pos = dr.select(leave, si.p + n * eps, pos)
+            direction = dr.select(leave, _refract(dr, direction, n, eta), direction)
+            code = dr.select(leave, UInt32(OUTSIDE), code)
 
-    pos, direction, rng, code, steps, face, scatters = dr.while_loop(
-        state=(pos, direction, rng, code, steps, face, scatters),
+            # -- in the air: escaped (tallied at the last exit), or back at the surface ----------
+            escape = outside & ~si.is_valid()
+            land = outside & si.is_valid()
+            m = dr.normalize(si.n)
+            m = dr.select(dr.dot(m, direction) > 0, -m, m)  # the outward normal, against the flight
+            cos_o = dr.abs(dr.dot(direction, m))
+            F_o = mi.fresnel(cos_o, Float(eta))[0] if eta != 1.0 else Float(0.0)
+            # (the draw advances only the landing lanes: on a convex mesh the walk is the same bit for bit)
+            bounce = land & (rng.next_float32(land) < F_o)  # reflected off the outside: stays in the air
+            enter = land & ~bounce
+            bounce_dir = direction + 2.0 * cos_o * m
+            pos = dr.select(bounce, si.p + m * eps, dr.select(enter, si.p - m * eps, pos))
+            direction = dr.select(
+                bounce, bounce_dir, dr.select(enter, _refract(dr, direction, -m, 1.0 / eta), direction)
+            )
+            pos = dr.select(escape, exit_pos, pos)
+            code = dr.select(escape, UInt32(EXIT), dr.select(enter, UInt32(ACTIVE), code))
+        else:
+            pos = dr.select(leave, si.p, pos)
+            code = dr.select(leave, UInt32(EXIT), code)
+        code = dr.select(escaped, UInt32(KILLED), code)
+        steps = steps + dr.select(active | outside, 1, 0)
+        scatters = scatters + dr.select(scatter, 1, 0)
+        running = (code == ACTIVE) | (code == OUTSIDE)
+        code = dr.select(running & (steps >= max_steps), UInt32(KILLED), code)
+        return pos, direction, rng, code, steps, face, scatters, exit_pos
+
+    pos, direction, rng, code, steps, face, scatters, exit_pos = dr.while_loop(
+        state=(pos, direction, rng, code, steps, face, scatters, exit_pos),
         cond=cond,
         body=body,
         label="mesh_photon_walk",
@@ -176,3 +218,17 @@ def mesh_random_walk(
         steps=int(dr.sum(steps)[0]),
         scatters=np.asarray(scatters).astype(np.int64),
     )
+
+
+def _refract(dr, d, n, eta: float):
+    r"""The direction refracted through a boundary with unit normal ``n`` along the flight
+    (``dot(d, n) > 0``), ``eta`` the index before over the index after (Snell's law):
+
+    .. math:: d_t = \eta d + (\cos\theta_t - \eta \cos\theta_i)\, n
+
+    (total internal reflection is the Fresnel step's, so :math:`\cos\theta_t` is real)."""
+    if eta == 1.0:
+        return d
+    cos_i = dr.dot(d, n)
+    cos_t = dr.sqrt(dr.maximum(1.0 - eta * eta * (1.0 - cos_i * cos_i), 0.0))
+    return dr.normalize(eta * d + (cos_t - eta * cos_i) * n)

@@ -233,6 +233,11 @@ class MeshOptions:
     g = typer.Option(0.0, "--g", help="Henyey-Greenstein anisotropy.")
     chunk = typer.Option(8, "--chunk", help="Incident points per chunk (unit of resuming).")
     index_matched = typer.Option(False, "--index-matched", help="No Fresnel reflection at the surface.")
+    reentry = typer.Option(
+        True,
+        "--reentry/--no-reentry",
+        help="Light leaving one part through the air into another (a horn by the head) walks on there.",
+    )
     overwrite = dataset_overwrite_option()
     scheduler = scheduler_option()
     max_memory = max_memory_option()
@@ -256,6 +261,7 @@ def acquire_mesh_cmd(
     g: float = MeshOptions.g,
     chunk: int = MeshOptions.chunk,
     index_matched: bool = MeshOptions.index_matched,
+    reentry: bool = MeshOptions.reentry,
     overwrite: bool = MeshOptions.overwrite,
     scheduler: str = MeshOptions.scheduler,
     max_memory: str = MeshOptions.max_memory,
@@ -278,6 +284,7 @@ def acquire_mesh_cmd(
         seed=seed,
         chunk_points=chunk,
         index_matched=index_matched,
+        reenter=reentry,
         scale_mm=scale,
         up=up,
         overwrite=overwrite,
