@@ -222,6 +222,28 @@ def test_spot_and_environment_irradiance(ball):
     )
 
 
+def test_the_skys_irradiance_does_not_depend_on_its_batches(monkeypatch):
+    """The sky's rays go in batches (a 338 k-vertex scan in one wavefront held 16 GB): a batch of 7 points
+    gives the estimate of one batch for all, bit for bit, with an incidence law held per vertex; and the
+    box under a plate keeps its shadow."""
+    from translucency.model.incidence import HalfSpaceIncidence
+    from translucency.render import EnvironmentLight
+    from translucency.render.lights import environment
+
+    box = trimesh.creation.box(extents=(10, 10, 10))
+    two = trimesh.util.concatenate(
+        [box, trimesh.creation.box(extents=(200, 200, 1)).apply_translation((0, 0, 7))]
+    )
+    scene, sky = mesh_scene(two), EnvironmentLight(0.3, samples=64)
+    law = HalfSpaceIncidence(np.random.default_rng(1).uniform(0.2, 0.8, (len(box.vertices), 3)))
+    one = (vertex_irradiance(box, scene, sky), vertex_irradiance(box, scene, sky, incidence=law))
+    monkeypatch.setattr(environment, "RAYS_PER_BATCH", 7 * 64)
+    many = (vertex_irradiance(box, scene, sky), vertex_irradiance(box, scene, sky, incidence=law))
+    for a, b in zip(one, many):
+        assert a.shape == b.shape and np.array_equal(a, b)
+    assert (one[0][box.vertex_normals[:, 2] > 0.5] < 0.5 * np.pi * 0.3).all()
+
+
 def _sky_map(path, sun=True):
     """A latitude–longitude map (rows from the map's +Y pole down): a blue-grey sky and an optional sun."""
     from translucency.mitsuba import mitsuba
