@@ -15,7 +15,6 @@ from ...model.boundary import fresnel_transmittance
 from .. import sh
 from .light import MAX_POWER, Light
 
-
 #: rays of the sky's visibility in one wavefront (Dr.Jit's and NumPy's arrays of a batch: ~1 GB)
 RAYS_PER_BATCH = 1 << 21
 
