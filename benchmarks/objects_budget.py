@@ -17,7 +17,9 @@ points, fit, α     the fitted α as well: what ``render`` draws (checked agains
 =================  ==================================================================================
 
 plus the acquisition noise (4× the photons), the near field (the profile at r_min instead of the
-measured own area), the transport radius, the picture's samples per pixel and the reference's own noise.
+measured own area), the transport radius, the picture's samples per pixel and the reference's own noise,
+and the oracle without re-entry (light that leaves one part through the air tallied where it left, not
+carried into the next part as ``volpath`` carries it).  ``--oracle-only``: the two oracle rows alone.
 The default case is the cow with skin under a spot (issue 12's case); needs ``cow.obj``:
 
     python benchmarks/objects_budget.py --meshes ../shared/meshes
@@ -122,6 +124,7 @@ def main() -> int:
     ap.add_argument(
         "--incidence", default="half-space", help="the incidence law of every row (render --incidence)"
     )
+    ap.add_argument("--oracle-only", action="store_true", help="the oracle with and without re-entry only")
     args = ap.parse_args()
     args.work.mkdir(parents=True, exist_ok=True)
     name, file, scale, up, material, points, photons, kind, light, view = args.case.split(":")
@@ -137,17 +140,26 @@ def main() -> int:
     picture = VertexPicture(mesh, camera, spp=16, light=light)
     area = vertex_areas(mesh)
 
-    def acquire(n_points, n_photons, seed=3):
+    def acquire(n_points, n_photons, seed=3, reentry=True):
         return acquire_mesh(
             mesh,
             volume,
-            args.work / f"{name}_{n_points}x{n_photons}_{seed}.zarr",
+            args.work / f"{name}_{n_points}x{n_photons}_{seed}{'' if reentry else '_first_exit'}.zarr",
             n_points=n_points,
             photons=n_photons,
             seed=seed,
             chunk_points=32,
             index_matched=True,
+            reentry=reentry,
         )
+
+    def oracle_kernel(reentry=True):
+        """K[o, j]: the tally with every vertex an incident point."""
+        oracle = open_mesh_dataset(acquire(V, N, reentry=reentry))
+        R = np.asarray(oracle.group["R_d"][...], dtype=np.float64)  # (V_j, V_o, 3)
+        K = np.zeros((V, V, 3))
+        K[:, oracle["incident"]] = R.transpose(1, 0, 2)
+        return K
 
     rows = []
 
@@ -179,6 +191,11 @@ def main() -> int:
     E = vertex_irradiance(mesh, scene, light, incidence=law)
     exit_law = law.exit(view_cosines(mesh, camera.origin))
     row("pipeline (render's default)", relight_vertices(T, E), "all terms")
+    if args.oracle_only:
+        for reentry in (True, False):
+            label = "oracle: the tally, every vertex" if reentry else "oracle without re-entry"
+            row(label, radiance(oracle_kernel(reentry), area, E), "the tally itself")
+        return _written(args, V, info, rows, t0)
     saved = model.measured
     model.measured = None
     row("  near field from the profile", relight_vertices(transport_matrices(model, mesh), E), "near field")
@@ -194,11 +211,7 @@ def main() -> int:
     row(f"  {4 * P} incident points", relight_vertices(transport_matrices(fitP.model, mesh), E), "points")
 
     # the oracle: every vertex an incident point, at the same photons per point
-    oracle = open_mesh_dataset(acquire(V, N))
-    R = np.asarray(oracle.group["R_d"][...], dtype=np.float64)  # (V_j, V_o, 3)
-    inc = oracle["incident"]
-    Ksrc = np.zeros((V, V, 3))
-    Ksrc[:, inc] = R.transpose(1, 0, 2)  # K[o, j]
+    Ksrc = oracle_kernel()
     L_oracle = radiance(Ksrc, area, E)
     row("oracle: the tally, every vertex", L_oracle, "floor: discretisation, exit law, noise")
     row(
@@ -245,6 +258,15 @@ def main() -> int:
         ),
         "fit",
     )
+    row(
+        "oracle without re-entry",
+        radiance(oracle_kernel(reentry=False), area, E),
+        "light crossing the air from part to part",
+    )
+    return _written(args, V, info, rows, t0)
+
+
+def _written(args, V, info, rows, t0) -> int:
     out = {
         "case": args.case,
         "vertices": V,

@@ -170,7 +170,7 @@ def test_reentry_carries_light_across_a_gap_into_the_next_part(eta):
     vol = Volume.homogeneous((6, 6, 22), 1.0, [0.0] * 3, [1e-7] * 3, 0.0, eta)
     N = 40_000
     runs = {
-        reenter: mesh_random_walk(
+        reentry: mesh_random_walk(
             mesh_scene(pair),
             pair.bounds,
             vol,
@@ -180,20 +180,20 @@ def test_reentry_carries_light_across_a_gap_into_the_next_part(eta):
             N,
             seed=5,
             index_matched=eta == 1.0,
-            reenter=reenter,
+            reentry=reentry,
         )  # fmt: skip
-        for reenter in (False, True)
+        for reentry in (False, True)
     }
     F = ((eta - 1) / (eta + 1)) ** 2
-    for reenter, r in runs.items():
+    for reentry, r in runs.items():
         assert (r.code == 4).sum() == 0 and set(np.unique(r.code)) <= {-1, EXIT}
         x = r.position[r.code == EXIT, 0]
         faces = [np.isclose(x, v, atol=1e-3) for v in (0.0, 10.0, 22.0)]
         assert np.all(faces[0] | faces[1] | faces[2])  # only through the faces the beam's line crosses
         entered = (r.code != -1).sum()
         shares = [f.sum() / entered for f in faces]
-        left, right = _interface_chain(F, 1, n=4 if reenter else 2)
-        expect = [left, 0.0, right] if reenter else [left, right, 0.0]
+        left, right = _interface_chain(F, 1, n=4 if reentry else 2)
+        expect = [left, 0.0, right] if reentry else [left, right, 0.0]
         for got, want in zip(shares, expect):
             sigma = np.sqrt(max(want * (1 - want), 1e-6) / entered)
             assert abs(got - want) <= 4 * sigma + 1e-9, (shares, expect)
@@ -221,7 +221,7 @@ def test_reentry_changes_nothing_on_a_convex_mesh_and_keeps_every_photon():
             sphere.vertex_normals[[top]],
             N,
             seed=1,
-            reenter=re,
+            reentry=re,
         )  # fmt: skip
         for re in (False, True)
     )
@@ -233,7 +233,7 @@ def test_reentry_changes_nothing_on_a_convex_mesh_and_keeps_every_photon():
     side = int(np.argmin(sphere.vertices[:, 0]))
     r = mesh_random_walk(
         mesh_scene(pair), pair.bounds, clear, 0, sphere.vertices[[side]], sphere.vertex_normals[[side]], N,
-        seed=3, reenter=True,
+        seed=3, reentry=True,
     )  # fmt: skip
     assert (r.code == 4).sum() == 0 and ((r.code == EXIT) | (r.code == -1)).all()
     far = r.position[r.code == EXIT, 0] > 3.15  # left through the second sphere

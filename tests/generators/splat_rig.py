@@ -275,7 +275,7 @@ def splat_rig(
             photons,
             seed=int(seed) * 31 + 977 * ch + 5,
             index_matched=True,
-            reenter=True,  # light crossing the air from one part into another, as a photograph sees it
+            reentry=True,  # light crossing the air from one part into another, as a photograph sees it
         )
         point = np.repeat(np.arange(P), photons)
         ok = res.code == EXIT

@@ -48,7 +48,7 @@ def acquire_mesh(
     seed: int = 0,
     chunk_points: int = 8,
     index_matched: bool = False,
-    reenter: bool = True,
+    reentry: bool = True,
     overwrite: bool = False,
     inputs=(),
     progress: Callable[[int, int], None] | None = None,
@@ -66,7 +66,7 @@ def acquire_mesh(
         Zarr directory.
     n_points, photons, seed, chunk_points
         Incident vertices, photons per point and channel, seed, points per chunk.
-    reenter : bool
+    reentry : bool
         Follow light that leaves one part of the mesh through the air into another (a horn beside the
         head): tallied where it finally escapes, as a photograph sees it
         (:func:`~translucency.acquire.mesh_walk.mesh_random_walk`).  Data sets made before it was
@@ -93,7 +93,7 @@ def acquire_mesh(
         "seed": int(seed),
         "chunk": int(chunk_points),
         "index_matched": bool(index_matched),
-        "reentry": bool(reenter),
+        "reentry": bool(reentry),
         "vertices": V,
         "faces": len(mesh.faces),
         "volume": volume.description,
@@ -125,7 +125,7 @@ def acquire_mesh(
         done = np.asarray(root["chunk_done"][...])
         todo = [(c, c * chunk_points, min(P, (c + 1) * chunk_points)) for c in range(n_chunks) if not done[c]]
         finished = P - sum(hi - lo for _, lo, hi in todo)
-        walk = (photons, seed, index_matched, reenter)
+        walk = (photons, seed, index_matched, reentry)
         with open_cluster(scheduler) as cluster:
             if cluster is None:  # this process, chunk after chunk (Dr.Jit uses every core)
                 scene = mesh_scene(mesh)
@@ -172,10 +172,10 @@ _SCENE: list = []
 def _acquire_mesh_chunk(mesh, volume, area, ds, c, lo, hi, incident, walk, scene=None) -> None:
     """Trace chunk ``c`` (incident vertices ``incident``, points lo..hi), write its rows, then its flag.
 
-    ``walk`` = (photons, seed, index_matched, reenter).  A pure function of its arguments: here or on a worker
+    ``walk`` = (photons, seed, index_matched, reentry).  A pure function of its arguments: here or on a worker
     (which builds the scene once per mesh), again after an interruption, it writes the same bytes.
     """
-    photons, seed, index_matched, reenter = walk
+    photons, seed, index_matched, reentry = walk
     if scene is None:
         if not _SCENE or _SCENE[0] is not mesh:
             _SCENE[:] = [mesh, mesh_scene(mesh)]
@@ -197,7 +197,7 @@ def _acquire_mesh_chunk(mesh, volume, area, ds, c, lo, hi, incident, walk, scene
             seed=seed + 7919 * ch,
             first_point=lo,
             index_matched=index_matched,
-            reenter=reenter,
+            reentry=reentry,
         )
         point = np.repeat(np.arange(hi - lo), photons)
         ok = res.code == EXIT

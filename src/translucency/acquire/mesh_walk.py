@@ -16,7 +16,7 @@ incidence); a photon that leaves is tallied at its exit point.  A ray that
 misses the mesh from inside means the photon escaped through a crack: it is
 reported as ``KILLED`` (none in a watertight mesh; the tests count them).
 
-**Re-entry** (``reenter=True``): on a non-convex scan light that leaves one part may fly through the air
+**Re-entry** (``reentry=True``): on a non-convex scan light that leaves one part may fly through the air
 into another — a horn's tip 0.7 mm thick beside the head, a leg beside a leg.  A photograph sees it
 where it finally escapes, so the photon, refracted out, is followed through the air (state
 ``OUTSIDE``, its last exit point kept): a ray that misses the mesh escapes and is tallied at that exit;
@@ -63,7 +63,7 @@ def mesh_random_walk(
     seed: int = 0,
     first_point: int = 0,
     index_matched: bool = False,
-    reenter: bool = False,
+    reentry: bool = False,
     max_steps: int = 200_000,
 ) -> MeshWalkResult:
     """Trace ``n_photons`` photons from each entry point into the mesh, in one wavefront.
@@ -82,7 +82,7 @@ def mesh_random_walk(
         Entry points on the surface and their outward unit normals.
     n_photons : int
         Photons per entry point.
-    reenter : bool
+    reentry : bool
         Follow light that leaves through the air into another part of the mesh (module docstring);
         ``False``: every photon that leaves is tallied where it first left.
 
@@ -165,7 +165,7 @@ def mesh_random_walk(
         face = dr.select(leave, si.prim_index, face)
         direction = dr.select(scatter, new_dir, dr.select(reflect, refl_dir, direction))
         code = dr.select(absorb, UInt32(ABSORBED), code)
-        if reenter:
+        if reentry:
             # -- leaving: refracted out into the air, the exit point kept for the tally ----------
             exit_pos = dr.select(leave, si.p, exit_pos)
             pos = dr.select(leave, si.p + n * eps, pos)

@@ -284,7 +284,7 @@ def acquire_mesh_cmd(
         seed=seed,
         chunk_points=chunk,
         index_matched=index_matched,
-        reenter=reentry,
+        reentry=reentry,
         scale_mm=scale,
         up=up,
         overwrite=overwrite,

@@ -76,6 +76,8 @@ def _dataset_rows(fields: dict, size_text: str, bounds: list):
             *bounds,
             ("index matched", str(fields["index_matched"])),
         ]
+        if fields.get("reentry") is not None:
+            rows.append(("re-entry", f"{fields['reentry']} (light through the air from part to part)"))
         if fields.get("source") == "photographs":
             rows += [
                 (

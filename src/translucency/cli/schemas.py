@@ -515,6 +515,10 @@ INFO_MESH = record(
         "n_vertices": field("integer", "Vertices of the mesh."),
         "n_faces": field("integer", "Triangles of the mesh."),
         "index_matched": field(["boolean", "null"], "No Fresnel reflection at the surface."),
+        "reentry": field(
+            ["boolean", "null"],
+            "A tally: light leaving one part through the air walked on in the next (null: photographs).",
+        ),
         **BOUNDS,
         **_STORE,
     },

@@ -269,6 +269,8 @@ def describe_mesh(ds: MeshDataset) -> dict:
         n_vertices=int(h["n_vertices"]),
         n_faces=int(ds.group["faces"].shape[0]),
         index_matched=h.get("request", {}).get("index_matched"),
+        # light carried through the air from part to part: a tally's flag (false before it existed)
+        reentry=h.get("request", {}).get("reentry", False) if h.get("source") != "photographs" else None,
         **object_bounds(vertices),
         **_photographs(h),
     )

@@ -250,7 +250,7 @@ def acquire_mesh(
     seed: int = 0,
     chunk_points: int = 8,
     index_matched: bool = False,
-    reenter: bool = True,
+    reentry: bool = True,
     scale_mm: float = 1.0,
     up: str = "z",
     overwrite: bool = False,
@@ -280,7 +280,7 @@ def acquire_mesh(
         Photons per point and channel, random seed, incident points per chunk.
     index_matched : bool
         No Fresnel reflection at the surface.
-    reenter : bool
+    reentry : bool
         Light that leaves one part through the air into another walks on there, tallied where it finally
         escapes (as a photograph sees it); ``False``: tallied where it first left.
     scale_mm, up
@@ -341,7 +341,7 @@ def acquire_mesh(
         volume = object_volume(name, obj, voxel_mm, g=g, seed=seed)
     check_filling(obj, volume)
     same = {"n_points": points, "photons": photons, "seed": seed, "chunk": chunk_points, "vertices": V}
-    same["reentry"] = bool(reenter)
+    same["reentry"] = bool(reentry)
     state = _resumable(out, open_mesh_dataset, lambda request: _matches(request, same))
     timing = run.time(
         resources.timing.mesh_acquisition_units(points=_left(state, points), photons=photons, vertices=V)
@@ -363,7 +363,7 @@ def acquire_mesh(
             seed=seed,
             chunk_points=chunk_points,
             index_matched=bool(index_matched),
-            reenter=bool(reenter),
+            reentry=bool(reentry),
             overwrite=overwrite,
             inputs=[mesh_file, path],
             progress=_steps(work, progress),

@@ -132,7 +132,7 @@ class MeshWalkGain:
         )  # fmt: skip
         walk = mesh_random_walk(
             self.scene, mesh.bounds, volume, 0, self.hit[None], self.normal[None], self.photons, seed=seed,
-            index_matched=True, reenter=True, max_steps=MAX_STEPS,
+            index_matched=True, reentry=True, max_steps=MAX_STEPS,
         )  # fmt: skip
         out = np.flatnonzero(walk.code == EXIT)
         tri, bary = exit_barycentric(mesh, walk.face[out], walk.position[out])
