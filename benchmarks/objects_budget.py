@@ -125,6 +125,7 @@ def main() -> int:
         "--incidence", default="half-space", help="the incidence law of every row (render --incidence)"
     )
     ap.add_argument("--oracle-only", action="store_true", help="the oracle with and without re-entry only")
+    ap.add_argument("--no-reentry", action="store_true", help="the pipeline's data without re-entry")
     args = ap.parse_args()
     args.work.mkdir(parents=True, exist_ok=True)
     name, file, scale, up, material, points, photons, kind, light, view = args.case.split(":")
@@ -140,7 +141,7 @@ def main() -> int:
     picture = VertexPicture(mesh, camera, spp=16, light=light)
     area = vertex_areas(mesh)
 
-    def acquire(n_points, n_photons, seed=3, reentry=True):
+    def acquire(n_points, n_photons, seed=3, reentry=not args.no_reentry):
         return acquire_mesh(
             mesh,
             volume,
@@ -153,7 +154,7 @@ def main() -> int:
             reentry=reentry,
         )
 
-    def oracle_kernel(reentry=True):
+    def oracle_kernel(reentry: bool):
         """K[o, j]: the tally with every vertex an incident point."""
         oracle = open_mesh_dataset(acquire(V, N, reentry=reentry))
         R = np.asarray(oracle.group["R_d"][...], dtype=np.float64)  # (V_j, V_o, 3)
@@ -211,7 +212,7 @@ def main() -> int:
     row(f"  {4 * P} incident points", relight_vertices(transport_matrices(fitP.model, mesh), E), "points")
 
     # the oracle: every vertex an incident point, at the same photons per point
-    Ksrc = oracle_kernel()
+    Ksrc = oracle_kernel(True)
     L_oracle = radiance(Ksrc, area, E)
     row("oracle: the tally, every vertex", L_oracle, "floor: discretisation, exit law, noise")
     row(
