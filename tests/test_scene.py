@@ -483,17 +483,25 @@ def test_every_emitter_kind_against_volpath_and_in_metres(fitted_ball, tmp_path,
     """The ball on its floor under each emitter kind: our picture against the volpath reference of the same
     scene (over the ball, as the area lamp's case above), and that reference written in metres equal to the
     millimetre one (the reference's frame carries each kind)."""
+    _against_volpath_and_in_metres(fitted_ball, tmp_path, lambda u: _emitter(kind, u, tmp_path), kind)
+
+
+def _against_volpath_and_in_metres(fitted_ball, tmp_path, light_in, tag: str) -> dict:
+    """The ball's scene with ``light_in(u)`` (lights and props written for ``u`` mm a unit) in millimetres:
+    our picture against its volpath reference over the ball; that reference written in metres equal to the
+    millimetre one.  Returns the comparison's errors."""
     from translucency.workflow.rendering import render_scene
 
     folder, model = fitted_ball
     (tmp_path / "object.ply").symlink_to(folder / "object.ply")
-    mm = _scene_in_unit(tmp_path, 1.0, _emitter(kind, 1.0, tmp_path), tag=kind)
+    mm = _scene_in_unit(tmp_path, 1.0, light_in(1.0), tag=tag)
     shot = render_scene(mm, {"ball": model}, tmp_path / "r", reference=True, spp=32, samples=32)
     obj = shot.summary["errors"]["object"]
     assert 0.85 < obj["brightness"] < 1.15 and obj["rel_rmse"] < 0.35, obj
-    metres = _scene_in_unit(tmp_path, 1000.0, _emitter(kind, 1000.0, tmp_path), tag=kind)
+    metres = _scene_in_unit(tmp_path, 1000.0, light_in(1000.0), tag=tag)
     ratio = _reference_ratio(mm, metres, 1000.0, model)
     assert np.all(np.abs(ratio - 1) < 0.02), ratio
+    return shot.summary["errors"]
 
 
 def _props(u: float) -> str:
@@ -538,19 +546,8 @@ def test_analytic_shapes_instances_textures_and_rough_bsdfs_against_volpath_in_m
     instances of a cylinder group, under the area lamp: our picture against the volpath reference of the
     same scene over the ball and over the rest (the props are drawn by the same path tracer in both, so
     there they agree within noise), and that reference written in metres equal to the millimetre one."""
-    from translucency.workflow.rendering import render_scene
-
-    folder, model = fitted_ball
-    (tmp_path / "object.ply").symlink_to(folder / "object.ply")
-    mm = _scene_in_unit(tmp_path, 1.0, LAMP + _props(1.0), tag="props")
-    shot = render_scene(mm, {"ball": model}, tmp_path / "r", reference=True, spp=32, samples=32)
-    errors = shot.summary["errors"]
-    obj, rest = errors["object"], errors["rest"]
-    assert 0.85 < obj["brightness"] < 1.15 and obj["rel_rmse"] < 0.35, obj
+    rest = _against_volpath_and_in_metres(fitted_ball, tmp_path, lambda u: LAMP + _props(u), "props")["rest"]
     assert 0.95 < rest["brightness"] < 1.05 and rest["rel_rmse"] < 0.35, rest
-    metres = _scene_in_unit(tmp_path, 1000.0, LAMP + _props(1000.0), tag="props")
-    ratio = _reference_ratio(mm, metres, 1000.0, model)
-    assert np.all(np.abs(ratio - 1) < 0.02), ratio
 
 
 def test_the_reference_frame_carries_analytic_shapes_cameras_and_lights():

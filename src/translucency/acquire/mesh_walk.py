@@ -156,10 +156,10 @@ def mesh_random_walk(
         n = dr.normalize(si.n)
         n = dr.select(dr.dot(n, direction) < 0, -n, n)  # the normal on the far side, along the flight
         cos_i = dr.abs(dr.dot(direction, n))
-        F = mi.fresnel(-cos_i, Float(eta))[0] if eta != 1.0 else Float(0.0)
+        F = _fresnel(mi, -cos_i, eta)
         reflect = hit & (rng.next_float32() < F)
         leave = hit & ~reflect
-        refl_dir = direction - 2.0 * dr.dot(direction, n) * n
+        refl_dir = _reflect(dr, direction, n)
 
         pos = dr.select(collide, p_c, dr.select(hit, si.p - n * eps, pos))
         face = dr.select(leave, si.prim_index, face)
@@ -178,14 +178,15 @@ def mesh_random_walk(
             m = dr.normalize(si.n)
             m = dr.select(dr.dot(m, direction) > 0, -m, m)  # the outward normal, against the flight
             cos_o = dr.abs(dr.dot(direction, m))
-            F_o = mi.fresnel(cos_o, Float(eta))[0] if eta != 1.0 else Float(0.0)
+            F_o = _fresnel(mi, cos_o, eta)
             # (the draw advances only the landing lanes: on a convex mesh the walk is the same bit for bit)
             bounce = land & (rng.next_float32(land) < F_o)  # reflected off the outside: stays in the air
             enter = land & ~bounce
-            bounce_dir = direction + 2.0 * cos_o * m
             pos = dr.select(bounce, si.p + m * eps, dr.select(enter, si.p - m * eps, pos))
             direction = dr.select(
-                bounce, bounce_dir, dr.select(enter, _refract(dr, direction, -m, 1.0 / eta), direction)
+                bounce,
+                _reflect(dr, direction, m),
+                dr.select(enter, _refract(dr, direction, -m, 1.0 / eta), direction),
             )
             pos = dr.select(escape, exit_pos, pos)
             code = dr.select(escape, UInt32(EXIT), dr.select(enter, UInt32(ACTIVE), code))
@@ -218,6 +219,17 @@ def mesh_random_walk(
         steps=int(dr.sum(steps)[0]),
         scatters=np.asarray(scatters).astype(np.int64),
     )
+
+
+def _fresnel(mi, cos_theta_i, eta: float):
+    """Mitsuba's unpolarised Fresnel reflectance at a boundary of relative index ``eta`` (interior over
+    exterior; ``cos_theta_i`` < 0 from inside), zero where index-matched."""
+    return mi.fresnel(cos_theta_i, mi.Float(eta))[0] if eta != 1.0 else mi.Float(0.0)
+
+
+def _reflect(dr, d, n):
+    """The mirror direction of ``d`` about the unit normal ``n`` (either side): d − 2 (d · n) n."""
+    return d - 2.0 * dr.dot(d, n) * n
 
 
 def _refract(dr, d, n, eta: float):

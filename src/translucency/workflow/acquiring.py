@@ -340,8 +340,14 @@ def acquire_mesh(
         estimate = need(resources.memory.object_voxels(obj.extents, voxel_mm))
         volume = object_volume(name, obj, voxel_mm, g=g, seed=seed)
     check_filling(obj, volume)
-    same = {"n_points": points, "photons": photons, "seed": seed, "chunk": chunk_points, "vertices": V}
-    same["reentry"] = bool(reentry)
+    same = {
+        "n_points": points,
+        "photons": photons,
+        "seed": seed,
+        "chunk": chunk_points,
+        "vertices": V,
+        "reentry": bool(reentry),
+    }
     state = _resumable(out, open_mesh_dataset, lambda request: _matches(request, same))
     timing = run.time(
         resources.timing.mesh_acquisition_units(points=_left(state, points), photons=photons, vertices=V)
