@@ -6,7 +6,7 @@ material and incident vertices (``acquire mesh``, index-matched, another seed):
 * ``rig``: the virtual rig (:mod:`translucency.rig.object.photographs`, Mitsuba's volpath through the
   cameras), one clipped exposure a shot (``exposures="single"``);
 * ``splat``: ``tests/generators/splat_rig.py`` — plain NumPy splatting of a photon tally's exits through a
-  pinhole model with a Lambertian exit law, its own z-buffer and sensor, one clipped exposure a shot.
+  pinhole model with a Lambertian exit law, its own exact visibility and sensor, one clipped exposure a shot.
 
     python benchmarks/object_import_energy.py [MESH.obj] [--size=30] [--cameras=8] [--resolution=96x72]
         [--points=3] [--spp=256] [--photons=200000] [--generators=rig,splat] [--exposure=single|brackets]

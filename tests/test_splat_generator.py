@@ -3,15 +3,15 @@ own and then run through ``import object``.
 
 Its own check: a flat square of known Lambertian exitance photographed face-on and obliquely reads
 M/π in every pixel inside it (the pinhole's Ω_p, the 1/d² and μ laws), and a square behind another hides
-its exits (the z-buffer).  The import on its photographs (slow): a ball of 2,562 vertices (cells of
-about a pixel's footprint) at 96 × 72 px, three shots of 200,000 photons a channel, against the exits'
-own tally — the exact answer for the sample photographed."""
+its exits (the exact ray test over binned triangles).  The import on its photographs (slow): a ball of
+2,562 vertices (cells of about a pixel's footprint) at 96 × 72 px, three shots of 200,000 photons a
+channel, against the exits' own tally — the exact answer for the sample photographed."""
 
 import numpy as np
 import pytest
 import trimesh
 
-from generators.splat_rig import Pinhole, splat_image, splat_rig, z_buffer
+from generators.splat_rig import Pinhole, splat_image, splat_rig, triangle_bins
 from translucency.io.mesh_dataset import open_mesh_dataset
 from translucency.rig.object import SATURATED, import_object
 
@@ -41,7 +41,7 @@ def test_a_lambertian_square_reads_its_exitance_over_pi(tilt):
     pos = np.column_stack([rng.uniform(-10, 10, n), rng.uniform(-10, 10, n), np.zeros(n)])
     face = np.where(pos[:, 1] > pos[:, 0], 1, 0)  # the diagonal splits the square
     cam = _looking_down(tilt)
-    L = splat_image(mesh, cam, z_buffer(mesh, cam), pos, face, np.full(n, 1.0 / n))
+    L = splat_image(mesh, cam, triangle_bins(mesh, cam), pos, face, np.full(n, 1.0 / n))
     M = 1.0 / 400.0  # power 1 over 400 mm²
     u, v, _ = cam.project(mesh.vertices)
     inside = np.zeros_like(L, dtype=bool)  # pixels well inside the square's image
@@ -58,7 +58,7 @@ def test_a_square_in_front_hides_the_exits_behind_it():
     pos = np.array([[0.0, 0.0, 0.0], [8.0, 8.0, 0.0], [1.0, 1.0, 5.0]])
     face = np.array([0, 1, 3])  # two on the far square (one behind the near one), one on the near
     images = [
-        splat_image(mesh, cam, z_buffer(mesh, cam), pos[k : k + 1], face[k : k + 1], np.ones(1))
+        splat_image(mesh, cam, triangle_bins(mesh, cam), pos[k : k + 1], face[k : k + 1], np.ones(1))
         for k in range(3)
     ]
     assert images[0].sum() == 0 and images[1].sum() > 0 and images[2].sum() > 0

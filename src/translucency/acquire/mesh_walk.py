@@ -49,6 +49,7 @@ class MeshWalkResult:
     direction: np.ndarray  # (n, 3) flight direction at the end (EXIT: the exit direction, outwards)
     steps: int
     scatters: np.ndarray | None = None  # (n,) real scattering events of each photon (albedo reweighting)
+    length: np.ndarray | None = None  # (n,) path length inside the medium, mm (σ_t reweighting)
 
 
 def mesh_random_walk(
@@ -116,12 +117,13 @@ def mesh_random_walk(
     steps = UInt32(0)
     face = UInt32(0)
     scatters = UInt32(0)
+    length = Float(0.0)  # the path inside the medium, mm
     exit_pos = mi.Vector3f(pos)  # the last exit point of a photon in the air (re-entry)
 
-    def cond(pos, direction, rng, code, steps, face, scatters, exit_pos):
+    def cond(pos, direction, rng, code, steps, face, scatters, length, exit_pos):
         return (code == ACTIVE) | (code == OUTSIDE)
 
-    def body(pos, direction, rng, code, steps, face, scatters, exit_pos):
+    def body(pos, direction, rng, code, steps, face, scatters, length, exit_pos):
         active = code == ACTIVE
         outside = code == OUTSIDE
         # tentative free flight against the majorant, and the distance to the surface (inside, or
@@ -160,6 +162,8 @@ def mesh_random_walk(
         reflect = hit & (rng.next_float32() < F)
         leave = hit & ~reflect
         refl_dir = _reflect(dr, direction, n)
+        # the flight inside: to the collision, or to the surface
+        length = length + dr.select(collide, t, dr.select(hit, si.t, 0.0))
 
         pos = dr.select(collide, p_c, dr.select(hit, si.p - n * eps, pos))
         face = dr.select(leave, si.prim_index, face)
@@ -198,15 +202,15 @@ def mesh_random_walk(
         scatters = scatters + dr.select(scatter, 1, 0)
         running = (code == ACTIVE) | (code == OUTSIDE)
         code = dr.select(running & (steps >= max_steps), UInt32(KILLED), code)
-        return pos, direction, rng, code, steps, face, scatters, exit_pos
+        return pos, direction, rng, code, steps, face, scatters, length, exit_pos
 
-    pos, direction, rng, code, steps, face, scatters, exit_pos = dr.while_loop(
-        state=(pos, direction, rng, code, steps, face, scatters, exit_pos),
+    pos, direction, rng, code, steps, face, scatters, length, exit_pos = dr.while_loop(
+        state=(pos, direction, rng, code, steps, face, scatters, length, exit_pos),
         cond=cond,
         body=body,
         label="mesh_photon_walk",
     )
-    dr.eval(pos, code, steps, face, scatters)
+    dr.eval(pos, code, steps, face, scatters, length)
     code_np = np.asarray(code).astype(np.int64)
     code_np[code_np == EXIT + 100] = -1
     position = np.stack([np.asarray(pos.x), np.asarray(pos.y), np.asarray(pos.z)], axis=1)
@@ -218,6 +222,7 @@ def mesh_random_walk(
         direction=flight,
         steps=int(dr.sum(steps)[0]),
         scatters=np.asarray(scatters).astype(np.int64),
+        length=np.asarray(length).astype(np.float64),
     )
 
 
