@@ -20,6 +20,20 @@ plus the acquisition noise (4× the photons), the near field (the profile at r_m
 measured own area), the transport radius, the picture's samples per pixel and the reference's own noise,
 and the oracle without re-entry (light that leaves one part through the air tallied where it left, not
 carried into the next part as ``volpath`` carries it).  ``--oracle-only``: the two oracle rows alone.
+
+``--angles`` (issue 37, step 1) splits the oracle's error by the angles the data are blind to, with walks
+of its own (every vertex a source, the same photons, re-entry), under a light of one direction per point
+(directional, point, spot):
+
+=======================  =============================================================================
+oracle, normal beams     each beam enters along −n; exitance × the incidence and exit laws (today's)
+(a) direction oracle     each beam enters along the light's direction of travel at that vertex (index-
+                         matched: not refracted), plain irradiance; exitance × the exit law
+(b) exit oracle          normal beams; the radiance toward the camera tallied from the exits whose
+                         direction lies within ``CONE_DEG`` of the vertex's view direction:
+                         L = Σ φ_o w / (A_o Ω_c cos θ_o), no exit law
+(c) both                 beams along the light and the radiance toward the camera
+=======================  =============================================================================
 The default case is the cow with skin under a spot (issue 12's case); needs ``cow.obj``:
 
     python benchmarks/objects_budget.py --meshes ../shared/meshes
@@ -35,7 +49,8 @@ from pathlib import Path
 
 import numpy as np
 
-from translucency.acquire.mesh import acquire_mesh, object_volume
+from translucency.acquire.mesh import acquire_mesh, exit_barycentric, object_volume
+from translucency.acquire.mesh_walk import EXIT, mesh_random_walk
 from translucency.fit.mesh import fit_mesh
 from translucency.geometry import vertex_areas
 from translucency.io.mesh import load_mesh
@@ -51,6 +66,8 @@ from translucency.render.reference import converged_reference
 from translucency.render.relight import relight_vertices, view_cosines
 from translucency.render.transport import transport_matrices
 
+#: the half-angle of the exit oracle's cone about each vertex's view direction, degrees
+CONE_DEG = 25.0
 CASE = "cow-skin-spot:cow.obj:8:z:skin:128:4000:spot:-60,70,90,0,0,0,25,3e4:-1,1.2,0.6"
 
 
@@ -126,6 +143,7 @@ def main() -> int:
     )
     ap.add_argument("--oracle-only", action="store_true", help="the oracle with and without re-entry only")
     ap.add_argument("--no-reentry", action="store_true", help="the pipeline's data without re-entry")
+    ap.add_argument("--angles", action="store_true", help="the oracle split by the angles in and out")
     args = ap.parse_args()
     args.work.mkdir(parents=True, exist_ok=True)
     name, file, scale, up, material, points, photons, kind, light, view = args.case.split(":")
@@ -164,8 +182,8 @@ def main() -> int:
 
     rows = []
 
-    def row(label, L, what, pic=picture):
-        img = pic.draw(L if exit_law is None else L * exit_law)
+    def row(label, L, what, pic=picture, law=True):  # law=False: L is a radiance already, no exit law
+        img = pic.draw(L * exit_law if law and exit_law is not None else L)
         cmp = compare(reference, img, mask)
         rows.append(
             {
@@ -196,6 +214,24 @@ def main() -> int:
         for reentry in (True, False):
             label = "oracle: the tally, every vertex" if reentry else "oracle without re-entry"
             row(label, radiance(oracle_kernel(reentry), area, E), "the tally itself")
+        return _written(args, V, info, rows, t0)
+    if args.angles:
+        w_light = light.arrival(scene, np.asarray(mesh.vertices), np.asarray(mesh.vertex_normals))[0]
+        E_plain = vertex_irradiance(mesh, scene, light)  # shadowed, no incidence law: the walks carry it
+        eye = np.asarray(camera.origin, dtype=np.float64)
+        for along, E_row in ((False, E), (True, E_plain)):
+            kernels = angle_kernels(
+                mesh, scene, volume, N, -w_light if along else None, eye,
+                args.work / f"{name}_{N}_{'light' if along else 'normal'}_beams.npz",
+            )  # fmt: skip
+            for view, K in zip((False, True), kernels):
+                label = {
+                    (False, False): "oracle, normal beams",
+                    (True, False): "(a) direction oracle",
+                    (False, True): "(b) exit oracle",
+                    (True, True): "(c) direction and exit oracle",
+                }[along, view]
+                row(label, radiance(K, area, E_row), "angles", law=not view)
         return _written(args, V, info, rows, t0)
     saved = model.measured
     model.measured = None
@@ -265,6 +301,53 @@ def main() -> int:
         "light crossing the air from part to part",
     )
     return _written(args, V, info, rows, t0)
+
+
+def angle_kernels(mesh, scene, volume, photons, incoming, eye, path, chunk=256, seed=41):
+    """(K_M, K_L), each (V, V, 3): with every vertex j a source of ``photons`` a channel (index-matched,
+    re-entry), beams along −n or along ``incoming`` (V, 3) where the light reaches the vertex from outside
+    (elsewhere E = 0), K_M[o, j] the exitance at o per unit power (mm⁻²) and K_L[o, j] π × the radiance
+    toward ``eye`` (mm) tallied from the exits within ``CONE_DEG`` of the direction to it (read as an
+    exitance with no exit law).  One walk for both; cached at ``path`` (.npz)."""
+    if path.is_file():
+        cached = np.load(path)
+        return cached["M"], cached["L"]
+    X = np.asarray(mesh.vertices, dtype=np.float64)
+    n = np.asarray(mesh.vertex_normals, dtype=np.float64)
+    V = len(X)
+    area = vertex_areas(mesh)
+    inward = None
+    if incoming is not None:  # towards the surface: along the light; elsewhere (unlit: E = 0) along −n
+        inward = np.where((np.einsum("vk,vk->v", incoming, n) < -1e-3)[:, None], incoming, -n)
+    face_n = np.asarray(mesh.face_normals, dtype=np.float64)
+    cos_c = np.cos(np.radians(CONE_DEG))
+    omega_c = 2 * np.pi * (1 - cos_c)
+    K_M, K_L = np.zeros((V, V, 3)), np.zeros((V, V, 3))
+    for ch in range(3):
+        for lo in range(0, V, chunk):
+            hi = min(lo + chunk, V)
+            res = mesh_random_walk(
+                scene, mesh.bounds, volume, ch, X[lo:hi], n[lo:hi], photons, seed=seed + 7919 * ch,
+                first_point=lo, index_matched=True, reentry=True,
+                incoming=None if inward is None else inward[lo:hi],
+            )  # fmt: skip
+            ok = np.flatnonzero(res.code == EXIT)
+            point = np.repeat(np.arange(lo, hi), photons)[ok]
+            pos, face = res.position[ok].astype(np.float64), res.face[ok]
+            # the exits within the cone about the direction to the eye, each 1 / (Ω_c cos θ_o) of radiance
+            to_eye = eye - pos
+            to_eye /= np.linalg.norm(to_eye, axis=1, keepdims=True)
+            d = res.direction[ok] / np.linalg.norm(res.direction[ok], axis=1, keepdims=True)
+            cos_o = np.maximum(np.einsum("ij,ij->i", face_n[face], to_eye), 0.1)
+            cone = np.where(np.einsum("ij,ij->i", d, to_eye) > cos_c, np.pi / (omega_c * cos_o), 0.0)
+            tri, bary = exit_barycentric(mesh, face, pos)
+            index = (tri * V + point[:, None]).ravel()  # (o, j) flattened
+            for K, weight in ((K_M, 1.0), (K_L, cone[:, None])):
+                K[..., ch] += np.bincount(index, (bary * weight).ravel(), V * V).reshape(V, V)
+        for K in (K_M, K_L):
+            K[..., ch] /= photons * area[:, None]
+    np.savez(path, M=K_M, L=K_L)
+    return K_M, K_L
 
 
 def _written(args, V, info, rows, t0) -> int:

@@ -105,6 +105,35 @@ def test_mesh_walk_in_a_box_matches_the_slab_walk(index_matched):
     assert (r.code == 4).sum() == 0  # no photon escaped through a crack
 
 
+def test_an_oblique_beam_crosses_a_clear_sheet_along_its_direction():
+    """A beam entering a 1 mm sheet of pure absorber (σ_a = 0.5 mm⁻¹) at 60° from the normal: every photon
+    that leaves does so on the far face, L = T / cos 60° = 2 mm along the beam from the entry, with
+    probability e^{−σ_a L} (Beer–Lambert), and its recorded path length is L."""
+    from translucency.acquire.mesh_walk import EXIT, mesh_random_walk
+    from translucency.acquire.volume import Volume
+    from translucency.mitsuba import mesh_scene
+
+    sheet = trimesh.creation.box(extents=(20.0, 20.0, 1.0))
+    vol = Volume.homogeneous((4, 40, 40), 0.5, [0.0] * 3, [0.5] * 3, 0.0, 1.0)
+    theta = np.radians(60.0)
+    d = np.array([[np.sin(theta), 0.0, -np.cos(theta)]])
+    N = 100_000
+    r = mesh_random_walk(
+        mesh_scene(sheet), sheet.bounds, vol, 0, np.array([[0.0, 0.0, 0.5]]), np.array([[0.0, 0.0, 1.0]]), N,
+        seed=4, index_matched=True, incoming=d,
+    )  # fmt: skip
+    out = r.code == EXIT
+    p = np.exp(-0.5 * 2.0)
+    assert abs(out.mean() - p) < 4 * np.sqrt(p * (1 - p) / N)
+    assert np.allclose(r.position[out], [np.tan(theta), 0.0, -0.5], atol=5e-3)  # (less the ray offset)
+    assert np.allclose(r.length[out], 2.0, atol=5e-3)
+    with pytest.raises(ValueError, match="index-matched"):
+        mesh_random_walk(
+            mesh_scene(sheet), sheet.bounds, vol, 0, np.zeros((1, 3)), np.array([[0.0, 0.0, 1.0]]), 10,
+            incoming=d,
+        )  # fmt: skip
+
+
 def test_mesh_walk_conserves_energy_in_a_non_absorbing_sphere():
     from translucency.acquire.mesh_walk import EXIT, mesh_random_walk
     from translucency.acquire.volume import Volume

@@ -66,6 +66,7 @@ def mesh_random_walk(
     index_matched: bool = False,
     reentry: bool = False,
     max_steps: int = 200_000,
+    incoming: np.ndarray | None = None,
 ) -> MeshWalkResult:
     """Trace ``n_photons`` photons from each entry point into the mesh, in one wavefront.
 
@@ -86,12 +87,18 @@ def mesh_random_walk(
     reentry : bool
         Follow light that leaves through the air into another part of the mesh (module docstring);
         ``False``: every photon that leaves is tallied where it first left.
+    incoming : ndarray, shape (P, 3), optional
+        Each beam's direction of flight into the medium (unit, against the outward normal), for beams that
+        arrive obliquely; index-matched walks only (the direction is not refracted).  Default: along
+        −``normal`` (normal incidence).
 
     Returns
     -------
     MeshWalkResult
     """
     mi, dr = mitsuba(), drjit()
+    if incoming is not None and not index_matched:
+        raise ValueError("incoming: oblique beams are walked index-matched only (no refraction at entry)")
 
     Float, UInt32 = mi.Float, mi.UInt32
     total = len(entry) * n_photons
@@ -112,7 +119,7 @@ def mesh_random_walk(
 
     n_in = gathered(normal)
     pos = gathered(entry) - n_in * eps
-    direction = -n_in
+    direction = -n_in if incoming is None else gathered(np.asarray(incoming, dtype=np.float64))
     code = dr.select(specular, UInt32(EXIT + 100), UInt32(ACTIVE))
     steps = UInt32(0)
     face = UInt32(0)
