@@ -6,11 +6,12 @@ material and incident vertices (``acquire mesh``, index-matched, another seed):
 * ``rig``: the virtual rig (:mod:`translucency.rig.object.photographs`, Mitsuba's volpath through the
   cameras), one clipped exposure a shot (``exposures="single"``);
 * ``splat``: ``tests/generators/splat_rig.py`` — plain NumPy splatting of a photon tally's exits through a
-  pinhole model with a Lambertian exit law, its own exact visibility and sensor, one clipped exposure a shot.
+  pinhole model with a Lambertian exit law (``--splat-law=walk``: each exit seen along its own direction of
+  flight, the transport's own law), its own exact visibility and sensor, one clipped exposure a shot.
 
     python benchmarks/object_import_energy.py [MESH.obj] [--size=30] [--cameras=8] [--resolution=96x72]
         [--points=3] [--spp=256] [--photons=200000] [--generators=rig,splat] [--exposure=single|brackets]
-        [--folder=DIR] [--reuse]
+        [--folder=DIR] [--reuse] [--splat-law=lambertian|walk]
 
 MESH defaults to an icosphere of 10,242 vertices at 30 mm (cells of 0.28 mm², about a quarter of a
 pixel's footprint at 96 x 72); the issue's case is ``../shared/meshes/spot.obj`` (2,930 vertices, cells
@@ -53,11 +54,13 @@ def _args(argv):
         "folder": None,
         "material": "homogeneous:skin1",
         "exposure": "single",
+        "splat_law": "lambertian",
     }
     mesh = None
     for a in argv[1:]:
         if a.startswith("--") and "=" in a:
             k, v = a[2:].split("=", 1)
+            k = k.replace("-", "_")
             opts[k] = type(opts[k])(v) if opts[k] is not None else v
         elif not a.startswith("--"):
             mesh = a
@@ -127,7 +130,8 @@ def main(argv) -> None:
         Rs, infos = [], []
         for seed in (0, 1):
             t1 = time.perf_counter()
-            rig = folder / f"{gen}-{o['exposure']}{seed}"
+            law = "" if gen != "splat" or o["splat_law"] == "lambertian" else f"-{o['splat_law']}"
+            rig = folder / f"{gen}{law}-{o['exposure']}{seed}"
             if not (o["reuse"] and (rig / "object.json").is_file()):
                 _generate(gen, mesh, volume, rig, incident, W, H, o, seed)
             t2 = time.perf_counter()
@@ -192,6 +196,7 @@ def _generate(gen, mesh, volume, rig, incident, W, H, o, seed):
             photons=o["photons"],
             seed=100 + seed,
             exposure=o["exposure"],
+            exit_law=o["splat_law"],
         )
 
 

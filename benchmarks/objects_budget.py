@@ -321,7 +321,7 @@ def angle_kernels(mesh, scene, volume, photons, incoming, eye, path, chunk=256, 
         inward = np.where((np.einsum("vk,vk->v", incoming, n) < -1e-3)[:, None], incoming, -n)
     face_n = np.asarray(mesh.face_normals, dtype=np.float64)
     cos_c = np.cos(np.radians(CONE_DEG))
-    omega_c = 2 * np.pi * (1 - cos_c)
+    omega_c = np.pi * (1 - cos_c**2)  # ∫ cos θ dω over the cone / cos θ_axis (exact for a constant L)
     K_M, K_L = np.zeros((V, V, 3)), np.zeros((V, V, 3))
     for ch in range(3):
         for lo in range(0, V, chunk):
@@ -334,7 +334,7 @@ def angle_kernels(mesh, scene, volume, photons, incoming, eye, path, chunk=256, 
             ok = np.flatnonzero(res.code == EXIT)
             point = np.repeat(np.arange(lo, hi), photons)[ok]
             pos, face = res.position[ok].astype(np.float64), res.face[ok]
-            # the exits within the cone about the direction to the eye, each 1 / (Ω_c cos θ_o) of radiance
+            # the exits within the cone about the direction to the eye, each 1 / (Ω'_c cos θ_o) of radiance
             to_eye = eye - pos
             to_eye /= np.linalg.norm(to_eye, axis=1, keepdims=True)
             d = res.direction[ok] / np.linalg.norm(res.direction[ok], axis=1, keepdims=True)

@@ -42,6 +42,7 @@ from translucency.acquire.mesh_walk import EXIT, mesh_random_walk
 from translucency.mitsuba import mesh_scene
 
 BIN_SUB = 4  # bins of the visibility test a pixel side
+CONE_DEG = 20.0  # exit_law="walk": the cone about the direction to a camera an exit must leave within
 DEPTH_TOL_MM = 0.05  # an exit this close to the nearest surface at its sample is seen
 SATURATION = 60.0  # raw value where the sensor clips
 ELECTRONS_AT_FULL = 20_000.0  # photo-electrons at saturation: gain = SATURATION / ELECTRONS_AT_FULL
@@ -141,8 +142,12 @@ def triangle_bins(mesh, cam: Pinhole, sub: int = BIN_SUB):
     return start, faces[order]
 
 
-def splat_image(mesh, cam: Pinhole, bins, position, face, weight, sub: int = BIN_SUB):
-    """Radiance (H, W) per W of laser power from exits at ``position`` on ``face`` with a Lambertian law.
+def splat_image(mesh, cam: Pinhole, bins, position, face, weight, sub: int = BIN_SUB, direction=None):
+    """Radiance (H, W) per W of laser power from exits at ``position`` on ``face`` with a Lambertian law,
+    or with ``direction`` (n, 3: each exit's own direction of flight) the walk's own law: an exit adds
+    ΔL = w / (Ω'_c Ω_p d²) where its direction lies within θ_c = ``CONE_DEG`` of the direction to the
+    camera, nothing elsewhere (a pixel's footprint A_f = Ω_p d²/μ, and L = dΦ / (A_f μ Ω'_c) with
+    Ω'_c = π (1 − cos² θ_c) = ∫_cap cos θ dω / μ, which a cap inside the hemisphere holds exactly).
 
     An exit is seen when the ray from it to the camera meets no triangle of its bin
     (:func:`triangle_bins`; Möller–Trumbore, :func:`_ray_triangle`) more than ``DEPTH_TOL_MM`` in front
@@ -171,7 +176,15 @@ def splat_image(mesh, cam: Pinhole, bins, position, face, weight, sub: int = BIN
     omega = cam.pixel_solid_angle()
     L = np.zeros(cam.height * cam.width)
     idx = row[ok] * cam.width + col[ok]
-    np.add.at(L, idx, weight[ok] * mu[ok] / (np.pi * omega.ravel()[idx] * d[ok] ** 2))
+    if direction is None:  # Lambertian: M / π
+        np.add.at(L, idx, weight[ok] * mu[ok] / (np.pi * omega.ravel()[idx] * d[ok] ** 2))
+    else:  # the exits leaving towards the camera
+        cos_c = np.cos(np.radians(CONE_DEG))
+        toward = np.einsum("ij,ij->i", direction[ok], to_cam[ok] / d[ok, None]) > cos_c
+        omega_c = np.pi * (1 - cos_c**2)  # ∫ cos θ dω over the cap / cos θ_axis: exact for a constant L
+        np.add.at(
+            L, idx[toward], weight[ok][toward] / (omega_c * omega.ravel()[idx[toward]] * d[ok][toward] ** 2)
+        )
     return L.reshape(cam.height, cam.width)
 
 
@@ -244,6 +257,7 @@ def splat_rig(
     seed: int = 0,
     exposure: str = "single",
     clip_fraction: float = 0.003,
+    exit_law: str = "lambertian",
 ) -> Path:
     """Write a lab's hand-over for ``mesh`` filled with ``volume`` (index-matched), one shot a vertex
     of ``incident``, photographed by ``cameras`` (:class:`Pinhole`).
@@ -251,7 +265,8 @@ def splat_rig(
     ``exposure="single"``: one frame a shot and camera, its gain set on the first shot so that the
     brightest ``clip_fraction`` of the lit pixels (over every camera) clip — the spot is saturated, as
     in a lab's single exposure.  ``"brackets"``: that frame and a second of 1/:data:`BRACKET` its
-    exposure time, in which nothing clips.
+    exposure time, in which nothing clips.  ``exit_law="walk"``: each exit seen along its own direction
+    of flight (:func:`splat_image`), the angular law of the transport itself, not a Lambertian one.
     """
     folder = Path(folder)
     (folder / "frames").mkdir(parents=True, exist_ok=True)
@@ -281,19 +296,21 @@ def splat_rig(
         )
         point = np.repeat(np.arange(P), photons)
         ok = res.code == EXIT
-        exits.append((point[ok], res.face[ok], res.position[ok].astype(np.float64)))
+        flight = res.direction[ok] / np.linalg.norm(res.direction[ok], axis=1, keepdims=True)
+        exits.append((point[ok], res.face[ok], res.position[ok].astype(np.float64), flight))
         truth[..., ch] = exits_tally(mesh, point[ok], res.face[ok], exits[-1][2], P) / (photons * area)
 
     # -- radiance per camera and shot ------------------------------------------------------------------
     radiance = np.zeros((P, len(cameras), cameras[0].height, cameras[0].width, 3))
     for i, cam in enumerate(cameras):
         bins = triangle_bins(mesh, cam)
-        for ch, (point, face, pos) in enumerate(exits):
+        for ch, (point, face, pos, flight) in enumerate(exits):
             for j in range(P):
                 m = point == j
                 radiance[j, i, ..., ch] = splat_image(
-                    mesh, cam, bins, pos[m], face[m], np.full(m.sum(), 1 / photons)
-                )
+                    mesh, cam, bins, pos[m], face[m], np.full(m.sum(), 1 / photons),
+                    direction=flight[m] if exit_law == "walk" else None,
+                )  # fmt: skip
 
     # -- the sensor: one exposure of 1 s a shot, the spot clipped --------------------------------------
     rng = np.random.default_rng(10_000 + int(seed))
