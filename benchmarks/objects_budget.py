@@ -307,8 +307,9 @@ def angle_kernels(mesh, scene, volume, photons, incoming, eye, path, chunk=256, 
     """(K_M, K_L), each (V, V, 3): with every vertex j a source of ``photons`` a channel (index-matched,
     re-entry), beams along −n or along ``incoming`` (V, 3) where the light reaches the vertex from outside
     (elsewhere E = 0), K_M[o, j] the exitance at o per unit power (mm⁻²) and K_L[o, j] π × the radiance
-    toward ``eye`` (mm) tallied from the exits within ``CONE_DEG`` of the direction to it (read as an
-    exitance with no exit law).  One walk for both; cached at ``path`` (.npz)."""
+    toward ``eye`` (mm) tallied from the scattered exits within ``CONE_DEG`` of the direction to it (read as
+    an exitance with no exit law; the unscattered light is a delta along the beam, seen head-on only).  One
+    walk for both; cached at ``path`` (.npz)."""
     if path.is_file():
         cached = np.load(path)
         return cached["M"], cached["L"]
@@ -340,6 +341,9 @@ def angle_kernels(mesh, scene, volume, photons, incoming, eye, path, chunk=256, 
             d = res.direction[ok] / np.linalg.norm(res.direction[ok], axis=1, keepdims=True)
             cos_o = np.maximum(np.einsum("ij,ij->i", face_n[face], to_eye), 0.1)
             cone = np.where(np.einsum("ij,ij->i", d, to_eye) > cos_c, np.pi / (omega_c * cos_o), 0.0)
+            # light that crossed a thin part unscattered leaves along the beam, a delta in direction that a
+            # camera sees only head-on — not spread over the cone (back-lit, 15° from the view: hot spots)
+            cone[res.scatters[ok] == 0] = 0.0
             tri, bary = exit_barycentric(mesh, face, pos)
             index = (tri * V + point[:, None]).ravel()  # (o, j) flattened
             for K, weight in ((K_M, 1.0), (K_L, cone[:, None])):

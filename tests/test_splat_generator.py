@@ -58,7 +58,7 @@ def test_exits_seen_along_their_own_directions_read_the_same_when_those_are_lamb
     lifted to the hemisphere) are a Lambertian exit: the square reads M/π again, face-on and at 50°."""
     mesh = _square(0.0)
     rng = np.random.default_rng(2)
-    n = 4_000_000
+    n = 1_000_000
     pos = np.column_stack([rng.uniform(-10, 10, n), rng.uniform(-10, 10, n), np.zeros(n)])
     face = np.where(pos[:, 1] > pos[:, 0], 1, 0)
     rho, phi = np.sqrt(rng.uniform(0, 1, n)), rng.uniform(0, 2 * np.pi, n)
