@@ -64,6 +64,7 @@ from translucency.render.parameters import neighbour_weights
 from translucency.render.picture import VertexPicture, coverage
 from translucency.render.reference import converged_reference
 from translucency.render.relight import relight_vertices, view_cosines
+from translucency.render.tonemap import auto_exposure, save_images
 from translucency.render.transport import transport_matrices
 
 #: the half-angle of the exit oracle's cone about each vertex's view direction, degrees
@@ -155,6 +156,8 @@ def main() -> int:
     camera = Camera.looking_at(mesh, [float(v) for v in view.split(",")], *args.size)
     mask = coverage(mesh, camera)
     reference, info = converged_reference(mesh, volume, light, camera, mask, spp=args.spp)
+    (args.work / "rows").mkdir(exist_ok=True)
+    save_images(reference, args.work / "rows" / "reference", auto_exposure(reference, mask))
     scene = mesh_scene(mesh)
     picture = VertexPicture(mesh, camera, spp=16, light=light)
     area = vertex_areas(mesh)
@@ -185,6 +188,10 @@ def main() -> int:
     def row(label, L, what, pic=picture, law=True):  # law=False: L is a radiance already, no exit law
         img = pic.draw(L * exit_law if law and exit_law is not None else L)
         cmp = compare(reference, img, mask)
+        slug = "".join(c if c.isalnum() else "_" for c in label.strip()).strip("_")
+        save_images(
+            img, args.work / "rows" / slug, auto_exposure(reference, mask)
+        )  # each row, as the reference
         rows.append(
             {
                 "row": label,
