@@ -243,12 +243,12 @@ class GainTable:
         s = float(np.clip(sigma_t, self.sigma_ts[0], self.sigma_ts[-1]))
         j = int(np.clip(np.searchsorted(self.sigma_ts, s) - 1, 0, len(self.sigma_ts) - 2))
         a = min(float(albedo), self.albedo_walk)
-        pair = (self.walks[j], self.walks[j + 1]), self.sigma_ts[j : j + 2]
-        walked = np.zeros(self.cells.S.shape[1])
-        for walk in pair[0]:
+        walks, sigmas = self.walks[j : j + 2], self.sigma_ts[j : j + 2]  # the two walks around σ_t
+        walked = np.zeros(self.cells.S.shape[1])  # A_u R_u over the zone's cells
+        for walk in walks:
             k, L = walk.scatters, walk.length
             # log p_m / p for each walk m of the pair (the albedo's factor is the same for both)
-            log_ratio = [k * np.log(sm / s) - (sm - s) * L for sm in pair[1]]
+            log_ratio = [k * np.log(sigma_m / s) - (sigma_m - s) * L for sigma_m in sigmas]
             log_mix = np.logaddexp(*log_ratio) - np.log(2.0)  # log ½ (p_j + p_{j+1}) / p
             weight = np.exp(k * (np.log(a) - np.log(self.albedo_walk)) - log_mix)
             walked += walk.exits @ weight / (2 * self.photons)
