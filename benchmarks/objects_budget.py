@@ -145,6 +145,9 @@ def main() -> int:
     ap.add_argument("--oracle-only", action="store_true", help="the oracle with and without re-entry only")
     ap.add_argument("--no-reentry", action="store_true", help="the pipeline's data without re-entry")
     ap.add_argument("--angles", action="store_true", help="the oracle split by the angles in and out")
+    ap.add_argument(
+        "--kernel-seed", type=int, default=41, help="the seed of --angles' walks (another: their noise)"
+    )
     args = ap.parse_args()
     args.work.mkdir(parents=True, exist_ok=True)
     name, file, scale, up, material, points, photons, kind, light, view = args.case.split(":")
@@ -226,10 +229,12 @@ def main() -> int:
         w_light = light.arrival(scene, np.asarray(mesh.vertices), np.asarray(mesh.vertex_normals))[0]
         E_plain = vertex_irradiance(mesh, scene, light)  # shadowed, no incidence law: the walks carry it
         eye = np.asarray(camera.origin, dtype=np.float64)
+        suffix = "" if args.kernel_seed == 41 else f"_seed{args.kernel_seed}"
         for along, E_row in ((False, E), (True, E_plain)):
             kernels = angle_kernels(
                 mesh, scene, volume, N, -w_light if along else None, eye,
-                args.work / f"{name}_{N}_{'light' if along else 'normal'}_beams.npz",
+                args.work / f"{name}_{N}_{'light' if along else 'normal'}_beams{suffix}.npz",
+                seed=args.kernel_seed,
             )  # fmt: skip
             for view, K in zip((False, True), kernels):
                 label = {
@@ -238,7 +243,7 @@ def main() -> int:
                     (False, True): "(b) exit oracle",
                     (True, True): "(c) direction and exit oracle",
                 }[along, view]
-                row(label, radiance(K, area, E_row), "angles", law=not view)
+                row(label + suffix.replace("_", ", "), radiance(K, area, E_row), "angles", law=not view)
         return _written(args, V, info, rows, t0)
     saved = model.measured
     model.measured = None
