@@ -186,15 +186,15 @@ def main() -> int:
         K[:, oracle["incident"]] = R.transpose(1, 0, 2)
         return K
 
-    rows = []
+    rows, pictures = [], {}
 
     def row(label, L, what, pic=picture, law=True):  # law=False: L is a radiance already, no exit law
         img = pic.draw(L * exit_law if law and exit_law is not None else L)
         cmp = compare(reference, img, mask)
-        slug = "".join(c if c.isalnum() else "_" for c in label.strip()).strip("_")
         save_images(
-            img, args.work / "rows" / slug, auto_exposure(reference, mask)
-        )  # each row, as the reference
+            img, args.work / "rows" / _slug(label), auto_exposure(reference, mask)
+        )  # as the reference
+        pictures[label] = img
         rows.append(
             {
                 "row": label,
@@ -243,7 +243,20 @@ def main() -> int:
                     (False, True): "(b) exit oracle",
                     (True, True): "(c) direction and exit oracle",
                 }[along, view]
-                row(label + suffix.replace("_", ", "), radiance(K, area, E_row), "angles", law=not view)
+                row(
+                    label + (", " + suffix[1:] if suffix else ""),
+                    radiance(K, area, E_row),
+                    "angles",
+                    law=not view,
+                )
+                first = args.work / "rows" / f"{_slug(label)}.npy"  # the default seed's picture
+                if not suffix:
+                    np.save(first, pictures[label])
+                elif first.is_file():  # the kernels' own noise, and the error of the two seeds' mean
+                    noise, error = _two_seeds(
+                        reference, mask, np.load(first), pictures[label + ", " + suffix[1:]]
+                    )
+                    print(f"  {label}: one seed's noise {noise:.3f}; the two seeds' mean {error:.3f}")
         return _written(args, V, info, rows, t0)
     saved = model.measured
     model.measured = None
@@ -364,6 +377,18 @@ def angle_kernels(mesh, scene, volume, photons, incoming, eye, path, chunk=256, 
             K[..., ch] /= photons * area[:, None]
     np.savez(path, M=K_M, L=K_L)
     return K_M, K_L
+
+
+def _slug(label: str) -> str:
+    return "".join(c if c.isalnum() else "_" for c in label.strip()).strip("_")
+
+
+def _two_seeds(reference, mask, A, B) -> tuple[float, float]:
+    """One picture's relative noise from two seeds, ‖A − B‖ / (√2 ‖(A + B)/2‖) over the object, and the
+    relative RMSE of their mean against the reference."""
+    mean = 0.5 * (A + B)
+    noise = np.sqrt(np.sum((A - B)[mask] ** 2) / np.sum(mean[mask] ** 2)) / np.sqrt(2)
+    return float(noise), float(compare(reference, mean, mask)["rel_rmse"])
 
 
 def _written(args, V, info, rows, t0) -> int:
