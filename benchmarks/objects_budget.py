@@ -156,6 +156,8 @@ def main() -> int:
     V = len(mesh.vertices)
     volume = object_volume(material, mesh, 1.0, seed=3)
     light = parse_light(f"{kind}:{light}")
+    if args.angles and not light.delta:  # (before the reference is rendered)
+        ap.error("--angles: a light of one direction per point (directional, point or spot)")
     camera = Camera.looking_at(mesh, [float(v) for v in view.split(",")], *args.size)
     mask = coverage(mesh, camera)
     reference, info = converged_reference(mesh, volume, light, camera, mask, spp=args.spp)
@@ -186,15 +188,12 @@ def main() -> int:
         K[:, oracle["incident"]] = R.transpose(1, 0, 2)
         return K
 
-    rows, pictures = [], {}
+    rows = []
 
     def row(label, L, what, pic=picture, law=True):  # law=False: L is a radiance already, no exit law
         img = pic.draw(L * exit_law if law and exit_law is not None else L)
         cmp = compare(reference, img, mask)
-        save_images(
-            img, args.work / "rows" / _slug(label), auto_exposure(reference, mask)
-        )  # as the reference
-        pictures[label] = img
+        save_images(img, args.work / "rows" / _slug(label), auto_exposure(reference, mask))
         rows.append(
             {
                 "row": label,
@@ -209,6 +208,7 @@ def main() -> int:
             f"brightness {rows[-1]['brightness']:.3f}",
             flush=True,
         )
+        return img
 
     t0 = time.perf_counter()
     # the pipeline as `render` runs it
@@ -229,11 +229,11 @@ def main() -> int:
         w_light = light.arrival(scene, np.asarray(mesh.vertices), np.asarray(mesh.vertex_normals))[0]
         E_plain = vertex_irradiance(mesh, scene, light)  # shadowed, no incidence law: the walks carry it
         eye = np.asarray(camera.origin, dtype=np.float64)
-        suffix = "" if args.kernel_seed == 41 else f"_seed{args.kernel_seed}"
+        tag = "" if args.kernel_seed == 41 else f"seed{args.kernel_seed}"  # another seed: the walks' noise
         for along, E_row in ((False, E), (True, E_plain)):
             kernels = angle_kernels(
                 mesh, scene, volume, N, -w_light if along else None, eye,
-                args.work / f"{name}_{N}_{'light' if along else 'normal'}_beams{suffix}.npz",
+                args.work / f"{name}_{N}_{'light' if along else 'normal'}_beams{tag and '_' + tag}.npz",
                 seed=args.kernel_seed,
             )  # fmt: skip
             for view, K in zip((False, True), kernels):
@@ -243,19 +243,14 @@ def main() -> int:
                     (False, True): "(b) exit oracle",
                     (True, True): "(c) direction and exit oracle",
                 }[along, view]
-                row(
-                    label + (", " + suffix[1:] if suffix else ""),
-                    radiance(K, area, E_row),
-                    "angles",
-                    law=not view,
+                img = row(
+                    label + (", " + tag if tag else ""), radiance(K, area, E_row), "angles", law=not view
                 )
                 first = args.work / "rows" / f"{_slug(label)}.npy"  # the default seed's picture
-                if not suffix:
-                    np.save(first, pictures[label])
+                if not tag:
+                    np.save(first, img)
                 elif first.is_file():  # the kernels' own noise, and the error of the two seeds' mean
-                    noise, error = _two_seeds(
-                        reference, mask, np.load(first), pictures[label + ", " + suffix[1:]]
-                    )
+                    noise, error = _two_seeds(reference, mask, np.load(first), img)
                     print(f"  {label}: one seed's noise {noise:.3f}; the two seeds' mean {error:.3f}")
         return _written(args, V, info, rows, t0)
     saved = model.measured

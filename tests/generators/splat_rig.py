@@ -43,7 +43,7 @@ from translucency.mitsuba import mesh_scene
 
 BIN_SUB = 4  # bins of the visibility test a pixel side
 CONE_DEG = 20.0  # exit_law="walk": the cone about the direction to a camera an exit must leave within
-DEPTH_TOL_MM = 0.05  # an exit this close to the nearest surface at its sample is seen
+DEPTH_TOL_MM = 0.05  # a triangle met this close to an exit, along its ray to the camera, does not hide it
 SATURATION = 60.0  # raw value where the sensor clips
 ELECTRONS_AT_FULL = 20_000.0  # photo-electrons at saturation: gain = SATURATION / ELECTRONS_AT_FULL
 READ_NOISE = 0.01  # raw units
