@@ -11,7 +11,7 @@ material and incident vertices (``acquire mesh``, index-matched, another seed):
 
     python benchmarks/object_import_energy.py [MESH.obj] [--size=30] [--cameras=8] [--resolution=96x72]
         [--points=3] [--spp=256] [--photons=200000] [--generators=rig,splat] [--exposure=single|brackets]
-        [--folder=DIR] [--reuse] [--splat-law=lambertian|walk]
+        [--folder=DIR] [--reuse] [--splat-law=lambertian|walk] [--import-law=tally]
 
 MESH defaults to an icosphere of 10,242 vertices at 30 mm (cells of 0.28 mm², about a quarter of a
 pixel's footprint at 96 x 72); the issue's case is ``../shared/meshes/spot.obj`` (2,930 vertices, cells
@@ -19,6 +19,10 @@ of 0.2-0.4 mm² near two of the hits).  Per generator and shot it prints the ene
 tally per channel, the hit vertex's energy share against the tally's, and the relative L2 per vertex
 against the photographs' own noise floor (two imports of two independent photograph sets,
 |A − B| / √2); one JSON object per generator (docs/object-rig.md quotes them).
+
+``--import-law=tally`` imports with the exit law of a second tally of the same object with exit bins
+(``acquire mesh --exit-bins 4``, another seed; :class:`translucency.rig.object.exit_law.Tabulated`)
+instead of the rig file's: the law the transport itself has, measured apart from the tally compared with.
 """
 
 from __future__ import annotations
@@ -36,6 +40,7 @@ import trimesh
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
 from translucency.acquire.mesh import acquire_mesh, object_volume  # noqa: E402
+from translucency.angles import ExitBins  # noqa: E402
 from translucency.geometry import farthest_points  # noqa: E402
 from translucency.io.mesh import load_mesh  # noqa: E402
 from translucency.io.mesh_dataset import open_mesh_dataset  # noqa: E402
@@ -55,6 +60,7 @@ def _args(argv):
         "material": "homogeneous:skin1",
         "exposure": "single",
         "splat_law": "lambertian",
+        "import_law": "",
     }
     mesh = None
     for a in argv[1:]:
@@ -125,6 +131,15 @@ def main(argv) -> None:
     area = np.asarray(T["vertex_area"][...], dtype=np.float64)
     Rt = np.asarray(T["R_d"][...], dtype=np.float64)
     print(f"tally: {time.perf_counter() - t0:.0f} s; cells / pixel footprint in the summary", file=sys.stderr)
+    exit_law = None
+    if o["import_law"] == "tally":  # the transport's own exit law, from a tally apart (another seed)
+        law_tally = folder / "law_tally.zarr"
+        if not (o["reuse"] and law_tally.is_dir()):
+            acquire_mesh(
+                mesh, volume, law_tally, n_points=o["points"], photons=o["photons"], index_matched=True,
+                overwrite=True, seed=777, exit_bins=ExitBins(4),
+            )  # fmt: skip
+        exit_law = f"tally:{law_tally}"
     results = {}
     for gen in o["generators"].split(","):
         Rs, infos = [], []
@@ -135,9 +150,9 @@ def main(argv) -> None:
             if not (o["reuse"] and (rig / "object.json").is_file()):
                 _generate(gen, mesh, volume, rig, incident, W, H, o, seed)
             t2 = time.perf_counter()
-            zarr = rig.with_suffix(".zarr")
+            zarr = rig.parent / f"{rig.name}{'-' + o['import_law'] if o['import_law'] else ''}.zarr"
             shutil.rmtree(zarr, ignore_errors=True)  # (same arguments would resume)
-            info = import_object(rig, zarr)
+            info = import_object(rig, zarr, exit_law=exit_law)
             Rs.append(np.asarray(open_mesh_dataset(zarr)["R_d"][...], dtype=np.float64))
             infos.append(info)
             print(
@@ -151,6 +166,7 @@ def main(argv) -> None:
         res.update(
             generator=gen,
             exposure=o["exposure"],
+            import_law=infos[0]["exit_law"]["law"],
             vertices=len(mesh.vertices),
             cameras=o["cameras"],
             resolution=[W, H],

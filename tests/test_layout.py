@@ -30,7 +30,9 @@ SRC = Path(__file__).resolve().parents[1] / "src" / "translucency"
 ROOT_SHARED = frozenset({"_validate", "_version", "_plotting"})
 
 #: the shared homes (sideways imports): one concern used by several stages
-SHARED = frozenset({"model", "geometry", "cluster", "mitsuba", "io", "data", "resources", "solvers"})
+SHARED = frozenset(
+    {"model", "geometry", "angles", "cluster", "mitsuba", "io", "data", "resources", "solvers"}
+)
 
 _BASE = ROOT_SHARED | SHARED
 #: unit → the units it may import (its own always).  A unit is a folder of src/translucency, or a module

@@ -127,11 +127,36 @@ def test_an_oblique_beam_crosses_a_clear_sheet_along_its_direction():
     assert abs(out.mean() - p) < 4 * np.sqrt(p * (1 - p) / N)
     assert np.allclose(r.position[out], [np.tan(theta), 0.0, -0.5], atol=5e-3)  # (less the ray offset)
     assert np.allclose(r.length[out], 2.0, atol=5e-3)
-    with pytest.raises(ValueError, match="index-matched"):
-        mesh_random_walk(
-            mesh_scene(sheet), sheet.bounds, vol, 0, np.zeros((1, 3)), np.array([[0.0, 0.0, 1.0]]), 10,
-            incoming=d,
-        )  # fmt: skip
+
+
+def test_an_oblique_beam_is_reflected_by_fresnel_and_refracted_by_snell():
+    """The same sheet at η = 1.5: a beam at 60° is reflected with Fresnel's share F(60°) (0.0918, the
+    closed form of unpolarised Fresnel) and refracted to θ_t = asin(sin 60° / 1.5); the photons that cross
+    straight through leave the far face at x = T tan θ_t after L = T / cos θ_t, with probability
+    (1 − F) e^{−σ_a L} (1 − F') (F' = F by Stokes' relations at the far face)."""
+    from translucency.acquire.mesh_walk import EXIT, mesh_random_walk
+    from translucency.acquire.volume import Volume
+    from translucency.mitsuba import mesh_scene
+
+    sheet = trimesh.creation.box(extents=(20.0, 20.0, 1.0))
+    vol = Volume.homogeneous((4, 40, 40), 0.5, [0.0] * 3, [0.5] * 3, 0.0, 1.5)
+    theta = np.radians(60.0)
+    theta_t = np.arcsin(np.sin(theta) / 1.5)
+    c, ct = np.cos(theta), np.cos(theta_t)  # Fresnel's unpolarised reflectance, written out
+    F = 0.5 * (((c - 1.5 * ct) / (c + 1.5 * ct)) ** 2 + ((1.5 * c - ct) / (1.5 * c + ct)) ** 2)
+    d = np.array([[np.sin(theta), 0.0, -np.cos(theta)]])
+    N = 200_000
+    r = mesh_random_walk(
+        mesh_scene(sheet), sheet.bounds, vol, 0, np.array([[0.0, 0.0, 0.5]]), np.array([[0.0, 0.0, 1.0]]), N,
+        seed=5, incoming=d,
+    )  # fmt: skip
+    spec = (r.code == -1).mean()
+    assert abs(spec - F) < 4 * np.sqrt(F * (1 - F) / N)
+    straight = (r.code == EXIT) & (np.abs(r.position[:, 0] - np.tan(theta_t)) < 5e-3) & (r.position[:, 2] < 0)
+    L = 1.0 / ct
+    p = (1 - F) * np.exp(-0.5 * L) * (1 - F)
+    assert abs(straight.mean() - p) < 4 * np.sqrt(p * (1 - p) / N)
+    assert np.allclose(r.length[straight], L, atol=5e-3)
 
 
 def test_mesh_walk_conserves_energy_in_a_non_absorbing_sphere():

@@ -12,6 +12,13 @@ with :math:`A_v = \int \phi_v\, dA` the vertex's area (a third of its
 triangles'): the count and the area it is divided by agree by construction.  Light
 reflected by Fresnel at the entry is recorded apart (``specular``).
 
+**Angles** (:mod:`translucency.angles`): with an :class:`~translucency.angles.Incidence` of oblique
+directions each incident point is also lit from them (N photons each, reflected and refracted at the
+surface), written to ``R_d_oblique``; with :class:`~translucency.angles.ExitBins` every exit is also
+counted in its direction bin, ``exit_bins`` (the part of R_d, normal and oblique, that left through
+each bin).  The cost is N × directions × 3 channels photons per point; the tally per photon is the
+same walk.
+
 The result is a mesh data set (:mod:`translucency.io.mesh_dataset`), written
 chunk by chunk.  Same arguments resume; other arguments are refused unless
 ``overwrite``.
@@ -28,8 +35,9 @@ import numpy as np
 import trimesh
 
 from .._validate import TranslucencyError, plain
+from ..angles import ExitBins, Incidence
 from ..cluster import open_cluster, parse_scheduler
-from ..geometry import farthest_points, vertex_areas
+from ..geometry import farthest_points, tangent_frames, vertex_areas
 from ..io.mesh_dataset import create_mesh_dataset, mesh_header
 from ..io.outputs import output_lock
 from ..mitsuba import mesh_scene
@@ -49,6 +57,8 @@ def acquire_mesh(
     chunk_points: int = 8,
     index_matched: bool = False,
     reentry: bool = True,
+    incidence: Incidence | None = None,
+    exit_bins: ExitBins | None = None,
     overwrite: bool = False,
     inputs=(),
     progress: Callable[[int, int], None] | None = None,
@@ -71,6 +81,11 @@ def acquire_mesh(
         head): tallied where it finally escapes, as a photograph sees it
         (:func:`~translucency.acquire.mesh_walk.mesh_random_walk`).  Data sets made before it was
         followed read ``reentry: false`` (absent from their request).
+    incidence : Incidence, optional
+        Oblique beams besides the normal one at every incident point (module notes); default: the normal
+        only, as the paper's data.
+    exit_bins : ExitBins, optional
+        Also tally each exit by its direction (module notes).
     scheduler : str, optional
         ``"threads"`` (default: this process), ``"local:N"`` or ``"tcp://HOST:PORT"``
         (:mod:`translucency.cluster`): each chunk a task that writes its rows and its done flag
@@ -101,6 +116,14 @@ def acquire_mesh(
         "volume_grid": {"voxel_mm": volume.voxel_mm, "size_mm": list(volume.size_mm)},
         "tally": "barycentric",
     }
+    incidence = incidence or Incidence()
+    angles = {}
+    if incidence.count > 1:
+        angles["incidence"] = incidence.describe()
+    if exit_bins is not None:
+        angles["exit_bins"] = exit_bins.describe()
+    if angles:  # (absent otherwise: the data sets made before the axes existed resume as they were)
+        request["angles"] = angles
     request = json.loads(json.dumps(request))
     area = vertex_areas(mesh)
     header = mesh_header(
@@ -113,6 +136,7 @@ def acquire_mesh(
         sample=volume.description,
         request=request,
         boundary_eta=1.0 if index_matched else float(volume.eta),  # what light crosses at the surface
+        **({"angles": angles} if angles else {}),
     )
     if volume.description.get("generator") == "file":  # a user's filling: where it is and what it was
         header["filling"] = filling_record(volume.description["path"])
@@ -125,7 +149,7 @@ def acquire_mesh(
         done = np.asarray(root["chunk_done"][...])
         todo = [(c, c * chunk_points, min(P, (c + 1) * chunk_points)) for c in range(n_chunks) if not done[c]]
         finished = P - sum(hi - lo for _, lo, hi in todo)
-        walk = (photons, seed, index_matched, reentry)
+        walk = (photons, seed, index_matched, reentry, incidence, exit_bins)
         with open_cluster(scheduler) as cluster:
             if cluster is None:  # this process, chunk after chunk (Dr.Jit uses every core)
                 scene = mesh_scene(mesh)
@@ -172,43 +196,75 @@ _SCENE: list = []
 def _acquire_mesh_chunk(mesh, volume, area, ds, c, lo, hi, incident, walk, scene=None) -> None:
     """Trace chunk ``c`` (incident vertices ``incident``, points lo..hi), write its rows, then its flag.
 
-    ``walk`` = (photons, seed, index_matched, reentry).  A pure function of its arguments: here or on a worker
-    (which builds the scene once per mesh), again after an interruption, it writes the same bytes.
+    ``walk`` = (photons, seed, index_matched, reentry, incidence, exit_bins).  A pure function of its
+    arguments: here or on a worker (which builds the scene once per mesh), again after an interruption, it
+    writes the same bytes.  Direction 0 (the normal) draws the same photons as before the angle axes
+    existed; direction d another stream.
     """
-    photons, seed, index_matched, reentry = walk
+    photons, seed, index_matched, reentry, incidence, exit_bins = walk
     if scene is None:
         if not _SCENE or _SCENE[0] is not mesh:
             _SCENE[:] = [mesh, mesh_scene(mesh)]
         scene = _SCENE[1]
     root = ds.group
-    V = len(mesh.vertices)
+    V, n = len(mesh.vertices), hi - lo
     normals = np.asarray(mesh.vertex_normals)
-    R = np.zeros((hi - lo, V, 3), np.float32)
-    spec = np.zeros((hi - lo, 3), np.float32)
-    for ch in range(3):
-        res = mesh_random_walk(
-            scene,
-            mesh.bounds,
-            volume,
-            ch,
-            mesh.vertices[incident],
-            normals[incident],
-            photons,
-            seed=seed + 7919 * ch,
-            first_point=lo,
-            index_matched=index_matched,
-            reentry=reentry,
-        )
-        point = np.repeat(np.arange(hi - lo), photons)
-        ok = res.code == EXIT
-        counts = splat_exits(mesh, point[ok], res.face[ok], res.position[ok], hi - lo)
-        R[..., ch] = counts / (photons * area)
-        spec[:, ch] = np.bincount(point[res.code == -1], minlength=hi - lo) / photons
-    # every chunk written is a file, zeros too: a missing one is damage (MeshDataset.damaged_chunks)
-    every = {"write_empty_chunks": True}
-    root["R_d"].with_config(every)[lo:hi] = R
-    root["specular"].with_config(every)[lo:hi] = spec
+    toward = incidence.world(tangent_frames(normals[incident]))  # (n, D, 3) toward the light
+    eta = 1.0 if index_matched else float(volume.eta)
+    every = {"write_empty_chunks": True}  # every chunk written is a file, zeros too: a missing one is damage
+    for d in range(incidence.count):
+        R = np.zeros((n, V, 3), np.float32)
+        spec = np.zeros((n, 3), np.float32)
+        binned = None if exit_bins is None else np.zeros((n, V, 3, exit_bins.count), np.float32)
+        for ch in range(3):
+            res = mesh_random_walk(
+                scene,
+                mesh.bounds,
+                volume,
+                ch,
+                mesh.vertices[incident],
+                normals[incident],
+                photons,
+                seed=seed + 7919 * ch + 104_729 * d,
+                first_point=lo,
+                index_matched=index_matched,
+                reentry=reentry,
+                incoming=None if d == 0 else -toward[:, d],
+            )
+            point = np.repeat(np.arange(n), photons)
+            ok = res.code == EXIT
+            R[..., ch] = splat_exits(mesh, point[ok], res.face[ok], res.position[ok], n) / (photons * area)
+            spec[:, ch] = np.bincount(point[res.code == -1], minlength=n) / photons
+            if binned is not None:
+                omega = exit_direction(mesh, res, ok, eta, reentry)
+                away = res.position[ok] - mesh.vertices[incident][point[ok]]  # x_o − x_i
+                b = exit_bins.index(omega, mesh.face_normals[res.face[ok]], away)
+                counts = splat_exits(mesh, point[ok] * exit_bins.count + b, res.face[ok], res.position[ok],
+                                     n * exit_bins.count)  # fmt: skip
+                counts = counts.reshape(n, exit_bins.count, V).transpose(0, 2, 1)
+                binned[..., ch, :] = counts / (photons * area)[None, :, None]
+        if d == 0:
+            root["R_d"].with_config(every)[lo:hi] = R
+            root["specular"].with_config(every)[lo:hi] = spec
+        else:
+            root["R_d_oblique"].with_config(every)[lo:hi, d - 1] = R
+            root["specular_oblique"].with_config(every)[lo:hi, d - 1] = spec
+        if binned is not None:
+            root["exit_bins"].with_config(every)[lo:hi, d] = binned
     root["chunk_done"][c] = True  # last: the chunk is complete
+
+
+def exit_direction(mesh, res, ok: np.ndarray, eta: float, reentry: bool) -> np.ndarray:
+    """The direction in the air of each exit ``ok`` (n, 3): the walk's own where it refracted the photon
+    out (re-entry followed), else the flight inside refracted through the exit face (Snell, η → 1)."""
+    omega = np.asarray(res.direction[ok], np.float64)
+    if reentry or eta == 1.0:
+        return omega
+    m = mesh.face_normals[res.face[ok]]  # outward: along the flight of a photon leaving
+    cos_i = np.einsum("nk,nk->n", omega, m)
+    cos2_t = np.maximum(1.0 - eta**2 * (1.0 - cos_i**2), 0.0)  # (TIR photons did not leave)
+    out = eta * omega + (np.sqrt(cos2_t) - eta * cos_i)[:, None] * m
+    return out / np.linalg.norm(out, axis=1, keepdims=True)
 
 
 def splat_exits(mesh, point: np.ndarray, face: np.ndarray, position: np.ndarray, n_points: int) -> np.ndarray:

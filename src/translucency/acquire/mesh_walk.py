@@ -12,7 +12,9 @@ The volume lives in object space over the mesh's bounding box: voxel
 and ``z in hi.z - (iz+1, iz] vox`` (z index 0 at the top, as for slabs).
 
 Each pencil beam enters at a surface point along the inward normal (normal
-incidence); a photon that leaves is tallied at its exit point.  A ray that
+incidence), or along a given direction in the air, reflected with Fresnel's share at
+its angle and refracted in (oblique incidence); a photon that leaves is tallied at
+its exit point with its direction of flight.  A ray that
 misses the mesh from inside means the photon escaped through a crack: it is
 reported as ``KILLED`` (none in a watertight mesh; the tests count them).
 
@@ -88,17 +90,16 @@ def mesh_random_walk(
         Follow light that leaves through the air into another part of the mesh (module docstring);
         ``False``: every photon that leaves is tallied where it first left.
     incoming : ndarray, shape (P, 3), optional
-        Each beam's direction of flight into the medium (unit, against the outward normal), for beams that
-        arrive obliquely; index-matched walks only (the direction is not refracted).  Default: along
-        −``normal`` (normal incidence).
+        Each beam's direction of flight in the air as it reaches the surface (unit, against the outward
+        normal), for beams that arrive obliquely: reflected with Fresnel's share at its angle and refracted
+        in by Snell's law (straight on where index-matched).  Default: along −``normal`` (normal
+        incidence).
 
     Returns
     -------
     MeshWalkResult
     """
     mi, dr = mitsuba(), drjit()
-    if incoming is not None and not index_matched:
-        raise ValueError("incoming: oblique beams are walked index-matched only (no refraction at entry)")
 
     Float, UInt32 = mi.Float, mi.UInt32
     total = len(entry) * n_photons
@@ -110,16 +111,20 @@ def mesh_random_walk(
         mi, dr, volume, channel, total, n_photons, seed, first_point
     )
 
-    # -- entry: Fresnel at normal incidence, then straight in along −n --------------------
-    F_in = float(mi.fresnel(Float(1.0), Float(eta))[0][0]) if eta != 1.0 else 0.0
-    specular = rng.next_float32() < F_in
-
     def gathered(a):
         return mi.Vector3f(*(dr.gather(Float, Float(a[:, k].astype(np.float32)), point) for k in range(3)))
 
     n_in = gathered(normal)
     pos = gathered(entry) - n_in * eps
-    direction = -n_in if incoming is None else gathered(np.asarray(incoming, dtype=np.float64))
+    if incoming is None:  # -- entry: Fresnel at normal incidence, then straight in along −n ------
+        F_in = float(mi.fresnel(Float(1.0), Float(eta))[0][0]) if eta != 1.0 else 0.0
+        specular = rng.next_float32() < F_in
+        direction = -n_in
+    else:  # -- oblique entry: Fresnel at cos θ_i = −ω·n, refracted in (Snell, 1 → η) -----------
+        omega = gathered(np.asarray(incoming, dtype=np.float64))
+        cos_in = dr.maximum(-dr.dot(omega, n_in), 1e-6)
+        specular = rng.next_float32() < _fresnel(mi, cos_in, eta)
+        direction = _refract(dr, omega, -n_in, 1.0 / eta)
     code = dr.select(specular, UInt32(EXIT + 100), UInt32(ACTIVE))
     steps = UInt32(0)
     face = UInt32(0)

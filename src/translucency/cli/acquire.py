@@ -238,6 +238,19 @@ class MeshOptions:
         "--reentry/--no-reentry",
         help="Light leaving one part through the air into another (a horn by the head) walks on there.",
     )
+    incidence = typer.Option(
+        [],
+        "--incidence",
+        help="Also beams arriving at this polar angle (degrees from the normal), at --azimuths azimuths "
+        "of each point's tangent frame; repeat for more angles. Cost: photons x directions.",
+    )
+    azimuths = typer.Option(4, "--azimuths", help="Azimuths per --incidence angle.")
+    exit_bins = typer.Option(
+        0,
+        "--exit-bins",
+        help="Also tally each exit by direction: this many polar bins of equal projected solid angle x "
+        "2 halves (away from / back toward the incident point); 0: none.",
+    )
     overwrite = dataset_overwrite_option()
     scheduler = scheduler_option()
     max_memory = max_memory_option()
@@ -262,6 +275,9 @@ def acquire_mesh_cmd(
     chunk: int = MeshOptions.chunk,
     index_matched: bool = MeshOptions.index_matched,
     reentry: bool = MeshOptions.reentry,
+    incidence: list[float] = MeshOptions.incidence,
+    azimuths: int = MeshOptions.azimuths,
+    exit_bins: int = MeshOptions.exit_bins,
     overwrite: bool = MeshOptions.overwrite,
     scheduler: str = MeshOptions.scheduler,
     max_memory: str = MeshOptions.max_memory,
@@ -285,6 +301,9 @@ def acquire_mesh_cmd(
         chunk_points=chunk,
         index_matched=index_matched,
         reentry=reentry,
+        incidence=incidence,
+        azimuths=azimuths,
+        exit_bins=exit_bins,
         scale_mm=scale,
         up=up,
         overwrite=overwrite,

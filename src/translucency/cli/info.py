@@ -78,6 +78,12 @@ def _dataset_rows(fields: dict, size_text: str, bounds: list):
         ]
         if fields.get("reentry") is not None:
             rows.append(("re-entry", f"{fields['reentry']} (light through the air from part to part)"))
+        inc = fields.get("incidence") or {}
+        if inc.get("directions", 1) > 1:
+            angles = ", ".join(f"{t:g}" for t in inc["polar_deg"])
+            rows.append(("incidence", f"normal + {angles} deg x {inc['azimuths']} azimuths"))
+        if fields.get("exit_bins"):
+            rows.append(("exit bins", f"{fields['exit_bins']} (polar x away/back)"))
         if fields.get("source") == "photographs":
             rows += [
                 (

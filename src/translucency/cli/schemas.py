@@ -118,6 +118,8 @@ ACQUIRE_MESH = record(
         "command": _command("acquire mesh"),
         **_ACQUIRED,
         "vertices": field("integer", "Vertices of the mesh (the outgoing points)."),
+        "directions": field("integer", "Directions of incidence per point, the normal included."),
+        "exit_bins": field("integer", "Exit direction bins per vertex (0: none; --exit-bins)."),
         **_WORKING,
     },
 )
@@ -518,6 +520,17 @@ INFO_MESH = record(
         "reentry": field(
             ["boolean", "null"],
             "A tally: light leaving one part through the air walked on in the next (null: photographs).",
+        ),
+        "incidence": record(
+            "The beams' directions at each incident point (translucency.angles.Incidence).",
+            {
+                "polar_deg": array("Polar angles of the oblique beams (none: normal only).", NUMBER, "deg"),
+                "azimuths": field("integer", "Azimuths per polar angle."),
+                "directions": field("integer", "Directions per point, the normal included."),
+            },
+        ),
+        "exit_bins": field(
+            ["integer", "null"], "Exit direction bins per vertex (polar x 2 halves); null: none."
         ),
         **BOUNDS,
         **_STORE,

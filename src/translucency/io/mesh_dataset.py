@@ -22,6 +22,17 @@ A data set measured from photographs (``translucency import object``, header ``s
                                    neighbours, 2 saturated, 4 grazing, 8 inside the laser's spot);
                                    the per-vertex fit leaves flagged pairs out
 
+A tally with angle axes (:mod:`translucency.angles`; header ``angles``) also holds, for D = the
+incidence's directions (the normal first) and B exit bins::
+
+    R_d_oblique       (P, D-1, V, 3) float32  R_d of the oblique beams (header angles.incidence)
+    specular_oblique  (P, D-1, 3) float32     their Fresnel reflection at entry
+    exit_bins         (P, D, V, 3, B) float32 the part of each R_d (normal, then oblique) that left
+                                              through each exit bin (header angles.exit_bins)
+
+A data set without them (every one made before they existed) reads as the normal beam only, without
+exit bins (:attr:`MeshDataset.incidence`, :attr:`MeshDataset.exit_bins`).
+
 Header (JSON): ``format`` = "translucency-mesh-dataset", ``version`` = 1,
 ``units``, ``n_points``, ``n_vertices``, ``photons``, ``seed``, ``eta``, ``g``,
 ``sample`` (the filling's description), ``software`` and ``request`` (the
@@ -40,7 +51,8 @@ import numpy as np
 
 from .._validate import TranslucencyError
 from .._version import __version__
-from ..geometry import object_bounds
+from ..angles import ExitBins, Incidence
+from ..geometry import object_bounds, tangent_frames
 from ._store import ChunkedStore, check_shapes, open_store
 from .outputs import kind_of, reopen_or_clear
 
@@ -52,6 +64,7 @@ FORMAT = "translucency-mesh-dataset"
 VERSION = 1
 _SURFACE = ("vertices", "faces", "normals", "vertex_area", "incident")
 _ARRAYS = ("vertices", "faces", "normals", "vertex_area", "incident", "R_d", "specular", "chunk_done")
+_ANGLES = ("R_d_oblique", "specular_oblique", "exit_bins")  # present where the header announces them
 
 
 class MeshDataset(ChunkedStore):
@@ -67,8 +80,11 @@ class MeshDataset(ChunkedStore):
     HEADER_KEY = HEADER_KEY
     FORMAT = FORMAT
     VERSION = VERSION
-    ARRAYS = _ARRAYS
-    PER_POINT = ("R_d", "specular")
+    ARRAYS = (*_ARRAYS, *_ANGLES)
+
+    @property
+    def PER_POINT(self) -> tuple[str, ...]:  # noqa: N802 — the store's name for it
+        return ("R_d", "specular", *(name for name in _ANGLES if name in self.group))
 
     @classmethod
     def from_group(cls, path: Path, header: dict, group) -> MeshDataset:
@@ -89,11 +105,22 @@ class MeshDataset(ChunkedStore):
                 "chunk_done": (None,),
             },
         )
-        for name, shape in (("R_d_var", (P, V, 3)), ("flags", (P, V))):  # a measured data set's (optional)
+        angles = header.get("angles") or {}
+        D = Incidence.from_header(angles.get("incidence")).count
+        bins = ExitBins.from_header(angles.get("exit_bins"))
+        optional = [("R_d_var", (P, V, 3)), ("flags", (P, V))]  # a measured data set's
+        if D > 1:
+            optional += [("R_d_oblique", (P, D - 1, V, 3)), ("specular_oblique", (P, D - 1, 3))]
+        if bins is not None:
+            optional += [("exit_bins", (P, D, V, 3, bins.count))]
+        for name, shape in optional:
             if name in group and tuple(group[name].shape) != shape:
                 raise TranslucencyError(
                     f"{path}: array {name!r} has shape {tuple(group[name].shape)}, expected {shape}"
                 )
+        for name, _ in optional[2:]:  # the angle axes the header announces
+            if name not in group:
+                raise TranslucencyError(f"{path}: header has angles but array {name!r} is missing")
         k = int(group["R_d"].chunks[0])
         if group["chunk_done"].shape[0] != -(-P // k):
             raise TranslucencyError(f"{path}: array 'chunk_done' does not match {P} points in chunks of {k}")
@@ -102,6 +129,31 @@ class MeshDataset(ChunkedStore):
     @property
     def chunk_points(self) -> int:
         return int(self.group["R_d"].chunks[0])
+
+    @property
+    def incidence(self) -> Incidence:
+        """The directions of the beams at each incident point (the normal only for a data set without the
+        axis)."""
+        return Incidence.from_header((self.header.get("angles") or {}).get("incidence"))
+
+    @property
+    def exit_bins(self) -> ExitBins | None:
+        """The exit bins the tally counted in, or None."""
+        return ExitBins.from_header((self.header.get("angles") or {}).get("exit_bins"))
+
+    def incident_frames(self) -> np.ndarray:
+        """(P, 3, 3) tangent frames (t, b, n) of the incident points, in which :attr:`incidence`'s
+        directions are given (:func:`translucency.geometry.tangent_frames` of the stored normals)."""
+        normals = np.asarray(self.group["normals"][...], dtype=np.float64)
+        return tangent_frames(normals[np.asarray(self.group["incident"][...])])
+
+    def R_d_toward(self, d: int, points=slice(None)) -> np.ndarray:
+        """R_d (P, V, 3) of the beams from direction ``d`` of :attr:`incidence` (0: the normal)."""
+        if not 0 <= d < self.incidence.count:
+            raise TranslucencyError(f"{self.path}: direction {d} not in 0..{self.incidence.count - 1}")
+        if d == 0:
+            return np.asarray(self.group["R_d"][points])
+        return np.asarray(self.group["R_d_oblique"][points, d - 1])
 
     def _expects_files(self, name: str) -> bool:
         return name == "R_d"
@@ -203,9 +255,7 @@ def create_mesh_dataset(
         for name in _SURFACE:
             if name in damaged:  # written whole at creation: write it again
                 old.group[name].with_config({"write_empty_chunks": True})[...] = surface[name]
-        chunks = sorted(
-            {chunk for name in ("R_d", "specular", "chunk_done") for chunk in damaged.get(name, [])}
-        )
+        chunks = sorted({chunk for name in (*old.PER_POINT, "chunk_done") for chunk in damaged.get(name, [])})
         for chunk in chunks:
             old.group["chunk_done"][chunk] = False
         if damaged:
@@ -256,6 +306,24 @@ def create_mesh_dataset(
             fill_value=0,
             config=every,
         )
+    angles = header.get("angles") or {}
+    D = Incidence.from_header(angles.get("incidence")).count
+    bins = ExitBins.from_header(angles.get("exit_bins"))
+    per_point = []  # the angle axes (module notes), chunked by points and one direction a chunk
+    if D > 1:
+        per_point += [("R_d_oblique", (P, D - 1, V, 3)), ("specular_oblique", (P, D - 1, 3))]
+    if bins is not None:
+        per_point += [("exit_bins", (P, D, V, 3, bins.count))]
+    for name, shape in per_point:
+        root.create_array(
+            name,
+            shape=shape,
+            dtype="float32",
+            chunks=(chunk_points, 1, *shape[2:]),
+            compressors=comp,
+            fill_value=0,
+            config=every,
+        )
     root.create_array("chunk_done", shape=(n_chunks,), dtype="bool", chunks=(1,), fill_value=False)
     return MeshDataset(path, header, root)
 
@@ -271,6 +339,8 @@ def describe_mesh(ds: MeshDataset) -> dict:
         index_matched=h.get("request", {}).get("index_matched"),
         # light carried through the air from part to part: a tally's flag (false before it existed)
         reentry=h.get("request", {}).get("reentry", False) if h.get("source") != "photographs" else None,
+        incidence={**ds.incidence.describe(), "directions": ds.incidence.count},
+        exit_bins=None if ds.exit_bins is None else ds.exit_bins.count,
         **object_bounds(vertices),
         **_photographs(h),
     )

@@ -233,26 +233,39 @@ def object_voxels(extents, voxel: float) -> float:
 
 
 def mesh_acquisition(
-    *, vertices: int, faces: int, points: int, photons: int, chunk: int, voxels: float
+    *,
+    vertices: int,
+    faces: int,
+    points: int,
+    photons: int,
+    chunk: int,
+    voxels: float,
+    directions: int = 1,
+    exit_bins: int = 0,
 ) -> Need:
-    r"""``acquire mesh``: V vertices, F faces, P incident points, k a chunk, N photons.
+    r"""``acquire mesh``: V vertices, F faces, P incident points, k a chunk, N photons, D directions of
+    incidence, B exit bins (0: none).
 
     .. math::
-        M = M_{mi} + 100\,V_{vox} + 400\,k N + 40\,k V + 300\,(V + F)
+        M = M_{mi} + 100\,V_{vox} + 400\,k N + 40\,k V + 24\,k V B + 300\,(V + F)
 
-    the volume as above, all k·N photons of a chunk in flight at once (one channel; their state, exits and
-    barycentric splat: measured 370 bytes each), the chunk's R_d and counts (float32 + float64 per vertex
-    and channel) and the mesh with its ray-tracing scene.  Output: :math:`D = 12 P V + 40 (V + F) + 20 P`.
+    the volume as above, all k·N photons of a chunk in flight at once (one channel and direction; their
+    state, exits and barycentric splat: measured 370 bytes each), the chunk's R_d and counts (float32 +
+    float64 per vertex and channel), its exit bins (float32 × 3 channels + float64 counts per vertex and
+    bin) and the mesh with its ray-tracing scene.  Output:
+    :math:`D (12 P V + 20 P) + 12 P V D B + 40 (V + F)` (exit bins uncompressed: far from the beam they
+    are zeros, which Zstandard keeps small).
     """
     k = min(chunk, points)
     parts = {
         "the filling: --voxel": 100 * voxels,
         "photons in flight: --chunk x --photons": 400 * k * photons,
         "a chunk of R_d: --chunk x vertices": 40 * k * vertices,
+        "a chunk's exit bins: --chunk x vertices x --exit-bins": 24 * k * vertices * exit_bins,
         "the mesh": 300 * (vertices + faces),
     }
-    disk = 12 * points * vertices + 40 * (vertices + faces) + 20 * points
-    return Need(BASE_MITSUBA + sum(parts.values()), disk, max(parts, key=parts.get))
+    disk = directions * (12 * points * vertices * (1 + exit_bins) + 20 * points)
+    return Need(BASE_MITSUBA + sum(parts.values()), disk + 40 * (vertices + faces), max(parts, key=parts.get))
 
 
 def planar_fit(

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import NamedTuple
 
@@ -24,6 +24,7 @@ from ..acquire import PlanarSetup, Volume, estimate_seconds, load_volume, make_s
 from ..acquire import acquire_planar as scan_planar
 from ..acquire.mesh import acquire_mesh as scan_mesh
 from ..acquire.mesh import check_filling, object_volume
+from ..angles import ExitBins, Incidence
 from ..cluster import parse_scheduler
 from ..io.dataset import PlanarDataset, open_dataset
 from ..io.mesh_dataset import MeshDataset, open_mesh_dataset
@@ -251,6 +252,9 @@ def acquire_mesh(
     chunk_points: int = 8,
     index_matched: bool = False,
     reentry: bool = True,
+    incidence: Sequence[float] = (),
+    azimuths: int = 4,
+    exit_bins: int = 0,
     scale_mm: float = 1.0,
     up: str = "z",
     overwrite: bool = False,
@@ -283,6 +287,13 @@ def acquire_mesh(
     reentry : bool
         Light that leaves one part through the air into another walks on there, tallied where it finally
         escapes (as a photograph sees it); ``False``: tallied where it first left.
+    incidence : sequence of float
+        Polar angles (degrees from the normal) of oblique beams besides the normal one, each at
+        ``azimuths`` azimuths of the incident point's tangent frame (:class:`translucency.angles.Incidence`);
+        default none: the paper's normal beams.  Cost: photons × (1 + len(incidence) × azimuths).
+    exit_bins : int
+        0 (default) or the number of polar exit bins; each exit is also counted by its direction in
+        ``exit_bins`` × 2 bins (:class:`translucency.angles.ExitBins`).
     scale_mm, up
         Millimetres per file unit and the file's up axis (a mesh file only).
     overwrite, progress, scheduler, max_memory, reporter
@@ -306,6 +317,8 @@ def acquire_mesh(
     out = as_path("out", out)
     photons, seed = whole_number("photons", photons), whole_number("seed", seed, lo=0)
     points, chunk_points = whole_number("points", points), whole_number("chunk_points", chunk_points)
+    angles = Incidence(tuple(float(t) for t in incidence), whole_number("azimuths", azimuths))
+    bins = ExitBins(whole_number("exit_bins", exit_bins)) if exit_bins else None
     g = float(check_option("g", g, lo=-1, hi=1, open_lo=True, open_hi=True))
     scale_mm = float(check_option("scale_mm", scale_mm, lo=0, open_lo=True))
     voxel_mm = float(check_option("voxel_mm", voxel_mm, lo=0, open_lo=True))
@@ -330,6 +343,8 @@ def acquire_mesh(
             photons=photons,
             chunk=chunk_points,
             voxels=voxels,
+            directions=angles.count,
+            exit_bins=0 if bins is None else bins.count,
         )
         return run.check(n, out, resumed=True)  # a resumed acquisition keeps what is there
 
@@ -350,11 +365,15 @@ def acquire_mesh(
     }
     state = _resumable(out, open_mesh_dataset, lambda request: _matches(request, same))
     timing = run.time(
-        resources.timing.mesh_acquisition_units(points=_left(state, points), photons=photons, vertices=V)
+        resources.timing.mesh_acquisition_units(
+            points=_left(state, points), photons=photons * angles.count, vertices=V
+        )
     )
     run.kept = lambda: kept_chunks(out, open_mesh_dataset)
     run.info(
-        f"{_resuming(state)}{_left(state, points)} incident points x {photons:,} photons x 3 channels on a "
+        f"{_resuming(state)}{_left(state, points)} incident points x {photons:,} photons x 3 channels"
+        f"{f' x {angles.count} directions' if angles.count > 1 else ''}"
+        f"{f' ({bins.count} exit bins)' if bins else ''} on a "
         f"mesh of {V:,} vertices, {' x '.join(f'{v:.1f}' for v in obj.extents)} mm; "
         f"time {timing.text()}, memory ~{estimate.memory / 2**20:,.0f} MiB",
     )
@@ -370,6 +389,8 @@ def acquire_mesh(
             chunk_points=chunk_points,
             index_matched=bool(index_matched),
             reentry=bool(reentry),
+            incidence=angles,
+            exit_bins=bins,
             overwrite=overwrite,
             inputs=[mesh_file, path],
             progress=_steps(work, progress),
@@ -383,6 +404,8 @@ def acquire_mesh(
             "points": ds.n_points,
             "vertices": V,
             "photons": photons,
+            "directions": ds.incidence.count,
+            "exit_bins": 0 if ds.exit_bins is None else ds.exit_bins.count,
             "seed": seed,
             "complete": ds.complete(),
             "seconds": run.seconds(),

@@ -27,7 +27,12 @@ the normal is only 10–20° from +z (so s ≈ −0.3), πL is 0.61 M.  So π ×
   hold the peak: near the hit, on the skin sphere 1.5 mm away, πL/M is 3.6 seen face-on leaning away
   from the hit, 0.5 from the side and 0.3 leaning towards it — photon walks and volpath alike), and a
   table over 4 × 4 cells of directions (too coarse for the peak: the true law tabulated so converts
-  10–60 % off; and too many unknowns for a few views per vertex).
+  10–60 % off; and too many unknowns for a few views per vertex);
+* :class:`Tabulated` — γ read from a photon tally's exit bins (``acquire mesh --exit-bins``,
+  :mod:`translucency.angles`): per band of distance from the hit (:data:`TABLE_EDGES_MM`), polar bin and
+  half (s > 0 away from the hit, s < 0 back), :math:`\gamma_b = \pi L_b / M`
+  over the band's vertices; a rig file names it ``"tally:PATH"``.  Exact in the bins' mean, piecewise
+  constant within them.
 """
 
 from __future__ import annotations
@@ -218,9 +223,87 @@ def fit_from_views(L, var, mu, s, r, *, min_snr: float = 5.0) -> FromViews:
     return FromViews(a_out[nearest], k_out[nearest], tuple(int(c) for c in counts))
 
 
+#: distance bands (mm from the hit) of :class:`Tabulated`, the last one open
+TABLE_EDGES_MM = (0.0, 0.5, 1.0, 1.5, 2.0, 3.0, 4.0, 6.0, 8.0, 12.0, 16.0)
+
+
+@dataclass(frozen=True)
+class Tabulated(ExitLaw):
+    r"""γ per distance band (:data:`TABLE_EDGES_MM`), exit bin and channel, ``gamma`` of shape (bands,
+    bins.count, 3), from a photon tally's exit bins (:func:`tabulated_from_tally`).  For every band
+    :math:`\sum_b \gamma_b \Omega'_b = \pi` (the bins tile the hemisphere), so the law keeps energy.
+
+    Examples
+    --------
+    >>> from translucency.angles import ExitBins
+    >>> law = Tabulated(ExitBins(2), np.ones((len(TABLE_EDGES_MM), 4, 3)), "flat")
+    >>> law.factor(np.array([0.9, 0.2]), np.array([0.1, -0.3]), np.array([0.2, 7.0]))[:, 0].tolist()
+    [1.0, 1.0]
+    """
+
+    bins: object  # translucency.angles.ExitBins
+    gamma: np.ndarray
+    source: str
+    name: str = "tally"
+    needs_direction = True
+
+    def factor(self, mu, s, r):
+        mu, s = np.asarray(mu, dtype=np.float64), np.asarray(s, dtype=np.float64)
+        band = np.clip(
+            np.searchsorted(TABLE_EDGES_MM, np.asarray(r, dtype=np.float64), side="right") - 1,
+            0,
+            len(TABLE_EDGES_MM) - 1,
+        )
+        return np.asarray(self.gamma)[band, 2 * self.bins.polar_index(mu) + (s < 0)]
+
+    def describe(self) -> dict:
+        return {
+            "law": self.name,
+            "source": self.source,
+            "band_edges_mm": list(TABLE_EDGES_MM),
+            "exit_bins": self.bins.describe(),
+            "gamma": np.round(np.asarray(self.gamma), 4).tolist(),
+        }
+
+
+def tabulated_from_tally(path) -> Tabulated:
+    r"""The exit law of a mesh data set with exit bins (its normal beams): per distance band from each
+    incident point, the bins' R_d weighted by the vertices' areas, :math:`\gamma_b = \pi \sum_v A_v
+    R_{d,b}(v) / (\Omega'_b \sum_v A_v R_d(v))`; a band without exits takes its nearest band's."""
+    from ...io.mesh_dataset import open_mesh_dataset  # Zarr loads where a tally is read
+
+    ds = open_mesh_dataset(path)
+    bins = ds.exit_bins
+    if bins is None:
+        raise TranslucencyError(f"exit_law: {path} has no exit bins (see `acquire mesh --exit-bins`)")
+    vertices = np.asarray(ds["vertices"], dtype=np.float64)
+    area = np.asarray(ds["vertex_area"], dtype=np.float64)
+    incident = np.asarray(ds["incident"])
+    bands = len(TABLE_EDGES_MM)
+    total = np.zeros((bands, bins.count, 3))
+    for p, i in enumerate(incident):
+        binned = np.asarray(ds.group["exit_bins"][p, 0], dtype=np.float64)  # (V, 3, B)
+        band = np.clip(
+            np.searchsorted(TABLE_EDGES_MM, np.linalg.norm(vertices - vertices[i], axis=1), side="right") - 1,
+            0,
+            bands - 1,
+        )
+        np.add.at(total, band, np.einsum("vcb,v->vbc", binned, area))
+    has = total.sum(axis=1).min(axis=1) > 0
+    if not has.any():
+        raise TranslucencyError(f"exit_law: {path} holds no exits")
+    idx = np.arange(bands)
+    nearest = np.array([idx[has][np.argmin(np.abs(idx[has] - b))] for b in idx])
+    total = total[nearest]
+    gamma = np.pi * total / (bins.projected_solid_angle * total.sum(axis=1, keepdims=True))
+    return Tabulated(bins, gamma, str(path))
+
+
 def law_named(name: str, eta: float = 1.0) -> ExitLaw | None:
-    """The law a rig file names: ``"lambertian"``, ``"dielectric"`` (needs η ≠ 1) or ``"from-views"`` (None:
-    it is estimated from the photographs)."""
+    """The law a rig file names: ``"lambertian"``, ``"dielectric"`` (needs η ≠ 1), ``"tally:PATH"`` (a mesh
+    data set with exit bins) or ``"from-views"`` (None: it is estimated from the photographs)."""
+    if name.startswith("tally:"):
+        return tabulated_from_tally(name.split(":", 1)[1])
     if name == "lambertian":
         return Lambertian()
     if name == "dielectric":
@@ -229,7 +312,17 @@ def law_named(name: str, eta: float = 1.0) -> ExitLaw | None:
         return Dielectric(float(eta))
     if name == "from-views":
         return None
-    raise TranslucencyError(f"exit_law: one of lambertian, dielectric, from-views; got {name!r}")
+    raise TranslucencyError(f"exit_law: one of lambertian, dielectric, from-views, tally:PATH; got {name!r}")
 
 
-__all__ = ["ExitLaw", "Lambertian", "Dielectric", "FromViews", "fit_from_views", "law_named", "BAND_EDGES_MM"]
+__all__ = [
+    "ExitLaw",
+    "Lambertian",
+    "Dielectric",
+    "FromViews",
+    "Tabulated",
+    "fit_from_views",
+    "tabulated_from_tally",
+    "law_named",
+    "BAND_EDGES_MM",
+]

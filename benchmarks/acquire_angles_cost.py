@@ -1,0 +1,97 @@
+"""The cost of the angle axes in ``acquire mesh`` (issue 37, item 2): time per photon and size on disk.
+
+Times, in one run, the same acquisition three ways — the paper's normal beams (the baseline), the same
+with exit bins, and normal + oblique beams (``--incidence 60 --azimuths 4``) with exit bins — and prints
+seconds per photon walked (photons × directions × 3 channels) with its ratio to the baseline, and each
+data set's size on disk (Zarr, Zstandard)::
+
+    python benchmarks/acquire_angles_cost.py [MESH.obj] [--size=20] [--points=8] [--photons=4000]
+        [--material=homogeneous:skin1] [--repeats=2]
+
+MESH defaults to ``../shared/meshes/spot.obj`` when it is there, else a 2,562-vertex icosphere.  The first
+run of each way is a warm-up (Dr.Jit compiles its kernels); the medians of ``--repeats`` further runs are
+printed.
+"""
+
+from __future__ import annotations
+
+import shutil
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+import trimesh
+
+from translucency.acquire.mesh import acquire_mesh, object_volume
+from translucency.angles import ExitBins, Incidence
+from translucency.io.mesh import load_mesh
+
+
+def _args(argv):
+    opts = {"size": 20.0, "points": 8, "photons": 4000, "material": "homogeneous:skin1", "repeats": 2}
+    mesh = None
+    for a in argv[1:]:
+        if a.startswith("--") and "=" in a:
+            k, v = a[2:].split("=", 1)
+            opts[k] = type(opts[k])(v)
+        else:
+            mesh = a
+    return mesh, opts
+
+
+def _mesh(path, size):
+    default = Path(__file__).resolve().parents[2] / "shared" / "meshes" / "spot.obj"
+    path = path or (default if default.is_file() else None)
+    m = trimesh.creation.icosphere(4, radius=size / 2) if path is None else load_mesh(path)
+    m.apply_scale(size / float(m.extents.max()))
+    m.apply_translation(-m.bounds.mean(axis=0))
+    return m
+
+
+def _bytes(path: Path) -> int:
+    return sum(f.stat().st_size for f in path.rglob("*") if f.is_file())
+
+
+def main(argv) -> None:
+    path, o = _args(argv)
+    mesh = _mesh(path, o["size"])
+    volume = object_volume(o["material"], mesh, 0.5, seed=1)
+    ways = {
+        "normal beams (baseline)": dict(),
+        "normal + exit bins (3 x 2)": dict(exit_bins=ExitBins(3)),
+        "normal + 60 deg x 4 azimuths + exit bins": dict(
+            incidence=Incidence((60.0,), 4), exit_bins=ExitBins(3)
+        ),
+    }
+    folder = Path(tempfile.mkdtemp(prefix="angles-cost-"))
+    print(
+        f"{len(mesh.vertices):,} vertices, {o['points']} points x {o['photons']:,} photons x 3 channels, "
+        f"{o['material']}, {o['repeats']} timed runs after a warm-up"
+    )
+    base = None
+    for name, kw in ways.items():
+        directions = kw.get("incidence", Incidence()).count
+        seconds = []
+        for r in range(1 + o["repeats"]):
+            out = folder / f"{len(seconds)}.zarr"
+            shutil.rmtree(out, ignore_errors=True)
+            t = time.perf_counter()
+            acquire_mesh(
+                mesh, volume, out, n_points=o["points"], photons=o["photons"], index_matched=True, **kw
+            )
+            if r:
+                seconds.append(time.perf_counter() - t)
+        walked = o["points"] * o["photons"] * 3 * directions
+        per = float(np.median(seconds)) / walked
+        base = base or per
+        print(
+            f"{name:44s} {np.median(seconds):7.2f} s  {per * 1e6:6.2f} us/photon  "
+            f"x{per / base:4.2f} per photon  {_bytes(out) / 2**20:7.2f} MiB on disk"
+        )
+    shutil.rmtree(folder, ignore_errors=True)
+
+
+if __name__ == "__main__":
+    main(sys.argv)

@@ -1,0 +1,171 @@
+r"""The angle axes of a mesh data set: the directions light arrives from, and the bins it leaves by.
+
+The paper's data are diffuse: :math:`R_d(x_i, x_o)` for a beam entering along the normal, the exits
+counted whatever their direction.  Light from behind an object enters obliquely and leaves toward the
+side a camera sees, and both angles move a back-lit picture by tens of percent (docs/objects.md, "Back
+lit: which angle").  A mesh data set may therefore hold two more axes; both live in the frame of the
+surface, so they mean the same on any mesh:
+
+**Incidence** (:class:`Incidence`): besides the normal beam, beams arriving at polar angles
+:math:`\theta_i` from the normal at :math:`n_\phi` azimuths :math:`\phi_k = 2\pi k / n_\phi` of each
+incident point's tangent frame :math:`(t, b, n)` (:func:`translucency.geometry.tangent_frames`).  A
+direction is stored as :math:`\omega_i` *toward the light*, local coordinates
+:math:`(\sin\theta_i\cos\phi, \sin\theta_i\sin\phi, \cos\theta_i)`; the beam flies along
+:math:`-\omega_i` and is reflected and refracted at the surface
+(:func:`translucency.acquire.mesh_walk.mesh_random_walk`).
+
+**Exit bins** (:class:`ExitBins`): each exit's direction :math:`\omega_o` (in the air, outwards) in
+:math:`n_\theta` polar bins of equal projected solid angle — edges at :math:`\cos^2\theta = 1 - j /
+n_\theta` — times two azimuthal halves: *away* from the incident point (the tangent component of
+:math:`\omega_o` along that of :math:`x_o - x_i`) or *back* toward it.  Every bin then has
+
+.. math:: \Omega'_b = \int_b \cos\theta\, d\omega = \pi / (2 n_\theta),
+
+so the part :math:`R_{d,b}` of :math:`R_d` that left through bin b is the radiance there
+:math:`L_b = R_{d,b} / \Omega'_b` (mm⁻² sr⁻¹ per unit power), and a Lambertian exit reads the same
+:math:`R_d / \pi` in every bin.  The exit law a camera needs to turn radiance into exitance is
+:math:`f_b = \pi L_b / R_d` (1 for Lambertian; :meth:`ExitBins.law`).
+
+Units: angles in degrees at the API, directions unit vectors; R_d in mm⁻².
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ._validate import TranslucencyError
+
+
+@dataclass(frozen=True)
+class Incidence:
+    """The directions the beams of each incident point arrive from: the normal, then
+    ``len(polar_deg) * azimuths`` oblique ones.
+
+    Examples
+    --------
+    >>> inc = Incidence(polar_deg=(60.0,), azimuths=4)
+    >>> inc.count, inc.local()[1].round(3).tolist()   # the normal first; then (θ 60°, φ 0°)
+    (5, [0.866, 0.0, 0.5])
+    >>> Incidence().count   # old data sets: the normal beam only
+    1
+    """
+
+    polar_deg: tuple[float, ...] = ()
+    azimuths: int = 4
+
+    def __post_init__(self):
+        for t in self.polar_deg:
+            if not 0.0 < float(t) < 90.0:
+                raise TranslucencyError(f"incidence: polar angles must lie in (0, 90) degrees, got {t:g}")
+        if self.polar_deg and not 1 <= int(self.azimuths) <= 64:
+            raise TranslucencyError(f"incidence azimuths: need 1 to 64, got {self.azimuths}")
+
+    @property
+    def count(self) -> int:
+        """Directions per incident point, the normal included."""
+        return 1 + len(self.polar_deg) * int(self.azimuths)
+
+    def local(self) -> np.ndarray:
+        """(count, 3) unit directions toward the light in the tangent frame (t, b, n); row 0 the normal."""
+        rows = [(0.0, 0.0, 1.0)]
+        for t in self.polar_deg:
+            th = np.radians(float(t))
+            for k in range(int(self.azimuths)):
+                ph = 2.0 * np.pi * k / int(self.azimuths)
+                rows.append((np.sin(th) * np.cos(ph), np.sin(th) * np.sin(ph), np.cos(th)))
+        return np.asarray(rows, dtype=np.float64)
+
+    def world(self, frames: np.ndarray) -> np.ndarray:
+        """(P, count, 3) directions toward the light in object space for incident frames (P, 3, 3) whose
+        rows are (t, b, n)."""
+        return np.einsum("dk,pkj->pdj", self.local(), np.asarray(frames, dtype=np.float64))
+
+    def describe(self) -> dict:
+        """The header's record (JSON)."""
+        return {"polar_deg": [float(t) for t in self.polar_deg], "azimuths": int(self.azimuths)}
+
+    @classmethod
+    def from_header(cls, record: dict | None) -> Incidence:
+        """From a header's record; None (a data set made before the axis existed): the normal only."""
+        if not record:
+            return cls()
+        return cls(tuple(float(t) for t in record.get("polar_deg", ())), int(record.get("azimuths", 4)))
+
+
+@dataclass(frozen=True)
+class ExitBins:
+    """Exit directions in ``polar`` bins of equal projected solid angle × 2 azimuthal halves (away from
+    the incident point, back toward it); bin index ``2 j + h`` (j polar from the normal, h = 1 back).
+
+    Examples
+    --------
+    >>> bins = ExitBins(polar=2)
+    >>> bins.count, round(bins.projected_solid_angle * bins.count / np.pi, 12)   # they tile the hemisphere
+    (4, 1.0)
+    >>> bins.edges_cos.round(4).tolist()   # cos θ at the edges: cos² θ = 1, 1/2, 0
+    [1.0, 0.7071, 0.0]
+    """
+
+    polar: int = 3
+
+    def __post_init__(self):
+        if not 1 <= int(self.polar) <= 16:
+            raise TranslucencyError(f"exit bins: need 1 to 16 polar bins, got {self.polar}")
+
+    @property
+    def count(self) -> int:
+        return 2 * int(self.polar)
+
+    @property
+    def edges_cos(self) -> np.ndarray:
+        """cos θ at the polar edges, from the normal (1) to the horizon (0)."""
+        return np.sqrt(1.0 - np.arange(int(self.polar) + 1) / int(self.polar))
+
+    @property
+    def projected_solid_angle(self) -> float:
+        r""":math:`\Omega'_b = \pi / (2 n_\theta)`, the same for every bin, sr."""
+        return np.pi / self.count
+
+    def polar_index(self, mu: np.ndarray) -> np.ndarray:
+        """The polar bin j of exits at cosines ``mu`` to the normal (at or below the horizon: the last)."""
+        cos2 = np.clip(np.asarray(mu, dtype=np.float64), 0.0, 1.0) ** 2
+        return np.minimum(((1.0 - cos2) * int(self.polar)).astype(np.int64), int(self.polar) - 1)
+
+    def index(self, omega: np.ndarray, normal: np.ndarray, away: np.ndarray) -> np.ndarray:
+        """The bin of each exit: directions ``omega`` (n, 3) outwards, the surface's unit normals there
+        (n, 3), and ``away`` (n, 3) the direction from the incident point to the exit (any length; its
+        tangent component decides the azimuthal half, none at the incident point: away)."""
+        omega, normal = np.asarray(omega, np.float64), np.asarray(normal, np.float64)
+        j = self.polar_index(np.einsum("nk,nk->n", omega, normal))
+        a = np.asarray(away, np.float64)
+        a_t = a - np.einsum("nk,nk->n", a, normal)[:, None] * normal  # tangent component of x_o − x_i
+        back = np.einsum("nk,nk->n", omega, a_t) < 0.0
+        return 2 * j + back.astype(np.int64)
+
+    def radiance(self, R_d_bins: np.ndarray) -> np.ndarray:
+        r"""Radiance per unit power in each bin, :math:`L_b = R_{d,b} / \Omega'_b` (mm⁻² sr⁻¹); the bins
+        on the last axis."""
+        return np.asarray(R_d_bins) / self.projected_solid_angle
+
+    def law(self, R_d_bins: np.ndarray, floor: float = 0.0) -> np.ndarray:
+        r"""The exit law :math:`f_b = \pi L_b / R_d` per bin (1 everywhere for a Lambertian exit); NaN
+        where :math:`R_d \le` ``floor``."""
+        R = np.asarray(R_d_bins, dtype=np.float64)
+        total = R.sum(axis=-1, keepdims=True)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            return np.where(total > floor, np.pi * self.radiance(R) / total, np.nan)
+
+    def describe(self) -> dict:
+        return {
+            "polar": int(self.polar),
+            "azimuth": ["away", "back"],
+            "edges_cos": [round(float(c), 6) for c in self.edges_cos],
+            "projected_solid_angle_sr": float(self.projected_solid_angle),
+        }
+
+    @classmethod
+    def from_header(cls, record: dict | None) -> ExitBins | None:
+        """From a header's record; None where the data set has no exit bins."""
+        return cls(int(record["polar"])) if record else None

@@ -1,0 +1,151 @@
+"""The angle axes of mesh data (translucency.angles): oblique beams and exit bins, checked against
+Chandrasekhar's closed forms for a half-space, and old data sets read as the normal beam alone."""
+
+import numpy as np
+import pytest
+import trimesh
+
+from translucency._validate import TranslucencyError
+from translucency.angles import ExitBins, Incidence
+
+
+def _slab_with_a_centre_vertex(extents=(60.0, 60.0, 30.0)):
+    """A box whose vertex 0 is the centre of its top face (the incident point of a one-point scan)."""
+    box = trimesh.creation.box(extents=extents).subdivide()  # the top diagonal's midpoint: the centre
+    top = np.array([0.0, 0.0, extents[2] / 2])
+    c = int(np.argmin(np.linalg.norm(box.vertices - top, axis=1)))
+    assert np.allclose(box.vertices[c], top)
+    order = np.r_[c, np.delete(np.arange(len(box.vertices)), c)]
+    inverse = np.argsort(order)
+    return trimesh.Trimesh(box.vertices[order], inverse[box.faces], process=False)
+
+
+def _bin_shares(mu0: float, albedo: float, edges_cos: np.ndarray) -> np.ndarray:
+    r"""Chandrasekhar's reflected radiance of a half-space lit at :math:`\mu_0` (isotropic scattering,
+    index-matched), :math:`I(\mu) \propto H(\mu) / (\mu + \mu_0)`, as the share of the reflected flux in
+    each polar bin: :math:`\int_{bin} \mu H(\mu) / (\mu + \mu_0) d\mu` over the whole."""
+    from translucency.model.incidence import chandrasekhar_h
+
+    x, w = np.polynomial.legendre.leggauss(64)
+    share = []
+    for hi, lo in zip(edges_cos[:-1], edges_cos[1:]):
+        mu = lo + (hi - lo) * (x + 1) / 2
+        share.append(np.sum(w * (hi - lo) / 2 * mu * chandrasekhar_h(mu, albedo) / (mu + mu0)))
+    share = np.asarray(share)
+    return share / share.sum()
+
+
+@pytest.mark.slow
+def test_a_half_space_s_oblique_albedo_and_exit_bins_match_chandrasekhar(tmp_path):
+    """A 30 mm slab (σ_t = 1 mm⁻¹, albedos 0.5 / 0.8 / 0.95: a half-space to < 1 %), index-matched, one
+    incident point lit along the normal and at 60° from four azimuths.  The tally's total reflectance
+    Σ_v R_d A_v is Chandrasekhar's plane albedo R(μ₀) = 1 − H(μ₀)√(1−a) at μ₀ = 1 and 0.5, and its exits
+    fall in the polar bins as :math:`\\int \\mu H(\\mu) / (\\mu + \\mu_0)`; the bins add up to R_d."""
+    from translucency.acquire.mesh import acquire_mesh
+    from translucency.acquire.volume import Volume
+    from translucency.io.mesh_dataset import open_mesh_dataset
+    from translucency.model.incidence import plane_albedo
+
+    slab = _slab_with_a_centre_vertex()
+    a = np.array([0.5, 0.8, 0.95])
+    vol = Volume.homogeneous((6, 12, 12), 5.0, a, 1 - a, 0.0, 1.0)
+    N = 40_000
+    bins = ExitBins(polar=3)
+    out = acquire_mesh(
+        slab, vol, tmp_path / "slab.zarr", n_points=1, photons=N, chunk_points=1, index_matched=True,
+        incidence=Incidence((60.0,), 4), exit_bins=bins,
+    )  # fmt: skip
+    ds = open_mesh_dataset(out)
+    assert ds.incidence.count == 5 and ds.exit_bins == bins
+    area = np.asarray(ds["vertex_area"], np.float64)
+    binned = np.asarray(ds["exit_bins"], np.float64)[0]  # (D, V, 3, B)
+    for d, mu0 in enumerate([1.0, 0.5, 0.5, 0.5, 0.5]):
+        R_d = ds.R_d_toward(d)[0].astype(np.float64)  # (V, 3)
+        assert np.allclose(binned[d].sum(-1), R_d, rtol=1e-5, atol=1e-9)
+        total = np.einsum("vc,v->c", R_d, area)  # the share of the power reflected
+        expect = plane_albedo(mu0, a)
+        sigma = np.sqrt(expect * (1 - expect) / N)
+        assert np.all(np.abs(total - expect) < 4 * sigma + 0.005), (d, total, expect)
+        polar = np.einsum("vcb,v->cb", binned[d], area).reshape(3, bins.polar, 2).sum(-1)  # (channel, polar)
+        for c in range(3):
+            share = polar[c] / polar[c].sum()
+            want = _bin_shares(mu0, a[c], bins.edges_cos)
+            n_exit = expect[c] * N
+            sigma = np.sqrt(want * (1 - want) / n_exit)
+            assert np.all(np.abs(share - want) < 4 * sigma + 0.005), (d, c, share, want)
+    assert ds.group["specular_oblique"][...].max() == 0  # index-matched: no Fresnel reflection
+
+
+def test_the_normal_beam_is_the_same_with_or_without_the_angle_axes_and_old_data_read_as_it(tmp_path):
+    """Adding oblique beams and exit bins leaves the normal beam's R_d bit for bit (its photons are drawn
+    as before); a data set without the axes reads as one direction without exit bins; a dielectric's
+    exit bins add up to R_d; a header that announces axes whose arrays are missing is refused in a line."""
+    import shutil
+
+    from translucency.acquire.mesh import acquire_mesh
+    from translucency.acquire.volume import Volume
+    from translucency.io.mesh_dataset import open_mesh_dataset
+
+    ball = trimesh.creation.icosphere(2, radius=4.0)
+    vol = Volume.homogeneous((9, 9, 9), 1.0, [1.0, 1.5, 2.0], [0.01, 0.02, 0.05], 0.0, 1.3)
+    kw = dict(n_points=3, photons=500, chunk_points=2)
+    plain = open_mesh_dataset(acquire_mesh(ball, vol, tmp_path / "plain.zarr", **kw))
+    both = open_mesh_dataset(
+        acquire_mesh(
+            ball, vol, tmp_path / "both.zarr", incidence=Incidence((45.0,), 2), exit_bins=ExitBins(2), **kw
+        )
+    )
+    assert plain.incidence.count == 1 and plain.exit_bins is None
+    assert np.array_equal(plain.R_d_toward(0), plain["R_d"])
+    assert np.array_equal(plain["R_d"], both["R_d"])
+    assert both.incidence.count == 3 and both["R_d_oblique"].shape == (3, 2, 162, 3)
+    assert np.allclose(np.asarray(both["exit_bins"]).sum(-1)[:, 1], both.R_d_toward(1), rtol=1e-5, atol=1e-9)
+    assert not np.array_equal(both.R_d_toward(1), both.R_d_toward(2))  # other beams, other photons
+    both.check_complete()
+    with pytest.raises(TranslucencyError, match="direction 3"):
+        both.R_d_toward(3)
+    _check_the_tally_s_exit_law(tmp_path / "both.zarr", tmp_path / "plain.zarr")
+    shutil.rmtree(tmp_path / "both.zarr" / "exit_bins")
+    with pytest.raises(TranslucencyError, match="exit_bins"):
+        open_mesh_dataset(tmp_path / "both.zarr")
+
+
+def test_exit_bins_tile_the_hemisphere_and_read_a_lambertian_exit_as_one():
+    """Cosine-distributed exits (Lambertian) fall evenly in the bins of equal projected solid angle: the
+    law is 1 in every bin; an exit grazing or below the horizon is in the last polar bin; the tangent
+    component of the way from the incident point decides away or back."""
+    rng = np.random.default_rng(3)
+    bins = ExitBins(polar=4)
+    n = 400_000
+    u1, u2 = rng.random(n), rng.random(n)
+    r, phi = np.sqrt(u1), 2 * np.pi * u2  # Malley: a cosine-distributed direction about +z
+    omega = np.stack([r * np.cos(phi), r * np.sin(phi), np.sqrt(1 - u1)], axis=1)
+    normal = np.tile([0.0, 0.0, 1.0], (n, 1))
+    away = np.tile([1.0, 0.0, 5.0], (n, 1))  # (its normal component does not count)
+    b = bins.index(omega, normal, away)
+    counts = np.bincount(b, minlength=bins.count).astype(float)
+    law = bins.law(counts)
+    assert np.allclose(law, 1.0, atol=4 * np.sqrt(bins.count / n) * 1.2)
+    assert np.array_equal(b[omega[:, 0] < 0] % 2, np.ones((omega[:, 0] < 0).sum(), int))
+    assert bins.index(np.array([[1.0, 0, -0.1]]), normal[:1], away[:1])[0] == 2 * (bins.polar - 1)
+    with pytest.raises(TranslucencyError, match="polar angles"):
+        Incidence((90.0,))
+
+
+def _check_the_tally_s_exit_law(binned, plain):
+    """The exit law read from a tally's bins (import object's ``tally:PATH``) keeps energy in every band
+    of distance (Σ_b γ_b Ω'_b = π), looks up the bin of a view (cosine, slant, distance) as the tally
+    binned it, and a data set without bins is refused in one line."""
+    from translucency.rig.object.exit_law import TABLE_EDGES_MM, law_named, tabulated_from_tally
+
+    law = law_named(f"tally:{binned}")
+    bins = law.bins
+    assert law.gamma.shape == (len(TABLE_EDGES_MM), bins.count, 3)
+    assert np.allclose((law.gamma * bins.projected_solid_angle).sum(axis=1), np.pi)
+    mu = np.array([0.95, 0.95, 0.3])
+    got = law.factor(mu, np.array([0.1, -0.1, 0.2]), np.array([0.2, 0.2, 5.0]))
+    band5 = np.searchsorted(TABLE_EDGES_MM, 5.0, side="right") - 1
+    want = law.gamma[[0, 0, band5], [0, 1, 2 * (bins.polar - 1)]]
+    assert np.array_equal(got, want)
+    with pytest.raises(TranslucencyError, match="no exit bins"):
+        tabulated_from_tally(plain)
