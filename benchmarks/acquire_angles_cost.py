@@ -5,8 +5,8 @@ with exit bins, and normal + oblique beams (``--incidence 60 --azimuths 4``) wit
 seconds per photon walked (photons × directions × 3 channels) with its ratio to the baseline, and each
 data set's size on disk (Zarr, Zstandard)::
 
-    python benchmarks/acquire_angles_cost.py [MESH.obj] [--size=20] [--points=8] [--photons=4000]
-        [--material=homogeneous:skin1] [--repeats=2]
+    python benchmarks/acquire_angles_cost.py [MESH.obj] [--size=20] [--points=8] [--photons=20000]
+        [--material=marble] [--repeats=2]
 
 MESH defaults to ``../shared/meshes/spot.obj`` when it is there, else a 2,562-vertex icosphere.  The first
 run of each way is a warm-up (Dr.Jit compiles its kernels); the medians of ``--repeats`` further runs are
@@ -30,7 +30,7 @@ from translucency.io.mesh import load_mesh
 
 
 def _args(argv):
-    opts = {"size": 20.0, "points": 8, "photons": 4000, "material": "homogeneous:skin1", "repeats": 2}
+    opts = {"size": 20.0, "points": 8, "photons": 20000, "material": "marble", "repeats": 2}
     mesh = None
     for a in argv[1:]:
         if a.startswith("--") and "=" in a:
