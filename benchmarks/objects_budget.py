@@ -33,6 +33,10 @@ oracle, normal beams     each beam enters along −n; exitance × the incidence 
                          direction lies within ``CONE_DEG`` of the vertex's view direction:
                          L = Σ φ_o w / (A_o Ω_c cos θ_o), no exit law
 (c) both                 beams along the light and the radiance toward the camera
+(d) the data's axes      what a data set with both axes holds (issue 37, step 2: ``acquire mesh
+                         --incidence 60 --azimuths 4 --exit-bins 3``, every vertex a source): the light's
+                         direction blended from the normal and the four 60° beams, the camera's direction
+                         read from its exit bin — each axis alone, then both
 =======================  =============================================================================
 The default case is the cow with skin under a spot (issue 12's case); needs ``cow.obj``:
 
@@ -51,11 +55,13 @@ import numpy as np
 
 from translucency.acquire.mesh import acquire_mesh, exit_barycentric, object_volume
 from translucency.acquire.mesh_walk import EXIT, mesh_random_walk
+from translucency.angles import ExitBins, Incidence
 from translucency.fit.mesh import fit_mesh
-from translucency.geometry import vertex_areas
+from translucency.geometry import tangent_frames, vertex_areas
 from translucency.io.mesh import load_mesh
 from translucency.io.mesh_dataset import open_mesh_dataset
 from translucency.mitsuba import mesh_scene
+from translucency.model.directions import direction_weights
 from translucency.render.camera import Camera
 from translucency.render.compare import compare
 from translucency.render.irradiance import vertex_irradiance
@@ -147,6 +153,9 @@ def main() -> int:
     ap.add_argument("--angles", action="store_true", help="the oracle split by the angles in and out")
     ap.add_argument(
         "--kernel-seed", type=int, default=41, help="the seed of --angles' walks (another: their noise)"
+    )
+    ap.add_argument(
+        "--data-axes", action="store_true", help="with --angles: also the rows of a data set with both axes"
     )
     args = ap.parse_args()
     args.work.mkdir(parents=True, exist_ok=True)
@@ -252,6 +261,18 @@ def main() -> int:
                 elif first.is_file():  # the kernels' own noise, and the error of the two seeds' mean
                     noise, error = _two_seeds(reference, mask, np.load(first), img)
                     print(f"  {label}: one seed's noise {noise:.3f}; the two seeds' mean {error:.3f}")
+        if args.data_axes:  # what a data set with both axes holds, every vertex a source
+            ds = open_mesh_dataset(
+                acquire_mesh(
+                    mesh, volume, args.work / f"{name}_{V}x{N}_axes.zarr", n_points=V, photons=N, seed=3,
+                    chunk_points=32, index_matched=True, reentry=True, incidence=Incidence((60.0,), 4),
+                    exit_bins=ExitBins(3),
+                )
+            )  # fmt: skip
+            K_in, K_out, K_both = data_axes_kernels(ds, mesh, w_light, eye)
+            row("(d) data: incidence axis", radiance(K_in, area, E_plain), "data axes")
+            row("(d) data: exit bins", radiance(K_out, area, E), "data axes", law=False)
+            row("(d) data: both axes", radiance(K_both, area, E_plain), "data axes", law=False)
         return _written(args, V, info, rows, t0)
     saved = model.measured
     model.measured = None
@@ -372,6 +393,52 @@ def angle_kernels(mesh, scene, volume, photons, incoming, eye, path, chunk=256, 
             K[..., ch] /= photons * area[:, None]
     np.savez(path, M=K_M, L=K_L)
     return K_M, K_L
+
+
+def data_axes_kernels(ds, mesh, w_light, eye, chunk=128):
+    r"""(K_in, K_out, K_both), each (V, V, 3), from a data set of every vertex a source with oblique beams
+    at one polar angle θ_b and K azimuths, and exit bins (:mod:`translucency.angles`).
+
+    *In*: the light's direction ω at source j, (θ, φ) in j's tangent frame, is blended from the stored beams
+    — :math:`R(\omega) = (1 - s) R_n + s \sum_k w_k(\varphi) R_k`, s = min(sin θ / sin θ_b, 1) and
+    :math:`w_k` the hat weights between neighbouring azimuths (the paper's :math:`w_l`), no extrapolation
+    past θ_b.  *Out*: π × the radiance toward ``eye`` at o, :math:`\pi R_{d,b} / \Omega'_b` of the exit bin
+    b of o's view direction (o's vertex normal; away or back from x_j) — read as an exitance, no exit law.
+    K_in is the blended exitance (the exit law applies), K_out the normal beam's bins, K_both both."""
+    inc, bins = ds.incidence, ds.exit_bins
+    K = inc.azimuths
+    theta_b = np.radians(inc.polar_deg[0])
+    X = np.asarray(ds["vertices"], dtype=np.float64)
+    n_o = np.asarray(mesh.vertex_normals, dtype=np.float64)
+    V = len(X)
+    incident = np.asarray(ds["incident"])
+    frames = tangent_frames(n_o[incident])  # as the acquisition set them
+    w = np.asarray(w_light, dtype=np.float64)[incident]  # toward the light at each source
+    local = np.einsum("pjk,pk->pj", frames, w)
+    s = np.clip(np.sqrt(np.maximum(1 - np.clip(local[:, 2], -1, 1) ** 2, 0)) / np.sin(theta_b), 0, 1)
+    weights = np.concatenate(
+        [(1 - s)[:, None], s[:, None] * direction_weights(np.arctan2(local[:, 1], local[:, 0]), K)], axis=1
+    )  # (P, 1 + K): the normal beam, then the ring
+    to_eye = eye[None, :] - X
+    to_eye /= np.linalg.norm(to_eye, axis=1, keepdims=True)
+    per_sr = np.pi / bins.projected_solid_angle
+    K_in, K_out, K_both = (np.zeros((V, V, 3)) for _ in range(3))
+    for lo in range(0, len(incident), chunk):
+        hi = min(lo + chunk, len(incident))
+        B = np.asarray(ds.group["exit_bins"][lo:hi], dtype=np.float64)  # (n, D, V, 3, b)
+        j = incident[lo:hi]
+        blended = np.einsum("nd,ndvcb->nvcb", weights[lo:hi], B)
+        away = X[None, :, :] - X[j][:, None, :]  # (n, V, 3): x_o − x_j
+        b = bins.index(
+            np.broadcast_to(to_eye, away.shape).reshape(-1, 3),
+            np.broadcast_to(n_o, away.shape).reshape(-1, 3),
+            away.reshape(-1, 3),
+        ).reshape(hi - lo, V)
+        take = b[:, :, None, None]
+        K_in[:, j] = blended.sum(-1).transpose(1, 0, 2)
+        K_out[:, j] = per_sr * np.take_along_axis(B[:, 0], take, axis=-1)[..., 0].transpose(1, 0, 2)
+        K_both[:, j] = per_sr * np.take_along_axis(blended, take, axis=-1)[..., 0].transpose(1, 0, 2)
+    return K_in, K_out, K_both
 
 
 def _slug(label: str) -> str:
