@@ -22,32 +22,12 @@ import time
 from pathlib import Path
 
 import numpy as np
-import trimesh
 
+from _options import options, sized_mesh
 from translucency.acquire.mesh import acquire_mesh, object_volume
 from translucency.angles import ExitBins, Incidence
-from translucency.io.mesh import load_mesh
 
-
-def _args(argv):
-    opts = {"size": 20.0, "points": 8, "photons": 20000, "material": "marble", "repeats": 2}
-    mesh = None
-    for a in argv[1:]:
-        if a.startswith("--") and "=" in a:
-            k, v = a[2:].split("=", 1)
-            opts[k] = type(opts[k])(v)
-        else:
-            mesh = a
-    return mesh, opts
-
-
-def _mesh(path, size):
-    default = Path(__file__).resolve().parents[2] / "shared" / "meshes" / "spot.obj"
-    path = path or (default if default.is_file() else None)
-    m = trimesh.creation.icosphere(4, radius=size / 2) if path is None else load_mesh(path)
-    m.apply_scale(size / float(m.extents.max()))
-    m.apply_translation(-m.bounds.mean(axis=0))
-    return m
+DEFAULTS = {"size": 20.0, "points": 8, "photons": 20000, "material": "marble", "repeats": 2}
 
 
 def _bytes(path: Path) -> int:
@@ -55,8 +35,8 @@ def _bytes(path: Path) -> int:
 
 
 def main(argv) -> None:
-    path, o = _args(argv)
-    mesh = _mesh(path, o["size"])
+    path, o = options(argv, DEFAULTS)
+    mesh = sized_mesh(path, o["size"])
     volume = object_volume(o["material"], mesh, 0.5, seed=1)
     ways = {
         "normal beams (baseline)": dict(),

@@ -31,44 +31,29 @@ import tempfile
 from pathlib import Path
 
 import numpy as np
-import trimesh
 
+from _options import options, sized_mesh
 from translucency.acquire.mesh import acquire_mesh, object_volume
 from translucency.angles import ExitBins, Incidence
-from translucency.io.mesh import load_mesh
 from translucency.io.mesh_dataset import open_mesh_dataset
 
 EDGES_MM = (0.0, 0.01, 1.0, 2.0, 4.0, 8.0, 16.0, np.inf)
 
 
-def _args(argv):
-    opts = {"size": 20.0, "up": "y", "material": "marble", "points": 32, "photons": 20000, "theta": 60.0}
-    opts["folder"] = ""
-    mesh = None
-    for a in argv[1:]:
-        if a.startswith("--") and "=" in a:
-            k, v = a[2:].split("=", 1)
-            opts[k] = type(opts[k])(v)
-        else:
-            mesh = a
-    return mesh, opts
-
-
-def _mesh(path, size, up):
-    default = Path(__file__).resolve().parents[2] / "shared" / "meshes" / "spot.obj"
-    path = path or (default if default.is_file() else None)
-    if path is None:
-        m = trimesh.creation.icosphere(4, radius=size / 2)
-    else:
-        m = load_mesh(path, up=up)
-    m.apply_scale(size / float(m.extents.max()))
-    m.apply_translation(-m.bounds.mean(axis=0))
-    return m
+DEFAULTS = {
+    "size": 20.0,
+    "up": "y",
+    "material": "marble",
+    "points": 32,
+    "photons": 20000,
+    "theta": 60.0,
+    "folder": "",
+}
 
 
 def main(argv) -> None:
-    path, o = _args(argv)
-    mesh = _mesh(path, o["size"], o["up"])
+    path, o = options(argv, DEFAULTS)
+    mesh = sized_mesh(path, o["size"], o["up"])
     folder = Path(o["folder"] or tempfile.mkdtemp(prefix="angle-structure-"))
     out = folder / "tally.zarr"
     K = 4
