@@ -157,6 +157,7 @@ def main() -> int:
     ap.add_argument(
         "--data-axes", action="store_true", help="with --angles: also the rows of a data set with both axes"
     )
+    ap.add_argument("--data-polar", default="60", help="--data-axes' polar angles of incidence, degrees")
     args = ap.parse_args()
     args.work.mkdir(parents=True, exist_ok=True)
     name, file, scale, up, material, points, photons, kind, light, view = args.case.split(":")
@@ -262,10 +263,12 @@ def main() -> int:
                     noise, error = _two_seeds(reference, mask, np.load(first), img)
                     print(f"  {label}: one seed's noise {noise:.3f}; the two seeds' mean {error:.3f}")
         if args.data_axes:  # what a data set with both axes holds, every vertex a source
+            polar = tuple(float(t) for t in args.data_polar.split(","))
+            tag = "" if polar == (60.0,) else "_" + "_".join(f"{t:g}" for t in polar)
             ds = open_mesh_dataset(
                 acquire_mesh(
-                    mesh, volume, args.work / f"{name}_{V}x{N}_axes.zarr", n_points=V, photons=N, seed=3,
-                    chunk_points=32, index_matched=True, reentry=True, incidence=Incidence((60.0,), 4),
+                    mesh, volume, args.work / f"{name}_{V}x{N}_axes{tag}.zarr", n_points=V, photons=N, seed=3,
+                    chunk_points=32, index_matched=True, reentry=True, incidence=Incidence(polar, 4),
                     exit_bins=ExitBins(3),
                 )
             )  # fmt: skip
@@ -397,17 +400,18 @@ def angle_kernels(mesh, scene, volume, photons, incoming, eye, path, chunk=256, 
 
 def data_axes_kernels(ds, mesh, w_light, eye, chunk=128):
     r"""(K_in, K_out, K_both), each (V, V, 3), from a data set of every vertex a source with oblique beams
-    at one polar angle θ_b and K azimuths, and exit bins (:mod:`translucency.angles`).
+    at polar angles θ_1 < θ_2 < … and K azimuths each, and exit bins (:mod:`translucency.angles`).
 
-    *In*: the light's direction ω at source j, (θ, φ) in j's tangent frame, is blended from the stored beams
-    — :math:`R(\omega) = (1 - s) R_n + s \sum_k w_k(\varphi) R_k`, s = min(sin θ / sin θ_b, 1) and
-    :math:`w_k` the hat weights between neighbouring azimuths (the paper's :math:`w_l`), no extrapolation
-    past θ_b.  *Out*: π × the radiance toward ``eye`` at o, :math:`\pi R_{d,b} / \Omega'_b` of the exit bin
-    b of o's view direction (o's vertex normal; away or back from x_j) — read as an exitance, no exit law.
+    *In*: the light's direction ω at source j, (θ, φ) in j's tangent frame, is blended from the stored beams:
+    linearly in sin θ between the normal (θ = 0) and the rings (no extrapolation past the last), and
+    within a ring by :math:`\sum_k w_k(\varphi) R_k` with :math:`w_k` the hat weights between neighbouring
+    azimuths (the paper's :math:`w_l`).  *Out*: π × the radiance toward ``eye`` at o,
+    :math:`\pi R_{d,b} / \Omega'_b` of the exit bin b of o's view direction (o's vertex normal; away or
+    back from x_j) — read as an exitance, no exit law.
     K_in is the blended exitance (the exit law applies), K_out the normal beam's bins, K_both both."""
     inc, bins = ds.incidence, ds.exit_bins
     K = inc.azimuths
-    theta_b = np.radians(inc.polar_deg[0])
+    ring_sin = np.r_[0.0, np.sin(np.radians(inc.polar_deg))]  # the normal, then each ring
     X = np.asarray(ds["vertices"], dtype=np.float64)
     n_o = np.asarray(mesh.vertex_normals, dtype=np.float64)
     V = len(X)
@@ -415,10 +419,14 @@ def data_axes_kernels(ds, mesh, w_light, eye, chunk=128):
     frames = tangent_frames(n_o[incident])  # as the acquisition set them
     w = np.asarray(w_light, dtype=np.float64)[incident]  # toward the light at each source
     local = np.einsum("pjk,pk->pj", frames, w)
-    s = np.clip(np.sqrt(np.maximum(1 - np.clip(local[:, 2], -1, 1) ** 2, 0)) / np.sin(theta_b), 0, 1)
+    sin_t = np.sqrt(np.maximum(1 - np.clip(local[:, 2], -1, 1) ** 2, 0))
+    # hat weights in sin θ over (normal, ring 1, ring 2, …), clamped at the last ring
+    u = np.interp(np.minimum(sin_t, ring_sin[-1]), ring_sin, np.arange(len(ring_sin)))
+    w_ring = np.maximum(0.0, 1.0 - np.abs(u[:, None] - np.arange(len(ring_sin))[None, :]))  # (P, 1 + rings)
+    w_az = direction_weights(np.arctan2(local[:, 1], local[:, 0]), K)  # (P, K)
     weights = np.concatenate(
-        [(1 - s)[:, None], s[:, None] * direction_weights(np.arctan2(local[:, 1], local[:, 0]), K)], axis=1
-    )  # (P, 1 + K): the normal beam, then the ring
+        [w_ring[:, :1], (w_ring[:, 1:, None] * w_az[:, None, :]).reshape(len(w), -1)], axis=1
+    )  # (P, D): the normal beam, then ring by ring its K azimuths (the data set's order)
     to_eye = eye[None, :] - X
     to_eye /= np.linalg.norm(to_eye, axis=1, keepdims=True)
     per_sr = np.pi / bins.projected_solid_angle
