@@ -105,6 +105,18 @@ def test_the_normal_beam_is_the_same_with_or_without_the_angle_axes_and_old_data
     with pytest.raises(TranslucencyError, match="direction 3"):
         both.R_d_toward(3)
     _check_the_tally_s_exit_law(tmp_path / "both.zarr", tmp_path / "plain.zarr")
+    # a lost chunk of an angle array is damage, found and acquired again with the same arguments
+    bins_before, oblique_before = np.asarray(both["exit_bins"]), np.asarray(both["R_d_oblique"])
+    lost = tmp_path / "both.zarr" / "R_d_oblique" / "c" / "1"
+    shutil.rmtree(lost)
+    assert open_mesh_dataset(tmp_path / "both.zarr").damaged_chunks() == {"R_d_oblique": [1]}
+    with pytest.warns(UserWarning, match="R_d_oblique"):
+        again = acquire_mesh(
+            ball, vol, tmp_path / "both.zarr", incidence=Incidence((45.0,), 2), exit_bins=ExitBins(2), **kw
+        )
+    again = open_mesh_dataset(again)
+    assert not again.damaged_chunks() and np.array_equal(again["exit_bins"], bins_before)
+    assert np.array_equal(again["R_d_oblique"][2:], oblique_before[2:])  # the same photons again
     shutil.rmtree(tmp_path / "both.zarr" / "exit_bins")
     with pytest.raises(TranslucencyError, match="exit_bins"):
         open_mesh_dataset(tmp_path / "both.zarr")

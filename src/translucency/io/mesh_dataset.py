@@ -156,7 +156,7 @@ class MeshDataset(ChunkedStore):
         return np.asarray(self.group["R_d_oblique"][points, d - 1])
 
     def _expects_files(self, name: str) -> bool:
-        return name == "R_d"
+        return name in ("R_d", *_ANGLES)  # written with every chunk a file: a missing one is damage
 
     def _damaged_whole(self, decode: bool) -> dict:
         bad: dict = {}
