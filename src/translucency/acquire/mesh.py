@@ -233,14 +233,14 @@ def _acquire_mesh_chunk(mesh, volume, area, ds, c, lo, hi, incident, walk, scene
             )
             point = np.repeat(np.arange(n), photons)
             ok = res.code == EXIT
-            R[..., ch] = splat_exits(mesh, point[ok], res.face[ok], res.position[ok], n) / (photons * area)
+            tri, bary = exit_barycentric(mesh, res.face[ok], res.position[ok])  # once for both tallies
+            R[..., ch] = splat_barycentric(tri, bary, point[ok], n, V) / (photons * area)
             spec[:, ch] = np.bincount(point[res.code == -1], minlength=n) / photons
             if binned is not None:
                 omega = exit_direction(mesh, res, ok, eta, reentry)
                 away = res.position[ok] - mesh.vertices[incident][point[ok]]  # x_o − x_i
                 b = exit_bins.index(omega, mesh.face_normals[res.face[ok]], away)
-                counts = splat_exits(mesh, point[ok] * exit_bins.count + b, res.face[ok], res.position[ok],
-                                     n * exit_bins.count)  # fmt: skip
+                counts = splat_barycentric(tri, bary, point[ok] * exit_bins.count + b, n * exit_bins.count, V)
                 counts = counts.reshape(n, exit_bins.count, V).transpose(0, 2, 1)
                 binned[..., ch, :] = counts / (photons * area)[None, :, None]
         if d == 0:
@@ -275,8 +275,15 @@ def splat_exits(mesh, point: np.ndarray, face: np.ndarray, position: np.ndarray,
     the adjacent triangles' area, :func:`translucency.geometry.vertex_areas`), dividing by N A_v gives
     the :math:`\phi_v`-weighted mean of R_d around v — the count and the area agree by construction.
     """
-    V = len(mesh.vertices)
     tri, bary = exit_barycentric(mesh, face, position)
+    return splat_barycentric(tri, bary, point, n_points, len(mesh.vertices))
+
+
+def splat_barycentric(
+    tri: np.ndarray, bary: np.ndarray, point: np.ndarray, n_points: int, V: int
+) -> np.ndarray:
+    """:func:`splat_exits` of exits whose triangles' vertices ``tri`` and barycentric coordinates ``bary``
+    (:func:`exit_barycentric`) are known: (n_points, V) counts, exit e counted in row ``point[e]``."""
     index = (np.asarray(point)[:, None] * V + tri).ravel()
     return np.bincount(index, weights=bary.ravel(), minlength=n_points * V).reshape(n_points, V)
 

@@ -105,20 +105,14 @@ class MeshDataset(ChunkedStore):
                 "chunk_done": (None,),
             },
         )
-        angles = header.get("angles") or {}
-        D = Incidence.from_header(angles.get("incidence")).count
-        bins = ExitBins.from_header(angles.get("exit_bins"))
-        optional = [("R_d_var", (P, V, 3)), ("flags", (P, V))]  # a measured data set's
-        if D > 1:
-            optional += [("R_d_oblique", (P, D - 1, V, 3)), ("specular_oblique", (P, D - 1, 3))]
-        if bins is not None:
-            optional += [("exit_bins", (P, D, V, 3, bins.count))]
-        for name, shape in optional:
+        announced = _angle_arrays(header, P, V)
+        measured = [("R_d_var", (P, V, 3)), ("flags", (P, V))]  # a measured data set's (optional)
+        for name, shape in [*measured, *announced]:
             if name in group and tuple(group[name].shape) != shape:
                 raise TranslucencyError(
                     f"{path}: array {name!r} has shape {tuple(group[name].shape)}, expected {shape}"
                 )
-        for name, _ in optional[2:]:  # the angle axes the header announces
+        for name, _ in announced:  # the angle axes the header announces
             if name not in group:
                 raise TranslucencyError(f"{path}: header has angles but array {name!r} is missing")
         k = int(group["R_d"].chunks[0])
@@ -177,6 +171,20 @@ class MeshDataset(ChunkedStore):
         import trimesh  # heavy: trimesh loads only where the surface is used (not for info or a fit)
 
         return trimesh.Trimesh(self["vertices"].astype(np.float64), self["faces"], process=False)
+
+
+def _angle_arrays(header: dict, P: int, V: int) -> list[tuple[str, tuple]]:
+    """The angle axes' arrays (module notes) a header announces, with their shapes: none for a data set
+    without ``angles``."""
+    angles = header.get("angles") or {}
+    D = Incidence.from_header(angles.get("incidence")).count
+    bins = ExitBins.from_header(angles.get("exit_bins"))
+    arrays = []
+    if D > 1:
+        arrays += [("R_d_oblique", (P, D - 1, V, 3)), ("specular_oblique", (P, D - 1, 3))]
+    if bins is not None:
+        arrays += [("exit_bins", (P, D, V, 3, bins.count))]
+    return arrays
 
 
 def is_mesh_dataset(path) -> bool:
@@ -306,15 +314,7 @@ def create_mesh_dataset(
             fill_value=0,
             config=every,
         )
-    angles = header.get("angles") or {}
-    D = Incidence.from_header(angles.get("incidence")).count
-    bins = ExitBins.from_header(angles.get("exit_bins"))
-    per_point = []  # the angle axes (module notes), chunked by points and one direction a chunk
-    if D > 1:
-        per_point += [("R_d_oblique", (P, D - 1, V, 3)), ("specular_oblique", (P, D - 1, 3))]
-    if bins is not None:
-        per_point += [("exit_bins", (P, D, V, 3, bins.count))]
-    for name, shape in per_point:
+    for name, shape in _angle_arrays(header, P, V):  # chunked by points and one direction a chunk
         root.create_array(
             name,
             shape=shape,

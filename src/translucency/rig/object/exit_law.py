@@ -134,7 +134,7 @@ class FromViews(ExitLaw):
     needs_direction = True
 
     def factor(self, mu, s, r):
-        band = np.clip(_band(r), 0, len(BAND_EDGES_MM) - 1)
+        band = _band(r)
         a = np.asarray(self.a, dtype=np.float64)[band]
         k = np.asarray(self.kappa, dtype=np.float64)[band]
         mu, s = (np.asarray(x, dtype=np.float64)[..., None] for x in (mu, s))
@@ -150,8 +150,10 @@ class FromViews(ExitLaw):
         }
 
 
-def _band(r) -> np.ndarray:
-    return np.clip(np.searchsorted(BAND_EDGES_MM, np.asarray(r, dtype=np.float64), side="right") - 1, 0, None)
+def _band(r, edges=BAND_EDGES_MM) -> np.ndarray:
+    """The band of ``edges`` (mm, the last one open) each distance ``r`` falls in."""
+    i = np.searchsorted(edges, np.asarray(r, dtype=np.float64), side="right") - 1
+    return np.clip(i, 0, len(edges) - 1)
 
 
 #: the grid of (a, κ) :func:`fit_from_views` searches
@@ -181,7 +183,7 @@ def fit_from_views(L, var, mu, s, r, *, min_snr: float = 5.0) -> FromViews:
     """
     L, var, mu, s = (np.asarray(x, dtype=np.float64) for x in (L, var, mu, s))
     bands = len(BAND_EDGES_MM)
-    band = np.clip(_band(r), 0, bands - 1)
+    band = _band(r)
     a_out = np.zeros((bands, 3))
     k_out = np.zeros((bands, 3))
     with np.errstate(invalid="ignore", divide="ignore"):
@@ -249,11 +251,7 @@ class Tabulated(ExitLaw):
 
     def factor(self, mu, s, r):
         mu, s = np.asarray(mu, dtype=np.float64), np.asarray(s, dtype=np.float64)
-        band = np.clip(
-            np.searchsorted(TABLE_EDGES_MM, np.asarray(r, dtype=np.float64), side="right") - 1,
-            0,
-            len(TABLE_EDGES_MM) - 1,
-        )
+        band = _band(r, TABLE_EDGES_MM)
         return np.asarray(self.gamma)[band, 2 * self.bins.polar_index(mu) + (s < 0)]
 
     def describe(self) -> dict:
@@ -283,11 +281,7 @@ def tabulated_from_tally(path) -> Tabulated:
     total = np.zeros((bands, bins.count, 3))
     for p, i in enumerate(incident):
         binned = np.asarray(ds.group["exit_bins"][p, 0], dtype=np.float64)  # (V, 3, B)
-        band = np.clip(
-            np.searchsorted(TABLE_EDGES_MM, np.linalg.norm(vertices - vertices[i], axis=1), side="right") - 1,
-            0,
-            bands - 1,
-        )
+        band = _band(np.linalg.norm(vertices - vertices[i], axis=1), TABLE_EDGES_MM)
         np.add.at(total, band, np.einsum("vcb,v->vbc", binned, area))
     has = total.sum(axis=1).min(axis=1) > 0
     if not has.any():
