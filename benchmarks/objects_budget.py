@@ -56,12 +56,14 @@ import numpy as np
 from translucency.acquire.mesh import acquire_mesh, exit_barycentric, object_volume
 from translucency.acquire.mesh_walk import EXIT, mesh_random_walk
 from translucency.angles import ExitBins, Incidence
+from translucency.fit.lean import fit_lean
 from translucency.fit.mesh import fit_mesh
 from translucency.geometry import tangent_frames, vertex_areas
 from translucency.io.mesh import load_mesh
 from translucency.io.mesh_dataset import open_mesh_dataset
 from translucency.mitsuba import mesh_scene
 from translucency.model.directions import direction_weights
+from translucency.model.lean import exit_normalisation, lean_vector
 from translucency.render.camera import Camera
 from translucency.render.compare import compare
 from translucency.render.irradiance import vertex_irradiance
@@ -276,6 +278,14 @@ def main() -> int:
             row("(d) data: incidence axis", radiance(K_in, area, E_plain), "data axes")
             row("(d) data: exit bins", radiance(K_out, area, E), "data axes", law=False)
             row("(d) data: both axes", radiance(K_both, area, E_plain), "data axes", law=False)
+            # the lean (model/lean.py): κ per vertex fitted from the same oblique beams, on the normal beams
+            kappa = fit_lean(ds, 64)[np.argsort(np.asarray(ds["incident"]))]  # (V, 3) by vertex
+            K_normal = angle_kernels(
+                mesh, scene, volume, N, None, eye, args.work / f"{name}_{N}_normal_beams.npz", seed=41
+            )[0]
+            for label, sides in (("in", (True, False)), ("out", (False, True)), ("both", (True, True))):
+                K = lean_kernel(K_normal, mesh, kappa, w_light, eye, *sides)
+                row(f"(e) lean on the normal beams: {label}", radiance(K, area, E), "the lean")
         return _written(args, V, info, rows, t0)
     saved = model.measured
     model.measured = None
@@ -447,6 +457,43 @@ def data_axes_kernels(ds, mesh, w_light, eye, chunk=128):
         K_out[:, j] = per_sr * np.take_along_axis(B[:, 0], take, axis=-1)[..., 0].transpose(1, 0, 2)
         K_both[:, j] = per_sr * np.take_along_axis(blended, take, axis=-1)[..., 0].transpose(1, 0, 2)
     return K_in, K_out, K_both
+
+
+def lean_kernel(K, mesh, kappa, w_light, eye, incidence=True, exit=True):
+    """K (V_o, V_j, 3) with the lean of model/lean.py: per source j the incidence lobe of the light's
+    direction (normalised per source over its receivers, own vertex apart), per receiver o the exit lobe of
+    the direction to ``eye`` (normalised over the exit hemisphere per pair); κ (V, 3) per vertex."""
+    X = np.asarray(mesh.vertices, dtype=np.float64)
+    n = np.asarray(mesh.vertex_normals, dtype=np.float64)
+    V = len(X)
+    area = vertex_areas(mesh)
+    d = X[:, None, :] - X[None, :, :]  # (o, j): x_o − x_j
+    r = np.linalg.norm(d, axis=2)
+    off = r > 0
+    d /= np.where(off, r, 1.0)[..., None]
+    out = K.copy()
+    if incidence:
+        ell = lean_vector(w_light, n)  # (V, 3) at the sources
+        a = np.einsum("ojk,jk->oj", d, ell) * off  # (o, j)
+        for c in range(3):
+            lobe = np.exp(kappa[None, :, c] * a)
+            lobe[~off] = 1.0
+            spread = np.einsum("oj,o->j", K[..., c] * off, area)
+            leaned = np.einsum("oj,o->j", K[..., c] * off * lobe, area)
+            Z = np.divide(leaned, spread, out=np.ones(V), where=spread > 0)
+            out[..., c] = np.where(off, K[..., c] * lobe / Z[None, :], K[..., c])
+    if exit:
+        to_eye = eye[None, :] - X
+        to_eye /= np.linalg.norm(to_eye, axis=1, keepdims=True)
+        ell_o = lean_vector(to_eye, n)  # (V, 3) at the receivers
+        b = -np.einsum("ojk,ok->oj", d, ell_o) * off
+        for c in range(3):
+            k_o = np.broadcast_to(kappa[:, None, c], (V, V))
+            N = exit_normalisation(
+                k_o.reshape(-1), -d.reshape(-1, 3), np.broadcast_to(n[:, None], (V, V, 3)).reshape(-1, 3)
+            ).reshape(V, V)
+            out[..., c] = np.where(off, out[..., c] * np.exp(k_o * b) / N, out[..., c])
+    return out
 
 
 def _slug(label: str) -> str:

@@ -83,6 +83,13 @@ _THROUGH = typer.Option(
     help="Use the model's through-body table (light between sides whose normals face apart, measured "
     "against the fit): brighter back-lit objects, not better on every case (docs/objects.md).",
 )
+_ANGLES = typer.Option(
+    False,
+    "--angles",
+    help="Lean the transport toward the light's and the camera's directions (the model's lean, fitted "
+    "from a data set acquired with --incidence; model/lean.py): back-lit objects, docs/objects.md. "
+    "A light of many directions (env) and a model without a lean draw the paper's model.",
+)
 _SCENE = typer.Option(
     None,
     "--scene",
@@ -126,6 +133,7 @@ def render(
     radius: float = _RADIUS,
     incidence: str = _INCIDENCE,
     through: bool = _THROUGH,
+    angles: bool = _ANGLES,
     scene: Path = _SCENE,
     models: list[str] = _MODELS,
     scene_unit: float = _SCENE_UNIT,
@@ -146,7 +154,7 @@ def render(
     common = dict(incidence=incidence, radius=radius, exposure=exposure, reference=reference, spp=spp)
     common.update(overwrite=overwrite, max_memory=max_memory, reporter=RichReporter(quiet))
     if scene is not None:
-        _refuse_object_options(model, light, view, size, through)
+        _refuse_object_options(model, light, view, size, through, angles)
         per_scene = dict(scene_unit=scene_unit, samples=samples, passes=passes, max_depth=max_depth)
         per_scene.update(roughness=roughness, picture_spp=picture_spp)
         shot = render_scene(scene, parse_models(models), out, **per_scene, **common)
@@ -158,14 +166,16 @@ def render(
         raise TranslucencyError("render: give a per-vertex model file, or --scene SCENE.xml --model ID=FILE")
     if len(light) > 1:
         raise TranslucencyError("--light: one light per render for now (run once per light)")
-    rendering = render_model(model, out, light=light[0], view=view, size=size, through=through, **common)
+    rendering = render_model(
+        model, out, light=light[0], view=view, size=size, through=through, angles=angles, **common
+    )
     table = Table(title=f"render of {model.name}", show_header=False)
     for k, v in rendering.numbers.items():
         table.add_row(k, f"{v:.4g}" if isinstance(v, float) else str(v))
     finish(as_json, quiet, rendering.summary, [table, f"images: {out}"])
 
 
-def _refuse_object_options(model, light, view, size, through) -> None:
+def _refuse_object_options(model, light, view, size, through, angles) -> None:
     """With --scene the scene file says where the light and the camera are: one line for an option that
     would be ignored."""
     if model is not None:
@@ -184,6 +194,8 @@ def _refuse_object_options(model, light, view, size, through) -> None:
         raise TranslucencyError(
             f"{given[0]}: the scene file says this (its emitters, sensor and film); not with --scene"
         )
+    if angles:
+        raise TranslucencyError("--angles: render --scene draws the paper's model (no lean in scenes yet)")
 
 
 def parse_models(texts: list[str]) -> dict[str, Path]:

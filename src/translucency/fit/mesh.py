@@ -28,6 +28,7 @@ from ..model import VertexAlpha
 from ._rounds import alternate
 from ._vertex_pool import VertexDiscPool
 from .families import FAMILIES
+from .lean import fit_lean
 from .options import FitContext, FitResult, check_fit_options
 
 #: α's pooling radius in mean edge lengths.  Measured on the main job's pig against its converged reference
@@ -250,6 +251,9 @@ def fit_mesh(
 
     if result.model.kind == "exponential":  # the paper's model (the baselines have no c, d to correct)
         result.model.measured["through"] = measure_through(ds, result.model, exclusion=exclusion)
+    # the lean (model/lean.py): how the kernel tilts toward the beam's direction, from the oblique beams
+    if ds.incidence.count > 1:
+        result.model.measured["lean"] = fit_lean(ds, chunk_points)
     # the photons per point: how far the physical bounds let a total exceed 1 by noise (model/bounds.py)
     result.model.tally_photons = int(header["photons"]) if header.get("photons") else None
     result.acquisition = header

@@ -14,6 +14,7 @@ Layout::
     measured/own          (N, 3) float32   mesh only, optional: R_d over each incident vertex's own area, mm⁻²
     measured/total        (N, 3) float32   mesh only, optional: measured diffuse exitance per unit power
     measured/through      (N, 4, 8, 3) f32 mesh only, optional: the through-body table (model/through.py)
+    measured/lean         (N, 3) float32   mesh only, optional: the lean's κ ≥ 0 (model/lean.py)
     params/...            per kind (the model class's ``STORED``), dtype = header["dtype"]:
         exponential:  c, d (N, C, m, n) in mm⁻² and mm⁻¹; s_g, s_b (N,) when C = 1
         dipole, pbd, ddipole:  sigma_a, sigma_s_prime (N, 3) in mm⁻¹ (and ``eta`` in the header)
@@ -62,6 +63,7 @@ from .._version import __version__
 from ..model import MODEL_KINDS, PlanarAlpha, ReflectanceModel, VertexAlpha
 from ..model.bounds import check_physics
 from ..model.extent import extent_from_dict
+from ..model.lean import KAPPA_MAX
 from ..model.through import COS_EDGES, R_EDGES
 from .atomic import atomic_path
 from .outputs import claim_output
@@ -362,15 +364,18 @@ def _attach_surface(model: ReflectanceModel, arrays: dict[str, np.ndarray]) -> N
         model.faces = faces.astype(np.int64)
     measured = {k.split("/", 1)[1]: v for k, v in arrays.items() if k.startswith("measured/")}
     if measured:
-        shapes = {"own": (model.n_points, 3), "total": (model.n_points, 3), "through": _through_shape(model)}
+        N = model.n_points
+        shapes = {"own": (N, 3), "total": (N, 3), "through": _through_shape(model), "lean": (N, 3)}
         for name, value in measured.items():
             if name not in shapes or value.shape != shapes[name]:
                 raise TranslucencyError(
-                    f"measured/{name}: expected 'own' or 'total' of shape ({model.n_points}, 3) or 'through' "
+                    f"measured/{name}: expected 'own', 'total' or 'lean' of shape ({N}, 3) or 'through' "
                     f"of shape {_through_shape(model)}, got {value.shape}"
                 )
             if not (np.isfinite(value).all() and (value >= 0).all()):
                 raise TranslucencyError(f"measured/{name}: values must be finite and >= 0")
+        if "lean" in measured and measured["lean"].max() > KAPPA_MAX:
+            raise TranslucencyError(f"measured/lean: κ must lie in [0, {KAPPA_MAX:g}]")
         model.measured = {k: v.astype(np.float64) for k, v in measured.items()}
 
 
@@ -519,7 +524,7 @@ def _read_model(path: Path, root, header: dict) -> ReflectanceModel:
     required = _required(header)
     optional = [f"params/{p}" for p in MODEL_KINDS[header["kind"]].STORED if f"params/{p}" not in required]
     if header["geometry"] == "mesh":
-        optional += ["mesh/faces", "measured/own", "measured/total", "measured/through"]
+        optional += ["mesh/faces", "measured/own", "measured/total", "measured/through", "measured/lean"]
     for key in required + optional:
         try:
             arr = root[key]

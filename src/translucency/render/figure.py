@@ -18,6 +18,7 @@ from ..io.atomic import atomic_path, write_json
 from ..mitsuba import mesh_scene
 from .camera import Camera
 from .compare import compare, region_errors
+from .lean import lean_applies
 from .lights import DEFAULT_DISTANCE, Placement
 from .picture import VertexPicture, coverage
 from .reference import converged_reference
@@ -44,6 +45,7 @@ def figure2(
     name: str = "render",
     incidence: str = "half-space",
     through: bool = False,
+    angles: bool = False,
 ) -> dict:
     """Render ``model`` on ``mesh`` under ``light``; with ``volume`` also the reference and the comparison.
 
@@ -59,6 +61,8 @@ def figure2(
     ``normal``; a dielectric object or a model without measured totals gets ``normal``).
     ``through``: the model's through-body table in the transport (:mod:`translucency.model.through`; off:
     the paper's model).
+    ``angles``: the model's lean toward the light's and the camera's directions
+    (:mod:`translucency.render.lean`; the summary's ``angles`` says whether it applied).
     ``exposure``: of the PNGs (:class:`~translucency.render.tonemap.Exposure` or its text: ``fixed``,
     ``fixed+STOPS``, ``auto``, a factor); the FLIP comparison tone-maps the pair at the reference's auto
     exposure whatever the pictures' (``flip_exposure`` in the summary where they differ).
@@ -86,7 +90,9 @@ def figure2(
     t_prepare = time.perf_counter() - t
     step(1, "irradiance and relight")
     t = time.perf_counter()
-    L, E, law = relight_object(mats, mesh, scene, light, camera.origin, eta=eta, incidence=incidence)
+    L, E, law = relight_object(
+        mats, mesh, scene, light, camera.origin, eta=eta, incidence=incidence, angles=angles
+    )
     t_relight = time.perf_counter() - t
     step(2, "picture")
     t = time.perf_counter()
@@ -106,6 +112,7 @@ def figure2(
         "eta": eta,
         "incidence": law.name,
         "through": mats.through,
+        "angles": bool(angles and lean_applies(mats, light)),
     }
     if volume is None:
         scale = _exposure(exposure, model, mesh, light, out, auto=lambda: auto_exposure(ours, mask))

@@ -28,6 +28,7 @@ from ..model.boundary import exit_factor
 from ..model.incidence import incidence_law
 from ._far_field import FarField
 from .irradiance import vertex_irradiance
+from .lean import leaned
 
 
 def view_cosines(mesh, viewpoint) -> np.ndarray:
@@ -61,6 +62,7 @@ class Transport:
     far: FarField | None = None  # the pairs beyond the near radius (None: truncated, or none there)
     reflectance: np.ndarray | None = None  # (V, 3) measured normal-incidence total reflectance, blended
     through: bool = False  # the model's through-body table is in the matrices (model/through.py)
+    lean: np.ndarray | None = None  # (V, 3) κ of the lean per vertex (model/lean.py), or None
     receivers: np.ndarray | None = None  # the vertices whose radiance it gives (None: all; :meth:`rows`)
 
     def incidence(self, name: str = "half-space", eta: float = 1.0):
@@ -92,7 +94,8 @@ class Transport:
         if far is not None:
             far = dataclasses.replace(far, B=[(B @ P).tocsr() for B in far.B])
         matrices = [(T @ P).tocsr() for T in sub.matrices]
-        return dataclasses.replace(sub, matrices=matrices, scale=scale, far=far, receivers=None)
+        # (the lean is per pair of vertices: a draft between cells draws the paper's model)
+        return dataclasses.replace(sub, matrices=matrices, scale=scale, far=far, receivers=None, lean=None)
 
     def rows(self, receivers) -> Transport:
         """The same transport giving the radiance of ``receivers`` (vertex indices) only: the rows of the
@@ -154,6 +157,9 @@ def relight_vertices(transport: Transport, E: np.ndarray) -> np.ndarray:
     if transport.scale is None:  # one matrix per channel
         X = E
         out = np.stack([T @ E[:, ch] for ch, T in enumerate(transport.matrices)], axis=1)
+    elif len(transport.matrices) == 3:  # one matrix per channel and the colour scale (render/lean.py)
+        X = np.ascontiguousarray(E * transport.scale)
+        out = np.stack([T @ X[:, ch] for ch, T in enumerate(transport.matrices)], axis=1)
     else:
         X, T, out = (
             np.ascontiguousarray(E * transport.scale),
@@ -169,14 +175,26 @@ def relight_vertices(transport: Transport, E: np.ndarray) -> np.ndarray:
 
 
 def relight_object(
-    transport: Transport, mesh, scene, light, viewpoint, *, eta: float = 1.0, incidence: str = "half-space"
+    transport: Transport,
+    mesh,
+    scene,
+    light,
+    viewpoint,
+    *,
+    eta: float = 1.0,
+    incidence: str = "half-space",
+    angles: bool = False,
 ):
     r"""What the camera at ``viewpoint`` sees of every vertex under ``light``: radiance (V, 3), W/(mm² sr).
 
     The whole chain once: the irradiance with shadows and the incidence law
     (:func:`vertex_irradiance`, :mod:`translucency.model.incidence`), the transport
     (:func:`relight_vertices`), the exit toward the camera — the boundary's Fresnel law
-    (:func:`exit_fresnel`, η ≠ 1) or the incidence law's reciprocal exit (η = 1).
+    (:func:`exit_fresnel`, η ≠ 1) or the incidence law's reciprocal exit (η = 1).  ``angles``: with a
+    model that has a lean (:mod:`translucency.model.lean`) and a light of one direction per vertex, the
+    near pairs lean toward the light's and the camera's directions
+    (:func:`translucency.render.lean.leaned`); otherwise the paper's diffuse transport
+    (:func:`translucency.render.lean.lean_applies` says which is drawn).
 
     Returns
     -------
@@ -191,6 +209,7 @@ def relight_object(
     """
     law = transport.incidence(incidence, eta)
     E = vertex_irradiance(mesh, scene, light, eta, law)
-    L = relight_vertices(transport, E) * exit_fresnel(mesh, viewpoint, eta)[:, None]
+    tilted = leaned(transport, mesh, scene, light, viewpoint, eta=eta) if angles else None
+    L = relight_vertices(tilted or transport, E) * exit_fresnel(mesh, viewpoint, eta)[:, None]
     exit_law = law.exit(view_cosines(mesh, viewpoint))
     return (L if exit_law is None else L * exit_law), E, law

@@ -155,6 +155,11 @@ def transport_matrices(
     if through and model.measured and "through" in model.measured:
         w_b, idx_b = weights
         table = np.einsum("vk,vkabc->vabc", w_b, model.measured["through"][idx_b])
+    # the lean's κ blended to every vertex (V, 3) (model/lean.py; render/lean.py applies it per light)
+    lean = None
+    if model.measured and "lean" in model.measured:
+        w_b, idx_b = weights
+        lean = np.einsum("vk,vkc->vc", w_b, model.measured["lean"][idx_b]).astype(np.float32)
     # shared colour (one fall-off, C = 1): T_λ = T · diag(s_λ) — one matrix, the scale goes with E
     # (not with the through table: it is per channel)
     shared = c.shape[1] == 1 and table is None
@@ -231,7 +236,7 @@ def transport_matrices(
         data = vals if diag is None else np.concatenate([vals, diag])
         mats.append(sp.csr_matrix((data.astype(np.float32), (rows, cols)), shape=(V, V)))
     if own is None:
-        return Transport(matrices=mats, scale=s.astype(np.float32) if shared else None, far=far)
+        return Transport(matrices=mats, scale=s.astype(np.float32) if shared else None, far=far, lean=lean)
     scale = tau if shared else None
     return Transport(
         matrices=mats,
@@ -240,4 +245,5 @@ def transport_matrices(
         far=far,
         reflectance=total,
         through=table is not None,
+        lean=lean,
     )

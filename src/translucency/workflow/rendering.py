@@ -77,6 +77,7 @@ def render_model(
     radius: float | None = None,
     incidence: str = "half-space",
     through: bool = False,
+    angles: bool = False,
     overwrite: bool = False,
     max_memory: str | int | None = None,
     reporter: Reporter | None = None,
@@ -115,6 +116,10 @@ def render_model(
         How light arriving at an angle counts against the data's normal-incidence beams.
     through : bool
         Use the model's through-body table.
+    angles : bool
+        Lean the near transport toward the light's and the camera's directions (a model fitted from a
+        data set with oblique beams, :mod:`translucency.model.lean`; a light of one direction per vertex);
+        the summary's ``angles`` says whether it did.
     overwrite : bool
         Replace an earlier output folder of translucency at ``out`` (never anything else).
     max_memory : str or int, optional
@@ -210,6 +215,7 @@ def render_model(
                 exposure=chosen_exposure,
                 incidence=incidence,
                 through=through,
+                angles=angles,
                 progress=work.step(),
             )
             work.update(completed=steps, item="done")
