@@ -303,6 +303,11 @@ RENDER = record(
             "object is dielectric or the model carries no measured totals).",
         ),
         "through": field("boolean", "Whether the model's through-body table was used (--through)."),
+        "angles": field(
+            "boolean",
+            "Whether the model's lean toward the light's direction was drawn (--angles: a model fitted "
+            "from oblique beams, a light of one direction per vertex).",
+        ),
         "rel_rmse": field(
             ["number", "null"], "Relative RMSE of ours against the reference (with --reference)."
         ),
@@ -461,7 +466,8 @@ INFO_MODEL = record(
         "measured": field(
             "array",
             "What a per-vertex model carries from its acquisition: own, total (the near field), through "
-            "(the through-body table, render --through); empty for planar models.",
+            "(the through-body table, render --through), lean (κ, render --angles); empty for planar "
+            "models.",
         ),
         **BOUNDS,
     },

@@ -37,7 +37,7 @@ the two sides are reciprocal only to the extent that :math:`Z` and :math:`N` agr
 from __future__ import annotations
 
 import numpy as np
-from scipy.special import i0e
+from scipy.special import i0e, ive
 
 from .boundary import fresnel_transmittance
 
@@ -134,7 +134,5 @@ def von_mises_harmonics(kappa: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     r"""The lobe :math:`e^{k \cos\varphi}`'s first two azimuthal harmonics over its mean,
     :math:`(2 I_1(k)/I_0(k),\; 2 I_2(k)/I_0(k))` — what ``benchmarks/angle_structure.py`` measures as
     c₁/c₀ and c₂/c₀ (k = κ sin θ_t for pairs in the tangent plane)."""
-    from scipy.special import ive
-
     k = np.asarray(kappa, dtype=np.float64)
     return 2.0 * ive(1, k) / ive(0, k), 2.0 * ive(2, k) / ive(0, k)

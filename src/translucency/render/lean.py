@@ -15,14 +15,20 @@ receiver, κ blended to every vertex from the fitted points.  Each source still 
 (the near pairs' share of it: the far field and the own area are left diffuse), and each pair's exit
 averages to its diffuse value over the hemisphere.  A light of many directions (an environment map) has
 no one lean vector: it draws the paper's model (:func:`leaned` returns None and says why).
+
+``render --angles`` draws the light's lean only: the exit's, the reciprocal half, is built (``exit=True``)
+and measured too bright (docs/objects.md, "The lean"), so the default transport is not reciprocal in
+the camera's direction — a measured choice, stated, not an oversight.
 """
 
 from __future__ import annotations
 
 import dataclasses
+from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
+from numba import njit, prange
 
 from ..geometry import vertex_areas
 from ..model.lean import exit_normalisation, lean_vector
@@ -31,10 +37,23 @@ from ..model.lean import exit_normalisation, lean_vector
 _PAIRS_PER_BATCH = 1 << 21
 
 
-def lean_pairs(transport, mesh, eta: float = 1.0):
-    r"""What the lean needs of the transport's near pairs, light- and camera-independent: (o, i, d, N),
-    the rows and columns (nnz,), the unit vectors :math:`\hat d_{oi}` (nnz, 3) float32 (0 on the diagonal)
-    and the exit normalisation :math:`N_{oi}` (nnz, 3) float32."""
+@dataclass(frozen=True)
+class LeanPairs:
+    """What the lean needs of a transport's near pairs, independent of the light and the camera (built once
+    per transport by :func:`lean_pairs`)."""
+
+    o: np.ndarray  # (nnz,) receivers (mesh vertex indices)
+    i: np.ndarray  # (nnz,) sources
+    d: np.ndarray  # (nnz, 3) float32 unit vectors from x_i to x_o (0 on the diagonal)
+    N: np.ndarray  # (nnz, 3) float32 the exit normalisation per pair and channel
+    weight: np.ndarray  # (nnz, 3) float32 A_o T_oi (with the colour scale): Z's weights
+    spread: np.ndarray  # (V, 3) Σ_o A_o T_oi per source: Z's denominator
+
+
+def lean_pairs(transport, mesh, eta: float = 1.0) -> LeanPairs:
+    r"""The transport's near pairs as the lean reads them (:class:`LeanPairs`): rows, columns, the unit
+    vectors :math:`\hat d_{oi}`, the exit normalisation :math:`N_{oi}`
+    (:func:`~translucency.model.lean.exit_normalisation`) and the weights of :math:`Z_i`."""
     T = transport.matrices[0].tocsr()
     o = np.repeat(np.arange(T.shape[0]), np.diff(T.indptr))
     i = T.indices.astype(np.int64)
@@ -43,6 +62,7 @@ def lean_pairs(transport, mesh, eta: float = 1.0):
     if transport.receivers is not None:
         o = np.asarray(transport.receivers)[o]
     kappa = transport.lean.astype(np.float64)
+    area = vertex_areas(mesh)
     d = np.zeros((len(o), 3), np.float32)
     N = np.ones((len(o), 3), np.float32)
     for s in range(0, len(o), _PAIRS_PER_BATCH):
@@ -52,7 +72,34 @@ def lean_pairs(transport, mesh, eta: float = 1.0):
         dd = np.divide(v, r, out=np.zeros_like(v), where=r > 0)
         d[s : s + len(oo)] = dd
         N[s : s + len(oo)] = exit_normalisation(kappa[oo], -dd, n[oo], eta)
-    return o, i, d, N
+    off = np.any(d != 0, axis=1)
+    weight = np.empty((len(o), 3), np.float32)
+    for c in range(3):
+        vals = transport.matrices[min(c, len(transport.matrices) - 1)].tocsr().data.astype(np.float64)
+        if transport.scale is not None:  # the shared-colour model: Z weighs with its scale too
+            vals = vals * transport.scale[i, c]
+        weight[:, c] = area[o] * vals * off
+    spread = np.stack([np.bincount(i, weight[:, c], minlength=len(X)) for c in range(3)], axis=1)
+    return LeanPairs(o=o, i=i, d=d, N=N, weight=weight, spread=spread)
+
+
+@njit(parallel=True, cache=True)
+def _lobes(i, o, d, ell, ell_view, kappa, N, with_exit, lobe, exit_lobe):
+    """Per pair and channel: the light's lobe e^{κ_i ℓ_i · d} (``lobe``) and the camera's
+    e^{−κ_o ℓ'_o · d} / N (``exit_lobe``, with ``with_exit``); 1 on the diagonal."""
+    for m in prange(i.shape[0]):
+        dx, dy, dz = d[m, 0], d[m, 1], d[m, 2]
+        if dx == 0.0 and dy == 0.0 and dz == 0.0:
+            for c in range(3):
+                lobe[m, c] = 1.0
+                exit_lobe[m, c] = 1.0
+            continue
+        s, r = i[m], o[m]
+        a = dx * ell[s, 0] + dy * ell[s, 1] + dz * ell[s, 2]
+        b = -(dx * ell_view[r, 0] + dy * ell_view[r, 1] + dz * ell_view[r, 2])
+        for c in range(3):
+            lobe[m, c] = np.exp(kappa[s, c] * a)
+            exit_lobe[m, c] = np.exp(kappa[r, c] * b) / N[m, c] if with_exit else 1.0
 
 
 def lean_applies(transport, light) -> bool:
@@ -61,7 +108,7 @@ def lean_applies(transport, light) -> bool:
     return transport.lean is not None and bool(getattr(light, "delta", False))
 
 
-def leaned(transport, mesh, scene, light, eye, *, eta: float = 1.0, exit: bool = True, pairs=None):
+def leaned(transport, mesh, scene, light, eye, *, eta: float = 1.0, exit: bool = False, pairs=None):
     """The transport with the lean of ``light`` and the camera at ``eye`` (mm), or None where it does not
     apply (no κ in the model, or a light of many directions).
 
@@ -79,9 +126,10 @@ def leaned(transport, mesh, scene, light, eye, *, eta: float = 1.0, exit: bool =
     eta : float
         Relative index of the boundary (1: index-matched).
     exit : bool
-        Also the exit's lean (False: the light's only — the ablation).
-    pairs : tuple, optional
-        :func:`lean_pairs`' result, to reuse between lights.
+        Also the exit's lean toward the camera (off by default: on the back-lit marble spot it draws
+        25–48 % too bright, docs/objects.md "The lean"; the light's lean alone is not reciprocal).
+    pairs : LeanPairs, optional
+        :func:`lean_pairs`' result, to reuse between lights and cameras.
 
     Returns
     -------
@@ -96,31 +144,24 @@ def leaned(transport, mesh, scene, light, eye, *, eta: float = 1.0, exit: bool =
     """
     if not lean_applies(transport, light):
         return None
-    o, i, d, N = lean_pairs(transport, mesh, eta) if pairs is None else pairs
+    p = lean_pairs(transport, mesh, eta) if pairs is None else pairs
     X = np.asarray(mesh.vertices, dtype=np.float64)
     n = np.asarray(mesh.vertex_normals, dtype=np.float64)
     V = len(X)
-    area = vertex_areas(mesh)
-    kappa = transport.lean.astype(np.float64)
     w_light = light.arrival(scene, X, n)[0]
-    ell = lean_vector(w_light, n, eta)  # (V, 3) at the sources
+    ell = lean_vector(w_light, n, eta).astype(np.float32)  # (V, 3) at the sources
     to_eye = np.asarray(eye, dtype=np.float64)[None, :] - X
     to_eye /= np.linalg.norm(to_eye, axis=1, keepdims=True)
-    ell_view = lean_vector(to_eye, n, eta)  # (V, 3) at the receivers
-    a = np.einsum("mk,mk->m", d, ell[i]).astype(np.float32)  # the incidence lean's argument per pair
-    b = -np.einsum("mk,mk->m", d, ell_view[o]).astype(np.float32)  # the exit lean's
-    off = np.any(d != 0, axis=1)
+    ell_view = lean_vector(to_eye, n, eta).astype(np.float32)  # (V, 3) at the receivers
+    lobe, exit_lobe = np.empty_like(p.N), np.empty_like(p.N)
+    kappa = transport.lean.astype(np.float32)
+    _lobes(p.i, p.o, p.d, ell, ell_view, kappa, p.N, exit, lobe, exit_lobe)
     mats = []
     for c in range(3):
         T = transport.matrices[min(c, len(transport.matrices) - 1)].tocsr()
-        vals = T.data.astype(np.float64)
-        if transport.scale is not None:  # the shared-colour model: Z weighs with its scale too
-            vals = vals * transport.scale[i, c]
-        lobe = np.where(off, np.exp(kappa[i, c] * a), 1.0)
-        weight = area[o] * vals * off
-        Z = np.bincount(i, weight * lobe, minlength=V)
-        Z = np.divide(Z, np.bincount(i, weight, minlength=V), out=np.ones(V), where=Z > 0)
-        exit_lobe = np.where(off, np.exp(kappa[o, c] * b) / N[:, c], 1.0) if exit else 1.0
-        data = T.data * np.where(off, lobe / Z[i], 1.0) * exit_lobe
-        mats.append(sp.csr_matrix((data.astype(np.float32), T.indices, T.indptr), shape=T.shape))
+        # Z_i: the source's lobe averaged over its receivers, weighted by the power each receives
+        Z = np.bincount(p.i, p.weight[:, c] * lobe[:, c], minlength=V)
+        Z = np.divide(Z, p.spread[:, c], out=np.ones(V), where=(Z > 0) & (p.spread[:, c] > 0))
+        data = T.data * (lobe[:, c] / Z[p.i].astype(np.float32)) * exit_lobe[:, c]
+        mats.append(sp.csr_matrix((data, T.indices, T.indptr), shape=T.shape))
     return dataclasses.replace(transport, matrices=mats)
