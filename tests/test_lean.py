@@ -161,3 +161,8 @@ def test_render_angles_from_the_command_line(leaned_ball, tmp_path):
     assert runs[True]["angles"] is True and runs[False]["angles"] is False
     line = error_line(["render", "--scene", str(tmp_path / "s.xml"), "--model", "a=b", "--angles"])
     assert "--angles" in line
+    # glTF bakes the paper's model and says so in one line (a light of many directions: the same)
+    from translucency import export_model
+
+    summary = export_model(path, gltf=tmp_path / "ball.glb")
+    assert "paper's model" in summary["lean"]

@@ -403,8 +403,13 @@ EXPORT = record(
         "reduction_error_p95": field("number", "Its 95th percentile (--gltf)."),
         "vertices": field("integer", "Vertices of the mesh."),
         "faces": field("integer", "Triangles of the mesh."),
+        "lean": field(
+            "string",
+            "With --gltf, for a model with a lean (render --angles): what the bake draws instead — the "
+            "paper's model.",
+        ),
     },
-    optional=("ply", "gltf", "colour_scale", "reduction_error_median", "reduction_error_p95"),
+    optional=("ply", "gltf", "colour_scale", "reduction_error_median", "reduction_error_p95", "lean"),
 )
 
 # -- info ---------------------------------------------------------------------------------------------

@@ -84,6 +84,8 @@ def export_model(model, *, ply=None, gltf=None, light: str = DEFAULT_LIGHT, over
         claim_output(gltf, "mesh file", overwrite=overwrite, inputs=inputs, option="gltf")
         record = _bake(fitted, mesh, acquisition, gltf, light)
         summary.update(gltf=gltf, **record)
+        if fitted.measured and "lean" in fitted.measured:  # one line: the bake has no direction in it
+            summary["lean"] = "not baked: the glTF draws the paper's model (render --angles draws the lean)"
     return summary
 
 

@@ -126,6 +126,8 @@ def view_model(
     if export is not None:  # claimed before any work
         claim_folder(export, overwrite=overwrite, inputs=[model], option="export")
     views = _ObjectViews(m, header, model, other, compare, figure, environment, bands, radius)
+    if m.measured and "lean" in m.measured:  # the page relights through the transfer of the paper's model
+        reporter.info("the viewer draws the paper's model: the lean (render --angles) is not in the page")
     if export is None:
         reporter.info("the maps first; the relighting follows once the transport is prepared.")
         server = _server(views.surface(), lambda say: views.prepare(say, False), port)
