@@ -13,7 +13,8 @@ each against the converged volpath reference (relative RMSE, FLIP, brightness). 
 acquisition with another seed (other incident points, other photons) predicts nothing of the fit; its
 oblique beams are predicted from its own normal beam with the fitted κ (blended to its points) and
 without (the paper's model: the normal beam's shape, scaled to the oblique total), and the relative L2
-error of each over the power per vertex is printed.  Also the relight time per light of both.
+error of each over the power per vertex is printed; and, as ``evaluate --truth`` reports it
+(evaluate/oblique_errors.py), the fitted model's oblique beams against the held-out ones.  Also the relight time per light of both.
 
     python benchmarks/lean_objects.py --meshes ../shared/meshes --spp 2304 \\
         --case spot-marble-backlit:spot.obj:20:y:marble:128:2000:directional:0.8,-1.6,0.2,1:1,-1.6,0.7
@@ -31,6 +32,7 @@ import numpy as np
 
 from translucency.acquire.mesh import acquire_mesh, object_volume
 from translucency.angles import Incidence
+from translucency.evaluate.oblique_errors import oblique_errors
 from translucency.fit.mesh import fit_mesh
 from translucency.io.mesh import load_mesh
 from translucency.io.mesh_dataset import open_mesh_dataset
@@ -163,6 +165,10 @@ def main() -> int:
     held = held_out_errors(open_mesh_dataset(other), kappa_v)
     print(f"held out (seed 4), oblique beams from the normal one: paper {held['paper']:.3f}, "
           f"lean {held['lean']:.3f} (rel. L2 of the power per vertex)")  # fmt: skip
+    # as `evaluate --truth` reports it: the fitted model's profile, the model's own incidence law
+    evaluated = oblique_errors(model, other)
+    print(f"evaluate --truth (seed 4), oblique beams from the fitted model: paper {evaluated['paper']:.3f}, "
+          f"lean {evaluated['lean']:.3f}, the truth's noise {evaluated['noise']:.3f}")  # fmt: skip
     out = {
         "case": args.case,
         "reference_noise": info["noise"],
@@ -170,6 +176,7 @@ def main() -> int:
         "rows": rows,
         "relight_s": timing,
         "held_out": held,
+        "evaluate_truth": evaluated,
         "acquire_s": t_acquire,
     }
     (args.work / "lean_objects.json").write_text(json.dumps(out, indent=2))

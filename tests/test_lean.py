@@ -166,3 +166,31 @@ def test_render_angles_from_the_command_line(leaned_ball, tmp_path):
 
     summary = export_model(path, gltf=tmp_path / "ball.glb")
     assert "paper's model" in summary["lean"]
+
+
+def test_evaluate_holds_the_lean_out_on_another_seed_s_oblique_beams(leaned_ball, tmp_path):
+    """`evaluate --truth` on an acquisition with oblique beams (another seed, the same points): the lean
+    predicts them better than the paper's model, both above the truth's noise; a model without a lean
+    reports only the paper's number."""
+    from translucency import evaluate_report
+    from translucency.acquire.mesh import acquire_mesh, object_volume
+    from translucency.angles import Incidence
+    from translucency.evaluate.oblique_errors import oblique_errors
+
+    ball, model, path, data = leaned_ball
+    vol = object_volume("homogeneous:marble", ball, 1.0, seed=3)
+    truth = acquire_mesh(
+        ball, vol, tmp_path / "truth.zarr", n_points=8, photons=3000, seed=9, chunk_points=4,
+        index_matched=True, incidence=Incidence((60.0,), 4),
+    )  # fmt: skip
+    ev = evaluate_report(path, data, truth=truth, report=tmp_path / "report")
+    ob = ev.summary["oblique"]
+    assert ob["beams"] == 4 and ob["polar_deg"] == [60.0]
+    assert ob["noise"] < ob["lean"] < 0.8 * ob["paper"], ob
+    saved = model.measured.pop("lean")
+    try:
+        plain = oblique_errors(model, truth)
+    finally:
+        model.measured["lean"] = saved
+    assert plain["lean"] is None and plain["paper"] == pytest.approx(ob["paper"], rel=1e-9)
+    assert "oblique beams (4 a point)" in (tmp_path / "report" / "index.html").read_text()

@@ -247,13 +247,27 @@ _MESH_ERRORS = {
         },
     ),
 }
+_OBLIQUE = record(
+    "With oblique beams in the truth (or the data: acquire mesh --incidence): the model's errors on them, "
+    "each beam's total from the model's own incidence law (evaluate/oblique_errors.py).",
+    {
+        "paper": field(
+            "number", "Relative L2 error of the paper's model (the normal beam's shape).", "fraction"
+        ),
+        "lean": field(["number", "null"], "With the model's lean; null without one.", "fraction"),
+        "noise": field("number", "The data's own noise on that scale.", "fraction"),
+        "beams": field("integer", "Oblique beams per incident point."),
+        "polar_deg": array("Their polar angles.", NUMBER_OR_NULL, "degrees"),
+    },
+)
 _MESH_MODEL_ERRORS = record(
     "One model's errors.",
     {
         **_MESH_ERRORS,
         "in_sample": field("object", "The same numbers against the fitted data (with --truth)."),
+        "oblique": _OBLIQUE,
     },
-    optional=("in_sample",),
+    optional=("in_sample", "oblique"),
 )
 EVALUATE_MESH = record(
     "`translucency evaluate --json` on a mesh data set (per-vertex models): the same names as on a planar "
@@ -274,9 +288,10 @@ EVALUATE_MESH = record(
             optional=("truth",),
         ),
         **_MESH_ERRORS,
+        "oblique": _OBLIQUE,
         "models": record("Every model's errors, by its label.", {}, extra=_MESH_MODEL_ERRORS),
     },
-    optional=("in_sample", "summary"),
+    optional=("in_sample", "summary", "oblique"),
 )
 
 # -- render -------------------------------------------------------------------------------------------

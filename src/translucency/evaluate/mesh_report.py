@@ -31,6 +31,7 @@ from .errors import BANDS, finite_or_null
 from .labels import labelled_models, noise_label
 from .mesh_errors import check_same_points, mesh_errors
 from .mesh_figure import plot_mesh_errors
+from .oblique_errors import oblique_errors
 from .summary import _relative
 
 #: what each number of a mesh report means (report.json "definition", the page)
@@ -123,6 +124,10 @@ def write_mesh_report(
             s_in = in_sample[name].summary()
             s_in.pop("beyond_noise", None)
             s["in_sample"] = s_in
+        # light arriving at an angle: the oblique beams of the truth (or the data), with and without the lean
+        oblique = oblique_errors(models[name], truth or ds, exclusion_mm=exclusion.get(name))
+        if oblique is not None:
+            s["oblique"] = oblique
         per_model[name] = s
     first = next(iter(models))
     summary = {
@@ -177,6 +182,13 @@ def _page(s: dict) -> str:
             cells = [b["all"], b["near"], b["mid"], b["far"]]
             rows.append(
                 "<tr><td>&nbsp;beyond the noise</td>" + "".join(f"<td>{pct(v)}</td>" for v in cells) + "</tr>"
+            )
+        if m.get("oblique"):
+            ob = m["oblique"]
+            lean = "" if ob["lean"] is None else f", with its lean {pct(ob['lean'])}"
+            rows.append(
+                f"<tr><td colspan='5'>&nbsp;oblique beams ({ob['beams']} a point): the paper's model "
+                f"{pct(ob['paper'])}{lean}; noise {pct(ob['noise'])}</td></tr>"
             )
         if m.get("in_sample"):
             i = m["in_sample"]
