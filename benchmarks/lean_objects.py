@@ -14,7 +14,8 @@ acquisition with another seed (other incident points, other photons) predicts no
 oblique beams are predicted from its own normal beam with the fitted κ (blended to its points) and
 without (the paper's model: the normal beam's shape, scaled to the oblique total), and the relative L2
 error of each over the power per vertex is printed; and, as ``evaluate --truth`` reports it
-(evaluate/oblique_errors.py), the fitted model's oblique beams against the held-out ones.  Also the relight time per light of both.
+(evaluate/oblique_errors.py), the fitted model's oblique beams against the held-out ones.  Also the
+relight time per light of both.
 
     python benchmarks/lean_objects.py --meshes ../shared/meshes --spp 2304 \\
         --case spot-marble-backlit:spot.obj:20:y:marble:128:2000:directional:0.8,-1.6,0.2,1:1,-1.6,0.7
