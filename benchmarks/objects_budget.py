@@ -279,12 +279,12 @@ def main() -> int:
             row("(d) data: exit bins", radiance(K_out, area, E), "data axes", law=False)
             row("(d) data: both axes", radiance(K_both, area, E_plain), "data axes", law=False)
             # the lean (model/lean.py): κ per vertex fitted from the same oblique beams, on the normal beams
-            kappa = fit_lean(ds, 64)[np.argsort(np.asarray(ds["incident"]))]  # (V, 3) by vertex
+            lean = fit_lean(ds, 64)[np.argsort(np.asarray(ds["incident"]))]  # (V, 2, 3) by vertex
             K_normal = angle_kernels(
                 mesh, scene, volume, N, None, eye, args.work / f"{name}_{N}_normal_beams.npz", seed=41
             )[0]
             for label, sides in (("in", (True, False)), ("out", (False, True)), ("both", (True, True))):
-                K = lean_kernel(K_normal, mesh, kappa, w_light, eye, *sides)
+                K = lean_kernel(K_normal, mesh, lean, w_light, eye, *sides)
                 row(f"(e) lean on the normal beams: {label}", radiance(K, area, E), "the lean")
         return _written(args, V, info, rows, t0)
     saved = model.measured
@@ -459,10 +459,12 @@ def data_axes_kernels(ds, mesh, w_light, eye, chunk=128):
     return K_in, K_out, K_both
 
 
-def lean_kernel(K, mesh, kappa, w_light, eye, incidence=True, exit=True):
+def lean_kernel(K, mesh, lean, w_light, eye, incidence=True, exit=True):
     """K (V_o, V_j, 3) with the lean of model/lean.py: per source j the incidence lobe of the light's
-    direction (normalised per source over its receivers, own vertex apart), per receiver o the exit lobe of
-    the direction to ``eye`` (normalised over the exit hemisphere per pair); κ (V, 3) per vertex."""
+    direction with its reach (normalised per source over its receivers, own vertex apart), per receiver o
+    the exit lobe of the direction to ``eye`` (normalised over the exit hemisphere per pair); ``lean``
+    (V, 2, 3): κ and λ per vertex."""
+    kappa, lam = lean[:, 0], lean[:, 1]
     X = np.asarray(mesh.vertices, dtype=np.float64)
     n = np.asarray(mesh.vertex_normals, dtype=np.float64)
     V = len(X)
@@ -475,8 +477,9 @@ def lean_kernel(K, mesh, kappa, w_light, eye, incidence=True, exit=True):
     if incidence:
         ell = lean_vector(w_light, n)  # (V, 3) at the sources
         a = np.einsum("ojk,jk->oj", d, ell) * off  # (o, j)
+        depth = np.einsum("jk,jk->j", ell, n)[None, :] * r  # (ℓ_j · n_j) r_oj
         for c in range(3):
-            lobe = np.exp(kappa[None, :, c] * a)
+            lobe = np.exp(kappa[None, :, c] * a - lam[None, :, c] * depth)
             lobe[~off] = 1.0
             spread = np.einsum("oj,o->j", K[..., c] * off, area)
             leaned = np.einsum("oj,o->j", K[..., c] * off * lobe, area)

@@ -12,7 +12,7 @@ import trimesh
 
 from helpers import error_line
 from translucency import load_model, save_model
-from translucency.fit.lean import _refine, lean_loss
+from translucency.fit.lean import fit_point
 from translucency.geometry import vertex_areas
 from translucency.model.boundary import fresnel_transmittance
 from translucency.model.lean import exit_normalisation, lean_vector, refracted, von_mises_harmonics
@@ -67,8 +67,9 @@ def test_von_mises_harmonics_are_the_lobe_s_fourier_series():
 
 
 def test_the_fit_recovers_a_known_lean_from_four_beams():
-    """A flat patch, a radial profile, four 60° beams whose tallies lean with κ = 1.3 (and 5 % noise):
-    the fit finds κ within 0.1; beams that do not lean give κ = 0."""
+    """A flat patch, a radial profile, four 60° beams whose tallies lean with κ = 1.3 and reach less with
+    λ = 0.2 mm⁻¹ (and 5 % noise): the fit finds κ within 0.1 and λ within 0.03; beams that do not lean
+    give κ = λ = 0."""
     rng = np.random.default_rng(11)
     g = np.linspace(-6, 6, 41)
     X, Y = np.meshgrid(g, g)
@@ -81,13 +82,15 @@ def test_the_fit_recovers_a_known_lean_from_four_beams():
     th = np.radians(60)
     phi = np.arange(4) * np.pi / 2
     w = np.stack([np.sin(th) * np.cos(phi), np.sin(th) * np.sin(phi), np.full(4, np.cos(th))], axis=1)
-    a = lean_vector(w, np.array([[0.0, 0, 1]])) @ d_hat.T  # (4, V)
-    lobe = np.exp(1.3 * a)[..., None]
+    ell = lean_vector(w, np.array([[0.0, 0, 1]]))
+    a, ln = ell @ d_hat.T, ell[:, 2]  # (4, V) ℓ · d̂; (4,) ℓ · n = 1 − cos 60°
+    lobe = np.exp(1.3 * a - 0.2 * ln[:, None] * r[None, :])[..., None]
     Z = (area[None, :, None] * R0[None] * lobe).sum(1) / (area[:, None] * R0).sum(0)
     R1 = 1.1 * R0[None] * lobe / Z[:, None, :] * (1 + 0.05 * rng.normal(size=(4, len(pts), 3)))
-    kappa = _refine(lean_loss(R0, R1 * use[None, :, None], area, a))
+    kappa, lam = fit_point(R0, R1 * use[None, :, None], area, a, ln, r)
     np.testing.assert_allclose(kappa, 1.3, atol=0.1)
-    assert np.all(_refine(lean_loss(R0, np.repeat(R0[None], 4, 0), area, a)) < 0.05)
+    np.testing.assert_allclose(lam, 0.2, atol=0.03)
+    assert np.all(fit_point(R0, np.repeat(R0[None], 4, 0), area, a, ln, r) < 0.05)
 
 
 @pytest.fixture(scope="module")
@@ -111,10 +114,12 @@ def leaned_ball(tmp_path_factory):
 
 def test_a_fit_on_oblique_beams_carries_a_lean_the_model_file_keeps(leaned_ball):
     ball, model, path, _ = leaned_ball
-    kappa = model.measured["lean"]
-    assert kappa.shape == (8, 3) and (kappa > 0.3).all() and (kappa < 4).all()  # marble leans: ~1.2
+    lean = model.measured["lean"]
+    assert lean.shape == (8, 2, 3)
+    assert (lean[:, 0] > 0.3).all() and (lean[:, 0] < 4).all()  # marble leans: κ about 1.2
+    assert (lean[:, 1] >= 0).all() and (lean[:, 1] < 0.5).all()  # and reaches a little less: λ mm⁻¹
     again = load_model(path)
-    np.testing.assert_allclose(again.measured["lean"], kappa, rtol=1e-6)
+    np.testing.assert_allclose(again.measured["lean"], lean, rtol=1e-6)
 
 
 def test_the_leaned_transport_keeps_each_source_s_energy_and_is_the_paper_s_at_kappa_zero(leaned_ball):

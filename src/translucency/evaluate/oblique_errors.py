@@ -8,11 +8,12 @@ P_i(r)`, and take the beam's total from the model's own incidence law (Chandrase
 point's measured total, :mod:`translucency.model.incidence`; nothing of the data set's oblique totals):
 
 .. math:: \hat R_{paper}(d, v) = F(\mu_d)\, \hat R(x_i, v), \qquad
-          \hat R_{lean}(d, v) = \hat R_{paper}(d, v)\, e^{\kappa_i \vec\ell_d \cdot \hat d_v} / Z_d,
+          \hat R_{lean}(d, v) = \hat R_{paper}(d, v)\, e^{g_d(v)} / Z_d,
 
-Z_d normalising over the pairs that count (the fit's exclusion radius, as :mod:`.mesh_errors`).  The
-relative L2 error over all pairs, beams and channels, and the data's noise on the same scale (the
-barycentric tally's variance :math:`R_d / (2 N A_v)`), are returned.
+the lean's exponent :math:`g_d(v) = \kappa_i \vec\ell_d \cdot \hat d_v - \lambda_i (\vec\ell_d \cdot n_i) r`
+(:func:`~translucency.model.lean.lean_exponent`) and Z_d normalising over the pairs that count (the fit's
+exclusion radius, as :mod:`.mesh_errors`). The relative L2 error over all pairs, beams and channels, and the
+data's noise on the same scale (the barycentric tally's variance :math:`R_d / (2 N A_v)`), are returned.
 """
 
 from __future__ import annotations
@@ -22,7 +23,7 @@ import numpy as np
 from ..fit.mesh import mean_edge_length, read_pairs
 from ..io.mesh_dataset import MeshDataset, open_mesh_dataset
 from ..model.incidence import incidence_law
-from ..model.lean import lean_vector
+from ..model.lean import lean_exponent, lean_vector
 from .mesh_errors import TALLY_VARIANCE_FACTOR
 
 
@@ -69,7 +70,7 @@ def oblique_errors(
     eta = 1.0 if ds.header.get("request", {}).get("index_matched") else float(ds.header["eta"])
     total = (model.measured or {}).get("total")
     law = incidence_law("half-space", total, eta)  # the model's own law of the oblique totals
-    kappa = (model.measured or {}).get("lean")
+    lean = (model.measured or {}).get("lean")  # (P, 2, 3): κ, λ
     alpha_o = model.alpha.at(vertices)
     var_scale = TALLY_VARIANCE_FACTOR / (float(ds.header["photons"]) * np.maximum(area, 1e-12))
     err2 = {"paper": 0.0, "lean": 0.0}
@@ -87,12 +88,19 @@ def oblique_errors(
         F = np.ones((e - s, len(mu), 3)) if F is None else F
         paper = F[:, :, None, :] * pred[:, None]  # (k, D, V, 3)
         predictions = {"paper": paper}
-        if kappa is not None:
+        if lean is not None:
             d = vertices[None] - x_i[s:e, None]  # (k, V, 3)
             d /= np.maximum(np.linalg.norm(d, axis=2, keepdims=True), 1e-12)
             ell = lean_vector(w[s:e], frames[s:e, None, 2], eta)  # (k, D, 3)
-            a = np.einsum("kdj,kvj->kdv", ell, d)  # (k, D, V)
-            lobe = np.exp(kappa[s:e, None, None, :] * a[..., None]) * ok[..., None]  # (k, D, V, 3)
+            g = lean_exponent(
+                lean[s:e, 0, None, None, :],
+                lean[s:e, 1, None, None, :],
+                ell[:, :, None, None, :],
+                d[:, None, :, None, :],
+                frames[s:e, None, None, None, 2],
+                r[:, None, :, None],
+            )  # (k, D, V, 3)
+            lobe = np.exp(g) * ok[..., None]
             base = pred[:, None] * area[None, None, :, None] * ok[..., None]
             Z = (base * lobe).sum(2) / np.maximum(base.sum(2), 1e-300)  # (k, D, 3)
             predictions["lean"] = paper * lobe / np.maximum(Z[:, :, None, :], 1e-300)
@@ -103,7 +111,7 @@ def oblique_errors(
     rel = {k: float(np.sqrt(v / ref2)) if ref2 > 0 else float("nan") for k, v in err2.items()}
     return {
         "paper": rel["paper"],
-        "lean": rel["lean"] if kappa is not None else None,
+        "lean": rel["lean"] if lean is not None else None,
         "noise": float(np.sqrt(var / ref2)) if ref2 > 0 else float("nan"),
         "beams": int(inc.count - 1),
         "polar_deg": [float(t) for t in inc.polar_deg],

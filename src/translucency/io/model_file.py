@@ -14,7 +14,7 @@ Layout::
     measured/own          (N, 3) float32   mesh only, optional: R_d over each incident vertex's own area, mm⁻²
     measured/total        (N, 3) float32   mesh only, optional: measured diffuse exitance per unit power
     measured/through      (N, 4, 8, 3) f32 mesh only, optional: the through-body table (model/through.py)
-    measured/lean         (N, 3) float32   mesh only, optional: the lean's κ ≥ 0 (model/lean.py)
+    measured/lean         (N, 2, 3) f32    mesh only, optional: the lean's κ ≥ 0, λ ≥ 0 mm⁻¹ (model/lean.py)
     params/...            per kind (the model class's ``STORED``), dtype = header["dtype"]:
         exponential:  c, d (N, C, m, n) in mm⁻² and mm⁻¹; s_g, s_b (N,) when C = 1
         dipole, pbd, ddipole:  sigma_a, sigma_s_prime (N, 3) in mm⁻¹ (and ``eta`` in the header)
@@ -63,7 +63,7 @@ from .._version import __version__
 from ..model import MODEL_KINDS, PlanarAlpha, ReflectanceModel, VertexAlpha
 from ..model.bounds import check_physics
 from ..model.extent import extent_from_dict
-from ..model.lean import KAPPA_MAX
+from ..model.lean import KAPPA_MAX, LAMBDA_MAX
 from ..model.through import COS_EDGES, R_EDGES
 from .atomic import atomic_path
 from .outputs import claim_output
@@ -365,17 +365,21 @@ def _attach_surface(model: ReflectanceModel, arrays: dict[str, np.ndarray]) -> N
     measured = {k.split("/", 1)[1]: v for k, v in arrays.items() if k.startswith("measured/")}
     if measured:
         N = model.n_points
-        shapes = {"own": (N, 3), "total": (N, 3), "through": _through_shape(model), "lean": (N, 3)}
+        shapes = {"own": (N, 3), "total": (N, 3), "through": _through_shape(model), "lean": (N, 2, 3)}
         for name, value in measured.items():
             if name not in shapes or value.shape != shapes[name]:
                 raise TranslucencyError(
-                    f"measured/{name}: expected 'own', 'total' or 'lean' of shape ({N}, 3) or 'through' "
-                    f"of shape {_through_shape(model)}, got {value.shape}"
+                    f"measured/{name}: expected 'own' or 'total' of shape ({N}, 3), 'lean' ({N}, 2, 3) or "
+                    f"'through' {_through_shape(model)}, got {value.shape}"
                 )
             if not (np.isfinite(value).all() and (value >= 0).all()):
                 raise TranslucencyError(f"measured/{name}: values must be finite and >= 0")
-        if "lean" in measured and measured["lean"].max() > KAPPA_MAX:
-            raise TranslucencyError(f"measured/lean: κ must lie in [0, {KAPPA_MAX:g}]")
+        if "lean" in measured and (
+            measured["lean"][:, 0].max() > KAPPA_MAX or measured["lean"][:, 1].max() > LAMBDA_MAX
+        ):
+            raise TranslucencyError(
+                f"measured/lean: κ must lie in [0, {KAPPA_MAX:g}] and λ in [0, {LAMBDA_MAX:g}] mm⁻¹"
+            )
         model.measured = {k: v.astype(np.float64) for k, v in measured.items()}
 
 

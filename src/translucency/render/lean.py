@@ -4,17 +4,18 @@ r"""The lean in the renderer: the near transport tilted toward the light's and t
 For a light of one direction per vertex (directional, point, spot: ``light.arrival``) and a camera at
 ``eye``, every near pair (o, i) of the prepared transport (:mod:`.transport`) is weighted per channel by
 
-.. math:: T'_{oi} = T_{oi}\,
-          \frac{e^{\kappa_i \vec\ell_i \cdot \hat d_{oi}}}{Z_i}\,
+.. math:: T'_{oi} = T_{oi}\, \frac{e^{g_{oi}}}{Z_i}\,
           \frac{e^{-\kappa_o \vec\ell'_o \cdot \hat d_{oi}}}{N_{oi}}, \qquad
-          Z_i = \frac{\sum_o A_o T_{oi} e^{\kappa_i \vec\ell_i \cdot \hat d_{oi}}}{\sum_o A_o T_{oi}},
+          g_{oi} = \kappa_i \vec\ell_i \cdot \hat d_{oi} - \lambda_i (\vec\ell_i \cdot n_i)\, r_{oi}, \qquad
+          Z_i = \frac{\sum_o A_o T_{oi} e^{g_{oi}}}{\sum_o A_o T_{oi}},
 
-with :math:`\hat d_{oi}` the unit vector from :math:`x_i` to :math:`x_o`, :math:`\vec\ell_i` the lean
-vector of the light at the source and :math:`\vec\ell'_o` that of the direction to the camera at the
-receiver, κ blended to every vertex from the fitted points.  Each source still sends its measured total
-(the near pairs' share of it: the far field and the own area are left diffuse), and each pair's exit
-averages to its diffuse value over the hemisphere.  A light of many directions (an environment map) has
-no one lean vector: it draws the paper's model (:func:`leaned` returns None and says why).
+with :math:`\hat d_{oi}` the unit vector from :math:`x_i` to :math:`x_o`, :math:`\vec\ell_i` the lean vector
+of the light at the source and :math:`\vec\ell'_o` that of the direction to the camera at the receiver, κ
+and λ blended to every vertex from the fitted points (the exit's lean has no reach term). Each source still
+sends its measured total (the near pairs' share of it: the far field and the own area are left diffuse), and
+each pair's exit averages to its diffuse value over the hemisphere. A light of many directions (an
+environment map) has no one lean vector: it draws the paper's model (:func:`leaned` returns None and says
+why).
 
 ``render --angles`` draws the light's lean only: the exit's, the reciprocal half, is built (``exit=True``)
 and measured too bright (docs/objects.md, "The lean"), so the default transport is not reciprocal in
@@ -45,6 +46,7 @@ class LeanPairs:
     o: np.ndarray  # (nnz,) receivers (mesh vertex indices)
     i: np.ndarray  # (nnz,) sources
     d: np.ndarray  # (nnz, 3) float32 unit vectors from x_i to x_o (0 on the diagonal)
+    r: np.ndarray  # (nnz,) float32 |x_o − x_i|, mm
     N: np.ndarray  # (nnz, 3) float32 the exit normalisation per pair and channel
     weight: np.ndarray  # (nnz, 3) float32 A_o T_oi (with the colour scale): Z's weights
     spread: np.ndarray  # (V, 3) Σ_o A_o T_oi per source: Z's denominator
@@ -61,9 +63,10 @@ def lean_pairs(transport, mesh, eta: float = 1.0) -> LeanPairs:
     n = np.asarray(mesh.vertex_normals, dtype=np.float64)
     if transport.receivers is not None:
         o = np.asarray(transport.receivers)[o]
-    kappa = transport.lean.astype(np.float64)
+    kappa = transport.lean[:, 0].astype(np.float64)
     area = vertex_areas(mesh)
     d = np.zeros((len(o), 3), np.float32)
+    dist = np.zeros(len(o), np.float32)
     N = np.ones((len(o), 3), np.float32)
     for s in range(0, len(o), _PAIRS_PER_BATCH):
         oo, ii = o[s : s + _PAIRS_PER_BATCH], i[s : s + _PAIRS_PER_BATCH]
@@ -71,6 +74,7 @@ def lean_pairs(transport, mesh, eta: float = 1.0) -> LeanPairs:
         r = np.linalg.norm(v, axis=1, keepdims=True)
         dd = np.divide(v, r, out=np.zeros_like(v), where=r > 0)
         d[s : s + len(oo)] = dd
+        dist[s : s + len(oo)] = r[:, 0]
         N[s : s + len(oo)] = exit_normalisation(kappa[oo], -dd, n[oo], eta)
     off = np.any(d != 0, axis=1)
     weight = np.empty((len(o), 3), np.float32)
@@ -80,13 +84,14 @@ def lean_pairs(transport, mesh, eta: float = 1.0) -> LeanPairs:
             vals = vals * transport.scale[i, c]
         weight[:, c] = area[o] * vals * off
     spread = np.stack([np.bincount(i, weight[:, c], minlength=len(X)) for c in range(3)], axis=1)
-    return LeanPairs(o=o, i=i, d=d, N=N, weight=weight, spread=spread)
+    return LeanPairs(o=o, i=i, d=d, r=dist, N=N, weight=weight, spread=spread)
 
 
 @njit(parallel=True, cache=True)
-def _lobes(i, o, d, ell, ell_view, kappa, N, with_exit, lobe, exit_lobe):
-    """Per pair and channel: the light's lobe e^{κ_i ℓ_i · d} (``lobe``) and the camera's
-    e^{−κ_o ℓ'_o · d} / N (``exit_lobe``, with ``with_exit``); 1 on the diagonal."""
+def _lobes(i, o, d, r, ell, depth, ell_view, kappa, lam, N, with_exit, lobe, exit_lobe):
+    """Per pair and channel: the light's lobe e^{κ_i ℓ_i · d − λ_i (ℓ_i · n_i) r} (``lobe``; ``depth`` (V,)
+    is ℓ · n per source) and the camera's e^{−κ_o ℓ'_o · d} / N (``exit_lobe``, with ``with_exit``); 1 on
+    the diagonal."""
     for m in prange(i.shape[0]):
         dx, dy, dz = d[m, 0], d[m, 1], d[m, 2]
         if dx == 0.0 and dy == 0.0 and dz == 0.0:
@@ -94,12 +99,13 @@ def _lobes(i, o, d, ell, ell_view, kappa, N, with_exit, lobe, exit_lobe):
                 lobe[m, c] = 1.0
                 exit_lobe[m, c] = 1.0
             continue
-        s, r = i[m], o[m]
-        a = dx * ell[s, 0] + dy * ell[s, 1] + dz * ell[s, 2]
-        b = -(dx * ell_view[r, 0] + dy * ell_view[r, 1] + dz * ell_view[r, 2])
+        src, rcv = i[m], o[m]
+        a = dx * ell[src, 0] + dy * ell[src, 1] + dz * ell[src, 2]
+        b = -(dx * ell_view[rcv, 0] + dy * ell_view[rcv, 1] + dz * ell_view[rcv, 2])
+        reach = depth[src] * r[m]
         for c in range(3):
-            lobe[m, c] = np.exp(kappa[s, c] * a)
-            exit_lobe[m, c] = np.exp(kappa[r, c] * b) / N[m, c] if with_exit else 1.0
+            lobe[m, c] = np.exp(kappa[src, c] * a - lam[src, c] * reach)
+            exit_lobe[m, c] = np.exp(kappa[rcv, c] * b) / N[m, c] if with_exit else 1.0
 
 
 def lean_applies(transport, light) -> bool:
@@ -149,13 +155,15 @@ def leaned(transport, mesh, scene, light, eye, *, eta: float = 1.0, exit: bool =
     n = np.asarray(mesh.vertex_normals, dtype=np.float64)
     V = len(X)
     w_light = light.arrival(scene, X, n)[0]
-    ell = lean_vector(w_light, n, eta).astype(np.float32)  # (V, 3) at the sources
+    ell = lean_vector(w_light, n, eta)  # (V, 3) at the sources
+    depth = np.einsum("vk,vk->v", ell, n).astype(np.float32)  # ℓ · n = 1 − cos θ_t
+    ell = ell.astype(np.float32)
     to_eye = np.asarray(eye, dtype=np.float64)[None, :] - X
     to_eye /= np.linalg.norm(to_eye, axis=1, keepdims=True)
     ell_view = lean_vector(to_eye, n, eta).astype(np.float32)  # (V, 3) at the receivers
     lobe, exit_lobe = np.empty_like(p.N), np.empty_like(p.N)
-    kappa = transport.lean.astype(np.float32)
-    _lobes(p.i, p.o, p.d, ell, ell_view, kappa, p.N, exit, lobe, exit_lobe)
+    kappa, lam = (np.ascontiguousarray(transport.lean[:, k], dtype=np.float32) for k in (0, 1))
+    _lobes(p.i, p.o, p.d, p.r, ell, depth, ell_view, kappa, lam, p.N, exit, lobe, exit_lobe)
     mats = []
     for c in range(3):
         T = transport.matrices[min(c, len(transport.matrices) - 1)].tocsr()

@@ -62,7 +62,7 @@ class Transport:
     far: FarField | None = None  # the pairs beyond the near radius (None: truncated, or none there)
     reflectance: np.ndarray | None = None  # (V, 3) measured normal-incidence total reflectance, blended
     through: bool = False  # the model's through-body table is in the matrices (model/through.py)
-    lean: np.ndarray | None = None  # (V, 3) κ of the lean per vertex (model/lean.py), or None
+    lean: np.ndarray | None = None  # (V, 2, 3) κ and λ of the lean per vertex (model/lean.py), or None
     receivers: np.ndarray | None = None  # the vertices whose radiance it gives (None: all; :meth:`rows`)
 
     def incidence(self, name: str = "half-space", eta: float = 1.0):

@@ -155,11 +155,11 @@ def transport_matrices(
     if through and model.measured and "through" in model.measured:
         w_b, idx_b = weights
         table = np.einsum("vk,vkabc->vabc", w_b, model.measured["through"][idx_b])
-    # the lean's κ blended to every vertex (V, 3) (model/lean.py; render/lean.py applies it per light)
+    # the lean's κ and λ blended to every vertex (V, 2, 3) (model/lean.py; render/lean.py applies it)
     lean = None
     if model.measured and "lean" in model.measured:
         w_b, idx_b = weights
-        lean = np.einsum("vk,vkc->vc", w_b, model.measured["lean"][idx_b]).astype(np.float32)
+        lean = np.einsum("vk,vkac->vac", w_b, model.measured["lean"][idx_b]).astype(np.float32)
     # shared colour (one fall-off, C = 1): T_λ = T · diag(s_λ) — one matrix, the scale goes with E
     # (not with the through table: it is per channel)
     shared = c.shape[1] == 1 and table is None
