@@ -88,24 +88,48 @@ def lean_pairs(transport, mesh, eta: float = 1.0) -> LeanPairs:
 
 
 @njit(parallel=True, cache=True)
-def _lobes(i, o, d, r, ell, depth, ell_view, kappa, lam, N, with_exit, lobe, exit_lobe):
-    """Per pair and channel: the light's lobe e^{κ_i ℓ_i · d − λ_i (ℓ_i · n_i) r} (``lobe``; ``depth`` (V,)
-    is ℓ · n per source) and the camera's e^{−κ_o ℓ'_o · d} / N (``exit_lobe``, with ``with_exit``); 1 on
-    the diagonal."""
+def _lobes(i, d, r, ell, depth, kappa, lam, lobe):
+    """Per pair and channel the light's lobe e^{κ_i ℓ_i · d − λ_i (ℓ_i · n_i) r} into ``lobe`` (nnz, 3);
+    ``depth`` (V,) is ℓ · n per source; 1 on the diagonal."""
     for m in prange(i.shape[0]):
         dx, dy, dz = d[m, 0], d[m, 1], d[m, 2]
         if dx == 0.0 and dy == 0.0 and dz == 0.0:
             for c in range(3):
                 lobe[m, c] = 1.0
-                exit_lobe[m, c] = 1.0
             continue
-        src, rcv = i[m], o[m]
+        src = i[m]
         a = dx * ell[src, 0] + dy * ell[src, 1] + dz * ell[src, 2]
-        b = -(dx * ell_view[rcv, 0] + dy * ell_view[rcv, 1] + dz * ell_view[rcv, 2])
         reach = depth[src] * r[m]
         for c in range(3):
             lobe[m, c] = np.exp(kappa[src, c] * a - lam[src, c] * reach)
-            exit_lobe[m, c] = np.exp(kappa[rcv, c] * b) / N[m, c] if with_exit else 1.0
+
+
+@njit(cache=True)
+def _source_means(i, weight, lobe, spread, Z):
+    """Z_i per channel (V, 3): Σ_o A_o T_oi lobe_oi / Σ_o A_o T_oi (1 where a source has no pairs)."""
+    acc = np.zeros(Z.shape)
+    for m in range(i.shape[0]):
+        s = i[m]
+        for c in range(3):
+            acc[s, c] += weight[m, c] * lobe[m, c]
+    for s in range(Z.shape[0]):
+        for c in range(3):
+            Z[s, c] = acc[s, c] / spread[s, c] if acc[s, c] > 0.0 and spread[s, c] > 0.0 else 1.0
+
+
+@njit(parallel=True, cache=True)
+def _tilted(i, o, d, ell_view, kappa, N, with_exit, lobe, Z, T0, T1, T2, out):
+    """The leaned matrices' values (3, nnz): T_c · lobe / Z_i (· the camera's lobe, ``with_exit``)."""
+    for m in prange(i.shape[0]):
+        src, rcv = i[m], o[m]
+        b = -(d[m, 0] * ell_view[rcv, 0] + d[m, 1] * ell_view[rcv, 1] + d[m, 2] * ell_view[rcv, 2])
+        diagonal = d[m, 0] == 0.0 and d[m, 1] == 0.0 and d[m, 2] == 0.0
+        for c in range(3):
+            f = lobe[m, c] / Z[src, c]
+            if with_exit and not diagonal:
+                f *= np.exp(kappa[rcv, c] * b) / N[m, c]
+            t = T0[m] if c == 0 else (T1[m] if c == 1 else T2[m])
+            out[c, m] = t * (1.0 if diagonal else f)
 
 
 def lean_applies(transport, light) -> bool:
@@ -161,15 +185,14 @@ def leaned(transport, mesh, scene, light, eye, *, eta: float = 1.0, exit: bool =
     to_eye = np.asarray(eye, dtype=np.float64)[None, :] - X
     to_eye /= np.linalg.norm(to_eye, axis=1, keepdims=True)
     ell_view = lean_vector(to_eye, n, eta).astype(np.float32)  # (V, 3) at the receivers
-    lobe, exit_lobe = np.empty_like(p.N), np.empty_like(p.N)
+    lobe = np.empty_like(p.N)
     kappa, lam = (np.ascontiguousarray(transport.lean[:, k], dtype=np.float32) for k in (0, 1))
-    _lobes(p.i, p.o, p.d, p.r, ell, depth, ell_view, kappa, lam, p.N, exit, lobe, exit_lobe)
-    mats = []
-    for c in range(3):
-        T = transport.matrices[min(c, len(transport.matrices) - 1)].tocsr()
-        # Z_i: the source's lobe averaged over its receivers, weighted by the power each receives
-        Z = np.bincount(p.i, p.weight[:, c] * lobe[:, c], minlength=V)
-        Z = np.divide(Z, p.spread[:, c], out=np.ones(V), where=(Z > 0) & (p.spread[:, c] > 0))
-        data = T.data * (lobe[:, c] / Z[p.i].astype(np.float32)) * exit_lobe[:, c]
-        mats.append(sp.csr_matrix((data, T.indices, T.indptr), shape=T.shape))
+    _lobes(p.i, p.d, p.r, ell, depth, kappa, lam, lobe)
+    # Z_i: the source's lobe averaged over its receivers, weighted by the power each receives
+    Z = np.empty((V, 3))
+    _source_means(p.i, p.weight, lobe, p.spread, Z)
+    T = [transport.matrices[min(c, len(transport.matrices) - 1)].tocsr() for c in range(3)]
+    data = np.empty((3, len(p.i)), np.float32)
+    _tilted(p.i, p.o, p.d, ell_view, kappa, p.N, exit, lobe, Z, T[0].data, T[1].data, T[2].data, data)
+    mats = [sp.csr_matrix((data[c], T[c].indices, T[c].indptr), shape=T[c].shape) for c in range(3)]
     return dataclasses.replace(transport, matrices=mats)
