@@ -84,7 +84,7 @@ def oblique_errors(
         )  # (k, V, 3)
         y = np.asarray(ds.group["R_d_oblique"][s:e], dtype=np.float64)  # (k, D, V, 3)
         ok = ok[:, None, :] & np.isfinite(y).all(axis=3)
-        F = law.factor(np.broadcast_to(mu, (e - s, len(mu))))  # (k, D, 3) or None
+        F = law.at(np.arange(s, e)).factor(np.broadcast_to(mu, (e - s, len(mu))))  # (k, D, 3) or None
         F = np.ones((e - s, len(mu), 3)) if F is None else F
         paper = F[:, :, None, :] * pred[:, None]  # (k, D, V, 3)
         predictions = {"paper": paper}
