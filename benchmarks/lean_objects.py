@@ -93,7 +93,9 @@ def main() -> int:
     ap.add_argument("--work", type=Path, default=Path(tempfile.mkdtemp(prefix="lean_objects_")))
     args = ap.parse_args()
     args.work.mkdir(parents=True, exist_ok=True)
-    name, file, scale, up, material, points, photons, kind, light_text, view = args.case.split(":")
+    parts = args.case.split(":")  # the material may hold a colon itself (homogeneous:potato)
+    (name, file, scale, up), material = parts[:4], ":".join(parts[4:-5])
+    points, photons, kind, light_text, view = parts[-5:]
     P, N = int(points), int(photons)
     mesh = load_mesh(args.meshes / file, scale_mm=float(scale), up=up)
     volume = object_volume(material, mesh, 1.0, seed=3)
