@@ -90,6 +90,7 @@ def main() -> int:
     ap.add_argument("--spp", type=int, default=256, help="samples per pixel of each of the two references")
     ap.add_argument("--size", type=int, nargs=2, default=(128, 96))
     ap.add_argument("--polar", type=float, default=60.0, help="the oblique beams' polar angle, degrees")
+    ap.add_argument("--colour", default="shared", help="the fit's colour: shared (the paper's), per-channel")
     ap.add_argument("--work", type=Path, default=Path(tempfile.mkdtemp(prefix="lean_objects_")))
     args = ap.parse_args()
     args.work.mkdir(parents=True, exist_ok=True)
@@ -116,7 +117,7 @@ def main() -> int:
         return path, time.perf_counter() - t
 
     data, t_acquire = acquire(3)
-    fit = fit_mesh(data, "iso")
+    fit = fit_mesh(data, "iso", colour=args.colour)
     model = fit.model
     lean = model.measured["lean"]  # (P, 2, 3): κ, λ
     print(
@@ -140,7 +141,8 @@ def main() -> int:
         L = relight_vertices(transport, E) * fresnel
         img = picture.draw(L if exit_law is None else L * exit_law)
         cmp = compare(reference, img, mask)
-        save_images(img, args.work / "".join(c if c.isalnum() else "_" for c in label), exposure)
+        stem = "".join(c if c.isalnum() else "_" for c in label) + ("" if args.colour == "shared" else "_pc")
+        save_images(img, args.work / stem, exposure)
         rows.append(
             {
                 "row": label,
@@ -186,7 +188,10 @@ def main() -> int:
         "evaluate_truth": evaluated,
         "acquire_s": t_acquire,
     }
-    (args.work / "lean_objects.json").write_text(json.dumps(out, indent=2))
+    out["colour"] = args.colour
+    (args.work / f"lean_objects{'' if args.colour == 'shared' else '_' + args.colour}.json").write_text(
+        json.dumps(out, indent=2)
+    )
     print(f"reference noise {info['noise']:.3f}; written: {args.work / 'lean_objects.json'}")
     return 0
 
