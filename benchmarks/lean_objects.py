@@ -132,7 +132,7 @@ def main() -> int:
     exit_law = law.exit(view_cosines(mesh, camera.origin))
     fresnel = exit_fresnel(mesh, camera.origin, 1.0)[:, None]
     rows = []
-    pairs = lean_pairs(T, mesh)
+    pairs = lean_pairs(T, mesh, exit=True)  # (the exit normalisation too: the both-ways row)
     for label, transport in (
         ("paper's model", T),
         ("lean of the light (render --angles)", leaned(T, mesh, scene, light, camera.origin, pairs=pairs)),

@@ -47,15 +47,15 @@ class LeanPairs:
     i: np.ndarray  # (nnz,) sources
     d: np.ndarray  # (nnz, 3) float32 unit vectors from x_i to x_o (0 on the diagonal)
     r: np.ndarray  # (nnz,) float32 |x_o − x_i|, mm
-    N: np.ndarray  # (nnz, 3) float32 the exit normalisation per pair and channel
+    N: np.ndarray | None  # (nnz, 3) float32 the exit normalisation per pair and channel (None: not needed)
     weight: np.ndarray  # (nnz, 3) float32 A_o T_oi (with the colour scale): Z's weights
     spread: np.ndarray  # (V, 3) Σ_o A_o T_oi per source: Z's denominator
 
 
-def lean_pairs(transport, mesh, eta: float = 1.0) -> LeanPairs:
+def lean_pairs(transport, mesh, eta: float = 1.0, exit: bool = False) -> LeanPairs:
     r"""The transport's near pairs as the lean reads them (:class:`LeanPairs`): rows, columns, the unit
-    vectors :math:`\hat d_{oi}`, the exit normalisation :math:`N_{oi}`
-    (:func:`~translucency.model.lean.exit_normalisation`) and the weights of :math:`Z_i`."""
+    vectors :math:`\hat d_{oi}`, the weights of :math:`Z_i` and, with ``exit``, the exit normalisation
+    :math:`N_{oi}` (:func:`~translucency.model.lean.exit_normalisation`: most of the preparation's time)."""
     T = transport.matrices[0].tocsr()
     o = np.repeat(np.arange(T.shape[0]), np.diff(T.indptr))
     i = T.indices.astype(np.int64)
@@ -67,7 +67,7 @@ def lean_pairs(transport, mesh, eta: float = 1.0) -> LeanPairs:
     area = vertex_areas(mesh)
     d = np.zeros((len(o), 3), np.float32)
     dist = np.zeros(len(o), np.float32)
-    N = np.ones((len(o), 3), np.float32)
+    N = np.ones((len(o), 3), np.float32) if exit else None
     for s in range(0, len(o), _PAIRS_PER_BATCH):
         oo, ii = o[s : s + _PAIRS_PER_BATCH], i[s : s + _PAIRS_PER_BATCH]
         v = X[oo] - X[ii]
@@ -75,7 +75,8 @@ def lean_pairs(transport, mesh, eta: float = 1.0) -> LeanPairs:
         dd = np.divide(v, r, out=np.zeros_like(v), where=r > 0)
         d[s : s + len(oo)] = dd
         dist[s : s + len(oo)] = r[:, 0]
-        N[s : s + len(oo)] = exit_normalisation(kappa[oo], -dd, n[oo], eta)
+        if exit:
+            N[s : s + len(oo)] = exit_normalisation(kappa[oo], -dd, n[oo], eta)
     off = np.any(d != 0, axis=1)
     weight = np.empty((len(o), 3), np.float32)
     for c in range(3):
@@ -174,7 +175,9 @@ def leaned(transport, mesh, scene, light, eye, *, eta: float = 1.0, exit: bool =
     """
     if not lean_applies(transport, light):
         return None
-    p = lean_pairs(transport, mesh, eta) if pairs is None else pairs
+    p = lean_pairs(transport, mesh, eta, exit) if pairs is None else pairs
+    if exit and p.N is None:
+        p = lean_pairs(transport, mesh, eta, exit=True)
     X = np.asarray(mesh.vertices, dtype=np.float64)
     n = np.asarray(mesh.vertex_normals, dtype=np.float64)
     V = len(X)
@@ -185,7 +188,7 @@ def leaned(transport, mesh, scene, light, eye, *, eta: float = 1.0, exit: bool =
     to_eye = np.asarray(eye, dtype=np.float64)[None, :] - X
     to_eye /= np.linalg.norm(to_eye, axis=1, keepdims=True)
     ell_view = lean_vector(to_eye, n, eta).astype(np.float32)  # (V, 3) at the receivers
-    lobe = np.empty_like(p.N)
+    lobe = np.empty((len(p.i), 3), np.float32)
     kappa, lam = (np.ascontiguousarray(transport.lean[:, k], dtype=np.float32) for k in (0, 1))
     _lobes(p.i, p.d, p.r, ell, depth, kappa, lam, lobe)
     # Z_i: the source's lobe averaged over its receivers, weighted by the power each receives
@@ -193,6 +196,7 @@ def leaned(transport, mesh, scene, light, eye, *, eta: float = 1.0, exit: bool =
     _source_means(p.i, p.weight, lobe, p.spread, Z)
     T = [transport.matrices[min(c, len(transport.matrices) - 1)].tocsr() for c in range(3)]
     data = np.empty((3, len(p.i)), np.float32)
-    _tilted(p.i, p.o, p.d, ell_view, kappa, p.N, exit, lobe, Z, T[0].data, T[1].data, T[2].data, data)
+    N = p.N if exit else lobe  # (unread without the exit)
+    _tilted(p.i, p.o, p.d, ell_view, kappa, N, exit, lobe, Z, T[0].data, T[1].data, T[2].data, data)
     mats = [sp.csr_matrix((data[c], T[c].indices, T[c].indptr), shape=T[c].shape) for c in range(3)]
     return dataclasses.replace(transport, matrices=mats)
