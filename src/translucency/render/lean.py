@@ -147,7 +147,7 @@ def leaned(transport, mesh, scene, light, eye, *, eta: float = 1.0, exit: bool =
     ----------
     transport : Transport
         Prepared by :func:`~translucency.render.transport.transport_matrices` from a model with a lean
-        (``transport.lean``, κ (V, 3)).
+        (``transport.lean``: κ and λ, (V, 2, 3)).
     mesh, scene
         The object and its Mitsuba scene.
     light : Light
@@ -157,8 +157,8 @@ def leaned(transport, mesh, scene, light, eye, *, eta: float = 1.0, exit: bool =
     eta : float
         Relative index of the boundary (1: index-matched).
     exit : bool
-        Also the exit's lean toward the camera (off by default: on the back-lit marble spot it draws
-        25–48 % too bright, docs/objects.md "The lean"; the light's lean alone is not reciprocal).
+        Also the exit's lean toward the camera (off by default: it draws the back-lit spots 29–70 % too
+        bright, docs/objects.md "The lean"; the light's lean alone is not reciprocal).
     pairs : LeanPairs, optional
         :func:`lean_pairs`' result, to reuse between lights and cameras.
 
