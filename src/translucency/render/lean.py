@@ -88,7 +88,7 @@ def lean_pairs(transport, mesh, eta: float = 1.0, exit: bool = False) -> LeanPai
     return LeanPairs(o=o, i=i, d=d, r=dist, N=N, weight=weight, spread=spread)
 
 
-@njit(parallel=True, cache=True)
+@njit(parallel=True, cache=True, fastmath=True)
 def _lobes(i, d, r, ell, depth, kappa, lam, lobe):
     """Per pair and channel the light's lobe e^{κ_i ℓ_i · d − λ_i (ℓ_i · n_i) r} into ``lobe`` (nnz, 3);
     ``depth`` (V,) is ℓ · n per source; 1 on the diagonal."""
@@ -118,7 +118,7 @@ def _source_means(i, weight, lobe, spread, Z):
             Z[s, c] = acc[s, c] / spread[s, c] if acc[s, c] > 0.0 and spread[s, c] > 0.0 else 1.0
 
 
-@njit(parallel=True, cache=True)
+@njit(parallel=True, cache=True, fastmath=True)
 def _tilted(i, o, d, ell_view, kappa, N, with_exit, lobe, Z, T0, T1, T2, out):
     """The leaned matrices' values (3, nnz): T_c · lobe / Z_i (· the camera's lobe, ``with_exit``)."""
     for m in prange(i.shape[0]):
