@@ -91,6 +91,7 @@ def main() -> int:
     ap.add_argument("--size", type=int, nargs=2, default=(128, 96))
     ap.add_argument("--polar", type=float, default=60.0, help="the oblique beams' polar angle, degrees")
     ap.add_argument("--colour", default="shared", help="the fit's colour: shared (the paper's), per-channel")
+    ap.add_argument("--incidence", default="half-space", help="the incidence law (render --incidence)")
     ap.add_argument("--work", type=Path, default=Path(tempfile.mkdtemp(prefix="lean_objects_")))
     args = ap.parse_args()
     args.work.mkdir(parents=True, exist_ok=True)
@@ -127,7 +128,7 @@ def main() -> int:
     scene = mesh_scene(mesh)
     picture = VertexPicture(mesh, camera, spp=16, light=light)
     T = transport_matrices(model, mesh)
-    law = T.incidence("half-space")
+    law = T.incidence(args.incidence)
     E = vertex_irradiance(mesh, scene, light, incidence=law)
     exit_law = law.exit(view_cosines(mesh, camera.origin))
     fresnel = exit_fresnel(mesh, camera.origin, 1.0)[:, None]
@@ -142,6 +143,7 @@ def main() -> int:
         img = picture.draw(L if exit_law is None else L * exit_law)
         cmp = compare(reference, img, mask)
         stem = "".join(c if c.isalnum() else "_" for c in label) + ("" if args.colour == "shared" else "_pc")
+        stem += "" if args.incidence == "half-space" else "_" + args.incidence.replace("-", "_")
         save_images(img, args.work / stem, exposure)
         rows.append(
             {
@@ -188,10 +190,11 @@ def main() -> int:
         "evaluate_truth": evaluated,
         "acquire_s": t_acquire,
     }
-    out["colour"] = args.colour
-    (args.work / f"lean_objects{'' if args.colour == 'shared' else '_' + args.colour}.json").write_text(
-        json.dumps(out, indent=2)
+    out["colour"], out["incidence"] = args.colour, args.incidence
+    tag = ("" if args.colour == "shared" else "_" + args.colour) + (
+        "" if args.incidence == "half-space" else "_" + args.incidence
     )
+    (args.work / f"lean_objects{tag}.json").write_text(json.dumps(out, indent=2))
     print(f"reference noise {info['noise']:.3f}; written: {args.work / 'lean_objects.json'}")
     return 0
 
