@@ -195,7 +195,7 @@ def main() -> int:
         "" if args.incidence == "half-space" else "_" + args.incidence
     )
     (args.work / f"lean_objects{tag}.json").write_text(json.dumps(out, indent=2))
-    print(f"reference noise {info['noise']:.3f}; written: {args.work / 'lean_objects.json'}")
+    print(f"reference noise {info['noise']:.3f}; written: {args.work / f'lean_objects{tag}.json'}")
     return 0
 
 
