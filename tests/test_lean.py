@@ -164,6 +164,8 @@ def test_render_angles_from_the_command_line(leaned_ball, tmp_path):
         assert res.exit_code == 0, res.output
         runs[bool(flag)] = json.loads((out / "render.json").read_text())
     assert runs[True]["angles"] is True and runs[False]["angles"] is False
+    res = CliRunner().invoke(app, [*args[:2], "--size", "48", "36", "--light", "env:1", "--angles"])
+    assert res.exit_code == 0 and "a light of many directions has no one lean" in res.output, res.output
     line = error_line(["render", "--scene", str(tmp_path / "s.xml"), "--model", "a=b", "--angles"])
     assert "--angles" in line
     # glTF bakes the paper's model and says so in one line (a light of many directions: the same)
@@ -199,3 +201,18 @@ def test_evaluate_holds_the_lean_out_on_another_seed_s_oblique_beams(leaned_ball
         model.measured["lean"] = saved
     assert plain["lean"] is None and plain["paper"] == pytest.approx(ob["paper"], rel=1e-9)
     assert "oblique beams (4 a point)" in (tmp_path / "report" / "index.html").read_text()
+
+
+def test_a_lean_out_of_range_is_refused_before_it_is_written(leaned_ball, tmp_path):
+    """A κ beyond KAPPA_MAX (a lobe of e^{40}) is no model a file may hold: refused, nothing written."""
+    from translucency import TranslucencyError
+
+    _, model, _, _ = leaned_ball
+    saved = model.measured["lean"].copy()
+    try:
+        model.measured["lean"][0, 0, 1] = 20.0
+        with pytest.raises(TranslucencyError, match="measured/lean: κ must lie in"):
+            save_model(model, tmp_path / "bad.model.zip")
+    finally:
+        model.measured["lean"] = saved
+    assert not (tmp_path / "bad.model.zip").exists()

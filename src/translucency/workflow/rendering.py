@@ -199,6 +199,10 @@ def render_model(
             f"{f'; a smaller {flags} lowers it' if flags else ''})"
         )
         run.info(f"{placement.describe()}; light {lit!r}")
+        if angles and not (fitted.measured and "lean" in fitted.measured):  # one line: what is drawn instead
+            run.info("--angles: the model has no lean (fit data acquired with --incidence): paper's model")
+        elif angles and not lit.delta:
+            run.info("--angles: a light of many directions has no one lean: the paper's model is drawn")
         camera = Camera.looking_at(mesh, direction, *size)
         steps = 4 if reference else 3
         with run.work("render", total=steps) as work:
