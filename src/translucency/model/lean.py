@@ -26,7 +26,7 @@ oblique beam's light stays nearer the lit surface, as the direction oracle measu
 number, :math:`\lambda \ge 0` (mm⁻¹), shortens the kernel's reach by :math:`e^{-\lambda (1 - \cos\theta_t) r}`
 (:math:`\vec\ell \cdot n = 1 - \cos\theta_t`, :math:`r = |x_o - x_i|`): an oblique beam scatters first
 nearer the surface, so more of its light comes out near the entry (on the back-lit marble spot's data,
-0.30 of a 60° beam's power within 1 mm against the normal beam's 0.26; ``benchmarks/lean_objects.py``).
+0.30 of a 60° beam's power within 1 mm against the normal beam's 0.26; ``benchmarks/lean_bands.py``).
 
 :math:`\kappa \ge 0` (dimensionless) and λ are numbers per vertex and channel, fitted from the oblique beams
 (:func:`translucency.fit.lean.fit_lean`); κ is meant for both sides, so the structure is reciprocal: swapping
