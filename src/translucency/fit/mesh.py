@@ -105,6 +105,12 @@ def mean_edge_length(vertices: np.ndarray, faces: np.ndarray) -> float:
     return float(np.mean(np.linalg.norm(vertices[faces[:, 0]] - vertices[faces[:, 1]], axis=1)))
 
 
+def exclusion_radius(vertices: np.ndarray, faces: np.ndarray, exclusion_mm: float | None = None) -> float:
+    """The radius (mm) within which pairs are left out: ``exclusion_mm``, or the fit's default, half the
+    mean edge length (the incident vertex's own cell)."""
+    return mean_edge_length(vertices, faces) / 2 if exclusion_mm is None else float(exclusion_mm)
+
+
 def fit_mesh(
     path,
     model: str = "iso",

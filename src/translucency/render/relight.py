@@ -154,18 +154,11 @@ def relight_vertices(transport: Transport, E: np.ndarray) -> np.ndarray:
     E = np.asarray(E, dtype=np.float32)
     E = np.repeat(E[:, None], 3, axis=1) if E.ndim == 1 else E
     rows = transport.matrices[0].shape[0]
-    if transport.scale is None:  # one matrix per channel
-        X = E
-        out = np.stack([T @ E[:, ch] for ch, T in enumerate(transport.matrices)], axis=1)
-    elif len(transport.matrices) == 3:  # one matrix per channel and the colour scale (render/lean.py)
-        X = np.ascontiguousarray(E * transport.scale)
+    X = E if transport.scale is None else np.ascontiguousarray(E * transport.scale)
+    if len(transport.matrices) == 3:  # one matrix per channel (with the colour scale: render/lean.py)
         out = np.stack([T @ X[:, ch] for ch, T in enumerate(transport.matrices)], axis=1)
     else:
-        X, T, out = (
-            np.ascontiguousarray(E * transport.scale),
-            transport.matrices[0],
-            np.empty((rows, 3), np.float32),
-        )
+        T, out = transport.matrices[0], np.empty((rows, 3), np.float32)
         _csr_times_rgb(T.indptr, T.indices, T.data, X, out)
     if transport.own is not None:  # the receivers' own area: their own irradiance
         out += transport.own * (E if transport.receivers is None else E[transport.receivers])
