@@ -49,7 +49,7 @@ def main() -> int:
 
     def green(light_dir, view_dir, exit):
         tilted = leaned(T, ball, scene, DirectionalLight(tuple(-light_dir)), 1e5 * view_dir, exit=exit)
-        return tilted.matrices[1].tocsr()
+        return tilted.tilt.matrix(T, 1)
 
     for exit, label in ((False, "the light's lean (render --angles)"), (True, "the lean both ways")):
         forward, backward = green(l, v, exit).tocoo(), green(v, l, exit)

@@ -136,18 +136,66 @@ def test_the_leaned_transport_keeps_each_source_s_energy_and_is_the_paper_s_at_k
     area = vertex_areas(ball)
     tilted = leaned(T, ball, scene, light, eye, exit=False)
     for c in range(3):
-        M0 = T.matrices[min(c, len(T.matrices) - 1)].tocoo()
-        M1 = tilted.matrices[c].tocoo()
-        before = np.bincount(M0.col, area[M0.row] * M0.data, minlength=len(area))
-        after = np.bincount(M1.col, area[M1.row] * M1.data, minlength=len(area))
+        M0 = T.matrices[min(c, len(T.matrices) - 1)].tocsr()
+        row = np.repeat(np.arange(M0.shape[0]), np.diff(M0.indptr))
+        values = tilted.tilt.matrix(T, c).data
+        before = np.bincount(M0.indices, area[row] * M0.data, minlength=len(area))
+        after = np.bincount(M0.indices, area[row] * values, minlength=len(area))
         np.testing.assert_allclose(after, before, rtol=1e-4)  # the light's lean only redistributes
-        assert not np.allclose(M1.data, M0.data, rtol=1e-3)  # …and it does redistribute
+        assert not np.allclose(values, M0.data, rtol=1e-3)  # …and it does redistribute
     T.lean[:] = 0.0
     flat = leaned(T, ball, scene, light, eye, exit=True)
     for c in range(3):
         paper = T.matrices[min(c, len(T.matrices) - 1)]
-        np.testing.assert_allclose(flat.matrices[c].data, paper.data, rtol=1e-6)
+        np.testing.assert_allclose(flat.tilt.matrix(T, c).data, paper.data, rtol=1e-6)
     assert leaned(T, ball, scene, parse_light("env:1"), eye) is None  # many directions: the paper's model
+
+
+def test_the_fused_relight_is_the_lean_s_formula_written_plainly(leaned_ball):
+    """relight_vertices on a leaned transport (the sources' pairs in blocks, NumPy's exponential, one core's
+    share each) against the formula of render/lean.py written pair by pair in NumPy, both ways."""
+    from translucency.mitsuba import mesh_scene
+    from translucency.model.lean import exit_normalisation
+    from translucency.render.lean import leaned
+    from translucency.render.lights import parse_light
+    from translucency.render.relight import relight_vertices
+    from translucency.render.transport import transport_matrices
+
+    ball, model, _, _ = leaned_ball
+    scene = mesh_scene(ball)
+    light = parse_light("point:30,-20,10,1e3")
+    eye = np.array([-10.0, -40.0, 25.0])
+    T = transport_matrices(model, ball, far_field=False)
+    X = np.asarray(ball.vertices, dtype=np.float64)
+    n = np.asarray(ball.vertex_normals, dtype=np.float64)
+    area = vertex_areas(ball)
+    E = np.random.default_rng(1).uniform(0.5, 2.0, len(X))
+    for exit in (False, True):
+        got = relight_vertices(leaned(T, ball, scene, light, eye, exit=exit), E) - T.own * E[:, None]
+        w_light = light.arrival(scene, X, n)[0]
+        ell = lean_vector(w_light, n)
+        view = _unit(eye[None] - X)
+        ell_view = lean_vector(view, n)
+        want = np.zeros((len(X), 3))
+        for c in range(3):
+            M = T.matrices[min(c, len(T.matrices) - 1)].tocoo()
+            o, i = M.row, M.col
+            v = X[o] - X[i]
+            r = np.linalg.norm(v, axis=1)
+            d = np.divide(v, r[:, None], out=np.zeros_like(v), where=r[:, None] > 0)
+            kappa, lam = T.lean[:, 0, c], T.lean[:, 1, c]
+            g = np.exp(kappa[i] * np.sum(ell[i] * d, 1) - lam[i] * np.sum(ell[i] * n[i], 1) * r)
+            off = o != i
+            num = np.bincount(i, area[o] * M.data * g * off, minlength=len(X))
+            den = np.bincount(i, area[o] * M.data * off, minlength=len(X))
+            Z = np.where((num > 0) & (den > 0), num / np.where(den > 0, den, 1), 1.0)
+            f = g / Z[i]
+            if exit:
+                f *= np.exp(-kappa[o] * np.sum(ell_view[o] * d, 1)) / exit_normalisation(kappa[o], -d, n[o])
+            f = np.where(off, f, 1.0)
+            s = 1.0 if T.scale is None else T.scale[i, c]
+            want[:, c] = np.bincount(o, M.data * f * s * E[i], minlength=len(X))
+        np.testing.assert_allclose(got, want, rtol=2e-4, atol=1e-6 * np.abs(want).max())
 
 
 def test_render_angles_from_the_command_line(leaned_ball, tmp_path):

@@ -18,7 +18,7 @@ from ..io.atomic import atomic_path, write_json
 from ..mitsuba import mesh_scene
 from .camera import Camera
 from .compare import compare, region_errors
-from .lean import lean_applies
+from .lean import lean_applies, lean_pairs
 from .lights import DEFAULT_DISTANCE, Placement
 from .picture import VertexPicture, coverage
 from .reference import converged_reference
@@ -87,11 +87,12 @@ def figure2(
     t = time.perf_counter()
     mats = transport_matrices(model, mesh, radius=radius, through=through)
     scene = mesh_scene(mesh)  # for shadow rays
+    pairs = lean_pairs(mats, mesh, eta) if angles and lean_applies(mats, light) else None  # once per object
     t_prepare = time.perf_counter() - t
     step(1, "irradiance and relight")
     t = time.perf_counter()
     L, E, law = relight_object(
-        mats, mesh, scene, light, camera.origin, eta=eta, incidence=incidence, angles=angles
+        mats, mesh, scene, light, camera.origin, eta=eta, incidence=incidence, angles=angles, pairs=pairs
     )
     t_relight = time.perf_counter() - t
     step(2, "picture")

@@ -27,6 +27,7 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 import scipy.sparse as sp
 from numba import njit, prange
@@ -34,42 +35,48 @@ from numba import njit, prange
 from ..geometry import vertex_areas
 from ..model.lean import exit_normalisation, lean_vector
 
-#: pairs handled at once (about 400 bytes each in flight)
+#: pairs handled at once while preparing (about 400 bytes each in flight)
 _PAIRS_PER_BATCH = 1 << 21
 
 
 @dataclass(frozen=True)
 class LeanPairs:
     """What the lean needs of a transport's near pairs, independent of the light and the camera (built once
-    per transport by :func:`lean_pairs`)."""
+    per transport by :func:`lean_pairs`), in column order: each source's pairs together."""
 
-    o: np.ndarray  # (nnz,) receivers (mesh vertex indices)
-    i: np.ndarray  # (nnz,) sources
+    indptr: np.ndarray  # (V + 1,) each source's pairs: indptr[i] … indptr[i + 1]
+    row: np.ndarray  # (nnz,) int32 the receiver's row of the matrices (where its radiance goes)
+    rcv: np.ndarray  # (nnz,) int32 the receiver's mesh vertex
     d: np.ndarray  # (nnz, 3) float32 unit vectors from x_i to x_o (0 on the diagonal)
     r: np.ndarray  # (nnz,) float32 |x_o − x_i|, mm
-    N: np.ndarray | None  # (nnz, 3) float32 the exit normalisation per pair and channel (None: not needed)
-    weight: np.ndarray  # (nnz, 3) float32 A_o T_oi (with the colour scale): Z's weights
-    spread: np.ndarray  # (V, 3) Σ_o A_o T_oi per source: Z's denominator
+    T: np.ndarray  # (nnz, C) float32 the near matrices' values (C = 1 shared, or 3 channels)
+    area: np.ndarray  # (V,) float32 the vertices' areas A_o, mm²: Z's weights are A_o T_oi
+    diagonal: np.ndarray  # (V,) int64 each source's pair with itself (−1: none), left as it is
+    log_N: np.ndarray | None  # (nnz, 3) float32 ln of the exit normalisation per pair (None: no exit)
+    order: np.ndarray  # (nnz,) the pairs' positions in the matrices' CSR order
 
 
 def lean_pairs(transport, mesh, eta: float = 1.0, exit: bool = False) -> LeanPairs:
-    r"""The transport's near pairs as the lean reads them (:class:`LeanPairs`): rows, columns, the unit
-    vectors :math:`\hat d_{oi}`, the weights of :math:`Z_i` and, with ``exit``, the exit normalisation
-    :math:`N_{oi}` (:func:`~translucency.model.lean.exit_normalisation`: most of the preparation's time)."""
+    r"""The transport's near pairs as the lean reads them (:class:`LeanPairs`): each source's receivers, the
+    unit vectors :math:`\hat d_{oi}`, the values and, with ``exit``, the exit normalisation :math:`N_{oi}`
+    (:func:`~translucency.model.lean.exit_normalisation`: most of the preparation's time)."""
     T = transport.matrices[0].tocsr()
-    o = np.repeat(np.arange(T.shape[0]), np.diff(T.indptr))
-    i = T.indices.astype(np.int64)
+    C = T.T.tocsr()  # column order: (V, rows), each source's receivers in one row of C
+    V = T.shape[1]
+    rows = C.indices.astype(np.int32)
+    i = np.repeat(np.arange(V), np.diff(C.indptr))
+    # where each column-order pair sits in the CSR order (to read the values and to write checks back)
+    position = sp.csr_matrix((np.arange(T.nnz, dtype=np.float64) + 1, T.indices, T.indptr), shape=T.shape)
+    order = (position.T.tocsr().data - 1).astype(np.int64)
+    rcv = rows if transport.receivers is None else np.asarray(transport.receivers)[rows].astype(np.int32)
     X = np.asarray(mesh.vertices, dtype=np.float64)
     n = np.asarray(mesh.vertex_normals, dtype=np.float64)
-    if transport.receivers is not None:
-        o = np.asarray(transport.receivers)[o]
     kappa = transport.lean[:, 0].astype(np.float64)
-    area = vertex_areas(mesh)
-    d = np.zeros((len(o), 3), np.float32)
-    dist = np.zeros(len(o), np.float32)
-    N = np.ones((len(o), 3), np.float32) if exit else None
-    for s in range(0, len(o), _PAIRS_PER_BATCH):
-        oo, ii = o[s : s + _PAIRS_PER_BATCH], i[s : s + _PAIRS_PER_BATCH]
+    d = np.zeros((len(i), 3), np.float32)
+    dist = np.zeros(len(i), np.float32)
+    N = np.ones((len(i), 3), np.float32) if exit else None
+    for s in range(0, len(i), _PAIRS_PER_BATCH):
+        oo, ii = rcv[s : s + _PAIRS_PER_BATCH], i[s : s + _PAIRS_PER_BATCH]
         v = X[oo] - X[ii]
         r = np.linalg.norm(v, axis=1, keepdims=True)
         dd = np.divide(v, r, out=np.zeros_like(v), where=r > 0)
@@ -77,60 +84,156 @@ def lean_pairs(transport, mesh, eta: float = 1.0, exit: bool = False) -> LeanPai
         dist[s : s + len(oo)] = r[:, 0]
         if exit:
             N[s : s + len(oo)] = exit_normalisation(kappa[oo], -dd, n[oo], eta)
-    off = np.any(d != 0, axis=1)
-    weight = np.empty((len(o), 3), np.float32)
-    for c in range(3):
-        vals = transport.matrices[min(c, len(transport.matrices) - 1)].tocsr().data.astype(np.float64)
-        if transport.scale is not None:  # the shared-colour model: Z weighs with its scale too
-            vals = vals * transport.scale[i, c]
-        weight[:, c] = area[o] * vals * off
-    spread = np.stack([np.bincount(i, weight[:, c], minlength=len(X)) for c in range(3)], axis=1)
-    return LeanPairs(o=o, i=i, d=d, r=dist, N=N, weight=weight, spread=spread)
+    diagonal = np.full(V, -1, np.int64)
+    on = rcv == i
+    diagonal[i[on]] = np.flatnonzero(on)
+    values = np.stack([M.tocsr().data[order] for M in transport.matrices], axis=1).astype(np.float32)
+    return LeanPairs(
+        indptr=C.indptr.astype(np.int64), row=rows, rcv=rcv, d=d, r=dist, T=values,
+        area=vertex_areas(mesh).astype(np.float32), diagonal=diagonal, log_N=None if N is None else np.log(N),
+        order=order,
+    )  # fmt: skip
+
+
+@dataclass(frozen=True)
+class Tilt:
+    r"""One light's (and camera's) lean on a transport's near pairs — what :func:`leaned` computes per light;
+    :func:`~translucency.render.relight.relight_vertices` applies it in one pass over the sources
+    (:meth:`apply`), no matrix rebuilt."""
+
+    pairs: LeanPairs
+    ell: np.ndarray  # (V, 3) float32 the light's lean vector at each source
+    depth: np.ndarray  # (V,) float32 ℓ · n at each source (1 − cos θ_t)
+    kappa: np.ndarray  # (V, 3) float32
+    lam: np.ndarray  # (V, 3) float32, mm⁻¹
+    ell_view: np.ndarray | None  # (V, 3) float32 the camera's lean vector at each receiver (None: no exit)
+
+    def _run(self, X, out, values):
+        """Source blocks of about :data:`_PAIRS_PER_BLOCK` pairs: the exponents (Numba), their exponential
+        (NumPy's, vectorised), then Z and the receivers (Numba); each core adds into its own ``parts``."""
+        p = self.pairs
+        with_exit = self.ell_view is not None
+        parts = np.zeros((numba.get_num_threads(), out.shape[0], 3), np.float32)
+        bounds = np.searchsorted(p.indptr, np.arange(0, p.indptr[-1], _PAIRS_PER_BLOCK), side="right") - 1
+        bounds = np.unique(np.append(bounds, len(p.indptr) - 1))
+        longest = int(np.max(p.indptr[bounds[1:]] - p.indptr[bounds[:-1]], initial=0))
+        g_all = np.empty((longest, 3), np.float32)  # g_oi, then e^{g_oi} (one buffer, reused)
+        h_all = np.empty((longest if with_exit else 0, 3), np.float32)  # the camera's, then its lobe
+        for lo_i, hi_i in zip(bounds[:-1], bounds[1:]):
+            lo, hi = p.indptr[lo_i], p.indptr[hi_i]
+            g, h = g_all[: hi - lo], h_all[: hi - lo]
+            view, log_N = (self.ell_view, p.log_N) if with_exit else (self.ell, _NONE)  # (unread: no exit)
+            _exponents(lo_i, hi_i, p.indptr, p.rcv, p.d, p.r, self.ell, self.depth, self.kappa, self.lam,
+                       view, log_N, with_exit, g, h)  # fmt: skip
+            np.exp(g, out=g)
+            np.exp(h, out=h)
+            _to_receivers(lo_i, hi_i, p.indptr, p.row, p.rcv, p.T, p.area, p.diagonal, g, h, with_exit, X,
+                          parts, values)  # fmt: skip
+        out += parts.sum(axis=0)
+
+    def apply(self, X: np.ndarray, rows: int) -> np.ndarray:
+        """The tilted near transport times X (V, 3) (the irradiance with its colour scale): (rows, 3)."""
+        out = np.zeros((rows, 3), np.float32)
+        self._run(np.ascontiguousarray(X, dtype=np.float32), out, np.zeros((0, 3), np.float32))
+        return out
+
+    def matrix(self, transport, c: int) -> sp.csr_matrix:
+        """The tilted near matrix of channel ``c``, T'_c (for checks and analyses: the renderer never
+        builds it)."""
+        p = self.pairs
+        values = np.zeros((len(p.r), 3), np.float32)
+        self._run(np.zeros((len(p.area), 3), np.float32), np.zeros((1, 3), np.float32), values)
+        T = transport.matrices[min(c, len(transport.matrices) - 1)].tocsr()
+        data = np.empty(T.nnz, np.float32)
+        data[p.order] = values[:, c]
+        return sp.csr_matrix((data, T.indices, T.indptr), shape=T.shape)
+
+
+#: pairs whose exponentials are taken at once (a block stays in the cache)
+_PAIRS_PER_BLOCK = 1 << 16
+_NONE = np.zeros((1, 3), np.float32)  # (for an argument a kernel does not read)
 
 
 @njit(parallel=True, cache=True, fastmath=True)
-def _lobes(i, d, r, ell, depth, kappa, lam, lobe):
-    """Per pair and channel the light's lobe e^{κ_i ℓ_i · d − λ_i (ℓ_i · n_i) r} into ``lobe`` (nnz, 3);
-    ``depth`` (V,) is ℓ · n per source; 1 on the diagonal."""
-    for m in prange(i.shape[0]):
-        dx, dy, dz = d[m, 0], d[m, 1], d[m, 2]
-        if dx == 0.0 and dy == 0.0 and dz == 0.0:
+def _exponents(lo_i, hi_i, indptr, rcv, d, r, ell, depth, kappa, lam, ell_view, log_N, with_exit, g, h):
+    """For the pairs of sources lo_i … hi_i − 1: the light's exponent per channel,
+    g_oi = κ_i ℓ_i · d_oi − λ_i (ℓ_i · n_i) r_oi, into ``g`` and, ``with_exit``, the camera's,
+    −κ_o ℓ'_o · d_oi − ln N_oi, into ``h``."""
+    base = indptr[lo_i]
+    for i in prange(lo_i, hi_i):
+        e0, e1, e2, q = ell[i, 0], ell[i, 1], ell[i, 2], depth[i]
+        for m in range(indptr[i], indptr[i + 1]):
+            a = d[m, 0] * e0 + d[m, 1] * e1 + d[m, 2] * e2
+            reach = q * r[m]
             for c in range(3):
-                lobe[m, c] = 1.0
-            continue
-        src = i[m]
-        a = dx * ell[src, 0] + dy * ell[src, 1] + dz * ell[src, 2]
-        reach = depth[src] * r[m]
-        for c in range(3):
-            lobe[m, c] = np.exp(kappa[src, c] * a - lam[src, c] * reach)
-
-
-@njit(cache=True)
-def _source_means(i, weight, lobe, spread, Z):
-    """Z_i per channel (V, 3): Σ_o A_o T_oi lobe_oi / Σ_o A_o T_oi (1 where a source has no pairs)."""
-    acc = np.zeros(Z.shape)
-    for m in range(i.shape[0]):
-        s = i[m]
-        for c in range(3):
-            acc[s, c] += weight[m, c] * lobe[m, c]
-    for s in range(Z.shape[0]):
-        for c in range(3):
-            Z[s, c] = acc[s, c] / spread[s, c] if acc[s, c] > 0.0 and spread[s, c] > 0.0 else 1.0
+                g[m - base, c] = kappa[i, c] * a - lam[i, c] * reach
+            if with_exit:
+                o = rcv[m]
+                b = -(d[m, 0] * ell_view[o, 0] + d[m, 1] * ell_view[o, 1] + d[m, 2] * ell_view[o, 2])
+                for c in range(3):
+                    h[m - base, c] = kappa[o, c] * b - log_N[m, c]
 
 
 @njit(parallel=True, cache=True, fastmath=True)
-def _tilted(i, o, d, ell_view, kappa, N, with_exit, lobe, Z, T0, T1, T2, out):
-    """The leaned matrices' values (3, nnz): T_c · lobe / Z_i (· the camera's lobe, ``with_exit``)."""
-    for m in prange(i.shape[0]):
-        src, rcv = i[m], o[m]
-        b = -(d[m, 0] * ell_view[rcv, 0] + d[m, 1] * ell_view[rcv, 1] + d[m, 2] * ell_view[rcv, 2])
-        diagonal = d[m, 0] == 0.0 and d[m, 1] == 0.0 and d[m, 2] == 0.0
-        for c in range(3):
-            f = lobe[m, c] / Z[src, c]
-            if with_exit and not diagonal:
-                f *= np.exp(kappa[rcv, c] * b) / N[m, c]
-            t = T0[m] if c == 0 else (T1[m] if c == 1 else T2[m])
-            out[c, m] = t * (1.0 if diagonal else f)
+def _to_receivers(lo_i, hi_i, indptr, row, rcv, T, area, diagonal, g, h, with_exit, X, parts, values):
+    """The estimator of :func:`leaned` for sources lo_i … hi_i − 1, given the lobes e^{g_oi} in ``g`` (and the
+    camera's in ``h``).  Per source i and channel c:
+
+    1. Z_i = Σ_o A_o T_oi e^{g_oi} / Σ_o A_o T_oi over its receivers (the pair with itself left out);
+    2. each receiver o gets T_oi X_i e^{g_oi} / Z_i (× the camera's lobe, ``with_exit``), the diagonal
+       T_ii X_i, added into the core's own slice of ``parts`` (K, rows, 3).
+
+    With ``values`` of nnz rows, the factor itself (without X) is written there instead."""
+    base, K, C = indptr[lo_i], parts.shape[0], T.shape[1]
+    write = values.shape[0] > 0
+    n_src = hi_i - lo_i
+    for k in prange(K):
+        f = np.empty(3, np.float32)
+        for i in range(lo_i + k * n_src // K, lo_i + (k + 1) * n_src // K):
+            lo, hi, j = indptr[i], indptr[i + 1], diagonal[i]
+            n0 = n1 = n2 = d0 = d1 = d2 = np.float32(0.0)
+            for m in range(lo, hi):  # 1. Z's sums (the diagonal's lobe is 1: taken out below)
+                w = area[rcv[m]]
+                t0, t1, t2 = T[m, 0] * w, T[m, min(1, C - 1)] * w, T[m, min(2, C - 1)] * w
+                n0 += t0 * g[m - base, 0]
+                n1 += t1 * g[m - base, 1]
+                n2 += t2 * g[m - base, 2]
+                d0 += t0
+                d1 += t1
+                d2 += t2
+            if j >= 0:
+                w = area[rcv[j]]
+                t0, t1, t2 = T[j, 0] * w, T[j, min(1, C - 1)] * w, T[j, min(2, C - 1)] * w
+                n0, n1, n2, d0, d1, d2 = n0 - t0, n1 - t1, n2 - t2, d0 - t0, d1 - t1, d2 - t2
+            z0 = d0 / n0 if n0 > 0.0 and d0 > 0.0 else np.float32(1.0)  # 1 / Z_i per channel
+            z1 = d1 / n1 if n1 > 0.0 and d1 > 0.0 else np.float32(1.0)
+            z2 = d2 / n2 if n2 > 0.0 and d2 > 0.0 else np.float32(1.0)
+            x0, x1, x2 = X[i, 0] * z0, X[i, 1] * z1, X[i, 2] * z2
+            for m in range(lo, hi):  # 2. the receivers
+                f[0] = T[m, 0] * g[m - base, 0]
+                f[1] = T[m, min(1, C - 1)] * g[m - base, 1]
+                f[2] = T[m, min(2, C - 1)] * g[m - base, 2]
+                if with_exit:
+                    f[0] *= h[m - base, 0]
+                    f[1] *= h[m - base, 1]
+                    f[2] *= h[m - base, 2]
+                if write:
+                    values[m, 0], values[m, 1], values[m, 2] = f[0] * z0, f[1] * z1, f[2] * z2
+                else:
+                    o = row[m]
+                    parts[k, o, 0] += f[0] * x0
+                    parts[k, o, 1] += f[1] * x1
+                    parts[k, o, 2] += f[2] * x2
+            if j >= 0:  # a vertex's pair with itself keeps its value: T_ii X_i
+                o = row[j]
+                for c in range(3):
+                    tc = T[j, min(c, C - 1)]
+                    if write:
+                        values[j, c] = tc
+                    else:
+                        zc = z0 if c == 0 else (z1 if c == 1 else z2)
+                        e = g[j - base, c] * (h[j - base, c] if with_exit else np.float32(1.0))
+                        parts[k, o, c] += tc * X[i, c] * (np.float32(1.0) - e * zc)
 
 
 def lean_applies(transport, light) -> bool:
@@ -165,8 +268,8 @@ def leaned(transport, mesh, scene, light, eye, *, eta: float = 1.0, exit: bool =
     Returns
     -------
     Transport or None
-        Three matrices (one per channel; a shared-colour model keeps its scale), the same own area and
-        far field.
+        The same matrices, own area and far field, with the light's :class:`Tilt` (``tilt``), which
+        :func:`~translucency.render.relight.relight_vertices` applies to the near pairs.
 
     Examples
     --------
@@ -175,28 +278,21 @@ def leaned(transport, mesh, scene, light, eye, *, eta: float = 1.0, exit: bool =
     """
     if not lean_applies(transport, light):
         return None
+    if len({T.nnz for T in transport.matrices}) > 1:
+        raise ValueError("leaned: the channels' near matrices must share their pairs")
     p = lean_pairs(transport, mesh, eta, exit) if pairs is None else pairs
-    if exit and p.N is None:
+    if exit and p.log_N is None:
         p = lean_pairs(transport, mesh, eta, exit=True)
     X = np.asarray(mesh.vertices, dtype=np.float64)
     n = np.asarray(mesh.vertex_normals, dtype=np.float64)
-    V = len(X)
     w_light = light.arrival(scene, X, n)[0]
     ell = lean_vector(w_light, n, eta)  # (V, 3) at the sources
     depth = np.einsum("vk,vk->v", ell, n).astype(np.float32)  # ℓ · n = 1 − cos θ_t
-    ell = ell.astype(np.float32)
-    to_eye = np.asarray(eye, dtype=np.float64)[None, :] - X
-    to_eye /= np.linalg.norm(to_eye, axis=1, keepdims=True)
-    ell_view = lean_vector(to_eye, n, eta).astype(np.float32)  # (V, 3) at the receivers
-    lobe = np.empty((len(p.i), 3), np.float32)
+    ell_view = None
+    if exit:  # the camera's lean vector at the receivers
+        to_eye = np.asarray(eye, dtype=np.float64)[None, :] - X
+        to_eye /= np.linalg.norm(to_eye, axis=1, keepdims=True)
+        ell_view = lean_vector(to_eye, n, eta).astype(np.float32)
     kappa, lam = (np.ascontiguousarray(transport.lean[:, k], dtype=np.float32) for k in (0, 1))
-    _lobes(p.i, p.d, p.r, ell, depth, kappa, lam, lobe)
-    # Z_i: the source's lobe averaged over its receivers, weighted by the power each receives
-    Z = np.empty((V, 3))
-    _source_means(p.i, p.weight, lobe, p.spread, Z)
-    T = [transport.matrices[min(c, len(transport.matrices) - 1)].tocsr() for c in range(3)]
-    data = np.empty((3, len(p.i)), np.float32)
-    N = p.N if exit else lobe  # (unread without the exit)
-    _tilted(p.i, p.o, p.d, ell_view, kappa, N, exit, lobe, Z, T[0].data, T[1].data, T[2].data, data)
-    mats = [sp.csr_matrix((data[c], T[c].indices, T[c].indptr), shape=T[c].shape) for c in range(3)]
-    return dataclasses.replace(transport, matrices=mats)
+    tilt = Tilt(pairs=p, ell=ell.astype(np.float32), depth=depth, kappa=kappa, lam=lam, ell_view=ell_view)
+    return dataclasses.replace(transport, tilt=tilt)

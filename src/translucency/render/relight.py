@@ -28,7 +28,7 @@ from ..model.boundary import exit_factor
 from ..model.incidence import incidence_law
 from ._far_field import FarField
 from .irradiance import vertex_irradiance
-from .lean import leaned
+from .lean import Tilt, leaned
 
 
 def view_cosines(mesh, viewpoint) -> np.ndarray:
@@ -63,6 +63,7 @@ class Transport:
     reflectance: np.ndarray | None = None  # (V, 3) measured normal-incidence total reflectance, blended
     through: bool = False  # the model's through-body table is in the matrices (model/through.py)
     lean: np.ndarray | None = None  # (V, 2, 3) κ and λ of the lean per vertex (model/lean.py), or None
+    tilt: Tilt | None = None  # one light's lean on the near pairs (render/lean.py: leaned), or None
     receivers: np.ndarray | None = None  # the vertices whose radiance it gives (None: all; :meth:`rows`)
 
     def incidence(self, name: str = "half-space", eta: float = 1.0):
@@ -95,12 +96,16 @@ class Transport:
             far = dataclasses.replace(far, B=[(B @ P).tocsr() for B in far.B])
         matrices = [(T @ P).tocsr() for T in sub.matrices]
         # (the lean is per pair of vertices: a draft between cells draws the paper's model)
-        return dataclasses.replace(sub, matrices=matrices, scale=scale, far=far, receivers=None, lean=None)
+        return dataclasses.replace(
+            sub, matrices=matrices, scale=scale, far=far, receivers=None, lean=None, tilt=None
+        )
 
     def rows(self, receivers) -> Transport:
         """The same transport giving the radiance of ``receivers`` (vertex indices) only: the rows of the
         near matrices and of the far field's interpolation (a relight of a few vertices under a light
         that lights them all)."""
+        if self.tilt is not None:
+            raise ValueError("Transport.rows: take the rows before the lean (leaned), not after")
         r = np.asarray(receivers, dtype=np.int64)
         far = None
         if self.far is not None:
@@ -136,8 +141,10 @@ def relight_vertices(transport: Transport, E: np.ndarray) -> np.ndarray:
     (per receiving vertex, (R, 3), for a transport restricted by :meth:`Transport.rows`).
 
     With one shared matrix the three channels go through it together (the matrix is read once,
-    rows on all cores, Numba); otherwise one SciPy product per channel.  The far field (if prepared)
-    adds two sparse products and one K × K product per channel.
+    rows on all cores, Numba); otherwise one SciPy product per channel.  A transport with one light's
+    lean (``tilt``, :func:`translucency.render.lean.leaned`) goes through its sources' pairs once, the
+    lobes computed on the way (:meth:`~translucency.render.lean.Tilt.apply`).  The far field (if
+    prepared) adds two sparse products and one K × K product per channel.
 
     Examples
     --------
@@ -155,7 +162,9 @@ def relight_vertices(transport: Transport, E: np.ndarray) -> np.ndarray:
     E = np.repeat(E[:, None], 3, axis=1) if E.ndim == 1 else E
     rows = transport.matrices[0].shape[0]
     X = E if transport.scale is None else np.ascontiguousarray(E * transport.scale)
-    if len(transport.matrices) == 3:  # one matrix per channel (with the colour scale: render/lean.py)
+    if transport.tilt is not None:  # one light's lean, source by source (render/lean.py)
+        out = transport.tilt.apply(X, rows)
+    elif len(transport.matrices) == 3:  # one matrix per channel
         out = np.stack([T @ X[:, ch] for ch, T in enumerate(transport.matrices)], axis=1)
     else:
         T, out = transport.matrices[0], np.empty((rows, 3), np.float32)
@@ -177,6 +186,7 @@ def relight_object(
     eta: float = 1.0,
     incidence: str = "half-space",
     angles: bool = False,
+    pairs=None,
 ):
     r"""What the camera at ``viewpoint`` sees of every vertex under ``light``: radiance (V, 3), W/(mm² sr).
 
@@ -187,7 +197,9 @@ def relight_object(
     model that has a lean (:mod:`translucency.model.lean`) and a light of one direction per vertex, the
     near pairs lean toward the light's and the camera's directions
     (:func:`translucency.render.lean.leaned`); otherwise the paper's diffuse transport
-    (:func:`translucency.render.lean.lean_applies` says which is drawn).
+    (:func:`translucency.render.lean.lean_applies` says which is drawn); ``pairs``: the lean's pairs
+    prepared once per transport (:func:`translucency.render.lean.lean_pairs`), to keep them out of the
+    per-light time.
 
     Returns
     -------
@@ -202,7 +214,7 @@ def relight_object(
     """
     law = transport.incidence(incidence, eta)
     E = vertex_irradiance(mesh, scene, light, eta, law)
-    tilted = leaned(transport, mesh, scene, light, viewpoint, eta=eta) if angles else None
+    tilted = leaned(transport, mesh, scene, light, viewpoint, eta=eta, pairs=pairs) if angles else None
     L = relight_vertices(tilted or transport, E) * exit_fresnel(mesh, viewpoint, eta)[:, None]
     exit_law = law.exit(view_cosines(mesh, viewpoint))
     return (L if exit_law is None else L * exit_law), E, law
