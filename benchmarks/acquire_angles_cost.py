@@ -1,4 +1,5 @@
-"""The cost of the angle axes in ``acquire mesh`` (issue 37, item 2): time per photon and size on disk.
+"""The cost of the angle axes in ``acquire mesh`` and ``acquire planar`` (issue 37, item 2): time per photon
+and size on disk.
 
 Times, in one run, the same acquisition three ways — the paper's normal beams (the baseline), the same
 with exit bins, and normal + oblique beams (``--incidence 60 --azimuths 4``) with exit bins — and prints
@@ -6,11 +7,12 @@ seconds per photon walked (photons × directions × 3 channels) with its ratio t
 data set's size on disk (Zarr, Zstandard)::
 
     python benchmarks/acquire_angles_cost.py [MESH.obj] [--size=20] [--points=8] [--photons=20000]
-        [--material=marble] [--repeats=2]
+        [--material=marble] [--repeats=2] [--planar=1]
 
 MESH defaults to ``../shared/meshes/spot.obj`` when it is there, else a 2,562-vertex icosphere.  The first
 run of each way is a warm-up (Dr.Jit compiles its kernels); the medians of ``--repeats`` further runs are
-printed.
+printed.  ``--planar=1``: the same three ways on a planar scan instead (a 30 × 30 × 10 mm slab of the
+material at 0.5 mm voxels, ``--points`` incident points in a row, windows of 10 mm at 0.25 mm pixels).
 """
 
 from __future__ import annotations
@@ -19,6 +21,7 @@ import shutil
 import sys
 import tempfile
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -27,7 +30,7 @@ from _options import options, sized_mesh
 from translucency.acquire.mesh import acquire_mesh, object_volume
 from translucency.angles import ExitBins, Incidence
 
-DEFAULTS = {"size": 20.0, "points": 8, "photons": 20000, "material": "marble", "repeats": 2}
+DEFAULTS = {"size": 20.0, "points": 8, "photons": 20000, "material": "marble", "repeats": 2, "planar": 0}
 
 
 def _bytes(path: Path) -> int:
@@ -36,8 +39,28 @@ def _bytes(path: Path) -> int:
 
 def main(argv) -> None:
     path, o = options(argv, DEFAULTS)
-    mesh = sized_mesh(path, o["size"])
-    volume = object_volume(o["material"], mesh, 0.5, seed=1)
+    if o["planar"]:
+        from translucency.acquire import make_sample
+        from translucency.acquire.planar import PlanarSetup, acquire_planar
+
+        volume = make_sample(o["material"], (30.0, 30.0, 10.0), 0.5, seed=1)
+        setup = PlanarSetup(
+            grid=(o["points"], 1), span=(10.0, 1.0), pitch=0.25, window=10.0, photons=o["photons"],
+            index_matched=True,
+        )  # fmt: skip
+        what = f"a {o['material']} slab 30 x 30 x 10 mm, windows of {setup.window_pixels()}^2 pixels"
+
+        def acquire(out, **kw):
+            acquire_planar(volume, replace(setup, **kw), out)
+    else:
+        mesh = sized_mesh(path, o["size"])
+        volume = object_volume(o["material"], mesh, 0.5, seed=1)
+        what = f"{len(mesh.vertices):,} vertices"
+
+        def acquire(out, **kw):
+            n, photons = o["points"], o["photons"]
+            acquire_mesh(mesh, volume, out, n_points=n, photons=photons, index_matched=True, **kw)
+
     ways = {
         "normal beams (baseline)": dict(),
         "normal + exit bins (3 x 2)": dict(exit_bins=ExitBins(3)),
@@ -47,7 +70,7 @@ def main(argv) -> None:
     }
     folder = Path(tempfile.mkdtemp(prefix="angles-cost-"))
     print(
-        f"{len(mesh.vertices):,} vertices, {o['points']} points x {o['photons']:,} photons x 3 channels, "
+        f"{what}, {o['points']} points x {o['photons']:,} photons x 3 channels, "
         f"{o['material']}, {o['repeats']} timed runs after a warm-up"
     )
     base = None
@@ -58,9 +81,7 @@ def main(argv) -> None:
             out = folder / f"{len(seconds)}.zarr"
             shutil.rmtree(out, ignore_errors=True)
             t = time.perf_counter()
-            acquire_mesh(
-                mesh, volume, out, n_points=o["points"], photons=o["photons"], index_matched=True, **kw
-            )
+            acquire(out, **kw)
             if r:
                 seconds.append(time.perf_counter() - t)
         walked = o["points"] * o["photons"] * 3 * directions

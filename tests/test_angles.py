@@ -161,3 +161,71 @@ def _check_the_tally_s_exit_law(binned, plain):
     assert np.array_equal(got, want)
     with pytest.raises(TranslucencyError, match="no exit bins"):
         tabulated_from_tally(plain)
+
+
+def test_a_planar_scan_s_oblique_beams_and_exit_bins_match_chandrasekhar(tmp_path):
+    """``acquire planar --incidence 60 --exit-bins 3`` on a 30 mm index-matched slab (a half-space to < 1 %,
+    the mesh test's): each beam's light leaving the top face is the plane albedo R(μ₀) at μ₀ = 1 and 0.5,
+    its exits fall in the polar bins as ∫ μ H(μ)/(μ + μ₀), the bins add up to R_d, and each oblique beam's
+    light lands downstream of x_i (away from the light's azimuth); the normal beam is the same bit for bit
+    as a scan without the axes, which reads as one direction without bins."""
+    from translucency.acquire.planar import PlanarSetup, acquire_planar
+    from translucency.acquire.volume import Volume
+    from translucency.model.incidence import plane_albedo
+
+    a = np.array([0.5, 0.8, 0.95])
+    vol = Volume.homogeneous((6, 12, 12), 5.0, a, 1 - a, 0.0, 1.0)
+    N, bins, inc = 20_000, ExitBins(polar=3), Incidence((60.0,), 4)
+    kw = dict(grid=(1, 1), span=(0.0, 0.0), pitch=1.0, window=41.0, photons=N, index_matched=True)
+    ds = acquire_planar(vol, PlanarSetup(**kw, incidence=inc, exit_bins=bins), tmp_path / "angles.zarr")
+    plain = acquire_planar(vol, PlanarSetup(**kw), tmp_path / "plain.zarr")
+    assert np.array_equal(ds["R_d"], plain["R_d"])
+    assert np.array_equal(ds["total_diffuse"], plain["total_diffuse"])
+    assert plain.incidence.count == 1 and plain.exit_bins is None and "R_d_oblique" not in plain.group
+    assert ds.incidence == inc and ds.exit_bins == bins
+    g = ds.group
+    R = np.concatenate([g["R_d"][:1][:, None], g["R_d_oblique"][:1]], axis=1)[0]  # (D, n, n, 3)
+    top = np.concatenate([g["total_diffuse"][:1][:, None], g["total_diffuse_oblique"][:1]], axis=1)[0]
+    binned = np.asarray(g["exit_bins"], np.float64)[0]  # (D, n, n, 3, B)
+    n = ds.window[0]
+    x = (np.arange(n) - n // 2) * ds.pitch  # pixel centres about x_i (the centre pixel), mm
+    for d, (mu0, toward) in enumerate(zip([1.0, 0.5, 0.5, 0.5, 0.5], inc.local())):
+        assert np.allclose(binned[d].sum(-1), R[d], rtol=1e-5, atol=1e-9)
+        expect = plane_albedo(mu0, a)
+        sigma = np.sqrt(expect * (1 - expect) / N)
+        assert np.all(np.abs(top[d] - expect) < 4 * sigma + 0.005), (d, top[d], expect)
+        polar = binned[d].sum(axis=(0, 1)).reshape(3, bins.polar, 2).sum(-1) * ds.pitch**2  # (channel, polar)
+        for c in range(3):
+            share, want = polar[c] / polar[c].sum(), _bin_shares(mu0, a[c], bins.edges_cos)
+            sigma = np.sqrt(want * (1 - want) / (expect[c] * N))
+            assert np.all(np.abs(share - want) < 4 * sigma + 0.005), (d, c, share, want)
+        if d:  # the centroid of the reflected light: downstream, against the light's tangential direction
+            w = R[d, ..., 2]
+            centroid = np.array([np.sum(w * x[None, :]), np.sum(w * x[:, None])]) / w.sum()
+            assert centroid @ toward[:2] < -0.1 * np.linalg.norm(toward[:2]), (d, centroid, toward)
+    assert np.asarray(g["specular_oblique"]).max() == 0  # index-matched: no Fresnel reflection
+
+
+def test_acquire_planar_with_the_angle_axes_from_the_command_line(tmp_path):
+    """The CLI's --incidence/--azimuths/--exit-bins on a planar scan, a resume with the same arguments, and
+    --angle with --incidence refused in one line."""
+    from typer.testing import CliRunner
+
+    from helpers import error_line
+    from translucency.cli.app import app
+    from translucency.io.dataset import open_dataset
+
+    out = tmp_path / "scan.zarr"
+    args = ["acquire", "planar", "--out", str(out), "-m", "homogeneous:skin1", "--size", "8", "8", "3",
+            "--voxel", "1", "--grid", "2", "--span", "2", "--window", "3", "--pitch", "0.5",
+            "--photons", "300", "--incidence", "45", "--azimuths", "2", "--exit-bins", "2", "-q"]  # fmt: skip
+    for _ in range(2):  # the second run finds it finished
+        res = CliRunner().invoke(app, args)
+        assert res.exit_code == 0, res.output
+    ds = open_dataset(out)
+    assert ds.incidence == Incidence((45.0,), 2) and ds.exit_bins == ExitBins(2)
+    assert ds.group["R_d_oblique"].shape == (4, 2, 7, 7, 3)
+    assert ds.group["exit_bins"].shape == (4, 3, 7, 7, 3, 4)
+    assert not ds.damaged_chunks()
+    line = error_line([*args[:3], str(tmp_path / "other.zarr"), *args[4:], "--angle", "30"])
+    assert "--angle" in line and "--incidence" in line

@@ -169,3 +169,56 @@ class ExitBins:
     def from_header(cls, record: dict | None) -> ExitBins | None:
         """From a header's record; None where the data set has no exit bins."""
         return cls(int(record["polar"])) if record else None
+
+
+def angle_record(incidence: Incidence | None, exit_bins: ExitBins | None) -> dict:
+    """The header's (and the request's) ``angles`` record of a data set: empty where it has neither axis, so
+    that data sets made before the axes existed read and resume as they were."""
+    record = {}
+    if incidence is not None and incidence.count > 1:
+        record["incidence"] = incidence.describe()
+    if exit_bins is not None:
+        record["exit_bins"] = exit_bins.describe()
+    return record
+
+
+def angle_arrays(record: dict | None, P: int, per_beam: tuple[int, ...]) -> list[tuple[str, tuple]]:
+    """The arrays an ``angles`` record announces, with their shapes, for P incident points whose beams are
+    tallied over ``per_beam`` (a mesh's (V,), a planar window's (H, W)); D directions, B exit bins:
+
+    ``R_d_oblique`` (P, D − 1, *per_beam, 3), ``specular_oblique`` (P, D − 1, 3) and ``exit_bins``
+    (P, D, *per_beam, 3, B) — none for a record without the axes.
+
+    Examples
+    --------
+    >>> record = angle_record(Incidence((60.0,), 4), ExitBins(3))
+    >>> [(name, shape) for name, shape in angle_arrays(record, 8, (5, 5))][::2]
+    [('R_d_oblique', (8, 4, 5, 5, 3)), ('exit_bins', (8, 5, 5, 5, 3, 6))]
+    """
+    record = record or {}
+    D = Incidence.from_header(record.get("incidence")).count
+    bins = ExitBins.from_header(record.get("exit_bins"))
+    arrays = []
+    if D > 1:
+        arrays += [("R_d_oblique", (P, D - 1, *per_beam, 3)), ("specular_oblique", (P, D - 1, 3))]
+    if bins is not None:
+        arrays += [("exit_bins", (P, D, *per_beam, 3, bins.count))]
+    return arrays
+
+
+class AngleAxes:
+    """The angle axes of a data set whose header carries an ``angles`` record (mixed into the mesh and the
+    planar data sets): the normal beam only and no exit bins where it has none."""
+
+    header: dict
+
+    @property
+    def incidence(self) -> Incidence:
+        """The directions of the beams at each incident point (the normal only for a data set without the
+        axis)."""
+        return Incidence.from_header((self.header.get("angles") or {}).get("incidence"))
+
+    @property
+    def exit_bins(self) -> ExitBins | None:
+        """The exit bins the tally counted in, or None."""
+        return ExitBins.from_header((self.header.get("angles") or {}).get("exit_bins"))

@@ -35,7 +35,7 @@ import numpy as np
 import trimesh
 
 from .._validate import TranslucencyError, plain
-from ..angles import ExitBins, Incidence
+from ..angles import ExitBins, Incidence, angle_record
 from ..cluster import open_cluster, parse_scheduler
 from ..geometry import farthest_points, tangent_frames, vertex_areas
 from ..io.mesh_dataset import create_mesh_dataset, mesh_header
@@ -117,11 +117,7 @@ def acquire_mesh(
         "tally": "barycentric",
     }
     incidence = incidence or Incidence()
-    angles = {}
-    if incidence.count > 1:
-        angles["incidence"] = incidence.describe()
-    if exit_bins is not None:
-        angles["exit_bins"] = exit_bins.describe()
+    angles = angle_record(incidence, exit_bins)
     if angles:  # (absent otherwise: the data sets made before the axes existed resume as they were)
         request["angles"] = angles
     request = json.loads(json.dumps(request))

@@ -26,6 +26,7 @@ import numpy as np
 
 from .._validate import TranslucencyError
 from .._version import __version__
+from ..angles import ExitBins, Incidence, angle_record
 from ..cluster import open_cluster, parse_scheduler
 from ..io.dataset import FORMAT, VERSION, PlanarDataset, create_dataset
 from ..io.outputs import output_lock
@@ -62,6 +63,8 @@ class PlanarSetup:
     index_matched: bool = False
     chunk_points: int = 16
     dtype: str = "float32"
+    incidence: Incidence = Incidence()  # oblique beams besides the normal one (angles.py)
+    exit_bins: ExitBins | None = None  # the exits tallied by direction too
 
     def check(self, volume: Volume) -> None:
         """Refuse bad arguments before any work, naming the parameter."""
@@ -84,6 +87,11 @@ class PlanarSetup:
             raise TranslucencyError(f"photons: must be >= 1, got {self.photons}")
         if not 0 <= self.theta_inc_deg < 90:
             raise TranslucencyError(f"angle: must lie in [0, 90) degrees, got {self.theta_inc_deg}")
+        if self.theta_inc_deg != 0 and self.incidence.count > 1:
+            raise TranslucencyError(
+                "angle: with --incidence the first beam is the normal one and the oblique ones are the "
+                f"--incidence angles; leave --angle at 0 (got {self.theta_inc_deg:g})"
+            )
         if self.dtype not in ("float32", "float16"):
             raise TranslucencyError(f"dtype: expected float32 or float16, got {self.dtype!r}")
         if self.chunk_points < 1:
@@ -268,8 +276,8 @@ def acquire_planar(
     n = setup.window_pixels()
     P = len(x_i)
     origin = x_i - setup.pitch * n / 2.0
-    # as stored (JSON: tuples become lists), so that a resume compares like with like
-    request = json.loads(json.dumps({"setup": asdict(setup), "volume": _volume_fingerprint(volume)}))
+    angles = angle_record(setup.incidence, setup.exit_bins)
+    request = {**setup_request(setup), "volume": _volume_fingerprint(volume)}
     header = {
         "format": FORMAT,
         "version": VERSION,
@@ -295,6 +303,7 @@ def acquire_planar(
         },
         "software": {"translucency": __version__, **mi_versions},
         "request": request,
+        **({"angles": angles} if angles else {}),
         # every chunk of every array is a file (all-zero ones too, :func:`_every_chunk`): a missing
         # file is damage; stores made before say nothing here and may lack their all-zero chunks
         "chunk_files": "every",
@@ -327,6 +336,15 @@ def acquire_planar(
         return ds
 
 
+def setup_request(setup: PlanarSetup) -> dict:
+    """The setup as a data set's ``request`` records it (JSON: tuples become lists, so that a resume
+    compares like with like): ``setup`` and, only where there are any, the angle axes (``angles``: a data
+    set made before them resumes as it was)."""
+    fields = {k: v for k, v in asdict(setup).items() if k not in ("incidence", "exit_bins")}
+    angles = angle_record(setup.incidence, setup.exit_bins)
+    return json.loads(json.dumps({"setup": fields, **({"angles": angles} if angles else {})}))
+
+
 def _acquire_chunk(
     volume: Volume,
     setup: PlanarSetup,
@@ -346,8 +364,40 @@ def _acquire_chunk(
     g = ds.group
     W, H, _ = volume.size_mm
     n = setup.window_pixels()
+    # pixel centres on the sample?
+    cx = origin[:, 0, None, None] + setup.pitch * (np.arange(n)[None, None, :] + 0.5)
+    cy = origin[:, 1, None, None] + setup.pitch * (np.arange(n)[None, :, None] + 0.5)
+    mask = (cx >= 0) & (cx <= W) & (cy >= 0) & (cy <= H)
+    out = _every_chunk(g)
+    toward = setup.incidence.local()  # the slab's tangent frame is (x, y, z)
+    for d in range(setup.incidence.count):
+        beam = (d, None if d == 0 else toward[d])
+        R_d, var, spec, top, binned = _tally_beam(volume, setup, lo, hi, x_i, origin, batch_photons, *beam)
+        if d == 0:
+            out("R_d")[lo:hi] = R_d.astype(setup.dtype)
+            out("variance")[lo:hi] = var.astype(setup.dtype)
+            out("mask")[lo:hi] = mask
+            out("specular")[lo:hi] = spec.astype(np.float32)
+            out("total_diffuse")[lo:hi] = top.astype(np.float32)
+        else:  # (the variance of an oblique beam is the same Poisson estimate: not stored)
+            out("R_d_oblique")[lo:hi, d - 1] = R_d.astype(setup.dtype)
+            out("specular_oblique")[lo:hi, d - 1] = spec.astype(np.float32)
+            out("total_diffuse_oblique")[lo:hi, d - 1] = top.astype(np.float32)
+        if binned is not None:
+            out("exit_bins")[lo:hi, d] = binned.astype(setup.dtype)
+    out("chunk_done")[c] = True  # last: the chunk is complete
+
+
+def _tally_beam(volume, setup, lo, hi, x_i, origin, batch_photons, d, toward_light):
+    """One beam direction of points lo..hi (direction ``d`` of the setup's incidence; ``toward_light`` None:
+    the setup's own angle): R_d and its variance (points, n, n, 3), the specular and top-face shares
+    (points, 3) and, with exit bins, R_d split by exit bin (points, n, n, 3, B).  Direction 0 draws the same
+    photons as before the angle axes existed; direction d another stream."""
+    n = setup.window_pixels()
     area = setup.pitch**2
-    counts = np.zeros((hi - lo, n, n, 3))
+    bins = setup.exit_bins
+    B = 1 if bins is None else bins.count
+    counts = np.zeros((hi - lo, n, n, 3, B))
     spec = np.zeros((hi - lo, 3))
     top = np.zeros((hi - lo, 3))
     per_launch = max(1, batch_photons // setup.photons)
@@ -359,9 +409,10 @@ def _acquire_chunk(
                 ch,
                 x_i[b0 - lo : b1 - lo],
                 setup.photons,
-                seed=setup.seed,
+                seed=setup.seed + 104_729 * d,
                 first_point=b0,
                 theta_inc_deg=setup.theta_inc_deg,
+                toward_light=None if toward_light is None else tuple(float(v) for v in toward_light),
                 index_matched=setup.index_matched,
             )
             m = b1 - b0
@@ -375,23 +426,23 @@ def _acquire_chunk(
             col = np.floor((res.x[is_top] - origin[b0 - lo + pt, 0]) / setup.pitch).astype(np.int64)
             row = np.floor((res.y[is_top] - origin[b0 - lo + pt, 1]) / setup.pitch).astype(np.int64)
             inside = (col >= 0) & (col < n) & (row >= 0) & (row < n)
-            flat = ((off + pt[inside]) * n + row[inside]) * n + col[inside]
-            counts[..., ch] += np.bincount(flat, minlength=(hi - lo) * n * n).reshape(hi - lo, n, n)
+            b = np.zeros(int(inside.sum()), np.int64)
+            if bins is not None:  # the exit's direction in the air, and away from x_i or back toward it
+                xy = res.exit_xy[is_top][inside]
+                omega = np.column_stack([xy, res.cos_exit[is_top][inside]])
+                away = np.column_stack(
+                    [res.x[is_top][inside] - x_i[b0 - lo + pt[inside], 0],
+                     res.y[is_top][inside] - x_i[b0 - lo + pt[inside], 1], np.zeros(len(b))]
+                )  # fmt: skip
+                b = bins.index(omega, np.broadcast_to([0.0, 0.0, 1.0], omega.shape), away)
+            flat = (((off + pt[inside]) * n + row[inside]) * n + col[inside]) * B + b
+            counts[..., ch, :] += np.bincount(flat, minlength=(hi - lo) * n * n * B).reshape(hi - lo, n, n, B)
     N = float(setup.photons)
-    p_hat = counts / N
+    p_hat = counts.sum(axis=-1) / N
     R_d = p_hat / area
     var = p_hat * (1.0 - p_hat) / (N * area**2)
-    # pixel centres on the sample?
-    cx = origin[:, 0, None, None] + setup.pitch * (np.arange(n)[None, None, :] + 0.5)
-    cy = origin[:, 1, None, None] + setup.pitch * (np.arange(n)[None, :, None] + 0.5)
-    mask = (cx >= 0) & (cx <= W) & (cy >= 0) & (cy <= H)
-    out = _every_chunk(g)
-    out("R_d")[lo:hi] = R_d.astype(setup.dtype)
-    out("variance")[lo:hi] = var.astype(setup.dtype)
-    out("mask")[lo:hi] = mask
-    out("specular")[lo:hi] = (spec / N).astype(np.float32)
-    out("total_diffuse")[lo:hi] = (top / N).astype(np.float32)
-    out("chunk_done")[c] = True  # last: the chunk is complete
+    binned = None if bins is None else counts / (N * area)
+    return R_d, var, spec / N, top / N, binned
 
 
 def _every_chunk(group):

@@ -56,6 +56,7 @@ class WalkResult:
     cos_exit: np.ndarray | None = (
         None  # cosine of the exit direction to the top normal (+z) for TOP exits, else 0
     )
+    exit_xy: np.ndarray | None = None  # (n, 2) the exit direction's x, y in the air for TOP exits, else 0
 
 
 def _hg_sample(mi, dr, d, g: float, u1, u2):
@@ -122,6 +123,7 @@ def random_walk(
     seed: int = 0,
     first_point: int = 0,
     theta_inc_deg: float = 0.0,
+    toward_light: tuple[float, float, float] | None = None,
     index_matched: bool = False,
     max_steps: int = 200_000,
 ) -> WalkResult:
@@ -142,7 +144,10 @@ def random_walk(
     first_point : int
         Global index of ``entry_xy[0]`` (photon streams are numbered globally).
     theta_inc_deg : float
-        Angle of incidence from the normal, in the x–z plane, degrees.
+        Angle of incidence from the normal, in the x–z plane (the beam travels toward +x), degrees.
+    toward_light : tuple of 3 floats, optional
+        In place of ``theta_inc_deg``: the unit direction toward the light (z > 0); the beam flies along
+        its opposite and is refracted at the top face.
     index_matched : bool
         Treat the boundary as index-matched (no Fresnel reflection or refraction).
     max_steps : int
@@ -166,11 +171,14 @@ def random_walk(
     )
 
     # -- entry: Fresnel at the top face, then refraction (Snell) -----------------------
-    th = np.radians(theta_inc_deg)
-    cos_in = float(np.cos(th))
+    if toward_light is None:  # from −x in the x–z plane
+        th = np.radians(theta_inc_deg)
+        toward_light = (-np.sin(th), 0.0, np.cos(th))
+    w = np.asarray(toward_light, dtype=np.float64)
+    cos_in = float(w[2])
     F_in = float(mi.fresnel(Float(cos_in), Float(eta))[0][0]) if eta != 1.0 else 0.0
-    sin_t = np.sin(th) / eta
-    d0 = mi.Vector3f(float(sin_t), 0.0, -float(np.sqrt(1.0 - sin_t**2)))
+    t_x, t_y = (0.0 - w[0]) / eta, (0.0 - w[1]) / eta  # Snell: the travel's tangential part shrinks by 1/η
+    d0 = mi.Vector3f(float(t_x), float(t_y), -float(np.sqrt(1.0 - t_x**2 - t_y**2)))
     specular = rng.next_float32() < F_in
     ex = dr.gather(Float, Float(entry_xy[:, 0].astype(np.float32)), point)
     ey = dr.gather(Float, Float(entry_xy[:, 1].astype(np.float32)), point)
@@ -244,8 +252,15 @@ def random_walk(
     # Snell's law refracts the inside cosine c to sqrt(1 - η²(1 - c²)) outside
     c_in = np.where(code_np == TOP, np.asarray(direction.z, dtype=np.float64), 0.0)
     cos_exit = np.where(code_np == TOP, np.sqrt(np.clip(1.0 - eta**2 * (1.0 - c_in**2), 0.0, 1.0)), 0.0)
+    top = (code_np == TOP)[:, None]  # the tangential part of the direction grows by η on the way out
+    exit_xy = np.where(top, eta * np.stack([np.asarray(direction.x), np.asarray(direction.y)], axis=1), 0.0)
     return WalkResult(
-        code=code_np, x=np.asarray(pos.x), y=np.asarray(pos.y), steps=int(dr.sum(steps)[0]), cos_exit=cos_exit
+        code=code_np,
+        x=np.asarray(pos.x),
+        y=np.asarray(pos.y),
+        steps=int(dr.sum(steps)[0]),
+        cos_exit=cos_exit,
+        exit_xy=exit_xy,
     )
 
 

@@ -112,6 +112,25 @@ def acquire_photographs_cmd(
     )
 
 
+class AngleOptions:
+    """The angle axes' options, shared by ``acquire planar`` and ``acquire mesh`` (translucency.angles)."""
+
+    incidence = typer.Option(
+        [],
+        "--incidence",
+        help="Also beams arriving at this polar angle (degrees from the normal), at --azimuths azimuths "
+        "about it (a mesh point's tangent frame; a slab's x, y); repeat for more angles. Cost: photons x "
+        "directions.",
+    )
+    azimuths = typer.Option(4, "--azimuths", help="Azimuths per --incidence angle.")
+    exit_bins = typer.Option(
+        0,
+        "--exit-bins",
+        help="Also tally each exit by direction: this many polar bins of equal projected solid angle x "
+        "2 halves (away from / back toward the incident point); 0: none.",
+    )
+
+
 class PlanarOptions:
     """The options of ``acquire planar`` (a class of their own keeps the command short)."""
 
@@ -143,6 +162,9 @@ class PlanarOptions:
     voxel = typer.Option(0.25, "--voxel", help="Voxel size of generated samples, mm.")
     g = typer.Option(0.0, "--g", help="Henyey-Greenstein anisotropy of generated samples.")
     angle = typer.Option(0.0, "--angle", help="Angle of incidence from the normal, degrees.")
+    incidence = AngleOptions.incidence
+    azimuths = AngleOptions.azimuths
+    exit_bins = AngleOptions.exit_bins
     index_matched = typer.Option(False, "--index-matched", help="No Fresnel reflection at the boundary.")
     chunk = typer.Option(16, "--chunk", help="Incident points per chunk (unit of resuming).")
     dtype = typer.Option("float32", "--dtype", help="Storage of R_d and variance: float32 or float16.")
@@ -170,6 +192,9 @@ def acquire_planar_cmd(
     voxel: float = PlanarOptions.voxel,
     g: float = PlanarOptions.g,
     angle: float = PlanarOptions.angle,
+    incidence: list[float] = PlanarOptions.incidence,
+    azimuths: int = PlanarOptions.azimuths,
+    exit_bins: int = PlanarOptions.exit_bins,
     index_matched: bool = PlanarOptions.index_matched,
     chunk: int = PlanarOptions.chunk,
     dtype: str = PlanarOptions.dtype,
@@ -196,6 +221,9 @@ def acquire_planar_cmd(
         voxel_mm=voxel,
         g=g,
         angle=angle,
+        incidence=incidence,
+        azimuths=azimuths,
+        exit_bins=exit_bins,
         index_matched=index_matched,
         chunk_points=chunk,
         dtype=dtype,
@@ -238,19 +266,9 @@ class MeshOptions:
         "--reentry/--no-reentry",
         help="Light leaving one part through the air into another (a horn by the head) walks on there.",
     )
-    incidence = typer.Option(
-        [],
-        "--incidence",
-        help="Also beams arriving at this polar angle (degrees from the normal), at --azimuths azimuths "
-        "of each point's tangent frame; repeat for more angles. Cost: photons x directions.",
-    )
-    azimuths = typer.Option(4, "--azimuths", help="Azimuths per --incidence angle.")
-    exit_bins = typer.Option(
-        0,
-        "--exit-bins",
-        help="Also tally each exit by direction: this many polar bins of equal projected solid angle x "
-        "2 halves (away from / back toward the incident point); 0: none.",
-    )
+    incidence = AngleOptions.incidence
+    azimuths = AngleOptions.azimuths
+    exit_bins = AngleOptions.exit_bins
     overwrite = dataset_overwrite_option()
     scheduler = scheduler_option()
     max_memory = max_memory_option()

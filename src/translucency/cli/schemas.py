@@ -103,12 +103,17 @@ _ACQUIRED = {
     "seed": field("integer", "Random seed of the photons."),
     "complete": field("boolean", "Every chunk of points is acquired."),
 }
+_ACQUIRED_ANGLES = {
+    "directions": field("integer", "Directions of incidence per point, the normal included."),
+    "exit_bins": field("integer", "Exit direction bins per exit point (0: none; --exit-bins)."),
+}
 ACQUIRE_PLANAR = record(
     "`translucency acquire planar --json`: the planar data set written.",
     {
         "command": _command("acquire planar"),
         **_ACQUIRED,
         "window_pixels": array("Window height, width around each incident point.", INTEGER, "pixels"),
+        **_ACQUIRED_ANGLES,
         **_WORKING,
     },
 )
@@ -118,8 +123,7 @@ ACQUIRE_MESH = record(
         "command": _command("acquire mesh"),
         **_ACQUIRED,
         "vertices": field("integer", "Vertices of the mesh (the outgoing points)."),
-        "directions": field("integer", "Directions of incidence per point, the normal included."),
-        "exit_bins": field("integer", "Exit direction bins per vertex (0: none; --exit-bins)."),
+        **_ACQUIRED_ANGLES,
         **_WORKING,
     },
 )
@@ -524,6 +528,19 @@ _STORE = {
     "complete": field("boolean", "Every chunk acquired."),
     "software": field("object", "Versions of the software that wrote it."),
 }
+_INFO_ANGLES = {
+    "incidence": record(
+        "The beams' directions at each incident point (translucency.angles.Incidence).",
+        {
+            "polar_deg": array("Polar angles of the oblique beams (none: normal only).", NUMBER, "deg"),
+            "azimuths": field("integer", "Azimuths per polar angle."),
+            "directions": field("integer", "Directions per point, the normal included."),
+        },
+    ),
+    "exit_bins": field(
+        ["integer", "null"], "Exit direction bins per exit point (polar x 2 halves); null: none."
+    ),
+}
 INFO_PLANAR = record(
     "`translucency info PLANAR.zarr --json`.",
     {
@@ -532,6 +549,7 @@ INFO_PLANAR = record(
         "window_px": array("Window height, width around each incident point.", INTEGER, "pixels"),
         "pitch_mm": field("number", "Pixel size.", "mm"),
         "dtype": field("string", "Storage of R_d: float32 or float16."),
+        **_INFO_ANGLES,
         **_STORE,
     },
 )
@@ -547,17 +565,7 @@ INFO_MESH = record(
             ["boolean", "null"],
             "A tally: light leaving one part through the air walked on in the next (null: photographs).",
         ),
-        "incidence": record(
-            "The beams' directions at each incident point (translucency.angles.Incidence).",
-            {
-                "polar_deg": array("Polar angles of the oblique beams (none: normal only).", NUMBER, "deg"),
-                "azimuths": field("integer", "Azimuths per polar angle."),
-                "directions": field("integer", "Directions per point, the normal included."),
-            },
-        ),
-        "exit_bins": field(
-            ["integer", "null"], "Exit direction bins per vertex (polar x 2 halves); null: none."
-        ),
+        **_INFO_ANGLES,
         **BOUNDS,
         **_STORE,
     },

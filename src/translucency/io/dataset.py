@@ -17,6 +17,16 @@ Layout (P incident points, windows of H × W pixels, 3 channels)::
     total_diffuse      (P, 3) float32   all light leaving the top face, inside the window or not
     chunk_done         (n_chunks,) bool written last for each chunk of points: resume marker
 
+With the angle axes (``acquire planar --incidence/--exit-bins``, header ``angles``; D directions, the
+normal first, and B exit bins: :mod:`translucency.angles`)::
+
+    R_d_oblique           (P, D-1, H, W, 3)    R_d of the oblique beams (their variance: Poisson, from
+                                               the photon count, as the normal beam's)
+    specular_oblique      (P, D-1, 3) float32  their Fresnel reflection at entry
+    total_diffuse_oblique (P, D-1, 3) float32  all their light leaving the top face
+    exit_bins             (P, D, H, W, 3, B)   the part of each R_d (normal, then oblique) that left
+                                               through each exit bin
+
 Header (JSON): ``format`` = "translucency-dataset", ``version`` = 1,
 ``units`` ({length: mm, R_d: mm^-2, variance: mm^-4}), ``pitch_mm``,
 ``window`` [H, W], ``n_points``, ``chunk_points``, ``dtype``, ``sample``
@@ -34,6 +44,7 @@ import numpy as np
 
 from .._validate import TranslucencyError, as_float_array
 from .._version import __version__
+from ..angles import AngleAxes, Incidence, angle_arrays
 from ._store import ChunkedStore, check_shapes, open_store
 from .outputs import claim_output, reopen_or_clear
 
@@ -41,18 +52,31 @@ FORMAT = "translucency-dataset"
 VERSION = 1
 HEADER_KEY = "translucency_dataset"
 _ARRAYS = ("x_i", "window_origin", "R_d", "variance", "mask", "specular", "total_diffuse", "chunk_done")
+_ANGLES = ("R_d_oblique", "specular_oblique", "total_diffuse_oblique", "exit_bins")
 
 
-class PlanarDataset(ChunkedStore):
+def _planar_angle_arrays(header: dict) -> list[tuple[str, tuple]]:
+    """The angle axes' arrays a planar header announces, with their shapes (none without ``angles``)."""
+    P, (H, W) = header["n_points"], header["window"]
+    arrays = angle_arrays(header.get("angles"), P, (H, W))
+    D = Incidence.from_header((header.get("angles") or {}).get("incidence")).count
+    return arrays + ([("total_diffuse_oblique", (P, D - 1, 3))] if D > 1 else [])
+
+
+class PlanarDataset(AngleAxes, ChunkedStore):
     """An opened data set; arrays are read lazily from the Zarr group."""
 
     KIND = "planar data set"
     HEADER_KEY = HEADER_KEY
     FORMAT = FORMAT
     VERSION = VERSION
-    ARRAYS = _ARRAYS
-    PER_POINT = ("R_d", "variance", "mask", "specular", "total_diffuse")
+    ARRAYS = (*_ARRAYS, *_ANGLES)
     ROW = "incident point"
+
+    @property
+    def PER_POINT(self) -> tuple[str, ...]:  # noqa: N802 — the store's name for it
+        angles = (name for name in _ANGLES if name in self.group)
+        return ("R_d", "variance", "mask", "specular", "total_diffuse", *angles)
 
     @property
     def pitch(self) -> float:
@@ -103,13 +127,20 @@ class PlanarDataset(ChunkedStore):
                 "chunk_done": (-(-P // k),),
             },
         )
+        for name, shape in _planar_angle_arrays(header):  # the angle axes the header announces
+            if name not in group:
+                raise TranslucencyError(f"{path}: header has angles but array {name!r} is missing")
+            if tuple(group[name].shape) != shape:
+                raise TranslucencyError(
+                    f"{path}: array {name!r} has shape {tuple(group[name].shape)}, expected {shape}"
+                )
         return cls(path, header, group)
 
     def _expects_files(self, name: str) -> bool:
         # chunks holding only the fill value may be absent by design in older stores (Zarr does not
         # write them); R_d and the mask of a finished chunk never are, nor any chunk of a store
         # written with every chunk as a file (its header says so)
-        return name in ("R_d", "mask") or self.header.get("chunk_files") == "every"
+        return name in ("R_d", "mask", *_ANGLES) or self.header.get("chunk_files") == "every"
 
 
 def create_dataset(path, header: dict, *, overwrite: bool = False, inputs=(), resume: bool = True):
@@ -164,6 +195,9 @@ def create_dataset(path, header: dict, *, overwrite: bool = False, inputs=(), re
         "total_diffuse": ((P, 3), "float32", (k, 3)),
         "chunk_done": ((n_chunks,), "bool", (1,)),
     }
+    for name, shape in _planar_angle_arrays(header):  # by points, one direction a chunk
+        specs[name] = (shape, "float32" if name.endswith("_oblique") and len(shape) == 3 else dtype,
+                       (k, 1, *shape[2:]))  # fmt: skip
     for name, (shape, dt, chunks) in specs.items():
         root.create_array(
             name,
@@ -306,4 +340,6 @@ def describe(ds: PlanarDataset) -> dict:
         window_px=[int(v) for v in h["window"]],
         pitch_mm=float(h["pitch_mm"]),
         dtype=h["dtype"],
+        incidence={**ds.incidence.describe(), "directions": ds.incidence.count},
+        exit_bins=None if ds.exit_bins is None else ds.exit_bins.count,
     )

@@ -51,7 +51,7 @@ import numpy as np
 
 from .._validate import TranslucencyError
 from .._version import __version__
-from ..angles import ExitBins, Incidence
+from ..angles import AngleAxes, angle_arrays
 from ..geometry import object_bounds, tangent_frames
 from ._store import ChunkedStore, check_shapes, open_store
 from .outputs import kind_of, reopen_or_clear
@@ -67,7 +67,7 @@ _ARRAYS = ("vertices", "faces", "normals", "vertex_area", "incident", "R_d", "sp
 _ANGLES = ("R_d_oblique", "specular_oblique", "exit_bins")  # present where the header announces them
 
 
-class MeshDataset(ChunkedStore):
+class MeshDataset(AngleAxes, ChunkedStore):
     """An opened mesh data set; arrays are read lazily from the Zarr group.
 
     For every finished chunk of points :meth:`damaged_chunks` looks for the ``R_d`` file (every chunk
@@ -105,7 +105,7 @@ class MeshDataset(ChunkedStore):
                 "chunk_done": (None,),
             },
         )
-        announced = _angle_arrays(header, P, V)
+        announced = angle_arrays(header.get("angles"), P, (V,))
         measured = [("R_d_var", (P, V, 3)), ("flags", (P, V))]  # a measured data set's (optional)
         for name, shape in [*measured, *announced]:
             if name in group and tuple(group[name].shape) != shape:
@@ -123,17 +123,6 @@ class MeshDataset(ChunkedStore):
     @property
     def chunk_points(self) -> int:
         return int(self.group["R_d"].chunks[0])
-
-    @property
-    def incidence(self) -> Incidence:
-        """The directions of the beams at each incident point (the normal only for a data set without the
-        axis)."""
-        return Incidence.from_header((self.header.get("angles") or {}).get("incidence"))
-
-    @property
-    def exit_bins(self) -> ExitBins | None:
-        """The exit bins the tally counted in, or None."""
-        return ExitBins.from_header((self.header.get("angles") or {}).get("exit_bins"))
 
     def incident_frames(self) -> np.ndarray:
         """(P, 3, 3) tangent frames (t, b, n) of the incident points, in which :attr:`incidence`'s
@@ -171,20 +160,6 @@ class MeshDataset(ChunkedStore):
         import trimesh  # heavy: trimesh loads only where the surface is used (not for info or a fit)
 
         return trimesh.Trimesh(self["vertices"].astype(np.float64), self["faces"], process=False)
-
-
-def _angle_arrays(header: dict, P: int, V: int) -> list[tuple[str, tuple]]:
-    """The angle axes' arrays (module notes) a header announces, with their shapes: none for a data set
-    without ``angles``."""
-    angles = header.get("angles") or {}
-    D = Incidence.from_header(angles.get("incidence")).count
-    bins = ExitBins.from_header(angles.get("exit_bins"))
-    arrays = []
-    if D > 1:
-        arrays += [("R_d_oblique", (P, D - 1, V, 3)), ("specular_oblique", (P, D - 1, 3))]
-    if bins is not None:
-        arrays += [("exit_bins", (P, D, V, 3, bins.count))]
-    return arrays
 
 
 def is_mesh_dataset(path) -> bool:
@@ -314,7 +289,7 @@ def create_mesh_dataset(
             fill_value=0,
             config=every,
         )
-    for name, shape in _angle_arrays(header, P, V):  # chunked by points and one direction a chunk
+    for name, shape in angle_arrays(header.get("angles"), P, (V,)):  # by points, one direction a chunk
         root.create_array(
             name,
             shape=shape,

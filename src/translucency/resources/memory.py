@@ -193,8 +193,12 @@ def planar_acquisition(
     voxels: float,
     dtype: str = "float32",
     batch_photons: int = 4_000_000,
+    directions: int = 1,
+    exit_bins: int = 0,
 ) -> Need:
-    r"""``acquire planar``: P = grid² = nx·ny, windows of n × n pixels (n = window/pitch, odd), k a chunk.
+    r"""``acquire planar``: P = grid² = nx·ny, windows of n × n pixels (n = window/pitch, odd), k a chunk;
+    with the angle axes D beam directions and B exit bins (the chunk's counts hold B bins a pixel, one
+    direction at a time; the disk D times R_d, plus B bins of each).
 
     .. math::
         M = M_{mi} + 100\,V_{vox} + 140\,b + 40 \cdot 3\,k n^2,
@@ -214,10 +218,11 @@ def planar_acquisition(
     parts = {
         "the volume: --size / --voxel": 100 * voxels,
         "photons in flight: --photons": 140 * b,
-        "a chunk of windows: --chunk x (--window / --pitch)^2": 40 * 3 * k * n * n,
+        "a chunk of windows: --chunk x (--window / --pitch)^2": 40 * 3 * k * n * n * (1 + exit_bins),
     }
     s = 2 if dtype == "float16" else 4
-    disk = P * n * n * (3 * 2 * s + 1) + 40 * P
+    disk = P * n * n * (3 * 2 * s + 1) + 40 * P + (directions - 1) * P * (n * n * 3 * s + 24)
+    disk += directions * P * n * n * 3 * s * exit_bins
     return Need(BASE_MITSUBA + sum(parts.values()), disk, max(parts, key=parts.get))
 
 

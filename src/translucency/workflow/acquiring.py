@@ -11,7 +11,6 @@ keeps the chunks done), the work, and the summary the command prints.  Units: mm
 from __future__ import annotations
 
 import dataclasses
-import json
 from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import NamedTuple
@@ -24,6 +23,7 @@ from ..acquire import PlanarSetup, Volume, estimate_seconds, load_volume, make_s
 from ..acquire import acquire_planar as scan_planar
 from ..acquire.mesh import acquire_mesh as scan_mesh
 from ..acquire.mesh import check_filling, object_volume
+from ..acquire.planar import setup_request
 from ..angles import ExitBins, Incidence
 from ..cluster import parse_scheduler
 from ..io.dataset import PlanarDataset, open_dataset
@@ -63,6 +63,9 @@ def acquire_planar(
     voxel_mm: float = 0.25,
     g: float = 0.0,
     angle: float = 0.0,
+    incidence: Sequence[float] = (),
+    azimuths: int = 4,
+    exit_bins: int = 0,
     index_matched: bool = False,
     chunk_points: int = 16,
     dtype: str = "float32",
@@ -102,6 +105,15 @@ def acquire_planar(
         A generated sample's voxel size (mm) and Henyey-Greenstein anisotropy.
     angle : float
         Angle of incidence from the normal, degrees.
+    incidence : sequence of float
+        Polar angles (degrees from the normal) of oblique beams besides the normal one, each at
+        ``azimuths`` azimuths of the slab's frame (x, y, z) (:class:`translucency.angles.Incidence`;
+        ``angle`` stays 0 then); stored as ``R_d_oblique`` and its specular and top-face shares.
+    azimuths : int
+        Azimuths per ``incidence`` angle.
+    exit_bins : int
+        Also tally each exit by direction: this many polar bins × 2 halves
+        (:class:`translucency.angles.ExitBins`); 0: none.
     index_matched : bool
         No Fresnel reflection at the boundary.
     chunk_points : int
@@ -140,6 +152,11 @@ def acquire_planar(
     parse_scheduler(scheduler)  # a bad value or an unreachable cluster: one line, before work
     out = as_path("out", out)
     setup = _planar_setup(grid, span, pitch, window, photons, seed, angle, index_matched, chunk_points, dtype)
+    setup = dataclasses.replace(
+        setup,
+        incidence=Incidence(tuple(float(t) for t in incidence), whole_number("azimuths", azimuths)),
+        exit_bins=ExitBins(whole_number("exit_bins", exit_bins)) if exit_bins else None,
+    )
     sample_seed = whole_number("sample_seed", seed if sample_seed is None else sample_seed, lo=0)
     size, voxel_mm, g = slab_of(size, voxel_mm, g)
     run = Run("acquire planar", max_memory=max_memory, reporter=reporter)
@@ -154,6 +171,8 @@ def acquire_planar(
             chunk=setup.chunk_points,
             voxels=voxels,
             dtype=setup.dtype,
+            directions=setup.incidence.count,
+            exit_bins=0 if setup.exit_bins is None else setup.exit_bins.count,
         )
         return run.check(n, out, resumed=True)  # a resumed acquisition keeps what is there
 
@@ -186,6 +205,8 @@ def acquire_planar(
             "out": out,
             "points": ds.n_points,
             "window_pixels": ds.window,
+            "directions": setup.incidence.count,
+            "exit_bins": 0 if setup.exit_bins is None else setup.exit_bins.count,
             "photons": setup.photons,
             "seed": setup.seed,
             "complete": ds.complete(),
@@ -221,18 +242,23 @@ def _timed_planar(run: Run, volume: Volume, setup: PlanarSetup, out: Path, estim
     its note for Ctrl-C; the data set it resumes, if any."""
     walk = probe_walk(volume, setup)  # a short trace of this volume: its steps a photon, this machine's speed
     P = setup.grid[0] * setup.grid[1]
-    state = _resumable(out, open_dataset, lambda request: request.get("setup") == _jsonable(setup))
+    want = setup_request(setup)  # the same setup and the same angle axes (none: none)
+    same = lambda request: all(request.get(k) == want.get(k) for k in ("setup", "angles"))  # noqa: E731
+    state = _resumable(out, open_dataset, same)
     share = 1.0 if state is None else state.points_left / P  # what is left of the work
+    D = setup.incidence.count  # photons × directions
     units = resources.timing.planar_acquisition_units(
         points=round(share * P),
-        photon_steps=share * estimate_seconds(volume, setup, steps_per_second=1.0, probe=walk),
+        photon_steps=share * D * estimate_seconds(volume, setup, steps_per_second=1.0, probe=walk),
         pixels=round(share * P) * setup.window_pixels() ** 2,
     )
     first = resources.timing.probe_factor("acquire planar", "photon_steps", walk.seconds_per_step)
     timing = run.time(units, (first, "from a probe of the walk on this sample"))
     run.kept = lambda: kept_chunks(out, open_dataset)
     run.info(
-        f"{_resuming(state)}{round(share * P)} incident points x {setup.photons:,} photons x 3 channels on a "
+        f"{_resuming(state)}{round(share * P)} incident points x {setup.photons:,} photons x 3 channels"
+        f"{f' x {D} directions' if D > 1 else ''}"
+        f"{f' ({setup.exit_bins.count} exit bins)' if setup.exit_bins else ''} on a "
         f"{' x '.join(f'{v:g}' for v in volume.size_mm)} mm slab; time {timing.text()}, "
         f"memory ~{estimate.memory / 2**20:,.0f} MiB",
     )
@@ -463,11 +489,6 @@ def _left(state: Resumed | None, points: int) -> int:
 
 def _matches(request: dict, same: dict) -> bool:
     return all(request.get(k) == v for k, v in same.items())
-
-
-def _jsonable(setup) -> dict:
-    """The setup as its data set's request records it (JSON)."""
-    return json.loads(json.dumps(dataclasses.asdict(setup)))
 
 
 def _resuming(state: Resumed | None) -> str:
