@@ -463,6 +463,48 @@ def base_rig(tmp_path_factory):
     return write_rig(tmp_path_factory.mktemp("base"))
 
 
+def test_an_oblique_laser_shot_is_stored_with_its_direction_and_said_not_silently_taken_as_normal(
+    base_rig, tmp_path
+):
+    """The base rig's third shot is a ray 16.7° off its face's normal (vertex and point hits say nothing of
+    the beam: taken along the normal).  The import stores each shot's direction toward the laser and its
+    polar angle at the incident vertex, and says in one warning line which shots are oblique; a 60° ray is
+    read as 60°; the fit says it reads them as normal beams."""
+    from translucency.fit.mesh import fit_mesh
+
+    mesh, hit = base_rig.mesh, np.asarray(base_rig.hits[2])
+    face = int(np.argmin(np.linalg.norm(mesh.triangles_center - hit, axis=1)))
+
+    def steep(rig):  # the third shot's laser 60° off its face's normal instead of 16.7°
+        n = mesh.face_normals[face]
+        t = np.cross(n, [0.0, 0.0, 1.0])
+        t /= np.linalg.norm(t)
+        back = np.cos(np.radians(60)) * n + np.sin(np.radians(60)) * t
+        ray = {"origin": (hit + 30 * back).tolist(), "direction": (-back).tolist()}
+        rig["shots"][2]["hit"] = {"ray": ray}
+
+    steep_path = _variant(base_rig, "steep", steep)
+    for name, path, want in (("base", base_rig.folder, 16.70), ("steep", steep_path, 60.0)):
+        out = tmp_path / f"{name}.zarr"
+        with pytest.warns(UserWarning, match=r"1 shot\(s\) \(2\) arrive .*° off the normal") as caught:
+            info = import_object(path, out, exit_law="lambertian")
+        assert sum("off the normal" in str(w.message) for w in caught) == 1
+        ds = open_mesh_dataset(out)
+        rec = ds.header["photographs"]
+        rig = json.loads(Path(path).read_text()) if Path(path).is_file() else base_rig.rig
+        ray = np.asarray(rig["shots"][2]["hit"]["ray"]["direction"], np.float64)
+        np.testing.assert_allclose(rec["toward_laser"][2], -ray / np.linalg.norm(ray), atol=1e-6)
+        incident = np.asarray(ds["incident"])
+        normals = np.asarray(ds["normals"], np.float64)[incident]
+        np.testing.assert_allclose(rec["toward_laser"][:2], normals[:2], atol=1e-5)  # vertex, point: normal
+        polar = np.asarray(info["beam_polar_deg"])
+        # at the incident vertex, not the face: off the face's angle by at most the two normals' angle
+        tilt = np.degrees(np.arccos(np.clip(normals[2] @ mesh.face_normals[face], -1, 1)))
+        assert polar[:2].max() < 1e-3 and abs(polar[2] - want) <= tilt + 0.01, (polar, tilt)
+        with pytest.warns(UserWarning, match="fitted to them as if they were normal beams"):
+            fit_mesh(out, "iso")
+
+
 def _variant(base: SyntheticRig, name: str, edit) -> Path:
     """A rig file beside the base one (sharing its mesh and images) with ``edit(rig)`` applied."""
     rig = json.loads(json.dumps(base.rig))

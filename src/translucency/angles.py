@@ -37,6 +37,22 @@ import numpy as np
 
 from ._validate import TranslucencyError
 
+#: a beam farther than this from its incident point's normal (degrees) is oblique: the paper's model, fitted
+#: to normal beams, does not describe it (``import object`` and ``fit`` say so)
+OBLIQUE_DEG = 10.0
+
+
+def polar_deg(toward: np.ndarray, normals: np.ndarray) -> np.ndarray:
+    """Polar angles (degrees) of unit directions ``toward`` the light from unit ``normals``, row by row.
+
+    Examples
+    --------
+    >>> polar_deg(np.array([[0.0, 0.5, np.sqrt(0.75)]]), np.array([[0.0, 0.0, 1.0]])).round(6).tolist()
+    [30.0]
+    """
+    cos = np.einsum("pk,pk->p", np.asarray(toward, np.float64), np.asarray(normals, np.float64))
+    return np.degrees(np.arccos(np.clip(cos, -1.0, 1.0)))
+
 
 @dataclass(frozen=True)
 class Incidence:

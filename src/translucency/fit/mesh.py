@@ -18,10 +18,12 @@ from __future__ import annotations
 import hashlib
 import json
 import time
+import warnings
 
 import numpy as np
 
 from .._validate import TranslucencyError
+from ..angles import OBLIQUE_DEG
 from ..geometry import tangent_frames
 from ..io.mesh_dataset import open_mesh_dataset
 from ..model import VertexAlpha
@@ -181,6 +183,15 @@ def fit_mesh(
     if not ds.complete():
         raise TranslucencyError(f"{ds.path}: the acquisition is unfinished; resume it before fitting")
     group, header = ds.group, ds.header
+    polar = np.asarray((header.get("photographs") or {}).get("beam_polar_deg", ()), dtype=np.float64)
+    oblique = polar[polar > OBLIQUE_DEG]
+    if len(oblique):  # a lab's oblique laser shots (import object): one line, not silence
+        warnings.warn(
+            f"{ds.path}: {len(oblique)} beam(s) arrive {oblique.min():.0f}–{oblique.max():.0f}° off the "
+            "normal (photographs.beam_polar_deg); the paper's model is fitted to them as if they were normal "
+            "beams",
+            stacklevel=2,
+        )
     source = _MeshSource(group, header, alpha_radius)
     exclusion = source.pitch / 2 if exclusion_mm is None else float(exclusion_mm)
     diagonal = float(np.linalg.norm(np.ptp(source.vertices, axis=0)))

@@ -278,6 +278,7 @@ def import_object(
             "rays_per_pixel": info["rays_per_pixel"],
             "energy": info["energy"],
             "energy_sigma": info["energy_sigma"],
+            "beam_polar_deg": info["beam_polar_deg"],
             "images_MB": mb,
             "seconds": info["seconds"],
             "throughput_MB_s": mb / max(info["seconds"], 1e-9),

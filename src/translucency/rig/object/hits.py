@@ -17,15 +17,18 @@ from .setup import ObjectRig
 HIT_TOLERANCE_EDGES = 0.5
 
 
-def incident_vertices(rig: ObjectRig, mesh, scene) -> tuple[np.ndarray, np.ndarray]:
-    """Each shot's hit as a point on the surface (P, 3) and its nearest vertex (P,); a hit off the mesh,
-    on a back-facing side or out of range is refused in one line naming the shot."""
+def incident_vertices(rig: ObjectRig, mesh, scene) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Each shot's nearest vertex (P,), its hit as a point on the surface (P, 3) and the unit direction
+    toward the laser (P, 3): the ray's, reversed, or the vertex normal where the hit is given as a vertex or
+    a point (the rig then says nothing of the beam's direction: taken along the normal).  A hit off the
+    mesh, on a back-facing side or out of range is refused in one line naming the shot."""
     from scipy.spatial import cKDTree  # heavy: SciPy's spatial index loads where hits are snapped
 
     verts = np.asarray(mesh.vertices, dtype=np.float64)
     edge = float(np.mean(mesh.edges_unique_length))
     tree = cKDTree(verts)
     points = np.zeros((len(rig.shots), 3))
+    toward = np.full((len(rig.shots), 3), np.nan)
     for shot in rig.shots:
         where = f"{rig.path}: shot {shot.index}: hit"
         h = shot.hit
@@ -61,8 +64,11 @@ def incident_vertices(rig: ObjectRig, mesh, scene) -> tuple[np.ndarray, np.ndarr
             if np.dot(mesh.face_normals[face], d) >= 0:
                 raise TranslucencyError(f"{where}: the laser ray hits a back-facing side of the mesh first")
             points[shot.index] = o + float(np.asarray(si.t)[0]) * d
+            toward[shot.index] = -d
     _, incident = tree.query(points)
-    return np.asarray(incident, dtype=np.int64), points
+    incident = np.asarray(incident, dtype=np.int64)
+    normals = np.asarray(mesh.vertex_normals, dtype=np.float64)[incident]
+    return incident, points, np.where(np.isnan(toward), normals, toward)
 
 
 def _closest_on_surface(mesh, tree, p: np.ndarray) -> tuple[np.ndarray, float]:

@@ -50,6 +50,7 @@ from pathlib import Path
 import numpy as np
 
 from ..._validate import TranslucencyError
+from ...angles import OBLIQUE_DEG, polar_deg
 from ...geometry import vertex_areas
 from ...io.mesh_dataset import MeshDataset, create_mesh_dataset, mesh_header, open_mesh_dataset
 from ...io.outputs import remove_dataset
@@ -149,6 +150,7 @@ def import_object(
         "seconds": time.perf_counter() - t0,
         "bytes_read": importer.bytes_read,
         "incident": importer.incident.tolist(),
+        "beam_polar_deg": importer.header["photographs"]["beam_polar_deg"],
     }
 
 
@@ -212,7 +214,9 @@ class ObjectImport:
         V = len(mesh.vertices)
         posed = [calibrated_camera(c, setup.folder, setup.max_reprojection_px) for c in setup.cameras]
         check_mesh_seen(mesh, posed, setup)  # before the maps: a wrong mesh is named as such, not as a camera
-        incident, hits = incident_vertices(setup, mesh, scene)
+        incident, hits, toward = incident_vertices(setup, mesh, scene)
+        beam_polar = polar_deg(toward, np.asarray(mesh.vertex_normals)[incident])
+        _say_oblique(setup, beam_polar)
         # the poses checked by the data before the maps: each camera's laser spots against its projected hits
         for camera, miss in zip(posed, _spot_misses(setup, posed, hits, scene)):
             if miss is not None:
@@ -260,7 +264,7 @@ class ObjectImport:
             request=request,
             source="photographs",
             boundary_eta=float(setup.eta),  # what light crosses at the surface (1: index-matched)
-            photographs=_provenance(setup, cameras, hits, law),
+            photographs=_provenance(setup, cameras, hits, law, toward, beam_polar),
         )
         E = np.zeros((P, 3))
         return cls(setup, mesh, scene, area, cameras, incident, hits, law, header, chunk_points, E, E.copy())
@@ -422,7 +426,24 @@ def _spot_misses(setup: ObjectRig, posed: list, hits: np.ndarray, scene) -> list
     return [misses.get(camera.name) for camera in posed]
 
 
-def _provenance(rig: ObjectRig, cameras: list[CameraView], hits: np.ndarray, law: ExitLaw) -> dict:
+def _say_oblique(rig: ObjectRig, beam_polar: np.ndarray) -> None:
+    """One warning line for shots whose laser arrives obliquely at its hit: they are stored with their
+    direction (the header's ``photographs.beam_polar_deg``), and fit reads every beam as a normal one."""
+    oblique = np.flatnonzero(beam_polar > OBLIQUE_DEG)
+    if len(oblique):
+        shots = ", ".join(str(j) for j in oblique[:6]) + (", …" if len(oblique) > 6 else "")
+        warnings.warn(
+            f"{rig.path}: {len(oblique)} shot(s) ({shots}) arrive {beam_polar[oblique].min():.0f}–"
+            f"{beam_polar[oblique].max():.0f}° off the normal at their hit: stored with their directions, "
+            "but fit reads every beam as a normal one (the paper's model) — aim the laser along the "
+            "normal, or take the lean's oblique beams from acquire mesh --incidence",
+            stacklevel=4,
+        )
+
+
+def _provenance(rig, cameras: list[CameraView], hits, law: ExitLaw, toward, beam_polar) -> dict:
+    """The header's ``photographs`` record: where everything came from, each shot's hit, power, files and
+    the direction toward its laser (with its polar angle at the incident vertex)."""
     return {
         "rig": str(rig.path.resolve()),
         "mesh": {"file": str(rig.mesh_file.resolve()), "sha256": sha256_file(rig.mesh_file)},
@@ -431,6 +452,8 @@ def _provenance(rig: ObjectRig, cameras: list[CameraView], hits: np.ndarray, law
             for c in cameras
         ],
         "hits_mm": np.round(hits, 6).tolist(),
+        "toward_laser": np.round(toward, 6).tolist(),
+        "beam_polar_deg": np.round(beam_polar, 3).tolist(),
         "power_W": [s.power for s in rig.shots],
         "files": [
             {cam: [str(f.file.relative_to(rig.folder)) for f in frames] for cam, frames in s.frames.items()}
