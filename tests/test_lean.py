@@ -4,6 +4,7 @@ each source's energy, drawing the paper's model at κ = 0 and being reciprocal w
 
 from __future__ import annotations
 
+import dataclasses
 import json
 
 import numpy as np
@@ -148,7 +149,31 @@ def test_the_leaned_transport_keeps_each_source_s_energy_and_is_the_paper_s_at_k
     for c in range(3):
         paper = T.matrices[min(c, len(T.matrices) - 1)]
         np.testing.assert_allclose(flat.tilt.matrix(T, c).data, paper.data, rtol=1e-6)
-    assert leaned(T, ball, scene, parse_light("env:1"), eye) is None  # many directions: the paper's model
+    assert leaned(dataclasses.replace(T, lean=None), ball, scene, light, eye) is None  # no lean in the model
+
+
+def test_a_uniform_sky_leans_by_a_third_of_the_normal(leaned_ball):
+    """The lean of light from many directions is its irradiance-weighted mean lean vector: under a uniform
+    sky a convex ball's every vertex sees its whole hemisphere, and ℓ = n − ω (η = 1) averages to
+    n − ⟨cos θ⟩_cos n = n / 3 (cosine-weighted: ⟨cos θ⟩ = 2/3), within the 64 rays' noise; a sky cut to
+    one direction by a wall would lean like a directional light — here its mean over the rays only."""
+    from translucency.mitsuba import mesh_scene
+    from translucency.render.lean import lean_applies, light_lean
+    from translucency.render.lights import parse_light
+    from translucency.render.transport import transport_matrices
+
+    ball, model, _, _ = leaned_ball
+    sky = parse_light("env:0.3")
+    ell = light_lean(sky, ball, mesh_scene(ball))
+    n = np.asarray(ball.vertex_normals)
+    along = np.einsum("vk,vk->v", ell, n)
+    np.testing.assert_allclose(np.mean(along), 1 / 3, atol=0.01)  # the mean over 642 vertices: tight
+    assert np.abs(along - 1 / 3).max() < 0.12  # each vertex: 64 rays, ⟨cos θ⟩'s sd √(1/18 / 64) ≈ 0.03
+    tangential = ell - along[:, None] * n
+    # no azimuth preferred: the tangential part is the rays' noise alone — each component's sd of the mean
+    # √(⟨sin²θ⟩/2 / 64) = 1/16, so its length's mean is Rayleigh's (1/16) √(π/2) = 0.078
+    assert np.linalg.norm(tangential, axis=1).mean() < 1.15 * np.sqrt(np.pi / 2) / 16
+    assert lean_applies(transport_matrices(model, ball), sky)
 
 
 def test_the_fused_relight_is_the_lean_s_formula_written_plainly(leaned_ball):
@@ -212,8 +237,11 @@ def test_render_angles_from_the_command_line(leaned_ball, tmp_path):
         assert res.exit_code == 0, res.output
         runs[bool(flag)] = json.loads((out / "render.json").read_text())
     assert runs[True]["angles"] is True and runs[False]["angles"] is False
-    res = CliRunner().invoke(app, [*args[:2], "--size", "48", "36", "--light", "env:1", "--angles"])
-    assert res.exit_code == 0 and "a light of many directions has no one lean" in res.output, res.output
+    sky = tmp_path / "sky"
+    env_args = [*args[:2], "--size", "48", "36", "--light", "env:1", "--angles", "--out", str(sky)]
+    res = CliRunner().invoke(app, env_args, env={"COLUMNS": "300"})
+    assert res.exit_code == 0 and "irradiance-weighted mean direction" in res.output, res.output
+    assert json.loads((sky / "render.json").read_text())["angles"] is True
     line = error_line(["render", "--scene", str(tmp_path / "s.xml"), "--model", "a=b", "--angles"])
     assert "--angles" in line
     # glTF bakes the paper's model and says so in one line (a light of many directions: the same)

@@ -194,8 +194,8 @@ def relight_object(
     (:func:`vertex_irradiance`, :mod:`translucency.model.incidence`), the transport
     (:func:`relight_vertices`), the exit toward the camera — the boundary's Fresnel law
     (:func:`exit_fresnel`, η ≠ 1) or the incidence law's reciprocal exit (η = 1).  ``angles``: with a
-    model that has a lean (:mod:`translucency.model.lean`) and a light of one direction per vertex, the
-    near pairs lean toward the light's and the camera's directions
+    model that has a lean (:mod:`translucency.model.lean`), the near pairs lean toward the light's
+    direction — its one direction per vertex, or its irradiance-weighted mean for light from many
     (:func:`translucency.render.lean.leaned`); otherwise the paper's diffuse transport
     (:func:`translucency.render.lean.lean_applies` says which is drawn); ``pairs``: the lean's pairs
     prepared once per transport (:func:`translucency.render.lean.lean_pairs`), to keep them out of the

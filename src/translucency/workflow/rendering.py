@@ -202,7 +202,7 @@ def render_model(
         if angles and not (fitted.measured and "lean" in fitted.measured):  # one line: what is drawn instead
             run.info("--angles: the model has no lean (fit data acquired with --incidence): paper's model")
         elif angles and not lit.delta:
-            run.info("--angles: a light of many directions has no one lean: the paper's model is drawn")
+            run.info("--angles: a light of many directions leans by its irradiance-weighted mean direction")
         camera = Camera.looking_at(mesh, direction, *size)
         steps = 4 if reference else 3
         with run.work("render", total=steps) as work:

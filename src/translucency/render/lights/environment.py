@@ -112,19 +112,47 @@ class EnvironmentLight(Light):
         wavefront held 16 GB); the random numbers are drawn point by point, so the estimate does not
         depend on the batching.
         """
+
+        def batch(v0, v1, w, weight, cos_i):
+            F = None if incidence is None else incidence.at(np.arange(v0, v1)).factor(cos_i)  # (V, K, 3)
+            if F is not None:
+                return (weight * F).mean(axis=1)
+            E = weight.mean(axis=1)
+            return E[:, 0] if self.filename is None else E
+
+        return np.concatenate(list(self._batches(scene, x, n, extent, eta, batch)), axis=0)
+
+    def mean_over_arrivals(self, scene, x, n, extent: float, f, eta: float = 1.0) -> np.ndarray:
+        r"""The irradiance-weighted mean of ``f`` over the light arriving at each point,
+        :math:`\int L V \cos\theta\, f(\omega)\, d\omega / E` (grey: the channels' mean weight), from the
+        same rays as :meth:`irradiance_at`; ``f(w, n)`` maps directions toward the sky (M, 3) and the
+        points' normals (M, 3) to values (M, k).  (V, k); 0 where no light arrives."""
+
+        def batch(v0, v1, w, weight, cos_i):
+            grey = weight.mean(axis=2)  # (V, K)
+            V, K = grey.shape
+            values = np.asarray(f(w.reshape(-1, 3), np.repeat(n[v0:v1], K, axis=0)), np.float64)
+            values = values.reshape(V, K, -1)
+            total = grey.sum(axis=1)[:, None]
+            return np.divide(np.einsum("vk,vkj->vj", grey, values), total, out=np.zeros((V, values.shape[2])),
+                             where=total > 0)  # fmt: skip
+
+        return np.concatenate(list(self._batches(scene, x, n, extent, eta, batch)), axis=0)
+
+    def _batches(self, scene, x, n, extent: float, eta: float, reduce):
+        """``reduce(v0, v1, w, weight, cos_i)`` over batches of points v0 … v1 − 1 with their K rays:
+        directions toward the sky w (V, K, 3), weights (V, K, C) — L cos / p with the visibility and the
+        boundary's transmission — and cosines (V, K) (:meth:`_arrivals`)."""
         K = int(self.samples)
         rng = np.random.default_rng(0)
         step = max(1, RAYS_PER_BATCH // K)
-        parts = []
         for v0 in range(0, len(x), step):
             v1 = min(v0 + step, len(x))
             u = rng.random((v1 - v0, K, 2))  # (points, rays, 2): the same stream whatever the batch
-            law = None if incidence is None else incidence.at(np.arange(v0, v1))
-            parts.append(self._irradiance_batch(scene, x[v0:v1], n[v0:v1], u, extent, eta, law))
-        return np.concatenate(parts, axis=0)
+            yield reduce(v0, v1, *self._arrivals(scene, x[v0:v1], n[v0:v1], u, extent, eta))
 
-    def _irradiance_batch(self, scene, x, n, u, extent: float, eta: float, incidence) -> np.ndarray:
-        """:meth:`irradiance_at` for one batch of points, ``u`` (points, K, 2) its uniform numbers."""
+    def _arrivals(self, scene, x, n, u, extent: float, eta: float):
+        """The rays of one batch of points, ``u`` (points, K, 2) its uniform numbers (:meth:`_batches`)."""
         K = u.shape[1]
         u1, u2 = u[..., 0], u[..., 1]
         mi = mitsuba()
@@ -153,12 +181,7 @@ class EnvironmentLight(Light):
         weight = (
             weight * (open_sky * fresnel_transmittance(cos_i, eta) / fresnel_transmittance(1.0, eta))[:, None]
         )
-        weight = weight.reshape(len(x), K, -1)
-        F = None if incidence is None else incidence.factor(cos_i.reshape(len(x), K))  # (V, K, 3)
-        if F is not None:
-            return (weight * F).mean(axis=1)
-        E = weight.mean(axis=1)
-        return E[:, 0] if self.filename is None else E
+        return w.reshape(len(x), K, 3), weight.reshape(len(x), K, -1), cos_i.reshape(len(x), K)
 
     def sh_coefficients(self, bands: int) -> np.ndarray:
         r""":math:`L_k = \int L\, Y_k\, d\omega` over :meth:`radiance_at` (:func:`.sh.project_environment`,
