@@ -61,13 +61,14 @@ def lean_pairs(transport, mesh, eta: float = 1.0, exit: bool = False) -> LeanPai
     unit vectors :math:`\hat d_{oi}`, the values and, with ``exit``, the exit normalisation :math:`N_{oi}`
     (:func:`~translucency.model.lean.exit_normalisation`: most of the preparation's time)."""
     T = transport.matrices[0].tocsr()
-    C = T.T.tocsr()  # column order: (V, rows), each source's receivers in one row of C
     V = T.shape[1]
-    rows = C.indices.astype(np.int32)
-    i = np.repeat(np.arange(V), np.diff(C.indptr))
-    # where each column-order pair sits in the CSR order (to read the values and to write checks back)
+    # column order: each source's receivers in one row of the transpose, whose values are the pairs'
+    # positions in the CSR order (to read the matrices' values there and to write checks back)
     position = sp.csr_matrix((np.arange(T.nnz, dtype=np.float64) + 1, T.indices, T.indptr), shape=T.shape)
-    order = (position.T.tocsr().data - 1).astype(np.int64)
+    by_source = position.T.tocsr()
+    rows = by_source.indices.astype(np.int32)
+    order = (by_source.data - 1).astype(np.int64)
+    i = np.repeat(np.arange(V), np.diff(by_source.indptr))
     rcv = rows if transport.receivers is None else np.asarray(transport.receivers)[rows].astype(np.int32)
     X = np.asarray(mesh.vertices, dtype=np.float64)
     n = np.asarray(mesh.vertex_normals, dtype=np.float64)
@@ -89,7 +90,7 @@ def lean_pairs(transport, mesh, eta: float = 1.0, exit: bool = False) -> LeanPai
     diagonal[i[on]] = np.flatnonzero(on)
     values = np.stack([M.tocsr().data[order] for M in transport.matrices], axis=1).astype(np.float32)
     return LeanPairs(
-        indptr=C.indptr.astype(np.int64), row=rows, rcv=rcv, d=d, r=dist, T=values,
+        indptr=by_source.indptr.astype(np.int64), row=rows, rcv=rcv, d=d, r=dist, T=values,
         area=vertex_areas(mesh).astype(np.float32), diagonal=diagonal, log_N=None if N is None else np.log(N),
         order=order,
     )  # fmt: skip
