@@ -154,8 +154,9 @@ def render(
     common = dict(incidence=incidence, radius=radius, exposure=exposure, reference=reference, spp=spp)
     common.update(overwrite=overwrite, max_memory=max_memory, reporter=RichReporter(quiet))
     if scene is not None:
-        _refuse_object_options(model, light, view, size, through, angles)
+        _refuse_object_options(model, light, view, size, through)
         per_scene = dict(scene_unit=scene_unit, samples=samples, passes=passes, max_depth=max_depth)
+        per_scene.update(angles=angles)
         per_scene.update(roughness=roughness, picture_spp=picture_spp)
         shot = render_scene(scene, parse_models(models), out, **per_scene, **common)
         finish(as_json, quiet, shot.summary, [_scene_table(scene, shot.summary, reference), f"images: {out}"])
@@ -175,7 +176,7 @@ def render(
     finish(as_json, quiet, rendering.summary, [table, f"images: {out}"])
 
 
-def _refuse_object_options(model, light, view, size, through, angles) -> None:
+def _refuse_object_options(model, light, view, size, through) -> None:
     """With --scene the scene file says where the light and the camera are: one line for an option that
     would be ignored."""
     if model is not None:
@@ -194,8 +195,6 @@ def _refuse_object_options(model, light, view, size, through, angles) -> None:
         raise TranslucencyError(
             f"{given[0]}: the scene file says this (its emitters, sensor and film); not with --scene"
         )
-    if angles:
-        raise TranslucencyError("--angles: render --scene draws the paper's model (no lean in scenes yet)")
 
 
 def parse_models(texts: list[str]) -> dict[str, Path]:

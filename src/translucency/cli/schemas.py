@@ -382,7 +382,9 @@ RENDER_SCENE = record(
         "scene": field("string", "The Mitsuba scene file."),
         "models": field("object", "Shape id -> the model file it is."),
         "images": field("string", "The folder of ours.exr/.png (and reference.exr/.png, scene.png)."),
-        "objects": field("object", "Per fitted object: vertices, eta, incidence (the law used)."),
+        "objects": field(
+            "object", "Per fitted object: vertices, eta, incidence (the law used), angles (the lean drawn)."
+        ),
         "prepare_s": field("number", "Building the transports.", "s"),
         "radius_mm": array("Each object's near radius of the transport.", NUMBER, "mm"),
         "light_s": field("number", "The light-in and through-the-body passes.", "s"),

@@ -295,14 +295,23 @@ def leaned(transport, mesh, scene, light, eye, *, eta: float = 1.0, exit: bool =
     """
     if not lean_applies(transport, light):
         return None
+    exit_eye = eye if exit else None
+    return tilted(transport, mesh, light_lean(light, mesh, scene, eta), eta=eta, eye=exit_eye, pairs=pairs)
+
+
+def tilted(transport, mesh, ell, *, eta: float = 1.0, eye=None, pairs=None):
+    """The transport with the lean of light whose lean vector at each vertex is ``ell`` (V, 3) (the mesh's
+    frame: :func:`light_lean`, or a scene's irradiance-weighted mean), and with ``eye`` (mm) the camera's
+    too: :func:`leaned` for a light already reduced to its lean vectors.  ``pairs``: :func:`lean_pairs`'
+    result, to reuse."""
     if len({T.nnz for T in transport.matrices}) > 1:
         raise ValueError("leaned: the channels' near matrices must share their pairs")
+    exit = eye is not None
     p = lean_pairs(transport, mesh, eta, exit) if pairs is None else pairs
     if exit and p.log_N is None:
         p = lean_pairs(transport, mesh, eta, exit=True)
     X = np.asarray(mesh.vertices, dtype=np.float64)
     n = np.asarray(mesh.vertex_normals, dtype=np.float64)
-    ell = light_lean(light, mesh, scene, eta)  # (V, 3) at the sources
     depth = np.einsum("vk,vk->v", ell, n).astype(np.float32)  # ℓ · n = 1 − cos θ_t
     ell_view = None
     if exit:  # the camera's lean vector at the receivers
@@ -310,5 +319,6 @@ def leaned(transport, mesh, scene, light, eye, *, eta: float = 1.0, exit: bool =
         to_eye /= np.linalg.norm(to_eye, axis=1, keepdims=True)
         ell_view = lean_vector(to_eye, n, eta).astype(np.float32)
     kappa, lam = (np.ascontiguousarray(transport.lean[:, k], dtype=np.float32) for k in (0, 1))
-    tilt = Tilt(pairs=p, ell=ell.astype(np.float32), depth=depth, kappa=kappa, lam=lam, ell_view=ell_view)
+    ell = np.ascontiguousarray(ell, dtype=np.float32)
+    tilt = Tilt(pairs=p, ell=ell, depth=depth, kappa=kappa, lam=lam, ell_view=ell_view)
     return dataclasses.replace(transport, tilt=tilt)

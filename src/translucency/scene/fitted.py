@@ -27,6 +27,7 @@ from ..mitsuba import load_plugin
 from ..model.boundary import exit_factor
 from ..model.incidence import INCIDENCE_LAWS
 from ..render import boundary_eta, default_radius, object_of_model, relight_vertices, transport_matrices
+from ..render.lean import lean_pairs, tilted
 from .pose import Pose, pose_of
 from .surfaces import Glowing, exit_table
 
@@ -71,6 +72,7 @@ class FittedObject:
     transport: object = None  # translucency.render.relight.Transport, once prepared
     law: object = None  # the incidence law, once prepared
     glowing: Glowing = None  # the object as a light of the scene, once prepared
+    lean_pairs: object = None  # the lean's near pairs (render/lean.py), once prepared, where it has a lean
 
     def prepare(self, radius: float | None = None) -> None:
         """Build the transport (near radius ``radius`` mm, default the model's 99 % energy radius), the
@@ -78,6 +80,8 @@ class FittedObject:
         rad = default_radius(self.model, self.mesh) if radius is None else float(radius)
         self.transport = transport_matrices(self.model, self.mesh, radius=rad)
         self.law = self.transport.incidence(self.incidence, self.eta)
+        if self.transport.lean is not None:
+            self.lean_pairs = lean_pairs(self.transport, self.mesh, self.eta)
         self.glowing = Glowing(
             self.shape,
             self.vertices,
@@ -97,9 +101,15 @@ class FittedObject:
         """(V, 3) outward vertex normals in the scene."""
         return self.pose.turn(self.mesh.vertex_normals)
 
-    def exitance(self, E: np.ndarray) -> np.ndarray:
-        r"""(V, 3) exitance :math:`M = \pi T E` for the effective irradiance ``E`` (V, 3)."""
-        return np.pi * relight_vertices(self.transport, E).astype(np.float64)
+    def exitance(self, E: np.ndarray, lean: np.ndarray | None = None) -> np.ndarray:
+        r"""(V, 3) exitance :math:`M = \pi T E` for the effective irradiance ``E`` (V, 3); with ``lean``
+        (V, 3), the light's mean lean vector at each vertex in the scene's frame, the transport leans
+        toward it (:func:`translucency.render.lean.tilted`; a model without a lean draws the paper's)."""
+        T = self.transport
+        if lean is not None and T.lean is not None:  # the scene's frame turned to the model's: R^T ℓ
+            ell = np.asarray(lean, np.float64) @ self.pose.rotation
+            T = tilted(T, self.mesh, ell, eta=self.eta, pairs=self.lean_pairs)
+        return np.pi * relight_vertices(T, E).astype(np.float64)
 
     def exit_law(self) -> np.ndarray:
         """(V, EXIT_NODES, 3) the exit's angular law g_v(μ) (module docstring)."""

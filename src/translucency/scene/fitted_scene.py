@@ -26,6 +26,7 @@ import numpy as np
 from .._validate import TranslucencyError
 from ..mitsuba import mitsuba
 from ..mitsuba.user_scenes import load_user_scene, mesh_buffers, segments_hit, shapes_by_id
+from ..model.lean import lean_vector
 from .fitted import fitted_object
 from .integrator import STRATEGIES, integrator_class
 from .irradiance import scene_irradiance
@@ -54,6 +55,9 @@ class FittedScene:
         Light-in / through-the-body passes (module docstring).
     max_depth : int
         Longest path (bounces) of the picture and of the irradiance's rays.
+    angles : bool
+        Objects whose model has a lean (:mod:`translucency.model.lean`) lean toward the light arriving
+        from the scene, by its irradiance-weighted mean lean vector (the paper's model otherwise).
 
     Examples
     --------
@@ -75,6 +79,7 @@ class FittedScene:
         passes: int = 2,
         max_depth: int = 8,
         strategy: str = "mis",
+        angles: bool = False,
     ):
         mi = mitsuba()
         if not models:
@@ -93,6 +98,7 @@ class FittedScene:
         self.source = scene
         self.scene = scene if isinstance(scene, mi.Scene) else load_user_scene(scene)
         self.samples, self.passes, self.max_depth = samples, passes, max_depth
+        self.angles = bool(angles)
         shapes = shapes_by_id(self.scene)
         self.objects = []
         for name, source in models.items():
@@ -241,8 +247,10 @@ class FittedScene:
             o.set_exitance(np.zeros((len(o.mesh.vertices), 3)))
         self.glow.update()
         for p in range(self.passes):
-            E = [
-                scene_irradiance(
+            E, leans = [], []
+            for k, o in enumerate(self.objects):
+                lean = self.angles and o.transport.lean is not None  # the light's mean lean vector too
+                e = scene_irradiance(
                     self.scene,
                     self.glow,
                     o.vertices,
@@ -252,11 +260,12 @@ class FittedScene:
                     incidence=o.law,
                     eta=o.eta,
                     max_depth=self.max_depth,
+                    moment=(lambda w, n, eta=o.eta: lean_vector(w, n, eta)) if lean else None,
                 )
-                for k, o in enumerate(self.objects)
-            ]
-            for o, e in zip(self.objects, E):
-                o.set_exitance(o.exitance(e))
+                E.append(e[0] if lean else e)
+                leans.append(e[1] if lean else None)
+            for o, e, ell in zip(self.objects, E, leans):
+                o.set_exitance(o.exitance(e, ell))
             self.glow.update()
         self.irradiance = E
         return E

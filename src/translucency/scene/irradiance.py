@@ -17,7 +17,10 @@ surfaces, and a cosine-distributed direction whose ray is traced through the sce
           F_v T}{p_s(\omega_{ks})}.
 
 The Dr.Jit kernel returns each sample's :math:`w_s L_i \cos / p_s` and cosine; the per-vertex, per-channel
-factor :math:`F_v T` is applied in NumPy (the incidence law is tabulated there).
+factor :math:`F_v T` is applied in NumPy (the incidence law is tabulated there).  With ``moment`` (a function
+f of the direction toward the light and the normal) the same samples also give the irradiance-weighted mean
+:math:`\int E(\omega) f(\omega)\, d\omega / E` (grey: the channels' mean) — the lean's mean vector of the
+light arriving from the whole scene (:func:`translucency.render.lean.light_lean`).
 """
 
 from __future__ import annotations
@@ -45,8 +48,11 @@ def scene_irradiance(
     eta: float = 1.0,
     max_depth: int = 8,
     offset: float | None = None,
-) -> np.ndarray:
-    """Effective irradiance (V, 3) at ``points`` (V, 3) with outward ``normals`` (V, 3), scene units.
+    moment=None,
+):
+    """Effective irradiance (V, 3) at ``points`` (V, 3) with outward ``normals`` (V, 3), scene units;
+    with ``moment`` (``f(w (M, 3), n (M, 3)) -> (M, k)``) also the irradiance-weighted mean of f over the
+    arriving light, (V, k) (0 where none arrives): ``(E, mean)``.
 
     ``incidence``: the object's incidence law (``factor(cos (V, K)) -> (V, K, 3)`` or None);
     ``eta``: its boundary (≠ 1: the Fresnel ratio); ``glow``: the fitted objects as they glow now
@@ -61,13 +67,24 @@ def scene_irradiance(
     # batches of samples, each a wavefront of at most WAVEFRONT paths (whole vertices' worth)
     per_batch = max(1, min(K, WAVEFRONT // max(V, 1)))
     E, done = np.zeros((V, 3)), 0
+    num, den = 0.0, np.zeros((V, 1))  # the moment's weighted sums
     while done < K:
         k = min(per_batch, K - done)
-        E += k * _irradiance_batch(
+        e, parts = _irradiance_batch(
             scene, glow, points, normals, k, (seed * 7919 + done) % 2**32, incidence, eta, max_depth, offset
         )
+        E += k * e
+        if moment is not None:  # Σ over the samples of every strategy of grey(e_s) f(ω_s)
+            for w, weight in parts:
+                grey = weight.mean(axis=2).reshape(-1)  # (V k,)
+                safe = np.where((grey > 0)[:, None], w.reshape(-1, 3), np.repeat(normals, k, axis=0))
+                f = np.asarray(moment(safe, np.repeat(normals, k, axis=0)), np.float64)
+                num = num + (grey[:, None] * f).reshape(V, k, -1).sum(axis=1)
+                den += grey.reshape(V, k).sum(axis=1)[:, None]
         done += k
-    return E / K
+    if moment is None:
+        return E / K
+    return E / K, np.divide(num, den, out=np.zeros(np.shape(num)), where=den > 0)
 
 
 def _irradiance_batch(scene, glow, points, normals, K, seed, incidence, eta, max_depth, offset):
@@ -118,13 +135,17 @@ def _irradiance_batch(scene, glow, points, normals, K, seed, incidence, eta, max
         max_depth=max_depth,
     )
     e_bsdf = L * dr.pi
-    dr.eval(e_emitter, cos_e, e_glow, cos_g, e_bsdf, cos_b)
+    d_bsdf = ray.d
+    d_glow = d if glow.emitting else dr.zeros(mi.Vector3f, N)
+    dr.eval(e_emitter, cos_e, e_glow, cos_g, e_bsdf, cos_b, ds.d, d_glow, d_bsdf)
     E = np.zeros((V, 3))
-    for e, c in ((e_emitter, cos_e), (e_glow, cos_g), (e_bsdf, cos_b)):
+    parts = []  # each strategy's directions toward the light (V, K, 3) and weights (V, K, 3)
+    for e, c, d_s in ((e_emitter, cos_e, ds.d), (e_glow, cos_g, d_glow), (e_bsdf, cos_b, d_bsdf)):
         e = np.asarray(e, dtype=np.float64).T.reshape(V, K, 3)  # Dr.Jit's (3, N) to (V, K, 3)
         c = np.clip(np.asarray(c, dtype=np.float64).reshape(V, K), 0.0, 1.0)
         factor = fresnel_transmittance(c, eta) / fresnel_transmittance(1.0, eta)
         F = None if incidence is None else incidence.factor(c)
         weight = factor[..., None] if F is None else factor[..., None] * F
         E += (e * weight).mean(axis=1)
-    return E
+        parts.append((np.asarray(d_s, dtype=np.float64).T.reshape(V, K, 3), e * weight))
+    return E, parts

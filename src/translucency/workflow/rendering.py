@@ -264,6 +264,7 @@ def render_scene(
     exposure: str = "fixed",
     reference: bool = False,
     spp: int = 32,
+    angles: bool = False,
     overwrite: bool = False,
     max_memory: str | int | None = None,
     reporter: Reporter | None = None,
@@ -289,6 +290,9 @@ def render_scene(
         GGX roughness of a dielectric object's boundary (0: smooth).
     picture_spp : int
         Samples per pixel of our picture.
+    angles : bool
+        Objects whose model has a lean lean toward the scene's light, by its irradiance-weighted mean
+        lean vector per vertex (the summary's ``angles`` per object says whether it did).
     incidence, radius, exposure, reference, spp, overwrite, max_memory, reporter
         As in :func:`render_model`.
 
@@ -333,9 +337,14 @@ def render_scene(
         samples=samples,
         passes=passes,
         max_depth=max_depth,
+        angles=angles,
     )
     for note in fs.notes:
         run.info(note)
+    if angles:  # one line for each object drawn with the paper's model
+        for o in fs.objects:
+            if not (o.model.measured and "lean" in o.model.measured):
+                run.info(f"--angles: {o.name}'s model has no lean (fit data acquired with --incidence)")
     W, H = fs.film_size
     radii = [
         default_radius(o.model, o.mesh, max_pairs=MAX_PAIRS) if radius is None else radius for o in fs.objects
@@ -393,7 +402,12 @@ def render_scene(
             "models": {k: str(v) for k, v in pairs.items()},
             "images": out,
             "objects": {
-                o.name: {"vertices": len(o.mesh.vertices), "eta": o.eta, "incidence": o.law.name}
+                o.name: {
+                    "vertices": len(o.mesh.vertices),
+                    "eta": o.eta,
+                    "incidence": o.law.name,
+                    "angles": bool(angles and o.transport.lean is not None),
+                }
                 for o in fs.objects
             },
             "prepare_s": fs.prepare_s,
