@@ -276,7 +276,6 @@ def acquire_planar(
     n = setup.window_pixels()
     P = len(x_i)
     origin = x_i - setup.pitch * n / 2.0
-    angles = angle_record(setup.incidence, setup.exit_bins)
     request = {**setup_request(setup), "volume": _volume_fingerprint(volume)}
     header = {
         "format": FORMAT,
@@ -303,7 +302,7 @@ def acquire_planar(
         },
         "software": {"translucency": __version__, **mi_versions},
         "request": request,
-        **({"angles": angles} if angles else {}),
+        **({"angles": request["angles"]} if "angles" in request else {}),
         # every chunk of every array is a file (all-zero ones too, :func:`_every_chunk`): a missing
         # file is damage; stores made before say nothing here and may lack their all-zero chunks
         "chunk_files": "every",

@@ -40,7 +40,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._validate import TranslucencyError
-from ..fit.mesh import exclusion_radius, read_pairs
+from ..fit.mesh import exclusion_radius, mean_edge_length, read_pairs
 from ..io.mesh_dataset import MeshDataset, open_mesh_dataset
 from ..io.vertex_model import check_vertex_model
 from .errors import BANDS, PlanarErrors, beyond
@@ -183,7 +183,7 @@ def mesh_errors(
     x_i = vertices[ds["incident"]]
     P, V = ds.n_points, len(vertices)
     area = ds["vertex_area"].astype(np.float64)
-    exclusion = exclusion_radius(vertices, np.asarray(ds["faces"]), exclusion_mm)
+    exclusion = exclusion_radius(mean_edge_length(vertices, np.asarray(ds["faces"])), exclusion_mm)
     flagged = np.zeros(P, bool) if flagged is None else np.asarray(flagged, bool)
     alpha_o = model.alpha.at(vertices)  # α per vertex (V,): the model's texture at the data set's vertices
     # σ² per pair = R_d · (factor / (N A_v)), mm⁻⁴ (module docstring)

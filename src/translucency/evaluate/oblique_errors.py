@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..fit.mesh import exclusion_radius, read_pairs
+from ..fit.mesh import exclusion_radius, mean_edge_length, read_pairs
 from ..io.mesh_dataset import MeshDataset, open_mesh_dataset
 from ..model.incidence import incidence_law
 from ..model.lean import lean_exponent, lean_vector
@@ -61,7 +61,7 @@ def oblique_errors(
     x_i = vertices[incident]
     P, V = len(incident), len(vertices)
     area = ds["vertex_area"].astype(np.float64)
-    exclusion = exclusion_radius(vertices, np.asarray(ds["faces"]), exclusion_mm)
+    exclusion = exclusion_radius(mean_edge_length(vertices, np.asarray(ds["faces"])), exclusion_mm)
     frames = ds.incident_frames()
     w = inc.world(frames)[:, 1:]  # (P, D, 3) toward the light
     mu = inc.local()[1:, 2]  # (D,) cosines to the normal

@@ -107,10 +107,10 @@ def mean_edge_length(vertices: np.ndarray, faces: np.ndarray) -> float:
     return float(np.mean(np.linalg.norm(vertices[faces[:, 0]] - vertices[faces[:, 1]], axis=1)))
 
 
-def exclusion_radius(vertices: np.ndarray, faces: np.ndarray, exclusion_mm: float | None = None) -> float:
+def exclusion_radius(pitch: float, exclusion_mm: float | None = None) -> float:
     """The radius (mm) within which pairs are left out: ``exclusion_mm``, or the fit's default, half the
-    mean edge length (the incident vertex's own cell)."""
-    return mean_edge_length(vertices, faces) / 2 if exclusion_mm is None else float(exclusion_mm)
+    mesh's pitch (:func:`mean_edge_length`: the incident vertex's own cell)."""
+    return pitch / 2 if exclusion_mm is None else float(exclusion_mm)
 
 
 def fit_mesh(
@@ -193,7 +193,7 @@ def fit_mesh(
             stacklevel=2,
         )
     source = _MeshSource(group, header, alpha_radius)
-    exclusion = source.pitch / 2 if exclusion_mm is None else float(exclusion_mm)
+    exclusion = exclusion_radius(source.pitch, exclusion_mm)
     diagonal = float(np.linalg.norm(np.ptp(source.vertices, axis=0)))
     a_max = 3.0 / source.pitch if max_rate is None else float(max_rate)
     if not (np.isfinite(a_max) and a_max > 0):

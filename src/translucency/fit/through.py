@@ -20,7 +20,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from ..model.through import COS_EDGES, K_LIMIT, R_EDGES, cells
-from .mesh import exclusion_radius, read_pairs
+from .mesh import exclusion_radius, mean_edge_length, read_pairs
 
 #: incident points whose sums pool into each point's table
 POOL = 8
@@ -34,7 +34,7 @@ def cell_energies(ds, model, *, exclusion: float | None = None, chunk_points: in
     n = np.asarray(g["normals"][...], dtype=np.float64)
     area = np.asarray(g["vertex_area"][...], dtype=np.float64)
     incident = np.asarray(g["incident"][...])
-    exclusion = exclusion_radius(v, np.asarray(g["faces"][...]), exclusion)
+    exclusion = exclusion_radius(mean_edge_length(v, np.asarray(g["faces"][...])), exclusion)
     P = len(incident)
     Br = len(R_EDGES) - 1
     Q = (len(COS_EDGES) - 1) * Br

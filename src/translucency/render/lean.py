@@ -120,10 +120,10 @@ class Tilt:
         longest = int(np.max(p.indptr[bounds[1:]] - p.indptr[bounds[:-1]], initial=0))
         g_all = np.empty((longest, 3), np.float32)  # g_oi, then e^{g_oi} (one buffer, reused)
         h_all = np.empty((longest if with_exit else 0, 3), np.float32)  # the camera's, then its lobe
+        view, log_N = (self.ell_view, p.log_N) if with_exit else (self.ell, _NONE)  # (unread: no exit)
         for lo_i, hi_i in zip(bounds[:-1], bounds[1:]):
             lo, hi = p.indptr[lo_i], p.indptr[hi_i]
             g, h = g_all[: hi - lo], h_all[: hi - lo]
-            view, log_N = (self.ell_view, p.log_N) if with_exit else (self.ell, _NONE)  # (unread: no exit)
             _exponents(lo_i, hi_i, p.indptr, p.rcv, p.d, p.r, self.ell, self.depth, self.kappa, self.lam,
                        view, log_N, with_exit, g, h)  # fmt: skip
             np.exp(g, out=g)

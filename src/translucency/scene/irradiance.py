@@ -75,10 +75,11 @@ def scene_irradiance(
         )
         E += k * e
         if moment is not None:  # Σ over the samples of every strategy of grey(e_s) f(ω_s)
+            n_k = np.repeat(normals, k, axis=0)  # (V k, 3): each sample's normal
             for w, weight in parts:
                 grey = weight.mean(axis=2).reshape(-1)  # (V k,)
-                safe = np.where((grey > 0)[:, None], w.reshape(-1, 3), np.repeat(normals, k, axis=0))
-                f = np.asarray(moment(safe, np.repeat(normals, k, axis=0)), np.float64)
+                safe = np.where((grey > 0)[:, None], w.reshape(-1, 3), n_k)  # (no direction: the normal)
+                f = np.asarray(moment(safe, n_k), np.float64)
                 num = num + (grey[:, None] * f).reshape(V, k, -1).sum(axis=1)
                 den += grey.reshape(V, k).sum(axis=1)[:, None]
         done += k

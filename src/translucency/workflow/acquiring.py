@@ -152,11 +152,8 @@ def acquire_planar(
     parse_scheduler(scheduler)  # a bad value or an unreachable cluster: one line, before work
     out = as_path("out", out)
     setup = _planar_setup(grid, span, pitch, window, photons, seed, angle, index_matched, chunk_points, dtype)
-    setup = dataclasses.replace(
-        setup,
-        incidence=Incidence(tuple(float(t) for t in incidence), whole_number("azimuths", azimuths)),
-        exit_bins=ExitBins(whole_number("exit_bins", exit_bins)) if exit_bins else None,
-    )
+    angles, bins = _angle_axes(incidence, azimuths, exit_bins)
+    setup = dataclasses.replace(setup, incidence=angles, exit_bins=bins)
     sample_seed = whole_number("sample_seed", seed if sample_seed is None else sample_seed, lo=0)
     size, voxel_mm, g = slab_of(size, voxel_mm, g)
     run = Run("acquire planar", max_memory=max_memory, reporter=reporter)
@@ -343,8 +340,7 @@ def acquire_mesh(
     out = as_path("out", out)
     photons, seed = whole_number("photons", photons), whole_number("seed", seed, lo=0)
     points, chunk_points = whole_number("points", points), whole_number("chunk_points", chunk_points)
-    angles = Incidence(tuple(float(t) for t in incidence), whole_number("azimuths", azimuths))
-    bins = ExitBins(whole_number("exit_bins", exit_bins)) if exit_bins else None
+    angles, bins = _angle_axes(incidence, azimuths, exit_bins)
     g = float(check_option("g", g, lo=-1, hi=1, open_lo=True, open_hi=True))
     scale_mm = float(check_option("scale_mm", scale_mm, lo=0, open_lo=True))
     voxel_mm = float(check_option("voxel_mm", voxel_mm, lo=0, open_lo=True))
@@ -489,6 +485,12 @@ def _left(state: Resumed | None, points: int) -> int:
 
 def _matches(request: dict, same: dict) -> bool:
     return all(request.get(k) == v for k, v in same.items())
+
+
+def _angle_axes(incidence, azimuths, exit_bins) -> tuple[Incidence, ExitBins | None]:
+    """The angle axes of an acquisition (``--incidence``, ``--azimuths``, ``--exit-bins``), checked."""
+    angles = Incidence(tuple(float(t) for t in incidence), whole_number("azimuths", azimuths))
+    return angles, ExitBins(whole_number("exit_bins", exit_bins)) if exit_bins else None
 
 
 def _resuming(state: Resumed | None) -> str:
