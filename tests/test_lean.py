@@ -177,8 +177,9 @@ def test_a_uniform_sky_leans_by_a_third_of_the_normal(leaned_ball):
 
 
 def test_the_fused_relight_is_the_lean_s_formula_written_plainly(leaned_ball):
-    """relight_vertices on a leaned transport (the sources' pairs in blocks, NumPy's exponential, one core's
-    share each) against the formula of render/lean.py written pair by pair in NumPy, both ways."""
+    """relight_vertices on a leaned transport (one pass over the sources, the kernel's own exponential, one
+    core's share each) against the formula of render/lean.py written pair by pair in NumPy, both ways, with
+    one matrix shared by the channels and with one matrix per channel."""
     from translucency.mitsuba import mesh_scene
     from translucency.model.lean import exit_normalisation
     from translucency.render.lean import leaned
@@ -190,12 +191,15 @@ def test_the_fused_relight_is_the_lean_s_formula_written_plainly(leaned_ball):
     scene = mesh_scene(ball)
     light = parse_light("point:30,-20,10,1e3")
     eye = np.array([-10.0, -40.0, 25.0])
-    T = transport_matrices(model, ball, far_field=False)
+    shared = transport_matrices(model, ball, far_field=False)
+    M0, M2 = shared.matrices[0], shared.matrices[0].copy()
+    M2.data = M2.data * np.random.default_rng(2).uniform(0.5, 1.5, M2.nnz).astype(np.float32)  # another shape
+    per_channel = dataclasses.replace(shared, matrices=[M0, 0.8 * M0, M2])
     X = np.asarray(ball.vertices, dtype=np.float64)
     n = np.asarray(ball.vertex_normals, dtype=np.float64)
     area = vertex_areas(ball)
     E = np.random.default_rng(1).uniform(0.5, 2.0, len(X))
-    for exit in (False, True):
+    for T, exit in [(shared, False), (shared, True), (per_channel, False), (per_channel, True)]:
         got = relight_vertices(leaned(T, ball, scene, light, eye, exit=exit), E) - T.own * E[:, None]
         w_light = light.arrival(scene, X, n)[0]
         ell = lean_vector(w_light, n)
@@ -221,6 +225,21 @@ def test_the_fused_relight_is_the_lean_s_formula_written_plainly(leaned_ball):
             s = 1.0 if T.scale is None else T.scale[i, c]
             want[:, c] = np.bincount(o, M.data * f * s * E[i], minlength=len(X))
         np.testing.assert_allclose(got, want, rtol=2e-4, atol=1e-6 * np.abs(want).max())
+
+
+def test_the_kernel_s_exponential_is_numpy_s_to_float32_precision():
+    """render/lean.py's exponential (range reduction to 2^k 2^f, a Taylor series, the exponent's bits)
+    against NumPy's in float64, over the exponents the lean meets and far beyond."""
+    from translucency.render.lean import _exp_inplace
+
+    x = np.concatenate([np.linspace(-30, 30, 200_001), np.random.default_rng(0).normal(0, 3, 10_000)])
+    got = x.astype(np.float32)
+    _exp_inplace(got, np.empty(len(x), np.int32), len(x))
+    rel = np.abs(got / np.exp(x.astype(np.float32).astype(np.float64)) - 1)
+    assert rel[np.abs(x) <= 3].max() < 4e-7 and rel.max() < 3e-6
+    tail = np.array([-100.0, 100.0], np.float32)  # beyond float32's range: clamped to 2^∓126, no inf or NaN
+    _exp_inplace(tail, np.empty(2, np.int32), 2)
+    np.testing.assert_allclose(tail, [2.0**-126, 2.0**126], rtol=1e-5)
 
 
 def test_render_angles_from_the_command_line(leaned_ball, tmp_path):

@@ -73,10 +73,10 @@ def refracted(w: np.ndarray, n: np.ndarray, eta: float = 1.0) -> np.ndarray:
     True
     """
     w, n = np.asarray(w, dtype=np.float64), np.asarray(n, dtype=np.float64)
-    cos_i = np.clip(np.sum(w * n, axis=-1, keepdims=True), 0.0, 1.0)
+    cos_i = np.clip(np.einsum("...k,...k->...", w, n)[..., None], 0.0, 1.0)
     cos_t = np.sqrt(np.maximum(1.0 - (1.0 - cos_i**2) / eta**2, 0.0))
-    t = -w / eta + (cos_i / eta - cos_t) * n
-    return t / np.linalg.norm(t, axis=-1, keepdims=True)
+    t = (cos_i / eta - cos_t) * n - w / eta
+    return t / np.sqrt(np.einsum("...k,...k->...", t, t))[..., None]  # unit (a clamped one is not)
 
 
 def lean_vector(w: np.ndarray, n: np.ndarray, eta: float = 1.0) -> np.ndarray:
