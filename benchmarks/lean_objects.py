@@ -96,6 +96,7 @@ def main() -> int:
     ap.add_argument("--polar", type=float, default=60.0, help="the oblique beams' polar angle, degrees")
     ap.add_argument("--colour", default="shared", help="the fit's colour: shared (the paper's), per-channel")
     ap.add_argument("--incidence", default="half-space", help="the incidence law (render --incidence)")
+    ap.add_argument("--through", action="store_true", help="with the through-body table (render --through)")
     ap.add_argument("--work", type=Path, default=Path(tempfile.mkdtemp(prefix="lean_objects_")))
     args = ap.parse_args()
     args.work.mkdir(parents=True, exist_ok=True)
@@ -136,7 +137,9 @@ def main() -> int:
     )
     scene = mesh_scene(mesh)
     picture = VertexPicture(mesh, camera, spp=16, light=light)
-    T = transport_matrices(model, mesh)
+    T = transport_matrices(model, mesh, through=args.through)
+    if args.through and not T.through:
+        print("the model has no through-body table: drawn without it")
     law = T.incidence(args.incidence)
     E = vertex_irradiance(mesh, scene, light, incidence=law)
     exit_law = law.exit(view_cosines(mesh, camera.origin))
@@ -153,6 +156,7 @@ def main() -> int:
         cmp = compare(reference, img, mask)
         stem = "".join(c if c.isalnum() else "_" for c in label) + ("" if args.colour == "shared" else "_pc")
         stem += "" if args.incidence == "half-space" else "_" + args.incidence.replace("-", "_")
+        stem += "_through" if args.through else ""
         save_images(img, args.work / stem, exposure)
         rows.append(
             {
@@ -199,9 +203,11 @@ def main() -> int:
         "evaluate_truth": evaluated,
         "acquire_s": t_acquire,
     }
-    out["colour"], out["incidence"] = args.colour, args.incidence
-    tag = ("" if args.colour == "shared" else "_" + args.colour) + (
-        "" if args.incidence == "half-space" else "_" + args.incidence
+    out["colour"], out["incidence"], out["through"] = args.colour, args.incidence, bool(T.through)
+    tag = (
+        ("" if args.colour == "shared" else "_" + args.colour)
+        + ("" if args.incidence == "half-space" else "_" + args.incidence)
+        + ("_through" if args.through else "")
     )
     (args.work / f"lean_objects{tag}.json").write_text(json.dumps(out, indent=2))
     print(f"reference noise {info['noise']:.3f}; written: {args.work / f'lean_objects{tag}.json'}")
