@@ -86,9 +86,10 @@ _THROUGH = typer.Option(
 _ANGLES = typer.Option(
     False,
     "--angles",
-    help="Lean the transport toward the light's and the camera's directions (the model's lean, fitted "
-    "from a data set acquired with --incidence; model/lean.py): back-lit objects, docs/objects.md. "
-    "A light of many directions (env) and a model without a lean draw the paper's model.",
+    help="Lean the transport toward the light's direction (the model's lean, fitted from a data set "
+    "acquired with --incidence; model/lean.py): back-lit objects, docs/objects.md. A light of many "
+    "directions (env, a scene's) leans by its irradiance-weighted mean direction; a model without a lean "
+    "draws the paper's model.",
 )
 _SCENE = typer.Option(
     None,

@@ -56,6 +56,14 @@ _RADIUS = typer.Option(
     help="Near radius of the transport, mm (default as render's: the 99% energy radius).",
 )
 
+_ANGLES = typer.Option(
+    False,
+    "--angles",
+    help="Draw the model's lean (fitted from a data set acquired with --incidence; model/lean.py): every "
+    "light and sky leans the transport toward the directions it arrives from, as render --angles. The "
+    "transfer takes one relight per direction of its lattice (256): slower to prepare.",
+)
+
 
 @user_errors
 def view(
@@ -73,6 +81,7 @@ def view(
     reference: Path = _REFERENCE,
     truth: Path = _TRUTH,
     radius: float = _RADIUS,
+    angles: bool = _ANGLES,
     seconds: float = typer.Option(
         0.0, "--seconds", help="Serve this long, then stop (0: until Ctrl-C; for scripts and tests)."
     ),
@@ -94,6 +103,7 @@ def view(
         reference_render=reference,
         truth=truth,
         radius=radius,
+        angles=angles,
         seconds=seconds,
         overwrite=overwrite,
         reporter=RichReporter(quiet),

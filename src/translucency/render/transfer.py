@@ -31,6 +31,17 @@ with :math:`\bar E^{(k)}` the channels' mean of :math:`E^{(k)}` and :math:`E_o(\
 own irradiance with its shadow (the page: a shadow map) — :meth:`Transfer.radiance` with
 ``local_irradiance``.  The error against the full relight is stated by
 :func:`translucency.view.object_page.transfer_errors`.
+
+**The lean** (``angles``, a model with one: :mod:`translucency.model.lean`).  The transport then depends
+on the direction the light comes from — T(ω), each near pair tilted toward ω (:func:`.lean.tilted`) — but
+the radiance is still linear in L, so the transfer keeps its form with the tilt inside the integral:
+
+.. math:: t_{o,k} = \frac{4\pi}{S} \sum_s Y_k(\omega_s) \bigl(T(\omega_s)\, w(\omega_s)\bigr)_o,
+
+:math:`w_i(\omega_s)` the lattice direction's own weight above (visibility, cosine, law): one tilted
+relight per direction of the lattice (S of them, not K) — the page is unchanged, and it draws the lean of
+every light and sky it is turned to, the directions' lobes themselves rather than the lobe of their mean
+(:func:`.lean.light_lean`'s approximation for a sky).  The local part :math:`a_o` stays the paper's.
 """
 
 from __future__ import annotations
@@ -42,7 +53,9 @@ import numpy as np
 
 from ..mitsuba import rays
 from ..model.boundary import fresnel_transmittance
+from ..model.lean import lean_vector
 from . import sh
+from .lean import lean_pairs, tilted
 from .relight import Transport, relight_vertices
 
 #: bands of the light basis by default: 16 coefficients per vertex and channel
@@ -91,10 +104,12 @@ def transfer_vectors(
     bands: int = DEFAULT_BANDS,
     directions: int = DEFAULT_DIRECTIONS,
     eta: float = 1.0,
+    angles: bool = False,
     progress=None,
 ) -> Transfer:
     """The transfer of every vertex of ``mesh`` (module docstring): K irradiances with shadows, then
-    K relights through ``transport``.
+    K relights through ``transport`` — or, with ``angles`` and a transport with a lean, one tilted relight
+    per direction of the lattice (module docstring: the lean).
 
     ``scene``: the object's Mitsuba scene for the shadow rays (:func:`translucency.mitsuba.mesh_scene`);
     ``law``: the incidence law (``transport.incidence(...)``); ``progress(done, total)`` after each batch.
@@ -107,6 +122,9 @@ def transfer_vectors(
     eps = 5e-4 * float(np.max(mesh.extents))
     origin = v + n * eps
     E = np.zeros((V, 3, K))
+    lean = angles and transport.lean is not None
+    pairs = lean_pairs(transport, mesh, eta) if lean else None
+    t = np.zeros((V, K, 3))  # with the lean: Σ_s Y_k(ω_s) T(ω_s) w(ω_s), direction by direction
     per_batch = max(1, _RAYS_PER_BATCH // V)
     for s0 in range(0, directions, per_batch):
         s = slice(s0, min(s0 + per_batch, directions))
@@ -121,10 +139,15 @@ def transfer_vectors(
         F = law.factor(cos_i)  # (V, b, 3) or None
         w3[vi, si] = weight[:, None] * (1.0 if F is None else F[vi, si])
         E += np.matmul(w3.transpose(0, 2, 1), Y[s]) * (4.0 * math.pi / directions)  # (V, 3, K)
+        for b, d in enumerate(range(s.start, s.stop)) if lean else ():  # T(ω_s) w(ω_s), ω_s toward the light
+            ell = lean_vector(np.broadcast_to(omega[d], n.shape), n, eta)
+            L_s = relight_vertices(tilted(transport, mesh, ell, eta=eta, pairs=pairs), w3[:, b, :])
+            t += L_s[:, None, :] * Y[d][None, :, None] * (4.0 * math.pi / directions)
         if progress:
             progress(s.stop, directions)
     E = E.transpose(0, 2, 1)  # (V, K, 3)
-    t = np.stack([relight_vertices(transport, E[:, k, :]) for k in range(K)], axis=1)
+    if not lean:  # the paper's transport is one matrix for every direction: T Σ_s = Σ_s T
+        t = np.stack([relight_vertices(transport, E[:, k, :]) for k in range(K)], axis=1)
     local = relight_vertices(transport, np.ones(V))  # a_o: the response to a uniform irradiance
     return Transfer(
         coefficients=t.astype(np.float32),

@@ -36,6 +36,7 @@ from ..model.incidence import HalfSpaceIncidence, cosine_mean, incidence_factor
 from ..render.camera import Camera
 from ..render.compare import rel_rmse
 from ..render.irradiance import vertex_irradiance
+from ..render.lean import lean_pairs, leaned
 from ..render.lights import DirectionalLight, EnvironmentLight, PointLight, SpotLight
 from ..render.parameters import neighbour_weights
 from ..render.picture import VertexPicture, coverage
@@ -81,6 +82,8 @@ class ObjectView:
     seconds: dict = field(default_factory=dict)
     drafts: dict = field(default_factory=dict)  # coarse transports by their receivers (:meth:`relight`)
     companion: ObjectView | None = None  # a second model of the same mesh, shown beside and against this one
+    angles: bool = False  # the transfer and the full relights lean toward the light (the model's lean)
+    pairs: object = None  # the lean's pairs of the transport (render/lean.py), prepared on the first lean
 
     @property
     def centre(self) -> np.ndarray:
@@ -112,18 +115,29 @@ class ObjectView:
 
     def relight(self, light, receivers=None) -> np.ndarray:
         """Radiance per vertex (V, 3) of a light, before the exit law (the page applies it): irradiance
-        with shadow rays, then the sparse transport.  With ``receivers`` (vertex indices) a draft at
+        with shadow rays, then the sparse transport (with :attr:`angles`, leaned toward the light:
+        :func:`~translucency.render.lean.leaned`).  With ``receivers`` (vertex indices) a draft at
         those only: their irradiance through the transport coarsened to their cells
-        (:meth:`~translucency.render.relight.Transport.coarse`, prepared on the first call)."""
+        (:meth:`~translucency.render.relight.Transport.coarse`, prepared on the first call; the paper's
+        model, a draft while the light moves)."""
         if receivers is None:
             E = vertex_irradiance(self.mesh, self.scene, light, self.eta, self.law)
-            return relight_vertices(self.transport, E)
+            return relight_vertices(self._leaned(light) or self.transport, E)
         key = hash(np.asarray(receivers).tobytes())
         if key not in self.drafts:
             self.drafts[key] = (self.transport.coarse(self.mesh.vertices, receivers), self.law.at(receivers))
         coarse, law = self.drafts[key]
         E = vertex_irradiance(self.mesh, self.scene, light, self.eta, law, at=receivers)
         return relight_vertices(coarse, E)
+
+    def _leaned(self, light):
+        """The transport leaned toward ``light`` with :attr:`angles` (None: the paper's, or not leaned)."""
+        if not self.angles:
+            return None
+        if self.pairs is None:
+            self.pairs = lean_pairs(self.transport, self.mesh, self.eta)
+        eye = self.centre  # (the camera's lean, the exit's, is off: unread)
+        return leaned(self.transport, self.mesh, self.scene, light, eye, eta=self.eta, pairs=self.pairs)
 
     def exit(self, viewpoint) -> np.ndarray:
         """The exit law toward ``viewpoint`` (V, 3), as the page computes it."""
@@ -171,13 +185,16 @@ def prepare_object(
     dataset=None,
     name: str = "model",
     check_error: bool = True,
+    angles: bool = False,
     progress=None,
 ) -> ObjectView:
     """The transport and the transfer of ``model`` on ``mesh``, and (``check_error``) the transfer's error
     against the full relight for a directional light and the environment, through the default camera.
 
     ``environment``: the page's sky (default: a constant sky); ``dataset``: the mesh data set the model
-    was fitted to, for the measured profiles (None: the fit's alone); ``progress(step)`` names each step.
+    was fitted to, for the measured profiles (None: the fit's alone); ``angles``: with a model that has
+    a lean, the transfer and the full relights lean toward the light (:mod:`translucency.render.transfer`);
+    ``progress(step)`` names each step.
     """
     say = progress or (lambda step: None)
     seconds = {}
@@ -189,7 +206,10 @@ def prepare_object(
     seconds["transport"] = time.perf_counter() - t
     t = time.perf_counter()
     say("transfer")
-    transfer = transfer_vectors(transport, mesh, scene, law, bands=bands, directions=directions, eta=eta)
+    angles = bool(angles and transport.lean is not None)
+    transfer = transfer_vectors(
+        transport, mesh, scene, law, bands=bands, directions=directions, eta=eta, angles=angles
+    )
     seconds["transfer"] = time.perf_counter() - t
     view = ObjectView(
         model=model,
@@ -203,6 +223,7 @@ def prepare_object(
         name=name,
         dataset=dataset,
         seconds=seconds,
+        angles=angles,
     )
     if check_error:
         say("error against the full relight")
@@ -233,7 +254,7 @@ def transfer_errors(view: ObjectView, size=(160, 120)) -> dict:
     out = {}
     for name, light in lights.items():
         E = vertex_irradiance(view.mesh, view.scene, light, view.eta, view.law)
-        full = relight_vertices(view.transport, E)
+        full = relight_vertices(view._leaned(light) or view.transport, E)
         local = E if light.delta else None  # the page: its shadow map
         ours = np.maximum(stored.radiance(light.sh_coefficients(stored.bands), local), 0.0)
         out[name] = rel_rmse(picture.draw(full * exit_law), picture.draw(ours * exit_law), mask)

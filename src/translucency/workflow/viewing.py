@@ -44,6 +44,7 @@ def view_model(
     reference_render=None,
     truth=None,
     radius: float | None = None,
+    angles: bool = False,
     seconds: float = 0.0,
     overwrite: bool = False,
     reporter: Reporter | None = None,
@@ -80,6 +81,10 @@ def view_model(
         the data's in each point's profile.
     radius : float, optional
         Near radius of the transport, mm (default as :func:`render_model`'s: the 99 % energy radius).
+    angles : bool
+        With a model that has a lean (fitted from a data set acquired with ``incidence``): the page draws
+        it, every light and sky leaning the transport toward the directions it arrives from (the transfer
+        takes one tilted relight per direction of its lattice: :mod:`translucency.render.transfer`).
     seconds : float
         Serve this long, then stop (0: until Ctrl-C).
     overwrite : bool
@@ -125,9 +130,13 @@ def view_model(
     figure = _reference_figure(Path(reference_render)) if reference_render is not None else None
     if export is not None:  # claimed before any work
         claim_folder(export, overwrite=overwrite, inputs=[model], option="export")
-    views = _ObjectViews(m, header, model, other, compare, figure, environment, bands, radius)
-    if m.measured and "lean" in m.measured:  # the page relights through the transfer of the paper's model
-        reporter.info("the viewer draws the paper's model: the lean (render --angles) is not in the page")
+    lean = bool(m.measured and "lean" in m.measured)
+    if lean and not angles:  # one line: what is drawn
+        reporter.info("the page draws the paper's model; --angles draws the model's lean")
+    elif angles and not lean:
+        reporter.info("--angles: the model has no lean (fit data acquired with --incidence): paper's model")
+    leaning = angles and lean
+    views = _ObjectViews(m, header, model, other, compare, figure, environment, bands, radius, leaning)
     if export is None:
         reporter.info("the maps first; the relighting follows once the transport is prepared.")
         server = _server(views.surface(), lambda say: views.prepare(say, False), port)
@@ -154,7 +163,7 @@ class _ObjectViews:
     """A per-vertex model's view (and ``compare``'s beside it): its surface first, the transport and the
     transfer once prepared, or all of it written as a page."""
 
-    def __init__(self, m, header, model: Path, other, compare, figure, environment, bands, radius):
+    def __init__(self, m, header, model: Path, other, compare, figure, environment, bands, radius, angles):
         from ..render import boundary_eta, object_of_model  # heavy: trimesh, Mitsuba, Numba load only to view
 
         self.m, self.model, self.other, self.compare, self.figure = m, model, other, compare, figure
@@ -162,7 +171,7 @@ class _ObjectViews:
         self.ds = _mesh_dataset(m, header)
         self.bands = bands
         self.options = dict(
-            eta=boundary_eta(acquisition), environment=environment, bands=bands, radius=radius
+            eta=boundary_eta(acquisition), environment=environment, bands=bands, radius=radius, angles=angles
         )
 
     def surface(self):
@@ -210,6 +219,7 @@ class _ObjectViews:
             "model": self.model,
             "vertices": len(self.mesh.vertices),
             "bands": self.bands,
+            "angles": view.angles,
             "error_vs_render": view.errors,
             "seconds": time.perf_counter() - t,
             **{f"{k}_s": v for k, v in view.seconds.items()},
