@@ -323,11 +323,31 @@ def test_render_angles_from_the_command_line(leaned_ball, tmp_path):
     assert json.loads((sky / "render.json").read_text())["angles"] is True
     line = error_line(["render", "--scene", str(tmp_path / "s.xml"), "--model", "a=b", "--angles"])
     assert "s.xml" in line and "--angles" not in line  # a scene takes --angles: the missing file is the fault
-    # glTF bakes the paper's model and says so in one line (a light of many directions: the same)
+    # glTF bakes the paper's model and says so in one line, or with --angles the lean: its colours are
+    # render's leaned exitance under the same light (8 bits)
     from translucency import export_model
+    from translucency.io.gltf import read_glb
+    from translucency.mitsuba import mesh_scene
+    from translucency.render.irradiance import vertex_irradiance
+    from translucency.render.lean import leaned
+    from translucency.render.lights import parse_light
+    from translucency.render.relight import relight_vertices
+    from translucency.render.transport import transport_matrices
 
     summary = export_model(path, gltf=tmp_path / "ball.glb")
-    assert "paper's model" in summary["lean"]
+    assert "paper's model" in summary["lean"] and summary["angles"] is False
+    light = "directional:1,-0.3,-0.2"
+    summary = export_model(path, gltf=tmp_path / "lean.glb", light=light, angles=True)
+    assert summary["angles"] is True and "lean" not in summary
+    mesh, extras = read_glb(tmp_path / "lean.glb")
+    ball, model, _, _ = leaned_ball
+    scene, T = mesh_scene(ball), transport_matrices(model, ball)
+    lit = parse_light(light)
+    E = vertex_irradiance(ball, scene, lit, 1.0, T.incidence("half-space", 1.0))
+    want = {a: relight_vertices(leaned(T, ball, scene, lit, ball.centroid) if a else T, E) for a in (0, 1)}
+    got = mesh.visual.vertex_colors[:, :3] / 255.0
+    np.testing.assert_allclose(got, np.clip(want[1] * extras["colour_scale"], 0, 1), atol=0.6 / 255)
+    assert np.abs(want[0] - want[1]).max() * extras["colour_scale"] > 10 / 255  # the lean is what was baked
 
 
 def test_evaluate_holds_the_lean_out_on_another_seed_s_oblique_beams(leaned_ball, tmp_path):

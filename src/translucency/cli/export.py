@@ -36,6 +36,12 @@ def export(
     light: str = typer.Option(
         DEFAULT_LIGHT, "--light", metavar="LIGHT", help="With --gltf: the light baked (as render's)."
     ),
+    angles: bool = typer.Option(
+        False,
+        "--angles",
+        help="With --gltf: bake the model's lean (the transport leaned toward the light, as render "
+        "--angles); a model without one bakes the paper's model.",
+    ),
     overwrite: bool = overwrite_option(),
     quiet: bool = quiet_option(),
     as_json: bool = json_option(),
@@ -43,13 +49,16 @@ def export(
     """Take a per-vertex model to other tools: its mesh as PLY (render --scene) or glTF (Blender)."""
     from ..workflow.exporting import export_model  # heavy: the bake loads Mitsuba and the transport
 
-    summary = export_model(model, ply=ply, gltf=gltf, light=light, overwrite=overwrite)
+    summary = export_model(model, ply=ply, gltf=gltf, light=light, angles=angles, overwrite=overwrite)
     lines = []
     if ply is not None:
         lines.append(f"mesh: {ply} ({summary['vertices']:,} vertices, {summary['faces']:,} triangles, mm)")
     if gltf is not None:
+        leaned = ", leaned" if summary["angles"] else ""
         lines.append(
-            f"glTF: {gltf} (baked under {light}; Burley reduction error median "
+            f"glTF: {gltf} (baked under {light}{leaned}; Burley reduction error median "
             f"{summary['reduction_error_median']:.3f}, 95th percentile {summary['reduction_error_p95']:.3f})"
         )
+    if "lean" in summary:
+        lines.append(summary["lean"])
     finish(as_json, quiet, summary, lines)

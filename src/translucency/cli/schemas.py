@@ -424,13 +424,22 @@ EXPORT = record(
         "reduction_error_p95": field("number", "Its 95th percentile (--gltf)."),
         "vertices": field("integer", "Vertices of the mesh."),
         "faces": field("integer", "Triangles of the mesh."),
+        "angles": field("boolean", "Whether the bake drew the model's lean (--gltf --angles, as render's)."),
         "lean": field(
             "string",
-            "With --gltf, for a model with a lean (render --angles): what the bake draws instead — the "
-            "paper's model.",
+            "With --gltf, one line when the lean is not baked: a model with a lean without --angles, or "
+            "--angles for a model without one — the paper's model is baked.",
         ),
     },
-    optional=("ply", "gltf", "colour_scale", "reduction_error_median", "reduction_error_p95", "lean"),
+    optional=(
+        "ply",
+        "gltf",
+        "colour_scale",
+        "reduction_error_median",
+        "reduction_error_p95",
+        "angles",
+        "lean",
+    ),  # fmt: skip
 )
 
 # -- info ---------------------------------------------------------------------------------------------

@@ -22,6 +22,7 @@ from ..io.inputs import expect_input
 from ..io.outputs import PLY_COMMENT, claim_output
 from ..model.burley import burley_of_exponentials, burley_shape
 from ..render import boundary_eta, object_of_model, relight_vertices, transport_matrices, vertex_irradiance
+from ..render.lean import leaned
 from ..render.lights import Placement, parse_light, place_light
 from ..render.transport import vertex_parameters
 from ._arguments import as_path, model_and_record
@@ -32,7 +33,9 @@ __all__ = ["DEFAULT_LIGHT", "export_gltf", "export_model", "export_ply"]
 DEFAULT_LIGHT = "point:60,-80,120,2e4"
 
 
-def export_model(model, *, ply=None, gltf=None, light: str = DEFAULT_LIGHT, overwrite: bool = False) -> dict:
+def export_model(
+    model, *, ply=None, gltf=None, light: str = DEFAULT_LIGHT, angles: bool = False, overwrite: bool = False
+) -> dict:
     """Take a per-vertex model to other tools: its mesh as PLY and/or glTF with the bake.
 
     ``translucency export MODEL [--ply OUT.ply] [--gltf OUT.glb]`` is this function: the names and the
@@ -49,6 +52,9 @@ def export_model(model, *, ply=None, gltf=None, light: str = DEFAULT_LIGHT, over
         Write glTF 2.0 binary here (``.glb``, metres): see :func:`export_gltf`.
     light : str
         With ``gltf``: the light baked (as :func:`render_model`'s).
+    angles : bool
+        With ``gltf`` and a model that has a lean: bake it (the transport leaned toward the light, as
+        ``render --angles``); otherwise the paper's model is baked and ``lean`` says so in one line.
     overwrite : bool
         Replace an earlier mesh file of translucency at ``ply`` or ``gltf`` (never anything else).
 
@@ -56,8 +62,8 @@ def export_model(model, *, ply=None, gltf=None, light: str = DEFAULT_LIGHT, over
     -------
     dict
         The summary of ``translucency export --json``: ``model``, ``vertices``, ``faces``, and ``ply``,
-        ``gltf`` with the bake's ``colour_scale`` and the Burley reduction's ``reduction_error_median``,
-        ``reduction_error_p95`` for what was written.
+        ``gltf`` with the bake's ``colour_scale``, ``angles`` (whether the lean was baked) and the Burley
+        reduction's ``reduction_error_median``, ``reduction_error_p95`` for what was written.
 
     Raises
     ------
@@ -82,10 +88,15 @@ def export_model(model, *, ply=None, gltf=None, light: str = DEFAULT_LIGHT, over
         summary["ply"] = ply
     if gltf is not None:
         claim_output(gltf, "mesh file", overwrite=overwrite, inputs=inputs, option="gltf")
-        record = _bake(fitted, mesh, acquisition, gltf, light)
+        has_lean = bool(fitted.measured and "lean" in fitted.measured)
+        record = _bake(fitted, mesh, acquisition, gltf, light, angles and has_lean)
         summary.update(gltf=gltf, **record)
-        if fitted.measured and "lean" in fitted.measured:  # one line: the bake has no direction in it
-            summary["lean"] = "not baked: the glTF draws the paper's model (render --angles draws the lean)"
+        if has_lean and not angles:  # one line: what the bake draws
+            summary["lean"] = "not baked: the glTF draws the paper's model (--angles bakes the lean)"
+        elif angles and not has_lean:
+            summary["lean"] = (
+                "--angles: the model has no lean (fit data acquired with --incidence): paper's model"
+            )
     return summary
 
 
@@ -117,7 +128,9 @@ def export_ply(model, out, *, overwrite: bool = False) -> Path:
     return export_model(model, ply=as_path("out", out), overwrite=overwrite)["ply"]
 
 
-def export_gltf(model, out, *, light: str = DEFAULT_LIGHT, overwrite: bool = False) -> dict:
+def export_gltf(
+    model, out, *, light: str = DEFAULT_LIGHT, angles: bool = False, overwrite: bool = False
+) -> dict:
     """Write a per-vertex model as glTF 2.0 binary (``.glb``) for Blender and three.js.
 
     The mesh (metres, +Y up), the exitance under ``light`` baked as vertex colours (``COLOR_0``, linear,
@@ -132,13 +145,15 @@ def export_gltf(model, out, *, light: str = DEFAULT_LIGHT, overwrite: bool = Fal
         The file to write (``.glb``).
     light : str
         The light baked, in the object's frame (as :func:`render_model`'s).
+    angles : bool
+        Bake the model's lean, if it has one (as ``render --angles``).
     overwrite : bool
         Replace an earlier mesh file of translucency at ``out`` (never anything else).
 
     Returns
     -------
     dict
-        ``gltf``, ``colour_scale`` and the Burley reduction's ``reduction_error_median`` and
+        ``gltf``, ``colour_scale``, ``angles`` and the Burley reduction's ``reduction_error_median`` and
         ``reduction_error_p95`` (with the mesh's ``vertices`` and ``faces``).
 
     Examples
@@ -147,7 +162,7 @@ def export_gltf(model, out, *, light: str = DEFAULT_LIGHT, overwrite: bool = Fal
     >>> tl.export_gltf("ball.model.zip", "ball.glb")["reduction_error_median"]  # doctest: +SKIP
     0.04
     """
-    return export_model(model, gltf=as_path("out", out), light=light, overwrite=overwrite)
+    return export_model(model, gltf=as_path("out", out), light=light, angles=angles, overwrite=overwrite)
 
 
 def _named(name: str, path, suffix: str, what: str) -> Path:
@@ -182,11 +197,11 @@ def _write_ply(mesh, path: Path) -> None:
         write_ply(tmp, mesh.vertices, mesh.faces, comment=PLY_COMMENT)
 
 
-def _bake(model, mesh, acquisition: dict, path, light_text: str) -> dict:
+def _bake(model, mesh, acquisition: dict, path, light_text: str, angles: bool) -> dict:
     """Write ``path`` (glTF) and return what the summary states (the reduction's error, the colour's
-    scale)."""
+    scale, whether the lean was baked)."""
     albedo, mfp, burley_s, error = _burley(model, mesh)
-    radiance = _baked_radiance(model, mesh, acquisition, light_text)
+    radiance = _baked_radiance(model, mesh, acquisition, light_text, angles)
     top = float(np.quantile(radiance, 0.99)) if np.any(radiance > 0) else 1.0
     scale = 1.0 / top if top > 0 else 1.0
     extras = {
@@ -196,6 +211,7 @@ def _bake(model, mesh, acquisition: dict, path, light_text: str) -> dict:
         "colour": "COLOR_0 = radiance x colour_scale (linear; Lambertian exit), clipped to 1",
         "colour_scale": scale,
         "light": light_text,
+        "angles": angles,
         "burley": "R(r) = A s (exp(-s r) + exp(-s r/3)) / (8 pi r); _MFP_MM = searchlight s~(A) / s",
         "mm_per_unit": MM_PER_GLTF_UNIT,
     }
@@ -209,6 +225,7 @@ def _bake(model, mesh, acquisition: dict, path, light_text: str) -> dict:
     finite = error[np.isfinite(error)]
     return {
         "colour_scale": scale,
+        "angles": angles,
         "reduction_error_median": float(np.median(finite)) if finite.size else float("nan"),
         "reduction_error_p95": float(np.quantile(finite, 0.95)) if finite.size else float("nan"),
     }
@@ -228,14 +245,17 @@ def _burley(model, mesh):
     return albedo, mfp, burley_s, error
 
 
-def _baked_radiance(model, mesh, acquisition: dict, light_text: str) -> np.ndarray:
+def _baked_radiance(model, mesh, acquisition: dict, light_text: str, angles: bool) -> np.ndarray:
     """The exitance under the light, W/(mm² sr) per vertex: the irradiance with shadows and the transport
-    (render's chain, a Lambertian exit)."""
+    (render's chain, a Lambertian exit; with ``angles``, the transport leaned toward the light)."""
     from ..mitsuba import mesh_scene  # Mitsuba loads only to bake
 
     eta = boundary_eta(acquisition)
     transport = transport_matrices(model, mesh)
-    lit = place_light(parse_light(light_text), Placement.of(mesh, (1.0, -1.6, 0.7)))
+    placement = Placement.of(mesh, (1.0, -1.6, 0.7))
+    lit = place_light(parse_light(light_text), placement)
     law = transport.incidence("half-space", eta)
-    E = vertex_irradiance(mesh, mesh_scene(mesh), lit, eta, law)
-    return relight_vertices(transport, E).astype(np.float64)
+    scene = mesh_scene(mesh)
+    E = vertex_irradiance(mesh, scene, lit, eta, law)
+    tilted = leaned(transport, mesh, scene, lit, mesh.centroid, eta=eta) if angles else None
+    return relight_vertices(tilted or transport, E).astype(np.float64)
