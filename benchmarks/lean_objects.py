@@ -44,7 +44,7 @@ from translucency.mitsuba import mesh_scene
 from translucency.model.lean import lean_vector
 from translucency.pipeline import FIGURE2_REFERENCE_SPP, figure2_scene
 from translucency.render.camera import Camera
-from translucency.render.compare import compare
+from translucency.render.compare import compare, region_errors
 from translucency.render.irradiance import vertex_irradiance
 from translucency.render.lean import lean_pairs, leaned
 from translucency.render.lights import parse_light
@@ -158,16 +158,20 @@ def main() -> int:
         stem += "" if args.incidence == "half-space" else "_" + args.incidence.replace("-", "_")
         stem += "_through" if args.through else ""
         save_images(img, args.work / stem, exposure)
+        regions = region_errors(mesh, scene, camera, E, reference, img, mask)
         rows.append(
             {
                 "row": label,
                 "rel_rmse": cmp["rel_rmse"],
                 "flip": cmp["flip_mean_object"],
                 "brightness": float(img[mask].mean() / reference[mask].mean()),
+                "regions": {k: v["rel_rmse"] for k, v in regions.items()},
+                "region_brightness": {k: v["brightness"] for k, v in regions.items()},
             }
         )
+        by_region = " ".join(f"{k} {v['brightness']:.2f}x" for k, v in regions.items())
         print(f"{label:<34} rel RMSE {cmp['rel_rmse']:.3f}  FLIP {cmp['flip_mean_object']:.3f}  "
-              f"brightness {rows[-1]['brightness']:.3f}", flush=True)  # fmt: skip
+              f"brightness {rows[-1]['brightness']:.3f}  ({by_region})", flush=True)  # fmt: skip
     # relight per light: the paper's one product against the lean's pairs, then its products
     timing = {}
     for label, run in (
