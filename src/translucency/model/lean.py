@@ -52,6 +52,14 @@ KAPPA_MAX = 8.0
 LAMBDA_MAX = 1.0
 #: Gauss–Legendre nodes of the exit normalisation's integral over μ_o
 _MU_NODES = 24
+#: what a command asked for ``--angles`` says of a model without a lean, in one line
+NO_LEAN = "--angles: the model has no lean (fit data acquired with --incidence): paper's model"
+
+
+def has_lean(model) -> bool:
+    """Whether a fitted model carries the lean (κ, λ per incident point: ``measured["lean"]``)."""
+    measured = getattr(model, "measured", None)
+    return bool(measured) and "lean" in measured
 
 
 def refracted(w: np.ndarray, n: np.ndarray, eta: float = 1.0) -> np.ndarray:

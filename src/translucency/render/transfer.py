@@ -124,7 +124,7 @@ def transfer_vectors(
     E = np.zeros((V, 3, K))
     lean = angles and transport.lean is not None
     pairs = lean_pairs(transport, mesh, eta) if lean else None
-    t = np.zeros((V, K, 3))  # with the lean: Σ_s Y_k(ω_s) T(ω_s) w(ω_s), direction by direction
+    t = np.zeros((V, K, 3)) if lean else None  # with the lean: Σ_s Y_k(ω_s) T(ω_s) w(ω_s), by direction
     per_batch = max(1, _RAYS_PER_BATCH // V)
     for s0 in range(0, directions, per_batch):
         s = slice(s0, min(s0 + per_batch, directions))
@@ -139,10 +139,11 @@ def transfer_vectors(
         F = law.factor(cos_i)  # (V, b, 3) or None
         w3[vi, si] = weight[:, None] * (1.0 if F is None else F[vi, si])
         E += np.matmul(w3.transpose(0, 2, 1), Y[s]) * (4.0 * math.pi / directions)  # (V, 3, K)
-        for b, d in enumerate(range(s.start, s.stop)) if lean else ():  # T(ω_s) w(ω_s), ω_s toward the light
-            ell = lean_vector(np.broadcast_to(omega[d], n.shape), n, eta)
-            L_s = relight_vertices(tilted(transport, mesh, ell, eta=eta, pairs=pairs), w3[:, b, :])
-            t += L_s[:, None, :] * Y[d][None, :, None] * (4.0 * math.pi / directions)
+        if lean:  # T(ω_s) w(ω_s) for each direction of the batch, ω_s toward the light
+            for b, d in enumerate(range(s.start, s.stop)):
+                ell = lean_vector(np.broadcast_to(omega[d], n.shape), n, eta)
+                L_s = relight_vertices(tilted(transport, mesh, ell, eta=eta, pairs=pairs), w3[:, b, :])
+                t += L_s[:, None, :] * Y[d][None, :, None] * (4.0 * math.pi / directions)
         if progress:
             progress(s.stop, directions)
     E = E.transpose(0, 2, 1)  # (V, K, 3)

@@ -23,6 +23,7 @@ from scipy.spatial import cKDTree
 
 from .._validate import TranslucencyError
 from ..geometry import vertex_areas
+from ..model.lean import has_lean
 from ..model.through import through_factor
 from ._far_field import far_field_operator
 from .parameters import measured_per_vertex, neighbour_weights, vertex_parameters
@@ -157,7 +158,7 @@ def transport_matrices(
         table = np.einsum("vk,vkabc->vabc", w_b, model.measured["through"][idx_b])
     # the lean's κ and λ blended to every vertex (V, 2, 3) (model/lean.py; render/lean.py applies it)
     lean = None
-    if model.measured and "lean" in model.measured:
+    if has_lean(model):
         w_b, idx_b = weights
         lean = np.einsum("vk,vkac->vac", w_b, model.measured["lean"][idx_b]).astype(np.float32)
     # shared colour (one fall-off, C = 1): T_λ = T · diag(s_λ) — one matrix, the scale goes with E

@@ -21,6 +21,7 @@ from ..io.gltf import MM_PER_GLTF_UNIT, write_glb
 from ..io.inputs import expect_input
 from ..io.outputs import PLY_COMMENT, claim_output
 from ..model.burley import burley_of_exponentials, burley_shape
+from ..model.lean import NO_LEAN, has_lean
 from ..render import boundary_eta, object_of_model, relight_vertices, transport_matrices, vertex_irradiance
 from ..render.lean import leaned
 from ..render.lights import Placement, parse_light, place_light
@@ -88,15 +89,13 @@ def export_model(
         summary["ply"] = ply
     if gltf is not None:
         claim_output(gltf, "mesh file", overwrite=overwrite, inputs=inputs, option="gltf")
-        has_lean = bool(fitted.measured and "lean" in fitted.measured)
-        record = _bake(fitted, mesh, acquisition, gltf, light, angles and has_lean)
+        lean = has_lean(fitted)
+        record = _bake(fitted, mesh, acquisition, gltf, light, angles and lean)
         summary.update(gltf=gltf, **record)
-        if has_lean and not angles:  # one line: what the bake draws
+        if lean and not angles:  # one line: what the bake draws
             summary["lean"] = "not baked: the glTF draws the paper's model (--angles bakes the lean)"
-        elif angles and not has_lean:
-            summary["lean"] = (
-                "--angles: the model has no lean (fit data acquired with --incidence): paper's model"
-            )
+        elif angles and not lean:
+            summary["lean"] = NO_LEAN
     return summary
 
 

@@ -24,6 +24,7 @@ from ..io.inputs import expect_input
 from ..io.records import jsonable
 from ..io.vertex_model import check_vertex_model
 from ..model.incidence import INCIDENCE_LAWS
+from ..model.lean import NO_LEAN, has_lean
 from ..render import MAX_PAIRS, Camera, default_radius, parse_light
 from ..render.camera import view_direction
 from ..render.figure import figure2, plot_comparison
@@ -199,8 +200,8 @@ def render_model(
             f"{f'; a smaller {flags} lowers it' if flags else ''})"
         )
         run.info(f"{placement.describe()}; light {lit!r}")
-        if angles and not (fitted.measured and "lean" in fitted.measured):  # one line: what is drawn instead
-            run.info("--angles: the model has no lean (fit data acquired with --incidence): paper's model")
+        if angles and not has_lean(fitted):  # one line: what is drawn instead
+            run.info(NO_LEAN)
         elif angles and not lit.delta:
             run.info("--angles: a light of many directions leans by its irradiance-weighted mean direction")
         camera = Camera.looking_at(mesh, direction, *size)
@@ -343,7 +344,7 @@ def render_scene(
         run.info(note)
     if angles:  # one line for each object drawn with the paper's model
         for o in fs.objects:
-            if not (o.model.measured and "lean" in o.model.measured):
+            if not has_lean(o.model):
                 run.info(f"--angles: {o.name}'s model has no lean (fit data acquired with --incidence)")
     W, H = fs.film_size
     radii = [

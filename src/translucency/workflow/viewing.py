@@ -23,6 +23,7 @@ from ..io.inputs import expect_input
 from ..io.mesh_dataset import is_mesh_dataset, open_mesh_dataset
 from ..io.model_file import load_model, read_header
 from ..io.outputs import claim_folder, kind_of
+from ..model.lean import NO_LEAN, has_lean
 from ..resources.run import Reporter, Silent
 from ..view.page import write_page
 
@@ -130,11 +131,11 @@ def view_model(
     figure = _reference_figure(Path(reference_render)) if reference_render is not None else None
     if export is not None:  # claimed before any work
         claim_folder(export, overwrite=overwrite, inputs=[model], option="export")
-    lean = bool(m.measured and "lean" in m.measured)
+    lean = has_lean(m)
     if lean and not angles:  # one line: what is drawn
         reporter.info("the page draws the paper's model; --angles draws the model's lean")
     elif angles and not lean:
-        reporter.info("--angles: the model has no lean (fit data acquired with --incidence): paper's model")
+        reporter.info(NO_LEAN)
     leaning = angles and lean
     views = _ObjectViews(m, header, model, other, compare, figure, environment, bands, radius, leaning)
     if export is None:
