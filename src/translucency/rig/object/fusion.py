@@ -35,7 +35,8 @@ SATURATED_LOSS = 1e-6
 def fuse(per_cam, cameras: list[CameraView], area, rig: ObjectRig):
     """Exitance per vertex fused over cameras (steps 4–5 of :mod:`.importer`): R (V, 3), variance (V, 3),
     flags (V,), the number of cameras' views of a cell dropped for saturated pixels, and the least value
-    the clipped pixels over each cell allow (V, 3; 0 where none clipped)."""
+    the clipped pixels over each cell allow (V, 3; 0 where none clipped): the most any camera's clipped
+    pixels hold over the part of the cell they cover, per unit of the cell's area (the rest at least 0)."""
     V = len(area)
     num = np.zeros((V, 3))
     den = np.zeros(V)
@@ -54,8 +55,8 @@ def fuse(per_cam, cameras: list[CameraView], area, rig: ObjectRig):
     for cam, cm in zip(cameras, per_cam):
         if cm is None:
             continue
-        M, vM, used, gamma, least = cm
-        bound = np.fmax(bound, least)
+        M, vM, used, gamma, clipped_sum = cm
+        bound = np.fmax(bound, clipped_sum / np.maximum(area, 1e-30)[:, None])
         m = cam.map
         grazing |= m.grazing
         seen = m.den / np.maximum(area, 1e-30) >= rig.min_coverage

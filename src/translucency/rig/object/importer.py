@@ -341,7 +341,8 @@ class ObjectImport:
         # (a horn's tip, a thin part): its cells hold at least the clip's value, and how much more only
         # energy conservation bounds — the light not yet accounted for, Σ_v A_v R_v ≤ 1 per W.  (Elsewhere
         # the fit honoured each clipped pixel as a lower bound on its footprint's mean; a cell's `least` is
-        # that pixel's mean, not the cell's own, and no bound on it.)
+        # what its clipped pixels hold over the part of it they cover, per unit of its whole area: their
+        # mean alone is no bound on a cell larger than them — it read the flank's shot of spot.obj 2-3x high.)
         below = near[:, None] & (R < least) & short[None, :]
         R = np.where(below, least, R)
         unknown = np.maximum(0.0, 1.0 - self.area @ R)  # (3,)

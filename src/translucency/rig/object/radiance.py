@@ -94,10 +94,7 @@ def shot_cell_means(
             L, var, floor = L / h, var / (h * h), floor / h
         clipped = ~usable
         if law is None:
-            return (
-                (*m.cell_means(L, var, usable), None, m.cell_means(floor, 0 * floor, clipped)[0]),
-                None,
-            ), nb
+            return ((*m.cell_means(L, var, usable), None, _clipped_sum(m, floor, clipped)), None), nb
         u = m.used
         if law.needs_direction:  # the slant and the distance of every pixel used
             r, slant = np.linalg.norm(m.position[u] - hit, axis=1), m.slant(hit, u)
@@ -111,10 +108,7 @@ def shot_cell_means(
             g_mean = m.cell_means(gamma, np.zeros_like(gamma), usable)[0]
         E_floor = np.float32(np.pi) * floor / gamma
         view = (m, E, vE, usable, E_floor) if pixels else None
-        return (
-            (*m.cell_means(E, vE, usable), g_mean, m.cell_means(E_floor, 0 * E_floor, clipped)[0]),
-            view,
-        ), nb
+        return ((*m.cell_means(E, vE, usable), g_mean, _clipped_sum(m, E_floor, clipped)), view), nb
 
     with ThreadPoolExecutor(min(len(cameras), os.cpu_count() or 1)) as pool:
         results = list(pool.map(one, cameras))
@@ -123,3 +117,12 @@ def shot_cell_means(
     if pixels:
         return per_cam, [v for (_, v), _ in results], nbytes
     return per_cam, nbytes
+
+
+def _clipped_sum(m, floor, clipped) -> np.ndarray:
+    """Per cell (V, 3): the clipped pixels' least value summed over the part of the cell they cover (their
+    mean there times that area, mm²; 0 where none clipped) — a cell's least mean is this over its area,
+    the rest of it at least 0 (:func:`.fusion.fuse`): the clipped pixels' mean alone is no bound on a cell
+    they cover in part."""
+    mean, _, covered = m.cell_means(floor, 0 * floor, clipped)
+    return np.nan_to_num(mean * covered[:, None])
