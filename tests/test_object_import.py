@@ -708,3 +708,26 @@ def test_a_clipped_spot_is_flagged_counted_and_recovered_within_its_variance(tmp
             # field lacks: the ring then implies a shallower core, and the miss is up to 34 % where flat it
             # was up to 16 % — a field no light on this ball would make, the limit of a model that is)
             assert (bias < 0.4).all(), (j, bias)
+
+
+def test_clipped_pixels_bound_a_larger_cell_by_their_share_of_it():
+    """A cell four times a clipped pixel's footprint: the clipped pixel says the cell's mean is at least its
+    value over a quarter of the cell (the rest at least 0), not its value — which read a coarse scan's
+    flank shot 1.6-2.9x the tally at 24 cameras (docs/object-rig.md §7)."""
+    from types import SimpleNamespace
+
+    from translucency.rig.object.fusion import fuse
+
+    area = np.array([4.0, 1.0])  # mm²: a large cell at the hit, a small one beside it
+    clip_level = 10.0  # the clipped pixel's least exitance (mm⁻² per W), over 1 mm² of cell 0
+    seen = SimpleNamespace(grazing=np.zeros(2, bool), den=area.copy(), n_eff=np.ones(2))
+    M = np.array([[0.0] * 3, [2.0] * 3])  # cell 0 has no unclipped pixel of its own: only the clip says
+    used = np.array([0.0, 1.0])
+    clipped_sum = np.array([[clip_level * 1.0] * 3, [0.0] * 3])  # least value × the area it covers
+    per_cam = [(M, np.zeros((2, 3)), used, np.ones((2, 3)), clipped_sum)]
+    rig = SimpleNamespace(min_coverage=0.5)
+    R, _, flags, _, least = fuse(per_cam, [SimpleNamespace(map=seen)], area, rig)
+    np.testing.assert_allclose(least[0], clip_level / 4)  # the cell's least mean: the clipped quarter's share
+    true_mean = (clip_level * 1.0 + 0.0 * 3.0) / 4.0  # the darkest the rest of the cell can be: 0
+    assert (least[0] <= true_mean + 1e-12).all() and (least[1] == 0).all()
+    assert flags[0] != 0 and flags[1] == 0 and np.allclose(R[1], 2.0)
