@@ -293,6 +293,8 @@ def test_view_angles_draws_the_lean_and_says_what_it_draws(leaned_ball, tmp_path
     assert runs[True]["angles"] is True and runs[False]["angles"] is False
     assert "the page draws the paper's model; --angles draws the model's lean" in said[False]
     assert "paper's model" not in said[True]
+    pages = {a: (tmp_path / ("lean" if a else "paper") / "data.js").read_text() for a in (False, True)}
+    assert "The model's lean is drawn" in pages[True] and "The model's lean is drawn" not in pages[False]
     paper, lean = runs[False]["error_vs_render"], runs[True]["error_vs_render"]
     # the page against render's chain (with --angles, render --angles'): as close with the lean as without
     # (the band limit's error), and under the sky within the first moment's approximation of render

@@ -513,9 +513,15 @@ def _about(view: ObjectView) -> str:
         f"Relit by precomputed radiance transfer: {view.transfer.bands} bands of real spherical harmonics "
         f"({view.transfer.directions} directions, shadows and the subsurface transport included).",
     ]
-    if e:
+    if view.angles:
         lines.append(
-            "Relative RMSE against the full relight (render's chain) through the default camera: "
+            "The model's lean is drawn: the transport leans toward each direction the light arrives from "
+            "(render --angles)."
+        )
+    if e:
+        chain = "render --angles' chain" if view.angles else "render's chain"
+        lines.append(
+            f"Relative RMSE against the full relight ({chain}) through the default camera: "
             + ", ".join(f"{k} {v:.3f}" for k, v in e.items())
             + "."
         )
