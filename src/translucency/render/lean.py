@@ -178,6 +178,7 @@ def _tilt_pass(split, indptr, row, rcv, d, r, T, AT, diagonal, ell, depth, kappa
 
     With ``values`` of nnz rows, the factor itself (without X) is written there instead."""
     C, K = T.shape[1], parts.shape[0]
+    c1, c2 = min(1, C - 1), min(2, C - 1)  # the matrices' columns of green and blue (one shared: 0)
     write = values.shape[0] > 0
     lanes = 6 if with_exit else 3  # exponentials per pair: the light's three (and the camera's three)
     for k in prange(K):
@@ -212,7 +213,7 @@ def _tilt_pass(split, indptr, row, rcv, d, r, T, AT, diagonal, ell, depth, kappa
                     n0, n1, n2 = n0 + t0 * e[u], n1 + t1 * e[u + 1], n2 + t2 * e[u + 2]
                     d0, d1, d2 = d0 + t0, d1 + t1, d2 + t2
             if j >= 0:
-                t0, t1, t2 = AT[j, 0], AT[j, min(1, C - 1)], AT[j, min(2, C - 1)]
+                t0, t1, t2 = AT[j, 0], AT[j, c1], AT[j, c2]
                 n0, n1, n2, d0, d1, d2 = n0 - t0, n1 - t1, n2 - t2, d0 - t0, d1 - t1, d2 - t2
             z0 = d0 / n0 if n0 > 0.0 and d0 > 0.0 else np.float32(1.0)  # 1 / Z_i per channel
             z1 = d1 / n1 if n1 > 0.0 and d1 > 0.0 else np.float32(1.0)
@@ -226,7 +227,7 @@ def _tilt_pass(split, indptr, row, rcv, d, r, T, AT, diagonal, ell, depth, kappa
                     parts[k, o, 2] += t * e[u + 2] * x2
             else:
                 for m in range(lo, hi):
-                    u, c1, c2 = 3 * (m - lo), min(1, C - 1), min(2, C - 1)
+                    u = 3 * (m - lo)
                     f0, f1, f2 = T[m, 0] * e[u], T[m, c1] * e[u + 1], T[m, c2] * e[u + 2]
                     if with_exit:
                         f0, f1, f2 = f0 * e[3 * n + u], f1 * e[3 * n + u + 1], f2 * e[3 * n + u + 2]
@@ -240,7 +241,7 @@ def _tilt_pass(split, indptr, row, rcv, d, r, T, AT, diagonal, ell, depth, kappa
             if j >= 0:  # a vertex's pair with itself keeps its value: T_ii X_i
                 o, u = row[j], 3 * (j - lo)
                 for c in range(3):
-                    tc = T[j, min(c, C - 1)]
+                    tc = T[j, min(c, c2)]
                     if write:
                         values[j, c] = tc
                     else:
