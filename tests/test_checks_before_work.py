@@ -209,6 +209,47 @@ def test_ctrl_c_says_what_is_kept_and_a_resumed_run_says_it_resumes(ball, tmp_pa
     assert f"resuming ({kept}/4 chunks done, kept): the {16 - 4 * kept} incident points" in text, text
 
 
+@pytest.mark.parametrize("where", ["inside a traced loop", "inside a library that drops the cause"])
+def test_ctrl_c_at_any_moment_ends_in_the_kept_line(ball, tmp_path, monkeypatch, where):
+    """The interrupt placed, not timed: it lands while Dr.Jit traces the walk's loop body of the second
+    chunk (Dr.Jit re-raises it as a RuntimeError caused by it), or in a library that catches it and raises
+    an error of its own with no cause (a real SIGINT, noted by the command's handler as it arrives)."""
+    from translucency.acquire import mesh as scan
+    from translucency.acquire import mesh_walk
+
+    walks = {"n": 0, "armed": False}
+    walk, medium_event = scan.mesh_random_walk, mesh_walk._medium_event
+
+    def counted_walk(*args, **kwargs):
+        walks["n"] += 1
+        walks["armed"] = walks["n"] == 4  # one walk a channel: the second chunk's first
+        return walk(*args, **kwargs)
+
+    def interrupted_once(*args, **kwargs):
+        if walks["armed"]:
+            walks["armed"] = False
+            if where == "inside a traced loop":
+                raise KeyboardInterrupt
+            try:
+                signal.raise_signal(signal.SIGINT)
+            except KeyboardInterrupt:
+                raise RuntimeError("a library's own error") from None
+        return medium_event(*args, **kwargs)
+
+    monkeypatch.setattr(scan, "mesh_random_walk", counted_walk)
+    monkeypatch.setattr(mesh_walk, "_medium_event", interrupted_once)
+    out = tmp_path / "i.zarr"
+    args = ["acquire", "mesh", "--mesh", str(ball["mesh"]), "--volume", str(ball["filling"]), "--points", "8",
+            "--photons", "50", "--chunk", "4", "--out", str(out)]  # fmt: skip
+    res = runner.invoke(app, args)
+    assert walks["n"] == 4, "the interrupt did not land in the second chunk's walk"
+    assert res.exit_code == 130, res.output
+    assert "interrupted: 1/2 chunks kept in" in words(res)
+    assert "re-run the same command to resume" in words(res)
+    assert "Traceback" not in res.output and not (tmp_path / ".i.zarr.lock").exists()
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler  # the command's handler is gone
+
+
 # -- the reference of a user's filling ---------------------------------------------------------------------
 def test_the_reference_of_a_users_filling_renders_while_the_file_is_unchanged(ball, tmp_path):
     header = zarr.open_group(str(ball["data"]), mode="r").attrs["translucency_mesh_dataset"]

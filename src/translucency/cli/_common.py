@@ -3,8 +3,11 @@ end of a working command (its result lines, or one JSON object with ``--json``).
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import json
+import signal
+import threading
 import warnings
 
 import typer
@@ -30,24 +33,85 @@ def user_errors(func):
 
     @functools.wraps(func)
     def wrapper(*args, **kwargs):
-        try:
-            with warnings.catch_warnings():
-                warnings.showwarning = one_line
-                return func(*args, **kwargs)
-        except TranslucencyError as exc:
-            _run.failed()  # a failed run leaves nothing behind
-            err_console.print(f"[bold red]error:[/] {cli_words(str(exc))}", highlight=False, soft_wrap=True)
-            raise typer.Exit(2) from None
-        except KeyboardInterrupt:
-            _run.interrupted()  # what is kept and how to resume, in one line
-            raise typer.Exit(130) from None
-        except (typer.Exit, typer.Abort):
-            raise
-        except Exception:
-            _run.failed()
-            raise
+        with _ctrl_c_watched() as ctrl_c:
+            try:
+                with warnings.catch_warnings():
+                    warnings.showwarning = one_line
+                    return func(*args, **kwargs)
+            except TranslucencyError as exc:
+                _run.failed()  # a failed run leaves nothing behind
+                line = f"[bold red]error:[/] {cli_words(str(exc))}"
+                err_console.print(line, highlight=False, soft_wrap=True)
+                raise typer.Exit(2) from None
+            except KeyboardInterrupt:
+                _run.interrupted()  # what is kept and how to resume, in one line
+                raise typer.Exit(130) from None
+            except (typer.Exit, typer.Abort):
+                raise
+            except Exception as exc:
+                if ctrl_c.seen or from_ctrl_c(exc):  # a Ctrl-C a library re-raised as an error of its own
+                    _run.interrupted()
+                    raise typer.Exit(130) from None
+                _run.failed()
+                raise
 
     return wrapper
+
+
+def from_ctrl_c(exc: BaseException | None) -> bool:
+    """Whether ``exc`` is a Ctrl-C or was raised from one: Dr.Jit re-raises a ``KeyboardInterrupt`` that
+    lands inside a traced loop's body (``dr.while_loop``) as a ``RuntimeError`` caused by it.
+
+    Examples
+    --------
+    >>> try:
+    ...     try:
+    ...         raise KeyboardInterrupt
+    ...     except KeyboardInterrupt as ki:
+    ...         raise RuntimeError("dr.while_loop(): encountered an exception") from ki
+    ... except RuntimeError as exc:
+    ...     from_ctrl_c(exc)
+    True
+    >>> from_ctrl_c(ValueError("no"))
+    False
+    """
+    seen = set()
+    while exc is not None and id(exc) not in seen:
+        if isinstance(exc, KeyboardInterrupt):
+            return True
+        seen.add(id(exc))
+        exc = exc.__cause__ or exc.__context__
+    return False
+
+
+class _CtrlC:
+    seen = False
+
+
+@contextlib.contextmanager
+def _ctrl_c_watched():
+    """While a command runs, note a Ctrl-C as it arrives, before Python raises it where the program happens
+    to be: a library that catches the ``KeyboardInterrupt`` and raises an error of its own (without a
+    cause) still ends the command as an interrupt. Outside the main thread (no signal handler there) or
+    where SIGINT is not Python's to handle, nothing changes."""
+    state = _CtrlC()
+    if threading.current_thread() is not threading.main_thread():
+        yield state
+        return
+    previous = signal.getsignal(signal.SIGINT)
+    if not callable(previous):  # SIG_IGN, SIG_DFL, or a handler not set from Python
+        yield state
+        return
+
+    def noted(signum, frame):
+        state.seen = True
+        previous(signum, frame)  # Python's own raises KeyboardInterrupt here
+
+    signal.signal(signal.SIGINT, noted)
+    try:
+        yield state
+    finally:
+        signal.signal(signal.SIGINT, previous)
 
 
 def warn(text: str) -> None:
