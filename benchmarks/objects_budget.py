@@ -21,6 +21,11 @@ measured own area), the transport radius, the picture's samples per pixel and th
 and the oracle without re-entry (light that leaves one part through the air tallied where it left, not
 carried into the next part as ``volpath`` carries it).  ``--oracle-only``: the two oracle rows alone.
 
+``--orders`` splits the oracle by scattering order (0: unscattered, 1: single, ≥ 2: multiple) with
+normal beams and with beams along the light, each order drawn as an exitance (the exit law, Lambertian)
+or by its own direction toward the camera, and prints each order's share of the unlit side's exitance and
+its hue beside the reference's.
+
 ``--angles`` (issue 37, step 1) splits the oracle's error by the angles the data are blind to, with walks
 of its own (every vertex a source, the same photons, re-entry), under a light of one direction per point
 (directional, point, spot):
@@ -46,6 +51,8 @@ The default case is the cow with skin under a spot (issue 12's case); needs ``co
 from __future__ import annotations
 
 import argparse
+import contextlib
+import importlib
 import json
 import tempfile
 import time
@@ -65,7 +72,7 @@ from translucency.mitsuba import mesh_scene
 from translucency.model.directions import direction_weights
 from translucency.model.lean import exit_normalisation, lean_vector
 from translucency.render.camera import Camera
-from translucency.render.compare import compare
+from translucency.render.compare import channel_shares, compare, vertex_thickness
 from translucency.render.irradiance import vertex_irradiance
 from translucency.render.lights import parse_light
 from translucency.render.parameters import neighbour_weights
@@ -75,8 +82,16 @@ from translucency.render.relight import relight_vertices, view_cosines
 from translucency.render.tonemap import auto_exposure, save_images
 from translucency.render.transport import transport_matrices
 
+fit_module = importlib.import_module("translucency.fit.mesh")  # the module, not fit()'s name
+
 #: the half-angle of the exit oracle's cone about each vertex's view direction, degrees
 CONE_DEG = 25.0
+#: ``--fit``'s "tail free" rows: the slowest rate a term may take, × 1/(object's diagonal) (the fit's own,
+#: ``fit.mesh.ENERGY_RADIUS_RATE``, keeps 99.9 % of each term's energy within the object)
+TAIL_RATE = 1.0
+#: ``--orders``: the scattering orders told apart, 0 (unscattered), 1 (single) and ≥ 2 (multiple)
+ORDER_CLASSES = 3
+ORDER_NAMES = ("0", "1", ">=2")
 CASE = "cow-skin-spot:cow.obj:8:z:skin:128:4000:spot:-60,70,90,0,0,0,25,3e4:-1,1.2,0.6"
 
 
@@ -154,6 +169,14 @@ def main() -> int:
     ap.add_argument("--no-reentry", action="store_true", help="the pipeline's data without re-entry")
     ap.add_argument("--angles", action="store_true", help="the oracle split by the angles in and out")
     ap.add_argument(
+        "--fit",
+        action="store_true",
+        help="the fit's rows alone, with its colour structure and its tail (the oracle from --orders' walks)",
+    )
+    ap.add_argument(
+        "--orders", action="store_true", help="the oracle split by scattering order (0, 1, >= 2), both beams"
+    )
+    ap.add_argument(
         "--kernel-seed", type=int, default=41, help="the seed of --angles' walks (another: their noise)"
     )
     ap.add_argument(
@@ -168,8 +191,8 @@ def main() -> int:
     V = len(mesh.vertices)
     volume = object_volume(material, mesh, 1.0, seed=3)
     light = parse_light(f"{kind}:{light}")
-    if args.angles and not light.delta:  # (before the reference is rendered)
-        ap.error("--angles: a light of one direction per point (directional, point or spot)")
+    if (args.angles or args.orders) and not light.delta:  # (before the reference is rendered)
+        ap.error("--angles, --orders: a light of one direction per point (directional, point or spot)")
     camera = Camera.looking_at(mesh, [float(v) for v in view.split(",")], *args.size)
     mask = coverage(mesh, camera)
     reference, info = converged_reference(mesh, volume, light, camera, mask, spp=args.spp)
@@ -236,6 +259,24 @@ def main() -> int:
         for reentry in (True, False):
             label = "oracle: the tally, every vertex" if reentry else "oracle without re-entry"
             row(label, radiance(oracle_kernel(reentry), area, E), "the tally itself")
+        return _written(args, V, info, rows, t0)
+    if args.fit:  # the fit's term: its colour structure and its tail, against the ring means it replaces
+        cached = args.work / f"{name}_{N}_normal_beams_orders.npz"  # --orders' normal beams: the oracle
+        Ksrc = np.load(cached)["M"].sum(0) if cached.is_file() else oracle_kernel(True)
+        row("oracle: the tally, every vertex", radiance(Ksrc, area, E), "floor")
+        data = acquire(P, N)
+        fits = {"shared colour": model, "per channel": fit_mesh(data, "iso", colour="per-channel").model}
+        with _slowest_rate(TAIL_RATE):  # each term may spread its light to the object's size and beyond
+            fits["shared colour, tail free"] = fit_mesh(data, "iso").model
+            fits["per channel, tail free"] = fit_mesh(data, "iso", colour="per-channel").model
+        radial_and_fit_rows(mesh, Ksrc, open_mesh_dataset(data), fits, E, row)
+        for label, fitted in list(fits.items())[1:]:  # as `render` draws them, α and the near field
+            T_fit = transport_matrices(fitted, mesh)
+            E_fit = vertex_irradiance(mesh, scene, light, incidence=T_fit.incidence(args.incidence))
+            row(f"pipeline, {label}", relight_vertices(T_fit, E_fit), "fit")
+        return _written(args, V, info, rows, t0)
+    if args.orders:
+        order_rows(args, name, mesh, scene, volume, N, light, camera, E, exit_law, row, reference, mask)
         return _written(args, V, info, rows, t0)
     if args.angles:
         w_light = light.arrival(scene, np.asarray(mesh.vertices), np.asarray(mesh.vertex_normals))[0]
@@ -311,6 +352,21 @@ def main() -> int:
         "drawing",
         pic=VertexPicture(mesh, camera, spp=256, light=light),
     )
+    radial_and_fit_rows(mesh, Ksrc, open_mesh_dataset(acquire(P, N)), {"": model}, E, row)
+    row(
+        "oracle without re-entry",
+        radiance(oracle_kernel(reentry=False), area, E),
+        "light crossing the air from part to part",
+    )
+    return _written(args, V, info, rows, t0)
+
+
+def radial_and_fit_rows(mesh, Ksrc, data, fits: dict, E, row) -> None:
+    """The rows between the oracle and the fit: the oracle's ring means (radial, Euclidean r), those of the
+    data set's P incident points blended with the renderer's weights, and each fitted model of ``fits``
+    ({label: model}) in their place, α = 1, all normalised as the renderer's near field."""
+    V = len(mesh.vertices)
+    area = vertex_areas(mesh)
     v = np.asarray(mesh.vertices, dtype=np.float64)
     r_all = np.linalg.norm(v[:, None] - v[None], axis=2)  # (V_o, V_j)
     width = float(np.mean(mesh.edges_unique_length))
@@ -325,48 +381,36 @@ def main() -> int:
         "local model (radial, Euclidean r)",
     )
     # the P incident points of the pipeline, their ring means blended with the renderer's weights
-    pts = np.asarray(open_mesh_dataset(acquire(P, N))["incident"])
-    w, idx = neighbour_weights(model, mesh)
-    row(
-        f"points, radial ({P})",
-        radiance(
-            normalised(
-                table_shape(tables[pts], w, idx, r_all, width), own[pts], total[pts], area[pts], w, idx, area
-            ),
-            area,
-            E,
-        ),
-        "interpolation between incident points",
-    )
+    pts = np.asarray(data["incident"])
+    P = len(pts)
+    w, idx = neighbour_weights(next(iter(fits.values())), mesh)
+    near = (own[pts], total[pts], area[pts], w, idx, area)
+    shape = table_shape(tables[pts], w, idx, r_all, width)
+    row(f"points, radial ({P})", radiance(normalised(shape, *near), area, E), "interpolation between points")
     # the fit in place of the ring means, at the exact distances (below r_min at r_min, as the renderer)
-    r_min = 0.5 * width
-    row(
-        f"points, fit ({P}, α = 1)",
-        radiance(
-            normalised(fit_shape(model, w, idx, r_all, r_min), own[pts], total[pts], area[pts], w, idx, area),
-            area,
-            E,
-        ),
-        "fit",
-    )
-    row(
-        "oracle without re-entry",
-        radiance(oracle_kernel(reentry=False), area, E),
-        "light crossing the air from part to part",
-    )
-    return _written(args, V, info, rows, t0)
+    for label, model in fits.items():
+        shape = fit_shape(model, w, idx, r_all, 0.5 * width)
+        row(
+            f"points, fit ({P}, α = 1{label and ', ' + label})",
+            radiance(normalised(shape, *near), area, E),
+            "fit",
+        )
 
 
-def angle_kernels(mesh, scene, volume, photons, incoming, eye, path, chunk=256, seed=41):
+def angle_kernels(mesh, scene, volume, photons, incoming, eye, path, chunk=256, seed=41, orders=False):
     """(K_M, K_L), each (V, V, 3): with every vertex j a source of ``photons`` a channel (index-matched,
     re-entry), beams along −n or along ``incoming`` (V, 3) where the light reaches the vertex from outside
     (elsewhere E = 0), K_M[o, j] the exitance at o per unit power (mm⁻²) and K_L[o, j] π × the radiance
     toward ``eye`` (mm) tallied from the scattered exits within ``CONE_DEG`` of the direction to it (read as
     an exitance with no exit law; the unscattered light is a delta along the beam, seen head-on only).  One
-    walk for both; cached at ``path`` (.npz)."""
+    walk for both; cached at ``path`` (.npz).
+
+    ``orders``: each split by the photon's scattering order, (3, V, V, 3) for orders 0 (unscattered), 1
+    (single scattering) and ≥ 2 (multiple scattering), which sum to the kernels above."""
     if path.is_file():
         cached = np.load(path)
         return cached["M"], cached["L"]
+    n_cls = ORDER_CLASSES if orders else 1
     X = np.asarray(mesh.vertices, dtype=np.float64)
     n = np.asarray(mesh.vertex_normals, dtype=np.float64)
     V = len(X)
@@ -377,7 +421,7 @@ def angle_kernels(mesh, scene, volume, photons, incoming, eye, path, chunk=256, 
     face_n = np.asarray(mesh.face_normals, dtype=np.float64)
     cos_c = np.cos(np.radians(CONE_DEG))
     omega_c = np.pi * (1 - cos_c**2)  # ∫ cos θ dω over the cone / cos θ_axis (exact for a constant L)
-    K_M, K_L = np.zeros((V, V, 3)), np.zeros((V, V, 3))
+    K_M, K_L = np.zeros((n_cls, V, V, 3)), np.zeros((n_cls, V, V, 3))
     for ch in range(3):
         for lo in range(0, V, chunk):
             hi = min(lo + chunk, V)
@@ -399,13 +443,64 @@ def angle_kernels(mesh, scene, volume, photons, incoming, eye, path, chunk=256, 
             # camera sees only head-on — not spread over the cone (back-lit, 15° from the view: hot spots)
             cone[res.scatters[ok] == 0] = 0.0
             tri, bary = exit_barycentric(mesh, face, pos)
-            index = (tri * V + point[:, None]).ravel()  # (o, j) flattened
+            cls = np.minimum(res.scatters[ok], n_cls - 1)[:, None]  # the order class (0 without orders)
+            index = ((cls * V + tri) * V + point[:, None]).ravel()  # (class, o, j) flattened
             for K, weight in ((K_M, 1.0), (K_L, cone[:, None])):
-                K[..., ch] += np.bincount(index, (bary * weight).ravel(), V * V).reshape(V, V)
+                counts = np.bincount(index, (bary * weight).ravel(), n_cls * V * V)
+                K[..., ch] += counts.reshape(n_cls, V, V)
         for K in (K_M, K_L):
             K[..., ch] /= photons * area[:, None]
+    if not orders:
+        K_M, K_L = K_M[0], K_L[0]
     np.savez(path, M=K_M, L=K_L)
     return K_M, K_L
+
+
+def order_rows(args, name, mesh, scene, volume, N, light, camera, E, exit_law, row, reference, mask):
+    """``--orders``: the oracle (every vertex a source, re-entry) split by scattering order, with normal
+    beams and with beams along the light, each order drawn as an exitance (× the exit law: Lambertian)
+    or by its own direction toward the camera (the cone of :func:`angle_kernels`); and the share of each
+    order in the unlit side's exitance and in the thin parts', per channel, beside the reference's hue."""
+    area = vertex_areas(mesh)
+    w_light = light.arrival(scene, np.asarray(mesh.vertices), np.asarray(mesh.vertex_normals))[0]
+    E_plain = vertex_irradiance(mesh, scene, light)  # shadowed, no incidence law: the walks carry it
+    eye = np.asarray(camera.origin, dtype=np.float64)
+    lit = (E_plain > 0) if E_plain.ndim == 1 else (E_plain.sum(axis=1) > 0)
+    thin = vertex_thickness(mesh, scene) < 10.0
+    unlit_px = VertexPicture(mesh, camera, spp=1).draw(np.repeat((~lit)[:, None], 3, 1).astype(float))
+    unlit_px = (unlit_px[..., 0] > 0.5) & mask
+    ref_hue = channel_shares(reference, unlit_px)
+    law = (lambda L: L) if exit_law is None else (lambda L: L * exit_law)
+    shares = {}
+    for along, E_row in ((False, E), (True, E_plain)):
+        beams = "light's beams" if along else "normal beams"
+        M, L = angle_kernels(
+            mesh, scene, volume, N, -w_light if along else None, eye,
+            args.work / f"{name}_{N}_{'light' if along else 'normal'}_beams_orders.npz", orders=True,
+        )  # fmt: skip
+        X = np.stack([radiance(M[k], area, E_row) for k in range(ORDER_CLASSES)])  # (orders, V, 3): M/π
+        Y = np.stack([radiance(L[k], area, E_row) for k in range(ORDER_CLASSES)])  # toward the camera
+        row(f"{beams}: every order, Lambertian", law(X.sum(0)), "orders", law=False)
+        row(f"{beams}: orders >= 1, Lambertian", law(X[1:].sum(0)), "orders", law=False)
+        row(f"{beams}: orders >= 2 alone, Lambertian", law(X[2]), "orders", law=False)
+        row(f"{beams}: >= 2 Lambertian + 1 by direction", law(X[2]) + Y[1], "orders", law=False)
+        row(f"{beams}: every order by direction", Y.sum(0), "orders", law=False)
+        for region, sel in (("unlit", ~lit), ("unlit, thin", ~lit & thin)):
+            power = np.einsum("kvc,v->kc", X[:, sel], area[sel])  # (orders, 3) the region's exitance
+            shares[f"{beams}, {region}"] = {
+                "vertices": int(sel.sum()),
+                "order_share": _share(power, 0).tolist(),  # (orders, R G B)
+                "hue_by_order": _share(power, 1).tolist(),  # each order's R G B shares
+                "hue_all": (power.sum(0) / power.sum()).tolist(),
+            }
+    print(f"the reference's hue on the unlit pixels (R, G, B shares): {np.round(ref_hue, 3).tolist()}")
+    for key, sh in shares.items():
+        print(f"{key} ({sh['vertices']} vertices): share of the exitance by order (R, G, B)")
+        for k, label in enumerate(ORDER_NAMES):
+            share, hue = np.round(sh["order_share"][k], 3), np.round(sh["hue_by_order"][k], 3)
+            print(f"  order {label:<3} {share.tolist()}   its hue {hue.tolist()}")
+        print(f"  all orders' hue {np.round(sh['hue_all'], 3).tolist()}")
+    (args.work / "orders.json").write_text(json.dumps({"reference_hue_unlit": ref_hue.tolist(), **shares}))
 
 
 def data_axes_kernels(ds, mesh, w_light, eye, chunk=128):
@@ -497,6 +592,23 @@ def lean_kernel(K, mesh, lean, w_light, eye, incidence=True, exit=True):
             ).reshape(V, V)
             out[..., c] = np.where(off, out[..., c] * np.exp(k_o * b) / N, out[..., c])
     return out
+
+
+@contextlib.contextmanager
+def _slowest_rate(rate: float):
+    """Fits within it take ``rate`` / (object's diagonal) as their slowest admissible fall-off."""
+    saved = fit_module.ENERGY_RADIUS_RATE
+    fit_module.ENERGY_RADIUS_RATE = rate
+    try:
+        yield
+    finally:
+        fit_module.ENERGY_RADIUS_RATE = saved
+
+
+def _share(a: np.ndarray, axis: int) -> np.ndarray:
+    """``a`` over its sum along ``axis`` (nan where that sum is 0)."""
+    total = a.sum(axis, keepdims=True)
+    return np.divide(a, total, out=np.full_like(a, np.nan), where=total > 0)
 
 
 def _slug(label: str) -> str:

@@ -137,10 +137,28 @@ def region_errors(
             "rel_rmse": rel_rmse(ours, reference, sel),
             # the sign of the error: mean of ours over the reference's in the region (nan where empty)
             "brightness": float(ours[sel].mean() / reference[sel].mean()) if sel.any() else float("nan"),
+            # the hue: each channel's share of the light in the region, ours over the reference's (R, G, B;
+            # 1 is right)
+            "colour": (channel_shares(ours, sel) / channel_shares(reference, sel)).tolist(),
             "pixels": int(sel.sum()),
         }
         for name, sel in regions.items()
     }
+
+
+def channel_shares(image: np.ndarray, sel: np.ndarray) -> np.ndarray:
+    """Each channel's share of the light over the pixels ``sel``: Σ I_c / Σ_c' Σ I_c', (3,) (nan where
+    none is lit).
+
+    Examples
+    --------
+    >>> image = np.ones((2, 2, 3)) * [0.5, 0.3, 0.2]
+    >>> channel_shares(image, np.ones((2, 2), bool)).round(3).tolist()
+    [0.5, 0.3, 0.2]
+    """
+    sums = np.asarray(image, dtype=np.float64)[sel].sum(axis=0)
+    total = sums.sum()
+    return sums / total if total > 0 else np.full(3, np.nan)
 
 
 def vertex_thickness(mesh, scene) -> np.ndarray:
