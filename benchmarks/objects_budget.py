@@ -269,7 +269,14 @@ def main() -> int:
         with _slowest_rate(TAIL_RATE):  # each term may spread its light to the object's size and beyond
             fits["shared colour, tail free"] = fit_mesh(data, "iso").model
             fits["per channel, tail free"] = fit_mesh(data, "iso", colour="per-channel").model
-        radial_and_fit_rows(mesh, Ksrc, open_mesh_dataset(data), fits, E, row)
+        # the geometry factor from the material's own mean coefficients (an oracle of its parameters)
+        inside = volume.sigma_s.reshape(-1, 3).mean(0), volume.sigma_a.reshape(-1, 3).mean(0)
+        sp_t = inside[0] * (1 - volume.g) + inside[1]  # σ_t' (mm⁻¹)
+        s_tr = np.sqrt(3 * inside[1] * sp_t)
+        one = np.ones((V, 1))
+        g_true = geometry_factor(mesh, one * s_tr, one / sp_t, one * 2 / (3 * sp_t))
+        print(f"geometry factor from the material: σ_tr {s_tr.round(3)}, z_r {(1 / sp_t).round(3)} mm")
+        radial_and_fit_rows(mesh, Ksrc, open_mesh_dataset(data), fits, E, row, {"dipole geometry": g_true})
         for label, fitted in list(fits.items())[1:]:  # as `render` draws them, α and the near field
             T_fit = transport_matrices(fitted, mesh)
             E_fit = vertex_irradiance(mesh, scene, light, incidence=T_fit.incidence(args.incidence))
@@ -361,7 +368,56 @@ def main() -> int:
     return _written(args, V, info, rows, t0)
 
 
-def radial_and_fit_rows(mesh, Ksrc, data, fits: dict, E, row) -> None:
+def dipole_flux(x_i, n_i, x_o, n_o, sigma_tr, z_r, z_b):
+    r"""The diffusion dipole of a source at x_i (normal n_i) read as the flux through the tangent plane
+    of x_o (normal n_o), per unit power and per the dipole's own constant (mm⁻²):
+
+    .. math:: F = \frac{(x_o - x_r)\cdot n_o\,(1 + \sigma_{tr} d_r) e^{-\sigma_{tr} d_r}}{d_r^3}
+                - \frac{(x_o - x_v)\cdot n_o\,(1 + \sigma_{tr} d_v) e^{-\sigma_{tr} d_v}}{d_v^3},
+
+    x_r = x_i − z_r n_i the real source, x_v = x_i + (z_r + 2 z_b) n_i its negative image: on a plane
+    (n_o = n_i) Jensen's dipole R_d(r); through a slab (n_o = −n_i) the light that crosses it.  Arrays
+    broadcast; σ_tr, z_r, z_b in mm⁻¹, mm, mm.  Clamped at 0 (a source above the exit's plane)."""
+    x_r = x_i - z_r[..., None] * n_i
+    x_v = x_i + (z_r + 2 * z_b)[..., None] * n_i
+    out = 0.0
+    for x_s, sign in ((x_r, 1.0), (x_v, -1.0)):
+        dx = x_o - x_s
+        d = np.sqrt(np.einsum("...k,...k->...", dx, dx))
+        out = (
+            out
+            + sign * np.einsum("...k,...k->...", dx, n_o) * (1 + sigma_tr * d) * np.exp(-sigma_tr * d) / d**3
+        )
+    return np.maximum(out, 0.0)
+
+
+def geometry_factor(mesh, sigma_tr, z_r, z_b):
+    """g[o, j, c]: the dipole's flux through x_o's tangent plane from source j over its value at the same
+    chord on j's own plane (:func:`dipole_flux`), per channel; ``sigma_tr`` (V, 3), ``z_r``, ``z_b`` (V, 3)
+    per source.  1 on a plane; > 1 across a slab (the light that crosses a body at chord r is not the
+    light that creeps along its surface to r)."""
+    v = np.asarray(mesh.vertices, dtype=np.float64)
+    n = np.asarray(mesh.vertex_normals, dtype=np.float64)
+    V = len(v)
+    g = np.ones((V, V, 3))
+    x_o, n_o = v[:, None, :], n[:, None, :]
+    x_j, n_j = v[None, :, :], n[None, :, :]
+    r = np.linalg.norm(x_o - x_j, axis=2)
+    for c in range(3):
+        s, zr, zb = sigma_tr[None, :, c], z_r[None, :, c], z_b[None, :, c]
+        real = dipole_flux(x_j, n_j, x_o, n_o, s, zr, zb)
+        # the same chord on the source's own plane: x_o' = x_j + r t, t ⟂ n_j
+        dr, dv = np.sqrt(r**2 + zr**2), np.sqrt(r**2 + (zr + 2 * zb) ** 2)
+        flat = (
+            zr * (1 + s * dr) * np.exp(-s * dr) / dr**3
+            + (zr + 2 * zb) * (1 + s * dv) * np.exp(-s * dv) / dv**3
+        )
+        g[..., c] = np.divide(real, flat, out=np.ones_like(real), where=flat > 0)
+    g[np.arange(V), np.arange(V)] = 1.0
+    return g
+
+
+def radial_and_fit_rows(mesh, Ksrc, data, fits: dict, E, row, geometry=None) -> None:
     """The rows between the oracle and the fit: the oracle's ring means (radial, Euclidean r), those of the
     data set's P incident points blended with the renderer's weights, and each fitted model of ``fits``
     ({label: model}) in their place, α = 1, all normalised as the renderer's near field."""
@@ -387,6 +443,20 @@ def radial_and_fit_rows(mesh, Ksrc, data, fits: dict, E, row) -> None:
     near = (own[pts], total[pts], area[pts], w, idx, area)
     shape = table_shape(tables[pts], w, idx, r_all, width)
     row(f"points, radial ({P})", radiance(normalised(shape, *near), area, E), "interpolation between points")
+    for label, g in (
+        geometry or {}
+    ).items():  # the ring means of K / g, drawn × g: a radial profile × geometry
+        flat = np.stack(
+            [ring_means(Ksrc[:, j] / g[:, j], r_all[:, j], area, width, n_bins) for j in range(V)]
+        )
+        shape = table_shape(flat, *eye, r_all, width) * g
+        row(
+            f"oracle, radial × {label}",
+            radiance(normalised(shape, own, total, area, *eye, area), area, E),
+            "geo",
+        )
+        shape = table_shape(flat[pts], w, idx, r_all, width) * g
+        row(f"points, radial ({P}) × {label}", radiance(normalised(shape, *near), area, E), "geometry")
     # the fit in place of the ring means, at the exact distances (below r_min at r_min, as the renderer)
     for label, model in fits.items():
         shape = fit_shape(model, w, idx, r_all, 0.5 * width)
