@@ -276,7 +276,18 @@ def main() -> int:
         one = np.ones((V, 1))
         g_true = geometry_factor(mesh, one * s_tr, one / sp_t, one * 2 / (3 * sp_t))
         print(f"geometry factor from the material: σ_tr {s_tr.round(3)}, z_r {(1 / sp_t).round(3)} mm")
-        radial_and_fit_rows(mesh, Ksrc, open_mesh_dataset(data), fits, E, row, {"dipole geometry": g_true})
+        # ... and from the data: each incident point's dipole fit (σ_a, σ_s'), blended to every vertex
+        dip = fit_mesh(data, "dipole").model
+        w_d, idx_d = neighbour_weights(dip, mesh)
+        sp_t = np.einsum("vk,vkc->vc", w_d, (dip.sigma_a + dip.sigma_s_prime)[idx_d])
+        s_tr = np.einsum(
+            "vk,vkc->vc", w_d, np.sqrt(3 * dip.sigma_a * (dip.sigma_a + dip.sigma_s_prime))[idx_d]
+        )
+        g_data = geometry_factor(mesh, s_tr, 1 / sp_t, 2 / (3 * sp_t))
+        print(f"geometry factor from the data: medians σ_tr {np.median(s_tr, 0).round(3)}, z_r "
+              f"{np.median(1 / sp_t, 0).round(3)} mm")  # fmt: skip
+        geometry = {"dipole geometry (material)": g_true, "dipole geometry (data)": g_data}
+        radial_and_fit_rows(mesh, Ksrc, open_mesh_dataset(data), fits, E, row, geometry)
         for label, fitted in list(fits.items())[1:]:  # as `render` draws them, α and the near field
             T_fit = transport_matrices(fitted, mesh)
             E_fit = vertex_irradiance(mesh, scene, light, incidence=T_fit.incidence(args.incidence))
