@@ -224,11 +224,17 @@ def main() -> int:
         return K
 
     rows = []
+    # the pixels the light does not reach directly: where each row's hue is measured against the reference's
+    unlit = vertex_irradiance(mesh, scene, light) == 0
+    unlit = (
+        VertexPicture(mesh, camera, spp=1).draw(np.repeat(unlit[:, None], 3, 1).astype(float))[..., 0] > 0.5
+    ) & mask
 
     def row(label, L, what, pic=picture, law=True):  # law=False: L is a radiance already, no exit law
         img = pic.draw(L * exit_law if law and exit_law is not None else L)
         cmp = compare(reference, img, mask)
         save_images(img, args.work / "rows" / _slug(label), auto_exposure(reference, mask))
+        hue = channel_shares(img, unlit) / channel_shares(reference, unlit)  # 1 is right
         rows.append(
             {
                 "row": label,
@@ -236,11 +242,12 @@ def main() -> int:
                 "rel_rmse": cmp["rel_rmse"],
                 "flip": cmp["flip_mean_object"],
                 "brightness": float(img[mask].mean() / reference[mask].mean()),
+                "unlit_hue": hue.tolist(),
             }
         )
         print(
             f"{label:<34} rel RMSE {cmp['rel_rmse']:.3f}  FLIP {cmp['flip_mean_object']:.3f}  "
-            f"brightness {rows[-1]['brightness']:.3f}",
+            f"brightness {rows[-1]['brightness']:.3f}  unlit hue {np.round(hue, 2).tolist()}",
             flush=True,
         )
         return img
