@@ -185,7 +185,9 @@ def main() -> int:
     ap.add_argument("--data-polar", default="60", help="--data-axes' polar angles of incidence, degrees")
     args = ap.parse_args()
     args.work.mkdir(parents=True, exist_ok=True)
-    name, file, scale, up, material, points, photons, kind, light, view = args.case.split(":")
+    parts = args.case.split(":")  # the material may hold a colon itself (homogeneous:potato)
+    (name, file, scale, up), material = parts[:4], ":".join(parts[4:-5])
+    points, photons, kind, light, view = parts[-5:]
     P, N = int(points), int(photons)
     mesh = load_mesh(args.meshes / file, scale_mm=float(scale), up=up)
     V = len(mesh.vertices)
