@@ -89,6 +89,10 @@ CONE_DEG = 25.0
 #: ``--fit``'s "tail free" rows: the slowest rate a term may take, × 1/(object's diagonal) (the fit's own,
 #: ``fit.mesh.ENERGY_RADIUS_RATE``, keeps 99.9 % of each term's energy within the object)
 TAIL_RATE = 1.0
+#: the fixed rates of the exponentials fitted to the ring means (``--fit``), 1/(object's diagonal) to 2/edge
+RING_RATES = 8
+#: the geometry factor's range (a source above the exit's plane still reaches it around the body)
+G_RANGE = (0.1, 20.0)
 #: ``--orders``: the scattering orders told apart, 0 (unscattered), 1 (single) and ≥ 2 (multiple)
 ORDER_CLASSES = 3
 ORDER_NAMES = ("0", "1", ">=2")
@@ -434,7 +438,50 @@ def geometry_factor(mesh, sigma_tr, z_r, z_b):
         )
         g[..., c] = np.divide(real, flat, out=np.ones_like(real), where=flat > 0)
     g[np.arange(V), np.arange(V)] = 1.0
-    return g
+    return np.clip(g, G_RANGE[0], G_RANGE[1])
+
+
+def area_rings(r, area, width, n_bins):
+    """(P, n_bins) the surface area in each ring of width ``width`` about each of P sources (r (P, V))."""
+    b = np.minimum((r / width).astype(int), n_bins - 1)
+    return np.stack([np.bincount(b[p], area, minlength=n_bins) for p in range(len(r))])
+
+
+def ring_fit(tables, ring_area, centres, rates, weighting):
+    """Non-negative amplitudes c (P, 3, K) of exp(−rates r) fitted to each source's ring means (P, n_bins, 3)
+    per channel: ``relative`` weighs each ring's relative error by its circumference (near and far rings
+    alike), ``energy`` each ring's absolute error by its area (where the light lies)."""
+    from scipy.optimize import nnls
+
+    A = np.exp(-np.outer(centres, rates))  # (n_bins, K)
+    P = len(tables)
+    c = np.zeros((P, 3, len(rates)))
+    for p in range(P):
+        keep = ring_area[p] > 0
+        for ch in range(3):
+            y = tables[p, keep, ch]
+            if weighting == "relative":
+                wgt = np.sqrt(centres[keep]) / np.maximum(y, 1e-3 * max(y.max(), 1e-30))
+            else:
+                wgt = np.sqrt(ring_area[p, keep])
+            scale = wgt * y
+            if not np.any(scale > 0):
+                continue
+            c[p, ch] = nnls(A[keep] * wgt[:, None], scale, maxiter=50 * len(rates))[0]
+    return c
+
+
+def ring_fit_shape(c, rates, w, idx, r_all, r_min):
+    """K (V_o, V_j, 3) of :func:`ring_fit`'s exponentials at the exact distances (below r_min at r_min),
+    blended with (w, idx) like :func:`fit_shape`."""
+    r = np.maximum(r_all, r_min)
+    K = np.zeros(r_all.shape + (3,))
+    basis = np.exp(-r[..., None] * rates)  # (V_o, V_j, K)
+    for kk in range(w.shape[1]):
+        p = idx[:, kk]
+        for ch in range(3):
+            K[..., ch] += w[None, :, kk] * np.einsum("ojk,jk->oj", basis, c[p, ch])
+    return K
 
 
 def radial_and_fit_rows(mesh, Ksrc, data, fits: dict, E, row, geometry=None) -> None:
@@ -477,6 +524,16 @@ def radial_and_fit_rows(mesh, Ksrc, data, fits: dict, E, row, geometry=None) -> 
         )
         shape = table_shape(flat[pts], w, idx, r_all, width) * g
         row(f"points, radial ({P}) × {label}", radiance(normalised(shape, *near), area, E), "geometry")
+    # exponentials fitted to the points' ring means themselves (non-negative amplitudes on a fixed grid of
+    # rates, per channel): a fit that follows the rings' tail and hue, in place of the fit to the pairs
+    centres = (np.arange(n_bins) + 0.5) * width
+    diagonal = float(np.linalg.norm(np.ptp(v, axis=0)))
+    rates = np.geomspace(1.0 / diagonal, 2.0 / width, RING_RATES)
+    for weighting in ("relative", "energy"):
+        c_nn = ring_fit(tables[pts], area_rings(r_all[pts], area, width, n_bins), centres, rates, weighting)
+        shape = ring_fit_shape(c_nn, rates, w, idx, r_all, 0.5 * width)
+        L = radiance(normalised(shape, *near), area, E)
+        row(f"points, {RING_RATES} exponentials on the rings ({weighting})", L, "fit")
     # the fit in place of the ring means, at the exact distances (below r_min at r_min, as the renderer)
     for label, model in fits.items():
         shape = fit_shape(model, w, idx, r_all, 0.5 * width)
