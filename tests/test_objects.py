@@ -294,6 +294,50 @@ def test_reentry_changes_nothing_on_a_convex_mesh_and_keeps_every_photon():
     assert far.mean() > 0.01  # some light crossed the 0.3 mm gap and walked on in the other sphere
 
 
+def test_unscattered_light_is_kept_apart_from_R_d(tmp_path):
+    """A beam crosses a 1 mm sheet (σ_s = 0.8, σ_a = 0.2 mm⁻¹, index-matched) straight through without
+    scattering with probability e^{−σ_t T} (Beer–Lambert): that is the ``unscattered`` fraction, within
+    its binomial noise, and it is not in R_d. The same photons counted in R_d (the data sets made before)
+    give R_d's total exactly the unscattered fraction more (one seed: the same walks)."""
+    from translucency.acquire.mesh import acquire_mesh
+    from translucency.acquire.volume import Volume
+    from translucency.geometry import vertex_areas
+    from translucency.io.mesh_dataset import open_mesh_dataset
+
+    sheet = trimesh.creation.box(extents=(16.0, 16.0, 1.0)).subdivide().subdivide()
+    centre = int(np.argmin(np.linalg.norm(sheet.vertices - [0.0, 0.0, 0.5], axis=1)))  # the top face's
+    order = np.r_[centre, np.delete(np.arange(len(sheet.vertices)), centre)]  # first: the incident point
+    sheet = trimesh.Trimesh(sheet.vertices[order], np.argsort(order)[sheet.faces], process=False)
+    assert np.allclose(sheet.vertices[0], [0.0, 0.0, 0.5]) and np.allclose(sheet.vertex_normals[0], [0, 0, 1])
+    vol = Volume.homogeneous((4, 34, 34), 0.5, [0.8] * 3, [0.2] * 3, 0.0, 1.0)
+    N = 20_000
+    runs = {
+        how: open_mesh_dataset(
+            acquire_mesh(
+                sheet,
+                vol,
+                tmp_path / f"{how}.zarr",
+                n_points=1,
+                photons=N,
+                seed=5,
+                index_matched=True,
+                unscattered=how,
+            )
+        )  # fmt: skip
+        for how in ("apart", "counted")
+    }
+    apart, counted = runs["apart"], runs["counted"]
+    assert "unscattered" not in counted.group and counted.header["request"].get("unscattered") is None
+    p = np.exp(-1.0 * 1.0)
+    direct = np.asarray(apart.group["unscattered"][...], dtype=np.float64)  # (P, 3)
+    assert np.all(np.abs(direct - p) < 4 * np.sqrt(p * (1 - p) / N)), direct
+    area = vertex_areas(sheet)
+    total = {
+        k: np.einsum("pvc,v->pc", np.asarray(d.group["R_d"][...], np.float64), area) for k, d in runs.items()
+    }
+    assert np.allclose(total["counted"] - total["apart"], direct, atol=1e-5)
+
+
 def test_acquire_mesh_cli_on_the_pig_and_a_users_mesh(tmp_path):
     import zarr
     from typer.testing import CliRunner

@@ -12,6 +12,15 @@ with :math:`A_v = \int \phi_v\, dA` the vertex's area (a third of its
 triangles'): the count and the area it is divided by agree by construction.  Light
 reflected by Fresnel at the entry is recorded apart (``specular``).
 
+**Unscattered light** (``unscattered="apart"``, the default): a photon that leaves without having
+scattered — the beam crossing a thin part (a horn, an ear) — flies on along the beam: a delta in
+direction that a camera sees only head-on, and never the diffuse glow the exitance R_d stands for.  It is
+recorded apart, the fraction of each beam that left so (``unscattered``, per point and channel), and
+left out of R_d.  Counted in R_d (``"counted"``, the data sets made before), it was drawn as diffuse light
+and turned a back-lit potato's thin parts pale blue-grey: the oracle of that case, every vertex a source,
+reads 0.456 from the reference with it and 0.284 without (``benchmarks/objects_budget.py --orders``,
+docs/objects.md).
+
 **Angles** (:mod:`translucency.angles`): with an :class:`~translucency.angles.Incidence` of oblique
 directions each incident point is also lit from them (N photons each, reflected and refracted at the
 surface), written to ``R_d_oblique``; with :class:`~translucency.angles.ExitBins` every exit is also
@@ -57,6 +66,7 @@ def acquire_mesh(
     chunk_points: int = 8,
     index_matched: bool = False,
     reentry: bool = True,
+    unscattered: str = "apart",
     incidence: Incidence | None = None,
     exit_bins: ExitBins | None = None,
     overwrite: bool = False,
@@ -81,6 +91,9 @@ def acquire_mesh(
         head): tallied where it finally escapes, as a photograph sees it
         (:func:`~translucency.acquire.mesh_walk.mesh_random_walk`).  Data sets made before it was
         followed read ``reentry: false`` (absent from their request).
+    unscattered : {"apart", "counted"}
+        Light that leaves without scattering: recorded apart and left out of R_d (module notes), or
+        counted in R_d as the data sets made before (their request has no ``unscattered``).
     incidence : Incidence, optional
         Oblique beams besides the normal one at every incident point (module notes); default: the normal
         only, as the paper's data.
@@ -97,6 +110,8 @@ def acquire_mesh(
     """
     if photons < 1:
         raise TranslucencyError(f"photons: must be >= 1, got {photons}")
+    if unscattered not in UNSCATTERED:
+        raise TranslucencyError(f"unscattered: expected one of {', '.join(UNSCATTERED)}, got {unscattered!r}")
     parse_scheduler(scheduler)  # a bad option is one line before any work
     check_filling(mesh, volume)
     V = len(mesh.vertices)
@@ -116,6 +131,8 @@ def acquire_mesh(
         "volume_grid": {"voxel_mm": volume.voxel_mm, "size_mm": list(volume.size_mm)},
         "tally": "barycentric",
     }
+    if unscattered == "apart":  # (absent otherwise: the data sets made before resume as they were)
+        request["unscattered"] = "apart"
     incidence = incidence or Incidence()
     angles = angle_record(incidence, exit_bins)
     if angles:  # (absent otherwise: the data sets made before the axes existed resume as they were)
@@ -145,7 +162,7 @@ def acquire_mesh(
         done = np.asarray(root["chunk_done"][...])
         todo = [(c, c * chunk_points, min(P, (c + 1) * chunk_points)) for c in range(n_chunks) if not done[c]]
         finished = P - sum(hi - lo for _, lo, hi in todo)
-        walk = (photons, seed, index_matched, reentry, incidence, exit_bins)
+        walk = (photons, seed, index_matched, reentry, incidence, exit_bins, unscattered == "apart")
         with open_cluster(scheduler) as cluster:
             if cluster is None:  # this process, chunk after chunk (Dr.Jit uses every core)
                 scene = mesh_scene(mesh)
@@ -185,6 +202,9 @@ def filling_record(path) -> dict:
     return {"path": str(path), "sha256": h.hexdigest()}
 
 
+#: what becomes of the light that leaves without scattering (:func:`acquire_mesh`, module notes)
+UNSCATTERED = ("apart", "counted")
+
 #: per process: (mesh, its Mitsuba scene) of the acquisition running there
 _SCENE: list = []
 
@@ -192,12 +212,13 @@ _SCENE: list = []
 def _acquire_mesh_chunk(mesh, volume, area, ds, c, lo, hi, incident, walk, scene=None) -> None:
     """Trace chunk ``c`` (incident vertices ``incident``, points lo..hi), write its rows, then its flag.
 
-    ``walk`` = (photons, seed, index_matched, reentry, incidence, exit_bins).  A pure function of its
+    ``walk`` = (photons, seed, index_matched, reentry, incidence, exit_bins, apart) — ``apart``: the
+    unscattered exits left out of R_d and recorded in ``unscattered``.  A pure function of its
     arguments: here or on a worker (which builds the scene once per mesh), again after an interruption, it
     writes the same bytes.  Direction 0 (the normal) draws the same photons as before the angle axes
     existed; direction d another stream.
     """
-    photons, seed, index_matched, reentry, incidence, exit_bins = walk
+    photons, seed, index_matched, reentry, incidence, exit_bins, apart = walk
     if scene is None:
         if not _SCENE or _SCENE[0] is not mesh:
             _SCENE[:] = [mesh, mesh_scene(mesh)]
@@ -211,6 +232,7 @@ def _acquire_mesh_chunk(mesh, volume, area, ds, c, lo, hi, incident, walk, scene
     for d in range(incidence.count):
         R = np.zeros((n, V, 3), np.float32)
         spec = np.zeros((n, 3), np.float32)
+        direct = np.zeros((n, 3), np.float32)  # the fraction that left unscattered (apart)
         binned = None if exit_bins is None else np.zeros((n, V, 3, exit_bins.count), np.float32)
         for ch in range(3):
             res = mesh_random_walk(
@@ -229,6 +251,10 @@ def _acquire_mesh_chunk(mesh, volume, area, ds, c, lo, hi, incident, walk, scene
             )
             point = np.repeat(np.arange(n), photons)
             ok = res.code == EXIT
+            if apart:  # the beam that crossed without scattering: a delta along it, not in R_d
+                straight = ok & (res.scatters == 0)
+                direct[:, ch] = np.bincount(point[straight], minlength=n) / photons
+                ok &= ~straight
             tri, bary = exit_barycentric(mesh, res.face[ok], res.position[ok])  # once for both tallies
             R[..., ch] = splat_barycentric(tri, bary, point[ok], n, V) / (photons * area)
             spec[:, ch] = np.bincount(point[res.code == -1], minlength=n) / photons
@@ -242,6 +268,8 @@ def _acquire_mesh_chunk(mesh, volume, area, ds, c, lo, hi, incident, walk, scene
         if d == 0:
             root["R_d"].with_config(every)[lo:hi] = R
             root["specular"].with_config(every)[lo:hi] = spec
+            if apart:
+                root["unscattered"].with_config(every)[lo:hi] = direct
         else:
             root["R_d_oblique"].with_config(every)[lo:hi, d - 1] = R
             root["specular_oblique"].with_config(every)[lo:hi, d - 1] = spec

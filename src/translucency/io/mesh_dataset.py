@@ -12,6 +12,8 @@ and F triangles)::
     incident      (P,) int32       vertex index of each incident point
     R_d           (P, V, 3) float32  per unit incident power, mm⁻²
     specular      (P, 3) float32   Fresnel reflection at entry (fraction of the power), not in R_d
+    unscattered   (P, 3) float32   the fraction that left without scattering, not in R_d (request
+                                   ``unscattered`` = "apart"; absent where it was counted in R_d)
     chunk_done    (n_chunks,) bool written last for each chunk of points: resume marker
 
 A data set measured from photographs (``translucency import object``, header ``source`` =
@@ -65,6 +67,7 @@ VERSION = 1
 _SURFACE = ("vertices", "faces", "normals", "vertex_area", "incident")
 _ARRAYS = ("vertices", "faces", "normals", "vertex_area", "incident", "R_d", "specular", "chunk_done")
 _ANGLES = ("R_d_oblique", "specular_oblique", "exit_bins")  # present where the header announces them
+_APART = ("unscattered",)  # present where the request says the unscattered light was kept apart
 
 
 class MeshDataset(AngleAxes, ChunkedStore):
@@ -80,11 +83,11 @@ class MeshDataset(AngleAxes, ChunkedStore):
     HEADER_KEY = HEADER_KEY
     FORMAT = FORMAT
     VERSION = VERSION
-    ARRAYS = (*_ARRAYS, *_ANGLES)
+    ARRAYS = (*_ARRAYS, *_APART, *_ANGLES)
 
     @property
     def PER_POINT(self) -> tuple[str, ...]:  # noqa: N802 — the store's name for it
-        return ("R_d", "specular", *(name for name in _ANGLES if name in self.group))
+        return ("R_d", "specular", *(name for name in (*_APART, *_ANGLES) if name in self.group))
 
     @classmethod
     def from_group(cls, path: Path, header: dict, group) -> MeshDataset:
@@ -106,7 +109,7 @@ class MeshDataset(AngleAxes, ChunkedStore):
             },
         )
         announced = angle_arrays(header.get("angles"), P, (V,))
-        measured = [("R_d_var", (P, V, 3)), ("flags", (P, V))]  # a measured data set's (optional)
+        measured = [("R_d_var", (P, V, 3)), ("flags", (P, V)), ("unscattered", (P, 3))]  # (optional)
         for name, shape in [*measured, *announced]:
             if name in group and tuple(group[name].shape) != shape:
                 raise TranslucencyError(
@@ -279,6 +282,10 @@ def create_mesh_dataset(
     root.create_array(
         "specular", shape=(P, 3), dtype="float32", chunks=(chunk_points, 3), fill_value=0, config=every
     )
+    if (header.get("request") or {}).get("unscattered") == "apart":
+        root.create_array(
+            "unscattered", shape=(P, 3), dtype="float32", chunks=(chunk_points, 3), fill_value=0, config=every
+        )
     if measured:
         root.create_array(
             "flags",
