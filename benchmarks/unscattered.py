@@ -1,0 +1,119 @@
+"""The unscattered light in the tally: counted in R_d (the data sets made before) or kept apart (the default).
+
+A photon that crosses a thin part without scattering leaves along the beam, a delta in direction that a
+camera sees only head-on; counted in R_d it is drawn as diffuse exitance.  For each case the same walks
+(one seed) are tallied both ways, fitted with the paper's shared colour and with a fall-off per channel,
+and the object rendered by ``render``'s chain beside a converged volpath reference:
+
+    python benchmarks/unscattered.py --meshes ../shared/meshes --spp 2304 --case CASE [--case CASE ...]
+
+A case is as in ``objects_budget.py`` (``name:mesh:mm per unit:up:material:points:photons:light:view``;
+the material may hold a colon, ``homogeneous:potato``), or ``pig`` (the main job's Figure 2, its shipped
+reference).  Each row prints the relative RMSE, FLIP and brightness, each region's brightness and the
+unlit region's hue (each channel's share of its light over the reference's, R G B: 1 is right), and the
+beams' mean unscattered fraction.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from translucency.acquire.mesh import acquire_mesh, object_volume
+from translucency.fit.mesh import fit_mesh
+from translucency.io.mesh import load_mesh
+from translucency.io.mesh_dataset import open_mesh_dataset
+from translucency.mitsuba import mesh_scene
+from translucency.pipeline import FIGURE2_REFERENCE_SPP, figure2_scene
+from translucency.render.camera import Camera
+from translucency.render.compare import compare, region_errors
+from translucency.render.lights import parse_light
+from translucency.render.picture import VertexPicture, coverage
+from translucency.render.reference import converged_reference
+from translucency.render.relight import relight_object
+from translucency.render.tonemap import auto_exposure, save_images
+from translucency.render.transport import transport_matrices
+
+
+def scene_of(case: str, meshes: Path, size):
+    """(name, points, photons, mesh, volume, light, camera, spp or None) of a case spec or ``pig``."""
+    if case == "pig":
+        mesh, volume, light, camera = figure2_scene()
+        return "pig", 96, 8000, mesh, volume, light, camera, FIGURE2_REFERENCE_SPP
+    parts = case.split(":")
+    (name, file, scale, up), material = parts[:4], ":".join(parts[4:-5])
+    points, photons, kind, light, view = parts[-5:]
+    mesh = load_mesh(meshes / file, scale_mm=float(scale), up=up)
+    volume = object_volume(material, mesh, 1.0, seed=3)
+    camera = Camera.looking_at(mesh, [float(v) for v in view.split(",")], *size)
+    return name, int(points), int(photons), mesh, volume, parse_light(f"{kind}:{light}"), camera, None
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--meshes", type=Path, default=Path("../shared/meshes"))
+    ap.add_argument("--case", action="append", required=True, help="a case spec (module docstring) or pig")
+    ap.add_argument("--spp", type=int, default=256, help="samples per pixel of each of the two references")
+    ap.add_argument("--size", type=int, nargs=2, default=(128, 96))
+    ap.add_argument("--work", type=Path, default=Path(tempfile.mkdtemp(prefix="unscattered_")))
+    args = ap.parse_args()
+    args.work.mkdir(parents=True, exist_ok=True)
+    out = []
+    for case in args.case:
+        name, P, N, mesh, volume, light, camera, spp = scene_of(case, args.meshes, args.size)
+        mask = coverage(mesh, camera)
+        reference, info = converged_reference(mesh, volume, light, camera, mask, spp=spp or args.spp)
+        exposure = auto_exposure(reference, mask)
+        save_images(reference, args.work / f"{name}_reference", exposure)
+        scene = mesh_scene(mesh)
+        picture = VertexPicture(mesh, camera, spp=16, light=light)
+        for tally in ("counted", "apart"):
+            t = time.perf_counter()
+            data = acquire_mesh(
+                mesh, volume, args.work / f"{name}_{P}x{N}_{tally}.zarr", n_points=P, photons=N, seed=3,
+                chunk_points=32, index_matched=True, unscattered=tally,
+            )  # fmt: skip
+            t_acquire = time.perf_counter() - t
+            ds = open_mesh_dataset(data)
+            direct = np.asarray(ds.group["unscattered"][...]).mean(0) if "unscattered" in ds.group else None
+            for colour in ("shared", "per-channel"):
+                model = fit_mesh(data, "iso", colour=colour).model
+                L, E, _ = relight_object(transport_matrices(model, mesh), mesh, scene, light, camera.origin)
+                ours = picture.draw(L)
+                save_images(ours, args.work / f"{name}_{tally}_{colour}", exposure)
+                cmp = compare(reference, ours, mask)
+                regions = region_errors(mesh, scene, camera, E, reference, ours, mask)
+                row = {
+                    "case": name,
+                    "tally": tally,
+                    "colour": colour,
+                    "rel_rmse": cmp["rel_rmse"],
+                    "flip": cmp["flip_mean_object"],
+                    "brightness": float(ours[mask].mean() / reference[mask].mean()),
+                    "regions": {k: v["brightness"] for k, v in regions.items()},
+                    "unlit_hue": regions["unlit"]["colour"],
+                    "reference_noise": info["noise"],
+                    "unscattered": None if direct is None else direct.tolist(),
+                    "acquire_s": t_acquire,
+                }
+                out.append(row)
+                by_region = " ".join(f"{k} {v:.2f}x" for k, v in row["regions"].items() if k != "all")
+                print(
+                    f"{name:<22} {tally:<8} {colour:<12} rel RMSE {row['rel_rmse']:.3f}  "
+                    f"FLIP {row['flip']:.3f}  brightness {row['brightness']:.3f}  ({by_region})  unlit hue "
+                    f"{np.round(row['unlit_hue'], 2).tolist()}  noise {info['noise']:.3f}"
+                    + ("" if direct is None else f"  unscattered {np.round(direct, 4).tolist()}"),
+                    flush=True,
+                )
+    (args.work / "unscattered.json").write_text(json.dumps(out, indent=2))
+    print(f"written: {args.work / 'unscattered.json'}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
