@@ -111,8 +111,35 @@ def main() -> int:
                     flush=True,
                 )
     (args.work / "unscattered.json").write_text(json.dumps(out, indent=2))
-    print(f"written: {args.work / 'unscattered.json'}")
+    figure(args.work, sorted({r["case"] for r in out}, key=[r["case"] for r in out].index))
+    print(f"written: {args.work / 'unscattered.json'}, {args.work / 'unscattered.png'}")
     return 0
+
+
+def figure(work: Path, cases: list[str]) -> None:
+    """One row per case: the reference, the paper's shared colour and a fall-off per channel (both on the
+    tally with the unscattered light apart), each at the reference's exposure."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from PIL import Image
+
+    columns = (("reference", "volpath reference"), ("apart_shared", "shared colour (paper)"),
+               ("apart_per-channel", "per-channel fall-off"))  # fmt: skip
+    fig, axes = plt.subplots(len(cases), 3, figsize=(9, 2.4 * len(cases)), squeeze=False)
+    for r, case in enumerate(cases):
+        for c, (stem, title) in enumerate(columns):
+            ax = axes[r, c]
+            ax.imshow(Image.open(work / f"{case}_{stem}.png"))
+            ax.set_xticks([]), ax.set_yticks([])
+            if r == 0:
+                ax.set_title(title, fontsize=10)
+            if c == 0:
+                ax.set_ylabel(case, fontsize=9)
+    fig.tight_layout()
+    fig.savefig(work / "unscattered.png", dpi=110)
+    plt.close(fig)
 
 
 if __name__ == "__main__":
