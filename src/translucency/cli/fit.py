@@ -49,7 +49,7 @@ _COLOUR = typer.Option(
     None,
     "--colour",
     help="shared: the paper's (1, s_g, s_b) scale of one fall-off; per-channel: one fall-off "
-    "per channel. Default: per-channel on planar data, shared on meshes.",
+    "per channel (the default).",
 )
 _EXCLUSION = typer.Option(
     None, "--exclusion", help="Ignore pixels closer than this to x_i, mm (default one pixel)."

@@ -118,7 +118,7 @@ def fit_mesh(
     model: str = "iso",
     *,
     n_terms: int = 3,
-    colour: str = "shared",
+    colour: str = "per-channel",
     exclusion_mm: float | None = None,
     rel_sigma: float = 0.05,
     max_rounds: int = 3,
@@ -138,10 +138,12 @@ def fit_mesh(
         A mesh data set (:func:`translucency.acquire.mesh.acquire_mesh`).
     model : {"iso", "dipole", "burley"}
         The paper fits the isotropic model on objects (no tangent directions).
-    colour : {"shared", "per-channel"}
-        Default: the paper's colour scale — per-channel fall-offs fitted from a
-        few thousand photons per vertex neighbourhood disagree between channels
-        and show as coloured patches in renderings.
+    colour : {"per-channel", "shared"}
+        Default: a fall-off per channel.  The paper's colour scale (``"shared"``, one fall-off scaled by
+        (1, s_g, s_b)) gives light that crossed a body the hue of the light near its entry: a back-lit
+        marble or potato drawn grey where the reference is brown or yellow (the unlit side's blue share
+        1.21–1.22× the reference's; per channel 1.04 and 0.82), and the main job's pig's unlit parts
+        too blue (docs/objects.md, "The colour of light that crossed the body").
     exclusion_mm : float, optional
         Vertices closer than this to x_i are left out; default half the mean edge length.
     alpha_radius : float, optional

@@ -115,8 +115,7 @@ def fit_model(
         Exponential terms per profile (1–4) and directions m of the anisotropic model; ``"auto"``
         chooses by held-out error (planar data).
     colour : {"shared", "per-channel"}, optional
-        One fall-off scaled per channel (the paper's) or one per channel; default per-channel on planar
-        data, shared on meshes.
+        One fall-off scaled per channel (the paper's) or one per channel (the default).
     weighting : {"poisson", "relative"}
         The residuals' weights (mesh fits: poisson only).
     max_rounds : int
@@ -169,7 +168,6 @@ def fit_model(
     stage = fit_mesh if on_mesh else fit_planar
     refuse_unknown(f"fit on a {'mesh' if on_mesh else 'planar'} data set", options, stage)
     if on_mesh:  # what a per-vertex fit does not take, one line each
-        colour = colour or "shared"
         if family in FAMILIES and FAMILIES[family].directional:
             raise TranslucencyError(
                 f"family={family!r}: the anisotropic model is for planar data sets; {data.path} is a "
@@ -180,8 +178,7 @@ def fit_model(
             raise TranslucencyError("n_terms: 'auto' selects on planar data only; give n for a mesh fit")
         if weighting != "poisson":
             raise TranslucencyError("weighting: mesh fits weight by the Poisson variance only")
-    else:
-        colour = colour or "per-channel"
+    colour = colour or "per-channel"
     check_fit_options(family, n_terms, 1 if on_mesh else n_directions, colour, weighting=weighting)
     run = Run("fit", max_memory=max_memory, reporter=reporter, timer=f"fit {family}")
     out = None if out is None else Path(out)
