@@ -69,9 +69,13 @@ def test_table_is_the_ratio_of_each_cells_energies(flat_box):
             cos = float(n[inc[p]] @ n[o])
             a = min(int(np.searchsorted(COS_EDGES, cos, side="right")) - 1, Nc - 1)
             b = min(int(np.searchsorted(R_EDGES, r, side="right")) - 1, Nr - 1)
-            prof = float(np.sum(m.c[p, 0, 0] * np.exp(m.d[p, 0, 0] * r)))
+            C = m.c.shape[1]  # 1: the paper's shared colour, 3: a fall-off per channel
+            prof = [
+                float(np.sum(m.c[p, min(c, C - 1), 0] * np.exp(m.d[p, min(c, C - 1), 0] * r)))
+                for c in range(3)
+            ]
             meas[p, a, b] += area[o] * R[p, o]
-            model[p, a, b] += area[o] * m.alpha.values[o] * prof * m.colour_scale[p]
+            model[p, a, b] += area[o] * m.alpha.values[o] * np.asarray(prof) * m.colour_scale[p]
     has = (meas > 0) & (model > 0)
     expected = np.clip(np.where(has, meas / np.where(has, model, 1.0), 1.0), 1 / 8, 8)
     np.testing.assert_allclose(table, expected, rtol=1e-5)

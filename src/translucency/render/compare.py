@@ -139,11 +139,17 @@ def region_errors(
             "brightness": float(ours[sel].mean() / reference[sel].mean()) if sel.any() else float("nan"),
             # the hue: each channel's share of the light in the region, ours over the reference's (R, G, B;
             # 1 is right)
-            "colour": (channel_shares(ours, sel) / channel_shares(reference, sel)).tolist(),
+            "colour": _ratio(channel_shares(ours, sel), channel_shares(reference, sel)).tolist(),
             "pixels": int(sel.sum()),
         }
         for name, sel in regions.items()
     }
+
+
+def _ratio(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """a / b, nan where b is 0 or not a number."""
+    ok = np.isfinite(b) & (b > 0)
+    return np.divide(a, b, out=np.full(np.shape(a), np.nan), where=ok)
 
 
 def channel_shares(image: np.ndarray, sel: np.ndarray) -> np.ndarray:
