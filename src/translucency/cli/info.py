@@ -78,6 +78,9 @@ def _dataset_rows(fields: dict, size_text: str, bounds: list):
         ]
         if fields.get("reentry") is not None:
             rows.append(("re-entry", f"{fields['reentry']} (light through the air from part to part)"))
+        if fields.get("unscattered") is not None:
+            share = " / ".join(f"{v:.4f}" for v in fields["unscattered"])
+            rows.append(("unscattered", f"{share} of a beam (R, G, B), kept apart from R_d"))
         inc = fields.get("incidence") or {}
         if inc.get("directions", 1) > 1:
             angles = ", ".join(f"{t:g}" for t in inc["polar_deg"])

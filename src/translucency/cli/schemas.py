@@ -576,6 +576,12 @@ INFO_MESH = record(
             ["boolean", "null"],
             "A tally: light leaving one part through the air walked on in the next (null: photographs).",
         ),
+        "unscattered": field(
+            ["array", "null"],
+            "A tally: the mean fraction of a beam that left without scattering, kept apart from R_d, R, G, B "
+            "(null: counted in R_d, as the tallies made before, or photographs).",
+            items=NUMBER,
+        ),
         **_INFO_ANGLES,
         **BOUNDS,
         **_STORE,

@@ -321,6 +321,13 @@ def describe_mesh(ds: MeshDataset) -> dict:
         index_matched=h.get("request", {}).get("index_matched"),
         # light carried through the air from part to part: a tally's flag (false before it existed)
         reentry=h.get("request", {}).get("reentry", False) if h.get("source") != "photographs" else None,
+        # the light that left unscattered: the mean fraction of a beam kept apart (R, G, B), or None where
+        # R_d counts it (the tallies made before) or a photograph measured it
+        unscattered=(
+            np.asarray(ds.group["unscattered"][...], dtype=np.float64).mean(axis=0).round(6).tolist()
+            if "unscattered" in ds.group
+            else None
+        ),
         incidence={**ds.incidence.describe(), "directions": ds.incidence.count},
         exit_bins=None if ds.exit_bins is None else ds.exit_bins.count,
         **object_bounds(vertices),
