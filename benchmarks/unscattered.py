@@ -24,6 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
+from translucency import evaluate_report, save_model
 from translucency.acquire.mesh import acquire_mesh, object_volume
 from translucency.fit.mesh import fit_mesh
 from translucency.io.mesh import load_mesh
@@ -61,6 +62,11 @@ def main() -> int:
     ap.add_argument("--spp", type=int, default=256, help="samples per pixel of each of the two references")
     ap.add_argument("--size", type=int, nargs=2, default=(128, 96))
     ap.add_argument("--work", type=Path, default=Path(tempfile.mkdtemp(prefix="unscattered_")))
+    ap.add_argument(
+        "--held-out",
+        action="store_true",
+        help="also evaluate both colours against another acquisition (seed 4, 4x the photons, same filling)",
+    )
     args = ap.parse_args()
     args.work.mkdir(parents=True, exist_ok=True)
     out = []
@@ -81,8 +87,24 @@ def main() -> int:
             t_acquire = time.perf_counter() - t
             ds = open_mesh_dataset(data)
             direct = np.asarray(ds.group["unscattered"][...]).mean(0) if "unscattered" in ds.group else None
+            truth = None
+            if args.held_out and tally == "apart":
+                truth = acquire_mesh(
+                    mesh, volume, args.work / f"{name}_{P}x{4 * N}_truth.zarr", n_points=P, photons=4 * N,
+                    seed=4, chunk_points=32, index_matched=True,
+                )  # fmt: skip
             for colour in ("shared", "per-channel"):
                 model = fit_mesh(data, "iso", colour=colour).model
+                if truth is not None:
+                    path = args.work / f"{name}_{colour}.model.zip"
+                    path.unlink(missing_ok=True)  # (this script's own file of an earlier run)
+                    save_model(model, path)
+                    held = evaluate_report(
+                        path, data, truth=truth, report=args.work / f"{name}_{colour}_held"
+                    )
+                    h = held.summary
+                    print(f"{name:<22} held out, {colour:<12} rel L2 {h['rel_l2']:.4f}"
+                          f"  (the truth's noise {h['noise_floor']['all']:.4f})", flush=True)  # fmt: skip
                 L, E, _ = relight_object(transport_matrices(model, mesh), mesh, scene, light, camera.origin)
                 ours = picture.draw(L)
                 save_images(ours, args.work / f"{name}_{tally}_{colour}", exposure)
