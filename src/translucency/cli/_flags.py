@@ -77,6 +77,7 @@ AT_START = {
     "chunk": "--chunk",
     "dtype": "--dtype",
     "up": "--up",
+    "unscattered": "--unscattered",
     "scale": "--scale",
     "fov": "--fov",
     "resolution": "--resolution",

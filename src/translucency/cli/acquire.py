@@ -266,6 +266,12 @@ class MeshOptions:
         "--reentry/--no-reentry",
         help="Light leaving one part through the air into another (a horn by the head) walks on there.",
     )
+    unscattered = typer.Option(
+        "apart",
+        "--unscattered",
+        help="Light that leaves without scattering (a beam through a thin part, seen only head-on): apart "
+        "(kept out of R_d, its fraction stored) or counted (in R_d, as data sets made before).",
+    )
     incidence = AngleOptions.incidence
     azimuths = AngleOptions.azimuths
     exit_bins = AngleOptions.exit_bins
@@ -293,6 +299,7 @@ def acquire_mesh_cmd(
     chunk: int = MeshOptions.chunk,
     index_matched: bool = MeshOptions.index_matched,
     reentry: bool = MeshOptions.reentry,
+    unscattered: str = MeshOptions.unscattered,
     incidence: list[float] = MeshOptions.incidence,
     azimuths: int = MeshOptions.azimuths,
     exit_bins: int = MeshOptions.exit_bins,
@@ -319,6 +326,7 @@ def acquire_mesh_cmd(
         chunk_points=chunk,
         index_matched=index_matched,
         reentry=reentry,
+        unscattered=unscattered,
         incidence=incidence,
         azimuths=azimuths,
         exit_bins=exit_bins,

@@ -21,8 +21,8 @@ from .. import resources
 from .._validate import TranslucencyError, check_option
 from ..acquire import PlanarSetup, Volume, estimate_seconds, load_volume, make_sample, probe_walk
 from ..acquire import acquire_planar as scan_planar
+from ..acquire.mesh import UNSCATTERED, check_filling, object_volume
 from ..acquire.mesh import acquire_mesh as scan_mesh
-from ..acquire.mesh import check_filling, object_volume
 from ..acquire.planar import setup_request
 from ..angles import ExitBins, Incidence
 from ..cluster import parse_scheduler
@@ -275,6 +275,7 @@ def acquire_mesh(
     chunk_points: int = 8,
     index_matched: bool = False,
     reentry: bool = True,
+    unscattered: str = "apart",
     incidence: Sequence[float] = (),
     azimuths: int = 4,
     exit_bins: int = 0,
@@ -310,6 +311,10 @@ def acquire_mesh(
     reentry : bool
         Light that leaves one part through the air into another walks on there, tallied where it finally
         escapes (as a photograph sees it); ``False``: tallied where it first left.
+    unscattered : {"apart", "counted"}
+        Light that leaves without scattering (a beam crossing a thin part, seen only head-on): kept apart
+        from R_d, its fraction stored as ``unscattered`` (the default), or counted in R_d as the data sets
+        made before (:func:`translucency.acquire.mesh.acquire_mesh`).
     incidence : sequence of float
         Polar angles (degrees from the normal) of oblique beams besides the normal one, each at
         ``azimuths`` azimuths of the incident point's tangent frame (:class:`translucency.angles.Incidence`);
@@ -346,6 +351,8 @@ def acquire_mesh(
     voxel_mm = float(check_option("voxel_mm", voxel_mm, lo=0, open_lo=True))
     if up not in UP_AXES:  # an option: before the mesh is read
         raise TranslucencyError(f"up: expected one of z, y, x, got {up!r}")
+    if unscattered not in UNSCATTERED:
+        raise TranslucencyError(f"unscattered: expected one of {', '.join(UNSCATTERED)}, got {unscattered!r}")
     run = Run("acquire mesh", max_memory=max_memory, reporter=reporter)
     name, volume, path = sample_of(sample)
     mesh_file = mesh_file_of(mesh)
@@ -411,6 +418,7 @@ def acquire_mesh(
             chunk_points=chunk_points,
             index_matched=bool(index_matched),
             reentry=bool(reentry),
+            unscattered=unscattered,
             incidence=angles,
             exit_bins=bins,
             overwrite=overwrite,
