@@ -34,8 +34,6 @@ from scipy.optimize import nnls
 
 sys.path.insert(0, str(Path(__file__).parent))
 from objects_budget import area_rings, ring_fit, ring_means  # noqa: E402
-from unscattered import scene_of  # noqa: E402
-
 from translucency.acquire.mesh import acquire_mesh  # noqa: E402
 from translucency.fit.mesh import fit_mesh  # noqa: E402
 from translucency.io.mesh_dataset import open_mesh_dataset  # noqa: E402
@@ -45,6 +43,7 @@ from translucency.render.picture import VertexPicture, coverage  # noqa: E402
 from translucency.render.reference import converged_reference  # noqa: E402
 from translucency.render.relight import relight_object  # noqa: E402
 from translucency.render.transport import transport_matrices  # noqa: E402
+from unscattered import scene_of  # noqa: E402
 
 #: rates of the ``rings`` variant
 RING_RATES = 8
@@ -90,6 +89,32 @@ def tail_profile(model, tables, ring_area, centres, rates, near, slow):
     return c, np.concatenate([d3, np.broadcast_to(-slow_rates, ct.shape)], axis=2)
 
 
+def _row(c: dict, label: str, model) -> dict:
+    """Render ``model`` in the case ``c`` and print its line against the reference."""
+    mesh, camera, reference, mask = c["mesh"], c["camera"], c["reference"], c["mask"]
+    L, E, _ = relight_object(transport_matrices(model, mesh), mesh, c["scene"], c["light"], camera.origin)
+    ours = c["picture"].draw(L)
+    cmp = compare(reference, ours, mask)
+    regions = region_errors(mesh, c["scene"], camera, E, reference, ours, mask)
+    r = {
+        "case": c["name"],
+        "profile": label,
+        "rel_rmse": cmp["rel_rmse"],
+        "flip": cmp["flip_mean_object"],
+        "brightness": float(ours[mask].mean() / reference[mask].mean()),
+        "thin": regions["thin"]["brightness"],
+        "unlit_hue": regions["unlit"]["colour"],
+        "reference_noise": c["noise"],
+    }
+    hue = np.round(r["unlit_hue"], 2).tolist()
+    print(
+        f"{c['name']:<22} {label:<34} rel RMSE {r['rel_rmse']:.3f}  FLIP {r['flip']:.3f}  "
+        f"brightness {r['brightness']:.3f}  thin {r['thin']:.2f}x  unlit hue {hue}  noise {c['noise']:.3f}",
+        flush=True,
+    )
+    return r
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--meshes", type=Path, default=Path("../shared/meshes"))
@@ -110,32 +135,26 @@ def main() -> int:
         picture = VertexPicture(mesh, camera, spp=16, light=light)
         path = args.work / f"{name}_{P}x{N}_apart.zarr"
         if not path.exists():
-            acquire_mesh(mesh, volume, path, n_points=P, photons=N, seed=3, chunk_points=32, index_matched=True)
+            acquire_mesh(
+                mesh, volume, path, n_points=P, photons=N, seed=3, chunk_points=32, index_matched=True
+            )
         model = fit_mesh(path, "iso").model
         tables, ring_area, centres, rates = point_rings(open_mesh_dataset(path))
 
-        def row(label, m):
-            L, E, _ = relight_object(transport_matrices(m, mesh), mesh, scene, light, camera.origin)
-            ours = picture.draw(L)
-            cmp = compare(reference, ours, mask)
-            regions = region_errors(mesh, scene, camera, E, reference, ours, mask)
-            r = {
-                "case": name,
-                "profile": label,
-                "rel_rmse": cmp["rel_rmse"],
-                "flip": cmp["flip_mean_object"],
-                "brightness": float(ours[mask].mean() / reference[mask].mean()),
-                "thin": regions["thin"]["brightness"],
-                "unlit_hue": regions["unlit"]["colour"],
-                "reference_noise": info["noise"],
-            }
-            out.append(r)
-            print(
-                f"{name:<22} {label:<34} rel RMSE {r['rel_rmse']:.3f}  FLIP {r['flip']:.3f}  brightness "
-                f"{r['brightness']:.3f}  thin {r['thin']:.2f}x  unlit hue {np.round(r['unlit_hue'], 2).tolist()}"
-                f"  noise {info['noise']:.3f}",
-                flush=True,
-            )
+        case_ = dict(
+            name=name,
+            mesh=mesh,
+            scene=scene,
+            light=light,
+            camera=camera,
+            picture=picture,
+            reference=reference,
+            mask=mask,
+            noise=info["noise"],
+        )
+
+        def row(label, m, c=case_):
+            out.append(_row(c, label, m))
 
         row("fit (the default)", model)
         c = ring_fit(tables, ring_area, centres, rates, "energy")

@@ -147,7 +147,8 @@ def tally_image(mesh, volume, light, camera, starts, photons, cone_deg, seed, ch
             d = res.direction[out].astype(np.float64)
             d /= np.linalg.norm(d, axis=1, keepdims=True)
             power = A * E[src] / (starts * photons)
-            splat.add(image[..., ch], res.position[out].astype(np.float64), d, face_normals[res.face[out]], power)
+            x_o = res.position[out].astype(np.float64)
+            splat.add(image[..., ch], x_o, d, face_normals[res.face[out]], power)
     return image
 
 
