@@ -1,0 +1,99 @@
+"""Which transport should ``render`` draw by default?  The paper's radial profile against the same profile
+with the through-body table, on today's data and fit defaults (the unscattered light apart, a fall-off per
+channel), each against a converged volpath reference.
+
+For each case one acquisition (``acquire mesh``'s defaults, seed 3; a data set already in ``--work`` is
+read again), one fit (``fit``'s defaults: it stores the through-body table in the model), and the object
+drawn twice by ``render``'s chain — ``transport_matrices(model, mesh)`` and ``…, through=True)`` — beside
+the reference (relative RMSE, FLIP, brightness, each region's brightness, the unlit side's hue):
+
+    python benchmarks/default_transport.py --meshes ../shared/meshes --spp 2304 --case CASE [--case CASE ...]
+
+Cases as in ``unscattered.py`` (``name:mesh:mm per unit:up:material:points:photons:light:view``, or
+``pig``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+from unscattered import scene_of
+
+from translucency.acquire.mesh import acquire_mesh
+from translucency.fit.mesh import fit_mesh
+from translucency.mitsuba import mesh_scene
+from translucency.render.compare import compare, region_errors
+from translucency.render.picture import VertexPicture, coverage
+from translucency.render.reference import converged_reference
+from translucency.render.relight import relight_object
+from translucency.render.tonemap import auto_exposure, save_images
+from translucency.render.transport import transport_matrices
+
+#: the transports compared: a label and ``transport_matrices``' keyword
+TRANSPORTS = (("paper's profile", {}), ("profile x through-body table", {"through": True}))
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--meshes", type=Path, default=Path("../shared/meshes"))
+    ap.add_argument("--case", action="append", required=True, help="a case spec (unscattered.py) or pig")
+    ap.add_argument("--spp", type=int, default=256, help="samples per pixel of each of the two references")
+    ap.add_argument("--size", type=int, nargs=2, default=(128, 96))
+    ap.add_argument("--work", type=Path, default=Path(tempfile.mkdtemp(prefix="default_transport_")))
+    args = ap.parse_args()
+    args.work.mkdir(parents=True, exist_ok=True)
+    out = []
+    for case in args.case:
+        name, P, N, mesh, volume, light, camera, spp = scene_of(case, args.meshes, args.size)
+        mask = coverage(mesh, camera)
+        reference, info = converged_reference(mesh, volume, light, camera, mask, spp=spp or args.spp)
+        exposure = auto_exposure(reference, mask)
+        save_images(reference, args.work / f"{name}_reference", exposure)
+        scene = mesh_scene(mesh)
+        picture = VertexPicture(mesh, camera, spp=16, light=light)
+        t = time.perf_counter()
+        data = acquire_mesh(
+            mesh, volume, args.work / f"{name}_{P}x{N}_apart.zarr", n_points=P, photons=N, seed=3,
+            chunk_points=32, index_matched=True,
+        )  # fmt: skip
+        t_acquire = time.perf_counter() - t
+        model = fit_mesh(data, "iso").model
+        for label, keywords in TRANSPORTS:
+            T = transport_matrices(model, mesh, **keywords)
+            L, E, _ = relight_object(T, mesh, scene, light, camera.origin)
+            ours = picture.draw(L)
+            stem = "through" if keywords else "paper"
+            save_images(ours, args.work / f"{name}_{stem}", exposure)
+            cmp = compare(reference, ours, mask)
+            regions = region_errors(mesh, scene, camera, E, reference, ours, mask)
+            row = {
+                "case": name,
+                "transport": label,
+                "rel_rmse": cmp["rel_rmse"],
+                "flip": cmp["flip_mean_object"],
+                "brightness": float(ours[mask].mean() / reference[mask].mean()),
+                "regions": {k: v["brightness"] for k, v in regions.items()},
+                "unlit_hue": regions["unlit"]["colour"],
+                "reference_noise": info["noise"],
+                "acquire_s": t_acquire,
+            }
+            out.append(row)
+            by_region = " ".join(f"{k} {v:.2f}x" for k, v in row["regions"].items() if k != "all")
+            print(
+                f"{name:<22} {label:<30} rel RMSE {row['rel_rmse']:.3f}  FLIP {row['flip']:.3f}  "
+                f"brightness {row['brightness']:.3f}  ({by_region})  unlit hue "
+                f"{np.round(row['unlit_hue'], 2).tolist()}  noise {info['noise']:.3f}",
+                flush=True,
+            )
+    (args.work / "default_transport.json").write_text(json.dumps(out, indent=2))
+    print(f"written: {args.work / 'default_transport.json'}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
