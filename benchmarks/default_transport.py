@@ -22,7 +22,6 @@ import time
 from pathlib import Path
 
 import numpy as np
-from unscattered import scene_of
 
 from translucency.acquire.mesh import acquire_mesh
 from translucency.fit.mesh import fit_mesh
@@ -33,6 +32,7 @@ from translucency.render.reference import converged_reference
 from translucency.render.relight import relight_object
 from translucency.render.tonemap import auto_exposure, save_images
 from translucency.render.transport import transport_matrices
+from unscattered import scene_of
 
 #: the transports compared: a label and ``transport_matrices``' keyword
 TRANSPORTS = (("paper's profile", {}), ("profile x through-body table", {"through": True}))

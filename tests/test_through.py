@@ -103,7 +103,7 @@ def test_transport_with_the_table_keeps_every_sources_total(flat_box):
     m.measured["through"] = np.ones_like(saved)
     try:
         ones = relight_vertices(transport_matrices(m, box, through=True), np.ones(len(box.vertices)))
-        paper = relight_vertices(transport_matrices(m, box), np.ones(len(box.vertices)))
+        paper = relight_vertices(transport_matrices(m, box, through=False), np.ones(len(box.vertices)))
     finally:
         m.measured["through"] = saved
     # per channel the rows balance to each channel's own target, the shared matrix to their mean: ≲ 1.2 %
@@ -127,3 +127,37 @@ def test_the_model_file_keeps_the_table(flat_box, tmp_path):
         assert not (tmp_path / "bad.model.zip").exists()
     finally:
         bad.measured["through"] = saved
+
+
+def test_the_default_draws_the_table_and_puts_the_light_where_the_data_put_it(flat_box):
+    """``transport_matrices``' default is the table wherever the model holds one (``through=False``, or a
+    model without it, the paper's model); on the thin box it sends each big face's sources' light to the
+    far face (normals facing apart) closer to the data's own share than the paper's radial profile does."""
+    box, data, fit = flat_box
+    m = fit.model
+    ds = open_mesh_dataset(data)
+    default, table, paper = (transport_matrices(m, box, through=t) for t in (None, True, False))
+    assert default.through and table.through and not paper.through
+    saved = m.measured.pop("through")
+    try:
+        assert not transport_matrices(m, box).through  # a model without the table: the paper's model
+    finally:
+        m.measured["through"] = saved
+    area, n = vertex_areas(box), np.asarray(ds["normals"])
+    R = np.nan_to_num(ds["R_d"].astype(float))
+    errors = {"default": [], "paper": []}
+    for p, v in enumerate(ds["incident"]):
+        if abs(n[v, 2]) < 0.9:
+            continue  # a source on a 6 mm side: its far side is 30 mm away
+        far = n @ n[v] < -0.5  # the other face of the 6 mm box
+        E = np.zeros(len(box.vertices))
+        E[v] = 1.0 / area[v]  # unit power into the source
+        measured = area[far] @ R[p, far]  # (3,) the data's light leaving the far face, per unit power
+        assert np.all(measured > 0)
+        L_default, L_paper = relight_vertices(default, E), relight_vertices(paper, E)
+        np.testing.assert_allclose(relight_vertices(table, E), L_default, rtol=1e-6)
+        for name, L in (("default", L_default), ("paper", L_paper)):
+            errors[name].append(np.abs(np.pi * area[far] @ L[far] / measured - 1.0))
+    assert len(errors["default"]) >= 4
+    mean = {k: float(np.mean(v)) for k, v in errors.items()}
+    assert mean["default"] < 0.5 * mean["paper"], mean

@@ -150,13 +150,8 @@ def _model_rows(fields: dict, size_text: str, bounds: list):
         *bounds,
     ]
     if fields["measured"]:
-        rows.append(
-            (
-                "measured",
-                ", ".join(fields["measured"])
-                + (" (the through-body table: render --through)" if "through" in fields["measured"] else ""),
-            )
-        )
+        table = " (the through-body table: render draws it, --paper not)" if "through" in fields["measured"] else ""
+        rows.append(("measured", ", ".join(fields["measured"]) + table))
     return rows
 
 

@@ -77,11 +77,12 @@ _INCIDENCE = typer.Option(
     "and by reciprocity leaves more toward oblique views; index-matched objects), 'half-space-in' (the "
     "light in only, a Lambertian exit) or 'normal' (every direction as measured).",
 )
-_THROUGH = typer.Option(
+_PAPER = typer.Option(
     False,
-    "--through",
-    help="Use the model's through-body table (light between sides whose normals face apart, measured "
-    "against the fit): brighter back-lit objects, not better on every case (docs/objects.md).",
+    "--paper",
+    help="Draw the paper's model: each point's radial profile alone, without the through-body table the "
+    "model holds (light between sides whose normals face apart, measured against the fit; drawn by default, "
+    "docs/objects.md).",
 )
 _ANGLES = typer.Option(
     False,
@@ -89,7 +90,7 @@ _ANGLES = typer.Option(
     help="Lean the transport toward the light's direction (the model's lean, fitted from a data set "
     "acquired with --incidence; model/lean.py): back-lit objects, docs/objects.md. A light of many "
     "directions (env, a scene's) leans by its irradiance-weighted mean direction; a model without a lean "
-    "draws the paper's model.",
+    "is drawn without it.",
 )
 _SCENE = typer.Option(
     None,
@@ -133,7 +134,7 @@ def render(
     spp: int = _SPP,
     radius: float = _RADIUS,
     incidence: str = _INCIDENCE,
-    through: bool = _THROUGH,
+    paper: bool = _PAPER,
     angles: bool = _ANGLES,
     scene: Path = _SCENE,
     models: list[str] = _MODELS,
@@ -155,9 +156,9 @@ def render(
     common = dict(incidence=incidence, radius=radius, exposure=exposure, reference=reference, spp=spp)
     common.update(overwrite=overwrite, max_memory=max_memory, reporter=RichReporter(quiet))
     if scene is not None:
-        _refuse_object_options(model, light, view, size, through)
+        _refuse_object_options(model, light, view, size)
         per_scene = dict(scene_unit=scene_unit, samples=samples, passes=passes, max_depth=max_depth)
-        per_scene.update(angles=angles)
+        per_scene.update(angles=angles, paper=paper)
         per_scene.update(roughness=roughness, picture_spp=picture_spp)
         shot = render_scene(scene, parse_models(models), out, **per_scene, **common)
         finish(as_json, quiet, shot.summary, [_scene_table(scene, shot.summary, reference), f"images: {out}"])
@@ -169,7 +170,7 @@ def render(
     if len(light) > 1:
         raise TranslucencyError("--light: one light per render for now (run once per light)")
     rendering = render_model(
-        model, out, light=light[0], view=view, size=size, through=through, angles=angles, **common
+        model, out, light=light[0], view=view, size=size, paper=paper, angles=angles, **common
     )
     table = Table(title=f"render of {model.name}", show_header=False)
     for k, v in rendering.numbers.items():
@@ -177,7 +178,7 @@ def render(
     finish(as_json, quiet, rendering.summary, [table, f"images: {out}"])
 
 
-def _refuse_object_options(model, light, view, size, through) -> None:
+def _refuse_object_options(model, light, view, size) -> None:
     """With --scene the scene file says where the light and the camera are: one line for an option that
     would be ignored."""
     if model is not None:
@@ -188,7 +189,6 @@ def _refuse_object_options(model, light, view, size, through) -> None:
             ("--light", light, [DEFAULT_LIGHT]),
             ("--view", view, DEFAULT_VIEW),
             ("--size", tuple(size), DEFAULT_SIZE),
-            ("--through", through, False),
         )
         if v != d
     ]

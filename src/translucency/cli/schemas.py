@@ -321,7 +321,11 @@ RENDER = record(
             "The incidence law used (half-space, half-space-in or normal: --incidence; normal where the "
             "object is dielectric or the model carries no measured totals).",
         ),
-        "through": field("boolean", "Whether the model's through-body table was used (--through)."),
+        "through": field(
+            "boolean",
+            "Whether the model's through-body table was drawn (the default where the model holds one; "
+            "--paper: not).",
+        ),
         "angles": field(
             "boolean",
             "Whether the model's lean toward the light's direction was drawn (--angles: a model fitted "
@@ -383,7 +387,9 @@ RENDER_SCENE = record(
         "models": field("object", "Shape id -> the model file it is."),
         "images": field("string", "The folder of ours.exr/.png (and reference.exr/.png, scene.png)."),
         "objects": field(
-            "object", "Per fitted object: vertices, eta, incidence (the law used), angles (the lean drawn)."
+            "object",
+            "Per fitted object: vertices, eta, incidence (the law used), angles (the lean drawn), through "
+            "(the through-body table drawn).",
         ),
         "prepare_s": field("number", "Building the transports.", "s"),
         "radius_mm": array("Each object's near radius of the transport.", NUMBER, "mm"),
@@ -501,8 +507,8 @@ INFO_MODEL = record(
         "measured": field(
             "array",
             "What a per-vertex model carries from its acquisition: own, total (the near field), through "
-            "(the through-body table, render --through), lean (κ, render --angles); empty for planar "
-            "models.",
+            "(the through-body table, drawn by render unless --paper), lean (κ, render --angles); empty for "
+            "planar models.",
         ),
         **BOUNDS,
     },

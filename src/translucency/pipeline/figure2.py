@@ -45,13 +45,14 @@ def run_figure2(
     spp: int = FIGURE2_REFERENCE_SPP,
     size=(160, 120),
     overwrite: bool = False,
-    extension_dir=None,
+    paper_dir=None,
 ) -> dict:
     """Acquire the pig per vertex (index-matched, so that volpath can light it), fit, render, compare.
 
-    With ``extension_dir`` the same picture with the through-body extension
-    (:mod:`translucency.model.through`) is written there too (``figure2_through.png`` / ``.json``): the
-    paper's model stays Figure 2, the extension beside it.
+    Figure 2 is drawn as ``render`` draws by default: the fitted profiles with the model's through-body
+    table (:mod:`translucency.model.through`).  With ``paper_dir`` the same picture with the paper's model
+    alone (the radial profiles, ``render --paper``) is written there too (``figure2_paper.png`` / ``.json``),
+    to set beside it.
 
     Writes the mesh data set to ``data_path`` (resumed, or reused, if it holds the same acquisition), the
     per-vertex model to ``model_path`` (replacing an earlier one with ``overwrite``) and Figure 2 into
@@ -72,8 +73,8 @@ def run_figure2(
         The picture's width and height, pixels.
     overwrite : bool
         Replace a model file at ``model_path``.
-    extension_dir : str or Path, optional
-        Where the through-body picture goes (none without).
+    paper_dir : str or Path, optional
+        Where the paper's model's picture goes (none without).
 
     Returns
     -------
@@ -113,7 +114,7 @@ def run_figure2(
         meta=fit.metadata(Path(data_path).resolve()),
     )
     # Figure 2 exposes its pair at the reference's own level (auto) and keeps its names
-    paper = figure2(
+    default = figure2(
         fit.model,
         pig,
         light,
@@ -124,20 +125,20 @@ def run_figure2(
         exposure="auto",
         name="figure2",
     )
-    if extension_dir is not None:
+    if paper_dir is not None:
         figure2(
             fit.model,
             pig,
             light,
-            extension_dir,
+            paper_dir,
             volume=volume,
             camera=camera,
             spp_reference=spp,
             exposure="auto",
-            name="figure2_through",
-            through=True,
+            name="figure2_paper",
+            through=False,
         )
-    return paper
+    return default
 
 
 def write_figure2_reference(folder=None, *, spp: int = FIGURE2_REFERENCE_SPP, size=(160, 120)) -> dict:

@@ -44,7 +44,7 @@ def figure2(
     exposure: Exposure | str = "fixed",
     name: str = "render",
     incidence: str = "half-space",
-    through: bool = False,
+    through: bool | None = None,
     angles: bool = False,
 ) -> dict:
     """Render ``model`` on ``mesh`` under ``light``; with ``volume`` also the reference and the comparison.
@@ -59,8 +59,8 @@ def figure2(
     ``incidence``: how light arriving at an angle counts against the normal-incidence data
     (:mod:`translucency.model.incidence`: ``half-space``, Chandrasekhar's plane albedo per vertex, or
     ``normal``; a dielectric object or a model without measured totals gets ``normal``).
-    ``through``: the model's through-body table in the transport (:mod:`translucency.model.through`; off:
-    the paper's model).
+    ``through``: the model's through-body table in the transport (:mod:`translucency.model.through`;
+    default: where the model holds one; False: the paper's model).
     ``angles``: the model's lean toward the light's and the camera's directions
     (:mod:`translucency.render.lean`; the summary's ``angles`` says whether it applied).
     ``exposure``: of the PNGs (:class:`~translucency.render.tonemap.Exposure` or its text: ``fixed``,

@@ -74,7 +74,7 @@ def transport_matrices(
     far_field: bool = True,
     clusters: int | None = None,
     balance_rows: bool = True,
-    through: bool = False,
+    through: bool | None = None,
 ):
     r"""The sparse transport T of the module docstring, as a :class:`Transport` (one matrix per
     channel, or one matrix and the colour scale for the shared-colour model).
@@ -113,8 +113,10 @@ def transport_matrices(
     ``model.measured["through"]``, :mod:`translucency.model.through`).  Every pair's profile is multiplied
     by the source's table at the pair's :math:`(n_i \cdot n_o, r)`, blended between incident points with
     the profile weights, before the normalisations; the table is per channel, so the transport holds
-    three matrices even for a shared-colour model.  ``through=False`` (the default: the table does not win
-    on every case of the objects table, docs/objects.md) or a model without the table is the paper's model.
+    three matrices even for a shared-colour model.  ``through=None`` (the default) uses the table wherever
+    the model holds one — every fit on a mesh stores it, and with the unscattered light kept out of the data
+    it wins or ties every case of docs/objects.md's table; ``through=False``, or a model without the table,
+    is the paper's model.
 
     **Far field.**  The pairs beyond ``radius`` are not dropped: ``far_field`` (default) adds them
     hierarchically (:mod:`translucency.render._far_field`: ``clusters`` source clusters, K², default
@@ -153,7 +155,7 @@ def transport_matrices(
     alpha = model.alpha.values if len(model.alpha.values) == V else model.alpha.at(v)
     # the through-body table blended to every vertex (V, 4, 8, 3), or None: the paper's model
     table = None
-    if through and model.measured and "through" in model.measured:
+    if through is not False and model.measured and "through" in model.measured:
         w_b, idx_b = weights
         table = np.einsum("vk,vkabc->vabc", w_b, model.measured["through"][idx_b])
     # the lean's κ and λ blended to every vertex (V, 2, 3) (model/lean.py; render/lean.py applies it)

@@ -74,11 +74,12 @@ class FittedObject:
     glowing: Glowing = None  # the object as a light of the scene, once prepared
     lean_pairs: object = None  # the lean's near pairs (render/lean.py), once prepared, where it has a lean
 
-    def prepare(self, radius: float | None = None) -> None:
-        """Build the transport (near radius ``radius`` mm, default the model's 99 % energy radius), the
+    def prepare(self, radius: float | None = None, through: bool | None = None) -> None:
+        """Build the transport (near radius ``radius`` mm, default the model's 99 % energy radius; the
+        through-body table as :func:`~translucency.render.transport.transport_matrices` takes it), the
         incidence law and the glowing surface."""
         rad = default_radius(self.model, self.mesh) if radius is None else float(radius)
-        self.transport = transport_matrices(self.model, self.mesh, radius=rad)
+        self.transport = transport_matrices(self.model, self.mesh, radius=rad, through=through)
         self.law = self.transport.incidence(self.incidence, self.eta)
         if self.transport.lean is not None:
             self.lean_pairs = lean_pairs(self.transport, self.mesh, self.eta)

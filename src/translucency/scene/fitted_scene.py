@@ -58,6 +58,9 @@ class FittedScene:
     angles : bool
         Objects whose model has a lean (:mod:`translucency.model.lean`) lean toward the light arriving
         from the scene, by its irradiance-weighted mean lean vector (the paper's model otherwise).
+    through : bool, optional
+        Each model's through-body table (:mod:`translucency.model.through`): default, wherever the model
+        holds one; False: the paper's model.
 
     Examples
     --------
@@ -80,6 +83,7 @@ class FittedScene:
         max_depth: int = 8,
         strategy: str = "mis",
         angles: bool = False,
+        through: bool | None = None,
     ):
         mi = mitsuba()
         if not models:
@@ -99,6 +103,7 @@ class FittedScene:
         self.scene = scene if isinstance(scene, mi.Scene) else load_user_scene(scene)
         self.samples, self.passes, self.max_depth = samples, passes, max_depth
         self.angles = bool(angles)
+        self.through = through
         shapes = shapes_by_id(self.scene)
         self.objects = []
         for name, source in models.items():
@@ -158,7 +163,7 @@ class FittedScene:
         for k, (o, r) in enumerate(zip(self.objects, radii)):
             if progress:
                 progress(k, len(self.objects), o.name)
-            o.prepare(r)
+            o.prepare(r, through=self.through)
         self.glow = GlowingSurfaces([o.glowing for o in self.objects])
         props = mi.Properties()
         props["max_depth"], props["strategy"] = int(self.max_depth), str(self.strategy)

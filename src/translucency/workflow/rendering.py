@@ -77,7 +77,7 @@ def render_model(
     spp: int = 32,
     radius: float | None = None,
     incidence: str = "half-space",
-    through: bool = False,
+    paper: bool = False,
     angles: bool = False,
     overwrite: bool = False,
     max_memory: str | int | None = None,
@@ -115,8 +115,10 @@ def render_model(
         would not fit in a quarter of ``max_memory`` or of the machine's memory).
     incidence : {"half-space", "half-space-in", "normal"}
         How light arriving at an angle counts against the data's normal-incidence beams.
-    through : bool
-        Use the model's through-body table.
+    paper : bool
+        Draw the paper's model: each point's radial profile alone.  By default the model's through-body
+        table (:mod:`translucency.model.through`) is drawn with it wherever the model holds one (every fit
+        on a mesh); the summary's ``through`` says whether it was.
     angles : bool
         Lean the near transport toward the light's and the camera's directions (a model fitted from a
         data set with oblique beams, :mod:`translucency.model.lean`; a light of one direction per vertex);
@@ -219,7 +221,7 @@ def render_model(
                 eta=eta,
                 exposure=chosen_exposure,
                 incidence=incidence,
-                through=through,
+                through=False if paper else None,
                 angles=angles,
                 progress=work.step(),
             )
@@ -266,6 +268,7 @@ def render_scene(
     reference: bool = False,
     spp: int = 32,
     angles: bool = False,
+    paper: bool = False,
     overwrite: bool = False,
     max_memory: str | int | None = None,
     reporter: Reporter | None = None,
@@ -294,7 +297,7 @@ def render_scene(
     angles : bool
         Objects whose model has a lean lean toward the scene's light, by its irradiance-weighted mean
         lean vector per vertex (the summary's ``angles`` per object says whether it did).
-    incidence, radius, exposure, reference, spp, overwrite, max_memory, reporter
+    incidence, radius, exposure, reference, spp, paper, overwrite, max_memory, reporter
         As in :func:`render_model`.
 
     Returns
@@ -339,10 +342,11 @@ def render_scene(
         passes=passes,
         max_depth=max_depth,
         angles=angles,
+        through=False if paper else None,
     )
     for note in fs.notes:
         run.info(note)
-    if angles:  # one line for each object drawn with the paper's model
+    if angles:  # one line for each object drawn without a lean
         for o in fs.objects:
             if not has_lean(o.model):
                 run.info(f"--angles: {o.name}'s model has no lean (fit data acquired with --incidence)")
@@ -408,6 +412,7 @@ def render_scene(
                     "eta": o.eta,
                     "incidence": o.law.name,
                     "angles": bool(angles and o.transport.lean is not None),
+                    "through": bool(o.transport.through),
                 }
                 for o in fs.objects
             },
