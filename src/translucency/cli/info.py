@@ -150,7 +150,8 @@ def _model_rows(fields: dict, size_text: str, bounds: list):
         *bounds,
     ]
     if fields["measured"]:
-        table = " (the through-body table: render draws it, --paper not)" if "through" in fields["measured"] else ""
+        has_table = "through" in fields["measured"]
+        table = " (the through-body table: render draws it, --paper not)" if has_table else ""
         rows.append(("measured", ", ".join(fields["measured"]) + table))
     return rows
 
