@@ -53,6 +53,12 @@ def evaluate(
         help="An independent acquisition of the same incident points (another seed, more photons; on a "
         "mesh: the same mesh and --points): errors against it, with the in-sample errors beside.",
     ),
+    paper: bool = typer.Option(
+        False,
+        "--paper",
+        help="Evaluate a per-vertex model as the paper's model (each point's radial profile alone), not as "
+        "render draws it (with the model's through-body table).",
+    ),
     overwrite: bool = overwrite_option(),
     scheduler: str = scheduler_option(),
     max_memory: str = max_memory_option(),
@@ -74,6 +80,7 @@ def evaluate(
         scheduler=scheduler,
         max_memory=max_memory,
         reporter=RichReporter(quiet),
+        paper=paper,
     )
     title = (
         f"relative L2 error against the truth {truth}"

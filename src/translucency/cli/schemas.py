@@ -241,6 +241,10 @@ _MESH_ERRORS = {
         },
     ),
     "exclusion_mm": field("number", "Pairs closer than this are left out (the own vertex's cell).", "mm"),
+    "through": field(
+        "boolean",
+        "Whether the prediction held the model's through-body table (as render draws it; --paper: not).",
+    ),
     "by_distance": record(
         "rel_l2 and the noise floor per ring of r, and the pairs in each ring.",
         {

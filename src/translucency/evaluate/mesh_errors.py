@@ -4,7 +4,9 @@ A mesh data set holds :math:`R_d(\vec x_i, v)` per incident vertex :math:`\vec x
 (:mod:`translucency.acquire.mesh`), read as the fit reads it (:func:`translucency.fit.mesh.read_pairs`):
 r = |v − x_i| Euclidean, and a pair counts when it is finite and r is at least the fit's exclusion radius
 (half the mean edge length: the incident vertex's own tally, the direct spot, is left out).  The model's
-:math:`\hat R_d(\vec x_i, v) = \alpha(v)\, P_i(r)` is evaluated at the same pairs, α included.  Over the
+:math:`\hat R_d(\vec x_i, v) = \alpha(v)\, P_i(r)` is evaluated at the same pairs, α included, times the
+point's through-body table :math:`k_i(n_i \cdot n_v, r)` (:mod:`translucency.model.through`) where the model
+holds one, as ``render`` draws it by default (``through=False``: the paper's model alone).  Over the
 pairs, RGB summed,
 
 .. math:: \mathrm{rel\_l2} = \frac{\lVert \hat R_d - R_d \rVert_2}{\lVert R_d \rVert_2},
@@ -43,6 +45,7 @@ from .._validate import TranslucencyError
 from ..fit.mesh import exclusion_radius, mean_edge_length, read_pairs
 from ..io.mesh_dataset import MeshDataset, open_mesh_dataset
 from ..io.vertex_model import check_vertex_model
+from ..model.through import through_factor
 from .errors import BANDS, PlanarErrors, beyond
 
 #: ring edges (mm) of the error-against-distance curve; 1 and 4 mm are the bands' edges
@@ -72,6 +75,7 @@ class MeshErrors:
     distance: dict  # "edges_mm" (R+1,), "rel_l2", "noise", "pairs" (R,) per ring of r
     map_radius: float
     exclusion_mm: float
+    through: bool = False  # whether the model's through-body table was in the prediction
 
     def summary(self) -> dict:
         """The JSON fields of ``translucency evaluate`` on a mesh data set (NaN for an empty band: the
@@ -79,6 +83,7 @@ class MeshErrors:
         out = PlanarErrors.summary(self)  # the planar errors' fields: the same names, the same meaning
         out["per_point"]["values"] = self.per_point.tolist()
         out["exclusion_mm"] = self.exclusion_mm
+        out["through"] = self.through
         out["by_distance"] = {k: np.asarray(v).tolist() for k, v in self.distance.items()}
         out["by_distance"]["pairs"] = [int(n) for n in self.distance["pairs"]]  # counts
         return out
@@ -149,6 +154,7 @@ def mesh_errors(
     flagged=None,
     map_radius: float = 4.0,
     chunk_points: int = 16,
+    through: bool | None = None,
 ) -> MeshErrors:
     """Relative L2 errors of a per-vertex ``model`` on a mesh data set: overall, per band, point and vertex.
 
@@ -165,6 +171,9 @@ def mesh_errors(
         Incident points to leave out.
     map_radius : float
         The per-vertex errors sum the pairs with r below this (mm).
+    through : bool, optional
+        The model's through-body table in the prediction: default, wherever the model holds one (what
+        ``render`` draws); False: the paper's model.
 
     Returns
     -------
@@ -186,6 +195,9 @@ def mesh_errors(
     exclusion = exclusion_radius(mean_edge_length(vertices, np.asarray(ds["faces"])), exclusion_mm)
     flagged = np.zeros(P, bool) if flagged is None else np.asarray(flagged, bool)
     alpha_o = model.alpha.at(vertices)  # α per vertex (V,): the model's texture at the data set's vertices
+    # the through-body table per point (P, 4, 8, 3), read at each pair's (n_i · n_v, r); None: the paper's
+    table = model.measured.get("through") if through is not False and model.measured else None
+    normals = np.asarray(ds["normals"], dtype=np.float64) if table is not None else None
     # σ² per pair = R_d · (factor / (N A_v)), mm⁻⁴ (module docstring)
     var_scale = TALLY_VARIANCE_FACTOR / (float(ds.header["photons"]) * np.maximum(area, 1e-12))
     edges = DISTANCE_EDGES
@@ -204,6 +216,11 @@ def mesh_errors(
         pred = model.R_d(
             i, np.broadcast_to(vertices, (e - s, V, 3)), alpha_o=np.broadcast_to(alpha_o, r.shape)
         )
+        if table is not None:  # k_i(n_i · n_v, r) per channel, dimensionless
+            cos = normals[ds["incident"][s:e]] @ normals.T
+            for c in range(3):
+                k = through_factor(table[..., c], i.ravel(), cos.ravel(), r.ravel())
+                pred[..., c] *= k.reshape(r.shape)
         d2 = np.where(ok, ((pred - y) ** 2).sum(2), 0.0)  # (k, V), mm⁻⁴
         y2 = np.where(ok, (y**2).sum(2), 0.0)
         v2 = np.where(ok, (y * var_scale[None, :, None]).sum(2), 0.0)
@@ -266,6 +283,7 @@ def mesh_errors(
         },
         map_radius=float(map_radius),
         exclusion_mm=exclusion,
+        through=table is not None,
     )
 
 

@@ -64,6 +64,7 @@ def write_mesh_report(
     exclusion=None,
     json_path=None,
     command: str | None = None,
+    through: bool | None = None,
 ) -> dict:
     """Evaluate per-vertex models on a mesh data set (or on an independent truth) and write the report.
 
@@ -83,6 +84,9 @@ def write_mesh_report(
         Also write the JSON summary here.
     command : str, optional
         The command that made the report (default: this process's command line).
+    through : bool, optional
+        Each model's through-body table in its predictions: default, wherever it holds one (as ``render``
+        draws it); False: the paper's model (:func:`~translucency.evaluate.mesh_errors.mesh_errors`).
 
     Returns
     -------
@@ -97,7 +101,9 @@ def write_mesh_report(
         check_same_points(ds, truth)
 
     def errors_on(data, name, m):
-        return mesh_errors(m, data, flagged=flagged.get(name), exclusion_mm=exclusion.get(name))
+        return mesh_errors(
+            m, data, flagged=flagged.get(name), exclusion_mm=exclusion.get(name), through=through
+        )
 
     in_sample = {name: errors_on(ds, name, m) for name, m in models.items()}
     held_out = None if truth is None else {name: errors_on(truth, name, m) for name, m in models.items()}

@@ -39,6 +39,7 @@ def evaluate_model(
     flagged=None,
     exclusion_mm: float | None = None,
     scheduler: str | None = "threads",
+    paper: bool = False,
 ) -> PlanarErrors | MeshErrors:
     """Relative L2 errors of a fitted model on its data set, or on an independent truth.
 
@@ -64,6 +65,9 @@ def evaluate_model(
         Pairs closer than this are left out (default: the fit's, else one pixel / half the mean edge).
     scheduler : str, optional
         Where the chunks of a planar evaluation run; the errors are the same.
+    paper : bool
+        A per-vertex model is evaluated as ``render`` draws it, with its through-body table
+        (:mod:`translucency.model.through`); ``paper`` evaluates the paper's model alone.
 
     Returns
     -------
@@ -121,7 +125,8 @@ def evaluate_model(
         exclusion_mm = (record.get("fit") or {}).get("exclusion_mm")
     check_option("exclusion_mm", exclusion_mm, lo=0)
     if isinstance(data, MeshDataset):
-        return mesh_errors(fitted, reference, flagged=flagged, exclusion_mm=exclusion_mm)
+        through = False if paper else None
+        return mesh_errors(fitted, reference, flagged=flagged, exclusion_mm=exclusion_mm, through=through)
     return planar_errors(fitted, reference, flagged=flagged, exclusion_mm=exclusion_mm, scheduler=scheduler)
 
 
@@ -165,6 +170,7 @@ def evaluate_report(
     scheduler: str | None = "threads",
     max_memory: str | int | None = None,
     reporter: Reporter | None = None,
+    paper: bool = False,
 ) -> Evaluation:
     """Evaluate model files on their data set and write the report: relative L2 errors (overall, per
     distance band, energy-weighted), error maps, profiles and ``index.html``.
@@ -201,6 +207,9 @@ def evaluate_report(
         Most memory the evaluation may use; a larger estimate is refused before any work.
     reporter : Reporter, optional
         Hears the run's information lines (default: silent).
+    paper : bool
+        Per-vertex models are evaluated as ``render`` draws them, with their through-body table; ``paper``
+        evaluates the paper's model alone (each point's radial profile).
 
     Returns
     -------
@@ -235,7 +244,7 @@ def evaluate_report(
     paths = dict(model=model, dataset=dataset, compare=compare, truth=truth, report=report)
     outputs = dict(json_out=json_out, overwrite=overwrite)
     if is_mesh_dataset(dataset):  # per-vertex models on a mesh data set
-        summary = _mesh_report(run, paths, outputs, points=points, scheduler=scheduler)
+        summary = _mesh_report(run, paths, outputs, points=points, scheduler=scheduler, paper=paper)
         geometry = "mesh"
     else:
         summary = _planar_report(run, paths, outputs, points=points, scheduler=scheduler)
@@ -359,7 +368,7 @@ def _planar_report(run: Run, paths: dict, outputs: dict, *, points, scheduler) -
         )
 
 
-def _mesh_report(run: Run, paths: dict, outputs: dict, *, points, scheduler) -> dict:
+def _mesh_report(run: Run, paths: dict, outputs: dict, *, points, scheduler, paper: bool = False) -> dict:
     """A mesh data set's evaluation under ``run`` (or held out against an independent acquisition of the
     same object): every check before any output, then the report."""
     # heavy: the stages (SciPy, trimesh, Matplotlib) load only when an evaluation runs
@@ -403,7 +412,10 @@ def _mesh_report(run: Run, paths: dict, outputs: dict, *, points, scheduler) -> 
         f"{len(models)} per-vertex model(s) on {ds.n_points} points x {V:,} vertices; time {timing.text()}"
     )
     with run.work():
-        return write_mesh_report(models, ds, report, truth=other, flagged=flagged, exclusion=exclusion)
+        through = False if paper else None
+        return write_mesh_report(
+            models, ds, report, truth=other, flagged=flagged, exclusion=exclusion, through=through
+        )
 
 
 def _mesh_truth(ds: MeshDataset, data: Path, truth: Path | None) -> MeshDataset | None:
