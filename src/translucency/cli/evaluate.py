@@ -21,6 +21,19 @@ from ._common import (
 )
 from ._run import RichReporter
 
+_TRUTH = typer.Option(
+    None,
+    "--truth",
+    help="An independent acquisition of the same incident points (another seed, more photons; on a "
+    "mesh: the same mesh and --points): errors against it, with the in-sample errors beside.",
+)
+_PAPER = typer.Option(
+    False,
+    "--paper",
+    help="Evaluate a per-vertex model as the paper's model (each point's radial profile alone), not as "
+    "render draws it (with the model's through-body table).",
+)
+
 
 @user_errors
 def evaluate(
@@ -47,18 +60,8 @@ def evaluate(
         None, "--compare", help="Other model files of the same data (repeatable)."
     ),
     points: str = typer.Option(None, "--points", help="Incident points for the profiles, e.g. '0,17,40'."),
-    truth: Path = typer.Option(
-        None,
-        "--truth",
-        help="An independent acquisition of the same incident points (another seed, more photons; on a "
-        "mesh: the same mesh and --points): errors against it, with the in-sample errors beside.",
-    ),
-    paper: bool = typer.Option(
-        False,
-        "--paper",
-        help="Evaluate a per-vertex model as the paper's model (each point's radial profile alone), not as "
-        "render draws it (with the model's through-body table).",
-    ),
+    truth: Path = _TRUTH,
+    paper: bool = _PAPER,
     overwrite: bool = overwrite_option(),
     scheduler: str = scheduler_option(),
     max_memory: str = max_memory_option(),
