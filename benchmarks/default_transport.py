@@ -4,8 +4,8 @@ channel), each against a converged volpath reference.
 
 For each case one acquisition (``acquire mesh``'s defaults, seed 3; a data set already in ``--work`` is
 read again), one fit (``fit``'s defaults: it stores the through-body table in the model), and the object
-drawn twice by ``render``'s chain — ``transport_matrices(model, mesh)`` and ``…, through=True)`` — beside
-the reference (relative RMSE, FLIP, brightness, each region's brightness, the unlit side's hue):
+drawn twice by ``render``'s chain — ``transport_matrices(model, mesh, through=False)`` (``render --paper``)
+and ``through=True`` (``render``'s default) — beside the reference (relative RMSE, FLIP, brightness, each region's brightness, the unlit side's hue):
 
     python benchmarks/default_transport.py --meshes ../shared/meshes --spp 2304 --case CASE [--case CASE ...]
 
@@ -35,7 +35,7 @@ from translucency.render.transport import transport_matrices
 from unscattered import scene_of
 
 #: the transports compared: a label and ``transport_matrices``' keyword
-TRANSPORTS = (("paper's profile", {}), ("profile x through-body table", {"through": True}))
+TRANSPORTS = (("paper's profile", {"through": False}), ("profile x through-body table", {"through": True}))
 
 
 def main() -> int:
@@ -67,7 +67,7 @@ def main() -> int:
             T = transport_matrices(model, mesh, **keywords)
             L, E, _ = relight_object(T, mesh, scene, light, camera.origin)
             ours = picture.draw(L)
-            stem = "through" if keywords else "paper"
+            stem = "through" if keywords["through"] else "paper"
             save_images(ours, args.work / f"{name}_{stem}", exposure)
             cmp = compare(reference, ours, mask)
             regions = region_errors(mesh, scene, camera, E, reference, ours, mask)
