@@ -5,7 +5,8 @@ channel), each against a converged volpath reference.
 For each case one acquisition (``acquire mesh``'s defaults, seed 3; a data set already in ``--work`` is
 read again), one fit (``fit``'s defaults: it stores the through-body table in the model), and the object
 drawn twice by ``render``'s chain — ``transport_matrices(model, mesh, through=False)`` (``render --paper``)
-and ``through=True`` (``render``'s default) — beside the reference (relative RMSE, FLIP, brightness, each region's brightness, the unlit side's hue):
+and ``through=True`` (``render``'s default) — beside the reference (relative RMSE, FLIP, brightness, each
+region's brightness, the unlit side's hue):
 
     python benchmarks/default_transport.py --meshes ../shared/meshes --spp 2304 --case CASE [--case CASE ...]
 
