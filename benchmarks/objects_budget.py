@@ -263,7 +263,7 @@ def main() -> int:
     fit = fit_mesh(acquire(P, N), "iso")
     model = fit.model
     # every row under the same light in and out: the pipeline's incidence law (its measured totals)
-    T = transport_matrices(model, mesh)
+    T = transport_matrices(model, mesh, through=False)
     law = T.incidence(args.incidence)
     E = vertex_irradiance(mesh, scene, light, incidence=law)
     exit_law = law.exit(view_cosines(mesh, camera.origin))
@@ -302,7 +302,7 @@ def main() -> int:
         geometry = {"dipole geometry (material)": g_true, "dipole geometry (data)": g_data}
         radial_and_fit_rows(mesh, Ksrc, open_mesh_dataset(data), fits, E, row, geometry)
         for label, fitted in list(fits.items())[1:]:  # as `render` draws them, α and the near field
-            T_fit = transport_matrices(fitted, mesh)
+            T_fit = transport_matrices(fitted, mesh, through=False)
             E_fit = vertex_irradiance(mesh, scene, light, incidence=T_fit.incidence(args.incidence))
             row(f"pipeline, {label}", relight_vertices(T_fit, E_fit), "fit")
         return _written(args, V, info, rows, t0)
@@ -361,17 +361,29 @@ def main() -> int:
         return _written(args, V, info, rows, t0)
     saved = model.measured
     model.measured = None
-    row("  near field from the profile", relight_vertices(transport_matrices(model, mesh), E), "near field")
+    row(
+        "  near field from the profile",
+        relight_vertices(transport_matrices(model, mesh, through=False), E),
+        "near field",
+    )
     model.measured = saved
     row(
         "  transport radius 1 m",
-        relight_vertices(transport_matrices(model, mesh, radius=1000.0), E),
+        relight_vertices(transport_matrices(model, mesh, radius=1000.0, through=False), E),
         "transport truncation",
     )
     fit4 = fit_mesh(acquire(P, 4 * N), "iso")
-    row(f"  {4 * N} photons per point", relight_vertices(transport_matrices(fit4.model, mesh), E), "noise")
+    row(
+        f"  {4 * N} photons per point",
+        relight_vertices(transport_matrices(fit4.model, mesh, through=False), E),
+        "noise",
+    )
     fitP = fit_mesh(acquire(4 * P, N), "iso")
-    row(f"  {4 * P} incident points", relight_vertices(transport_matrices(fitP.model, mesh), E), "points")
+    row(
+        f"  {4 * P} incident points",
+        relight_vertices(transport_matrices(fitP.model, mesh, through=False), E),
+        "points",
+    )
 
     # the oracle: every vertex an incident point, at the same photons per point
     Ksrc = oracle_kernel(True)

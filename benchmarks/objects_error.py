@@ -27,7 +27,9 @@ from translucency.render.transport import transport_matrices
 
 
 def render(model, mesh, light, camera, scene):
-    L, _, _ = relight_object(transport_matrices(model, mesh), mesh, scene, light, camera.origin)
+    L, _, _ = relight_object(
+        transport_matrices(model, mesh, through=False), mesh, scene, light, camera.origin
+    )
     return VertexPicture(mesh, camera, spp=16).draw(L)
 
 

@@ -67,7 +67,7 @@ def run_case(spec: str, meshes: Path, work: Path, spp: int, size) -> dict:
     camera = Camera.looking_at(mesh, [float(v) for v in view.split(",")], *size)
     mask = coverage(mesh, camera)
     scene = mesh_scene(mesh)
-    T = transport_matrices(fit.model, mesh)
+    T = transport_matrices(fit.model, mesh, through=False)
     picture = VertexPicture(mesh, camera, spp=16, light=light)
     reference, info = converged_reference(mesh, volume, light, camera, mask, spp=spp)
     row = {

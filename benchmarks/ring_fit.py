@@ -92,7 +92,9 @@ def tail_profile(model, tables, ring_area, centres, rates, near, slow):
 def _row(c: dict, label: str, model) -> dict:
     """Render ``model`` in the case ``c`` and print its line against the reference."""
     mesh, camera, reference, mask = c["mesh"], c["camera"], c["reference"], c["mask"]
-    L, E, _ = relight_object(transport_matrices(model, mesh), mesh, c["scene"], c["light"], camera.origin)
+    L, E, _ = relight_object(
+        transport_matrices(model, mesh, through=False), mesh, c["scene"], c["light"], camera.origin
+    )
     ours = c["picture"].draw(L)
     cmp = compare(reference, ours, mask)
     regions = region_errors(mesh, c["scene"], camera, E, reference, ours, mask)

@@ -105,7 +105,9 @@ def main() -> int:
                     h = held.summary
                     print(f"{name:<22} held out, {colour:<12} rel L2 {h['rel_l2']:.4f}"
                           f"  (the truth's noise {h['noise_floor']['all']:.4f})", flush=True)  # fmt: skip
-                L, E, _ = relight_object(transport_matrices(model, mesh), mesh, scene, light, camera.origin)
+                L, E, _ = relight_object(
+                    transport_matrices(model, mesh, through=False), mesh, scene, light, camera.origin
+                )
                 ours = picture.draw(L)
                 save_images(ours, args.work / f"{name}_{tally}_{colour}", exposure)
                 cmp = compare(reference, ours, mask)
