@@ -59,7 +59,7 @@ def pct(v) -> str:
 
 
 def targets(results: dict) -> list[str]:
-    """issue 13's targets, each with the numbers and met / not met (held-out, and beyond the noise)."""
+    """The targets, each with the numbers and met / not met (held-out, and beyond the noise)."""
     out = []
 
     def line(ok: bool, text: str) -> None:
@@ -170,7 +170,7 @@ def markdown(results: dict, args) -> str:
         "",
         "The *truth noise* row's last cell is the fitted data's own noise (the in-sample floor).",
         "",
-        "## Targets (issue 13)",
+        "## Targets",
         "",
         "iso near-band ≤ 0.5 × dipole; iso lower than Burley, PBD and the directional dipole overall; "
         "aniso ≤ 0.6 × iso on fibers; aniso within the truth's noise of iso on the homogeneous sample. "

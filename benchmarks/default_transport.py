@@ -10,6 +10,9 @@ region's brightness, the unlit side's hue):
 
     python benchmarks/default_transport.py --meshes ../shared/meshes --spp 2304 --case CASE [--case CASE ...]
 
+``--held-out`` also evaluates both against another acquisition of the same points (``evaluate --truth``,
+with ``--paper`` for the paper's profile).
+
 Cases as in ``unscattered.py`` (``name:mesh:mm per unit:up:material:points:photons:light:view``, or
 ``pig``).
 """
@@ -24,6 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
+from translucency import evaluate_report, save_model
 from translucency.acquire.mesh import acquire_mesh
 from translucency.fit.mesh import fit_mesh
 from translucency.mitsuba import mesh_scene
@@ -46,6 +50,12 @@ def main() -> int:
     ap.add_argument("--spp", type=int, default=256, help="samples per pixel of each of the two references")
     ap.add_argument("--size", type=int, nargs=2, default=(128, 96))
     ap.add_argument("--work", type=Path, default=Path(tempfile.mkdtemp(prefix="default_transport_")))
+    ap.add_argument(
+        "--held-out",
+        action="store_true",
+        help="also evaluate both transports against another acquisition (seed 4, 4x the photons, same "
+        "filling): evaluate --truth and evaluate --truth --paper",
+    )
     args = ap.parse_args()
     args.work.mkdir(parents=True, exist_ok=True)
     out = []
@@ -64,6 +74,8 @@ def main() -> int:
         )  # fmt: skip
         t_acquire = time.perf_counter() - t
         model = fit_mesh(data, "iso").model
+        if args.held_out:
+            _held_out(args.work, name, mesh, volume, data, model, P, N)
         for label, keywords in TRANSPORTS:
             T = transport_matrices(model, mesh, **keywords)
             L, E, _ = relight_object(T, mesh, scene, light, camera.origin)
@@ -94,6 +106,23 @@ def main() -> int:
     (args.work / "default_transport.json").write_text(json.dumps(out, indent=2))
     print(f"written: {args.work / 'default_transport.json'}")
     return 0
+
+
+def _held_out(work: Path, name: str, mesh, volume, data: Path, model, P: int, N: int) -> None:
+    """``evaluate --truth`` with both transports: relative L2 per pair against another acquisition of the
+    same points (seed 4, 4 N photons), the truth's own noise beside."""
+    truth = acquire_mesh(
+        mesh, volume, work / f"{name}_{P}x{4 * N}_truth.zarr", n_points=P, photons=4 * N, seed=4,
+        chunk_points=32, index_matched=True,
+    )  # fmt: skip
+    path = work / f"{name}.model.zip"
+    path.unlink(missing_ok=True)  # (this script's own file of an earlier run)
+    save_model(model, path)
+    for label, paper in (("paper's profile", True), ("profile x through-body table", False)):
+        report = work / f"{name}_held_{'paper' if paper else 'default'}"
+        h = evaluate_report(path, data, truth=truth, report=report, paper=paper, overwrite=True).summary
+        print(f"{name:<22} {label:<30} held out: rel L2 {h['rel_l2']:.4f}"
+              f"  (the truth's noise {h['noise_floor']['all']:.4f})", flush=True)  # fmt: skip
 
 
 if __name__ == "__main__":

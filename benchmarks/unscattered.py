@@ -100,7 +100,7 @@ def main() -> int:
                     path.unlink(missing_ok=True)  # (this script's own file of an earlier run)
                     save_model(model, path)
                     held = evaluate_report(
-                        path, data, truth=truth, report=args.work / f"{name}_{colour}_held"
+                        path, data, truth=truth, report=args.work / f"{name}_{colour}_held", paper=True
                     )
                     h = held.summary
                     print(f"{name:<22} held out, {colour:<12} rel L2 {h['rel_l2']:.4f}"

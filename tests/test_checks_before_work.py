@@ -238,16 +238,22 @@ def test_ctrl_c_at_any_moment_ends_in_the_kept_line(ball, tmp_path, monkeypatch,
 
     monkeypatch.setattr(scan, "mesh_random_walk", counted_walk)
     monkeypatch.setattr(mesh_walk, "_medium_event", interrupted_once)
+    # Python's own handler, as a user's terminal gives it (a suite started in the background by a shell
+    # inherits SIGINT ignored, where no Ctrl-C arrives at all); set back after the command
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
     out = tmp_path / "i.zarr"
     args = ["acquire", "mesh", "--mesh", str(ball["mesh"]), "--volume", str(ball["filling"]), "--points", "8",
             "--photons", "50", "--chunk", "4", "--out", str(out)]  # fmt: skip
-    res = runner.invoke(app, args)
+    try:
+        res = runner.invoke(app, args)
+    finally:
+        now = signal.signal(signal.SIGINT, previous)
+    assert now is signal.default_int_handler  # the command's handler is gone
     assert walks["n"] == 4, "the interrupt did not land in the second chunk's walk"
     assert res.exit_code == 130, res.output
     assert "interrupted: 1/2 chunks kept in" in words(res)
     assert "re-run the same command to resume" in words(res)
     assert "Traceback" not in res.output and not (tmp_path / ".i.zarr.lock").exists()
-    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler  # the command's handler is gone
 
 
 # -- the reference of a user's filling ---------------------------------------------------------------------

@@ -59,6 +59,36 @@ def test_transport_equals_a_plain_double_loop(ball):
     np.testing.assert_allclose(L, ref, rtol=2e-5)
 
 
+def test_three_channels_on_one_set_of_pairs_against_a_plain_loop():
+    """A fall-off per channel: three matrices on the same pairs go through one pass (the pairs read once,
+    three values each), three on different pairs through one product each; both are L_c = Σ_i T_c,oi E_i,c
+    summed pair by pair."""
+    import scipy.sparse as sp
+
+    from translucency.render.relight import Transport
+
+    rng = np.random.default_rng(7)
+    V = 60
+    pattern = sp.random(V, V, density=0.2, random_state=3, format="csr", dtype=np.float32)
+    shared = []
+    for _ in range(3):
+        T = pattern.copy()
+        T.data = rng.uniform(0, 1, T.nnz).astype(np.float32)
+        shared.append(T)
+    apart = [sp.random(V, V, density=0.2, random_state=s, format="csr", dtype=np.float32) for s in (4, 5, 6)]
+    E = rng.uniform(0, 1, (V, 3)).astype(np.float32)
+    for matrices, one in ((shared, True), (apart, False)):
+        transport = Transport(matrices=matrices)
+        assert transport.one_pattern is one
+        ref = np.zeros((V, 3))
+        for c, T in enumerate(matrices):
+            dense = T.toarray()
+            for o in range(V):
+                for i in range(V):
+                    ref[o, c] += dense[o, i] * E[i, c]
+        np.testing.assert_allclose(relight_vertices(transport, E), ref, rtol=1e-5)
+
+
 def test_profiles_are_blended_not_parameters(ball):
     """Between incident points the profile is the weighted mean of their profiles (no new exponential)."""
     from translucency.render.parameters import vertex_parameters

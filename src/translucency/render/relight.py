@@ -17,6 +17,7 @@ incidence law's reciprocal exit (:func:`relight_object`).
 from __future__ import annotations
 
 import dataclasses
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -69,6 +70,12 @@ class Transport:
     def incidence(self, name: str = "half-space", eta: float = 1.0):
         """The incidence law ``name`` for this object (:func:`translucency.model.incidence.incidence_law`)."""
         return incidence_law(name, self.reflectance, eta)
+
+    @functools.cached_property
+    def one_pattern(self) -> bool:
+        """Whether three matrices store the same pairs (checked once; :func:`relight_vertices` then reads
+        them in one pass)."""
+        return len(self.matrices) == 3 and _one_pattern(self.matrices)
 
     @property
     def nnz(self) -> int:
@@ -136,12 +143,38 @@ def _csr_times_rgb(indptr, indices, data, X, out):
         out[o, 0], out[o, 1], out[o, 2] = a0, a1, a2
 
 
+@njit(parallel=True, cache=True)
+def _csr3_times_rgb(indptr, indices, d0, d1, d2, X, out):
+    """out[:, c] = T_c X[:, c] for three CSR matrices T_c on one pattern (``indptr``, ``indices``): each
+    row's pairs read once for all three channels, rows on all cores."""
+    for o in prange(indptr.shape[0] - 1):
+        a0 = a1 = a2 = np.float32(0.0)
+        for j in range(indptr[o], indptr[o + 1]):
+            col = indices[j]
+            a0 += d0[j] * X[col, 0]
+            a1 += d1[j] * X[col, 1]
+            a2 += d2[j] * X[col, 2]
+        out[o, 0], out[o, 1], out[o, 2] = a0, a1, a2
+
+
+def _one_pattern(matrices) -> bool:
+    """Whether the three channels' CSR matrices store the same pairs (the fit's fall-off per channel on the
+    pairs of one transport): then one pass over the pairs serves all three."""
+    T0 = matrices[0]
+    return all(
+        T.indptr is T0.indptr
+        or (np.array_equal(T.indptr, T0.indptr) and np.array_equal(T.indices, T0.indices))
+        for T in matrices[1:]
+    )
+
+
 def relight_vertices(transport: Transport, E: np.ndarray) -> np.ndarray:
     """Radiance per vertex (V, 3) for irradiance E (V,) or (V, 3): one sparse product, plus the far field
     (per receiving vertex, (R, 3), for a transport restricted by :meth:`Transport.rows`).
 
     With one shared matrix the three channels go through it together (the matrix is read once,
-    rows on all cores, Numba); otherwise one SciPy product per channel.  A transport with one light's
+    rows on all cores, Numba); so do three matrices on the same pairs (a fall-off per channel: the pairs
+    read once, three values each); otherwise one SciPy product per channel.  A transport with one light's
     lean (``tilt``, :func:`translucency.render.lean.leaned`) goes through its sources' pairs once, the
     lobes computed on the way (:meth:`~translucency.render.lean.Tilt.apply`).  The far field (if
     prepared) adds two sparse products and one K × K product per channel.
@@ -164,7 +197,10 @@ def relight_vertices(transport: Transport, E: np.ndarray) -> np.ndarray:
     X = E if transport.scale is None else np.ascontiguousarray(E * transport.scale)
     if transport.tilt is not None:  # one light's lean, source by source (render/lean.py)
         out = transport.tilt.apply(X, rows)
-    elif len(transport.matrices) == 3:  # one matrix per channel
+    elif len(transport.matrices) == 3 and transport.one_pattern:  # one matrix per channel, one set of pairs
+        T, out = transport.matrices, np.empty((rows, 3), np.float32)
+        _csr3_times_rgb(T[0].indptr, T[0].indices, T[0].data, T[1].data, T[2].data, X, out)
+    elif len(transport.matrices) == 3:  # one matrix per channel, each its own pairs
         out = np.stack([T @ X[:, ch] for ch, T in enumerate(transport.matrices)], axis=1)
     else:
         T, out = transport.matrices[0], np.empty((rows, 3), np.float32)
