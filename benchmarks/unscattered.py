@@ -42,10 +42,13 @@ from translucency.render.transport import transport_matrices
 
 
 def scene_of(case: str, meshes: Path, size):
-    """(name, points, photons, mesh, volume, light, camera, spp or None) of a case spec or ``pig``."""
-    if case == "pig":
+    """(name, points, photons, mesh, volume, light, camera, spp or None) of a case spec, ``pig`` or
+    ``pig:POINTS:PHOTONS`` (the main job's pig, 96 × 8,000 unless given)."""
+    if case == "pig" or case.startswith("pig:"):
         mesh, volume, light, camera = figure2_scene()
-        return "pig", 96, 8000, mesh, volume, light, camera, FIGURE2_REFERENCE_SPP
+        points, photons = (int(v) for v in (case.split(":")[1:] or (96, 8000)))
+        name = "pig" if case == "pig" else f"pig-{points}x{photons}"
+        return name, points, photons, mesh, volume, light, camera, FIGURE2_REFERENCE_SPP
     parts = case.split(":")
     (name, file, scale, up), material = parts[:4], ":".join(parts[4:-5])
     points, photons, kind, light, view = parts[-5:]
