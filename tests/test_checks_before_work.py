@@ -83,9 +83,10 @@ def test_a_light_inside_the_object_is_found_by_the_winding_number():
 
 
 def test_render_refuses_a_light_inside_before_any_work(ball, tmp_path, monkeypatch):
-    from translucency.render import figure  # the command imports figure2 from here when it runs
+    from translucency.workflow import rendering  # the module the command draws with (imported here, before
+    # the patch: a module first imported while figure2 is patched would keep the stand-in for later tests)
 
-    monkeypatch.setattr(figure, "figure2", lambda *a, **k: pytest.fail("the transport ran"))
+    monkeypatch.setattr(rendering, "figure2", lambda *a, **k: pytest.fail("the transport ran"))
     out = tmp_path / "r"
     res = runner.invoke(app, ["render", str(ball["model"]), "--light", "point:0,0,1,10", "--out", str(out)])
     assert res.exit_code == 2
@@ -284,9 +285,10 @@ def test_the_reference_of_a_users_filling_renders_while_the_file_is_unchanged(ba
 
 
 def test_a_reference_volpath_cannot_light_is_refused_before_any_work(ball, tmp_path, monkeypatch):
-    from translucency.render import figure  # the command imports figure2 from here when it runs
+    from translucency.workflow import rendering  # the module the command draws with (imported here, before
+    # the patch: a module first imported while figure2 is patched would keep the stand-in for later tests)
 
-    monkeypatch.setattr(figure, "figure2", lambda *a, **k: pytest.fail("the transport ran"))
+    monkeypatch.setattr(rendering, "figure2", lambda *a, **k: pytest.fail("the transport ran"))
     dielectric = tmp_path / "d.zarr"  # the same ball behind a dielectric boundary (not index-matched)
     args = ["acquire", "mesh", "--mesh", str(ball["mesh"]), "--volume", str(ball["filling"]), "--points", "2"]
     res = runner.invoke(app, [*args, "--photons", "200", "--out", str(dielectric), "-q"])
