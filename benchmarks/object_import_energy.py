@@ -11,7 +11,8 @@ material and incident vertices (``acquire mesh``, index-matched, another seed):
 
     python benchmarks/object_import_energy.py [MESH.obj] [--size=30] [--cameras=8] [--resolution=96x72]
         [--points=3] [--spp=256] [--photons=200000] [--generators=rig,splat] [--exposure=single|brackets]
-        [--folder=DIR] [--reuse] [--splat-law=lambertian|walk] [--import-law=tally]
+        [--folder=DIR] [--reuse] [--splat-law=lambertian|walk] [--splat-cameras=sphere|rig]
+        [--import-law=tally]
 
 MESH defaults to an icosphere of 10,242 vertices at 30 mm (cells of 0.28 mm², about a quarter of a
 pixel's footprint at 96 x 72); the issue's case is ``../shared/meshes/spot.obj`` (2,930 vertices, cells
@@ -19,6 +20,10 @@ of 0.2-0.4 mm² near two of the hits).  Per generator and shot it prints the ene
 tally per channel, the hit vertex's energy share against the tally's, and the relative L2 per vertex
 against the photographs' own noise floor (two imports of two independent photograph sets,
 |A − B| / √2); one JSON object per generator (docs/object-rig.md quotes them).
+
+``--splat-cameras=rig`` splats through the virtual rig's own cameras (``cameras_around``) instead of the
+splat generator's sphere: the two generators seen from the same places.  Each generator's JSON also holds
+``band_ratio``: per shot, the imported energy over the tally's in bands of distance from the hit.
 
 ``--import-law=tally`` imports with the exit law of a second tally of the same object with exit bins
 (``acquire mesh --exit-bins 4``, another seed; :class:`translucency.rig.object.exit_law.Tabulated`)
@@ -60,6 +65,7 @@ def _args(argv):
         "material": "homogeneous:skin1",
         "exposure": "single",
         "splat_law": "lambertian",
+        "splat_cameras": "sphere",
         "import_law": "",
     }
     mesh = None
@@ -83,9 +89,27 @@ def _mesh(path, size):
     return m
 
 
-def _compare(A, B, T, area, incident, E=None, sigma=None):
-    """The numbers of one generator: per shot and channel energy ratio, hit share ratio, rel L2."""
+#: bands of distance from the hit (mm) over which ``band_ratio`` sums the energy
+BANDS = np.array([0.0, 1.0, 2.0, 4.0, 8.0, 16.0, np.inf])
+
+
+def _band_ratio(A, T, area, vertices, incident):
+    """(P, bands, 3): per shot, the imported energy over the tally's in each band of distance from the hit."""
+    out = np.full((len(incident), len(BANDS) - 1, 3), np.nan)
+    for p, v in enumerate(incident):
+        band = np.searchsorted(BANDS, np.linalg.norm(vertices - vertices[v], axis=1), side="right") - 1
+        for b in range(len(BANDS) - 1):
+            on = band == b
+            t = np.einsum("vk,v->k", T[p, on], area[on])
+            out[p, b] = np.einsum("vk,v->k", A[p, on], area[on]) / np.where(t > 0, t, np.nan)
+    return out
+
+
+def _compare(A, B, T, area, incident, E=None, sigma=None, vertices=None):
+    """The numbers of one generator: per shot and channel energy ratio, hit share ratio, rel L2 (and, given
+    the vertices, the energy ratio per band of distance from the hit)."""
     eA, eT = np.einsum("pvk,v->pk", A, area), np.einsum("pvk,v->pk", T, area)
+    bands = None if vertices is None else np.round(_band_ratio(A, T, area, vertices, incident), 3).tolist()
     own = np.arange(len(incident))
     shareA = A[own, incident] * area[incident][:, None] / eA
     shareT = T[own, incident] * area[incident][:, None] / eT
@@ -103,6 +127,8 @@ def _compare(A, B, T, area, incident, E=None, sigma=None):
         # the import's own statement of each shot's energy uncertainty, against the truth
         "energy_sigma_rel": None if sigma is None else np.round(sigma / E, 3).tolist(),
         "energy_z": None if sigma is None else np.round((E - eT) / sigma, 2).tolist(),
+        "bands_mm": BANDS.tolist(),
+        "band_ratio": bands,
     }
 
 
@@ -146,6 +172,7 @@ def main(argv) -> None:
         for seed in (0, 1):
             t1 = time.perf_counter()
             law = "" if gen != "splat" or o["splat_law"] == "lambertian" else f"-{o['splat_law']}"
+            law += "-rigcams" if gen == "splat" and o["splat_cameras"] == "rig" else ""
             rig = folder / f"{gen}{law}-{o['exposure']}{seed}"
             if not (o["reuse"] and (rig / "object.json").is_file()):
                 _generate(gen, mesh, volume, rig, incident, W, H, o, seed)
@@ -162,7 +189,7 @@ def main(argv) -> None:
                 file=sys.stderr,
             )
         E0, s0 = (np.asarray(infos[0][k]) for k in ("energy", "energy_sigma"))
-        res = _compare(Rs[0], Rs[1], Rt, area, incident, E0, s0)
+        res = _compare(Rs[0], Rs[1], Rt, area, incident, E0, s0, np.asarray(mesh.vertices, dtype=np.float64))
         res.update(
             generator=gen,
             exposure=o["exposure"],
@@ -200,9 +227,15 @@ def _generate(gen, mesh, volume, rig, incident, W, H, o, seed):
             spot_radius_mm=0.0,
         )
     else:
-        from generators.splat_rig import cameras_on_sphere, splat_rig
+        from generators.splat_rig import Pinhole, cameras_on_sphere, splat_rig
 
-        cams = cameras_on_sphere(mesh, o["cameras"], W, H, seed=0)
+        if o["splat_cameras"] == "rig":  # the virtual rig's own cameras, as OpenCV pinholes
+            from translucency.rig.object.photographs import cameras_around
+
+            rig_cams = cameras_around(mesh, o["cameras"], W, H, seed=0)
+            cams = [Pinhole(c.name, W, H, c.K, c.R, c.t) for c in rig_cams]
+        else:
+            cams = cameras_on_sphere(mesh, o["cameras"], W, H, seed=0)
         splat_rig(
             mesh,
             volume,
