@@ -80,7 +80,8 @@ def _args(argv):
     return mesh, opts
 
 
-def _mesh(path, size):
+def object_mesh(path, size):
+    """The mesh file scaled to ``size`` mm along its longest side and centred (default: an icosphere)."""
     if path is None:
         return trimesh.creation.icosphere(subdivisions=5, radius=size / 2)
     m = load_mesh(path)
@@ -134,7 +135,7 @@ def _compare(A, B, T, area, incident, E=None, sigma=None, vertices=None):
 
 def main(argv) -> None:
     path, o = _args(argv)
-    mesh = _mesh(path, o["size"])
+    mesh = object_mesh(path, o["size"])
     W, H = (int(v) for v in o["resolution"].split("x"))
     folder = Path(o["folder"] or tempfile.mkdtemp(prefix="import-energy-"))
     folder.mkdir(parents=True, exist_ok=True)

@@ -31,28 +31,17 @@ import time
 from pathlib import Path
 
 import numpy as np
-import trimesh
 
+from object_import_energy import object_mesh
 from translucency.acquire.mesh import object_volume
 from translucency.acquire.mesh_walk import EXIT, mesh_random_walk
 from translucency.geometry import farthest_points
-from translucency.io.mesh import load_mesh
 from translucency.mitsuba import mesh_scene, rays
 from translucency.rig.object.photographs import LaserBeam, cameras_around, render_shot
 from translucency.rig.object.surface_map import surface_map
 
 #: the bands of distance from the hit, mm
 BANDS = np.array([0.0, 1.0, 2.0, 4.0, 8.0, 16.0, np.inf])
-
-
-def object_mesh(path: Path | None, size: float) -> trimesh.Trimesh:
-    """``object_import_energy.py``'s mesh: the file scaled to ``size`` mm along its longest side, centred."""
-    if path is None:
-        return trimesh.creation.icosphere(subdivisions=5, radius=size / 2)
-    m = load_mesh(path)
-    m.apply_scale(size / float(m.extents.max()))
-    m.apply_translation(-m.bounds.mean(axis=0))
-    return m
 
 
 def tally_pictures(scene, mesh, volume, cams, x_i, n_i, walks, cone_deg, seed, chunk=250_000):
