@@ -12,7 +12,7 @@ material and incident vertices (``acquire mesh``, index-matched, another seed):
     python benchmarks/object_import_energy.py [MESH.obj] [--size=30] [--cameras=8] [--resolution=96x72]
         [--points=3] [--spp=256] [--photons=200000] [--generators=rig,splat] [--exposure=single|brackets]
         [--folder=DIR] [--reuse] [--splat-law=lambertian|walk] [--splat-cameras=sphere|rig]
-        [--import-law=tally]
+        [--import-law=tally] [--law-slants=2]
 
 MESH defaults to an icosphere of 10,242 vertices at 30 mm (cells of 0.28 mm², about a quarter of a
 pixel's footprint at 96 x 72); the issue's case is ``../shared/meshes/spot.obj`` (2,930 vertices, cells
@@ -27,7 +27,8 @@ splat generator's sphere: the two generators seen from the same places.  Each ge
 
 ``--import-law=tally`` imports with the exit law of a second tally of the same object with exit bins
 (``acquire mesh --exit-bins 4``, another seed; :class:`translucency.rig.object.exit_law.Tabulated`)
-instead of the rig file's: the law the transport itself has, measured apart from the tally compared with.
+instead of the rig file's: the law the transport itself has, measured apart from the tally compared with;
+``--law-slants=K`` tallies it in K azimuthal sectors about the away axis instead of two halves.
 """
 
 from __future__ import annotations
@@ -67,6 +68,7 @@ def _args(argv):
         "splat_law": "lambertian",
         "splat_cameras": "sphere",
         "import_law": "",
+        "law_slants": 2,
     }
     mesh = None
     for a in argv[1:]:
@@ -160,11 +162,12 @@ def main(argv) -> None:
     print(f"tally: {time.perf_counter() - t0:.0f} s; cells / pixel footprint in the summary", file=sys.stderr)
     exit_law = None
     if o["import_law"] == "tally":  # the transport's own exit law, from a tally apart (another seed)
-        law_tally = folder / "law_tally.zarr"
+        slants = int(o["law_slants"])
+        law_tally = folder / ("law_tally.zarr" if slants == 2 else f"law_tally_{slants}sectors.zarr")
         if not (o["reuse"] and law_tally.is_dir()):
             acquire_mesh(
                 mesh, volume, law_tally, n_points=o["points"], photons=o["photons"], index_matched=True,
-                overwrite=True, seed=777, exit_bins=ExitBins(4),
+                overwrite=True, seed=777, exit_bins=ExitBins(4, slants),
             )  # fmt: skip
         exit_law = f"tally:{law_tally}"
     results = {}
@@ -178,7 +181,9 @@ def main(argv) -> None:
             if not (o["reuse"] and (rig / "object.json").is_file()):
                 _generate(gen, mesh, volume, rig, incident, W, H, o, seed)
             t2 = time.perf_counter()
-            zarr = rig.parent / f"{rig.name}{'-' + o['import_law'] if o['import_law'] else ''}.zarr"
+            sectors = f"{o['law_slants']}" if int(o["law_slants"]) != 2 else ""
+            tag = f"-{o['import_law']}{sectors}" if o["import_law"] else ""
+            zarr = rig.parent / f"{rig.name}{tag}.zarr"
             shutil.rmtree(zarr, ignore_errors=True)  # (same arguments would resume)
             info = import_object(rig, zarr, exit_law=exit_law)
             Rs.append(np.asarray(open_mesh_dataset(zarr)["R_d"][...], dtype=np.float64))

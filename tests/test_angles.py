@@ -229,3 +229,68 @@ def test_acquire_planar_with_the_angle_axes_from_the_command_line(tmp_path):
     assert not ds.damaged_chunks()
     line = error_line([*args[:3], str(tmp_path / "other.zarr"), *args[4:], "--angle", "30"])
     assert "--angle" in line and "--incidence" in line
+
+
+def _cosine_directions(n: int, rng) -> np.ndarray:
+    """Unit directions about +z distributed as cos θ (a Lambertian exit): μ = √u, φ uniform."""
+    mu, phi = np.sqrt(rng.random(n)), 2 * np.pi * rng.random(n)
+    s = np.sqrt(1 - mu**2)
+    return np.stack([s * np.cos(phi), s * np.sin(phi), mu], axis=1)
+
+
+def test_the_two_halves_are_the_sign_of_the_exit_along_the_away_axis_bit_for_bit():
+    """The default two sectors are the halves every data set with exit bins was tallied in: 2 j + h,
+    h = 1 where the exit's direction points back toward the incident point (ω · a_t < 0)."""
+    rng = np.random.default_rng(3)
+    n = np.tile([0.0, 0.0, 1.0], (5000, 1))
+    omega = _cosine_directions(5000, rng)
+    away = rng.normal(size=(5000, 3))
+    away[:50] = [0.0, 0.0, 1.0]  # at the incident point: no tangent part, away
+    bins = ExitBins(polar=3)
+    a_t = away - away[:, 2:3] * n
+    expected = 2 * bins.polar_index(omega[:, 2]) + (np.einsum("ij,ij->i", omega, a_t) < 0)
+    assert np.array_equal(bins.index(omega, n, away), expected)
+
+
+@pytest.mark.parametrize("polar, slants", [(3, 2), (4, 8), (2, 5)])
+def test_a_lambertian_exit_fills_every_bin_alike(polar, slants):
+    """Bins of equal projected solid angle: cos θ-distributed exits fall into each with the same
+    probability 1/count (within 4 σ of the binomial), whatever the away axis."""
+    rng = np.random.default_rng(polar * 10 + slants)
+    N, bins = 200_000, ExitBins(polar=polar, slants=slants)
+    omega = _cosine_directions(N, rng)
+    n = np.tile([0.0, 0.0, 1.0], (N, 1))
+    theta = 2 * np.pi * rng.random(N)
+    away = np.stack([np.cos(theta), np.sin(theta), rng.normal(size=N)], axis=1)  # any tangent axis
+    counts = np.bincount(bins.index(omega, n, away), minlength=bins.count)
+    p = 1.0 / bins.count
+    assert len(counts) == bins.count
+    assert np.all(np.abs(counts / N - p) < 4 * np.sqrt(p * (1 - p) / N)), counts / N
+
+
+def test_the_import_reads_the_bin_the_tally_counted_in():
+    """The tabulated exit law (the import's side) looks up each view's bin from its cosine μ and slant
+    s = ω · t̂; the tally bins each exit from its direction and the away axis.  Both must name the same bin,
+    in the halves and in finer sectors."""
+    from translucency.rig.object.exit_law import TABLE_EDGES_MM, Tabulated
+
+    rng = np.random.default_rng(11)
+    for bins in (ExitBins(3), ExitBins(4, slants=8)):
+        omega = _cosine_directions(20_000, rng)
+        n = np.tile([0.0, 0.0, 1.0], (len(omega), 1))
+        theta = 2 * np.pi * rng.random(len(omega))
+        t_hat = np.stack([np.cos(theta), np.sin(theta), np.zeros_like(theta)], axis=1)  # unit tangent, away
+        gamma = np.broadcast_to(
+            np.arange(bins.count, dtype=float)[None, :, None], (len(TABLE_EDGES_MM), bins.count, 3)
+        )
+        law = Tabulated(bins, np.array(gamma), "bin numbers")
+        read = law.factor(omega[:, 2], np.einsum("ij,ij->i", omega, t_hat), np.full(len(omega), 3.0))[:, 0]
+        assert np.array_equal(read.astype(int), bins.index(omega, n, t_hat))
+
+
+def test_exit_bins_refuse_too_few_or_too_many_sectors():
+    with pytest.raises(TranslucencyError, match="2 to 16 azimuthal sectors"):
+        ExitBins(3, slants=1)
+    assert ExitBins.from_header(ExitBins(4, slants=8).describe()) == ExitBins(4, slants=8)
+    assert ExitBins.from_header(ExitBins(4).describe()) == ExitBins(4)
+    assert "slants" not in ExitBins(4).describe()  # the halves' record as data sets always had it

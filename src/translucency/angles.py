@@ -112,8 +112,11 @@ class Incidence:
 
 @dataclass(frozen=True)
 class ExitBins:
-    """Exit directions in ``polar`` bins of equal projected solid angle × 2 azimuthal halves (away from
-    the incident point, back toward it); bin index ``2 j + h`` (j polar from the normal, h = 1 back).
+    r"""Exit directions in ``polar`` bins of equal projected solid angle × ``slants`` azimuthal sectors about
+    the direction away from the incident point; bin index ``slants · j + k`` (j polar from the normal, k the
+    sector).  The sector is the azimuth φ between the exit's tangent part and the tangent pointing away from
+    the hit, in ``slants`` equal parts of [0, π] (left and right of that axis alike): with the default 2 the
+    two halves, away (k = 0) and back toward it (k = 1).
 
     Examples
     --------
@@ -122,17 +125,23 @@ class ExitBins:
     (4, 1.0)
     >>> bins.edges_cos.round(4).tolist()   # cos θ at the edges: cos² θ = 1, 1/2, 0
     [1.0, 0.7071, 0.0]
+    >>> fine = ExitBins(polar=2, slants=4)   # sectors of 45° either side of the away axis
+    >>> fine.sector(np.array([0.9, 0.5, -0.2, -0.9])).tolist()
+    [0, 1, 2, 3]
     """
 
     polar: int = 3
+    slants: int = 2
 
     def __post_init__(self):
         if not 1 <= int(self.polar) <= 16:
             raise TranslucencyError(f"exit bins: need 1 to 16 polar bins, got {self.polar}")
+        if not 2 <= int(self.slants) <= 16:
+            raise TranslucencyError(f"exit bins: need 2 to 16 azimuthal sectors, got {self.slants}")
 
     @property
     def count(self) -> int:
-        return 2 * int(self.polar)
+        return int(self.slants) * int(self.polar)
 
     @property
     def edges_cos(self) -> np.ndarray:
@@ -141,7 +150,7 @@ class ExitBins:
 
     @property
     def projected_solid_angle(self) -> float:
-        r""":math:`\Omega'_b = \pi / (2 n_\theta)`, the same for every bin, sr."""
+        r""":math:`\Omega'_b = \pi / (n_\theta n_\varphi)`, the same for every bin, sr."""
         return np.pi / self.count
 
     def polar_index(self, mu: np.ndarray) -> np.ndarray:
@@ -149,16 +158,34 @@ class ExitBins:
         cos2 = np.clip(np.asarray(mu, dtype=np.float64), 0.0, 1.0) ** 2
         return np.minimum(((1.0 - cos2) * int(self.polar)).astype(np.int64), int(self.polar) - 1)
 
+    def sector(self, cos_phi: np.ndarray) -> np.ndarray:
+        """The azimuthal sector k of exits whose tangent part makes the angle φ with the away axis, given
+        cos φ (1: straight away, −1: straight back; 0 counts as away, as the halves always did)."""
+        c = np.clip(np.asarray(cos_phi, dtype=np.float64), -1.0, 1.0)
+        if int(self.slants) == 2:  # the two halves, exactly as data sets made before the sectors read them
+            return (c < 0.0).astype(np.int64)
+        k = (np.arccos(c) / np.pi * int(self.slants)).astype(np.int64)
+        return np.minimum(k, int(self.slants) - 1)
+
+    def bin_of(self, mu: np.ndarray, cos_phi: np.ndarray) -> np.ndarray:
+        """The bin of exits at cosines ``mu`` to the normal and azimuths cos φ from the away axis."""
+        return int(self.slants) * self.polar_index(mu) + self.sector(cos_phi)
+
     def index(self, omega: np.ndarray, normal: np.ndarray, away: np.ndarray) -> np.ndarray:
         """The bin of each exit: directions ``omega`` (n, 3) outwards, the surface's unit normals there
         (n, 3), and ``away`` (n, 3) the direction from the incident point to the exit (any length; its
-        tangent component decides the azimuthal half, none at the incident point: away)."""
+        tangent component sets the azimuth's axis; at the incident point itself every exit is sector 0)."""
         omega, normal = np.asarray(omega, np.float64), np.asarray(normal, np.float64)
-        j = self.polar_index(np.einsum("nk,nk->n", omega, normal))
+        mu = np.einsum("nk,nk->n", omega, normal)
         a = np.asarray(away, np.float64)
         a_t = a - np.einsum("nk,nk->n", a, normal)[:, None] * normal  # tangent component of x_o − x_i
-        back = np.einsum("nk,nk->n", omega, a_t) < 0.0
-        return 2 * j + back.astype(np.int64)
+        w_t = omega - mu[:, None] * normal  # the exit's tangent component
+        norms = np.linalg.norm(a_t, axis=1) * np.linalg.norm(w_t, axis=1)
+        dot = np.einsum("nk,nk->n", w_t, a_t)
+        cos_phi = np.divide(dot, norms, out=np.ones_like(dot), where=norms > 0)
+        if int(self.slants) == 2:  # the halves by the sign alone, bit for bit as before the sectors
+            cos_phi = np.where(dot < 0.0, -1.0, 1.0)
+        return self.bin_of(mu, cos_phi)
 
     def radiance(self, R_d_bins: np.ndarray) -> np.ndarray:
         r"""Radiance per unit power in each bin, :math:`L_b = R_{d,b} / \Omega'_b` (mm⁻² sr⁻¹); the bins
@@ -174,17 +201,21 @@ class ExitBins:
             return np.where(total > floor, np.pi * self.radiance(R) / total, np.nan)
 
     def describe(self) -> dict:
-        return {
+        record = {
             "polar": int(self.polar),
             "azimuth": ["away", "back"],
             "edges_cos": [round(float(c), 6) for c in self.edges_cos],
             "projected_solid_angle_sr": float(self.projected_solid_angle),
         }
+        if int(self.slants) != 2:  # sectors of φ from the away axis (records of the halves stay as they were)
+            record["azimuth"] = f"{int(self.slants)} sectors of 180/{int(self.slants)} degrees from away"
+            record["slants"] = int(self.slants)
+        return record
 
     @classmethod
     def from_header(cls, record: dict | None) -> ExitBins | None:
         """From a header's record; None where the data set has no exit bins."""
-        return cls(int(record["polar"])) if record else None
+        return cls(int(record["polar"]), int(record.get("slants", 2))) if record else None
 
 
 def angle_record(incidence: Incidence | None, exit_bins: ExitBins | None) -> dict:

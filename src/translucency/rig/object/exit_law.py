@@ -30,7 +30,8 @@ the normal is only 10–20° from +z (so s ≈ −0.3), πL is 0.61 M.  So π ×
   10–60 % off; and too many unknowns for a few views per vertex);
 * :class:`Tabulated` — γ read from a photon tally's exit bins (``acquire mesh --exit-bins``,
   :mod:`translucency.angles`): per band of distance from the hit (:data:`TABLE_EDGES_MM`), polar bin and
-  half (s > 0 away from the hit, s < 0 back), :math:`\gamma_b = \pi L_b / M`
+  azimuthal sector about the away axis (two halves, s > 0 away from the hit and s < 0 back, unless the
+  tally was made with more sectors), :math:`\gamma_b = \pi L_b / M`
   over the band's vertices; a rig file names it ``"tally:PATH"``.  Exact in the bins' mean, piecewise
   constant within them.
 """
@@ -252,7 +253,10 @@ class Tabulated(ExitLaw):
     def factor(self, mu, s, r):
         mu, s = np.asarray(mu, dtype=np.float64), np.asarray(s, dtype=np.float64)
         band = _band(r, TABLE_EDGES_MM)
-        return np.asarray(self.gamma)[band, 2 * self.bins.polar_index(mu) + (s < 0)]
+        # the azimuth from the away axis: s = ω · t̂ over the length of ω's tangent part, √(1 − μ²)
+        sin_theta = np.sqrt(np.clip(1.0 - mu**2, 0.0, 1.0))
+        cos_phi = np.divide(s, sin_theta, out=np.ones_like(s), where=sin_theta > 1e-9)
+        return np.asarray(self.gamma)[band, self.bins.bin_of(mu, cos_phi)]
 
     def describe(self) -> dict:
         return {
