@@ -86,7 +86,7 @@ def _dataset_rows(fields: dict, size_text: str, bounds: list):
             angles = ", ".join(f"{t:g}" for t in inc["polar_deg"])
             rows.append(("incidence", f"normal + {angles} deg x {inc['azimuths']} azimuths"))
         if fields.get("exit_bins"):
-            rows.append(("exit bins", f"{fields['exit_bins']} (polar x away/back)"))
+            rows.append(("exit bins", f"{fields['exit_bins']} (polar x azimuthal sectors from away)"))
         if fields.get("source") == "photographs":
             rows += [
                 (

@@ -559,7 +559,8 @@ _INFO_ANGLES = {
         },
     ),
     "exit_bins": field(
-        ["integer", "null"], "Exit direction bins per exit point (polar x 2 halves); null: none."
+        ["integer", "null"],
+        "Exit direction bins per exit point (polar x azimuthal sectors, two: away/back); null: none.",
     ),
 }
 INFO_PLANAR = record(
