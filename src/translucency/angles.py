@@ -182,9 +182,7 @@ class ExitBins:
         w_t = omega - mu[:, None] * normal  # the exit's tangent component
         norms = np.linalg.norm(a_t, axis=1) * np.linalg.norm(w_t, axis=1)
         dot = np.einsum("nk,nk->n", w_t, a_t)
-        cos_phi = np.divide(dot, norms, out=np.ones_like(dot), where=norms > 0)
-        if int(self.slants) == 2:  # the halves by the sign alone, bit for bit as before the sectors
-            cos_phi = np.where(dot < 0.0, -1.0, 1.0)
+        cos_phi = np.divide(dot, norms, out=np.ones_like(dot), where=norms > 0)  # at the hit: away
         return self.bin_of(mu, cos_phi)
 
     def radiance(self, R_d_bins: np.ndarray) -> np.ndarray:
