@@ -32,16 +32,13 @@ from pathlib import Path
 
 import numpy as np
 
-from object_import_energy import object_mesh
+from object_import_energy import BANDS, object_mesh  # the same bands of distance from the hit, mm
 from translucency.acquire.mesh import object_volume
 from translucency.acquire.mesh_walk import EXIT, mesh_random_walk
 from translucency.geometry import farthest_points
 from translucency.mitsuba import mesh_scene, rays
 from translucency.rig.object.photographs import LaserBeam, cameras_around, render_shot
 from translucency.rig.object.surface_map import surface_map
-
-#: the bands of distance from the hit, mm
-BANDS = np.array([0.0, 1.0, 2.0, 4.0, 8.0, 16.0, np.inf])
 
 
 def tally_pictures(scene, mesh, volume, cams, x_i, n_i, walks, cone_deg, seed, chunk=250_000):
