@@ -12,7 +12,7 @@ material and incident vertices (``acquire mesh``, index-matched, another seed):
     python benchmarks/object_import_energy.py [MESH.obj] [--size=30] [--cameras=8] [--resolution=96x72]
         [--points=3] [--spp=256] [--photons=200000] [--generators=rig,splat] [--exposure=single|brackets]
         [--folder=DIR] [--reuse] [--splat-law=lambertian|walk] [--splat-cameras=sphere|rig]
-        [--import-law=tally] [--law-slants=2]
+        [--import-law=tally] [--law-slants=2] [--eta=1]
 
 MESH defaults to an icosphere of 10,242 vertices at 30 mm (cells of 0.28 mm², about a quarter of a
 pixel's footprint at 96 x 72); the issue's case is ``../shared/meshes/spot.obj`` (2,930 vertices, cells
@@ -24,6 +24,10 @@ against the photographs' own noise floor (two imports of two independent photogr
 ``--splat-cameras=rig`` splats through the virtual rig's own cameras (``cameras_around``) instead of the
 splat generator's sphere: the two generators seen from the same places.  Each generator's JSON also holds
 ``band_ratio``: per shot, the imported energy over the tally's in bands of distance from the hit.
+
+``--eta=1.4``: the object behind a smooth dielectric of that index — the tally without ``--index-matched``,
+the splat generator's walks refracted in and out (``--splat-law=walk`` only) with the laser's glint, the
+virtual rig behind a dielectric boundary (:func:`translucency.rig.object.photographs.photograph_object`).
 
 ``--import-law=tally`` imports with the exit law of a second tally of the same object with exit bins
 (``acquire mesh --exit-bins 4``, another seed; :class:`translucency.rig.object.exit_law.Tabulated`)
@@ -38,6 +42,7 @@ import shutil
 import sys
 import tempfile
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -69,6 +74,7 @@ def _args(argv):
         "splat_cameras": "sphere",
         "import_law": "",
         "law_slants": 2,
+        "eta": 1.0,
     }
     mesh = None
     for a in argv[1:]:
@@ -142,20 +148,24 @@ def main(argv) -> None:
     folder = Path(o["folder"] or tempfile.mkdtemp(prefix="import-energy-"))
     folder.mkdir(parents=True, exist_ok=True)
     volume = object_volume(o["material"], mesh, 0.5, seed=1)
+    eta = float(o["eta"])
+    if eta != 1.0:  # behind a dielectric of that index: the tally and every generator alike
+        volume = replace(volume, eta=eta)
     incident = farthest_points(np.asarray(mesh.vertices), o["points"])
     t0 = time.perf_counter()
-    if not (o["reuse"] and (folder / "tally.zarr").is_dir()):
+    tally = folder / ("tally.zarr" if eta == 1.0 else f"tally-eta{eta:g}.zarr")
+    if not (o["reuse"] and tally.is_dir()):
         acquire_mesh(
             mesh,
             volume,
-            folder / "tally.zarr",
+            tally,
             n_points=o["points"],
             photons=o["photons"],
-            index_matched=True,
+            index_matched=eta == 1.0,
             overwrite=True,
             seed=12345,
         )
-    T = open_mesh_dataset(folder / "tally.zarr")
+    T = open_mesh_dataset(tally)
     assert np.array_equal(np.asarray(T["incident"][...]), incident)
     area = np.asarray(T["vertex_area"][...], dtype=np.float64)
     Rt = np.asarray(T["R_d"][...], dtype=np.float64)
@@ -166,7 +176,7 @@ def main(argv) -> None:
         law_tally = folder / ("law_tally.zarr" if slants == 2 else f"law_tally_{slants}sectors.zarr")
         if not (o["reuse"] and law_tally.is_dir()):
             acquire_mesh(
-                mesh, volume, law_tally, n_points=o["points"], photons=o["photons"], index_matched=True,
+                mesh, volume, law_tally, n_points=o["points"], photons=o["photons"], index_matched=eta == 1.0,
                 overwrite=True, seed=777, exit_bins=ExitBins(4, slants),
             )  # fmt: skip
         exit_law = f"tally:{law_tally}"
@@ -177,6 +187,7 @@ def main(argv) -> None:
             t1 = time.perf_counter()
             law = "" if gen != "splat" or o["splat_law"] == "lambertian" else f"-{o['splat_law']}"
             law += "-rigcams" if gen == "splat" and o["splat_cameras"] == "rig" else ""
+            law += f"-eta{eta:g}" if eta != 1.0 else ""
             rig = folder / f"{gen}{law}-{o['exposure']}{seed}"
             if not (o["reuse"] and (rig / "object.json").is_file()):
                 _generate(gen, mesh, volume, rig, incident, W, H, o, seed)
@@ -252,6 +263,7 @@ def _generate(gen, mesh, volume, rig, incident, W, H, o, seed):
             seed=100 + seed,
             exposure=o["exposure"],
             exit_law=o["splat_law"],
+            eta=float(o["eta"]),
         )
 
 

@@ -395,7 +395,8 @@ def test_right_poses_put_the_laser_spots_within_a_pixel(tmp_path):
 
 @pytest.mark.parametrize("eta", [1.0, 1.4])
 def test_import_recovers_the_cell_means_of_an_analytic_field(tmp_path, eta):
-    rig = write_rig(tmp_path / "rig", eta=eta)
+    field = exitance
+    rig = write_rig(tmp_path / "rig", eta=eta, field=field)
     out = tmp_path / "ball.zarr"
     if eta == 1.0:  # the library call, the law named
         info = import_object(rig.folder, out, exit_law="lambertian")
@@ -417,12 +418,21 @@ def test_import_recovers_the_cell_means_of_an_analytic_field(tmp_path, eta):
     posed = [Camera.from_dict(c, c["name"]) for c in ds.header["photographs"]["cameras"]]  # as imported
     coverage = np.max([surface_map(mesh, c).coverage(area) for c in posed], axis=0)
     for j, hit in enumerate(rig.hits):
-        truth, energy = fine_cell_means(mesh, exitance(hit))
+        truth, energy = fine_cell_means(mesh, field(hit))
         whole = (coverage > 0.95) & (flags[j] == 0)
         assert whole.sum() > 500
         err = R[j, whole] / (truth[whole, None] * COLOUR) - 1
         assert np.abs(err).max() < 0.02, (j, np.abs(err).max())
-        assert np.allclose(area @ R[j], energy * COLOUR, rtol=0.03), (j, area @ R[j], energy)
+        spot = np.linalg.norm(verts - hit, axis=1) <= 0.5
+        if eta == 1.0:
+            assert np.allclose(area @ R[j], energy * COLOUR, rtol=0.03), (j, area @ R[j], energy)
+        else:  # behind glass the spot's cells (and unseen ones beside it) come from the transport through
+            # the boundary (the near peak's model), which this exponential is not (that model is tested on a
+            # field it holds, below): the energy of the measured cells is kept
+            measured = flags[j] == 0
+            kept, true = area[measured] @ R[j][measured], area[measured] @ truth[measured] * COLOUR
+            assert np.allclose(kept, true, rtol=0.03), (j, kept, true)
+            assert (R[j][spot] > 0).all() and (var[j][spot] > 0).all()  # the spot's, with their σ
         # the spot is flagged; cells no camera sees well are flagged, filled and finite
         assert (flags[j][np.linalg.norm(verts - hit, axis=1) <= 0.5] & SPOT).all()
         filled = (flags[j] & UNSEEN) != 0
@@ -645,22 +655,33 @@ def _two_scales(hit):
     )
 
 
-def _half_space(hit):
-    """What the near-peak model of an index-matched object assumes, mm⁻²: the profile of an index-matched
-    half-space (σ_t = 1.2 mm⁻¹, albedo 0.95) times the ball's own gain at that material (a photon walk on
-    the ball against the flat profile, rig/object/shape_gain.py; its own seed, the importer's walks follow
-    their fit; 200,000 photons: its gains per cell are near the hit, where its noise would be the truth's),
-    on the cell of the nearest vertex."""
-    from scipy.spatial import cKDTree  # the cell each point lies in
+def _half_space_behind(eta: float):
+    """What the near-peak model assumes, mm⁻²: the profile of an index-matched half-space (σ_t = 1.2 mm⁻¹,
+    albedo 0.95) times the ball's own gain at that material (a photon walk on the ball through a boundary of
+    index ``eta`` against the flat profile, rig/object/shape_gain.py; its own seed, the importer's walks
+    follow their fit; 200,000 photons: its gains per cell are near the hit, where its noise would be the
+    truth's), on the cell of the nearest vertex.  Behind a dielectric the gain holds the boundary's effect:
+    the light it keeps inside and sends out further from the hit."""
 
-    hit = np.asarray(hit, np.float64)
-    ball = load_mesh_of_rig()
-    v = np.asarray(ball.vertices)
-    at = int(np.argmin(np.linalg.norm(v - hit, axis=1)))
-    walk = MeshWalkGain(ball, mesh_scene(ball), hit, ball.vertex_normals[at], seed=777, photons=200_000)
-    G = walk.gain([(1.2, 0.95)] * 3, reach=6.0)
-    tree = cKDTree(v)
-    return lambda y: G[tree.query(y)[1], 0] * half_space_R_d(np.linalg.norm(y - hit, axis=1), 1.2, 0.95)
+    def field(hit):
+        from scipy.spatial import cKDTree  # the cell each point lies in
+
+        hit = np.asarray(hit, np.float64)
+        ball = load_mesh_of_rig()
+        v = np.asarray(ball.vertices)
+        at = int(np.argmin(np.linalg.norm(v - hit, axis=1)))
+        walk = MeshWalkGain(
+            ball, mesh_scene(ball), hit, ball.vertex_normals[at], seed=777, photons=200_000, eta=eta
+        )
+        G = walk.gain([(1.2, 0.95)] * 3, reach=6.0)
+        tree = cKDTree(v)
+        return lambda y: G[tree.query(y)[1], 0] * half_space_R_d(np.linalg.norm(y - hit, axis=1), 1.2, 0.95)
+
+    return field
+
+
+_half_space = _half_space_behind(1.0)
+_half_space_glass = _half_space_behind(1.4)
 
 
 def load_mesh_of_rig():
@@ -670,15 +691,19 @@ def load_mesh_of_rig():
 
 @pytest.mark.parametrize(
     "field, eta",
-    [(exitance, 1.4), (_half_space, 1.0), pytest.param(_two_scales, 1.0, marks=pytest.mark.slow)],
-    ids=["exponential behind glass", "half-space", "steep core"],  # (the limit's case: a minute, slow)
+    [
+        (_half_space_glass, 1.4),
+        (_half_space, 1.0),
+        pytest.param(_two_scales, 1.0, marks=pytest.mark.slow),
+    ],
+    ids=["half-space behind glass", "half-space", "steep core"],  # (the limit's case: a minute, slow)
 )
 def test_a_clipped_spot_is_flagged_counted_and_recovered_within_its_variance(tmp_path, field, eta):
     """One exposure a shot, the spot clipped (saturation 15 of peaks of 10-100): the cells under clipped
     pixels are flagged SATURATED, every camera view that lost one is counted, none is averaged over its
     unclipped part; their values come from the near-peak model (never below what the clipped pixels
-    allow), within 3 standard deviations of the truth where the model can tell — an exponential behind a
-    dielectric boundary, a half-space's profile through an index-matched one — and short where it
+    allow), within 3 standard deviations of the truth where the model can tell — a half-space's profile
+    times the walks' gains behind a dielectric boundary and through an index-matched one — and short where it
     cannot (a steep core hidden under the clip: the limit, asserted)."""
     rig = write_rig(tmp_path / "rig", saturation=2.5 if field is _two_scales else 15.0, field=field, eta=eta)
     _no_spot(rig)
@@ -697,12 +722,12 @@ def test_a_clipped_spot_is_flagged_counted_and_recovered_within_its_variance(tmp
         assert np.isfinite(R[j][sat]).all() and (R[j][sat] > 0).all() and (var[j][sat] > 0).all()
         z = np.abs(R[j][sat] - truth[sat, None] * COLOUR) / np.sqrt(var[j][sat])
         bias = np.abs(area @ R[j] / (energy * COLOUR) - 1)
-        if field is exitance:  # behind glass, the ring tells the exponential: energy kept, values within 3 σ
-            assert (z < 3).all() and (bias < 0.02).all(), (j, z.max(), bias)
-        elif field is _half_space:  # index-matched: the half-space's own profile, at its calibrated level
-            # (4 %: a gain near the hit is its own cell's, with the photon noise of the importer's 50,000
-            # walks — 1-3 % a channel measured; the stated σ covers it, z < 3)
-            assert (z < 3).all() and (bias < 0.04).all(), (j, z.max(), bias)
+        if field in (_half_space, _half_space_glass):  # the half-space's own profile, at its calibrated
+            # level, times the walks' gains through the boundary (4 %: a gain near the hit is its own
+            # cell's, with the photon noise of the importer's 50,000 walks — 1-3 % a channel measured
+            # index-matched; the stated σ covers it, z < 3)
+            # (behind glass measured up to 4.0 %: the walks reflect inside, and fewer reach each cell)
+            assert (z < 3).all() and (bias < (0.04 if eta == 1.0 else 0.05)).all(), (j, z.max(), bias)
         else:  # the core is steeper than the ring: the energy short, and the model's error beyond its σ
             # (on this 6 mm ball the model takes the ball's gain, brighter away from the hit, which the flat
             # field lacks: the ring then implies a shallower core, and the miss is up to 34 % where flat it

@@ -33,13 +33,13 @@ and the incident vertices — the exact answer for the sample the photographs we
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
 
 from translucency.acquire.mesh_walk import EXIT, mesh_random_walk
-from translucency.mitsuba import mesh_scene
+from translucency.mitsuba import mesh_scene, rays
 
 BIN_SUB = 4  # bins of the visibility test a pixel side
 CONE_DEG = 20.0  # exit_law="walk": the cone about the direction to a camera an exit must leave within
@@ -234,6 +234,46 @@ def exits_tally(mesh, point, face, position, n_points: int) -> np.ndarray:
     return out.reshape(n_points, len(V))
 
 
+def fresnel_dielectric(cos_i, eta: float):
+    """Unpolarised Fresnel reflectance of light arriving from the air at cos θ_i on a medium of index η."""
+    cos_i = np.clip(np.abs(cos_i), 0.0, 1.0)
+    sin_t2 = (1.0 - cos_i**2) / eta**2
+    cos_t = np.sqrt(np.maximum(1.0 - sin_t2, 0.0))
+    r_s = (cos_i - eta * cos_t) / (cos_i + eta * cos_t)
+    r_p = (eta * cos_i - cos_t) / (eta * cos_i + cos_t)
+    return 0.5 * (r_s**2 + r_p**2)
+
+
+def glint_image(cam: Pinhole, scene, point, normal, eta: float, alpha: float) -> np.ndarray:
+    r"""Radiance (H, W) per W of the laser's specular glint: the beam along −n reflected by a GGX boundary
+    of roughness ``alpha`` at ``point``, into the pixel the point projects to.
+
+    The disc of area A lit by P reflects :math:`L_o = f\,E` with :math:`E = P/A` and the
+    microfacet BRDF :math:`f = F(\omega_o\cdot h)\,D(h)/(4\cos\theta_o)` at θ_i = 0 (G = 1); the pixel
+    reads the mean over its footprint :math:`\Omega_p d^2/\cos\theta_o`, so
+    :math:`\Delta L = P\,F\,D/(4\,\Omega_p d^2)`, nothing where the point is hidden from the camera.
+    """
+    L = np.zeros((cam.height, cam.width))
+    to_cam = cam.centre - point
+    d = float(np.linalg.norm(to_cam))
+    w_o = to_cam / d
+    cos_o = float(normal @ w_o)
+    u, v, z = cam.project(point[None])
+    col, row = int(np.floor(u[0] + 0.5)), int(np.floor(v[0] + 0.5))
+    if cos_o <= 0 or z[0] <= 0 or not (0 <= col < cam.width and 0 <= row < cam.height):
+        return L
+    si = scene.ray_intersect(rays((point + 1e-3 * w_o)[None], w_o[None]))
+    if bool(np.asarray(si.is_valid())[0]) and float(np.asarray(si.t)[0]) < d:
+        return L
+    h = (normal + w_o) / np.linalg.norm(normal + w_o)
+    cos_h = float(normal @ h)
+    tan2 = (1 - cos_h**2) / cos_h**2
+    D = alpha**2 / (np.pi * cos_h**4 * (alpha**2 + tan2) ** 2)  # GGX, ∫ D cos θ_h dω = 1
+    F = float(fresnel_dielectric(w_o @ h, eta))
+    L[row, col] = F * D / (4 * cam.pixel_solid_angle()[row, col] * d**2)
+    return L
+
+
 def _sensor_fields(cam: Pinhole, rng):
     """Dark frame (raw) and flat field (mean 1), and vig(ρ) (H, W)."""
     h, w = cam.height, cam.width
@@ -258,9 +298,16 @@ def splat_rig(
     exposure: str = "single",
     clip_fraction: float = 0.003,
     exit_law: str = "lambertian",
+    eta: float = 1.0,
+    glint_alpha: float = 0.1,
 ) -> Path:
     """Write a lab's hand-over for ``mesh`` filled with ``volume`` (index-matched), one shot a vertex
     of ``incident``, photographed by ``cameras`` (:class:`Pinhole`).
+
+    ``eta`` > 1: the object behind a smooth dielectric boundary of that index (``volume.eta`` replaced),
+    the walks refracted in and out with Fresnel at every crossing (``exit_law`` must be ``"walk"``: the
+    exits' own directions in the air are the law behind the boundary), and each shot's specular glint
+    (:func:`glint_image`, a GGX boundary of roughness ``glint_alpha``) added where a camera sees it.
 
     ``exposure="single"``: one frame a shot and camera, its gain set on the first shot so that the
     brightest ``clip_fraction`` of the lit pixels (over every camera) clip — the spot is saturated, as
@@ -268,6 +315,10 @@ def splat_rig(
     exposure time, in which nothing clips.  ``exit_law="walk"``: each exit seen along its own direction
     of flight (:func:`splat_image`), the angular law of the transport itself, not a Lambertian one.
     """
+    if eta != 1.0:
+        if exit_law != "walk":
+            raise ValueError("eta > 1: exits behind a dielectric are not Lambertian; use exit_law='walk'")
+        volume = replace(volume, eta=float(eta))
     folder = Path(folder)
     (folder / "frames").mkdir(parents=True, exist_ok=True)
     incident = np.asarray(incident, dtype=np.int64)
@@ -291,7 +342,7 @@ def splat_rig(
             normals[incident],
             photons,
             seed=int(seed) * 31 + 977 * ch + 5,
-            index_matched=True,
+            index_matched=eta == 1.0,
             reentry=True,  # light crossing the air from one part into another, as a photograph sees it
         )
         point = np.repeat(np.arange(P), photons)
@@ -311,6 +362,10 @@ def splat_rig(
                     mesh, cam, bins, pos[m], face[m], np.full(m.sum(), 1 / photons),
                     direction=flight[m] if exit_law == "walk" else None,
                 )  # fmt: skip
+            if eta != 1.0:  # the glint: the same in every channel (the boundary is grey)
+                radiance[:, i] += np.stack(
+                    [glint_image(cam, scene, V[v], normals[v], eta, glint_alpha) for v in incident]
+                )[..., None]
 
     # -- the sensor: one exposure of 1 s a shot, the spot clipped --------------------------------------
     rng = np.random.default_rng(10_000 + int(seed))
@@ -362,8 +417,8 @@ def splat_rig(
         "format": "translucency-object-rig",
         "version": 1,
         "mesh": {"file": "scan.ply", "scale_mm": 1.0, "up": "z"},
-        "boundary": {"eta": 1.0},
-        "exit_law": "lambertian",
+        "boundary": {"eta": float(eta)},
+        "exit_law": "lambertian" if eta == 1.0 else "dielectric",
         "spot_radius_mm": 0.0,
         "cameras": cam_entries,
         "shots": shots,

@@ -59,6 +59,7 @@ from ..contract import Chunk, run_import, sha256_file
 from .exit_law import ExitLaw, Lambertian, law_named
 from .fill import HarmonicFill
 from .fusion import GRAZING, SATURATED, SPOT, UNSEEN, fuse
+from .glint import glint_pixels
 from .hits import incident_vertices
 from .law_estimate import estimate_law
 from .near_peak import recover_near_peak
@@ -185,6 +186,7 @@ class ObjectImport:
     cameras: list[CameraView]
     incident: np.ndarray  # (P,) the vertex nearest each hit
     hits: np.ndarray  # (P, 3) where each shot enters, mm
+    toward: np.ndarray  # (P, 3) unit direction from each hit toward its laser
     law: ExitLaw
     header: dict
     chunk_points: int
@@ -267,7 +269,9 @@ class ObjectImport:
             photographs=_provenance(setup, cameras, hits, law, toward, beam_polar),
         )
         E = np.zeros((P, 3))
-        return cls(setup, mesh, scene, area, cameras, incident, hits, law, header, chunk_points, E, E.copy())
+        return cls(
+            setup, mesh, scene, area, cameras, incident, hits, toward, law, header, chunk_points, E, E.copy()
+        )
 
     def create(self, out, *, overwrite: bool) -> MeshDataset:
         """The mesh data set at ``out``: the mesh, its vertex areas and the incident vertices."""
@@ -299,7 +303,10 @@ class ObjectImport:
             for j in range(lo, hi):
                 shot = setup.shots[j]
                 r = np.linalg.norm(mesh.vertices - hits[j], axis=1)
-                per_cam, views, nbytes = shot_cell_means(shot, cameras, setup, law, hits[j], pixels=True)
+                aside = self._glint(j)
+                per_cam, views, nbytes = shot_cell_means(
+                    shot, cameras, setup, law, hits[j], pixels=True, aside=aside
+                )
                 self.bytes_read += nbytes
                 Rj, vj, fj, dropped, least = fuse(per_cam, cameras, area, setup)
                 self.saturated_views += dropped
@@ -308,6 +315,10 @@ class ObjectImport:
                 Rj, vj, missing = self._recover(Rj, vj, fj, r, j, least, [v for v in views if v])
                 Rj = fill(Rj, missing)
                 vj = fill.variance(Rj, vj, missing)
+                # a clipped spot away from the hit (the glint's reflected beam lighting another part): its
+                # cells hold at least what their clipped pixels show
+                far = ((fj & SATURATED) != 0) & (r > near_peak_reach(r, fj))
+                Rj = np.where(far[:, None], np.fmax(Rj, np.nan_to_num(least)), Rj)
                 R[j - lo], var[j - lo], flags[j - lo] = Rj, vj, fj
                 energy[j], self.energy_sigma[j] = shot_energy(Rj, vj, fj, area)
             root["R_d"].with_config(every)[lo:hi] = R
@@ -317,6 +328,19 @@ class ObjectImport:
             root["chunk_done"][c] = True
             yield chunk
 
+    def _glint(self, j: int) -> dict:
+        """Per camera name, the pixels (of its used ones) the laser's glint may light in shot ``j``
+        (:mod:`.glint`): none on an index-matched boundary."""
+        if self.setup.eta == 1.0 or self.setup.glint_deg <= 0:
+            return {}
+        normal = self.mesh.vertex_normals[self.incident[j]]
+        return {
+            cam.setup.name: glint_pixels(
+                cam.camera, cam.map.used, self.hits[j], normal, self.toward[j], glint_deg=self.setup.glint_deg
+            )
+            for cam in self.cameras
+        }
+
     def _recover(self, R, var, flags, r, j, least, views):
         """The cells at the hit that saturated, lie in the stated spot or went unseen there, from the
         near-peak model (:mod:`.near_peak`, fitted to the pixels of ``views`` that see them and their
@@ -324,7 +348,7 @@ class ObjectImport:
         whole (``short``), the clip's value (``least``), with a standard deviation that spreads half
         the light energy conservation leaves unaccounted for over those cells; the cells still missing
         (to fill)."""
-        peak = (flags & (SATURATED | SPOT)) != 0
+        peak = ((flags & (SATURATED | SPOT)) != 0) & (r <= near_peak_reach(r, flags))
         unseen = (flags & UNSEEN) != 0
         if not peak.any():
             return R, var, unseen
@@ -332,7 +356,7 @@ class ObjectImport:
         hit, mesh = self.hits[j], self.mesh
         # the scan's own shape: photon walks on it at the fitted material (seeded by the shot: resumable)
         normal = mesh.vertex_normals[self.incident[j]]
-        shape = MeshWalkGain(mesh, self.scene, hit, normal, seed=1 + 104729 * j)
+        shape = MeshWalkGain(mesh, self.scene, hit, normal, seed=1 + 104729 * j, eta=self.setup.eta)
         measured = flags == 0
         R, var, ok, short = recover_near_peak(
             mesh, hit, R, var, near, measured, self.setup.eta, views, shape, self.scene
@@ -371,6 +395,31 @@ class ObjectImport:
         self.header["photons"] = _equivalent_photons(root, area, flags_all)
         root.attrs.update({"translucency_mesh_dataset": self.header})
         return flag_counts
+
+
+#: a gap this wide (mm) in the distances of the clipped cells from the hit ends the hit's own peak
+PEAK_GAP_MM = 2.0
+
+
+def near_peak_reach(r: np.ndarray, flags: np.ndarray) -> float:
+    """How far (mm) the hit's own peak reaches: the clipped or spot cells (``flags``) from the hit outward
+    until their distances ``r`` leave a gap of :data:`PEAK_GAP_MM`; −1 where none lies within it of the
+    hit.  Clipped cells beyond are another bright spot — light the boundary reflected at the hit onto
+    another part of the object — which no radial profile about the hit describes.
+
+    Examples
+    --------
+    >>> r = np.array([0.0, 0.4, 0.9, 1.5, 6.0, 21.0, 22.0])
+    >>> near_peak_reach(r, np.array([2, 2, 2, 0, 0, 2, 2], np.uint8))
+    0.9
+    >>> near_peak_reach(r, np.array([0, 0, 0, 0, 0, 2, 2], np.uint8))
+    -1.0
+    """
+    d = np.sort(r[(flags & (SATURATED | SPOT)) != 0])
+    if len(d) == 0 or d[0] > PEAK_GAP_MM:
+        return -1.0
+    gap = np.flatnonzero(np.diff(d) > PEAK_GAP_MM)
+    return float(d[gap[0]] if len(gap) else d[-1])
 
 
 def shot_energy(R, var, flags, area):

@@ -12,11 +12,13 @@ measured ring around it:
 * the **model**, through an index-matched boundary: the half-space's own profile
   :math:`\sigma_t^2 f(\sigma_t r; \alpha)` (:mod:`translucency.model.half_space`) at its calibrated level,
   fitted to the pixels that see the ring and the peak (:class:`PixelEvidence`; the clipped ones as lower
-  bounds) or, without them, to the ring's cell means (:func:`_half_space_channel`); behind a dielectric:
-  Jensen's dipole profile :math:`s\,R_d^{dip}(r; \sigma_a, \sigma_s', \eta)` with a free scale s (three
-  parameters a channel, fitted to the ring's cell means in log space) — or, where it fits the ring worse
-  or its whole profile would return more light than came in (:math:`s\,R^{dip} > 1`: energy is
-  conserved), the exponential :math:`a e^{-b r}`;
+  bounds) or, without them, to the ring's cell means (:func:`_half_space_channel`); behind a dielectric
+  the same profile times the gains of walks through that boundary (:mod:`.shape_gain`: they hold the
+  light the boundary keeps inside), or, without the scan's walks, Jensen's dipole profile
+  :math:`s\,R_d^{dip}(r; \sigma_a, \sigma_s', \eta)` with a free scale s (three parameters a channel,
+  fitted to the ring's cell means in log space) — or, where it fits the ring worse or its whole profile
+  would return more light than came in (:math:`s\,R^{dip} > 1`: energy is conserved), the exponential
+  :math:`a e^{-b r}`;
 * the **value**: the model's own cell mean :math:`\int \phi_v\, R\, dA / A_v` over each target cell
   (:func:`cell_quadrature`, graded towards the hit; r the distance from the hit, mm);
 * its **variance**: for the half-space, :func:`_half_space_channel`'s; for the dipole, half the difference
@@ -391,7 +393,8 @@ def _near_peak_channel(y, r_ring, mean_of, eta, misfit=None, shape=None, quick=F
     (:func:`_half_space_channel`), else the dipole fitted to the ring's log cell means ``y``."""
     from scipy.optimize import least_squares  # heavy: SciPy's optimisers load where a peak is recovered
 
-    if eta == 1.0:  # index-matched: the half-space's own profile (the dipole misses its near peak)
+    if eta == 1.0 or shape is not None:  # the half-space's own profile (the dipole misses its near peak),
+        # behind a dielectric times the gains of walks through that boundary (the first pass seeds them)
         return _half_space_channel(y, r_ring, mean_of, misfit, shape, quick)
     n_ring = len(y)
 
@@ -404,11 +407,14 @@ def _near_peak_channel(y, r_ring, mean_of, eta, misfit=None, shape=None, quick=F
     def residual(model):
         return lambda x: np.log(np.maximum(model(x)[:n_ring], 1e-300)) - y
 
-    sigma_tr = float(np.clip(-np.polyfit(r_ring, y, 1)[0], 1e-3, 50.0))  # from the ring's log slope
+    # the first guess from the ring's log slope (a flat or rising ring: the bounds' gentlest profile)
+    sigma_tr = float(np.clip(-np.polyfit(r_ring, y, 1)[0], 0.01, 49.0))
     fit = least_squares(
         residual(dipole), [np.log(sigma_tr**2 / 3.0), 0.0, 0.0], bounds=([-12, -6, -20], [6, 6, 20])
     )
-    efit = least_squares(residual(exponential), [y.max(), sigma_tr], bounds=([-50, 0], [50, 50]))
+    efit = least_squares(
+        residual(exponential), [float(np.clip(y.max(), -49, 49)), sigma_tr], bounds=([-50, 0], [50, 50])
+    )
     dip, expo = dipole(fit.x)[n_ring:], exponential(efit.x)[n_ring:]
     # the dipole unless it fits the ring worse or its profile would return more light than came in
     albedo = np.exp(fit.x[2]) * float(dipole_total_reflectance(np.exp(fit.x[0]), np.exp(fit.x[1]), eta))
@@ -437,7 +443,7 @@ def recover_near_peak(mesh, hit, R, var, target, measured, eta: float, views=(),
         Per camera (map, E, Var E, usable, clip floor) from :func:`.radiance.shot_cell_means`: the pixels
         the index-matched fit reads (:class:`PixelEvidence`).
     shape : object with ``table(sigma_ts, reach)``, optional
-        The scan's own shape (:class:`.shape_gain.MeshWalkGain`): through an index-matched boundary the
+        The scan's own shape (:class:`.shape_gain.MeshWalkGain`): the
         half-space's profile times the walks' per-cell gains, fitted jointly (σ_t and α move the gains
         too; a table of walks over σ_t around the flat fit's, :data:`SIGMA_STEP` apart).
     scene : mitsuba.Scene, optional
@@ -510,7 +516,7 @@ def recover_near_peak(mesh, hit, R, var, target, measured, eta: float, views=(),
     params = [None, None, None]
     # the flat fit first; then, with the scan's shape, the profile times the walks' gains fitted jointly
     # (a table of walks over σ_t around the flat fit's, reweighted for the albedo)
-    walks = shape is not None and eta == 1.0
+    walks = shape is not None
     if pixels:
         pixels.gain = gain  # (the same array: the gains set below are the pixels' too)
     for walk in range(1 + walks):
@@ -530,7 +536,7 @@ def recover_near_peak(mesh, hit, R, var, target, measured, eta: float, views=(),
 
                 shape_ch = (set_gain, table.sigma_ts, table.albedo_walk, params[ch])
             value, variance, short[ch], params[ch] = _near_peak_channel(
-                np.log(R[ring, ch]), r[ring], mean_of, eta, pixels or None, shape_ch, refit
+                np.log(R[ring, ch]), r[ring], mean_of, 1.0 if walks else eta, pixels or None, shape_ch, refit
             )
             R[targets, ch], var[targets, ch] = value, variance
     return R, var, True, short

@@ -21,6 +21,9 @@ from .exit_law import Lambertian
 from .setup import ObjectRig, ObjectShot
 from .views import CameraView, read_frame
 
+#: below this γ a pixel is not converted (its exitance would be its noise divided by ~0)
+GAMMA_MIN = 1e-3
+
 
 def view_radiance(shot: ObjectShot, cam: CameraView, rig: ObjectRig):
     """One camera's frames of a shot as radiance per unit power at the pixels its map uses (n, 3), its
@@ -73,7 +76,14 @@ def view_radiance(shot: ObjectShot, cam: CameraView, rig: ObjectRig):
 
 
 def shot_cell_means(
-    shot: ObjectShot, cameras: list[CameraView], rig: ObjectRig, law=None, hit=None, *, pixels: bool = False
+    shot: ObjectShot,
+    cameras: list[CameraView],
+    rig: ObjectRig,
+    law=None,
+    hit=None,
+    *,
+    pixels: bool = False,
+    aside: dict | None = None,
 ):
     """Per camera: (cell mean (V, 3), its variance, usable weight (V,), mean γ (V, 3), the clipped pixels'
     least value over each cell (V, 3), NaN where none) of the radiance —
@@ -82,13 +92,19 @@ def shot_cell_means(
     ``pixels`` (and ``law``), also per camera the pixels themselves: (its surface map, the exitance of
     its used pixels (n, 3), its variance, usable (n,), the clipped pixels' least exitance (n, 3)), None
     for a camera without frames — the near peak's evidence (:class:`.near_peak.PixelEvidence`).  The
-    cameras run on threads (reading, NumPy and the sparse products release the GIL)."""
+    cameras run on threads (reading, NumPy and the sparse products release the GIL).  ``aside``: per camera
+    name, used pixels (bool) set aside — neither used nor a lower bound where they clip (:mod:`.glint`)."""
+    aside = aside or {}
 
     def one(cam: CameraView):
         if cam.setup.name not in shot.frames:
             return (None, None), 0
         L, var, usable, floor, nb = view_radiance(shot, cam, rig)
         m = cam.map
+        skip = aside.get(cam.setup.name)
+        if skip is not None and skip.any():  # unused, and clipped with no bound
+            usable = usable & ~skip
+            floor = np.where(skip[:, None], np.float32(0.0), floor)
         if m.hit_share is not None:  # a silhouette's pixel: its reading over the part on the surface
             h = np.maximum(m.hit_share[m.used], 1e-6).astype(np.float32)[:, None]
             L, var, floor = L / h, var / (h * h), floor / h
@@ -101,6 +117,11 @@ def shot_cell_means(
         else:
             r = slant = np.zeros(len(u))
         gamma = law.factor(m.mu[u], slant, r).astype(np.float32)  # (n, 3)
+        dark = (gamma <= GAMMA_MIN).any(axis=1)  # a law that sends nothing there (a dielectric at μ ≤ 0)
+        if dark.any():
+            usable, gamma = usable & ~dark, np.maximum(gamma, np.float32(GAMMA_MIN))
+            floor = np.where(dark[:, None], np.float32(0.0), floor)  # and no bound
+            clipped = ~usable
         E, vE = np.float32(np.pi) * L / gamma, var * (np.float32(np.pi) / gamma) ** 2
         if isinstance(law, Lambertian):
             g_mean = np.ones((len(m.den), 3), np.float32)

@@ -5,6 +5,8 @@ The file (every path relative to its folder; JSON schema in docs/object-rig.md):
     {"format": "translucency-object-rig", "version": 1,
      "mesh": {"file": "scan.ply", "scale_mm": 1.0, "up": "z"},
      "boundary": {"eta": 1.0},                      # 1: index-matched; > 1 a smooth dielectric
+     "glint_deg": 30,                                # > 1: cameras this close to the mirror direction
+                                                     #      set the hit's pixels aside (.glint)
      "exit_law": "lambertian",                       # or "dielectric", "from-views" (.exit_law)
      "grazing_deg": 75, "spot_radius_mm": 0.5, "min_coverage": 0.5, "max_reprojection_px": 1.0,
      "cameras": [{"name": "cam0", "width": 160, "height": 120,
@@ -42,6 +44,7 @@ import numpy as np
 from ..._validate import TranslucencyError
 from ..shared.hdr import read_hdr
 from .cameras import MAX_REPROJECTION_PX, Camera, calibrate_intrinsics, estimate_pose
+from .glint import GLINT_DEG
 
 FORMAT = "translucency-object-rig"
 VERSION = 1
@@ -123,6 +126,7 @@ class ObjectRig:
     exit_law: str
     grazing_deg: float
     spot_radius_mm: float
+    glint_deg: float
     min_coverage: float
     max_reprojection_px: float
     cameras: list
@@ -301,6 +305,7 @@ def read_object_rig(path) -> ObjectRig:
         exit_law=law,
         grazing_deg=_number(raw, "grazing_deg", str(path), 75.0, positive=True),
         spot_radius_mm=_number(raw, "spot_radius_mm", str(path), 0.0),
+        glint_deg=_number(raw, "glint_deg", str(path), GLINT_DEG if eta > 1.0 else 0.0),
         min_coverage=_number(raw, "min_coverage", str(path), 0.5, positive=True),
         max_reprojection_px=_number(
             raw, "max_reprojection_px", str(path), MAX_REPROJECTION_PX, positive=True

@@ -75,6 +75,10 @@ class MeshWalkGain:
     seed : int
         The walks' seed (a shot's gains are a pure function of its arguments: a resumed import writes the
         same bytes).
+    eta : float
+        The boundary's relative index: 1 index-matched; > 1 the walks enter, reflect inside and leave
+        with Fresnel's law, so that the gain against the (index-matched) half-space's profile holds the
+        boundary's own effect too — the light it keeps inside and sends out further from the hit.
 
     Examples
     --------
@@ -90,8 +94,8 @@ class MeshWalkGain:
     (True, True)
     """
 
-    def __init__(self, mesh, scene, hit, normal, *, seed: int = 0, photons: int = PHOTONS):
-        self.mesh, self.scene = mesh, scene
+    def __init__(self, mesh, scene, hit, normal, *, seed: int = 0, photons: int = PHOTONS, eta: float = 1.0):
+        self.mesh, self.scene, self.eta = mesh, scene, float(eta)
         self.hit = np.asarray(hit, dtype=np.float64)
         self.normal = np.asarray(normal, dtype=np.float64) / np.linalg.norm(normal)
         self.seed, self.photons = seed, photons
@@ -128,11 +132,11 @@ class MeshWalkGain:
         mesh = self.mesh
         volume = Volume.homogeneous(
             (1, 1, 1), float(np.max(mesh.extents)) + 1.0, [albedo * sigma_t] * 3,
-            [(1 - albedo) * sigma_t] * 3, eta=1.0,
+            [(1 - albedo) * sigma_t] * 3, eta=self.eta,
         )  # fmt: skip
         walk = mesh_random_walk(
             self.scene, mesh.bounds, volume, 0, self.hit[None], self.normal[None], self.photons, seed=seed,
-            index_matched=True, reentry=True, max_steps=MAX_STEPS,
+            index_matched=self.eta == 1.0, reentry=True, max_steps=MAX_STEPS,
         )  # fmt: skip
         out = np.flatnonzero(walk.code == EXIT)
         tri, bary = exit_barycentric(mesh, walk.face[out], walk.position[out])
@@ -202,7 +206,8 @@ class _Walk:
 class GainTable:
     r"""Gains at any (σ_t, α) from walks at a grid of σ_t and one albedo α_w, by reweighting the walks'
     own paths.  A path that scattered k times and ran L mm inside has the density
-    :math:`(\alpha\sigma_t)^k e^{-\sigma_t L}` (index-matched: no other factor), so a walk at
+    :math:`(\alpha\sigma_t)^k e^{-\sigma_t L}` (its other factors, the Fresnel reflections and
+    refractions of a dielectric boundary, do not depend on the material), so a walk at
     (σ_j, α_w) counts at (σ_t, α) with the weight
     :math:`p/p_j = (\alpha/\alpha_w)^k (\sigma_t/\sigma_j)^k e^{-(\sigma_t - \sigma_j) L}`.  The two walks of
     the grid around σ_t are combined by the balance heuristic (a path of either walk weighs
