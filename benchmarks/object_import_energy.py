@@ -12,7 +12,7 @@ material and incident vertices (``acquire mesh``, index-matched, another seed):
     python benchmarks/object_import_energy.py [MESH.obj] [--size=30] [--cameras=8] [--resolution=96x72]
         [--points=3] [--spp=256] [--photons=200000] [--generators=rig,splat] [--exposure=single|brackets]
         [--folder=DIR] [--reuse] [--splat-law=lambertian|walk] [--splat-cameras=sphere|rig]
-        [--import-law=tally] [--law-slants=2] [--eta=1]
+        [--import-law=tally] [--law-slants=2] [--eta=1] [--picture] [--reference-spp=256]
 
 MESH defaults to an icosphere of 10,242 vertices at 30 mm (cells of 0.28 mm², about a quarter of a
 pixel's footprint at 96 x 72); the issue's case is ``../shared/meshes/spot.obj`` (2,930 vertices, cells
@@ -28,6 +28,9 @@ splat generator's sphere: the two generators seen from the same places.  Each ge
 ``--eta=1.4``: the object behind a smooth dielectric of that index — the tally without ``--index-matched``,
 the splat generator's walks refracted in and out (``--splat-law=walk`` only) with the laser's glint, the
 virtual rig behind a dielectric boundary (:func:`translucency.rig.object.photographs.photograph_object`).
+
+``--picture``: the object fitted from the first photograph set and from the tally, drawn under ``render``'s
+default light and view, each against the other and against a converged volpath reference (:func:`pictures`).
 
 ``--import-law=tally`` imports with the exit law of a second tally of the same object with exit bins
 (``acquire mesh --exit-bins 4``, another seed; :class:`translucency.rig.object.exit_law.Tabulated`)
@@ -75,6 +78,8 @@ def _args(argv):
         "import_law": "",
         "law_slants": 2,
         "eta": 1.0,
+        "picture": "",
+        "reference_spp": 256,
     }
     mesh = None
     for a in argv[1:]:
@@ -85,6 +90,7 @@ def _args(argv):
         elif not a.startswith("--"):
             mesh = a
     opts["reuse"] = "--reuse" in argv
+    opts["picture"] = opts["picture"] or ("yes" if "--picture" in argv else "")
     return mesh, opts
 
 
@@ -219,8 +225,36 @@ def main(argv) -> None:
             rays_per_pixel=infos[0]["rays_per_pixel"],
             cell_over_footprint=_cells_per_footprint(infos[0], area),
         )
+        if o["picture"]:
+            first = rig.parent / f"{rig.name[:-1]}0{tag}.zarr"  # the first photograph set's import
+            res["picture"] = pictures(
+                mesh, volume, eta, first, tally, folder / f"pictures-{rig.name[:-1]}{tag}", o["reference_spp"]
+            )
         results[gen] = res
         print(json.dumps(res))
+
+
+def pictures(mesh, volume, eta: float, photographed: Path, tally: Path, out: Path, reference_spp: int):
+    """The object fitted from the first photograph set's import and from the tally, drawn under ``render``'s
+    default light and view, each against the other and against a converged volpath reference of the same
+    object behind the same boundary (:func:`translucency.pipeline.picture_check.picture_check`)."""
+    from translucency.pipeline.picture_check import picture_check
+    from translucency.render import Camera
+    from translucency.render.lights.text import parse_light
+
+    light, camera = parse_light("point:60,-80,120,2e4"), Camera.looking_at(mesh, [1.0, -1.6, 0.7], 160, 120)
+    res = picture_check(
+        mesh, volume, {"tally": tally, "photographs": photographed}, light, camera, eta=eta,
+        reference_spp=reference_spp, out=out,
+    )  # fmt: skip
+    A, T = res["photographs"], res["tally"]
+    print(
+        f"picture: photographs vs tally {A['vs_first']:.3f} (brightness {A['brightness_vs_first']:.3f}); "
+        f"vs volpath: photographs {A['vs_volpath']:.3f}, tally {T['vs_volpath']:.3f} "
+        f"(reference noise {res['reference_noise']:.3f})",
+        file=sys.stderr,
+    )
+    return res
 
 
 def _cells_per_footprint(info, area):
@@ -242,6 +276,7 @@ def _generate(gen, mesh, volume, rig, incident, W, H, o, seed):
             seed=seed,
             exposures=o["exposure"],
             spot_radius_mm=0.0,
+            boundary_eta=float(o["eta"]),
         )
     else:
         from generators.splat_rig import Pinhole, cameras_on_sphere, splat_rig

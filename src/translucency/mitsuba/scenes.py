@@ -315,6 +315,55 @@ def object_volpath_scene(mesh, volume, channel: int, emitter: dict, sensor: dict
     )
 
 
+def object_window_scene(mesh, window, volume, channel: int, emitter: dict, sensor: dict, *, eta: float):
+    """:func:`object_volpath_scene` behind a smooth ``dielectric`` of index ``eta`` with a **window**: the
+    faces ``window`` (bool per face) index-matched (``null``), the rest dielectric, one medium inside both.
+
+    A spot outside cannot light a medium behind a smooth dielectric in ``volpath`` (camera paths inside
+    reach the light by next-event estimation, which a delta refraction stops); through a window over the
+    laser's disc they do.  What the window changes, light leaving through it unrefracted, stays within
+    the window (the laser's spot, which the import sets aside).
+
+    Examples
+    --------
+    >>> from translucency.mitsuba import perspective_camera_dict
+    >>> from types import SimpleNamespace
+    >>> from translucency.acquire import Volume
+    >>> tetra = SimpleNamespace(vertices=np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]]),
+    ...                         faces=np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]),
+    ...                         bounds=np.array([[0.0, 0, 0], [1, 1, 1]]))
+    >>> filling = Volume.homogeneous((2, 2, 2), 0.5, sigma_s=[1.0] * 3, sigma_a=[0.01] * 3)
+    >>> scene = object_window_scene(tetra, np.array([True, False, False, False]), filling, 0,
+    ...                             spot_dict((0, 0, 100), (0, 0, 0), 2.0),
+    ...                             perspective_camera_dict((3, 3, 3), (0, 0, 0), 30.0, 16, 16), eta=1.4)
+    >>> sorted((s.face_count(), str(s.bsdf()).split("[")[0]) for s in scene.shapes())
+    [(1, 'Null'), (3, 'SmoothDielectric')]
+    >>> len({id(s.interior_medium()) for s in scene.shapes()})  # one medium
+    1
+    """
+    mi = mitsuba()
+    lo, hi = mesh.bounds
+    medium = mi.load_dict(slab_medium_dict(volume, channel, (lo[0], lo[1], hi[2])))
+    verts, faces = np.asarray(mesh.vertices), np.asarray(mesh.faces)
+    window = np.asarray(window, dtype=bool)
+    parts = {
+        "object": (faces[~window], {"type": "dielectric", "int_ior": float(eta), "ext_ior": 1.0}),
+        "window": (faces[window], {"type": "null"}),
+    }
+    with tempfile.TemporaryDirectory() as tmp:
+        scene = {
+            "type": "scene",
+            "integrator": {"type": "volpath", "max_depth": -1, "rr_depth": 100_000},
+            "light": emitter,
+            "camera": sensor,
+        }
+        for key, (f, bsdf) in parts.items():
+            path = Path(tmp) / f"{key}.ply"
+            write_ply(path, verts, f)
+            scene[key] = {"type": "ply", "filename": str(path), "bsdf": bsdf, "interior": medium}
+        return mi.load_dict(scene)
+
+
 def slab_scene(
     volume, channel: int, emitter: dict, sensor: dict, *, rr_depth: int = NO_ROULETTE, moment=False
 ):

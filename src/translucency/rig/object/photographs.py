@@ -29,7 +29,7 @@ Units: mm, W; radiance per W of laser power.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -37,7 +37,7 @@ import numpy as np
 from ..._validate import TranslucencyError
 from ...geometry import farthest_points
 from ...io.atomic import atomic_path, write_json
-from ...mitsuba import mesh_scene, mitsuba, object_volpath_scene, rays, spot_dict
+from ...mitsuba import mesh_scene, mitsuba, object_volpath_scene, object_window_scene, rays, spot_dict
 from ..shared.hdr import write_hdr
 from ..shared.sensor import Sensor
 from ..shared.spot import spot_power
@@ -105,17 +105,75 @@ def _beam_distance(scene, point, normal, beam: LaserBeam) -> float:
     return float(min(beam.distance_mm, 0.9 * t))
 
 
-def render_shot(mesh, volume, camera: Camera, point, normal, beam: LaserBeam, *, spp: int, seed: int, scene):
+def window_mesh(mesh, point, beam: LaserBeam):
+    """The mesh with its faces within 1 mm of ``point`` subdivided to edges of a third of the beam's radius,
+    and which of its faces form the window over the laser's disc (those whose centroid lies within the
+    radius plus one fine edge of ``point``): a (vertices, faces, window) triple for
+    :func:`translucency.mitsuba.object_window_scene`.  (The fine faces meet their coarse neighbours at
+    T-junctions: the surface is the same, every new vertex on an old edge.)
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> ball = trimesh.creation.icosphere(2, radius=6.0)
+    >>> fine, window = window_mesh(ball, ball.vertices[0], LaserBeam(radius_mm=0.3))
+    >>> d = np.linalg.norm(fine.triangles_center - ball.vertices[0], axis=1)
+    >>> bool(window[d <= 0.3].all()), bool(window[d > 0.45].any())  # the disc, and no more than its rim
+    (True, False)
+    >>> bool(np.allclose(fine.area, ball.area))  # the same surface
+    True
+    """
+    import trimesh  # heavy: trimesh loads where a mesh is refined
+
+    point = np.asarray(point, dtype=np.float64)
+    edge = beam.radius_mm / 3.0
+    V, F = np.asarray(mesh.vertices, dtype=np.float64), np.asarray(mesh.faces)
+    for _ in range(12):
+        tri = V[F]
+        near = np.linalg.norm(tri.mean(axis=1) - point, axis=1) <= 1.0 + np.linalg.norm(
+            tri[:, 0] - tri[:, 1], axis=1
+        )
+        longest = np.max(np.linalg.norm(tri - np.roll(tri, 1, axis=1), axis=2), axis=1)
+        refine = np.flatnonzero(near & (longest > edge))
+        if len(refine) == 0:
+            break
+        V, F = trimesh.remesh.subdivide(V, F, face_index=refine)
+    fine = trimesh.Trimesh(V, F, process=False)
+    window = np.linalg.norm(fine.triangles_center - point, axis=1) <= beam.radius_mm + edge
+    return fine, window
+
+
+def render_shot(
+    mesh,
+    volume,
+    camera: Camera,
+    point,
+    normal,
+    beam: LaserBeam,
+    *,
+    spp: int,
+    seed: int,
+    scene,
+    eta: float = 1.0,
+):
     """Radiance (H, W, 3) per W of laser power entering at ``point`` along −``normal``, one grey
-    ``volpath`` render per channel."""
+    ``volpath`` render per channel.  ``eta`` > 1: behind a smooth dielectric of that index, the laser
+    entering through a window over its disc (:func:`window_mesh`) with Fresnel's transmittance at normal
+    incidence, 1 − ((η − 1)/(η + 1))² (its reflected part, the glint, is not rendered)."""
     mi = mitsuba()
     D = _beam_distance(scene, point, normal, beam)
     emitter = spot_dict(point + D * normal, point, beam.cutoff_deg(D), 1.0)
     out = np.zeros((camera.height, camera.width, 3), np.float32)
+    if eta != 1.0:
+        fine, window = window_mesh(mesh, point, beam)
     for ch in range(3):
-        sc = object_volpath_scene(mesh, volume, ch, emitter, camera.sensor_dict(spp))
+        if eta == 1.0:
+            sc = object_volpath_scene(mesh, volume, ch, emitter, camera.sensor_dict(spp))
+        else:
+            sc = object_window_scene(fine, window, volume, ch, emitter, camera.sensor_dict(spp), eta=eta)
         out[..., ch] = np.asarray(mi.render(sc, spp=int(spp), seed=int(seed) * 3 + ch))[..., ch]
-    return out / beam.power(D)
+    transmitted = 1.0 - ((eta - 1.0) / (eta + 1.0)) ** 2
+    return out * transmitted / beam.power(D)
 
 
 def _marks(mesh, camera: Camera, rng, n: int = 12, noise_px: float = 0.15) -> dict:
@@ -147,6 +205,7 @@ def photograph_object(
     checkerboards: bool = False,
     spot_radius_mm: float = 0.5,
     exposures: str = "brackets",
+    boundary_eta: float = 1.0,
     progress=None,
 ) -> dict:
     """Photograph ``volume`` inside ``mesh`` lit at ``n_points`` vertices; write a lab's hand-over.
@@ -164,6 +223,10 @@ def photograph_object(
         Default :func:`cameras_around` (``n_cameras`` at ``resolution`` = (width, height)).
     spp : int
         Samples per pixel of each of the two repeated frames.
+    boundary_eta : float
+        1: index-matched (``null``); > 1: a smooth dielectric of that index (the volume's η replaced; the
+        laser through a window over its disc, :func:`render_shot`; ``spot_radius_mm`` at least the
+        window's, which the import then sets aside).
     exposures : {"brackets", "single"}
         ``"brackets"``: per camera and shot, two repeated long exposures and a short one (the spot
         unsaturated in it); ``"single"``: one long exposure, the spot clipped, as a lab's single
@@ -208,10 +271,17 @@ def photograph_object(
         raise TranslucencyError(f"spp: must be >= 1, got {spp}")
     if exposures not in ("brackets", "single"):
         raise TranslucencyError(f"exposures: brackets or single, got {exposures!r}")
+    if boundary_eta < 1.0:
+        raise TranslucencyError(f"boundary_eta: must be >= 1, got {boundary_eta}")
     repeats = 2 if exposures == "brackets" else 1
     k_auto = sensor is None
     sensor = sensor or Sensor()
     beam = beam or LaserBeam()
+    if (
+        boundary_eta != 1.0
+    ):  # behind glass: the window over the laser's disc is the spot the import sets aside
+        volume = replace(volume, eta=float(boundary_eta))
+        spot_radius_mm = max(spot_radius_mm, 4.0 * beam.radius_mm / 3.0)
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     W, H = (int(v) for v in resolution)
@@ -275,6 +345,7 @@ def photograph_object(
                     spp=spp,
                     seed=seed * 1000 + 2 * j + rep,
                     scene=scene,
+                    eta=boundary_eta,
                 )
                 for rep in range(repeats)
             ]
@@ -309,8 +380,8 @@ def photograph_object(
         "format": FORMAT,
         "version": VERSION,
         "mesh": {"file": "object.ply", "scale_mm": 1.0, "up": "z"},
-        "boundary": {"eta": 1.0, "medium_eta": float(volume.eta)},
-        "exit_law": "lambertian",
+        "boundary": {"eta": float(boundary_eta), "medium_eta": float(volume.eta)},
+        "exit_law": "lambertian" if boundary_eta == 1.0 else "dielectric",
         "grazing_deg": 75.0,
         "spot_radius_mm": float(spot_radius_mm),
         "min_coverage": 0.5,
