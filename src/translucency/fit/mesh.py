@@ -31,6 +31,7 @@ from ._rounds import alternate
 from ._vertex_pool import VertexDiscPool
 from .families import FAMILIES
 from .lean import fit_lean
+from .lean_shots import fit_lean_from_shots
 from .options import FitContext, FitResult, check_fit_options
 
 #: α's pooling radius in mean edge lengths.  Measured on the main job's pig against its converged reference
@@ -190,8 +191,8 @@ def fit_mesh(
     if len(oblique):  # a lab's oblique laser shots (import object): one line, not silence
         warnings.warn(
             f"{ds.path}: {len(oblique)} beam(s) arrive {oblique.min():.0f}–{oblique.max():.0f}° off the "
-            "normal (photographs.beam_polar_deg); the paper's model is fitted to them as if they were normal "
-            "beams",
+            "normal (photographs.beam_polar_deg): the profile is fitted to them as if they were normal "
+            "beams, and the lean (render --angles) from their asymmetry",
             stacklevel=2,
         )
     source = _MeshSource(group, header, alpha_radius)
@@ -273,6 +274,8 @@ def fit_mesh(
     # the lean (model/lean.py): how the kernel tilts toward the beam's direction, from the oblique beams
     if ds.incidence.count > 1:
         result.model.measured["lean"] = fit_lean(ds, chunk_points)
+    elif (from_shots := fit_lean_from_shots(ds, chunk_points)) is not None:  # a lab's oblique shots
+        result.model.measured["lean"] = from_shots
     # the photons per point: how far the physical bounds let a total exceed 1 by noise (model/bounds.py)
     result.model.tally_photons = int(header["photons"]) if header.get("photons") else None
     result.acquisition = header

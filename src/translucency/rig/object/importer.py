@@ -478,15 +478,16 @@ def _spot_misses(setup: ObjectRig, posed: list, hits: np.ndarray, scene) -> list
 
 def _say_oblique(rig: ObjectRig, beam_polar: np.ndarray) -> None:
     """One warning line for shots whose laser arrives obliquely at its hit: they are stored with their
-    direction (the header's ``photographs.beam_polar_deg``), and fit reads every beam as a normal one."""
+    direction (the header's ``photographs.beam_polar_deg``); fit reads each as a normal beam for the profile
+    and the lean from its asymmetry (:mod:`translucency.fit.lean_shots`)."""
     oblique = np.flatnonzero(beam_polar > OBLIQUE_DEG)
     if len(oblique):
         shots = ", ".join(str(j) for j in oblique[:6]) + (", …" if len(oblique) > 6 else "")
         warnings.warn(
             f"{rig.path}: {len(oblique)} shot(s) ({shots}) arrive {beam_polar[oblique].min():.0f}–"
             f"{beam_polar[oblique].max():.0f}° off the normal at their hit: stored with their directions, "
-            "but fit reads every beam as a normal one (the paper's model) — aim the laser along the "
-            "normal, or take the lean's oblique beams from acquire mesh --incidence",
+            "fit reads the profile as if each were a normal beam and the lean (render --angles) from their "
+            "asymmetry — aim the laser along the normal for the profile",
             stacklevel=4,
         )
 
