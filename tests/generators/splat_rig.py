@@ -244,14 +244,15 @@ def fresnel_dielectric(cos_i, eta: float):
     return 0.5 * (r_s**2 + r_p**2)
 
 
-def glint_image(cam: Pinhole, scene, point, normal, eta: float, alpha: float) -> np.ndarray:
-    r"""Radiance (H, W) per W of the laser's specular glint: the beam along −n reflected by a GGX boundary
-    of roughness ``alpha`` at ``point``, into the pixel the point projects to.
+def glint_image(cam: Pinhole, scene, point, normal, eta: float, alpha: float, toward=None) -> np.ndarray:
+    r"""Radiance (H, W) per W of the laser's specular glint: the beam arriving from ``toward`` (unit, toward
+    the laser; default the normal) reflected by a GGX boundary of roughness ``alpha`` at ``point``, into the
+    pixel the point projects to.
 
-    The disc of area A lit by P reflects :math:`L_o = f\,E` with :math:`E = P/A` and the
-    microfacet BRDF :math:`f = F(\omega_o\cdot h)\,D(h)/(4\cos\theta_o)` at θ_i = 0 (G = 1); the pixel
-    reads the mean over its footprint :math:`\Omega_p d^2/\cos\theta_o`, so
-    :math:`\Delta L = P\,F\,D/(4\,\Omega_p d^2)`, nothing where the point is hidden from the camera.
+    The spot of area A lit by P reflects :math:`L_o = f\,E` with :math:`E = P/A` and the microfacet BRDF
+    :math:`f = F(\omega_o\cdot h)\,D(h)/(4\cos\theta_i\cos\theta_o)` (G = 1); the pixel reads the mean
+    over its footprint :math:`\Omega_p d^2/\cos\theta_o`, so
+    :math:`\Delta L = P\,F\,D/(4\cos\theta_i\,\Omega_p d^2)`, nothing where the point is hidden.
     """
     L = np.zeros((cam.height, cam.width))
     to_cam = cam.centre - point
@@ -265,12 +266,13 @@ def glint_image(cam: Pinhole, scene, point, normal, eta: float, alpha: float) ->
     si = scene.ray_intersect(rays((point + 1e-3 * w_o)[None], w_o[None]))
     if bool(np.asarray(si.is_valid())[0]) and float(np.asarray(si.t)[0]) < d:
         return L
-    h = (normal + w_o) / np.linalg.norm(normal + w_o)
+    w_i = normal if toward is None else np.asarray(toward, dtype=np.float64)
+    h = (w_i + w_o) / np.linalg.norm(w_i + w_o)
     cos_h = float(normal @ h)
     tan2 = (1 - cos_h**2) / cos_h**2
     D = alpha**2 / (np.pi * cos_h**4 * (alpha**2 + tan2) ** 2)  # GGX, ∫ D cos θ_h dω = 1
     F = float(fresnel_dielectric(w_o @ h, eta))
-    L[row, col] = F * D / (4 * cam.pixel_solid_angle()[row, col] * d**2)
+    L[row, col] = F * D / (4 * float(normal @ w_i) * cam.pixel_solid_angle()[row, col] * d**2)
     return L
 
 
@@ -300,6 +302,7 @@ def splat_rig(
     exit_law: str = "lambertian",
     eta: float = 1.0,
     glint_alpha: float = 0.1,
+    incoming=None,
 ) -> Path:
     """Write a lab's hand-over for ``mesh`` filled with ``volume`` (index-matched), one shot a vertex
     of ``incident``, photographed by ``cameras`` (:class:`Pinhole`).
@@ -308,6 +311,8 @@ def splat_rig(
     the walks refracted in and out with Fresnel at every crossing (``exit_law`` must be ``"walk"``: the
     exits' own directions in the air are the law behind the boundary), and each shot's specular glint
     (:func:`glint_image`, a GGX boundary of roughness ``glint_alpha``) added where a camera sees it.
+    ``incoming`` (P, 3): each shot's beam direction of flight (unit; default along −n): the walks enter
+    along it and the rig file gives the shot as a ray.
 
     ``exposure="single"``: one frame a shot and camera, its gain set on the first shot so that the
     brightest ``clip_fraction`` of the lit pixels (over every camera) clip — the spot is saturated, as
@@ -344,6 +349,7 @@ def splat_rig(
             seed=int(seed) * 31 + 977 * ch + 5,
             index_matched=eta == 1.0,
             reentry=True,  # light crossing the air from one part into another, as a photograph sees it
+            incoming=None if incoming is None else np.asarray(incoming, dtype=np.float64),
         )
         point = np.repeat(np.arange(P), photons)
         ok = res.code == EXIT
@@ -363,8 +369,12 @@ def splat_rig(
                     direction=flight[m] if exit_law == "walk" else None,
                 )  # fmt: skip
             if eta != 1.0:  # the glint: the same in every channel (the boundary is grey)
+                toward = [None] * P if incoming is None else -np.asarray(incoming, dtype=np.float64)
                 radiance[:, i] += np.stack(
-                    [glint_image(cam, scene, V[v], normals[v], eta, glint_alpha) for v in incident]
+                    [
+                        glint_image(cam, scene, V[v], normals[v], eta, glint_alpha, toward[j])
+                        for j, v in enumerate(incident)
+                    ]
                 )[..., None]
 
     # -- the sensor: one exposure of 1 s a shot, the spot clipped --------------------------------------
@@ -412,7 +422,12 @@ def splat_rig(
                 name = f"frames/{j:03d}_{cam.name}_{t:g}s.pfm"
                 write_pfm(folder / name, Z)
                 images[cam.name].append({"file": name, "exposure_s": t})
-        shots.append({"hit": {"vertex": int(incident[j])}, "power": float(power[j]), "images": images})
+        if incoming is None:
+            hit = {"vertex": int(incident[j])}
+        else:  # the laser's ray, from 40 mm back along it
+            w = np.asarray(incoming[j], dtype=np.float64)
+            hit = {"ray": {"origin": (V[incident[j]] - 40.0 * w).tolist(), "direction": w.tolist()}}
+        shots.append({"hit": hit, "power": float(power[j]), "images": images})
     rig = {
         "format": "translucency-object-rig",
         "version": 1,

@@ -17,12 +17,12 @@ itself for the oblique beam, in :func:`translucency.fit.lean.fit_point`'s three 
 keeps a little of the lobe (:math:`\langle e^{\kappa a}\rangle > 1` and grows with r), so the
 symmetric part is taken again of the shot with the lean found so far divided out,
 :math:`\overline{R\,e^{-\kappa\,\vec\ell\cdot\hat d}}`, and the fit repeated (:data:`ROUNDS`): on a
-marble ball the single shot's κ is then 0.95–1.02 of the paired beams' (0.79–0.91 after one round).
+marble ball the single shot's κ is then 0.94–1.02 of the paired beams' (0.79–0.91 after one round).
 Shots within :data:`translucency.angles.OBLIQUE_DEG` of the normal carry no lean of their own (ℓ ≈ 0):
 their points take the median of the oblique shots' (κ, λ), the material's.
 
 What this cannot tell from a lean: an asymmetry the object's shape makes about the hit (a ridge, an
-edge), which a normal beam would show too — on a ball there is none (``tests/test_lean_shots.py``).
+edge), which a normal beam would show too — on a ball there is none (``tests/test_lean.py``).
 Units: κ dimensionless, λ mm⁻¹, distances mm.
 """
 

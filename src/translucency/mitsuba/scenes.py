@@ -326,18 +326,15 @@ def object_window_scene(mesh, window, volume, channel: int, emitter: dict, senso
 
     Examples
     --------
+    >>> import trimesh
     >>> from translucency.mitsuba import perspective_camera_dict
-    >>> from types import SimpleNamespace
     >>> from translucency.acquire import Volume
-    >>> tetra = SimpleNamespace(vertices=np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]]),
-    ...                         faces=np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]),
-    ...                         bounds=np.array([[0.0, 0, 0], [1, 1, 1]]))
-    >>> filling = Volume.homogeneous((2, 2, 2), 0.5, sigma_s=[1.0] * 3, sigma_a=[0.01] * 3)
-    >>> scene = object_window_scene(tetra, np.array([True, False, False, False]), filling, 0,
-    ...                             spot_dict((0, 0, 100), (0, 0, 0), 2.0),
-    ...                             perspective_camera_dict((3, 3, 3), (0, 0, 0), 30.0, 16, 16), eta=1.4)
+    >>> box = trimesh.creation.box((2.0, 2.0, 2.0))  # 12 faces; the first two make one square side
+    >>> scene = object_window_scene(box, np.arange(12) < 2, Volume.homogeneous((4, 4, 4), 0.5, [1.0] * 3,
+    ...                             [0.01] * 3), 0, spot_dict((0, 0, 100), (0, 0, 0), 2.0),
+    ...                             perspective_camera_dict((5, 5, 5), (0, 0, 0), 30.0, 16, 16), eta=1.4)
     >>> sorted((s.face_count(), str(s.bsdf()).split("[")[0]) for s in scene.shapes())
-    [(1, 'Null'), (3, 'SmoothDielectric')]
+    [(2, 'Null'), (10, 'SmoothDielectric')]
     >>> len({id(s.interior_medium()) for s in scene.shapes()})  # one medium
     1
     """

@@ -18,7 +18,7 @@ from pathlib import Path
 
 
 def picture_check(mesh, volume, datasets: dict, light, camera, *, eta: float = 1.0, reference_spp: int = 256,
-                  out=None) -> dict:  # fmt: skip
+                  angles: bool = False, out=None) -> dict:  # fmt: skip
     """Fit and draw each of ``datasets`` (name → mesh data set path; the first is the one the others are
     judged against) and compare the pictures with each other and with a converged reference.
 
@@ -33,9 +33,12 @@ def picture_check(mesh, volume, datasets: dict, light, camera, *, eta: float = 1
     light, camera
         The render's light (:func:`translucency.render.lights.text.parse_light`) and camera.
     eta : float
-        The reference's boundary (1: index-matched).
+        The reference's boundary (1: index-matched); each data set is drawn behind its own
+        (:func:`translucency.render.boundary_eta`), as ``render`` draws it.
     reference_spp : int
         Samples per pixel of each of the reference's two renders (cached, :func:`converged_reference`).
+    angles : bool
+        Draw with the lean where a model has one (``render --angles``).
     out : path, optional
         Where the pictures go as EXR and PNG (one exposure, the reference's).
 
@@ -56,7 +59,9 @@ def picture_check(mesh, volume, datasets: dict, light, camera, *, eta: float = 1
     (0.04, 0.21)
     """
     from ..fit.mesh import fit_mesh
+    from ..io.mesh_dataset import open_mesh_dataset
     from ..mitsuba import mesh_scene
+    from ..render import boundary_eta
     from ..render.compare import compare
     from ..render.picture import VertexPicture, coverage
     from ..render.reference import converged_reference
@@ -72,12 +77,14 @@ def picture_check(mesh, volume, datasets: dict, light, camera, *, eta: float = 1
         out.mkdir(parents=True, exist_ok=True)
         save_images(reference, out / "reference", exposure)
     scene = mesh_scene(mesh)
-    picture = VertexPicture(mesh, camera, spp=16, light=light)
     drawn = {}
     for name, data in datasets.items():
         model = fit_mesh(data, "iso").model
-        L, _, _ = relight_object(transport_matrices(model, mesh), mesh, scene, light, camera.origin)
-        drawn[name] = picture.draw(L)
+        eta_data = boundary_eta(open_mesh_dataset(data).header)
+        L, _, _ = relight_object(
+            transport_matrices(model, mesh), mesh, scene, light, camera.origin, eta=eta_data, angles=angles
+        )
+        drawn[name] = VertexPicture(mesh, camera, spp=16, eta=eta_data, light=light).draw(L)
         if out is not None:
             save_images(drawn[name], out / name, exposure)
     first = drawn[next(iter(drawn))]
