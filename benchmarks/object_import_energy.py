@@ -236,13 +236,16 @@ def main(argv) -> None:
 
 def pictures(mesh, volume, eta: float, photographed: Path, tally: Path, out: Path, reference_spp: int):
     """The object fitted from the first photograph set's import and from the tally, drawn under ``render``'s
-    default light and view, each against the other and against a converged volpath reference of the same
-    object behind the same boundary (:func:`translucency.pipeline.picture_check.picture_check`)."""
+    default light (behind a dielectric a constant sky) and view, each against the other and against a
+    converged volpath reference of the same object behind the same boundary
+    (:func:`translucency.pipeline.picture_check.picture_check`)."""
     from translucency.pipeline.picture_check import picture_check
     from translucency.render import Camera
     from translucency.render.lights.text import parse_light
 
-    light, camera = parse_light("point:60,-80,120,2e4"), Camera.looking_at(mesh, [1.0, -1.6, 0.7], 160, 120)
+    # behind a dielectric volpath can be lit only by a sky (a point's light would enter by a delta refraction)
+    light = parse_light("point:60,-80,120,2e4" if eta == 1.0 else "env:0.01")
+    camera = Camera.looking_at(mesh, [1.0, -1.6, 0.7], 160, 120)
     res = picture_check(
         mesh, volume, {"tally": tally, "photographs": photographed}, light, camera, eta=eta,
         reference_spp=reference_spp, out=out,

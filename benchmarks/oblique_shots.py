@@ -49,10 +49,13 @@ def oblique_beams(mesh, incident, polar_deg: float, seed: int = 0) -> tuple[np.n
     """Each shot's direction of flight (P, 3): ``polar_deg`` off the inward normal, from the first of 12
     azimuths (random start) whose ray from 40 mm out reaches the vertex unobstructed — else along the
     normal; and how many are oblique."""
+    from generators.splat_rig import aim_point
+
     scene = mesh_scene(mesh)
     rng = np.random.default_rng(seed)
-    V, N = np.asarray(mesh.vertices, np.float64), np.asarray(mesh.vertex_normals, np.float64)
+    N = np.asarray(mesh.vertex_normals, np.float64)
     out, n_oblique = np.zeros((len(incident), 3)), 0
+    ring = [f[f >= 0] for f in mesh.vertex_faces]  # the faces around each vertex
     for j, v in enumerate(incident):
         n = N[v]
         t = np.cross(n, [0.0, 0.0, 1.0] if abs(n[2]) < 0.9 else [1.0, 0.0, 0.0])
@@ -64,8 +67,16 @@ def oblique_beams(mesh, incident, polar_deg: float, seed: int = 0) -> tuple[np.n
             toward = np.cos(np.radians(polar_deg)) * n + np.sin(np.radians(polar_deg)) * (
                 np.cos(phi) * t + np.sin(phi) * b
             )
-            hit = scene.ray_intersect(rays((V[v] + 1e-3 * toward)[None], toward[None]))
-            if not bool(np.asarray(hit.is_valid())[0]):  # nothing of the object between it and the laser
+            # as the import casts it: from 40 mm out, the first surface met must be the vertex's, facing it
+            aim = aim_point(mesh, int(v), -toward)
+            hit = scene.ray_intersect(rays((aim + 40.0 * toward)[None], -toward[None]))
+            t, face = float(np.asarray(hit.t)[0]), int(np.asarray(hit.prim_index)[0])
+            if (
+                bool(np.asarray(hit.is_valid())[0])
+                and abs(t - 40.0) < 0.05
+                and mesh.face_normals[face] @ toward > 0.05
+                and (mesh.face_normals[ring[v]] @ toward > 0.05).all()  # a ray at a vertex may meet any
+            ):
                 out[j], n_oblique = -toward, n_oblique + 1
                 break
     return out, n_oblique

@@ -276,6 +276,17 @@ def glint_image(cam: Pinhole, scene, point, normal, eta: float, alpha: float, to
     return L
 
 
+def aim_point(mesh, vertex: int, w: np.ndarray) -> np.ndarray:
+    """Where a laser ray of direction ``w`` aimed at ``vertex`` meets the surface: 2 % of the way from the
+    vertex toward the centroid of the face around it that faces the beam most (a ray through a vertex
+    exactly may slip between its faces in floating point); the import snaps it back to the vertex."""
+    faces = mesh.vertex_faces[vertex]
+    faces = faces[faces >= 0]
+    f = faces[np.argmin(np.asarray(mesh.face_normals)[faces] @ w)]
+    V = np.asarray(mesh.vertices, dtype=np.float64)
+    return V[vertex] + 0.02 * (np.asarray(mesh.triangles_center)[f] - V[vertex])
+
+
 def _sensor_fields(cam: Pinhole, rng):
     """Dark frame (raw) and flat field (mean 1), and vig(ρ) (H, W)."""
     h, w = cam.height, cam.width
@@ -426,7 +437,8 @@ def splat_rig(
             hit = {"vertex": int(incident[j])}
         else:  # the laser's ray, from 40 mm back along it
             w = np.asarray(incoming[j], dtype=np.float64)
-            hit = {"ray": {"origin": (V[incident[j]] - 40.0 * w).tolist(), "direction": w.tolist()}}
+            aim = aim_point(mesh, int(incident[j]), w)
+            hit = {"ray": {"origin": (aim - 40.0 * w).tolist(), "direction": w.tolist()}}
         shots.append({"hit": hit, "power": float(power[j]), "images": images})
     rig = {
         "format": "translucency-object-rig",
