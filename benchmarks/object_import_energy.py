@@ -12,7 +12,7 @@ material and incident vertices (``acquire mesh``, index-matched, another seed):
     python benchmarks/object_import_energy.py [MESH.obj] [--size=30] [--cameras=8] [--resolution=96x72]
         [--points=3] [--spp=256] [--photons=200000] [--generators=rig,splat] [--exposure=single|brackets]
         [--folder=DIR] [--reuse] [--splat-law=lambertian|walk] [--splat-cameras=sphere|rig]
-        [--import-law=tally] [--law-slants=2] [--eta=1] [--picture] [--reference-spp=256]
+        [--import-law=tally|walk] [--law-slants=2] [--eta=1] [--picture] [--reference-spp=256]
 
 MESH defaults to an icosphere of 10,242 vertices at 30 mm (cells of 0.28 mm², about a quarter of a
 pixel's footprint at 96 x 72); the issue's case is ``../shared/meshes/spot.obj`` (2,930 vertices, cells
@@ -31,6 +31,9 @@ virtual rig behind a dielectric boundary (:func:`translucency.rig.object.photogr
 
 ``--picture``: the object fitted from the first photograph set and from the tally, drawn under ``render``'s
 default light and view, each against the other and against a converged volpath reference (:func:`pictures`).
+
+``--import-law=walk`` imports with the law of photon walks at each shot's fitted material, per cell and
+camera (:mod:`translucency.rig.object.walk_law`).
 
 ``--import-law=tally`` imports with the exit law of a second tally of the same object with exit bins
 (``acquire mesh --exit-bins 4``, another seed; :class:`translucency.rig.object.exit_law.Tabulated`)
@@ -176,7 +179,7 @@ def main(argv) -> None:
     area = np.asarray(T["vertex_area"][...], dtype=np.float64)
     Rt = np.asarray(T["R_d"][...], dtype=np.float64)
     print(f"tally: {time.perf_counter() - t0:.0f} s; cells / pixel footprint in the summary", file=sys.stderr)
-    exit_law = None
+    exit_law = "walk" if o["import_law"] == "walk" else None  # the transport's law per cell and camera
     if o["import_law"] == "tally":  # the transport's own exit law, from a tally apart (another seed)
         slants = int(o["law_slants"])
         law_tally = folder / ("law_tally.zarr" if slants == 2 else f"law_tally_{slants}sectors.zarr")

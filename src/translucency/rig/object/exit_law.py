@@ -14,7 +14,7 @@ Lambertian exit) through an index-matched boundary.  Photon walks on a 6 mm skin
 and :math:`\gamma(1) \approx 1.2`, :math:`\gamma(0.1) \approx 0.2` at 4–8 mm (the Milne problem's
 law); and light leaves leaning *away* from the hit — seen along +z from 1–2 mm off the pole, where
 the normal is only 10–20° from +z (so s ≈ −0.3), πL is 0.61 M.  So π × radiance is off by up to
-±40 % depending on the view.  Three laws, one object each behind :class:`ExitLaw`:
+±40 % depending on the view.  The laws, one object each behind :class:`ExitLaw`:
 
 * :class:`Lambertian` — γ = 1 (a rough, white-diffusing surface, or for comparison only);
 * :class:`Dielectric` — :math:`\gamma = F_t(\mu)/(1 - F_{dr,e})` for a smooth boundary of index η,
@@ -28,6 +28,8 @@ the normal is only 10–20° from +z (so s ≈ −0.3), πL is 0.61 M.  So π ×
   from the hit, 0.5 from the side and 0.3 leaning towards it — photon walks and volpath alike), and a
   table over 4 × 4 cells of directions (too coarse for the peak: the true law tabulated so converts
   10–60 % off; and too many unknowns for a few views per vertex);
+* :class:`Walked` — γ per cell and camera from photon walks on the scan at the material the near peak
+  fitted to the same shot (:mod:`.walk_law`): the transport's own law where each camera sees it;
 * :class:`Tabulated` — γ read from a photon tally's exit bins (``acquire mesh --exit-bins``,
   :mod:`translucency.angles`): per band of distance from the hit (:data:`TABLE_EDGES_MM`), polar bin and
   azimuthal sector about the away axis (two halves, s > 0 away from the hit and s < 0 back, unless the
@@ -73,6 +75,16 @@ class Lambertian(ExitLaw):
     """γ = 1: π × radiance is the exitance."""
 
     name = "lambertian"
+
+    def factor(self, mu, s, r):
+        return np.ones(np.shape(mu) + (3,))
+
+
+class Walked(ExitLaw):
+    """γ per cell and camera from photon walks on the scan at the material the near peak fitted to each shot
+    (:class:`.walk_law.ShotWalkLaw`): the import converts each shot twice, first with π L (γ = 1 here)."""
+
+    name = "walk"
 
     def factor(self, mu, s, r):
         return np.ones(np.shape(mu) + (3,))
@@ -299,7 +311,8 @@ def tabulated_from_tally(path) -> Tabulated:
 
 def law_named(name: str, eta: float = 1.0) -> ExitLaw | None:
     """The law a rig file names: ``"lambertian"``, ``"dielectric"`` (needs η ≠ 1), ``"tally:PATH"`` (a mesh
-    data set with exit bins) or ``"from-views"`` (None: it is estimated from the photographs)."""
+    data set with exit bins), ``"walk"`` (per cell and camera, from walks at each shot's fitted material)
+    or ``"from-views"`` (None: it is estimated from the photographs)."""
     if name.startswith("tally:"):
         return tabulated_from_tally(name.split(":", 1)[1])
     if name == "lambertian":
@@ -310,7 +323,11 @@ def law_named(name: str, eta: float = 1.0) -> ExitLaw | None:
         return Dielectric(float(eta))
     if name == "from-views":
         return None
-    raise TranslucencyError(f"exit_law: one of lambertian, dielectric, from-views, tally:PATH; got {name!r}")
+    if name == "walk":
+        return Walked()
+    raise TranslucencyError(
+        f"exit_law: one of lambertian, dielectric, from-views, walk, tally:PATH; got {name!r}"
+    )
 
 
 __all__ = [
@@ -319,6 +336,7 @@ __all__ = [
     "Dielectric",
     "FromViews",
     "Tabulated",
+    "Walked",
     "fit_from_views",
     "tabulated_from_tally",
     "law_named",

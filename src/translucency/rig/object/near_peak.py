@@ -459,6 +459,8 @@ def recover_near_peak(mesh, hit, R, var, target, measured, eta: float, views=(),
     short : ndarray of bool, shape (3,)
         Per channel, whether the model reads below what the clipped pixels of ``views`` show
         (:meth:`PixelEvidence.short_of_clip`): the peak is steeper than the model can be.
+    params : list
+        Per channel the half-space's fitted (σ_t mm⁻¹, α), or None (the dipole, or not recovered).
 
     Examples
     --------
@@ -474,7 +476,7 @@ def recover_near_peak(mesh, hit, R, var, target, measured, eta: float, views=(),
     >>> mean = np.bincount(owner, w * truth(pts), minlength=V) / np.bincount(owner, w, minlength=V)
     >>> R = np.repeat(mean[:, None], 3, axis=1)
     >>> target = np.arange(V) == 0
-    >>> out, v, ok, short = recover_near_peak(mesh, hit, R * ~target[:, None], 0 * R, target, ~target, 1.3)
+    >>> out, v, ok, short, _ = recover_near_peak(mesh, hit, R * ~target[:, None], 0 * R, target, ~target, 1.3)
     >>> round(float(out[0, 0] / R[0, 0]), 2)
     1.0
     """
@@ -487,7 +489,7 @@ def recover_near_peak(mesh, hit, R, var, target, measured, eta: float, views=(),
     r_in = r[targets].max()
     outside = np.flatnonzero(measured & (r > r_in) & np.all(R > 0, axis=1))
     if len(outside) < RING_CELLS:
-        return R, var, False, np.zeros(3, dtype=bool)
+        return R, var, False, np.zeros(3, dtype=bool), [None] * 3
     order = outside[np.argsort(r[outside])]
     r_out = max(r_in + RING_MM, r[order[RING_CELLS - 1]])
     ring = order[r[order] <= r_out]
@@ -539,7 +541,7 @@ def recover_near_peak(mesh, hit, R, var, target, measured, eta: float, views=(),
                 np.log(R[ring, ch]), r[ring], mean_of, 1.0 if walks else eta, pixels or None, shape_ch, refit
             )
             R[targets, ch], var[targets, ch] = value, variance
-    return R, var, True, short
+    return R, var, True, short, params
 
 
 def _sigma_grid(params) -> np.ndarray:

@@ -84,6 +84,7 @@ def shot_cell_means(
     *,
     pixels: bool = False,
     aside: dict | None = None,
+    view_law=None,
 ):
     """Per camera: (cell mean (V, 3), its variance, usable weight (V,), mean γ (V, 3), the clipped pixels'
     least value over each cell (V, 3), NaN where none) of the radiance —
@@ -93,10 +94,12 @@ def shot_cell_means(
     its used pixels (n, 3), its variance, usable (n,), the clipped pixels' least exitance (n, 3)), None
     for a camera without frames — the near peak's evidence (:class:`.near_peak.PixelEvidence`).  The
     cameras run on threads (reading, NumPy and the sparse products release the GIL).  ``aside``: per camera
-    name, used pixels (bool) set aside — neither used nor a lower bound where they clip (:mod:`.glint`)."""
+    name, used pixels (bool) set aside — neither used nor a lower bound where they clip (:mod:`.glint`).
+    ``view_law``: γ per camera and pixel instead of ``law``'s (:class:`.walk_law.ShotWalkLaw`)."""
     aside = aside or {}
 
-    def one(cam: CameraView):
+    def one(indexed):
+        c, cam = indexed
         if cam.setup.name not in shot.frames:
             return (None, None), 0
         L, var, usable, floor, nb = view_radiance(shot, cam, rig)
@@ -116,7 +119,10 @@ def shot_cell_means(
             r, slant = np.linalg.norm(m.position[u] - hit, axis=1), m.slant(hit, u)
         else:
             r = slant = np.zeros(len(u))
-        gamma = law.factor(m.mu[u], slant, r).astype(np.float32)  # (n, 3)
+        if view_law is not None:  # the transport's own law, this camera's
+            gamma = view_law.pixel_gamma(c, m).astype(np.float32)
+        else:
+            gamma = law.factor(m.mu[u], slant, r).astype(np.float32)  # (n, 3)
         dark = (gamma <= GAMMA_MIN).any(axis=1)  # a law that sends nothing there (a dielectric at μ ≤ 0)
         if dark.any():
             usable, gamma = usable & ~dark, np.maximum(gamma, np.float32(GAMMA_MIN))
@@ -132,7 +138,7 @@ def shot_cell_means(
         return ((*m.cell_means(E, vE, usable), g_mean, _clipped_sum(m, E_floor, clipped)), view), nb
 
     with ThreadPoolExecutor(min(len(cameras), os.cpu_count() or 1)) as pool:
-        results = list(pool.map(one, cameras))
+        results = list(pool.map(one, enumerate(cameras)))
     per_cam = [r for (r, _), _ in results]
     nbytes = sum(nb for _, nb in results)
     if pixels:
