@@ -22,8 +22,9 @@ def import_object_cmd(
     exit_law: str = typer.Option(
         None,
         "--exit-law",
-        help="Radiance to exitance: lambertian (pi L), dielectric (F_t/(1 - F_dr) of the boundary's eta) "
-        "or from-views (a law estimated from vertices two cameras see); default the rig file's.",
+        help="Radiance to exitance: lambertian (pi L), dielectric (F_t/(1 - F_dr) of the boundary's eta), "
+        "walk (photon walks at each shot's fitted material, per cell and camera) or from-views; default "
+        "the rig file's.",
     ),
     chunk: int = typer.Option(8, "--chunk", help="Laser shots per chunk (unit of resuming and memory)."),
     overwrite: bool = dataset_overwrite_option(),

@@ -16,6 +16,17 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from ..fit.mesh import fit_mesh
+from ..io.mesh_dataset import open_mesh_dataset
+from ..mitsuba import mesh_scene
+from ..render import boundary_eta
+from ..render.compare import compare
+from ..render.picture import VertexPicture, coverage
+from ..render.reference import converged_reference
+from ..render.relight import relight_object
+from ..render.tonemap import auto_exposure, save_images
+from ..render.transport import transport_matrices
+
 
 def picture_check(mesh, volume, datasets: dict, light, camera, *, eta: float = 1.0, reference_spp: int = 256,
                   angles: bool = False, out=None) -> dict:  # fmt: skip
@@ -58,17 +69,6 @@ def picture_check(mesh, volume, datasets: dict, light, camera, *, eta: float = 1
     >>> res["photographs"]["vs_first"], res["photographs"]["vs_volpath"]  # doctest: +SKIP
     (0.04, 0.21)
     """
-    from ..fit.mesh import fit_mesh
-    from ..io.mesh_dataset import open_mesh_dataset
-    from ..mitsuba import mesh_scene
-    from ..render import boundary_eta
-    from ..render.compare import compare
-    from ..render.picture import VertexPicture, coverage
-    from ..render.reference import converged_reference
-    from ..render.relight import relight_object
-    from ..render.tonemap import auto_exposure, save_images
-    from ..render.transport import transport_matrices
-
     mask = coverage(mesh, camera)
     reference, info = converged_reference(mesh, volume, light, camera, mask, spp=reference_spp, eta=eta)
     exposure = auto_exposure(reference, mask)
