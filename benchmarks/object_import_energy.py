@@ -12,7 +12,7 @@ material and incident vertices (``acquire mesh``, index-matched, another seed):
     python benchmarks/object_import_energy.py [MESH.obj] [--size=30] [--cameras=8] [--resolution=96x72]
         [--points=3] [--spp=256] [--photons=200000] [--generators=rig,splat] [--exposure=single|brackets]
         [--folder=DIR] [--reuse] [--splat-law=lambertian|walk] [--splat-cameras=sphere|rig]
-        [--import-law=tally|walk] [--law-slants=2] [--eta=1] [--picture] [--reference-spp=256]
+        [--import-law=tally|walk] [--law-slants=2] [--eta=1] [--beam=0.3] [--picture] [--reference-spp=256]
 
 MESH defaults to an icosphere of 10,242 vertices at 30 mm (cells of 0.28 mm², about a quarter of a
 pixel's footprint at 96 x 72); the issue's case is ``../shared/meshes/spot.obj`` (2,930 vertices, cells
@@ -28,6 +28,8 @@ splat generator's sphere: the two generators seen from the same places.  Each ge
 ``--eta=1.4``: the object behind a smooth dielectric of that index — the tally without ``--index-matched``,
 the splat generator's walks refracted in and out (``--splat-law=walk`` only) with the laser's glint, the
 virtual rig behind a dielectric boundary (:func:`translucency.rig.object.photographs.photograph_object`).
+
+``--beam=R``: the virtual rig's laser disc radius (mm; behind a dielectric its window grows with it).
 
 ``--picture``: the object fitted from the first photograph set and from the tally, drawn under ``render``'s
 default light and view, each against the other and against a converged volpath reference (:func:`pictures`).
@@ -82,6 +84,7 @@ def _args(argv):
         "law_slants": 2,
         "eta": 1.0,
         "picture": "",
+        "beam": 0.3,
         "reference_spp": 256,
     }
     mesh = None
@@ -197,6 +200,7 @@ def main(argv) -> None:
             law = "" if gen != "splat" or o["splat_law"] == "lambertian" else f"-{o['splat_law']}"
             law += "-rigcams" if gen == "splat" and o["splat_cameras"] == "rig" else ""
             law += f"-eta{eta:g}" if eta != 1.0 else ""
+            law += f"-beam{o['beam']:g}" if gen == "rig" and float(o["beam"]) != 0.3 else ""
             rig = folder / f"{gen}{law}-{o['exposure']}{seed}"
             if not (o["reuse"] and (rig / "object.json").is_file()):
                 _generate(gen, mesh, volume, rig, incident, W, H, o, seed)
@@ -269,7 +273,7 @@ def _cells_per_footprint(info, area):
 
 def _generate(gen, mesh, volume, rig, incident, W, H, o, seed):
     if gen == "rig":
-        from translucency.rig.object.photographs import cameras_around, photograph_object
+        from translucency.rig.object.photographs import LaserBeam, cameras_around, photograph_object
 
         cams = cameras_around(mesh, o["cameras"], W, H, seed=0)
         photograph_object(
@@ -283,6 +287,7 @@ def _generate(gen, mesh, volume, rig, incident, W, H, o, seed):
             exposures=o["exposure"],
             spot_radius_mm=0.0,
             boundary_eta=float(o["eta"]),
+            beam=LaserBeam(radius_mm=float(o["beam"])),
         )
     else:
         from generators.splat_rig import Pinhole, cameras_on_sphere, splat_rig

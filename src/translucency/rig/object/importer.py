@@ -44,7 +44,7 @@ import json
 import time
 import warnings
 from collections.abc import Callable, Iterator
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -148,6 +148,9 @@ def import_object(
         "flags": dict(zip(("unseen", "saturated", "grazing", "spot"), flag_counts.tolist())),
         "saturated_views": importer.saturated_views,
         "near_peak": importer.recovered,
+        # with exit_law "walk": the shots (of this run's chunks) converted with the walks' law; the others
+        # clipped nothing, had no near peak to give a material, and kept π L
+        "walked_shots": importer.walked,
         "rays_per_pixel": {c.camera.name: c.map.sub**2 for c in importer.cameras},
         "seconds": time.perf_counter() - t0,
         "bytes_read": importer.bytes_read,
@@ -196,6 +199,7 @@ class ObjectImport:
     bytes_read: int = 0  # image bytes read by the chunks imported
     saturated_views: int = 0  # cameras' views of a cell dropped for a saturated pixel (this run's chunks)
     recovered: int = 0  # pairs from the near-peak model (this run's chunks)
+    walked: list = field(default_factory=list)  # shots converted with the walks' law (this run's chunks)
 
     @property
     def n_points(self) -> int:
@@ -313,6 +317,7 @@ class ObjectImport:
                         [cam.camera.centre for cam in cameras], eta=setup.eta, seed=7 + 104729 * j,
                     )  # fmt: skip
                     Rj, vj, fj, missing, least, params = self._convert(j, r, aside, view_law)
+                    self.walked.append(j)
                 Rj = fill(Rj, missing)
                 vj = fill.variance(Rj, vj, missing)
                 # a clipped spot away from the hit (the glint's reflected beam lighting another part): its
