@@ -98,7 +98,7 @@ def lean_of_shot(R, area, vertices, hit_vertex: int, normal, toward, eta: float 
     return lean
 
 
-def fit_lean_from_shots(ds, chunk_points: int = 32) -> np.ndarray | None:
+def fit_lean_from_shots(ds) -> np.ndarray | None:
     """κ and λ per incident point and channel, (P, 2, 3), from a data set of a lab's shots (``import
     object``: each shot's direction toward its laser in the header's ``photographs.toward_laser``); None
     when no shot is more than :data:`~translucency.angles.OBLIQUE_DEG` off the normal."""
@@ -116,10 +116,9 @@ def fit_lean_from_shots(ds, chunk_points: int = 32) -> np.ndarray | None:
     area = np.asarray(ds.group["vertex_area"][...], dtype=np.float64)
     incident = np.asarray(ds.group["incident"][...])
     lean = np.full((len(incident), 2, 3), np.nan)
-    for s in range(0, len(oblique), chunk_points):
-        for p in oblique[s : s + chunk_points]:
-            R = np.asarray(ds.group["R_d"][int(p)], dtype=np.float64)
-            lean[p] = lean_of_shot(R, area, vertices, int(incident[p]), normals[p], toward[p], eta)
+    for p in oblique:  # one shot's R_d (V, 3) read at a time
+        R = np.asarray(ds.group["R_d"][int(p)], dtype=np.float64)
+        lean[p] = lean_of_shot(R, area, vertices, int(incident[p]), normals[p], toward[p], eta)
     # the points lit along their normal: the material's lean, the median of the oblique shots'
     lean[np.isnan(lean[:, 0, 0])] = np.median(lean[oblique], axis=0)
     return lean

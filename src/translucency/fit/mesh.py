@@ -274,7 +274,7 @@ def fit_mesh(
     # the lean (model/lean.py): how the kernel tilts toward the beam's direction, from the oblique beams
     if ds.incidence.count > 1:
         result.model.measured["lean"] = fit_lean(ds, chunk_points)
-    elif (from_shots := fit_lean_from_shots(ds, chunk_points)) is not None:  # a lab's oblique shots
+    elif (from_shots := fit_lean_from_shots(ds)) is not None:  # a lab's oblique shots
         result.model.measured["lean"] = from_shots
     # the photons per point: how far the physical bounds let a total exceed 1 by noise (model/bounds.py)
     result.model.tally_photons = int(header["photons"]) if header.get("photons") else None

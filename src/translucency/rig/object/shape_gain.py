@@ -59,6 +59,44 @@ WALK_ALBEDO = 0.999
 MAX_STEPS = 3_000
 
 
+def homogeneous_walk(mesh, scene, hit, normal, sigma_t: float, albedo: float, photons: int, *, seed: int,
+                     eta: float = 1.0, max_steps: int = 200_000):  # fmt: skip
+    """Photons from ``hit`` into ``mesh`` along −``normal``, in a homogeneous medium of σ_t (mm⁻¹) and albedo
+    α behind a boundary of relative index ``eta`` (1: index-matched), light that leaves followed through
+    the air into other parts (:func:`translucency.acquire.mesh_walk.mesh_random_walk`)."""
+    volume = Volume.homogeneous(
+        (1, 1, 1), float(np.max(mesh.extents)) + 1.0, [albedo * sigma_t] * 3, [(1 - albedo) * sigma_t] * 3,
+        eta=eta,
+    )  # fmt: skip
+    entry, outward = np.asarray(hit, np.float64)[None], np.asarray(normal, np.float64)[None]
+    return mesh_random_walk(
+        scene, mesh.bounds, volume, 0, entry, outward, photons, seed=seed, index_matched=eta == 1.0,
+        reentry=True, max_steps=max_steps,
+    )  # fmt: skip
+
+
+def mean_edge(mesh) -> np.ndarray:
+    """Each vertex's own edges' mean length ē_v (V,), mm: a scan's cells are finest where its detail is."""
+    ends, length = mesh.edges_unique.ravel(), np.repeat(mesh.edges_unique_length, 2)
+    V = len(mesh.vertices)
+    return np.bincount(ends, length, V) / np.maximum(np.bincount(ends, minlength=V), 1)
+
+
+def same_side_pairs(mesh, centres: np.ndarray, candidates: np.ndarray, h: np.ndarray):
+    """The pairs (i, j) with vertex ``candidates[j]`` within ``h[i]`` mm of vertex ``centres[i]`` and on the
+    same side (normals within 60°, :data:`SAME_SIDE`: across a sheet thinner than h the far side's cells
+    face away): two index arrays, into ``centres`` and into ``candidates``."""
+    from scipy.spatial import cKDTree  # heavy: SciPy loads where a peak is recovered
+
+    verts = np.asarray(mesh.vertices, dtype=np.float64)
+    neighbours = cKDTree(verts[candidates]).query_ball_point(verts[centres], h)
+    rows = np.repeat(np.arange(len(centres)), [len(n) for n in neighbours])
+    cols = np.concatenate([np.asarray(n, dtype=np.int64) for n in neighbours])
+    normals = np.asarray(mesh.vertex_normals, dtype=np.float64)
+    side = np.einsum("ij,ij->i", normals[centres[rows]], normals[candidates[cols]]) > SAME_SIDE
+    return rows[side], cols[side]
+
+
 class MeshWalkGain:
     r"""The gains :math:`G_v` (module notes) of the cells within ``reach`` mm of one shot's hit.
 
@@ -130,13 +168,9 @@ class MeshWalkGain:
         import scipy.sparse as sp  # heavy: SciPy's sparse matrices load where a peak is recovered
 
         mesh = self.mesh
-        volume = Volume.homogeneous(
-            (1, 1, 1), float(np.max(mesh.extents)) + 1.0, [albedo * sigma_t] * 3,
-            [(1 - albedo) * sigma_t] * 3, eta=self.eta,
-        )  # fmt: skip
-        walk = mesh_random_walk(
-            self.scene, mesh.bounds, volume, 0, self.hit[None], self.normal[None], self.photons, seed=seed,
-            index_matched=self.eta == 1.0, reentry=True, max_steps=MAX_STEPS,
+        walk = homogeneous_walk(
+            mesh, self.scene, self.hit, self.normal, sigma_t, albedo, self.photons, seed=seed, eta=self.eta,
+            max_steps=MAX_STEPS,
         )  # fmt: skip
         out = np.flatnonzero(walk.code == EXIT)
         tri, bary = exit_barycentric(mesh, walk.face[out], walk.position[out])
@@ -162,27 +196,17 @@ class _Cells:
 
     def __init__(self, mesh, hit, reach: float):
         import scipy.sparse as sp  # heavy: SciPy loads where a peak is recovered
-        from scipy.spatial import cKDTree
 
         verts = np.asarray(mesh.vertices, dtype=np.float64)
         r = np.linalg.norm(verts - hit, axis=1)
         self.near = np.flatnonzero(r <= reach)
-        # each cell's own edges' mean length ē_v: a scan's cells are finest where its detail is
-        ends, length = mesh.edges_unique.ravel(), np.repeat(mesh.edges_unique_length, 2)
-        e_v = np.bincount(ends, length, len(verts)) / np.maximum(np.bincount(ends, minlength=len(verts)), 1)
-        h = np.maximum(OWN_EDGE * e_v[self.near], NEIGHBOURHOOD * r[self.near])  # neighbourhood radius, mm
+        h = np.maximum(OWN_EDGE * mean_edge(mesh)[self.near], NEIGHBOURHOOD * r[self.near])  # radius, mm
         self.zone = np.flatnonzero(r <= reach + h.max())  # every neighbourhood within it
         self.index = np.full(len(verts), -1)
         self.index[self.zone] = np.arange(len(self.zone))
         pts, self.w, self.owner = cell_quadrature(mesh, self.zone, toward=hit)
         self.dist = np.linalg.norm(pts - hit, axis=1)
-        neighbours = cKDTree(verts[self.zone]).query_ball_point(verts[self.near], h)
-        rows = np.repeat(np.arange(len(self.near)), [len(n) for n in neighbours])
-        cols = np.concatenate([np.asarray(n, dtype=np.int64) for n in neighbours])
-        # on the same side only: across a sheet thinner than h the far side's cells face away
-        normals = np.asarray(mesh.vertex_normals, dtype=np.float64)
-        side = np.einsum("ij,ij->i", normals[self.near[rows]], normals[self.zone[cols]]) > SAME_SIDE
-        rows, cols = rows[side], cols[side]
+        rows, cols = same_side_pairs(mesh, self.near, self.zone, h)
         self.S = sp.csr_matrix((np.ones(len(cols)), (rows, cols)), shape=(len(self.near), len(self.zone)))
 
     def gain(self, walked: np.ndarray, sigma_t: float, albedo: float) -> np.ndarray:
@@ -260,4 +284,4 @@ class GainTable:
         return self.cells.gain(walked, s, a)
 
 
-__all__ = ["MeshWalkGain", "GainTable", "PHOTONS"]
+__all__ = ["MeshWalkGain", "GainTable", "PHOTONS", "homogeneous_walk", "mean_edge", "same_side_pairs"]

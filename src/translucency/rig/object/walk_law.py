@@ -32,8 +32,8 @@ from __future__ import annotations
 import numpy as np
 
 from ...acquire.mesh import exit_barycentric
-from ...acquire.mesh_walk import EXIT, mesh_random_walk
-from ...acquire.volume import Volume
+from ...acquire.mesh_walk import EXIT
+from .shape_gain import homogeneous_walk, mean_edge, same_side_pairs
 
 #: the half-angle (degrees) of the cap about a camera's direction within which an exit counts for it
 CONE_DEG = 20.0
@@ -62,34 +62,21 @@ class ShotWalkLaw:
     """
 
     def __init__(self, mesh, scene, hit, normal, params, centres, *, eta=1.0, seed=0, photons=PHOTONS):
-        from scipy.spatial import cKDTree  # heavy: SciPy loads where a law is walked
-
         V = np.asarray(mesh.vertices, dtype=np.float64)
         hit, normal = np.asarray(hit, np.float64), np.asarray(normal, np.float64)
         r = np.linalg.norm(V - hit, axis=1)
-        ends, length = mesh.edges_unique.ravel(), np.repeat(mesh.edges_unique_length, 2)
-        e_v = np.bincount(ends, length, len(V)) / np.maximum(np.bincount(ends, minlength=len(V)), 1)
-        h = np.minimum(np.maximum(0.5 * e_v, 0.3 * r), MAX_NEIGHBOURHOOD_MM)
-        neighbours = cKDTree(V).query_ball_point(V, h)
-        rows = np.repeat(np.arange(len(V)), [len(n) for n in neighbours])
-        cols = np.concatenate([np.asarray(n, dtype=np.int64) for n in neighbours])
-        normals = np.asarray(mesh.vertex_normals, dtype=np.float64)
-        side = np.einsum("ij,ij->i", normals[rows], normals[cols]) > 0.5  # the same side of a thin sheet
-        rows, cols = rows[side], cols[side]
+        h = np.minimum(np.maximum(0.5 * mean_edge(mesh), 0.3 * r), MAX_NEIGHBOURHOOD_MM)
+        every = np.arange(len(V))
+        rows, cols = same_side_pairs(mesh, every, every, h)
         cos_c = np.cos(np.radians(CONE_DEG))
         omega_c = np.pi * (1.0 - cos_c**2)
         self.gamma = [np.ones((len(V), 3)) for _ in centres]
         for ch, (sigma_t, albedo) in enumerate(params):
             if sigma_t is None:
                 continue
-            volume = Volume.homogeneous(
-                (1, 1, 1), float(np.max(mesh.extents)) + 1.0, [albedo * sigma_t] * 3,
-                [(1 - albedo) * sigma_t] * 3, eta=eta,
-            )  # fmt: skip
-            walk = mesh_random_walk(
-                scene, mesh.bounds, volume, 0, hit[None], normal[None], photons, seed=seed + 7919 * ch,
-                index_matched=eta == 1.0, reentry=True,
-            )  # fmt: skip
+            walk = homogeneous_walk(
+                mesh, scene, hit, normal, sigma_t, albedo, photons, seed=seed + 7919 * ch, eta=eta
+            )
             out = np.flatnonzero(walk.code == EXIT)
             pos = np.asarray(walk.position[out], dtype=np.float64)
             w = np.asarray(walk.direction[out], dtype=np.float64)
