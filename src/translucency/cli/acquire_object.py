@@ -29,6 +29,7 @@ class ObjectPhotographsOptions:
     resolution = typer.Option((128, 128), "--resolution", help="Image width and height, pixels.")
     spp = typer.Option(64, "--spp", help="Samples per pixel of each of the two repeated frames.")
     beam = typer.Option(0.3, "--beam", help="Radius of the laser's spot on the surface, mm.")
+    eta = typer.Option(1.0, "--eta", help="The boundary: 1 index-matched, > 1 a smooth dielectric.")
     checkerboards = typer.Option(
         False, "--checkerboards", help="Give intrinsics as checkerboard photographs (OpenCV calibrates)."
     )
@@ -57,6 +58,7 @@ def acquire_object_photographs_cmd(
     resolution: tuple[int, int] = ObjectPhotographsOptions.resolution,
     spp: int = ObjectPhotographsOptions.spp,
     beam: float = ObjectPhotographsOptions.beam,
+    eta: float = ObjectPhotographsOptions.eta,
     checkerboards: bool = ObjectPhotographsOptions.checkerboards,
     exposures: str = ObjectPhotographsOptions.exposures,
     seed: int = ObjectPhotographsOptions.seed,
@@ -82,6 +84,7 @@ def acquire_object_photographs_cmd(
         resolution=resolution,
         spp=spp,
         beam_mm=beam,
+        eta=eta,
         checkerboards=checkerboards,
         exposures=exposures,
         seed=seed,

@@ -183,6 +183,7 @@ def acquire_object_photographs(
     resolution=(128, 128),
     spp: int = 64,
     beam_mm: float = 0.3,
+    eta: float = 1.0,
     checkerboards: bool = False,
     exposures: str = "brackets",
     seed: int = 0,
@@ -215,6 +216,9 @@ def acquire_object_photographs(
         Samples per pixel of each of the two repeated frames.
     beam_mm : float
         Radius of the laser's spot on the surface, mm.
+    eta : float
+        The boundary's relative index: 1 index-matched; > 1 a smooth dielectric (the laser enters through
+        a window over its spot, :func:`translucency.rig.object.photographs.render_shot`).
     checkerboards : bool
         Give the intrinsics as checkerboard photographs (OpenCV calibrates them on import).
     exposures : {"brackets", "single"}
@@ -242,6 +246,7 @@ def acquire_object_photographs(
     cameras = int(check_option("cameras", whole_number("cameras", cameras), hi=64))
     spp, seed = whole_number("spp", spp), whole_number("seed", seed, lo=0)
     beam_mm = float(check_option("beam_mm", beam_mm, lo=0, open_lo=True))
+    eta = float(check_option("eta", eta, lo=1.0))
     voxel_mm = float(check_option("voxel_mm", voxel_mm, lo=0, open_lo=True))
     scale_mm = float(check_option("scale_mm", scale_mm, lo=0, open_lo=True))
     resolution, image_format = _resolution(resolution), _image_format(image_format)
@@ -284,6 +289,7 @@ def acquire_object_photographs(
             checkerboards=bool(checkerboards),
             exposures=exposures,
             spot_radius_mm=max(0.5, 2 * beam_mm),
+            boundary_eta=eta,
             progress=step,
         )
     summary = {
