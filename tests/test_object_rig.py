@@ -83,29 +83,3 @@ def test_torus_of_layered_skin_photographed_and_imported(tmp_path):
         render=False,
     )
     _recovered(_show(out))
-
-
-def test_the_command_photographs_behind_a_dielectric_and_refuses_an_index_below_one(tmp_path):
-    """``acquire object-photographs --eta 1.4``: a rig file behind that boundary (the dielectric law, the
-    window stated as the spot), and light in the photographs — the laser enters through its window, where
-    behind a closed smooth dielectric volpath renders the object black; ``--eta 0.9``: one line, exit 2."""
-    from typer.testing import CliRunner
-
-    from translucency.cli.app import app
-    from translucency.rig.shared.hdr import read_hdr
-
-    ball = tmp_path / "ball.ply"
-    trimesh.creation.icosphere(2, radius=4.0).export(ball)
-    base = ["acquire", "object-photographs", "--mesh", str(ball), "--material", "homogeneous:skin1",
-            "--points", "1", "--cameras", "2", "--resolution", "24", "24", "--spp", "4",
-            "--exposures", "single", "--quiet"]  # fmt: skip
-    bad = CliRunner().invoke(app, [*base, "--out", str(tmp_path / "bad"), "--eta", "0.9"])
-    assert bad.exit_code == 2 and "--eta" in bad.output, bad.output
-    assert len(bad.output.strip().splitlines()) == 1, bad.output
-    res = CliRunner().invoke(app, [*base, "--out", str(tmp_path / "rig"), "--eta", "1.4"])
-    assert res.exit_code == 0, res.output
-    rig = json.loads((tmp_path / "rig" / "object.json").read_text())
-    assert rig["boundary"]["eta"] == 1.4 and rig["exit_law"] == "dielectric" and rig["spot_radius_mm"] >= 0.4
-    frames = [read_hdr(tmp_path / "rig" / f["file"]) for fs in rig["shots"][0]["images"].values() for f in fs]
-    dark = [read_hdr(tmp_path / "rig" / c["radiometry"]["dark"]) for c in rig["cameras"]]
-    assert max(float((f - d).max()) for f, d in zip(frames, dark)) > 1.0  # raw values above the dark frame
