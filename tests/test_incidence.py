@@ -158,3 +158,22 @@ def _albedo_of(R1: float) -> float:
         mid = 0.5 * (lo + hi)
         lo, hi = (mid, hi) if float(plane_albedo(1.0, mid)) < R1 else (lo, mid)
     return 0.5 * (lo + hi)
+
+
+def test_wavefront_kernel_is_the_numpy_law():
+    """The Dr.Jit lookup of a wavefront (each sample's vertex and cosine) against the NumPy law it mirrors,
+    over albedos from dark to near-conservative and cosines from grazing to normal (single precision)."""
+    from translucency.mitsuba import mitsuba
+
+    mi = mitsuba()
+    rng = np.random.default_rng(4)
+    R1 = rng.uniform(0.005, 0.95, size=(50, 3))
+    law = HalfSpaceIncidence(R1)
+    v = rng.integers(0, 50, size=4000)
+    mu = np.concatenate([rng.uniform(-0.2, 1.0, size=3996), [0.0, 1e-6, 1.0, -1.0]])
+    expected = law.factor(mu[:, None].repeat(1, axis=1).T.repeat(50, axis=0))  # (50, N, 3): every vertex
+    expected = expected[v, np.arange(len(v))]
+    got = np.asarray(law.kernel()(mi.UInt32(v.astype(np.uint32)), mi.Float(mu.astype(np.float32)))).T
+    assert np.allclose(got, expected, rtol=2e-5, atol=2e-6)
+    assert (got[mu <= 0] == 0).all() and np.allclose(got[mu == 1.0], 1.0, atol=1e-5)
+    assert NormalIncidence().kernel() is None

@@ -802,3 +802,43 @@ def test_export_gltf_carries_the_mesh_the_bake_and_the_burley_attributes(fitted_
     assert colour[z > 3].mean() > 2 * colour[z < -3].mean()
     assert extras["colour_scale"] > 0 and extras["units"]["positions"] == "m"
     assert "--gltf" in error_line(["export", model, "--gltf", folder / "ball.gltf"])
+
+
+def test_glow_alone_is_the_closed_form_and_the_rest_of_the_light():
+    """The part of the irradiance the glowing objects send (``sources="glow"``): a Lambertian ball of
+    exitance M (radius R) gives a probe ball's vertices E = M R² cos θ / d², and it is what a lit scene
+    gains when the ball glows — the linearity the later passes of :meth:`FittedScene.light` rest on."""
+    M, R = 2.0, 5.0
+    source = trimesh.creation.icosphere(4, radius=R)
+    probe = trimesh.creation.icosphere(2, radius=1.0)
+    probe.apply_translation([30.0, 0.0, 0.0])
+    scene = load_user_scene(
+        {
+            "type": "scene",
+            "source": _mesh(source),
+            "probe": _mesh(probe),
+            "light": {"type": "point", "position": [30.0, 5.0, 40.0], "intensity": 400.0},
+        }
+    )
+    shape = shapes_by_id(scene)["source"]
+    dark = GlowingSurfaces([Glowing(shape, source.vertices, source.faces)])
+    lit = GlowingSurfaces(
+        [Glowing(shape, source.vertices, source.faces, exitance=np.full((len(source.vertices), 3), M))]
+    )
+    x, n = probe.vertices, probe.vertex_normals
+    glow = scene_irradiance(scene, lit, x, n, samples=256, sources="glow")
+    to = -x / np.linalg.norm(x, axis=1)[:, None]
+    d2 = (x**2).sum(axis=1)
+    cos = np.einsum("vk,vk->v", to, n)
+    expected = M * R**2 * np.maximum(cos, 0) / d2
+    seen = cos > 0.3  # the whole ball above the vertex's horizon
+    assert abs(glow[seen, 0].sum() / expected[seen].sum() - 1) < 0.02
+    assert np.abs(glow[cos < -0.2]).max() == 0  # facing away: nothing
+    everything = scene_irradiance(scene, lit, x, n, samples=256, seed=1)
+    emitters = scene_irradiance(scene, dark, x, n, samples=256, seed=2)
+    both = emitters + glow
+    assert abs(everything.sum() / both.sum() - 1) < 0.01
+    lit_vertices = both[:, 0] > 0.2 * both.max()
+    assert np.median(np.abs(everything[lit_vertices, 0] / both[lit_vertices, 0] - 1)) < 0.05
+    with pytest.raises(ValueError, match="sources"):
+        scene_irradiance(scene, lit, x, n, samples=1, sources="sky")

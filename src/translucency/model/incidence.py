@@ -36,6 +36,7 @@ from functools import cached_property, lru_cache
 import numpy as np
 
 from .._validate import TranslucencyError
+from ..mitsuba import drjit, mitsuba
 
 #: Gauss–Legendre nodes of the H-function's integral on [0, 1]
 H_NODES = 32
@@ -205,6 +206,10 @@ class NormalIncidence:
         """The same law for a few of the vertices."""
         return self
 
+    def kernel(self):
+        """None: no factor in a wavefront either (:meth:`HalfSpaceIncidence.kernel`)."""
+        return None
+
 
 @dataclass(frozen=True)
 class HalfSpaceIncidence:
@@ -249,6 +254,12 @@ class HalfSpaceIncidence:
         fa = self._albedo if cos_i.ndim == 1 else self._albedo[:, None, :]
         return _factor_at(fa, cos_i[..., None])
 
+    def kernel(self):
+        """:meth:`factor` on Dr.Jit arrays, for a wavefront of samples: a function of each sample's vertex
+        (``mi.UInt32``) and cosine (``mi.Float``) returning F per channel (``mi.Color3f``), bilinear in
+        the same table (single precision)."""
+        return _FactorKernel(self._albedo)
+
     def at(self, vertices) -> HalfSpaceIncidence:
         """The same law for a few of the vertices (indices)."""
         return HalfSpaceIncidence(self.reflectance[np.asarray(vertices)], both_ways=self.both_ways)
@@ -261,6 +272,37 @@ class HalfSpaceIncidence:
             return None
         mu = np.clip(np.asarray(cos_o, np.float64), 1e-3, 1.0)
         return incidence_factor(mu[:, None], self.reflectance) / cosine_mean(self.reflectance)
+
+
+class _FactorKernel:
+    """F(μ; R_1) of :func:`_factor_at` in a Dr.Jit wavefront: the table and each vertex's albedo
+    coordinates (V, 3) held as Dr.Jit arrays, looked up by vertex index."""
+
+    def __init__(self, albedo: np.ndarray):
+        mi = mitsuba()
+        _, F = _table()
+        self.F = mi.Float(F.astype(np.float32).ravel())  # (A, M) row-major
+        self.fa = mi.Float(np.asarray(albedo, np.float32).ravel())  # (V, 3) row-major
+        self.M = F.shape[1]
+
+    def __call__(self, v, cos):
+        mi, dr = mitsuba(), drjit()
+        M = self.M
+        # the cosine's column: even in √μ, clamped below the last column
+        fm = dr.minimum(dr.sqrt(dr.clip(cos, 0.0, 1.0)) * (M - 1), M - 1.000001)
+        im = mi.UInt32(fm)
+        tm = fm - mi.Float(im)
+        out = []
+        for c in range(3):  # each channel's albedo row, then bilinear in (row, column)
+            fa = dr.gather(mi.Float, self.fa, v * 3 + c)
+            ia = mi.UInt32(fa)
+            ta = fa - mi.Float(ia)
+            i00 = ia * M + im
+            f00, f01 = dr.gather(mi.Float, self.F, i00), dr.gather(mi.Float, self.F, i00 + 1)
+            f10, f11 = dr.gather(mi.Float, self.F, i00 + M), dr.gather(mi.Float, self.F, i00 + M + 1)
+            f = (1 - ta) * ((1 - tm) * f00 + tm * f01) + ta * ((1 - tm) * f10 + tm * f11)
+            out.append(dr.select(cos > 0, f, 0.0))
+        return mi.Color3f(*out)
 
 
 #: the incidence laws by the name ``render --incidence`` takes: the default, its ablation, the data's own

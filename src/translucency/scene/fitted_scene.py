@@ -11,7 +11,9 @@ Two passes, each a wavefront over every vertex of every fitted object:
 
 The first pass sees the fitted objects dark; the second (``passes=2``, the default) sees them glowing
 from the first, so that an object lit by the light its neighbour or the floor under it sends back, and
-by itself across a concavity, is counted once more.  The picture is then path-traced through the scene's
+by itself across a concavity, is counted once more.  The irradiance is linear in the glow: the second
+pass keeps the first's :math:`E_0` and traces only the glow's part, at a quarter of the samples
+(:meth:`FittedScene.light`).  The picture is then path-traced through the scene's
 own sensor and film by :class:`~translucency.scene.integrator.integrator_class` (the fitted objects glow,
 reflect off their boundary, and light the other shapes).  A new light or camera costs the two passes
 and the picture; the transports are built once.
@@ -50,7 +52,10 @@ class FittedScene:
     roughness : float
         GGX α of a dielectric object's boundary (0: smooth).
     samples : int
-        Irradiance samples per vertex and pass.
+        Irradiance samples per vertex of the first pass (the light of the scene's emitters).
+    glow_samples : int, optional
+        Samples per vertex of each later pass (the objects' glow alone; :meth:`light`); default a
+        quarter of ``samples``.
     passes : int
         Light-in / through-the-body passes (module docstring).
     max_depth : int
@@ -79,6 +84,7 @@ class FittedScene:
         incidence: str = "half-space",
         roughness: float = 0.0,
         samples: int = 32,
+        glow_samples: int | None = None,
         passes: int = 2,
         max_depth: int = 8,
         strategy: str = "mis",
@@ -91,6 +97,7 @@ class FittedScene:
         for option, value, lo in (
             ("samples", samples, 1),
             ("passes", passes, 1),
+            ("glow_samples", max(1, samples // 4) if glow_samples is None else glow_samples, 1),
             ("max_depth", max_depth, 1),
         ):
             if not isinstance(value, int) or value < lo:
@@ -102,6 +109,7 @@ class FittedScene:
         self.source = scene
         self.scene = scene if isinstance(scene, mi.Scene) else load_user_scene(scene)
         self.samples, self.passes, self.max_depth = samples, passes, max_depth
+        self.glow_samples = max(1, samples // 4) if glow_samples is None else glow_samples
         self.angles = bool(angles)
         self.through = through
         shapes = shapes_by_id(self.scene)
@@ -245,35 +253,49 @@ class FittedScene:
 
     def light(self, *, seed: int = 0) -> list[np.ndarray]:
         """Run the passes (module docstring); every object glows with its new exitance.  Returns the last
-        pass's effective irradiance per object, (V, 3) each."""
+        pass's effective irradiance per object, (V, 3) each.
+
+        The first pass sees the objects dark: :math:`E_0`, the light of the scene's emitters.  A later
+        pass adds to it only what the objects' glow brings, :math:`E_p = E_0 + G(M_{p-1})` (``sources=
+        "glow"``, ``glow_samples`` a vertex): the irradiance is linear in the glow, and :math:`E_0` is
+        the same every pass."""
         if self.glow is None:
             self.prepare()
         for o in self.objects:
             o.set_exitance(np.zeros((len(o.mesh.vertices), 3)))
         self.glow.update()
+        E0 = [self._irradiance(k, o, "all", self.samples, seed) for k, o in enumerate(self.objects)]
+        E = E0
         for p in range(self.passes):
-            E, leans = [], []
-            for k, o in enumerate(self.objects):
-                lean = self.angles and o.transport.lean is not None  # the light's mean lean vector too
-                e = scene_irradiance(
-                    self.scene,
-                    self.glow,
-                    o.vertices,
-                    o.normals,
-                    samples=self.samples,
-                    seed=seed + 7919 * p + 104729 * k,
-                    incidence=o.law,
-                    eta=o.eta,
-                    max_depth=self.max_depth,
-                    moment=(lambda w, n, eta=o.eta: lean_vector(w, n, eta)) if lean else None,
-                )
-                E.append(e[0] if lean else e)
-                leans.append(e[1] if lean else None)
-            for o, e, ell in zip(self.objects, E, leans):
+            if p > 0:
+                E = [
+                    _added(e0, self._irradiance(k, o, "glow", self.glow_samples, seed + 7919 * p))
+                    for k, (o, e0) in enumerate(zip(self.objects, E0))
+                ]
+            for o, (e, ell) in zip(self.objects, E):
                 o.set_exitance(o.exitance(e, ell))
             self.glow.update()
-        self.irradiance = E
-        return E
+        self.irradiance = [e for e, _ in E]
+        return self.irradiance
+
+    def _irradiance(self, k: int, o, sources: str, samples: int, seed: int):
+        """Object k's irradiance (V, 3) from ``sources`` and, where it leans, the light's mean lean vector
+        (V, 3) (None otherwise)."""
+        lean = self.angles and o.transport.lean is not None
+        e = scene_irradiance(
+            self.scene,
+            self.glow,
+            o.vertices,
+            o.normals,
+            samples=samples,
+            seed=seed + 104729 * k,
+            incidence=o.law,
+            eta=o.eta,
+            max_depth=self.max_depth,
+            moment=(lambda w, n, eta=o.eta: lean_vector(w, n, eta)) if lean else None,
+            sources=sources,
+        )
+        return e if lean else (e, None)
 
     def render(self, *, spp: int = 16, seed: int = 0, sensor: int = 0, glowing: bool = True) -> np.ndarray:
         """The picture (H, W, 3), linear RGB, through the scene's ``sensor`` (index), ``spp`` samples a
@@ -299,3 +321,16 @@ class FittedScene:
             ),
             dtype=np.float64,
         )[..., :3]
+
+
+def _added(first, glow):
+    """The irradiance and mean lean of two parts of the light together: the lean is each part's mean
+    weighted by its grey irradiance (the weight :func:`~translucency.scene.irradiance.scene_irradiance`
+    averages with)."""
+    (e0, ell0), (eg, ellg) = first, glow
+    if ell0 is None:
+        return e0 + eg, None
+    w0, wg = e0.mean(axis=1, keepdims=True), eg.mean(axis=1, keepdims=True)
+    total = w0 + wg
+    ell = np.divide(w0 * ell0 + wg * ellg, total, out=np.zeros_like(ell0), where=total > 0)
+    return e0 + eg, ell

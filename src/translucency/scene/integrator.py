@@ -61,6 +61,7 @@ def trace(
     max_depth: int = 8,
     rr_depth: int = 5,
     strategy: str = "mis",
+    sources: str = "all",
 ):
     r"""Radiance arriving along ``ray`` (a wavefront), by the estimator of the module docstring.
 
@@ -68,6 +69,8 @@ def trace(
     ``prev_delta`` describe the vertex the ray left (its interaction, the solid-angle density the ray's
     direction was drawn with, whether that was a delta choice), for the weights of what the ray hits.
     ``glow``: the fitted objects (:class:`~translucency.scene.surfaces.GlowingSurfaces`).
+    ``sources="glow"``: the glowing surfaces' light alone (the Mitsuba emitters' :math:`L_e` terms
+    dropped; each remaining term keeps its weight, so the two add up to ``"all"``).
     Returns the radiance (Color3f), ``beta`` included.
     """
     mi, dr = mitsuba(), drjit()
@@ -86,6 +89,7 @@ def trace(
 
     hits = strategy != "light"  # BSDF-sampled hits of lights count (with MIS unless "bsdf")
     nee = strategy != "bsdf"
+    emitters = sources == "all"  # the Mitsuba emitters count (not for the glow alone)
     weigh = strategy == "mis"
     L = dr.zeros(mi.Color3f, n)
     depth = dr.zeros(mi.UInt32, n)
@@ -98,12 +102,14 @@ def trace(
         count = active & (prev_delta | hits)
         w_e = w_g = mi.Float(1.0)
         if weigh:
+            w_g = dr.select(prev_delta, 1.0, _mis(prev_pdf, glow.pdf(si, prev_si.p, count & ~prev_delta)))
+        if weigh and emitters:
             p_e = scene.pdf_emitter_direction(prev_si, ds, count & ~prev_delta)
             w_e = dr.select(prev_delta, 1.0, _mis(prev_pdf, p_e))
-            w_g = dr.select(prev_delta, 1.0, _mis(prev_pdf, glow.pdf(si, prev_si.p, count & ~prev_delta)))
-        Le = ds.emitter.eval(si, count)
-        Lg = glow.radiance(si, ray.d, count)
-        L = L + dr.select(count, beta * (w_e * Le + w_g * Lg), 0.0)
+        arriving = w_g * glow.radiance(si, ray.d, count)
+        if emitters:
+            arriving += w_e * ds.emitter.eval(si, count)
+        L = L + dr.select(count, beta * arriving, 0.0)
         # --- the surface: a fitted object keeps only its boundary's reflection
         fitted_k, on_fitted = glow.hit(si, active)
         bsdf = si.bsdf(ray)
@@ -117,7 +123,7 @@ def trace(
         # --- next-event estimation: one Mitsuba emitter, one point of the glowing surfaces
         smooth = go_on & mi.has_flag(bsdf.flags(), mi.BSDFFlags.Smooth)
         s2 = sampler.next_2d(active)
-        if nee:
+        if nee and emitters:
             ds, em_weight = scene.sample_emitter_direction(si, s2, True, smooth)
             wo = si.to_local(ds.d)
             ok = smooth & (ds.pdf != 0) & (~on_fitted | (mi.Frame3f.cos_theta(wo) > 0))

@@ -16,9 +16,11 @@ surfaces, and a cosine-distributed direction whose ray is traced through the sce
 .. math:: \hat E_v = \frac{1}{K} \sum_{k} \sum_{s} w_s\, \frac{L_i(\omega_{ks}) \cos\theta_{ks}\,
           F_v T}{p_s(\omega_{ks})}.
 
-The Dr.Jit kernel returns each sample's :math:`w_s L_i \cos / p_s` and cosine; the per-vertex, per-channel
-factor :math:`F_v T` is applied in NumPy (the incidence law is tabulated there).  With ``moment`` (a function
-f of the direction toward the light and the normal) the same samples also give the irradiance-weighted mean
+The whole estimate runs in one Dr.Jit wavefront, the per-vertex, per-channel factor :math:`F_v T`
+included (the incidence law's table looked up by
+:meth:`~translucency.model.incidence.HalfSpaceIncidence.kernel`); NumPy only averages each vertex's K
+samples.  With ``moment`` (a function f of the direction toward the light and the normal) the same
+samples also give the irradiance-weighted mean
 :math:`\int E(\omega) f(\omega)\, d\omega / E` (grey: the channels' mean) — the lean's mean vector of the
 light arriving from the whole scene (:func:`translucency.render.lean.light_lean`).
 """
@@ -28,7 +30,6 @@ from __future__ import annotations
 import numpy as np
 
 from ..mitsuba import drjit, load_plugin, mitsuba
-from ..model.boundary import fresnel_transmittance
 from .integrator import _mis, trace
 
 #: the most paths one wavefront holds: larger ones are traced in batches of samples (a wavefront of a few
@@ -49,6 +50,7 @@ def scene_irradiance(
     max_depth: int = 8,
     offset: float | None = None,
     moment=None,
+    sources: str = "all",
 ):
     """Effective irradiance (V, 3) at ``points`` (V, 3) with outward ``normals`` (V, 3), scene units;
     with ``moment`` (``f(w (M, 3), n (M, 3)) -> (M, k)``) also the irradiance-weighted mean of f over the
@@ -57,8 +59,13 @@ def scene_irradiance(
     ``incidence``: the object's incidence law (``factor(cos (V, K)) -> (V, K, 3)`` or None);
     ``eta``: its boundary (≠ 1: the Fresnel ratio); ``glow``: the fitted objects as they glow now
     (:class:`~translucency.scene.surfaces.GlowingSurfaces`); ``offset``: how far above the surface the
-    rays start (default 5·10⁻⁴ of the points' extent).
+    rays start (default 5·10⁻⁴ of the points' extent); ``sources``: ``"all"`` the light of the whole
+    scene, ``"glow"`` only what the glowing objects send (directly or by way of other shapes) — the
+    part of the irradiance that is linear in their exitance, for the passes after the first
+    (:meth:`~translucency.scene.fitted_scene.FittedScene.light`).
     """
+    if sources not in ("all", "glow"):
+        raise ValueError(f"sources: {sources!r} is not 'all' or 'glow'")
     points = np.asarray(points, dtype=np.float64)
     normals = np.asarray(normals, dtype=np.float64)
     V, K = len(points), int(samples)
@@ -71,7 +78,18 @@ def scene_irradiance(
     while done < K:
         k = min(per_batch, K - done)
         e, parts = _irradiance_batch(
-            scene, glow, points, normals, k, (seed * 7919 + done) % 2**32, incidence, eta, max_depth, offset
+            scene,
+            glow,
+            points,
+            normals,
+            k,
+            (seed * 7919 + done) % 2**32,
+            incidence,
+            eta,
+            max_depth,
+            offset,
+            sources,
+            moment is not None,
         )
         E += k * e
         if moment is not None:  # Σ over the samples of every strategy of grey(e_s) f(ω_s)
@@ -88,8 +106,11 @@ def scene_irradiance(
     return E / K, np.divide(num, den, out=np.zeros(np.shape(num)), where=den > 0)
 
 
-def _irradiance_batch(scene, glow, points, normals, K, seed, incidence, eta, max_depth, offset):
-    """:func:`scene_irradiance` with K samples per vertex in one wavefront."""
+def _irradiance_batch(
+    scene, glow, points, normals, K, seed, incidence, eta, max_depth, offset, sources, moment
+):
+    """:func:`scene_irradiance` with K samples per vertex in one wavefront: (V, 3), and with ``moment``
+    each strategy's directions toward the light and weighted samples, (V, K, 3) each."""
     mi, dr = mitsuba(), drjit()
     V = len(points)
     N = V * K
@@ -103,22 +124,35 @@ def _irradiance_batch(scene, glow, points, normals, K, seed, incidence, eta, max
     si.wi = mi.Vector3f(0.0, 0.0, 1.0)
     it = mi.Interaction3f(si)
     active = dr.full(mi.Bool, True, N)
-    # 1. one Mitsuba emitter
-    ds, em_weight = scene.sample_emitter_direction(it, sampler.next_2d(), True, active)
-    cos_e = dr.dot(ds.d, n)
-    ok = (cos_e > 0) & (ds.pdf != 0)
-    w = dr.select(ds.delta, 1.0, _mis(ds.pdf, dr.maximum(cos_e, 0.0) * dr.inv_pi))
-    e_emitter = dr.select(ok, em_weight * w * cos_e, 0.0)
+    F_t1 = 1.0 - float(mi.fresnel(mi.Float(1.0), mi.Float(float(eta)))[0][0]) if eta != 1.0 else 1.0
+
+    def weight(cos):
+        """The per-sample factor F_v(cos) T(cos) (module docstring), 0 below the horizon."""
+        w = mi.Color3f(dr.select(cos > 0, 1.0, 0.0))
+        if eta != 1.0:  # T = F_t(cos)/F_t(1), Mitsuba's unpolarised Fresnel term from outside
+            w *= (1.0 - mi.fresnel(dr.clip(cos, 0.0, 1.0), mi.Float(float(eta)))[0]) / F_t1
+        return w if factor is None else w * factor(v, cos)
+
+    factor = None if incidence is None else incidence.kernel()
+    strategies = []  # (weighted sample, direction toward the light) of each strategy
+    # 1. one Mitsuba emitter (none for the glow alone)
+    if sources == "all":
+        ds, em_weight = scene.sample_emitter_direction(it, sampler.next_2d(), True, active)
+        cos_e = dr.dot(ds.d, n)
+        ok = (cos_e > 0) & (ds.pdf != 0)
+        w = dr.select(ds.delta, 1.0, _mis(ds.pdf, dr.maximum(cos_e, 0.0) * dr.inv_pi))
+        strategies.append((dr.select(ok, em_weight * w * cos_e, 0.0) * weight(cos_e), ds.d))
+    else:
+        sampler.next_2d()  # (the same random numbers for the strategies that follow)
     # 2. one point of the glowing surfaces (none glow before the first transport pass)
     s1, s2 = sampler.next_1d(), sampler.next_2d()
-    e_glow, cos_g = dr.zeros(mi.Color3f, N), dr.zeros(mi.Float, N)
     if glow.emitting:
         d, dist, g_weight, g_pdf, valid = glow.sample(p, s1, s2, active)
         cos_g = dr.dot(d, n)
         ok = valid & (cos_g > 0)
         ok &= ~scene.ray_test(it.spawn_ray_to(p + d * dist), ok)
         w = _mis(g_pdf, dr.maximum(cos_g, 0.0) * dr.inv_pi)
-        e_glow = dr.select(ok, g_weight * w * cos_g, 0.0)
+        strategies.append((dr.select(ok, g_weight * w * cos_g, 0.0) * weight(cos_g), d))
     # 3. a cosine-distributed direction, its ray traced through the scene (hits weighted against 1 and 2)
     local = mi.warp.square_to_cosine_hemisphere(sampler.next_2d())
     cos_b = local.z
@@ -134,19 +168,18 @@ def _irradiance_batch(scene, glow, points, normals, K, seed, incidence, eta, max
         dr.full(mi.Bool, False, N),
         active & (cos_b > 0),
         max_depth=max_depth,
+        sources=sources,
     )
-    e_bsdf = L * dr.pi
-    d_bsdf = ray.d
-    d_glow = d if glow.emitting else dr.zeros(mi.Vector3f, N)
-    dr.eval(e_emitter, cos_e, e_glow, cos_g, e_bsdf, cos_b, ds.d, d_glow, d_bsdf)
-    E = np.zeros((V, 3))
-    parts = []  # each strategy's directions toward the light (V, K, 3) and weights (V, K, 3)
-    for e, c, d_s in ((e_emitter, cos_e, ds.d), (e_glow, cos_g, d_glow), (e_bsdf, cos_b, d_bsdf)):
-        e = np.asarray(e, dtype=np.float64).T.reshape(V, K, 3)  # Dr.Jit's (3, N) to (V, K, 3)
-        c = np.clip(np.asarray(c, dtype=np.float64).reshape(V, K), 0.0, 1.0)
-        factor = fresnel_transmittance(c, eta) / fresnel_transmittance(1.0, eta)
-        F = None if incidence is None else incidence.factor(c)
-        weight = factor[..., None] if F is None else factor[..., None] * F
-        E += (e * weight).mean(axis=1)
-        parts.append((np.asarray(d_s, dtype=np.float64).T.reshape(V, K, 3), e * weight))
+    strategies.append((L * dr.pi * weight(cos_b), ray.d))
+    total = strategies[0][0]
+    for e, _ in strategies[1:]:
+        total = total + e
+    dr.eval(total, *(x for pair in strategies for x in pair) if moment else ())
+    E = np.asarray(total, dtype=np.float64).T.reshape(V, K, 3).mean(axis=1)  # Dr.Jit's (3, N) per vertex
+    if not moment:
+        return E, None
+    parts = [
+        (np.asarray(d, np.float64).T.reshape(V, K, 3), np.asarray(e, np.float64).T.reshape(V, K, 3))
+        for e, d in strategies
+    ]
     return E, parts
