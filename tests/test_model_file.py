@@ -308,3 +308,90 @@ def test_not_a_model(tmp_path):
         load_model(p)
     with pytest.raises(ModelFileError, match="no such file"):
         load_model(tmp_path / "absent.model.zip")
+
+
+@pytest.fixture(scope="module")
+def fitted_ball(tmp_path_factory):
+    """A per-vertex fit on a ball (642 vertices), its mesh in the model."""
+    import trimesh
+
+    import translucency as tl
+
+    ball = trimesh.creation.icosphere(3, radius=6.0)
+    ds = tl.acquire_mesh(
+        ball,
+        tmp_path_factory.mktemp("ball") / "ball.zarr",
+        "homogeneous:marble",
+        voxel_mm=1.0,
+        points=8,
+        photons=400,
+        index_matched=True,
+    )
+    return tl.fit_model(ds, max_rounds=1).model
+
+
+def test_compressed_mesh_renders_as_the_full_one(tmp_path, fitted_ball):
+    """The mesh is stored by Draco (io/mesh_codec.py): the file is smaller than the raw arrays, every vertex
+    moves by less than half a grid step, the triangles are the same, and the loaded model's picture is
+    within 0.005 of the uncompressed model's (relative RMSE over the object's pixels)."""
+    import translucency as tl
+    from translucency.io.mesh_codec import STEP_OF_EDGE
+
+    model = fitted_ball
+    path = save_model(model, tmp_path / "ball.model.zip")
+    header = mf.read_header(path)
+    assert header["mesh_codec"] == {"name": "draco", "array": "mesh/draco"}
+    with zipfile.ZipFile(path) as z:
+        names = z.namelist()
+        stored = sum(i.compress_size for i in z.infolist() if "mesh/draco" in i.filename)
+    assert not any(n.startswith("alpha/vertices") or n.startswith("mesh/faces/") for n in names)
+    raw = len(model.alpha.vertices) * 12 + len(model.faces) * 12
+    assert stored < raw / 3, (stored, raw)
+    loaded = load_model(path)
+    v, v0 = loaded.alpha.vertices, model.alpha.vertices
+    edge = np.median(np.linalg.norm(v0[model.faces[:, 1]] - v0[model.faces[:, 0]], axis=1))
+    assert np.abs(v - v0).max() <= 0.5 * STEP_OF_EDGE * edge * 1.01
+    as_set = lambda f: np.unique(np.sort(f, axis=1), axis=0)  # noqa: E731 — the triangles, unordered
+    assert loaded.faces.shape == model.faces.shape
+    np.testing.assert_array_equal(as_set(loaded.faces), as_set(model.faces))
+    area = lambda m: np.cross(  # noqa: E731 — oriented area vectors: the winding kept
+        m.alpha.vertices[m.faces[:, 1]] - m.alpha.vertices[m.faces[:, 0]],
+        m.alpha.vertices[m.faces[:, 2]] - m.alpha.vertices[m.faces[:, 0]],
+    ).sum(axis=0)
+    assert np.allclose(area(loaded), area(model), atol=1e-3 * np.abs(area(model)).max() + 1e-6)
+    np.testing.assert_array_equal(loaded.alpha.values, model.alpha.values.astype(np.float32))
+    full = tl.render_model(model, size=(64, 48)).picture
+    decoded = tl.render_model(loaded, size=(64, 48)).picture
+    lit = full.mean(axis=2) > 0
+    assert lit.sum() > 500
+    assert tl.render.rel_rmse(decoded, full, lit) < 0.005
+
+
+def test_mesh_draco_would_change_is_kept_as_it_is(tmp_path, fitted_ball):
+    """A triangle with a repeated corner (Draco would skip it): the mesh is stored uncompressed, exactly."""
+    model = fitted_ball
+    model_faces = model.faces
+    try:
+        model.faces = np.vstack([model_faces, [[1, 1, 2]]])
+        path = save_model(model, tmp_path / "loose.model.zip")
+        assert "mesh_codec" not in mf.read_header(path)
+        loaded = load_model(path)
+        np.testing.assert_array_equal(loaded.faces, model.faces)
+        np.testing.assert_array_equal(loaded.alpha.vertices, model.alpha.vertices.astype(np.float32))
+    finally:
+        model.faces = model_faces
+
+
+def test_altered_draco_bytes_are_refused(tmp_path, fitted_ball):
+    path = save_model(fitted_ball, tmp_path / "ball.model.zip")
+    import zarr
+
+    store = zarr.storage.ZipStore(path, mode="a")
+    root = zarr.open_group(store, mode="a")
+    data = np.asarray(root["mesh/draco"][...])
+    data[len(data) // 2 :] ^= 0x5A
+    with pytest.warns(UserWarning):  # zip's duplicate entry
+        root["mesh/draco"][...] = data
+    store.close()
+    with pytest.raises(ModelFileError, match="mesh/draco|checksum"):
+        load_model(path)

@@ -11,6 +11,7 @@ Layout::
     alpha/values          (H, W) planar or (V,) mesh; dtype = header["dtype"]
     alpha/vertices        (V, 3) float32   mesh only: vertex positions, mm
     mesh/faces            (F, 3) int32     mesh only, optional: the triangles (the model renders on its own)
+    mesh/draco            (B,) uint8       in place of the two above: the mesh compressed (io/mesh_codec.py)
     measured/own          (N, 3) float32   mesh only, optional: R_d over each incident vertex's own area, mm⁻²
     measured/total        (N, 3) float32   mesh only, optional: measured diffuse exitance per unit power
     measured/through      (N, 4, 8, 3) f32 mesh only, optional: the through-body table (model/through.py)
@@ -34,6 +35,8 @@ of the tally it was fitted to), ``physics`` (the per-point bounds of
 :mod:`translucency.model.bounds`: the largest total reflectance, share of the
 energy beyond the object and energy radius, the bounds, the object's size and
 the indices of the points that break a bound), ``software`` and
+``mesh_codec`` (``{"name": "draco", "array": "mesh/draco"}`` where the mesh is compressed: its
+positions on a grid a hundredth of an edge fine) and
 ``checksum``: the SHA-256 of every array's decoded bytes in a fixed order, so
 that corruption that survives decompression is still caught.
 
@@ -66,11 +69,15 @@ from ..model.extent import extent_from_dict
 from ..model.lean import KAPPA_MAX, LAMBDA_MAX
 from ..model.through import COS_EDGES, R_EDGES
 from .atomic import atomic_path
+from .mesh_codec import decode_mesh, encode_mesh
 from .outputs import claim_output
 
 FORMAT = "translucency-model"
 VERSION = 1
 HEADER_KEY = "translucency_model"
+#: the array of a compressed mesh, and the two it stands for
+MESH_ARRAY = "mesh/draco"
+_MESH_KEYS = ("alpha/vertices", "mesh/faces")
 
 _STORABLE = tuple(MODEL_KINDS.values())
 #: the parameter arrays of each kind, in file order (as each model class declares them)
@@ -238,6 +245,11 @@ def save_model(
             stacklevel=2,
         )
     arrays = _model_arrays(model, dtype, params)
+    mesh = None  # the mesh as Draco bytes (io/mesh_codec.py), its arrays replaced by what they decode to
+    if "mesh/faces" in arrays:
+        mesh = encode_mesh(arrays["alpha/vertices"], arrays["mesh/faces"])
+        if mesh is not None:
+            arrays["alpha/vertices"], arrays["mesh/faces"] = mesh[1], mesh[2]
     # the stored (cast) values must still form a valid model
     for key, a in arrays.items():
         if not np.isfinite(a).all():
@@ -250,6 +262,10 @@ def save_model(
     if unstorable:
         header["unstorable"] = {str(i): v for i, v in unstorable.items()}
     header["physics"] = check_physics(stored).summary()  # what the stored values promise (model/bounds.py)
+    if mesh is not None:
+        header["mesh_codec"] = {"name": "draco", "array": MESH_ARRAY}
+        arrays = {k: v for k, v in arrays.items() if k not in _MESH_KEYS}
+        arrays[MESH_ARRAY] = np.frombuffer(mesh[0], dtype=np.uint8)
     _write_store(path, header, arrays)
     return path
 
@@ -521,6 +537,23 @@ def read_model(path) -> tuple[ReflectanceModel, dict]:
     return _read_model(path, root, header), header
 
 
+def _decoded_mesh(path: Path, root, codec: dict) -> dict[str, np.ndarray]:
+    """The vertices and triangles of a compressed mesh (the header's ``mesh_codec``), decoded."""
+    if codec.get("name") != "draco" or codec.get("array") != MESH_ARRAY:
+        raise ModelFileError(f"{path}: unknown mesh_codec {codec!r} (this version reads draco)")
+    try:
+        data = np.asarray(root[MESH_ARRAY][...], dtype=np.uint8).tobytes()
+    except KeyError:
+        raise ModelFileError(f"{path}: missing array {MESH_ARRAY!r}") from None
+    except Exception as exc:  # noqa: BLE001 — CRC or codec failures: corrupted data
+        raise ModelFileError(f"{path}: array {MESH_ARRAY!r} is corrupted ({_first_line(exc)})") from None
+    try:
+        vertices, faces = decode_mesh(data)
+    except Exception as exc:  # noqa: BLE001 — Draco's own failures on altered bytes
+        raise ModelFileError(f"{path}: array {MESH_ARRAY!r} does not decode ({_first_line(exc)})") from None
+    return {"alpha/vertices": vertices, "mesh/faces": faces}
+
+
 def _read_model(path: Path, root, header: dict) -> ReflectanceModel:
     """The model of the opened file at ``path`` (:func:`_open`: its Zarr group and checked header)."""
     want_dtype = np.dtype(header["dtype"])
@@ -529,6 +562,10 @@ def _read_model(path: Path, root, header: dict) -> ReflectanceModel:
     optional = [f"params/{p}" for p in MODEL_KINDS[header["kind"]].STORED if f"params/{p}" not in required]
     if header["geometry"] == "mesh":
         optional += ["mesh/faces", "measured/own", "measured/total", "measured/through", "measured/lean"]
+    if header.get("mesh_codec"):  # the vertices and triangles as one Draco array (io/mesh_codec.py)
+        arrays.update(_decoded_mesh(path, root, header["mesh_codec"]))
+        required = [k for k in required if k not in _MESH_KEYS]
+        optional = [k for k in optional if k not in _MESH_KEYS]
     for key in required + optional:
         try:
             arr = root[key]
