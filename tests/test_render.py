@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import trimesh
+from scipy.spatial import cKDTree
 
 from helpers import random_exponential_model
 from translucency import TranslucencyError
@@ -23,6 +24,7 @@ from translucency.render import (
     vertex_irradiance,
 )
 from translucency.render.picture import coverage
+from translucency.render.transport import default_radius
 
 
 @pytest.fixture(scope="module")
@@ -436,3 +438,27 @@ def test_thickness_and_region_errors():
     )
     for r in regions.values():
         assert r["rel_rmse"] == pytest.approx(0.1, rel=1e-9)
+
+
+def test_default_radius_shrinks_where_vertices_crowd_and_a_given_one_is_refused():
+    """A mesh whose vertices crowd in one part (a cap subdivided twice): the default radius, which
+    assumes them evenly spread, would hold more pairs than allowed; the transport shrinks it until they
+    fit.  A radius the user gave is refused
+    with one line that says so."""
+    rng = np.random.default_rng(3)
+    ball = trimesh.creation.icosphere(3, radius=5.0)
+    for _ in range(2):
+        top = np.where(ball.vertices[ball.faces].mean(axis=1)[:, 2] > 3.5)[0]
+        ball = trimesh.Trimesh(*trimesh.remesh.subdivide(ball.vertices, ball.faces, face_index=top))
+    V = len(ball.vertices)
+    model = random_exponential_model(
+        rng, geometry="mesh", mesh=ball, points=np.arange(0, V, 7), terms=TWO_TERMS
+    )
+    limit = 40 * V
+    wanted = default_radius(model, ball, max_pairs=limit)
+    pairs = 2 * len(cKDTree(ball.vertices).query_pairs(wanted)) + V
+    assert pairs > limit  # the even-spread assumption underestimates here
+    T = transport_matrices(model, ball, max_pairs=limit)
+    assert T.matrices[0].nnz <= limit
+    with pytest.raises(TranslucencyError, match=r"radius: .* vertex pairs .*lower --radius"):
+        transport_matrices(model, ball, radius=wanted, max_pairs=limit)

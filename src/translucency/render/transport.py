@@ -64,6 +64,30 @@ def default_radius(model, mesh, *, max_pairs: float = MAX_PAIRS) -> float:
     return float(min(np.max(model.energy_radius(0.99)), fit_pairs))
 
 
+def _near_pairs(model, mesh, v: np.ndarray, radius: float | None, max_pairs: float):
+    r"""The near radius (mm) and the vertex pairs within it (P, 2), at most ``max_pairs`` both ways with
+    the diagonal.  A radius of the user's that gives more is refused; the default
+    (:func:`default_radius`, which assumes the vertices evenly spread) shrinks until the pairs fit:
+    they grow as r², so each try scales r by :math:`0.95 \sqrt{p_{max} / p}` (the far field takes what
+    the near field no longer holds)."""
+    V = len(v)
+    tree = cKDTree(v)
+    rad = default_radius(model, mesh, max_pairs=max_pairs) if radius is None else float(radius)
+    for _ in range(8):
+        pairs = tree.query_pairs(rad, output_type="ndarray")
+        count = 2 * len(pairs) + V
+        if count <= max_pairs:
+            return rad, pairs
+        if radius is not None or V >= max_pairs:
+            break
+        rad *= 0.95 * np.sqrt(max(max_pairs - V, 1.0) / max(count - V, 1.0))
+    given = radius is not None
+    raise TranslucencyError(
+        f"radius: {rad:.3g} mm gives {count:,} vertex pairs (at most {max_pairs:,.0f}); "
+        + ("lower --radius" if given else f"{V:,} vertices are too many for the near field's pairs")
+    )
+
+
 def transport_matrices(
     model,
     mesh,
@@ -138,12 +162,7 @@ def transport_matrices(
     weights = neighbour_weights(model, mesh)
     c, d, s = vertex_parameters(model, mesh, weights=weights)
     own, total = measured_per_vertex(model, weights, v, area)
-    rad = default_radius(model, mesh, max_pairs=max_pairs) if radius is None else float(radius)
-    pairs = cKDTree(v).query_pairs(rad, output_type="ndarray")
-    if 2 * len(pairs) + V > max_pairs:
-        raise TranslucencyError(
-            f"radius: {rad:.2f} mm gives {2 * len(pairs) + V:,} vertex pairs; lower --radius"
-        )
+    rad, pairs = _near_pairs(model, mesh, v, radius, max_pairs)
     # both directions of every pair; each vertex with itself below
     i = np.concatenate([pairs[:, 0], pairs[:, 1]])
     o = np.concatenate([pairs[:, 1], pairs[:, 0]])
