@@ -107,7 +107,10 @@ _MODELS = typer.Option(
 )
 _SCENE_UNIT = typer.Option(1.0, "--scene-unit", help="With --scene: millimetres per scene unit.")
 _SAMPLES = typer.Option(
-    32, "--samples", help="With --scene: irradiance samples per vertex and pass (path-traced)."
+    32,
+    "--samples",
+    help="With --scene: irradiance samples per vertex of the first pass, path-traced (a later pass, the "
+    "objects' glow alone, takes a quarter of them).",
 )
 _PASSES = typer.Option(
     2,

@@ -25,7 +25,7 @@ picture (:mod:`translucency.scene.integrator`).
    * - ``samples``
      - integer
      - 32
-     - irradiance samples per vertex and pass
+     - irradiance samples per vertex of the first pass (a later one: a quarter)
    * - ``passes``
      - integer
      - 2
