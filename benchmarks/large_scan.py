@@ -80,6 +80,7 @@ def run_stage(name: str, args: list[str], kill_bytes: float) -> dict:
     estimate, time_estimate = summary.get("estimate") or {}, summary.get("time_estimate") or {}
     row["estimate_bytes"] = estimate.get("memory_bytes")
     row["estimate_seconds"] = time_estimate.get("seconds")
+    row["estimate_source"] = time_estimate.get("source")
     row["summary"] = summary
     print(_line(row), flush=True)
     return row
@@ -88,7 +89,8 @@ def run_stage(name: str, args: list[str], kill_bytes: float) -> dict:
 def _line(row: dict) -> str:
     est = []
     if row.get("estimate_seconds") is not None:
-        est.append(f"{row['estimate_seconds']:.0f} s")
+        calibrated = "" if str(row.get("estimate_source", "")).startswith("calibrated") else " (uncalibrated)"
+        est.append(f"{row['estimate_seconds']:.0f} s{calibrated}")
     if row.get("estimate_bytes") is not None:
         est.append(f"{row['estimate_bytes'] / 2**30:.1f} GiB")
     return (

@@ -98,6 +98,11 @@ class FittedObject:
         return self.pose.apply(self.mesh.vertices)
 
     @property
+    def mean_edge(self) -> float:
+        """The mesh's mean edge length, mm (model frame)."""
+        return float(self.mesh.edges_unique_length.mean())
+
+    @property
     def normals(self) -> np.ndarray:
         """(V, 3) outward vertex normals in the scene."""
         return self.pose.turn(self.mesh.vertex_normals)

@@ -120,7 +120,8 @@ class FittedScene:
         if not (irradiance_spacing == 0 or irradiance_spacing >= 1):
             raise TranslucencyError(f"irradiance_spacing: 0 or >= 1 mean edges, got {irradiance_spacing!r}")
         self.irradiance_spacing = float(irradiance_spacing)
-        self.reduced = [None] * len(models)
+        self.reduced = [None] * len(models)  # each object's ReducedVertices (light(); None: every vertex)
+        self._reduced_at = 0.0  # the spacing self.reduced was built for
         self.angles = bool(angles)
         self.through = through
         shapes = shapes_by_id(self.scene)
@@ -184,17 +185,6 @@ class FittedScene:
                 progress(k, len(self.objects), o.name)
             o.prepare(r, through=self.through)
         self.glow = GlowingSurfaces([o.glowing for o in self.objects])
-        self.reduced = [
-            ReducedVertices(
-                o.vertices,
-                o.normals,
-                float(o.mesh.edges_unique_length.mean()) * o.pose.scale,
-                self.irradiance_spacing,
-            )
-            if self.irradiance_spacing > 0
-            else None
-            for o in self.objects
-        ]
         props = mi.Properties()
         props["max_depth"], props["strategy"] = int(self.max_depth), str(self.strategy)
         self.integrator = integrator_class()(props)
@@ -283,6 +273,14 @@ class FittedScene:
         the same every pass."""
         if self.glow is None:
             self.prepare()
+        if self._reduced_at != self.irradiance_spacing:  # the reduced vertex sets, once per spacing
+            self.reduced = [
+                ReducedVertices(o.vertices, o.normals, o.mean_edge * o.pose.scale, self.irradiance_spacing)
+                if self.irradiance_spacing > 0
+                else None
+                for o in self.objects
+            ]
+            self._reduced_at = self.irradiance_spacing
         for o in self.objects:
             o.set_exitance(np.zeros((len(o.mesh.vertices), 3)))
         self.glow.update()
