@@ -9,7 +9,10 @@ their orientation; their order is Draco's).
 The quantisation step is 1 % of the median edge (``STEP_OF_EDGE``), on a grid of
 :math:`2^b` cells over the mesh's largest extent, :math:`b` between ``MIN_BITS`` and ``MAX_BITS``:
 the positions move by at most half a step, far below what a picture or the transport can tell
-(a model renders within 0.005 of its uncompressed self; ``tests/test_model_file.py``).  A mesh Draco
+(a model renders within 0.005 of its uncompressed self; ``tests/test_model_file.py``).  A mesh with
+triangles far smaller than its median edge (marching cubes puts vertices nanometres apart) would lose
+or turn the normals of their vertices on that grid: the bits grow, two at a time, until every vertex
+normal stays within ``NORMAL_TURN_DEG`` of its own (24 bits: float32's own precision).  A mesh Draco
 would change (vertices it would merge or drop, a degenerate triangle it would skip) is not
 compressed: :func:`encode_mesh` returns None and the model file keeps the arrays as they are.
 """
@@ -22,6 +25,8 @@ import numpy as np
 STEP_OF_EDGE = 0.01
 #: bounds on the quantisation bits per coordinate
 MIN_BITS, MAX_BITS = 11, 24
+#: the most a vertex normal may turn on the grid (else more bits: :func:`encode_mesh`), degrees
+NORMAL_TURN_DEG = 60.0
 #: Draco's compression level (0 fastest … 10 smallest; 10 costs ~0.1 µs a vertex more than 7)
 LEVEL = 10
 
@@ -57,20 +62,41 @@ def encode_mesh(vertices: np.ndarray, faces: np.ndarray):
     if len(v) == 0 or len(f) == 0 or len(v) >= 2**32:
         return None
     index = np.arange(len(v), dtype=np.uint32)[:, None]
-    try:
-        data = DracoPy.encode(
-            v,
-            f,
-            quantization_bits=quantization_bits(v, f),
-            compression_level=LEVEL,
-            generic_attributes={"index": index},
-        )
-        decoded_v, decoded_f = decode_mesh(data)
-    except Exception:  # noqa: BLE001 — any codec failure: the mesh is stored as it is
-        return None
-    if decoded_v.shape != v.shape or not _same_triangles(decoded_f, f):
-        return None
-    return data, decoded_v, decoded_f
+    normals = _area_normals(v, f)
+    for bits in range(quantization_bits(v, f), MAX_BITS + 1, 2):
+        try:
+            data = DracoPy.encode(
+                v, f, quantization_bits=bits, compression_level=LEVEL, generic_attributes={"index": index}
+            )
+            decoded_v, decoded_f = decode_mesh(data)
+        except Exception:  # noqa: BLE001 — any codec failure: the mesh is stored as it is
+            return None
+        if decoded_v.shape != v.shape or not _same_triangles(decoded_f, f):
+            return None
+        if _normals_kept(normals, _area_normals(decoded_v, f)):
+            return data, decoded_v, decoded_f
+    return None
+
+
+def _area_normals(v: np.ndarray, f: np.ndarray) -> np.ndarray:
+    """(V, 3) each vertex's sum of its triangles' area vectors (unnormalised)."""
+    v = np.asarray(v, np.float64)
+    c = np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]])
+    n = np.zeros((len(v), 3))
+    for corner in range(3):
+        for axis in range(3):
+            n[:, axis] += np.bincount(f[:, corner], c[:, axis], minlength=len(v))
+    return n
+
+
+def _normals_kept(before: np.ndarray, after: np.ndarray) -> bool:
+    """Whether every vertex normal that was defined stays defined and within ``NORMAL_TURN_DEG`` — a
+    mesh with triangles a few nanometres across (marching cubes, then subdivided) turns or loses the
+    normals of their vertices on a grid a hundredth of an edge fine, and takes more bits."""
+    lb, la = np.linalg.norm(before, axis=1), np.linalg.norm(after, axis=1)
+    defined = lb > 0
+    cos = np.einsum("vk,vk->v", before, after)[defined] / np.maximum(lb * la, 1e-300)[defined]
+    return bool((cos >= np.cos(np.radians(NORMAL_TURN_DEG))).all())
 
 
 def decode_mesh(data: bytes):

@@ -166,7 +166,8 @@ def _factor_at(fa: np.ndarray, mu: np.ndarray) -> np.ndarray:
     """F at albedo coordinates ``fa`` and cosines ``mu`` (broadcast): bilinear in (log(1 − a), √μ)."""
     _, F = _table()
     fa, mu = np.broadcast_arrays(fa, np.asarray(mu, np.float64))
-    fm = np.sqrt(np.clip(mu, 0.0, 1.0)) * (len(_MU) - 1)
+    # (a vertex without a normal — all its triangles degenerate — has no cosine: no light, F = 0)
+    fm = np.sqrt(np.clip(np.nan_to_num(mu, nan=0.0), 0.0, 1.0)) * (len(_MU) - 1)
     fm = np.minimum(fm, len(_MU) - 1.000001)
     ia, im = fa.astype(int), fm.astype(int)
     ta, tm = fa - ia, fm - im
