@@ -24,7 +24,7 @@ from .picture import VertexPicture, coverage
 from .reference import converged_reference
 from .relight import relight_object
 from .tonemap import Exposure, auto_exposure, parse_exposure, save_images, tonemap
-from .transport import transport_matrices
+from .transport import MAX_PAIRS, transport_matrices
 
 
 def figure2(
@@ -37,6 +37,7 @@ def figure2(
     camera: Camera | None = None,
     spp_reference: int = 32,
     radius: float | None = None,
+    max_pairs: float = MAX_PAIRS,
     eta: float = 1.0,
     spp: int = 16,
     reference_cache=True,
@@ -55,6 +56,8 @@ def figure2(
     relative error at the silhouettes). The reference is the mean of two independent renders of
     ``spp_reference`` samples each, with its noise measured and cached
     (:func:`translucency.render.reference.converged_reference`; ``reference_cache`` as there).
+    ``radius``: the transport's near radius, mm (default :func:`~translucency.render.transport.default_radius`
+    at ``max_pairs``, shrunk where the vertices crowd).
     ``progress(done, total, step)`` is called as each step begins (transport, light, picture, reference).
     ``incidence``: how light arriving at an angle counts against the normal-incidence data
     (:mod:`translucency.model.incidence`: ``half-space``, Chandrasekhar's plane albedo per vertex, or
@@ -85,7 +88,7 @@ def figure2(
     # the calls run down the stage once: transport, picture, reference, comparison, files
     step(0, "transport (once per object)")
     t = time.perf_counter()
-    mats = transport_matrices(model, mesh, radius=radius, through=through)
+    mats = transport_matrices(model, mesh, radius=radius, through=through, max_pairs=max_pairs)
     scene = mesh_scene(mesh)  # for shadow rays
     pairs = lean_pairs(mats, mesh, eta) if angles and lean_applies(mats, light) else None  # once per object
     t_prepare = time.perf_counter() - t

@@ -26,7 +26,7 @@ from ..io.vertex_model import check_vertex_model, load_vertex_model
 from ..mitsuba import load_plugin
 from ..model.boundary import exit_factor
 from ..model.incidence import INCIDENCE_LAWS
-from ..render import boundary_eta, default_radius, object_of_model, relight_vertices, transport_matrices
+from ..render import boundary_eta, object_of_model, relight_vertices, transport_matrices
 from ..render.lean import lean_pairs, tilted
 from .pose import Pose, pose_of
 from .surfaces import Glowing, exit_table
@@ -78,8 +78,7 @@ class FittedObject:
         """Build the transport (near radius ``radius`` mm, default the model's 99 % energy radius; the
         through-body table as :func:`~translucency.render.transport.transport_matrices` takes it), the
         incidence law and the glowing surface."""
-        rad = default_radius(self.model, self.mesh) if radius is None else float(radius)
-        self.transport = transport_matrices(self.model, self.mesh, radius=rad, through=through)
+        self.transport = transport_matrices(self.model, self.mesh, radius=radius, through=through)
         self.law = self.transport.incidence(self.incidence, self.eta)
         if self.transport.lean is not None:
             self.lean_pairs = lean_pairs(self.transport, self.mesh, self.eta)

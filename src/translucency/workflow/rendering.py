@@ -217,7 +217,8 @@ def render_model(
                 volume=volume,
                 camera=camera,
                 spp_reference=spp,
-                radius=rad,
+                radius=None if radius is None else rad,  # (the default: rad, shrunk if its pairs crowd)
+                max_pairs=min(MAX_PAIRS, 2 * budget),
                 eta=eta,
                 exposure=chosen_exposure,
                 incidence=incidence,
@@ -360,7 +361,7 @@ def render_scene(
         )
         for o, r in zip(fs.objects, radii)
     )
-    paths = fs.vertices * samples
+    paths = fs.vertices * samples  # the first pass's wavefront; a later pass traces glow_samples a vertex
     need = run.check(
         resources.memory.scene_rendering(
             pairs=pairs_total,
@@ -376,7 +377,7 @@ def render_scene(
     units = {
         "vertices": fs.vertices,
         "pairs": pairs_total,
-        "paths": paths * passes,
+        "paths": fs.vertices * (samples + (passes - 1) * fs.glow_samples),
         "samples": W * H * picture_spp,
         "reference_samples": 2 * 3 * W * H * spp if reference else 0,
     }
@@ -389,7 +390,7 @@ def render_scene(
     with run.work("render", total=5 if reference else 4) as work:
         step = lambda k, name: work.update(completed=k, item=name)  # noqa: E731 — one line per step
         step(0, "transport (once per object)")
-        fs.prepare(radii)  # the radii the estimates were made with
+        fs.prepare(radius)  # the radii the estimates were made with (a default one shrinks if it must)
         step(1, "light in, through the body")
         t1 = time.perf_counter()
         fs.light()
