@@ -40,3 +40,17 @@ def test_sampler_chi2():
     assert stats.chi2.sf(chi2, 29) > 1e-3
     rad = model.energy_radius(0.999)
     assert burley_energy_within(rad[0], 0.4, 0.5) == pytest.approx(0.999 * 0.4, rel=1e-9)
+
+
+def test_reduction_in_blocks_is_the_reduction_at_once(monkeypatch):
+    """A scan's millions of profiles go through the reduction in blocks (bounded memory): the same
+    numbers as all at once, whatever the block."""
+    from translucency.model import burley
+
+    rng = np.random.default_rng(5)
+    c, d = rng.uniform(0.1, 1.0, (1000, 3, 3)), -rng.uniform(0.5, 5.0, (1000, 3, 3))
+    whole = burley.burley_of_exponentials(c, d)
+    monkeypatch.setattr(burley, "BURLEY_BLOCK", 7)
+    for a, b in zip(whole, burley.burley_of_exponentials(c, d)):
+        assert a.shape == (1000, 3)
+        np.testing.assert_array_equal(a, b)

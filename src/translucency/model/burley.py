@@ -83,6 +83,11 @@ def burley_shape(A, mean_free_path, config: str = "searchlight") -> np.ndarray:
     return scale / np.asarray(mean_free_path, dtype=np.float64)
 
 
+#: profiles reduced at once by :func:`burley_of_exponentials` (its temporaries: 64 radii x n terms x 8
+#: bytes a profile, about 100 MB each for 3 terms)
+BURLEY_BLOCK = 1 << 16
+
+
 def burley_of_exponentials(c, d, radii: int = 64):
     r"""The Christensen–Burley profile that matches a sum of exponentials :math:`\sum_k c_k e^{d_k r}` in
     energy and mean radius, and how far it is from it.
@@ -111,6 +116,20 @@ def burley_of_exponentials(c, d, radii: int = 64):
     """
     c = np.asarray(c, dtype=np.float64)
     d = np.asarray(d, dtype=np.float64)
+    c, d = np.broadcast_arrays(c, d)
+    shape, n = c.shape[:-1], c.shape[-1]
+    c, d = c.reshape(-1, n), d.reshape(-1, n)
+    out = np.empty((3, len(c)))
+    # in blocks of BURLEY_BLOCK profiles: the energies within ``radii`` radii are (profiles, radii, n)
+    for start in range(0, len(c), BURLEY_BLOCK):
+        block = slice(start, start + BURLEY_BLOCK)
+        out[:, block] = _burley_block(c[block], d[block], radii)
+    A, s, error = (v.reshape(shape) for v in out)
+    return A, s, error
+
+
+def _burley_block(c: np.ndarray, d: np.ndarray, radii: int):
+    """:func:`burley_of_exponentials` of profiles (P, n): (A, s, error), (P,) each."""
     A = TWO_PI * np.sum(c / d**2, axis=-1)
     first = 2.0 * TWO_PI * np.sum(c / np.abs(d) ** 3, axis=-1)
     with np.errstate(divide="ignore", invalid="ignore"):
