@@ -11,8 +11,8 @@ The quantisation step is 1 % of the median edge (``STEP_OF_EDGE``), on a grid of
 the positions move by at most half a step, far below what a picture or the transport can tell
 (a model renders within 0.005 of its uncompressed self; ``tests/test_model_file.py``).  A mesh with
 triangles far smaller than its median edge (marching cubes puts vertices nanometres apart) would lose
-or turn the normals of their vertices on that grid: the bits grow, two at a time, until every vertex
-normal stays within ``NORMAL_TURN_DEG`` of its own (24 bits: float32's own precision).  A mesh Draco
+or turn the normals of their vertices on that grid: then the fewest bits (bisected up to ``MAX_BITS``,
+float32's own precision) that keep every vertex normal within ``NORMAL_TURN_DEG`` of its own.  A mesh Draco
 would change (vertices it would merge or drop, a degenerate triangle it would skip) is not
 compressed: :func:`encode_mesh` returns None and the model file keeps the arrays as they are.
 """
@@ -63,19 +63,38 @@ def encode_mesh(vertices: np.ndarray, faces: np.ndarray):
         return None
     index = np.arange(len(v), dtype=np.uint32)[:, None]
     normals = _area_normals(v, f)
-    for bits in range(quantization_bits(v, f), MAX_BITS + 1, 2):
-        try:
-            data = DracoPy.encode(
-                v, f, quantization_bits=bits, compression_level=LEVEL, generic_attributes={"index": index}
-            )
-            decoded_v, decoded_f = decode_mesh(data)
-        except Exception:  # noqa: BLE001 — any codec failure: the mesh is stored as it is
+    tried = {}
+
+    def attempt(bits):
+        """(bytes, vertices, faces) at ``bits``; None where Draco changes the mesh, False where the
+        normals do not hold."""
+        if bits not in tried:
+            try:
+                data = DracoPy.encode(
+                    v, f, quantization_bits=bits, compression_level=LEVEL, generic_attributes={"index": index}
+                )
+                dv, df = decode_mesh(data)
+            except Exception:  # noqa: BLE001 — any codec failure: the mesh is stored as it is
+                dv, df, data = None, None, None
+            if dv is None or dv.shape != v.shape or not _same_triangles(df, f):
+                tried[bits] = None
+            else:
+                tried[bits] = (data, dv, df) if _normals_kept(normals, _area_normals(dv, f)) else False
+        return tried[bits]
+
+    # the fewest bits that keep the normals: the edge's grid, else bisected up to MAX_BITS
+    lo = quantization_bits(v, f)
+    if attempt(lo) is not False:
+        return tried[lo]
+    if not attempt(MAX_BITS):
+        return None
+    hi = MAX_BITS
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        if attempt(mid) is None:
             return None
-        if decoded_v.shape != v.shape or not _same_triangles(decoded_f, f):
-            return None
-        if _normals_kept(normals, _area_normals(decoded_v, f)):
-            return data, decoded_v, decoded_f
-    return None
+        lo, hi = (mid, hi) if attempt(mid) is False else (lo, mid)
+    return tried[hi]
 
 
 def _area_normals(v: np.ndarray, f: np.ndarray) -> np.ndarray:
