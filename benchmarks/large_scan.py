@@ -151,24 +151,25 @@ def main() -> int:
         scene = scene_folder("pig", work / "scene", model, (160, 120))
         command = ["render", "--scene", str(scene), "--model", f"object={model}", "--out", str(work / "lit")]
         rows.append(run_stage("render --scene", command + ["--overwrite", "--json"], kill))
-    sizes = {"model file": model, "glTF": work / "scan.glb"}
-    page = sorted((work / "page").glob("*.html")) if (work / "page").is_dir() else []
-    if page:
-        sizes["page"] = page[0]
+    page = [p for p in (work / "page").glob("*") if p.name != ".translucency-output.json"]
+    sizes = {
+        "model file": model.stat().st_size if model.exists() else None,
+        "glTF": (work / "scan.glb").stat().st_size if (work / "scan.glb").exists() else None,
+        "page": sum(p.stat().st_size for p in page) if page else None,
+    }
     print(f"vertices: {_vertices(model):,}", flush=True)
-    for what, path in sizes.items():
-        if path.exists():
-            print(f"{what}: {path.stat().st_size / 1e6:.2f} MB ({path.name})", flush=True)
-    record = {"args": {k: str(v) for k, v in vars(args).items()}, "stages": rows}
-    record["sizes_bytes"] = {k: p.stat().st_size for k, p in sizes.items() if p.exists()}
+    for what, size in sizes.items():
+        if size is not None:
+            print(f"{what}: {size / 1e6:.2f} MB", flush=True)
+    record = {"args": {k: str(v) for k, v in vars(args).items()}, "stages": rows, "sizes_bytes": sizes}
     (work / "large_scan.json").write_text(json.dumps(record, indent=2, default=str))
     return 0
 
 
 def _vertices(model: Path) -> int:
-    from translucency.io.model_file import read_header
+    from translucency.io.model_file import load_model
 
-    return int(read_header(model).get("n_points", 0)) if model.exists() else 0
+    return len(load_model(model).alpha.values) if model.exists() else 0
 
 
 if __name__ == "__main__":

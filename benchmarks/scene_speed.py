@@ -65,11 +65,14 @@ def main() -> int:
     ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--case", action="append", choices=sorted(ACQUISITIONS), help="scenes against volpath")
     ap.add_argument("--spp-reference", type=int, default=64)
+    ap.add_argument("--samples", type=int, nargs="+", default=[16, 32], help="irradiance samples to time")
+    ap.add_argument("--no-noise", action="store_true", help="leave out the noise against a converged light")
+    ap.add_argument("--no-volpath", action="store_true", help="leave out the scenes against volpath")
     args = ap.parse_args()
     mi = mitsuba()
     model = _model("pig", args.work, args.meshes, args.pig_model)
     scene = scene_folder("pig", args.work / "pig-speed", model, (320, 240))
-    for samples in (16, 32):
+    for samples in args.samples:
         fs = FittedScene(scene, {"object": model}, samples=samples)
         t = time.perf_counter()
         fs.prepare()
@@ -102,9 +105,10 @@ def main() -> int:
             f"(target 0.5 s: {'met' if light <= 0.5 else 'not met'})",
             flush=True,
         )
-    noise_of_irradiance(scene, model)
-    for case in args.case or ["pig"]:
-        for samples in (16, 32):
+    if not args.no_noise:
+        noise_of_irradiance(scene, model)
+    for case in [] if args.no_volpath else args.case or ["pig"]:
+        for samples in args.samples:
             row = run_case(
                 case, args.work, args.meshes, (160, 120), args.spp_reference, samples, args.pig_model, 64
             )

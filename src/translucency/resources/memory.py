@@ -362,20 +362,25 @@ def rendering(
     r"""``render``: V vertices on A mm² of surface, transport radius r, a W × H picture.
 
     .. math::
-        M = M_{mi} + 300\,\min(p_{max}, V^2, V + V^2 \pi r^2 / A) + W H\,(64 + 10 \cdot 16)
+        M = M_{mi} + 300\,\min(p_{max}, V^2, V + V^2 \pi r^2 / A) + 4600\,V + W H\,(64 + 10 \cdot 16)
             \;[+\, 2 \cdot 10\,W H s_{ref}]
 
     the sparse transport's vertex pairs (indices, distances, profile values and the CSR matrices:
-    measured 240–330 bytes each; at most p_max pairs, ``translucency.render.MAX_PAIRS``, beyond which the
-    transport refuses), the
-    film and the picture's 16 samples a pixel and, with ``--reference``, the two path-traced references.
+    measured 240–330 bytes each; at most p_max pairs, ``translucency.render.MAX_PAIRS``), the per-vertex
+    arrays (``VERTEX_BYTES``: the blended parameters, the far field's clusters, the irradiance's rays,
+    the mesh in Mitsuba), the film and the picture's 16 samples a pixel and, with ``--reference``, the
+    two path-traced references.
     Output: :math:`D = 60\,W H` per picture (EXR + PNG; three with the reference) + 1 MiB.
     """
     pairs = transport_pairs(
         vertices=vertices, surface_mm2=surface_mm2, radius_mm=radius_mm, max_pairs=max_pairs
     )
     pixels = width * height
-    parts = {"the transport: --radius": PAIR_BYTES * pairs, "the picture: --size": pixels * (64 + 10 * 16)}
+    parts = {
+        "the transport: --radius": PAIR_BYTES * pairs,
+        "the vertices": VERTEX_BYTES * vertices,
+        "the picture: --size": pixels * (64 + 10 * 16),
+    }
     if reference:
         parts["the reference: --size x --spp"] = 2 * 10 * pixels * spp_reference
     disk = pixels * 60 * (3 if reference else 1) + MiB
@@ -404,6 +409,9 @@ def scene_rendering(
     return Need(BASE_MITSUBA + sum(parts.values()), disk, max(parts, key=parts.get))
 
 
+#: bytes a vertex of ``render`` holds beside its pairs: the 338 k-vertex scan peaked 1.5 GiB above the
+#: pairs' and the picture's estimate (``benchmarks/large_scan.py``)
+VERTEX_BYTES = 4600
 #: bytes a vertex pair of the render transport holds at its peak (indices, distances, profile values, the
 #: CSR matrices; measured 330 for the 14.0 M pairs of a 34,839-vertex bunny: 4.56 GiB peak)
 PAIR_BYTES = 300

@@ -37,6 +37,7 @@ from ..resources.run import Reporter, Run
 from ..rig.shared.hdr import read_hdr
 from ..scene import FittedScene
 from ..scene.compare import lit_pixels, object_pixels, scene_errors
+from ..scene.irradiance import WAVEFRONT
 from ..scene.reference import converged_scene_reference
 from ._arguments import model_and_record, whole_number
 
@@ -361,7 +362,10 @@ def render_scene(
         )
         for o, r in zip(fs.objects, radii)
     )
-    paths = fs.vertices * samples  # the first pass's wavefront; a later pass traces glow_samples a vertex
+    # the irradiance's wavefront: whole vertices' samples, at most WAVEFRONT paths unless one a vertex
+    paths = max(
+        len(o.mesh.vertices) * max(1, min(samples, WAVEFRONT // len(o.mesh.vertices))) for o in fs.objects
+    )
     need = run.check(
         resources.memory.scene_rendering(
             pairs=pairs_total,
