@@ -400,7 +400,7 @@ RENDER_SCENE = record(
         "light_s": field("number", "The light-in and through-the-body passes.", "s"),
         "draw_s": field("number", "Path tracing our picture.", "s"),
         "passes": field("integer", "Light-in / through-the-body passes (--passes)."),
-        "samples": field("integer", "Irradiance samples per vertex and pass (--samples)."),
+        "samples": field("integer", "Irradiance samples per vertex of the first pass (--samples)."),
         "picture_spp": field("integer", "Samples per pixel of our picture (--picture-spp)."),
         "object_pixels": field("integer", "Pixels whose centre ray meets a fitted object."),
         "exposure": field("number", "Exposure of the PNGs: the linear scale before sRGB."),

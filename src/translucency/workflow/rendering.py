@@ -291,7 +291,8 @@ def render_scene(
     scene_unit : float
         Millimetres per scene unit.
     samples, passes, max_depth : int
-        Irradiance samples per vertex and pass, light-in / through-the-body passes, longest light path.
+        Irradiance samples per vertex of the first pass (a later one, the objects' glow alone, takes a
+        quarter), light-in / through-the-body passes, longest light path.
     roughness : float
         GGX roughness of a dielectric object's boundary (0: smooth).
     picture_spp : int
