@@ -60,8 +60,9 @@ class FittedScene:
     irradiance_spacing : float
         The irradiance is traced at one vertex per cell of a grid this many mean edges wide and at the
         shadow edges between them, interpolated elsewhere (:mod:`~translucency.scene.reduced`); 0 (the
-        default): traced at every vertex.  On the 27 k-vertex pig, 2 saves a sixth of a light's time and
-        adds a third to the picture's noise (``benchmarks/scene_speed.py``).
+        default): traced at every vertex.  On the 27 k-vertex pig at 32 samples, 2 saves a sixth of the
+        light's time and adds a quarter to its picture's error against a converged irradiance; at 16
+        it saves nothing (``benchmarks/scene_speed.py``).
     passes : int
         Light-in / through-the-body passes (module docstring).
     max_depth : int
