@@ -388,18 +388,27 @@ def rendering(
 
 
 def scene_rendering(
-    *, pairs: float, paths: int, pixels: int, spp: int, reference: bool, spp_reference: int
+    *,
+    pairs: float,
+    paths: int,
+    pixels: int,
+    spp: int,
+    reference: bool,
+    spp_reference: int,
+    vertices: int = 0,
 ) -> Need:
-    r"""``render --scene``: the transports' vertex pairs, the irradiance's wavefront of ``paths`` paths
-    (vertices × samples), a picture of ``pixels`` at ``spp`` and, with the reference, its two renders.
+    r"""``render --scene``: the transports' vertex pairs, the objects' ``vertices`` (as ``render``'s), the
+    irradiance's wavefront of ``paths`` paths (as traced: whole vertices' samples, at most 2¹⁹ paths unless
+    one a vertex), a picture of ``pixels`` at ``spp`` and, with the reference, its two renders.
 
-    .. math:: M = M_{mi} + 300\,p + 400\,P + 100\,W H s \;[+\, 100\,W H s_{ref}]
+    .. math:: M = M_{mi} + 300\,p + 4600\,V + 400\,P + 100\,W H s \;[+\, 100\,W H s_{ref}]
 
     (a path of the wavefront holds its ray, throughput, interaction and sampler, about 400 bytes;
     a camera sample about 100).  Output: three EXR + PNG pictures and the summary.
     """
     parts = {
         "the transport: --radius": PAIR_BYTES * pairs,
+        "the vertices": VERTEX_BYTES * vertices,
         "the irradiance: --samples": 400 * paths,
         "the picture: --picture-spp": 100 * pixels * spp,
     }

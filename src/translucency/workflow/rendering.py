@@ -371,6 +371,7 @@ def render_scene(
         resources.memory.scene_rendering(
             pairs=pairs_total,
             paths=paths,
+            vertices=fs.vertices,
             pixels=W * H,
             spp=picture_spp,
             reference=reference,
