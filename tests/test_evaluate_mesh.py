@@ -168,7 +168,7 @@ def test_cli_evaluates_a_per_vertex_model_on_a_mesh_data_set(ball, tmp_path):
     )
     assert res.exit_code == 0, res.output
     out = json.loads(res.stdout)
-    held = tl.evaluate_model(fit, data, truth=truth)
+    held = tl.evaluate_model(model, data, truth=truth)  # the same stored model through the API
     assert out["rel_l2"] == pytest.approx(held.rel_l2) and out["in_sample"]["rel_l2"] > 0
     assert (tmp_path / "r" / "report.json").is_file()
 

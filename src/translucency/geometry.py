@@ -172,3 +172,26 @@ def object_bounds(vertices) -> dict:
     v = np.asarray(vertices, dtype=np.float64).reshape(-1, 3)
     lo, hi = v.min(axis=0), v.max(axis=0)
     return {"bounds_mm": [lo.tolist(), hi.tolist()], "centre_mm": ((lo + hi) / 2).tolist()}
+
+
+def same_triangles(a, b) -> bool:
+    """Whether two (F, 3) face arrays hold the same oriented triangles in any order and from any corner
+    (a model file keeps its mesh compressed, its triangles in the codec's order: ``io/mesh_codec.py``).
+
+    Examples
+    --------
+    >>> same_triangles([[0, 1, 2], [2, 1, 3]], [[1, 3, 2], [2, 0, 1]])
+    True
+    >>> same_triangles([[0, 1, 2]], [[0, 2, 1]])  # the other orientation
+    False
+    """
+    a, b = np.asarray(a, np.int64), np.asarray(b, np.int64)
+    if a.shape != b.shape:
+        return False
+
+    def canonical(f):
+        turn = np.argmin(f, axis=1)  # each triangle rotated to start at its smallest index
+        f = f[np.arange(len(f))[:, None], (turn[:, None] + np.arange(3)) % 3]
+        return f[np.lexsort(f.T[::-1])]
+
+    return bool(np.array_equal(canonical(a), canonical(b)))

@@ -21,6 +21,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..geometry import same_triangles
+
 #: quantisation step as a fraction of the median edge length
 STEP_OF_EDGE = 0.01
 #: bounds on the quantisation bits per coordinate
@@ -76,7 +78,7 @@ def encode_mesh(vertices: np.ndarray, faces: np.ndarray):
                 dv, df = decode_mesh(data)
             except Exception:  # noqa: BLE001 — any codec failure: the mesh is stored as it is
                 dv, df, data = None, None, None
-            if dv is None or dv.shape != v.shape or not _same_triangles(df, f):
+            if dv is None or dv.shape != v.shape or not same_triangles(df, f):
                 tried[bits] = None
             else:
                 tried[bits] = (data, dv, df) if _normals_kept(normals, _area_normals(dv, f)) else False
@@ -132,18 +134,3 @@ def decode_mesh(data: bytes):
     vertices[index] = points  # decoded vertex k was the original vertex index[k]
     faces = index[np.asarray(mesh.faces, np.int64).reshape(-1, 3)].astype(np.int32)
     return vertices, faces
-
-
-def _same_triangles(a: np.ndarray, b: np.ndarray) -> bool:
-    """Whether two face arrays hold the same oriented triangles, in any order and starting corner."""
-    if a.shape != b.shape:
-        return False
-
-    def canonical(f):
-        f = np.asarray(f, np.int64)
-        turn = np.argmin(f, axis=1)  # each triangle rotated to start at its smallest index
-        rows = np.arange(len(f))[:, None]
-        f = f[rows, (turn[:, None] + np.arange(3)) % 3]
-        return f[np.lexsort(f.T[::-1])]
-
-    return bool(np.array_equal(canonical(a), canonical(b)))

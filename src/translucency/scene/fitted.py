@@ -155,6 +155,8 @@ def fitted_object(
     model, header = read_vertex_model(source, name=name)
     mesh, acquisition = object_of_model(model, header or {"meta": {"acquisition": {}}})
     pose = pose_of(name, mesh.vertices, mesh.faces, shape_vertices, shape_faces, scene_unit_mm=scene_unit_mm)
+    if not np.array_equal(mesh.faces, shape_faces):  # the same triangles in the scene's order: what it hits
+        mesh = trimesh.Trimesh(mesh.vertices, np.asarray(shape_faces, np.int64), process=False)
     eta = boundary_eta(acquisition)  # 1 (index-matched) for a loaded model without its header
     return FittedObject(
         name=name,
