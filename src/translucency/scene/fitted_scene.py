@@ -100,12 +100,13 @@ class FittedScene:
         through: bool | None = None,
     ):
         mi = mitsuba()
+        glow_samples = max(1, samples // 4) if glow_samples is None else glow_samples
         if not models:
             raise TranslucencyError("models: name at least one fitted object (shape id = model file)")
         for option, value, lo in (
             ("samples", samples, 1),
             ("passes", passes, 1),
-            ("glow_samples", max(1, samples // 4) if glow_samples is None else glow_samples, 1),
+            ("glow_samples", glow_samples, 1),
             ("max_depth", max_depth, 1),
         ):
             if not isinstance(value, int) or value < lo:
@@ -117,7 +118,7 @@ class FittedScene:
         self.source = scene
         self.scene = scene if isinstance(scene, mi.Scene) else load_user_scene(scene)
         self.samples, self.passes, self.max_depth = samples, passes, max_depth
-        self.glow_samples = max(1, samples // 4) if glow_samples is None else glow_samples
+        self.glow_samples = glow_samples
         if not (irradiance_spacing == 0 or irradiance_spacing >= 1):
             raise TranslucencyError(f"irradiance_spacing: 0 or >= 1 mean edges, got {irradiance_spacing!r}")
         self.irradiance_spacing = float(irradiance_spacing)
@@ -332,13 +333,13 @@ class FittedScene:
         E = reduced.interpolate(e_s)
         ell = None if ell_s is None else reduced.interpolate(ell_s)
         E[at] = e_s
+        if ell is not None:
+            ell[at] = ell_s
         edge = reduced.to_refine(e_s)
         if len(edge):  # a shadow's edge crosses here: traced at its own vertices
             E[edge], ell_edge = traced(edge, o.law.at(edge), salt=1)
             if ell is not None:
                 ell[edge] = ell_edge
-        if ell is not None:
-            ell[at] = ell_s
         return E, ell
 
     def render(self, *, spp: int = 16, seed: int = 0, sensor: int = 0, glowing: bool = True) -> np.ndarray:

@@ -37,6 +37,12 @@ from .integrator import _mis, trace
 WAVEFRONT = 1 << 19
 
 
+def samples_per_wavefront(vertices: int, samples: int) -> int:
+    """Samples a vertex traced in one wavefront: batches of whole vertices' samples, each at most
+    :data:`WAVEFRONT` paths (at least one sample a vertex)."""
+    return max(1, min(int(samples), WAVEFRONT // max(int(vertices), 1)))
+
+
 def scene_irradiance(
     scene,
     glow,
@@ -71,8 +77,7 @@ def scene_irradiance(
     V, K = len(points), int(samples)
     if offset is None:
         offset = 5e-4 * float(np.max(np.ptp(points, axis=0)) or 1.0)
-    # batches of samples, each a wavefront of at most WAVEFRONT paths (whole vertices' worth)
-    per_batch = max(1, min(K, WAVEFRONT // max(V, 1)))
+    per_batch = samples_per_wavefront(V, K)
     E, done = np.zeros((V, 3)), 0
     num, den = 0.0, np.zeros((V, 1))  # the moment's weighted sums
     while done < K:

@@ -37,7 +37,7 @@ from ..resources.run import Reporter, Run
 from ..rig.shared.hdr import read_hdr
 from ..scene import FittedScene
 from ..scene.compare import lit_pixels, object_pixels, scene_errors
-from ..scene.irradiance import WAVEFRONT
+from ..scene.irradiance import samples_per_wavefront
 from ..scene.reference import converged_scene_reference
 from ._arguments import model_and_record, whole_number
 
@@ -363,10 +363,9 @@ def render_scene(
         )
         for o, r in zip(fs.objects, radii)
     )
-    # the irradiance's wavefront: whole vertices' samples, at most WAVEFRONT paths unless one a vertex
-    paths = max(
-        len(o.mesh.vertices) * max(1, min(samples, WAVEFRONT // len(o.mesh.vertices))) for o in fs.objects
-    )
+    # the irradiance's largest wavefront, as traced
+    sizes = [len(o.mesh.vertices) for o in fs.objects]
+    paths = max(V * samples_per_wavefront(V, samples) for V in sizes)
     need = run.check(
         resources.memory.scene_rendering(
             pairs=pairs_total,
