@@ -36,11 +36,12 @@ FITS = {  # label -> fit_planar arguments
 }
 
 
-def acquire(sample: str, cache: Path, photons: int, grid: int, photon_seed: int) -> Path:
-    """One acquisition of ``sample``: the volume is always seed 1 (the same sample), ``photon_seed`` seeds
-    the photon streams only."""
-    path = cache / f"{sample.replace(':', '_')}_{grid}x{grid}_{photons}_s{photon_seed}.zarr"
-    vol = make_sample(sample, (20.0, 20.0, 8.0), 0.25, g=0.0, seed=1)
+def acquire(sample: str, cache: Path, photons: int, grid: int, photon_seed: int, volume_seed: int = 1) -> Path:
+    """One acquisition of ``sample``: the volume is ``volume_seed`` (1: the table's samples), ``photon_seed``
+    seeds the photon streams only."""
+    vol_tag = "" if volume_seed == 1 else f"_v{volume_seed}"
+    path = cache / f"{sample.replace(':', '_')}{vol_tag}_{grid}x{grid}_{photons}_s{photon_seed}.zarr"
+    vol = make_sample(sample, (20.0, 20.0, 8.0), 0.25, g=0.0, seed=volume_seed)
     setup = PlanarSetup(
         grid=(grid, grid),
         span=(6.0, 6.0),

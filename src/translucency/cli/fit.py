@@ -25,19 +25,25 @@ _DATA = typer.Argument(
 )
 _OUT = typer.Option(..., "--out", "-o", help="Model file to write (.model.zip).")
 _MODEL = typer.Option(
-    "iso",
+    "auto",
     "--model",
-    help="iso | aniso (the paper's; planar data sets only) | dipole | burley | pbd (photon beam "
-    "diffusion) | ddipole (directional dipole at normal incidence).",
+    help="auto: the sum of exponentials with its structure (colour, terms, directions) chosen by held-out "
+    "error on the data's own photons | iso | aniso (the paper's; planar data sets only) | dipole | burley "
+    "| pbd (photon beam diffusion) | ddipole (directional dipole at normal incidence).",
 )
 _TERMS = typer.Option(
-    "3", "--terms", "-n", help="Exponential terms n per profile (1-4), or auto (held-out choice)."
+    None,
+    "--terms",
+    "-n",
+    help="Exponential terms n per profile (1-4), or auto (held-out choice). Default: chosen with "
+    "--model auto, 3 otherwise.",
 )
 _DIRECTIONS = typer.Option(
-    "8",
+    None,
     "--directions",
     "-m",
-    help="Directions m of the anisotropic model (>= 2), or auto (m in 1, 2, 4, 8, 16 by held-out error).",
+    help="Directions m of the anisotropic model (>= 2), or auto (m in 1, 2, 4, 8, 16 by held-out error). "
+    "Default: chosen with --model auto, 8 with --model aniso (the paper's).",
 )
 _WEIGHTING = typer.Option(
     "poisson",
@@ -48,8 +54,8 @@ _WEIGHTING = typer.Option(
 _COLOUR = typer.Option(
     None,
     "--colour",
-    help="shared: the paper's (1, s_g, s_b) scale of one fall-off; per-channel: one fall-off "
-    "per channel (the default).",
+    help="shared: the paper's (1, s_g, s_b) scale of one fall-off; per-channel: one fall-off per "
+    "channel; auto: the held-out choice. Default: chosen with --model auto, per-channel otherwise.",
 )
 _EXCLUSION = typer.Option(
     None, "--exclusion", help="Ignore pixels closer than this to x_i, mm (default one pixel)."
@@ -120,4 +126,5 @@ def fit(
     s = fitting.summary
     mesh_of = f", mesh of {len(fitting.model.alpha.values):,} vertices" if s["geometry"] == "mesh" else ""
     line = f"model: {fitting.path} ({s['seconds']:.1f} s, {s['rounds']} rounds{mesh_of})"
-    finish(as_json, quiet, s, [line])
+    chosen = [s["structure"]["summary"]] if s.get("structure") else []
+    finish(as_json, quiet, s, [*chosen, line])

@@ -123,6 +123,9 @@ def _model_rows(fields: dict, size_text: str, bounds: list):
     rows += [(key, str(fields[key])) for key in (*MODEL_FIELDS, "dtype") if key in fields]
     if fields["meta"]:
         rows.append(("meta", _short(fields["meta"])))
+    chosen = ((fields["meta"] or {}).get("fit") or {}).get("structure")
+    if isinstance(chosen, dict) and chosen.get("summary"):  # the fit's held-out choice
+        rows.append(("structure", str(chosen["summary"])))
     if not fields["intact"]:
         return [*rows, ("valid", f"no — {fields['problem']}")]
     alpha = fields["alpha"]

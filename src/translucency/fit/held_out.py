@@ -1,10 +1,14 @@
-"""The held-out split of a planar fit: two interleaved halves of every window's pairs, one fitted and the
-other scored (:func:`pair_half`, :func:`held_out_error`); the choice of n and m by it is
-:func:`translucency.fit.planar.select_model`.
+"""The held-out split of a fit: two interleaved halves of the pairs (incident point, pixel or vertex), one
+fitted and the other scored, per incident point so that two fits' scores have a standard error.
 
-A pair is (incident point i, sample-grid pixel); its half is (row + col + i) mod 2, a checkerboard over
-each window flipped from one point to the next, so every pixel is fitted from some windows and scored in
-the others.  Errors are relative L2, ‖αP − y‖ / ‖y‖ (dimensionless).
+*Planar* (:func:`pair_half`): a pair is (incident point i, sample-grid pixel); its half is
+(row + col + i) mod 2, a checkerboard over each window flipped from one point to the next, so every pixel is
+fitted from some windows and scored in the others.  *Mesh* (:func:`vertex_half`): a pair is (incident point
+i, vertex v); its half is (v + i) mod 2, so every vertex is fitted from half the points and scored from the
+others.  Errors are relative L2, ‖αP − y‖ / ‖y‖ (dimensionless); :func:`held_out_terms` and
+:func:`mesh_held_out_terms` give each point's ‖αP − y‖² and ‖y‖² (mm⁻⁴ times the pairs' count), whose sums
+make :func:`held_out_error` and whose differences between two fits make the split's noise
+(:mod:`translucency.fit.structure`).
 """
 
 from __future__ import annotations
@@ -15,7 +19,7 @@ from ..geometry import SampleGrid, window_geometry
 from ..io.dataset import PlanarDataset
 from .options import FitResult
 
-__all__ = ["held_out_error", "pair_half"]
+__all__ = ["held_out_error", "held_out_terms", "mesh_held_out_terms", "pair_half", "vertex_half"]
 
 
 def pair_half(i, pixel, grid: SampleGrid) -> np.ndarray:
@@ -23,19 +27,42 @@ def pair_half(i, pixel, grid: SampleGrid) -> np.ndarray:
     return (pixel // grid.shape[1] + pixel % grid.shape[1] + np.asarray(i)[:, None]) % 2
 
 
-def held_out_error(fit: FitResult, ds: PlanarDataset, *, near: float = 0.0, chunk_points: int = 256) -> float:
-    """Relative L2 error ‖αP − y‖ / ‖y‖ of a fit made on one ``half`` over the other half's pairs.
+def vertex_half(i, vertex) -> np.ndarray:
+    """The half (0 or 1) of each pair (point i (k,), vertex (k, V) or (V,)): (v + i) mod 2.
 
-    α at a held-out pair's pixel comes from the windows where that pixel was
-    fitted; pixels no fitted pair covers take the mean α of their fitted
-    4-neighbours.  Pairs as in the fit (mask set, finite, flagged points left
-    out), from the smallest radius the fit saw in each window on: the halves
-    interleave, so the first held-out ring may lie inside the first fitted one,
-    and a profile is not asked to extrapolate towards x_i.
+    Examples
+    --------
+    >>> vertex_half(np.array([0, 1]), np.arange(4)).tolist()
+    [[0, 1, 0, 1], [1, 0, 1, 0]]
+    """
+    return (np.asarray(vertex) + np.asarray(i)[:, None]) % 2
+
+
+def held_out_error(fit: FitResult, ds: PlanarDataset, *, near: float = 0.0, chunk_points: int = 32) -> float:
+    """Relative L2 error ‖αP − y‖ / ‖y‖ of a planar fit made on one ``half`` over the other half's pairs
+    (:func:`held_out_terms` summed over the points).
 
     Examples
     --------
     >>> e = held_out_error(fit_planar(ds, "iso", half=0), ds)   # doctest: +SKIP
+    """
+    sq_err, sq_data = held_out_terms(fit, ds, near=near, chunk_points=chunk_points)
+    return float(np.sqrt(sq_err.sum() / max(sq_data.sum(), 1e-300)))
+
+
+def held_out_terms(fit: FitResult, ds: PlanarDataset, *, near: float = 0.0, chunk_points: int = 32):
+    """Per incident point, ‖αP − y‖² and ‖y‖² over the held-out half of its pairs (planar), (P,) each.
+
+    α at a held-out pair's pixel comes from the windows where that pixel was
+    fitted; pixels no fitted pair covers take the mean α of their fitted
+    4-neighbours.  Pairs as in the fit (mask set, finite, flagged points left
+    out: their terms are 0), from the smallest radius the fit saw in each window on:
+    the halves interleave, so the first held-out ring may lie inside the first fitted one,
+    and a profile is not asked to extrapolate towards x_i; and at least ``near`` mm from x_i.
+
+    Examples
+    --------
+    >>> sq_err, sq_data = held_out_terms(fit_planar(ds, "iso", half=0), ds)   # doctest: +SKIP
     """
     model, fitted = fit.model, int(fit.options["half"])
     grid = SampleGrid.covering(ds["window_origin"].astype(np.float64), ds.pitch, ds.window)
@@ -66,7 +93,7 @@ def held_out_error(fit: FitResult, ds: PlanarDataset, *, near: float = 0.0, chun
     num = padded[:-2, 1:-1] + padded[2:, 1:-1] + padded[1:-1, :-2] + padded[1:-1, 2:]
     cnt = pad_seen[:-2, 1:-1] + pad_seen[2:, 1:-1] + pad_seen[1:-1, :-2] + pad_seen[1:-1, 2:]
     alpha = np.where(seen, alpha, num / np.maximum(cnt, 1.0)).ravel()
-    sq_err = sq_data = 0.0
+    sq_err, sq_data = np.zeros(ds.n_points), np.zeros(ds.n_points)
     for s, e in chunks:
         y, r, theta, pixel, valid, train = pairs(s, e)
         # no inward extrapolation: held-out pairs from the smallest radius the fit saw in the window on
@@ -74,6 +101,41 @@ def held_out_error(fit: FitResult, ds: PlanarDataset, *, near: float = 0.0, chun
         test = valid & ~train & (r >= np.maximum(r_fit, near))
         i = np.broadcast_to(np.arange(s, e)[:, None], r.shape)
         pred = alpha[pixel[test]][:, None] * model.profile(i[test], r[test], theta[test])
-        sq_err += float(np.sum((pred - y[test]) ** 2))
-        sq_data += float(np.sum(y[test] ** 2))
-    return float(np.sqrt(sq_err / max(sq_data, 1e-300)))
+        row = i[test] - s  # each pair's point, within the chunk
+        sq_err[s:e] = np.bincount(row, np.sum((pred - y[test]) ** 2, axis=1), minlength=e - s)
+        sq_data[s:e] = np.bincount(row, np.sum(y[test] ** 2, axis=1), minlength=e - s)
+    return sq_err, sq_data
+
+
+def mesh_held_out_terms(fit: FitResult, group, *, chunk_points: int = 32):
+    """Per incident point, ‖αP − y‖² and ‖y‖² over the held-out half of its pairs (mesh), (P,) each.
+
+    A pair (i, v) is held out when :func:`vertex_half` differs from the fit's ``half``; pairs as the fit
+    reads them (finite, at least the fit's exclusion radius from x_i, not flagged), each weighted by its
+    vertex's area A_v (mm²), so that a finely meshed region does not count more than a coarse one.
+    α at v was fitted from the other points' pairs on v (pooled over its disc).
+
+    Examples
+    --------
+    >>> sq_err, sq_data = mesh_held_out_terms(fit_mesh("object.zarr", half=0), group)   # doctest: +SKIP
+    """
+    from .mesh import read_pairs  # circular at the top: mesh.py fits with the halves defined here
+
+    model, fitted = fit.model, int(fit.options["half"])
+    vertices = np.asarray(group["vertices"][...], dtype=np.float64)
+    area = np.asarray(group["vertex_area"][...], dtype=np.float64)
+    alpha = np.asarray(model.alpha.values, dtype=np.float64)
+    x_i = np.asarray(model.x_i, dtype=np.float64)
+    P = len(x_i)
+    sq_err, sq_data = np.zeros(P), np.zeros(P)
+    for s in range(0, P, chunk_points):
+        e = min(s + chunk_points, P)
+        y, r, valid = read_pairs(group, vertices, x_i, float(fit.options["exclusion_mm"]), s, e)
+        test = valid & (vertex_half(np.arange(s, e), np.arange(len(vertices))) != fitted)
+        test &= ~fit.flagged[s:e, None]
+        for k in range(e - s):  # one point at a time: (V, 3) each
+            t = test[k]
+            pred = alpha[t, None] * model.profile(np.full(t.sum(), s + k), r[k, t], np.zeros(t.sum()))
+            sq_err[s + k] = np.sum(area[t, None] * (pred - y[k, t]) ** 2)
+            sq_data[s + k] = np.sum(area[t, None] * y[k, t].astype(np.float64) ** 2)
+    return sq_err, sq_data

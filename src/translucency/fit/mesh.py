@@ -30,9 +30,11 @@ from ..model import VertexAlpha
 from ._rounds import alternate
 from ._vertex_pool import VertexDiscPool
 from .families import FAMILIES
+from .held_out import mesh_held_out_terms, vertex_half
 from .lean import fit_lean
 from .lean_shots import fit_lean_from_shots
 from .options import FitContext, FitResult, check_fit_options
+from .structure import fit_chosen, resolve_structure
 
 #: α's pooling radius in mean edge lengths.  Measured on the main job's pig against its converged reference
 #: (relative RMSE at 96 x 8,000 / 384 x 2,000 / 1,536 x 500 photons): 3 edges 0.082 / 0.070 / 0.078,
@@ -59,8 +61,9 @@ ENERGY_RADIUS_RATE = 9.233
 class _MeshSource:
     """Rows of a mesh data set: 'pixels' are vertices, α lives on the vertices."""
 
-    def __init__(self, group, header, alpha_radius: float | None = None):
+    def __init__(self, group, header, alpha_radius: float | None = None, half: int | None = None):
         self.group = group
+        self.half = half  # None, or the half of the pairs the fit may use (:func:`.held_out.vertex_half`)
         self.vertices = np.asarray(group["vertices"][...], dtype=np.float64)
         self.area = np.asarray(group["vertex_area"][...], dtype=np.float64)
         self.incident = np.asarray(group["incident"][...])
@@ -79,6 +82,8 @@ class _MeshSource:
     def read(self, ctx, s: int, e: int):
         y, r, valid = read_pairs(self.group, self.vertices, ctx.x_i, ctx.exclusion, s, e)
         pixel = np.broadcast_to(np.arange(len(self.vertices)), r.shape)
+        if self.half is not None:  # held-out evaluation: the other half of the pairs is left out
+            valid &= vertex_half(np.arange(s, e), pixel) == self.half
         return y, None, valid, r, np.zeros_like(r), pixel, self.poisson
 
     def smooth_alpha(self, stat: np.ndarray) -> np.ndarray:
@@ -108,6 +113,11 @@ def mean_edge_length(vertices: np.ndarray, faces: np.ndarray) -> float:
     return float(np.mean(np.linalg.norm(vertices[faces[:, 0]] - vertices[faces[:, 1]], axis=1)))
 
 
+def _held_out(fit: FitResult, ds):
+    """Per point, the held-out squared error and data norm of a half fit (structure choice)."""
+    return mesh_held_out_terms(fit, ds.group)
+
+
 def exclusion_radius(pitch: float, exclusion_mm: float | None = None) -> float:
     """The radius (mm) within which pairs are left out: ``exclusion_mm``, or the fit's default, half the
     mesh's pitch (:func:`mean_edge_length`: the incident vertex's own cell)."""
@@ -116,10 +126,10 @@ def exclusion_radius(pitch: float, exclusion_mm: float | None = None) -> float:
 
 def fit_mesh(
     path,
-    model: str = "iso",
+    model: str = "auto",
     *,
-    n_terms: int = 3,
-    colour: str = "per-channel",
+    n_terms: int | str | None = None,
+    colour: str | None = None,
     exclusion_mm: float | None = None,
     rel_sigma: float = 0.05,
     max_rounds: int = 3,
@@ -130,6 +140,7 @@ def fit_mesh(
     workers: int | None = None,
     progress=None,
     scheduler: str | None = "threads",
+    half: int | None = None,
 ) -> FitResult:
     """Fit the isotropic model (or a baseline) per incident vertex of a mesh data set, with α per vertex.
 
@@ -137,14 +148,18 @@ def fit_mesh(
     ----------
     path : path
         A mesh data set (:func:`translucency.acquire.mesh.acquire_mesh`).
-    model : {"iso", "dipole", "burley"}
-        The paper fits the isotropic model on objects (no tangent directions).
-    colour : {"per-channel", "shared"}
-        Default: a fall-off per channel.  The paper's colour scale (``"shared"``, one fall-off scaled by
-        (1, s_g, s_b)) gives light that crossed a body the hue of the light near its entry: a back-lit
-        marble or potato drawn grey where the reference is brown or yellow (the unlit side's blue share
-        1.21–1.22× the reference's; per channel 1.04 and 0.82), and the main job's pig's unlit parts
-        too blue (docs/objects.md, "The colour of light that crossed the body").
+    model : {"auto", "iso", "dipole", "burley"}
+        The paper fits the isotropic model on objects (no tangent directions); ``"auto"`` (default): the
+        isotropic model with n and the colour chosen by held-out error (:mod:`translucency.fit.structure`).
+    n_terms : int, "auto" or None
+        Exponential terms per profile (1–4); None: chosen with ``model="auto"``, 3 for ``"iso"``.
+    colour : {"per-channel", "shared", "auto"}, optional
+        None: chosen with ``model="auto"``, a fall-off per channel for ``"iso"``.  The paper's colour
+        scale (``"shared"``, one fall-off scaled by (1, s_g, s_b)) gives light that crossed a body the
+        hue of the light near its entry: a back-lit marble or potato drawn grey where the reference is
+        brown or yellow (the unlit side's blue share 1.21–1.22× the reference's; per channel 1.04 and
+        0.82), and the main job's pig's unlit parts too blue (docs/objects.md, "The colour of light that
+        crossed the body").
     exclusion_mm : float, optional
         Vertices closer than this to x_i are left out; default half the mean edge length.
     alpha_radius : float, optional
@@ -159,6 +174,10 @@ def fit_mesh(
     scheduler : str, optional
         Where the chunks run: ``"threads"`` (default), ``"local:N"`` or ``"tcp://HOST:PORT"``
         (:mod:`translucency.cluster`); the result is the same bit for bit.
+    half : {0, 1}, optional
+        Fit only the pairs (point i, vertex v) with (v + i) mod 2 = ``half`` (held-out evaluation,
+        :func:`translucency.fit.held_out.mesh_held_out_terms`); the model then has its profiles and α
+        only, not what a renderer needs beside them.  Default: all pairs.
 
     Returns
     -------
@@ -174,28 +193,40 @@ def fit_mesh(
     >>> fit_mesh("object.zarr", "iso", colour="grey")   # options refused before the data set is opened
     Traceback (most recent call last):
     ...
-    translucency._validate.TranslucencyError: colour: expected 'shared' or 'per-channel', got 'grey'
+    translucency._validate.TranslucencyError: colour: expected 'shared', 'per-channel' or 'auto', got 'grey'
     """
     t0 = time.perf_counter()
     if model == "aniso":
         raise TranslucencyError(
             "model: on meshes the isotropic model is fitted (r = |x_o - x_i|, as in the paper)"
         )
+    model, n_terms, _, colour, free, base = resolve_structure(model, n_terms, None, colour, planar=False)
     check_fit_options(model, n_terms, 1, colour, rel_sigma)
+    if half not in (None, 0, 1):
+        raise TranslucencyError(f"half: expected 0 or 1, got {half!r}")
     ds = open_mesh_dataset(path)
     if not ds.complete():
         raise TranslucencyError(f"{ds.path}: the acquisition is unfinished; resume it before fitting")
+    if free:  # n and the colour chosen by held-out error on a subset of the points, then fitted on all
+        if half is not None:
+            raise TranslucencyError("half: a held-out fit needs its structure given, not chosen")
+        kw = dict(exclusion_mm=exclusion_mm, rel_sigma=rel_sigma, max_rounds=max_rounds, tol=tol,
+                  alpha_radius=alpha_radius, max_rate=max_rate, chunk_points=chunk_points, workers=workers,
+                  scheduler=scheduler)  # fmt: skip
+        return fit_chosen(
+            fit_mesh, ds, _held_out, free=free, base=base, planar=False, progress=progress, **kw
+        )
     group, header = ds.group, ds.header
     polar = np.asarray((header.get("photographs") or {}).get("beam_polar_deg", ()), dtype=np.float64)
     oblique = polar[polar > OBLIQUE_DEG]
-    if len(oblique):  # a lab's oblique laser shots (import object): one line, not silence
+    if len(oblique) and half is None:  # a lab's oblique laser shots (import object): one line, not silence
         warnings.warn(
             f"{ds.path}: {len(oblique)} beam(s) arrive {oblique.min():.0f}–{oblique.max():.0f}° off the "
             "normal (photographs.beam_polar_deg): the profile is fitted to them as if they were normal "
             "beams, and the lean (render --angles) from their asymmetry",
             stacklevel=2,
         )
-    source = _MeshSource(group, header, alpha_radius)
+    source = _MeshSource(group, header, alpha_radius, half)
     exclusion = exclusion_radius(source.pitch, exclusion_mm)
     diagonal = float(np.linalg.norm(np.ptp(source.vertices, axis=0)))
     a_max = 3.0 / source.pitch if max_rate is None else float(max_rate)
@@ -223,6 +254,8 @@ def fit_mesh(
         "max_rate": a_max,
         "geometry": "mesh",
     }
+    if half is not None:
+        options["half"] = int(half)
     request = json.dumps(
         {
             "dataset": str(ds.path.resolve()),
@@ -263,6 +296,8 @@ def fit_mesh(
     )
     if model == "iso":
         result.options["scaled_to_albedo_bound"] = bound_albedo(result.model).tolist()
+    if half is not None:  # a held-out fit: its profiles and α are what is scored
+        return result
     # the model carries its surface and what was measured where the fit does not look (module docstring)
     result.model.faces = np.asarray(group["faces"][...], dtype=np.int64)
     result.model.measured = measured_near_field(ds, chunk_points)

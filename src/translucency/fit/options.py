@@ -127,8 +127,8 @@ def check_fit_options(
             raise TranslucencyError(f"directions: 'auto' needs the anisotropic model, got model {model!r}")
     elif directional and _as_count(n_directions) < 2:
         raise TranslucencyError(f"directions: the anisotropic model needs m >= 2, got {n_directions}")
-    if colour not in ("shared", "per-channel"):
-        raise TranslucencyError(f"colour: expected 'shared' or 'per-channel', got {colour!r}")
+    if colour not in ("shared", "per-channel", "auto"):
+        raise TranslucencyError(f"colour: expected 'shared', 'per-channel' or 'auto', got {colour!r}")
     if not (rel_sigma > 0 and np.isfinite(rel_sigma)):
         raise TranslucencyError(f"rel_sigma: must be > 0, got {rel_sigma}")
     if weighting not in WEIGHTINGS:

@@ -66,21 +66,27 @@ from ..model import PlanarAlpha, Rectangle
 from ._rounds import alternate
 from .chunk import POOL_POINTS
 from .families import FAMILIES
-from .held_out import held_out_error, pair_half
-from .options import AUTO_DIRECTIONS, AUTO_TERMS, FitContext, FitResult, check_fit_options
+from .held_out import held_out_terms, pair_half
+from .options import FitContext, FitResult, check_fit_options
+from .structure import fit_chosen, resolve_structure
 
 __all__ = [
     "FitResult",
     "PlanarFit",
     "check_fit_options",
     "fit_planar",
-    "select_model",
 ]
 
-#: model selection scores held-out pairs from this distance (mm) on: the two interleaved halves have
+#: a structure's held-out error counts pairs from this distance (mm) on: the two interleaved halves have
 #: different exact radii near x_i, and a per-direction fit from half the pixels extrapolates between them
 #: (scored over all radii, near-field spikes hide a fibrous material's anisotropy; docs/fitting.md)
 NEAR_MM = 1.0
+
+
+def _held_out(fit: FitResult, ds: PlanarDataset):
+    """Per point, the held-out squared error and data norm beyond :data:`NEAR_MM` (structure choice)."""
+    return held_out_terms(fit, ds, near=NEAR_MM)
+
 
 #: the result of :func:`fit_planar` (the name before the alternation was shared with meshes)
 PlanarFit = FitResult
@@ -113,11 +119,11 @@ def default_chunk_points(n_points: int, stored: int) -> int:
 
 def fit_planar(
     dataset,
-    model: str = "iso",
+    model: str = "auto",
     *,
-    n_terms: int = 3,
-    n_directions: int = 8,
-    colour: str = "per-channel",
+    n_terms: int | str | None = None,
+    n_directions: int | str | None = None,
+    colour: str | None = None,
     exclusion_mm: float | None = None,
     weighting: str = "poisson",
     rel_sigma: float = 0.05,
@@ -131,7 +137,6 @@ def fit_planar(
     cache_mb: float = 512,
     checkpoint=None,
     half: int | None = None,
-    select_tol: float = 0.01,
     progress: Callable[[int, int, str], None] | None = None,
     scheduler: str | None = "threads",
     alpha_radius: float | None = None,
@@ -142,17 +147,18 @@ def fit_planar(
     ----------
     dataset : PlanarDataset or path
         The measurement (:func:`translucency.io.dataset.open_dataset`).
-    model : {"iso", "aniso", "dipole", "burley", "pbd", "ddipole"}
-        Model family (see the module docstring).
-    n_terms : int or "auto"
-        n, exponential terms per profile (1–4); ``"auto"``: chosen from 1–4 by
-        held-out error (:func:`select_model`).
-    n_directions : int or "auto"
-        m, directions of the anisotropic model (≥ 2); ``"auto"``: chosen from
-        {1, 2, 4, 8, 16} by held-out error (m = 1: the isotropic model).
-    colour : {"shared", "per-channel"}
-        Exponential families: the paper's (1, s_g, s_b) scale of one fall-off,
-        or one fall-off per channel.
+    model : {"auto", "iso", "aniso", "dipole", "burley", "pbd", "ddipole"}
+        Model family (see the module docstring); ``"auto"`` (default): the sum of exponentials with its
+        structure (colour, n, m) chosen by held-out error (:mod:`translucency.fit.structure`).
+    n_terms : int, "auto" or None
+        n, exponential terms per profile (1–4); ``"auto"``: chosen from 1–4 by held-out error.  None:
+        chosen with ``model="auto"``, 3 for a named family.
+    n_directions : int, "auto" or None
+        m, directions of the anisotropic model (≥ 2); ``"auto"``: chosen from {1, 2, 4, 8, 16} by
+        held-out error (m = 1: the isotropic model).  None: chosen with ``model="auto"``, 8 for "aniso".
+    colour : {"shared", "per-channel", "auto"}, optional
+        Exponential families: the paper's (1, s_g, s_b) scale of one fall-off, or one fall-off per
+        channel.  None: chosen with ``model="auto"``, per channel for a named family.
     exclusion_mm : float, optional
         Pixels closer than this to x_i are ignored; default one pixel.
     weighting : {"poisson", "relative"}
@@ -186,9 +192,6 @@ def fit_planar(
         (row + col + i) mod 2 = ``half``: two interleaved halves of every window,
         alternating between points, so that α at a pixel held out in one window is
         fitted from the others (held-out evaluation, :func:`held_out_error`).  Default: all pairs.
-    select_tol : float
-        Model selection: the simplest candidate whose held-out squared error is
-        within this fraction of the best one's is chosen.
     progress : callable, optional
         ``progress(done, total, message)``.
     scheduler : str, optional
@@ -211,6 +214,9 @@ def fit_planar(
     >>> fit = fit_planar(default_dataset_path(), "iso", max_rounds=1)   # doctest: +SKIP
     """
     t0 = time.perf_counter()
+    model, n_terms, n_directions, colour, free, base = resolve_structure(
+        model, n_terms, n_directions, colour, planar=True
+    )
     check_fit_options(model, n_terms, n_directions, colour, rel_sigma, weighting)
     ds = dataset if isinstance(dataset, PlanarDataset) else open_dataset(dataset)
     if not ds.complete():
@@ -218,15 +224,15 @@ def fit_planar(
     pool = 0.0 if alpha_radius is None else float(alpha_radius)
     if not (pool >= 0 and np.isfinite(pool)):
         raise TranslucencyError(f"alpha_radius: must be >= 0 mm, got {alpha_radius}")
-    if "auto" in (n_terms, n_directions):  # model selection by held-out error, then the chosen fit
-        if not (select_tol >= 0 and np.isfinite(select_tol)):
-            raise TranslucencyError(f"select_tol: must be >= 0, got {select_tol}")
-        kw = dict(colour=colour, exclusion_mm=exclusion_mm, weighting=weighting, rel_sigma=rel_sigma,
-                  max_rounds=max_rounds, tol=tol, radius_step=radius_step, sweeps=sweeps, balance=balance,
-                  chunk_points=chunk_points, workers=workers, cache_mb=cache_mb,
+    if free:  # the structure chosen by held-out error on a subset of the points, then fitted on all
+        if half is not None:
+            raise TranslucencyError("half: a held-out fit needs its structure given, not chosen")
+        kw = dict(exclusion_mm=exclusion_mm, weighting=weighting, rel_sigma=rel_sigma, max_rounds=max_rounds,
+                  tol=tol, radius_step=radius_step, sweeps=sweeps, balance=balance, chunk_points=chunk_points,
+                  workers=workers, cache_mb=cache_mb, checkpoint=checkpoint, scheduler=scheduler,
                   alpha_radius=alpha_radius)  # fmt: skip
-        return select_model(ds, model, n_terms, n_directions, select_tol=select_tol, checkpoint=checkpoint,
-                            progress=progress, scheduler=scheduler, **kw)  # fmt: skip
+        return fit_chosen(fit_planar, ds, _held_out, free=free, base=base, planar=True,
+                          progress=progress, **kw)  # fmt: skip
     pitch = ds.pitch
     exclusion = pitch if exclusion_mm is None else float(exclusion_mm)
     if exclusion < 0 or not np.isfinite(exclusion):
@@ -420,55 +426,3 @@ class DiscPool:
 
     def __call__(self, stat: np.ndarray) -> np.ndarray:
         return correlate(np.asarray(stat, dtype=np.float64), self.kernel, mode="constant", cval=0.0)
-
-
-def select_model(ds, model, n_terms, n_directions, *, select_tol=0.01, checkpoint=None, progress=None,
-                 scheduler="threads", **kw) -> FitResult:  # fmt: skip
-    """Choose n (1–4) and/or m ({1, 2, 4, 8, 16}) by held-out error, then fit the choice on all pixels.
-
-    The pairs (point, pixel) are split into two interleaved halves
-    (:func:`pair_half`: a checkerboard over each window's pixels, flipped from
-    one point to the next); every candidate is fitted on one half and scored by
-    :func:`held_out_error` on the other.  n is chosen first (with m = 1 when m is chosen too), then m with
-    that n; the simplest candidate whose held-out squared error lies within
-    ``select_tol`` of the best one's wins (ties to the simpler model: noise
-    never buys terms or directions).  m = 1 is the isotropic model.  The
-    returned fit's ``options["selection"]`` holds every candidate's held-out
-    error and the choice.  Per sample: one n and one m for all points.
-
-    Examples
-    --------
-    >>> fit = fit_planar(ds, "aniso", n_terms="auto", n_directions="auto")   # doctest: +SKIP
-    >>> fit.options["selection"]["chosen"]   # doctest: +SKIP
-    {'n_terms': 3, 'n_directions': 1}
-    """
-
-    def score(kind, n, m):  # fitted on half 0, scored on half 1
-        fit = fit_planar(ds, kind, n_terms=n, n_directions=max(m, 2), half=0, **kw)
-        return held_out_error(fit, ds, near=NEAR_MM)
-
-    def pick(errors: dict):  # the simplest candidate within select_tol (in squared error) of the best
-        best = min(errors.values())
-        return next(c for c, e in errors.items() if e**2 <= best**2 * (1.0 + select_tol))
-
-    selection = {}
-    n = n_terms
-    if n_terms == "auto" and model in ("iso", "aniso"):
-        kind = "iso" if n_directions == "auto" else model
-        m0 = 1 if n_directions == "auto" else int(n_directions)
-        errors = {c: score(kind, c, m0) for c in AUTO_TERMS}
-        n = pick(errors)
-        selection["n_terms"] = {str(c): e for c, e in errors.items()}
-    elif n_terms == "auto":  # the baselines have no terms
-        n = 3
-    m = n_directions
-    if n_directions == "auto":
-        errors = {c: score("iso" if c == 1 else "aniso", n, c) for c in AUTO_DIRECTIONS}
-        m = pick(errors)
-        selection["n_directions"] = {str(c): e for c, e in errors.items()}
-    final = model if m != 1 else "iso"
-    selection["chosen"] = {"n_terms": int(n), "n_directions": int(m)}
-    fit = fit_planar(ds, final, n_terms=n, n_directions=max(int(m), 2), checkpoint=checkpoint,
-                     progress=progress, scheduler=scheduler, **kw)  # fmt: skip
-    fit.options["selection"] = selection
-    return fit

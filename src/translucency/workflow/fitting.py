@@ -28,6 +28,7 @@ from ..fit import (
     fit_mesh,
     fit_planar,
 )
+from ..fit.structure import resolve_structure
 from ..io.dataset import PlanarDataset, dataset_identity
 from ..io.datasets import open_any_dataset
 from ..io.inputs import DATA_SETS, expect_input
@@ -79,11 +80,11 @@ class Fitting:
 
 def fit_model(
     dataset,
-    family: str = "iso",
+    family: str = "auto",
     out=None,
     *,
-    n_terms: int | str = 3,
-    n_directions: int | str = 8,
+    n_terms: int | str | None = None,
+    n_directions: int | str | None = None,
     colour: str | None = None,
     weighting: str = "poisson",
     max_rounds: int = 3,
@@ -106,16 +107,19 @@ def fit_model(
     ----------
     dataset : PlanarDataset, MeshDataset or path
         The measurement (:func:`translucency.open_dataset`).
-    family : {"iso", "aniso", "dipole", "burley", "pbd", "ddipole"}
+    family : {"auto", "iso", "aniso", "dipole", "burley", "pbd", "ddipole"}
         The model family (:data:`translucency.fit.FAMILIES`): the paper's isotropic or anisotropic sum
-        of exponentials, or a baseline (meshes: iso, dipole, burley).
+        of exponentials, or a baseline (meshes: iso, dipole, burley); ``"auto"`` (default): the sum of
+        exponentials with its structure — colour, n, m (planar) — chosen by held-out error on the data's
+        own photons (:mod:`translucency.fit.structure`; the choice is in ``summary["structure"]``).
     out : str or Path, optional
         The model file to write (``.model.zip``); default: none written, the fit is returned.
-    n_terms, n_directions : int or "auto"
-        Exponential terms per profile (1–4) and directions m of the anisotropic model; ``"auto"``
-        chooses by held-out error (planar data).
-    colour : {"shared", "per-channel"}, optional
-        One fall-off scaled per channel (the paper's) or one per channel (the default).
+    n_terms, n_directions : int, "auto" or None
+        Exponential terms per profile (1–4) and directions m of the anisotropic model (planar data);
+        ``"auto"`` chooses by held-out error.  None: chosen with ``family="auto"``, else n = 3, m = 8.
+    colour : {"shared", "per-channel", "auto"}, optional
+        One fall-off scaled per channel (the paper's) or one per channel; None: chosen with
+        ``family="auto"``, else per channel.
     weighting : {"poisson", "relative"}
         The residuals' weights (mesh fits: poisson only).
     max_rounds : int
@@ -174,13 +178,20 @@ def fit_model(
                 "mesh data set, where the isotropic model is fitted per vertex (r = |x_o - x_i|, as in the "
                 "paper): use family='iso'"
             )
-        if n_terms == "auto":
-            raise TranslucencyError("n_terms: 'auto' selects on planar data only; give n for a mesh fit")
         if weighting != "poisson":
             raise TranslucencyError("weighting: mesh fits weight by the Poisson variance only")
-    colour = colour or "per-channel"
-    check_fit_options(family, n_terms, 1 if on_mesh else n_directions, colour, weighting=weighting)
-    run = Run("fit", max_memory=max_memory, reporter=reporter, timer=f"fit {family}")
+    # the family the estimates count (the richest a choice may fit), and whether a structure is chosen
+    checked, n, m, c, free, _ = resolve_structure(family, n_terms, None if on_mesh else n_directions, colour,
+                                                  planar=not on_mesh)  # fmt: skip
+    check_fit_options(checked, n, m, c, weighting=weighting)
+    run = Run("fit", max_memory=max_memory, reporter=reporter, timer=f"fit {checked}")
+    estimate = {
+        "family": checked,
+        "n_terms": n,
+        "n_directions": m,
+        "colour": c,
+        "candidates": 2 if free else 1,
+    }
     out = None if out is None else Path(out)
     if out is not None:
         claim_output(out, "model file", overwrite=overwrite, inputs=[data.path], option="out")
@@ -188,11 +199,11 @@ def fit_model(
     args = dict(n_terms=n_terms, colour=colour, exclusion_mm=exclusion_mm, max_rounds=max_rounds)
     args.update(alpha_radius=alpha_radius, scheduler=scheduler, **options)
     if on_mesh:
-        result = _fit_mesh(run, data, family, out, args)
+        result = _fit_mesh(run, data, family, out, args, estimate)
         meta = result.metadata(Path(data.path).resolve())
     else:
         args.update(n_directions=n_directions, weighting=weighting, chunk_points=chunk_points)
-        result = _fit_planar(run, data, family, out, args)
+        result = _fit_planar(run, data, family, out, args, estimate)
         meta = {**result.metadata(data.path), "dataset_identity": dataset_identity(data.header)}
     path = None
     if out is not None:
@@ -213,7 +224,10 @@ def _data_set(dataset) -> PlanarDataset | MeshDataset:
 
 
 def _count_or_auto(name: str, value):
-    """``"auto"`` or a whole number (its range is checked with the model: ``check_fit_options``)."""
+    """``"auto"``, None (the default) or a whole number (its range is checked with the model:
+    ``check_fit_options``)."""
+    if value is None:
+        return None
     if isinstance(value, str):
         text = value.strip().lower()
         if text == "auto":
@@ -227,29 +241,34 @@ def _count_or_auto(name: str, value):
     return int(value)
 
 
-def _fit_mesh(run: Run, data: MeshDataset, family: str, out: Path | None, args: dict) -> FitResult:
-    """The per-vertex fit under ``run``: its estimates, then :func:`translucency.fit.fit_mesh`."""
+def _fit_mesh(run: Run, data: MeshDataset, family: str, out: Path | None, args: dict, est: dict) -> FitResult:
+    """The per-vertex fit under ``run``: its estimates (``est``: the family, options and candidates they
+    count), then :func:`translucency.fit.fit_mesh`."""
     V = int(data.header["n_vertices"])
-    params = FAMILIES[family].params_per_point(args["n_terms"], 1, args["colour"])
+    params = FAMILIES[est["family"]].params_per_point(est["n_terms"], 1, est["colour"])
     workers = os.cpu_count() or 1
     need = resources.memory.mesh_fit(
         points=data.n_points, vertices=V, chunk=MESH_FIT_CHUNK, workers=workers, params=params
     )
     run.check(need, out)
-    units = resources.timing.fit_units(points=data.n_points, pixels=V, rounds=args["max_rounds"])
+    units = resources.timing.fit_units(
+        points=data.n_points, pixels=V, rounds=args["max_rounds"], candidates=est["candidates"]
+    )
     timing = run.time(units)
     run.info(f"fit {family} on {data.n_points} incident points x {V:,} vertices; time {timing.text()}")
     with run.work(f"fit {family} per vertex") as work:
         return fit_mesh(data.path, family, progress=work.step(), **args)
 
 
-def _fit_planar(run: Run, data: PlanarDataset, family: str, out: Path | None, args: dict) -> FitResult:
-    """The planar fit under ``run``: its estimates, a checkpoint beside ``out`` to resume from, then
-    :func:`translucency.fit.fit_planar`."""
+def _fit_planar(
+    run: Run, data: PlanarDataset, family: str, out: Path | None, args: dict, est: dict
+) -> FitResult:
+    """The planar fit under ``run``: its estimates (``est``: the family, options and candidates they count),
+    a checkpoint beside ``out`` to resume from, then :func:`translucency.fit.fit_planar`."""
     chunk = None if args["chunk_points"] is None else min(args["chunk_points"], data.n_points)
     H, W = data.window
     stored = int(data.group["R_d"].chunks[0])
-    params = FAMILIES[family].params_per_point(args["n_terms"], args["n_directions"], args["colour"])
+    params = FAMILIES[est["family"]].params_per_point(est["n_terms"], est["n_directions"], est["colour"])
     need = resources.memory.planar_fit(
         points=data.n_points,
         pixels=H * W,
@@ -262,9 +281,11 @@ def _fit_planar(run: Run, data: PlanarDataset, family: str, out: Path | None, ar
     ckpt = None if out is None else out.with_name(out.name + ".partial.npz")
     done = _rounds_done(ckpt)  # a checkpoint of an interrupted fit: only the rounds left are estimated
     max_rounds = args["max_rounds"]
-    candidates = (4 if args["n_terms"] == "auto" else 1) * (5 if args["n_directions"] == "auto" else 1)
     units = resources.timing.fit_units(
-        points=data.n_points, pixels=H * W, rounds=max(1, max_rounds - (done or 0)), candidates=candidates
+        points=data.n_points,
+        pixels=H * W,
+        rounds=max(1, max_rounds - (done or 0)),
+        candidates=est["candidates"],
     )
     timing = run.time(units)
     if ckpt is not None:
@@ -316,6 +337,7 @@ def _record(result: FitResult, path: Path | None, data, on_mesh: bool) -> dict:
         "seconds": round(result.seconds, 3),
         "flagged_points": flagged,
         "unphysical_points": bad,
+        "structure": result.options.get("structure"),  # the held-out choice (None: the structure given)
     }
 
 

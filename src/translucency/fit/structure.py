@@ -1,0 +1,407 @@
+r"""A fit's structure chosen by held-out error: what ``fit`` does unless it is told the structure.
+
+A *structure* is what a fit holds fixed while it solves for the parameters (:class:`Structure`): the
+colour (the paper's (1, s_g, s_b) scale of one fall-off, or one fall-off per channel), the number n of
+exponential terms, and the directions m (1: the isotropic model; m ≥ 2 the paper's anisotropic blend, on
+planar data).  Each default the project could pick would be right on its own samples and wrong on some
+user's, so the fit measures instead, on the data's own photons.
+
+**Estimator.**  A candidate c is fitted on one half of the pairs (incident point, pixel or vertex) and
+scored on the other (:mod:`.held_out`): per incident point i its held-out squared error
+:math:`e_i(c)` and data norm :math:`y_i`, and the relative held-out error
+
+.. math:: E(c) = \sqrt{\textstyle\sum_i e_i(c) / \sum_i y_i}.
+
+Two candidates b, c fitted and scored on the same halves differ by
+:math:`\Delta = \sum_i (e_i(c) - e_i(b)) / \sum_i y_i`, whose standard error over the points,
+:math:`\mathrm{SE} = \sqrt{P}\, \mathrm{std}_i(e_i(c) - e_i(b)) / \sum_i y_i`, is the split's noise.
+
+**Rule** (the one-standard-error rule of cross-validated λ in glmnet).  Along each axis the candidates
+are nested, simplest first — shared ⊂ per-channel colour, n ⊂ n + 1 terms, m = 1 ⊂ 2 ⊂ 4 ⊂ 8 ⊂ 16
+directions (a blend of equal directions is the isotropic profile) — and the simplest candidate whose Δ
+to the best is within one SE is chosen: a richer structure is kept only where it wins by more than the
+split's noise, and the record says by how much.  The axes are taken in the order of :data:`AXES`, each
+with what the earlier ones chose; an axis the caller fixes is not searched.  A last guard compares the
+choice with the base structure (isotropic, n = 3, one fall-off per channel, where not fixed) and keeps the
+base unless the choice wins there too (:func:`choose`).
+
+**Cost.**  The candidates run on a subset of the incident points (:func:`selection_points`: a share
+:data:`SELECT_SHARE`, at least :data:`SELECT_MIN_POINTS`, spread by a fixed seed) for
+:data:`SELECT_ROUNDS` round(s) each; an axis stops after :data:`PATIENCE` candidates in a row that lower
+nothing; and the choice is then fitted on every point;
+``benchmarks/structure_choice.py`` times the choice against one fit.  Units: errors are relative
+(dimensionless); the record gives them in percent.
+"""
+
+from __future__ import annotations
+
+import tempfile
+import time
+import warnings
+from collections.abc import Callable
+from dataclasses import asdict, dataclass, replace
+from pathlib import Path
+
+import numpy as np
+
+from .._validate import TranslucencyError
+from ..io.point_subset import point_subset
+from .families import FAMILIES
+
+__all__ = [
+    "AXES",
+    "Choice",
+    "Structure",
+    "choose",
+    "fit_chosen",
+    "free_axes",
+    "resolve_structure",
+    "selection_points",
+]
+
+#: the axes searched, in order, and each one's candidates from simplest to richest
+AXES = {
+    "colour": ("shared", "per-channel"),
+    "n_terms": (1, 2, 3, 4),
+    "n_directions": (1, 2, 4, 8, 16),
+}
+#: a candidate may be chosen over the best when its held-out squared error is within this many standard
+#: errors of the best one's (the one-standard-error rule)
+SELECT_SE = 1.0
+#: the share of the incident points the candidates are fitted on ...
+SELECT_SHARE = 0.125
+#: ... and at least this many (all of them when the data set has fewer)
+SELECT_MIN_POINTS = 64
+#: alternation rounds of a candidate's fit (parameters, then α)
+SELECT_ROUNDS = 1
+#: an axis's search stops after this many candidates in a row that do not lower its best held-out error
+#: (richer ones are not fitted: on a homogeneous sample m = 8 and 16 cost more than the rest together)
+PATIENCE = 2
+
+
+@dataclass(frozen=True)
+class Structure:
+    """What a fit holds fixed: the colour, n terms and m directions (1: isotropic).
+
+    Examples
+    --------
+    >>> Structure().label, Structure(n_directions=8, colour="shared").label
+    ('iso n=3 per-channel', 'aniso n=3 m=8 shared')
+    >>> Structure(n_directions=8).options(planar=True)
+    {'model': 'aniso', 'n_terms': 3, 'colour': 'per-channel', 'n_directions': 8}
+    """
+
+    colour: str = "per-channel"
+    n_terms: int = 3
+    n_directions: int = 1
+
+    @property
+    def model(self) -> str:
+        """The family: ``"iso"`` for one direction, ``"aniso"`` for more."""
+        return "iso" if self.n_directions == 1 else "aniso"
+
+    @property
+    def label(self) -> str:
+        m = f" m={self.n_directions}" if self.n_directions > 1 else ""
+        return f"{self.model} n={self.n_terms}{m} {self.colour}"
+
+    def options(self, *, planar: bool) -> dict:
+        """The fit's arguments for this structure (a mesh fit takes no directions)."""
+        out = {"model": self.model, "n_terms": self.n_terms, "colour": self.colour}
+        if planar:
+            out["n_directions"] = max(self.n_directions, 2)
+        return out
+
+
+@dataclass
+class Choice:
+    """What :func:`choose` found: the structure, and every candidate's held-out error per axis.
+
+    ``axes[axis]`` lists the candidates, simplest first, each a dict with ``value``, ``held_out`` (%) and
+    ``delta``, ``se`` (% of the squared norm: the candidate's squared error minus the best one's, and its
+    standard error over the points).
+    """
+
+    structure: Structure
+    axes: dict
+    held_out: float = float("nan")  # the chosen structure's held-out error, %
+    guard: dict | None = None
+    points: int = 0
+    of_points: int = 0
+    seconds: float = 0.0
+
+    def record(self) -> dict:
+        """The choice as stored in the model file and printed by ``--json``."""
+        return {
+            "chosen": {
+                **asdict(self.structure),
+                "model": self.structure.model,
+                "label": self.structure.label,
+            },
+            "held_out": self.held_out,
+            "axes": self.axes,
+            "guard": self.guard,
+            "runner_up": self.runner_up(),
+            "points": self.points,
+            "of_points": self.of_points,
+            "rounds": SELECT_ROUNDS,
+            "seconds": round(self.seconds, 2),
+            "rule": f"simplest within {SELECT_SE:g} standard error of the best held-out error",
+        }
+
+    def runner_up(self) -> dict | None:
+        """The candidate nearest to the choice on any axis: its label, held-out error and the margin."""
+        rows = [
+            {**row, "axis": axis}
+            for axis, table in self.axes.items()
+            for row in table
+            if row["value"] != asdict(self.structure)[axis]
+        ]
+        if not rows:
+            return None
+        best = min(rows, key=lambda row: row["held_out"])
+        label = replace(self.structure, **{best["axis"]: best["value"]}).label
+        return {"label": label, "held_out": best["held_out"], "axis": best["axis"]}
+
+    def summary_line(self) -> str:
+        """One line for the run's summary: the structure, its held-out error and how it won."""
+        won = []
+        for axis, table in self.axes.items():
+            chosen = next(row for row in table if row["value"] == asdict(self.structure)[axis])
+            rank = AXES[axis].index
+            simpler = [row for row in table if rank(row["value"]) < rank(chosen["value"])]
+            if simpler:  # a richer structure kept: by how much it won over the best simpler one
+                s = min(simpler, key=lambda row: row["held_out"])
+                gain = s["held_out"] - chosen["held_out"]
+                won.append(f"{axis} {chosen['value']} over {s['value']} by {gain:.2f} pt")
+        how = "; ".join(won) if won else "no richer candidate won by more than the split's noise"
+        where = f"held-out {self.held_out:.2f} % on {self.points} points"
+        return f"structure {self.structure.label} ({where}; {how})"
+
+
+def free_axes(model: str, n_terms, n_directions, colour, *, planar: bool):
+    """The axes to choose and the base structure, from the fit's options (``None`` or ``"auto"``: choose).
+
+    ``model="auto"`` chooses every axis not given; a named exponential family chooses only the axes given
+    as ``"auto"`` and fills the others with the family's defaults (n = 3, m = 8, one fall-off per
+    channel); a baseline family has no structure to choose.
+
+    Returns
+    -------
+    (tuple of str, Structure)
+        The free axes (in :data:`AXES` order; empty: nothing to choose) and the base structure (the
+        fixed values, and the simplest-but-safe defaults for the free ones).
+
+    Examples
+    --------
+    >>> free_axes("auto", None, None, None, planar=True)
+    (('colour', 'n_terms', 'n_directions'), Structure(colour='per-channel', n_terms=3, n_directions=1))
+    >>> free_axes("aniso", 3, "auto", "shared", planar=True)
+    (('n_directions',), Structure(colour='shared', n_terms=3, n_directions=1))
+    >>> free_axes("auto", None, None, "shared", planar=False)
+    (('n_terms',), Structure(colour='shared', n_terms=3, n_directions=1))
+    """
+    given = {"colour": colour, "n_terms": n_terms, "n_directions": n_directions}
+    if model != "auto":
+        if model not in FAMILIES or not FAMILIES[model].shared_colour:  # a baseline: checked by the fit
+            return (), Structure()
+        defaults = {
+            "colour": "per-channel",
+            "n_terms": 3,
+            "n_directions": 8 if FAMILIES[model].directional else 1,
+        }
+        given = {axis: defaults[axis] if v is None else v for axis, v in given.items()}
+        if model == "aniso" and given["n_directions"] != "auto" and int(given["n_directions"]) < 2:
+            raise TranslucencyError(f"directions: the anisotropic model needs m >= 2, got {n_directions}")
+    if not planar:
+        given["n_directions"] = 1
+    free = tuple(axis for axis in AXES if given[axis] is None or given[axis] == "auto")
+    fixed = {axis: (int(v) if axis != "colour" else v) for axis, v in given.items() if axis not in free}
+    return free, Structure(**fixed)
+
+
+def resolve_structure(model: str, n_terms, n_directions, colour, *, planar: bool):
+    """The fit's options with the structure's defaults filled, the free axes and the base structure.
+
+    Returns ``(model, n_terms, n_directions, colour, free, base)``: the family to check the options with
+    (``"auto"`` resolves to ``"aniso"`` where directions are chosen or given, else ``"iso"``), the options
+    (``"auto"`` where an axis is chosen), and :func:`free_axes`'s two values.
+
+    Examples
+    --------
+    >>> resolve_structure("auto", None, None, None, planar=True)[:4]
+    ('aniso', 'auto', 'auto', 'auto')
+    >>> resolve_structure("iso", None, None, None, planar=True)[:4]
+    ('iso', 3, 1, 'per-channel')
+    >>> resolve_structure("dipole", None, None, None, planar=False)[:5]
+    ('dipole', 3, 1, 'per-channel', ())
+    """
+    free, base = free_axes(model, n_terms, n_directions, colour, planar=planar)
+    if model == "auto":
+        model = "aniso" if "n_directions" in free or base.n_directions > 1 else "iso"
+    exponential = model in FAMILIES and FAMILIES[model].shared_colour
+    values = {}
+    for axis, given in (("n_terms", n_terms), ("n_directions", n_directions), ("colour", colour)):
+        if axis in free:
+            values[axis] = "auto"
+        elif exponential:
+            values[axis] = getattr(base, axis)
+        elif given is None or (axis == "n_terms" and given == "auto"):  # a baseline has no terms
+            values[axis] = getattr(Structure(), axis)
+        else:
+            values[axis] = given  # a baseline's: checked by the fit (its directions' "auto" refused there)
+    if model == "aniso" and values["n_directions"] == 1:
+        model = "iso"
+    return model, values["n_terms"], values["n_directions"], values["colour"], free, base
+
+
+def selection_points(n_points: int) -> np.ndarray:
+    """The incident points the candidates are fitted on: :data:`SELECT_SHARE` of them, at least
+    :data:`SELECT_MIN_POINTS`, drawn by a fixed seed (so a fit is repeatable), in ascending order.
+
+    Examples
+    --------
+    >>> len(selection_points(1024)), len(selection_points(100)), len(selection_points(25))
+    (256, 64, 25)
+    """
+    k = min(n_points, max(SELECT_MIN_POINTS, int(np.ceil(SELECT_SHARE * n_points))))
+    if k == n_points:
+        return np.arange(n_points)
+    return np.sort(np.random.default_rng(0).choice(n_points, size=k, replace=False))
+
+
+def choose(score: Callable[[Structure], tuple], base: Structure, free: tuple) -> Choice:
+    """Choose the structure along the ``free`` axes by the one-standard-error rule (module docstring).
+
+    Parameters
+    ----------
+    score : callable
+        ``score(structure) -> (e, y)``: per incident point the held-out squared error and data norm, (P,)
+        each, of the structure fitted on one half of the pairs (:func:`.held_out.held_out_terms`).
+    base : Structure
+        The fixed axes' values, and where the search starts.
+    free : tuple of str
+        The axes to search, a subset of :data:`AXES` (in its order).
+
+    Returns
+    -------
+    Choice
+
+    Examples
+    --------
+    Three points; one direction misses 10 % more than eight on every point (a clear win), and two
+    directions gain less than their noise: eight are chosen (16 is tried, and loses).
+
+    >>> e = {1: np.array([1.1, 1.2, 1.0]), 2: np.array([1.0, 1.3, 0.95]), 4: np.array([1.1, 1.2, 1.0]),
+    ...      8: np.array([1.0, 1.09, 0.91]), 16: np.array([1.1, 1.2, 1.0])}
+    >>> choice = choose(lambda s: (e[s.n_directions], np.full(3, 10.0)), Structure(), ("n_directions",))
+    >>> choice.structure.n_directions
+    8
+    """
+    scored: dict[Structure, tuple] = {}
+
+    def terms(structure: Structure):
+        if structure not in scored:
+            scored[structure] = tuple(np.asarray(a, dtype=np.float64) for a in score(structure))
+        return scored[structure]
+
+    current, axes = base, {}
+    for axis in (a for a in AXES if a in free):
+        candidates, scores, best, worse = [], [], np.inf, 0
+        for value in AXES[axis]:  # simplest first, until PATIENCE in a row lower nothing
+            c = replace(current, **{axis: value})
+            e, y = terms(c)
+            candidates.append(c)
+            scores.append((e, y))
+            err = e.sum() / max(y.sum(), 1e-300)
+            worse = 0 if err < best else worse + 1
+            best = min(best, err)
+            if worse >= PATIENCE:
+                break
+        pick, table = _one_se(candidates, scores, axis)
+        current, axes[axis] = pick, table
+    guard = None
+    if current != base and free:  # the last guard: the choice against the base, on the same halves
+        delta, se = _difference(terms(current), terms(base))
+        guard = {"base": base.label, "delta": 100 * delta, "se": 100 * se}
+        if delta > SELECT_SE * se:  # worse than the base by more than the split's noise: keep the base
+            guard["kept"] = "base"
+            current = base
+    e, y = terms(current)
+    return Choice(current, axes, 100 * float(np.sqrt(e.sum() / max(y.sum(), 1e-300))), guard)
+
+
+def _difference(a: tuple, b: tuple) -> tuple[float, float]:
+    """Δ = Σ(e_a − e_b) / Σy and its standard error over the points (both relative, of the squared norm)."""
+    (e_a, y_a), (e_b, y_b) = a, b
+    y = 0.5 * (y_a.sum() + y_b.sum())
+    d = e_a - e_b
+    n = int(np.count_nonzero((y_a > 0) | (y_b > 0)))
+    se = np.sqrt(n) * float(np.std(d[(y_a > 0) | (y_b > 0)], ddof=1)) / y if n > 1 else 0.0
+    return float(d.sum() / y), float(se)
+
+
+def _one_se(candidates: list, terms: list, axis: str):
+    """The simplest candidate within one SE of the best, and the axis's table (see :class:`Choice`)."""
+    errors = [float(np.sqrt(e.sum() / max(y.sum(), 1e-300))) for e, y in terms]
+    best = int(np.argmin(errors))
+    table, pick = [], None
+    for c, t, err in zip(candidates, terms, errors, strict=True):
+        delta, se = _difference(t, terms[best])
+        table.append({"value": getattr(c, axis), "held_out": 100 * err, "delta": 100 * delta, "se": 100 * se})
+        if pick is None and delta <= SELECT_SE * se:
+            pick = c
+    return pick, table
+
+
+def fit_chosen(fit: Callable, ds, score_terms: Callable, *, free: tuple, base: Structure, planar: bool,
+               progress=None, **kw):  # fmt: skip
+    """Choose the structure on a subset of ``ds``'s points (:func:`choose`), then fit it on all of them.
+
+    Parameters
+    ----------
+    fit : callable
+        :func:`translucency.fit.fit_planar` or :func:`translucency.fit.fit_mesh`.
+    ds : PlanarDataset or MeshDataset
+        The data set (finished).
+    score_terms : callable
+        ``score_terms(fit_result, subset) -> (e, y)`` per point (:mod:`.held_out`).
+    free, base :
+        From :func:`free_axes`.
+    planar : bool
+        Planar data (directions may be chosen) or a mesh.
+    progress : callable, optional
+        ``progress(done, total, message)``: one step per candidate, then the final fit's own.
+    **kw
+        The fit's other options, the same for the candidates and the final fit.
+
+    Returns
+    -------
+    FitResult
+        The chosen structure's fit on every point; ``options["structure"]`` holds :meth:`Choice.record`.
+    """
+    t0 = time.perf_counter()
+    points = selection_points(ds.n_points)
+    n_candidates = sum(len(AXES[a]) for a in free)
+    done = [0]
+    selection_kw = {k: v for k, v in kw.items() if k not in ("checkpoint", "max_rounds")}
+    with tempfile.TemporaryDirectory(prefix="translucency-structure-") as tmp:
+        sub = ds if len(points) == ds.n_points else point_subset(ds, points, Path(tmp) / "points.zarr")
+
+        def score(structure: Structure):
+            if progress is not None:
+                progress(done[0], n_candidates, f"structure: {structure.label}")
+            with warnings.catch_warnings():  # the final fit says what the data set's fits should hear
+                warnings.simplefilter("ignore")
+                result = fit(sub.path, **structure.options(planar=planar), half=0, max_rounds=SELECT_ROUNDS,
+                             **selection_kw)  # fmt: skip
+            done[0] += 1
+            return score_terms(result, sub)
+
+        choice = choose(score, base, free)
+    choice.points, choice.of_points, choice.seconds = len(points), ds.n_points, time.perf_counter() - t0
+    result = fit(ds.path, **choice.structure.options(planar=planar), progress=progress, **kw)
+    result.options["structure"] = choice.record()
+    result.options["structure"]["summary"] = choice.summary_line()
+    result.seconds += choice.seconds
+    return result
