@@ -95,7 +95,8 @@ def targets(results: dict) -> list[str]:
         an = results["fibers"][label]
         line(
             an["rel_l2"] <= 0.6 * iso["rel_l2"],
-            f"fibers: aniso (the better of m = 8 and the default: {label}) ≤ 0.6 × iso overall: {pct(an['rel_l2'])} "
+            f"fibers: aniso (the better of m = 8 and the default: {label}) ≤ 0.6 × iso overall: "
+            f"{pct(an['rel_l2'])} "
             f"vs 0.6 × {pct(iso['rel_l2'])} % (ratio {an['rel_l2'] / iso['rel_l2']:.2f}; beyond noise "
             f"{pct(an['beyond_noise']['all'])} vs {pct(iso['beyond_noise']['all'])} %)",
         )

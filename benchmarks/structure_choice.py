@@ -20,8 +20,8 @@ import time
 from pathlib import Path
 
 import numpy as np
-from accuracy_table import SAMPLES, acquire, pct, write_between_markers
 
+from accuracy_table import SAMPLES, acquire, pct, write_between_markers
 from translucency.data import default_dataset_path
 from translucency.evaluate.errors import finite_or_null, planar_errors
 from translucency.fit.planar import fit_planar
@@ -44,7 +44,7 @@ def score(ds: Path, truth: Path) -> dict:
         fit = fit_planar(ds, **kw)
         seconds = time.perf_counter() - t
         err = planar_errors(fit.model, truth, flagged=fit.flagged)
-        out[label] = {"rel_l2": err.rel_l2, "noise": err.noise_floor["all"], "seconds": seconds}
+        out[label] = {"rel_l2": err.rel_l2, "noise": err.noise["all"], "seconds": seconds}
         if label == "default":
             out[label]["chosen"] = fit.options["structure"]["chosen"]["label"]
         print(f"  {label:32s} {100 * err.rel_l2:6.2f} %  ({seconds:.2f} s)", flush=True)
@@ -91,7 +91,8 @@ def markdown(results: dict, times: dict, args) -> str:
         met = gap <= noise and over_iso <= noise
         met_all &= met
         rows.append(
-            f"| {sample} | {default['chosen']} | {pct(default['rel_l2'])} | {best} {pct(fixed[best]['rel_l2'])} "
+            f"| {sample} | {default['chosen']} | {pct(default['rel_l2'])} | "
+            f"{best} {pct(fixed[best]['rel_l2'])} "
             f"| {100 * gap:+.2f} | {pct(fixed['iso']['rel_l2'])} | {pct(fixed['aniso m=8']['rel_l2'])} | "
             f"{pct(fixed['aniso m=8 shared (the paper' + 's)']['rel_l2'])} | {pct(noise)} | "
             f"{'**met**' if met else '**not met**'} |"
@@ -101,13 +102,13 @@ def markdown(results: dict, times: dict, args) -> str:
         [
             "## The default's structure against every fixed one (held-out)",
             "",
-            f"Written by `python benchmarks/structure_choice.py --out docs/accuracy.md` ({args.photons:,}-photon "
-            "data and a 3× truth for the table's samples; the two kept aside at 20,000 photons against "
-            "400,000).  `fit` chooses the colour, n and m by held-out error on its own data "
-            "(docs/fitting.md, *The structure*); each fixed structure is fitted too, and all are scored against "
-            "the independent truth, % relative L2 over all pairs.  *gap*: the default minus the best fixed "
-            "structure, percentage points.  Target: the default within the truth's noise of the best, and "
-            "never worse than iso by more than that noise.",
+            "Written by `python benchmarks/structure_choice.py --out docs/accuracy.md` "
+            f"({args.photons:,}-photon data and a 3× truth for the table's samples; the two kept aside at "
+            "20,000 photons against 400,000).  `fit` chooses the colour, n and m by held-out error on its "
+            "own data (docs/fitting.md, *The structure*); each fixed structure is fitted too, and all are "
+            "scored against the independent truth, % relative L2 over all pairs.  *gap*: the default minus "
+            "the best fixed structure, percentage points.  Target: the default within the truth's noise of "
+            "the best, and never worse than iso by more than that noise.",
             "",
             "| sample | default chose | default | best fixed | gap | iso | aniso m=8 | the paper's (m=8, shared) "
             "| truth noise | target |",
