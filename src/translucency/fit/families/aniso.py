@@ -54,7 +54,9 @@ class AnisoFamily(ExponentialFamily):
                 O = np.where(in0, l1, l0)  # its neighbour, held fixed
                 u = np.where(in0, 1 - t, np.where(in1, t, 0.0)).astype(np.float32)
                 f_other = at_pixels(self.profiles(ctx, state, sl, ch.r_g).astype(np.float32), ch, m, O)
-                f_other *= kappa
+                f_other = (
+                    f_other * kappa if ctx.C == 1 else np.multiply(f_other, kappa, out=f_other)
+                )  # (k, J, 3)
                 f_other *= ch.per_channel(np.where(in0, t, 1 - t).astype(np.float32))  # the neighbour's part
                 target = np.subtract(ch.y, f_other, out=f_other)
                 both = in0 | in1  # (m even: every pixel borders one direction of each class)
