@@ -126,4 +126,7 @@ def test_the_registry_describes_itself(seventh_family):
 
 def test_the_cli_help_lists_the_registry():
     fit = typer.main.get_command(app).commands["fit"]
-    assert next(p.help for p in fit.params if p.name == "model") == describe_families()
+    text = next(p.help for p in fit.params if p.name == "model")
+    assert text.startswith("auto: ") and text.endswith(
+        " | " + describe_families()
+    )  # the choice, then each family

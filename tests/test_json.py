@@ -114,7 +114,10 @@ def test_info_json_is_typed_and_whole(outputs):
     assert planar["complete"] is True and planar["damaged"] == {} and isinstance(planar["sample"], dict)
     assert planar["window_px"] == [5, 5] and planar["pitch_mm"] == 0.5
     assert isinstance(model["valid"], bool) and isinstance(model["physical"]["ok"], bool)
-    assert model["meta"]["fit"]["model"] == "iso" and isinstance(model["meta"]["objective_per_round"], list)
+    fit = model["meta"]["fit"]  # the structure chosen by default, and what was fitted
+    assert fit["model"] == fit["structure"]["chosen"]["model"] and isinstance(
+        model["meta"]["objective_per_round"], list
+    )
     assert model["n_points"] == 4 and len(model["total_reflectance_mean"]) == 3
 
 

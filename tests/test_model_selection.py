@@ -1,4 +1,5 @@
-"""Model selection by held-out error (issue 13, item 3): n_terms="auto", n_directions="auto"."""
+"""Model selection by held-out error with a named family: n_terms="auto", n_directions="auto" (the default
+``model="auto"`` is tests/test_structure_choice.py)."""
 
 import numpy as np
 import pytest
@@ -22,6 +23,10 @@ def fibers(planar_scan):
     return planar_scan("fibers", **SCAN)
 
 
+def _errors(record, axis):
+    return {row["value"]: row["held_out"] for row in record["axes"][axis]}
+
+
 def test_halves_interleave_and_alternate_between_points(homogeneous):
     grid = SampleGrid.covering(homogeneous["window_origin"].astype(np.float64), 0.25, homogeneous.window)
     pixel = np.arange(grid.shape[0] * grid.shape[1])[None, :].repeat(2, axis=0)
@@ -34,26 +39,27 @@ def test_halves_interleave_and_alternate_between_points(homogeneous):
 
 def test_homogeneous_material_gets_one_direction(homogeneous):
     fit = fit_planar(homogeneous, "aniso", n_terms="auto", n_directions="auto", max_rounds=3)
-    sel = fit.options["selection"]
-    assert sel["chosen"]["n_directions"] == 1
+    record = fit.options["structure"]
+    assert set(record["axes"]) == {"n_terms", "n_directions"}  # the colour was given (per channel)
+    assert record["chosen"]["n_directions"] == 1
     assert fit.model.kind == "exponential" and fit.model.n_directions == 1
-    assert fit.model.c.shape[-1] == sel["chosen"]["n_terms"]
-    e = sel["n_directions"]
+    assert fit.model.c.shape[-1] == record["chosen"]["n_terms"]
+    e = _errors(record, "n_directions")
     # no direction count buys anything on held-out pairs (none more than 3 % below the isotropic error) ...
-    assert min(e.values()) >= e["1"] / 1.03
+    assert min(e.values()) >= e[1] / 1.03
     # ... and more terms than the data support do not help either: one term is clearly short
-    n = sel["n_terms"]
-    assert n["1"] > 1.5 * min(n.values())
+    n = _errors(record, "n_terms")
+    assert n[1] > 1.5 * min(n.values())
 
 
 def test_fibers_get_many_directions(fibers):
     fit = fit_planar(fibers, "aniso", n_terms=3, n_directions="auto", max_rounds=3)
-    sel = fit.options["selection"]
-    assert sel["chosen"]["n_directions"] >= 8
-    assert fit.model.n_directions == sel["chosen"]["n_directions"]
-    e = sel["n_directions"]
+    record = fit.options["structure"]
+    m = record["chosen"]["n_directions"]
+    assert m >= 8 and fit.model.n_directions == m
+    e = _errors(record, "n_directions")
     # the lamellae's anisotropy shows on held-out pairs: the chosen m beats isotropy by a wide margin
-    assert e[str(sel["chosen"]["n_directions"])] < 0.7 * e["1"]
+    assert e[m] < 0.7 * e[1]
 
 
 def test_held_out_error_of_the_right_model_is_near_its_in_sample_error(homogeneous):
@@ -72,3 +78,5 @@ def test_bad_selection_options(homogeneous):
         fit_planar(homogeneous, "iso", n_terms="many")
     with pytest.raises(TranslucencyError, match="half"):
         fit_planar(homogeneous, "iso", half=2)
+    with pytest.raises(TranslucencyError, match="half"):  # a held-out fit of a structure still to choose
+        fit_planar(homogeneous, half=0)

@@ -129,6 +129,66 @@ ACQUIRE_MESH = record(
 )
 
 # -- fit ----------------------------------------------------------------------------------------------
+_CANDIDATE = record(
+    "One candidate of an axis: its value, held-out error and its distance to the axis's best.",
+    {
+        "value": field(["string", "integer"], "The axis's value (colour name, n or m)."),
+        "held_out": field("number", "Held-out relative L2 error on the data's own photons.", "fraction"),
+        "delta": field(
+            "number", "Its squared error minus the best candidate's, of the data's squared norm.", "fraction"
+        ),
+        "se": field("number", "The standard error of that difference over the incident points.", "fraction"),
+    },
+)
+_STRUCTURE = record(
+    "The structure chosen by held-out error (--model auto, or an axis given as auto); null when given.",
+    {
+        "chosen": record(
+            "The structure fitted.",
+            {
+                "colour": field("string", "shared or per-channel.", enum=["shared", "per-channel"]),
+                "n_terms": field("integer", "Exponential terms n per profile."),
+                "n_directions": field("integer", "Directions m (1: isotropic)."),
+                "model": field("string", "The family fitted: iso or aniso.", enum=["iso", "aniso"]),
+                "label": field("string", "The structure in words."),
+            },
+        ),
+        "held_out": field(
+            "number", "The chosen structure's held-out error on the points it was chosen on.", "fraction"
+        ),
+        "axes": record(
+            "Per axis searched (colour, n_terms, n_directions), its candidates simplest first.",
+            {},
+            extra=array("The candidates tried (a search stops after two that lower nothing).", _CANDIDATE),
+        ),
+        "guard": record(
+            "The choice against the base structure (isotropic, n = 3, per channel) on the same halves.",
+            {
+                "base": field("string", "The base structure."),
+                "delta": field("number", "The choice's squared error minus the base's.", "fraction"),
+                "se": field("number", "Its standard error over the points.", "fraction"),
+                "kept": field("string", "base: the choice lost by more than the split's noise."),
+            },
+            optional=("kept",),
+            nullable=True,
+        ),
+        "runner_up": record(
+            "The best candidate not chosen, on any axis.",
+            {
+                "label": field("string", "Its structure in words."),
+                "held_out": field("number", "Its held-out error.", "fraction"),
+                "axis": field("string", "The axis it differs on."),
+            },
+            nullable=True,
+        ),
+        "points": field("integer", "Incident points the candidates were fitted and scored on."),
+        "of_points": field("integer", "Incident points of the data set."),
+        "seconds": field("number", "Time of the choice (the final fit's own time not included).", "s"),
+        "rule": field("string", "How the choice is made."),
+        "summary": field("string", "The choice in one line, as the command prints it."),
+    },
+    nullable=True,
+)
 FIT = record(
     "`translucency fit --json`: the model file written.",
     {
@@ -142,6 +202,7 @@ FIT = record(
         "objective_per_round": array("The fit's objective after each round.", NUMBER),
         "flagged_points": array("Incident points without usable data (planar fits).", INTEGER),
         "unphysical_points": array("Incident points that break a physical bound (see `info`).", INTEGER),
+        "structure": _STRUCTURE,
         **_WORKING,
     },
 )

@@ -26,11 +26,12 @@ choice with the base structure (isotropic, n = 3, one fall-off per channel, wher
 base unless the choice wins there too (:func:`choose`).
 
 **Cost.**  The candidates run on a subset of the incident points (:func:`selection_points`: a share
-:data:`SELECT_SHARE`, at least :data:`SELECT_MIN_POINTS`, spread by a fixed seed) for
-:data:`SELECT_ROUNDS` round(s) each; an axis stops after :data:`PATIENCE` candidates in a row that lower
-nothing; and the choice is then fitted on every point;
+:data:`SELECT_SHARE`, at least :data:`SELECT_MIN_POINTS`, spread by a fixed seed), each fitted
+as the final fit will be (the same rounds: after one round the richer structures still hold what α
+takes in the next, and won where they lose after three); an axis stops after :data:`PATIENCE`
+candidates in a row that lower nothing; and the choice is then fitted on every point;
 ``benchmarks/structure_choice.py`` times the choice against one fit.  Units: errors are relative
-(dimensionless); the record gives them in percent.
+(fractions; 0.05 is 5 %).
 """
 
 from __future__ import annotations
@@ -69,11 +70,9 @@ AXES = {
 #: errors of the best one's (the one-standard-error rule)
 SELECT_SE = 1.0
 #: the share of the incident points the candidates are fitted on ...
-SELECT_SHARE = 0.125
+SELECT_SHARE = 0.0625
 #: ... and at least this many (all of them when the data set has fewer)
 SELECT_MIN_POINTS = 64
-#: alternation rounds of a candidate's fit (parameters, then α)
-SELECT_ROUNDS = 1
 #: an axis's search stops after this many candidates in a row that do not lower its best held-out error
 #: (richer ones are not fitted: on a homogeneous sample m = 8 and 16 cost more than the rest together)
 PATIENCE = 2
@@ -117,14 +116,14 @@ class Structure:
 class Choice:
     """What :func:`choose` found: the structure, and every candidate's held-out error per axis.
 
-    ``axes[axis]`` lists the candidates, simplest first, each a dict with ``value``, ``held_out`` (%) and
-    ``delta``, ``se`` (% of the squared norm: the candidate's squared error minus the best one's, and its
-    standard error over the points).
+    ``axes[axis]`` lists the candidates, simplest first, each a dict with ``value``, ``held_out`` and
+    ``delta``, ``se`` (fractions of the squared norm: the candidate's squared error minus the best
+    one's, and its standard error over the points).
     """
 
     structure: Structure
     axes: dict
-    held_out: float = float("nan")  # the chosen structure's held-out error, %
+    held_out: float = float("nan")  # the chosen structure's held-out error (fraction)
     guard: dict | None = None
     points: int = 0
     of_points: int = 0
@@ -144,7 +143,6 @@ class Choice:
             "runner_up": self.runner_up(),
             "points": self.points,
             "of_points": self.of_points,
-            "rounds": SELECT_ROUNDS,
             "seconds": round(self.seconds, 2),
             "rule": f"simplest within {SELECT_SE:g} standard error of the best held-out error",
         }
@@ -172,10 +170,10 @@ class Choice:
             simpler = [row for row in table if rank(row["value"]) < rank(chosen["value"])]
             if simpler:  # a richer structure kept: by how much it won over the best simpler one
                 s = min(simpler, key=lambda row: row["held_out"])
-                gain = s["held_out"] - chosen["held_out"]
+                gain = 100 * (s["held_out"] - chosen["held_out"])
                 won.append(f"{axis} {chosen['value']} over {s['value']} by {gain:.2f} pt")
         how = "; ".join(won) if won else "no richer candidate won by more than the split's noise"
-        where = f"held-out {self.held_out:.2f} % on {self.points} points"
+        where = f"held-out {100 * self.held_out:.2f} % on {self.points} points"
         return f"structure {self.structure.label} ({where}; {how})"
 
 
@@ -216,8 +214,21 @@ def free_axes(model: str, n_terms, n_directions, colour, *, planar: bool):
     if not planar:
         given["n_directions"] = 1
     free = tuple(axis for axis in AXES if given[axis] is None or given[axis] == "auto")
-    fixed = {axis: (int(v) if axis != "colour" else v) for axis, v in given.items() if axis not in free}
+    fixed = {
+        axis: (_count(axis, v) if axis != "colour" else v) for axis, v in given.items() if axis not in free
+    }
     return free, Structure(**fixed)
+
+
+def _count(axis: str, value) -> int:
+    """A fixed n or m as an int; anything else is refused in one line naming the option."""
+    try:
+        if isinstance(value, bool) or int(value) != float(value):
+            raise ValueError
+        return int(value)
+    except (TypeError, ValueError):
+        name = {"n_terms": "terms", "n_directions": "directions"}[axis]
+        raise TranslucencyError(f"{name}: expected a whole number or 'auto', got {value!r}") from None
 
 
 def resolve_structure(model: str, n_terms, n_directions, colour, *, planar: bool):
@@ -262,7 +273,7 @@ def selection_points(n_points: int) -> np.ndarray:
     Examples
     --------
     >>> len(selection_points(1024)), len(selection_points(100)), len(selection_points(25))
-    (256, 64, 25)
+    (64, 64, 25)
     """
     k = min(n_points, max(SELECT_MIN_POINTS, int(np.ceil(SELECT_SHARE * n_points))))
     if k == n_points:
@@ -323,18 +334,20 @@ def choose(score: Callable[[Structure], tuple], base: Structure, free: tuple) ->
     guard = None
     if current != base and free:  # the last guard: the choice against the base, on the same halves
         delta, se = _difference(terms(current), terms(base))
-        guard = {"base": base.label, "delta": 100 * delta, "se": 100 * se}
+        guard = {"base": base.label, "delta": delta, "se": se}
         if delta > SELECT_SE * se:  # worse than the base by more than the split's noise: keep the base
             guard["kept"] = "base"
             current = base
     e, y = terms(current)
-    return Choice(current, axes, 100 * float(np.sqrt(e.sum() / max(y.sum(), 1e-300))), guard)
+    return Choice(current, axes, float(np.sqrt(e.sum() / max(y.sum(), 1e-300))), guard)
 
 
 def _difference(a: tuple, b: tuple) -> tuple[float, float]:
     """Δ = Σ(e_a − e_b) / Σy and its standard error over the points (both relative, of the squared norm)."""
     (e_a, y_a), (e_b, y_b) = a, b
     y = 0.5 * (y_a.sum() + y_b.sum())
+    if not y > 0:  # no held-out data at all: nothing tells the candidates apart
+        return 0.0, 0.0
     d = e_a - e_b
     n = int(np.count_nonzero((y_a > 0) | (y_b > 0)))
     se = np.sqrt(n) * float(np.std(d[(y_a > 0) | (y_b > 0)], ddof=1)) / y if n > 1 else 0.0
@@ -348,7 +361,7 @@ def _one_se(candidates: list, terms: list, axis: str):
     table, pick = [], None
     for c, t, err in zip(candidates, terms, errors, strict=True):
         delta, se = _difference(t, terms[best])
-        table.append({"value": getattr(c, axis), "held_out": 100 * err, "delta": 100 * delta, "se": 100 * se})
+        table.append({"value": getattr(c, axis), "held_out": err, "delta": delta, "se": se})
         if pick is None and delta <= SELECT_SE * se:
             pick = c
     return pick, table
@@ -384,7 +397,7 @@ def fit_chosen(fit: Callable, ds, score_terms: Callable, *, free: tuple, base: S
     points = selection_points(ds.n_points)
     n_candidates = sum(len(AXES[a]) for a in free)
     done = [0]
-    selection_kw = {k: v for k, v in kw.items() if k not in ("checkpoint", "max_rounds")}
+    selection_kw = {k: v for k, v in kw.items() if k != "checkpoint"}
     with tempfile.TemporaryDirectory(prefix="translucency-structure-") as tmp:
         sub = ds if len(points) == ds.n_points else point_subset(ds, points, Path(tmp) / "points.zarr")
 
@@ -393,8 +406,7 @@ def fit_chosen(fit: Callable, ds, score_terms: Callable, *, free: tuple, base: S
                 progress(done[0], n_candidates, f"structure: {structure.label}")
             with warnings.catch_warnings():  # the final fit says what the data set's fits should hear
                 warnings.simplefilter("ignore")
-                result = fit(sub.path, **structure.options(planar=planar), half=0, max_rounds=SELECT_ROUNDS,
-                             **selection_kw)  # fmt: skip
+                result = fit(sub.path, **structure.options(planar=planar), half=0, **selection_kw)
             done[0] += 1
             return score_terms(result, sub)
 
