@@ -34,6 +34,7 @@ FIXED = {  # label -> fit_planar arguments: what the default could have chosen
     **{f"aniso m={m}": dict(model="aniso", n_directions=m) for m in (2, 4, 8, 16)},
     "aniso m=8 shared (the paper's)": dict(model="aniso", n_directions=8, colour="shared"),
 }
+PAPER = "aniso m=8 shared (the paper's)"
 
 
 def score(ds: Path, truth: Path) -> dict:
@@ -94,7 +95,7 @@ def markdown(results: dict, times: dict, args) -> str:
             f"| {sample} | {default['chosen']} | {pct(default['rel_l2'])} | "
             f"{best} {pct(fixed[best]['rel_l2'])} "
             f"| {100 * gap:+.2f} | {pct(fixed['iso']['rel_l2'])} | {pct(fixed['aniso m=8']['rel_l2'])} | "
-            f"{pct(fixed['aniso m=8 shared (the paper' + 's)']['rel_l2'])} | {pct(noise)} | "
+            f"{pct(fixed[PAPER]['rel_l2'])} | {pct(noise)} | "
             f"{'**met**' if met else '**not met**'} |"
         )
     (d_label, d), (c_label, c), (i_label, i) = times.items()

@@ -155,7 +155,7 @@ def test_every_model_file_of_the_demo_is_valid(demo_out):
     32 mm sample, the pig's per-vertex model, and Jensen's materials as semi-infinite slabs."""
     files = sorted((demo_out / "fits").glob("*.model.zip")) + [demo_out / "dipole_fits.model.zip"]
     assert {p.name.removesuffix(".model.zip") for p in files} == {
-        "iso", "aniso", "dipole", "burley", "pig_iso", "dipole_fits"
+        "default", "paper", "iso", "dipole", "burley", "pig_iso", "dipole_fits"
     }  # fmt: skip
     for path in files:
         res = runner.invoke(app, ["info", str(path)])

@@ -99,11 +99,11 @@ def held_out_terms(fit: FitResult, ds: PlanarDataset, *, near: float = 0.0, chun
         # no inward extrapolation: held-out pairs from the smallest radius the fit saw in the window on
         r_fit = np.where(valid & train, r, np.inf).min(axis=1, keepdims=True)
         test = valid & ~train & (r >= np.maximum(r_fit, near))
-        i = np.broadcast_to(np.arange(s, e)[:, None], r.shape)
-        pred = alpha[pixel[test]][:, None] * model.profile(i[test], r[test], theta[test])
-        row = i[test] - s  # each pair's point, within the chunk
-        sq_err[s:e] = np.bincount(row, np.sum((pred - y[test]) ** 2, axis=1), minlength=e - s)
-        sq_data[s:e] = np.bincount(row, np.sum(y[test] ** 2, axis=1), minlength=e - s)
+        for k in range(e - s):  # one point at a time: its parameters broadcast over its pairs
+            t = test[k]
+            pred = alpha[pixel[k, t]][:, None] * model.profile(np.int64(s + k), r[k, t], theta[k, t])
+            sq_err[s + k] = np.sum((pred - y[k, t]) ** 2)
+            sq_data[s + k] = np.sum(y[k, t] ** 2)
     return sq_err, sq_data
 
 
@@ -133,9 +133,9 @@ def mesh_held_out_terms(fit: FitResult, group, *, chunk_points: int = 32):
         y, r, valid = read_pairs(group, vertices, x_i, float(fit.options["exclusion_mm"]), s, e)
         test = valid & (vertex_half(np.arange(s, e), np.arange(len(vertices))) != fitted)
         test &= ~fit.flagged[s:e, None]
-        for k in range(e - s):  # one point at a time: (V, 3) each
+        for k in range(e - s):  # one point at a time: its parameters broadcast over its (V, 3) pairs
             t = test[k]
-            pred = alpha[t, None] * model.profile(np.full(t.sum(), s + k), r[k, t], np.zeros(t.sum()))
+            pred = alpha[t, None] * model.profile(np.int64(s + k), r[k, t], np.zeros(t.sum()))
             sq_err[s + k] = np.sum(area[t, None] * (pred - y[k, t]) ** 2)
             sq_data[s + k] = np.sum(area[t, None] * y[k, t].astype(np.float64) ** 2)
     return sq_err, sq_data

@@ -26,7 +26,8 @@ choice with the base structure (isotropic, n = 3, one fall-off per channel, wher
 base unless the choice wins there too (:func:`choose`).
 
 **Cost.**  The candidates run on a subset of the incident points (:func:`selection_points`: a share
-:data:`SELECT_SHARE`, at least :data:`SELECT_MIN_POINTS`, spread by a fixed seed), each fitted
+:data:`SELECT_SHARE`, at least :data:`SELECT_MIN_POINTS`, spread by a fixed seed), as many side by side
+as there are workers, each fitted
 as the final fit will be (the same rounds: after one round the richer structures still hold what α
 takes in the next, and won where they lose after three); an axis stops after :data:`PATIENCE`
 candidates in a row that lower nothing; and the choice is then fitted on every point;
@@ -36,10 +37,12 @@ candidates in a row that lower nothing; and the choice is then fitted on every p
 
 from __future__ import annotations
 
+import os
 import tempfile
 import time
 import warnings
 from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 
@@ -281,7 +284,7 @@ def selection_points(n_points: int) -> np.ndarray:
     return np.sort(np.random.default_rng(0).choice(n_points, size=k, replace=False))
 
 
-def choose(score: Callable[[Structure], tuple], base: Structure, free: tuple) -> Choice:
+def choose(score: Callable[[Structure], tuple], base: Structure, free: tuple, *, workers: int = 1) -> Choice:
     """Choose the structure along the ``free`` axes by the one-standard-error rule (module docstring).
 
     Parameters
@@ -293,6 +296,8 @@ def choose(score: Callable[[Structure], tuple], base: Structure, free: tuple) ->
         The fixed axes' values, and where the search starts.
     free : tuple of str
         The axes to search, a subset of :data:`AXES` (in its order).
+    workers : int
+        Candidates fitted side by side (threads; ``score`` must allow it).  The choice is the same.
 
     Returns
     -------
@@ -311,34 +316,42 @@ def choose(score: Callable[[Structure], tuple], base: Structure, free: tuple) ->
     """
     scored: dict[Structure, tuple] = {}
 
-    def terms(structure: Structure):
-        if structure not in scored:
-            scored[structure] = tuple(np.asarray(a, dtype=np.float64) for a in score(structure))
-        return scored[structure]
+    def terms(*structures: Structure) -> list:
+        """The scores of ``structures``, those not yet scored fitted side by side (``workers`` at once)."""
+        todo = [c for c in dict.fromkeys(structures) if c not in scored]
+        results = pool.map(score, todo) if len(todo) > 1 else map(score, todo)
+        for c, result in zip(todo, results, strict=True):
+            scored[c] = tuple(np.asarray(a, dtype=np.float64) for a in result)
+        return [scored[c] for c in structures]
 
     current, axes = base, {}
-    for axis in (a for a in AXES if a in free):
-        candidates, scores, best, worse = [], [], np.inf, 0
-        for value in AXES[axis]:  # simplest first, until PATIENCE in a row lower nothing
-            c = replace(current, **{axis: value})
-            e, y = terms(c)
-            candidates.append(c)
-            scores.append((e, y))
-            err = e.sum() / max(y.sum(), 1e-300)
-            worse = 0 if err < best else worse + 1
-            best = min(best, err)
-            if worse >= PATIENCE:
-                break
-        pick, table = _one_se(candidates, scores, axis)
-        current, axes[axis] = pick, table
+    with ThreadPoolExecutor(max_workers=max(1, workers)) as pool:
+        for axis in (a for a in AXES if a in free):
+            candidates, scores, best, worse = [], [], np.inf, 0
+            values = list(AXES[axis])
+            while values and worse < PATIENCE:  # simplest first, until PATIENCE in a row lower nothing
+                batch = []  # the next candidates, up to ``workers`` of them still to fit
+                while values and sum(c not in scored for c in batch) < max(1, workers):
+                    batch.append(replace(current, **{axis: values.pop(0)}))
+                for c, (e, y) in zip(batch, terms(*batch), strict=True):
+                    if worse >= PATIENCE:
+                        break
+                    candidates.append(c)
+                    scores.append((e, y))
+                    err = e.sum() / max(y.sum(), 1e-300)
+                    worse = 0 if err < best else worse + 1
+                    best = min(best, err)
+            pick, table = _one_se(candidates, scores, axis)
+            current, axes[axis] = pick, table
+        (e_base, e_current) = terms(base, current)
     guard = None
     if current != base and free:  # the last guard: the choice against the base, on the same halves
-        delta, se = _difference(terms(current), terms(base))
+        delta, se = _difference(e_current, e_base)
         guard = {"base": base.label, "delta": delta, "se": se}
         if delta > SELECT_SE * se:  # worse than the base by more than the split's noise: keep the base
             guard["kept"] = "base"
             current = base
-    e, y = terms(current)
+    e, y = e_base if current == base else e_current
     return Choice(current, axes, float(np.sqrt(e.sum() / max(y.sum(), 1e-300))), guard)
 
 
@@ -397,20 +410,21 @@ def fit_chosen(fit: Callable, ds, score_terms: Callable, *, free: tuple, base: S
     points = selection_points(ds.n_points)
     n_candidates = sum(len(AXES[a]) for a in free)
     done = [0]
+    workers = kw.get("workers") or os.cpu_count() or 1
     selection_kw = {k: v for k, v in kw.items() if k != "checkpoint"}
     with tempfile.TemporaryDirectory(prefix="translucency-structure-") as tmp:
         sub = ds if len(points) == ds.n_points else point_subset(ds, points, Path(tmp) / "points.zarr")
 
         def score(structure: Structure):
+            result = fit(sub.path, **structure.options(planar=planar), half=0, **selection_kw)
+            done[0] += 1
             if progress is not None:
                 progress(done[0], n_candidates, f"structure: {structure.label}")
-            with warnings.catch_warnings():  # the final fit says what the data set's fits should hear
-                warnings.simplefilter("ignore")
-                result = fit(sub.path, **structure.options(planar=planar), half=0, **selection_kw)
-            done[0] += 1
             return score_terms(result, sub)
 
-        choice = choose(score, base, free)
+        with warnings.catch_warnings():  # the final fit says what the data set's fits should hear
+            warnings.simplefilter("ignore")
+            choice = choose(score, base, free, workers=workers)
     choice.points, choice.of_points, choice.seconds = len(points), ds.n_points, time.perf_counter() - t0
     result = fit(ds.path, **choice.structure.options(planar=planar), progress=progress, **kw)
     result.options["structure"] = choice.record()

@@ -49,10 +49,11 @@ def run_figure2(
 ) -> dict:
     """Acquire the pig per vertex (index-matched, so that volpath can light it), fit, render, compare.
 
-    Figure 2 is drawn as ``render`` draws by default: the fitted profiles with the model's through-body
-    table (:mod:`translucency.model.through`).  With ``paper_dir`` the same picture with the paper's model
-    alone (the radial profiles, ``render --paper``) is written there too (``figure2_paper.png`` / ``.json``),
-    to set beside it.
+    Figure 2 is drawn as ``fit`` and ``render`` do by default: the structure chosen by held-out error,
+    the fitted profiles with the model's through-body table (:mod:`translucency.model.through`).  With
+    ``paper_dir`` the paper's choice is drawn there too, to set beside it (``figure2_paper.png`` /
+    ``.json``, its model ``pig_paper.model.zip``): the isotropic model with n = 3 and the colour scale
+    (1, s_g, s_b), rendered from its radial profiles alone (``render --paper``).
 
     Writes the mesh data set to ``data_path`` (resumed, or reused, if it holds the same acquisition), the
     per-vertex model to ``model_path`` (replacing an earlier one with ``overwrite``) and Figure 2 into
@@ -105,7 +106,7 @@ def run_figure2(
         index_matched=True,
         overwrite=overwrite,
     )
-    fit = fit_mesh(data_path, "iso")
+    fit = fit_mesh(data_path)  # the default: the structure chosen by held-out error
     save_model(
         fit.model,
         model_path,
@@ -126,8 +127,12 @@ def run_figure2(
         name="figure2",
     )
     if paper_dir is not None:
+        paper = fit_mesh(data_path, "iso", n_terms=3, colour="shared")  # the paper's structure
+        paper_dir = Path(paper_dir)
+        save_model(paper.model, paper_dir / "pig_paper.model.zip", dtype="float16", overwrite=True,
+                   meta=paper.metadata(Path(data_path).resolve()))  # fmt: skip
         figure2(
-            fit.model,
+            paper.model,
             pig,
             light,
             paper_dir,
