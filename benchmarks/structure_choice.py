@@ -111,8 +111,8 @@ def markdown(results: dict, times: dict, args) -> str:
             "the best fixed structure, percentage points.  Target: the default within the truth's noise of "
             "the best, and never worse than iso by more than that noise.",
             "",
-            "| sample | default chose | default | best fixed | gap | iso | aniso m=8 | the paper's (m=8, shared) "
-            "| truth noise | target |",
+            "| sample | default chose | default | best fixed | gap | iso | aniso m=8 | "
+            "the paper's (m=8, shared) | truth noise | target |",
             "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |",
             *rows,
             "",
