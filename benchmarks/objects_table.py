@@ -1,14 +1,18 @@
 """Objects outside the default case: meshes × materials × lights against converged references.
 
-Each case acquires a mesh per vertex, fits the isotropic model and renders it beside the mean of two
-independent volpath renders (their noise measured; cached under ~/.cache/translucency), and prints the
-relative RMSE, FLIP, brightness and the error by region, once for each incidence law (``half-space``, the
-render's default, in and out; ``half-space-in``, the irradiance only; ``normal``, the data's own:
-:mod:`translucency.model.incidence`), and the through-body extension beside them (``half-space+through``,
-:mod:`translucency.model.through`).  Meshes are the users' files, e.g.
-``../shared/meshes``:
+Each case acquires a mesh per vertex, fits the isotropic model as ``fit`` does by default (its structure
+chosen by held-out error) and renders it beside the mean of two independent volpath renders (their noise
+measured; cached under ~/.cache/translucency), and prints the relative RMSE, FLIP, brightness and the error
+by region, once for each incidence law (``half-space``, the render's default, in and out;
+``half-space-in``, the irradiance only; ``normal``, the data's own: :mod:`translucency.model.incidence`),
+and the through-body extension beside them (``half-space+through``, :mod:`translucency.model.through`).
+With ``--compare structure`` it renders, instead, three fits of the same data as ``render`` draws them by
+default (half-space, through-body table): the default, the fixed iso n = 3 with a fall-off per channel,
+and the paper's choice (iso n = 3, shared colour) — that one also as the paper draws it (``render
+--paper``).  Meshes are the users' files, e.g. ``../shared/meshes``:
 
     python benchmarks/objects_table.py --meshes ../shared/meshes
+    python benchmarks/objects_table.py --meshes ../shared/meshes --size 128 96 --compare structure
 
 A case is ``name:mesh file:mm per unit:up axis:material:points:photons:light:view`` (``--case``, repeatable);
 the default cases need ``cow.obj``, ``stanford-bunny.obj`` and ``spot.obj`` in ``--meshes``.
@@ -46,7 +50,16 @@ CASES = [
 ]
 
 
-def run_case(spec: str, meshes: Path, work: Path, spp: int, size) -> dict:
+#: --compare structure: label -> (fit_mesh arguments, through-body table)
+STRUCTURES = {
+    "default": ({}, True),
+    "iso n=3 per-channel": (dict(model="iso", n_terms=3, colour="per-channel"), True),
+    "paper's choice (iso n=3 shared)": (dict(model="iso", n_terms=3, colour="shared"), True),
+    "paper's choice, render --paper": (dict(model="iso", n_terms=3, colour="shared"), False),
+}
+
+
+def run_case(spec: str, meshes: Path, work: Path, spp: int, size, compare: str = "laws") -> dict:
     name, file, scale, up, material, points, photons, kind, light, view = spec.split(":")
     mesh = load_mesh(meshes / file, scale_mm=float(scale), up=up)
     volume = object_volume(material, mesh, 1.0, seed=3)
@@ -61,7 +74,7 @@ def run_case(spec: str, meshes: Path, work: Path, spp: int, size) -> dict:
         chunk_points=32,
         index_matched=True,
     )
-    fit = fit_mesh(data, "iso")
+    fit = fit_mesh(data)  # as `fit` does by default
     t_fit = time.perf_counter() - t
     light = parse_light(f"{kind}:{light}")
     camera = Camera.looking_at(mesh, [float(v) for v in view.split(",")], *size)
@@ -79,22 +92,36 @@ def run_case(spec: str, meshes: Path, work: Path, spp: int, size) -> dict:
         "acquire_fit_s": t_fit,
         "reference_s": info["seconds"],
     }
+    if compare == "structure":  # three fits of the same data, as render draws each by default
+        row["chosen"] = fit.options["structure"]["chosen"]["label"]
+        fits = {}
+        for label, (kw, through) in STRUCTURES.items():
+            key = json.dumps(kw, sort_keys=True)
+            fits[key] = fits.get(key) or (fit if not kw else fit_mesh(data, **kw))
+            T = transport_matrices(fits[key].model, mesh, through=through)
+            row[label] = _scores(T, mesh, scene, light, camera, picture, reference, mask, "half-space")
+        return row
     # the paper's model under each incidence law, then the through-body extension (model/through.py)
     variants = [(name_of_law, T, name_of_law) for name_of_law in INCIDENCE_LAWS]
     variants.append(("half-space+through", transport_matrices(fit.model, mesh, through=True), "half-space"))
     for name_of_law, transport, law in variants:
-        L, E, _ = relight_object(transport, mesh, scene, light, camera.origin, incidence=law)
-        ours = picture.draw(L)
-        cmp = compare(reference, ours, mask)
-        regions = region_errors(mesh, scene, camera, E, reference, ours, mask)
-        row[name_of_law] = {
-            "rel_rmse": cmp["rel_rmse"],
-            "flip": cmp["flip_mean_object"],
-            "brightness": float(ours[mask].mean() / reference[mask].mean()),
-            "regions": {k: v["rel_rmse"] for k, v in regions.items()},
-            "region_brightness": {k: v["brightness"] for k, v in regions.items()},
-        }
+        row[name_of_law] = _scores(transport, mesh, scene, light, camera, picture, reference, mask, law)
     return row
+
+
+def _scores(transport, mesh, scene, light, camera, picture, reference, mask, law) -> dict:
+    """The picture of ``transport`` under ``law`` against the reference: overall and by region."""
+    L, E, _ = relight_object(transport, mesh, scene, light, camera.origin, incidence=law)
+    ours = picture.draw(L)
+    cmp = compare(reference, ours, mask)
+    regions = region_errors(mesh, scene, camera, E, reference, ours, mask)
+    return {
+        "rel_rmse": cmp["rel_rmse"],
+        "flip": cmp["flip_mean_object"],
+        "brightness": float(ours[mask].mean() / reference[mask].mean()),
+        "regions": {k: v["rel_rmse"] for k, v in regions.items()},
+        "region_brightness": {k: v["brightness"] for k, v in regions.items()},
+    }
 
 
 def main() -> int:
@@ -104,12 +131,17 @@ def main() -> int:
     ap.add_argument("--spp", type=int, default=256, help="samples per pixel of each of the two references")
     ap.add_argument("--size", type=int, nargs=2, default=(160, 120))
     ap.add_argument("--work", type=Path, default=Path(tempfile.mkdtemp(prefix="objects_table_")))
+    ap.add_argument("--compare", choices=("laws", "structure"), default="laws",
+                    help="laws: the default fit under each incidence law; structure: three fits")  # fmt: skip
     args = ap.parse_args()
     rows = []
+    columns = [*INCIDENCE_LAWS, "half-space+through"] if args.compare == "laws" else list(STRUCTURES)
     for spec in args.case or CASES:
-        row = run_case(spec, args.meshes, args.work, args.spp, tuple(args.size))
+        row = run_case(spec, args.meshes, args.work, args.spp, tuple(args.size), args.compare)
         rows.append(row)
-        for law in [*INCIDENCE_LAWS, "half-space+through"]:
+        if "chosen" in row:
+            print(f"{row['case']:<28} the default chose {row['chosen']}", flush=True)
+        for law in columns:
             r = row[law]
             worst = max(r["regions"].items(), key=lambda kv: kv[1] if np.isfinite(kv[1]) else -1)
             print(
