@@ -74,6 +74,16 @@ def test_a_richer_structure_needs_to_win_by_more_than_the_split_noise():
     assert "n_directions 2 over 1 by" in choice.summary_line()
 
 
+def test_a_noisy_richer_candidate_near_the_best_does_not_beat_a_steady_simpler_one():
+    # n = 4 is the best on every point; n = 2 misses by 0.1 on each (a sure loss); n = 3 has the same sum
+    # as n = 2 but swings ±0.6 between points: within one standard error of the best, yet it does not beat
+    # n = 2 at all, so the simpler n = 2 is kept (the pairwise guard)
+    e = {1: [9.0] * 4, 2: [1.1] * 4, 3: [0.5, 1.7, 0.5, 1.7], 4: [1.0] * 4}
+    choice = choose(lambda s: _terms(e[s.n_terms]), Structure(n_terms=1), ("n_terms",))
+    assert choice.structure.n_terms == 2
+    assert choice.margins["n_terms"]["over"] == 1 and choice.margins["n_terms"]["delta"] > 0
+
+
 def test_the_search_stops_after_candidates_that_lower_nothing_and_the_guard_keeps_the_base():
     tried = []
 

@@ -172,6 +172,21 @@ _STRUCTURE = record(
             optional=("kept",),
             nullable=True,
         ),
+        "margins": record(
+            "Per axis where a richer value was kept: what it won over and by how much.",
+            {},
+            extra=record(
+                "The richer value's win over the best simpler candidate of its axis.",
+                {
+                    "over": field(["string", "integer"], "The simpler value it won over."),
+                    "delta": field(
+                        "number", "The simpler one's squared error minus the chosen one's.", "fraction"
+                    ),
+                    "se": field("number", "Its standard error over the points.", "fraction"),
+                    "held_out": field("number", "The difference of their held-out errors.", "fraction"),
+                },
+            ),
+        ),
         "runner_up": record(
             "The best candidate not chosen, on any axis.",
             {

@@ -43,7 +43,7 @@ import time
 import warnings
 from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
-from dataclasses import asdict, dataclass, replace
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -128,6 +128,7 @@ class Choice:
     axes: dict
     held_out: float = float("nan")  # the chosen structure's held-out error (fraction)
     guard: dict | None = None
+    margins: dict = field(default_factory=dict)  # per axis where a richer value won: over what, by how much
     points: int = 0
     of_points: int = 0
     seconds: float = 0.0
@@ -143,6 +144,7 @@ class Choice:
             "held_out": self.held_out,
             "axes": self.axes,
             "guard": self.guard,
+            "margins": self.margins,
             "runner_up": self.runner_up(),
             "points": self.points,
             "of_points": self.of_points,
@@ -166,15 +168,13 @@ class Choice:
 
     def summary_line(self) -> str:
         """One line for the run's summary: the structure, its held-out error and how it won."""
-        won = []
-        for axis, table in self.axes.items():
-            chosen = next(row for row in table if row["value"] == asdict(self.structure)[axis])
-            rank = AXES[axis].index
-            simpler = [row for row in table if rank(row["value"]) < rank(chosen["value"])]
-            if simpler:  # a richer structure kept: by how much it won over the best simpler one
-                s = min(simpler, key=lambda row: row["held_out"])
-                gain = 100 * (s["held_out"] - chosen["held_out"])
-                won.append(f"{axis} {chosen['value']} over {s['value']} by {gain:.2f} pt")
+        won = [
+            f"{axis} {asdict(self.structure)[axis]} over {m['over']} by {100 * m['held_out']:.2f} pt "
+            f"({m['delta'] / m['se']:.1f} standard errors)" if m["se"] > 0 else
+            f"{axis} {asdict(self.structure)[axis]} over {m['over']} by {100 * m['held_out']:.2f} pt"
+            for axis, m in self.margins.items()
+            if axis in self.axes
+        ]  # fmt: skip
         how = "; ".join(won) if won else "no richer candidate won by more than the split's noise"
         where = f"held-out {100 * self.held_out:.2f} % on {self.points} points"
         return f"structure {self.structure.label} ({where}; {how})"
@@ -324,7 +324,7 @@ def choose(score: Callable[[Structure], tuple], base: Structure, free: tuple, *,
             scored[c] = tuple(np.asarray(a, dtype=np.float64) for a in result)
         return [scored[c] for c in structures]
 
-    current, axes = base, {}
+    current, axes, margins = base, {}, {}
     with ThreadPoolExecutor(max_workers=max(1, workers)) as pool:
         for axis in (a for a in AXES if a in free):
             candidates, scores, best, worse = [], [], np.inf, 0
@@ -341,8 +341,9 @@ def choose(score: Callable[[Structure], tuple], base: Structure, free: tuple, *,
                     err = e.sum() / max(y.sum(), 1e-300)
                     worse = 0 if err < best else worse + 1
                     best = min(best, err)
-            pick, table = _one_se(candidates, scores, axis)
-            current, axes[axis] = pick, table
+            current, axes[axis], margin = _one_se(candidates, scores, axis)
+            if margin is not None:
+                margins[axis] = margin
         (e_base, e_current) = terms(base, current)
     guard = None
     if current != base and free:  # the last guard: the choice against the base, on the same halves
@@ -350,9 +351,9 @@ def choose(score: Callable[[Structure], tuple], base: Structure, free: tuple, *,
         guard = {"base": base.label, "delta": delta, "se": se}
         if delta > SELECT_SE * se:  # worse than the base by more than the split's noise: keep the base
             guard["kept"] = "base"
-            current = base
+            current, margins = base, {}
     e, y = e_base if current == base else e_current
-    return Choice(current, axes, float(np.sqrt(e.sum() / max(y.sum(), 1e-300))), guard)
+    return Choice(current, axes, float(np.sqrt(e.sum() / max(y.sum(), 1e-300))), guard, margins)
 
 
 def _difference(a: tuple, b: tuple) -> tuple[float, float]:
@@ -368,16 +369,30 @@ def _difference(a: tuple, b: tuple) -> tuple[float, float]:
 
 
 def _one_se(candidates: list, terms: list, axis: str):
-    """The simplest candidate within one SE of the best, and the axis's table (see :class:`Choice`)."""
+    """The simplest candidate within one SE of the best, the axis's table (see :class:`Choice`) and the
+    margin of a richer choice over its best simpler candidate (None when the simplest is chosen).
+
+    The bias guard: a richer candidate is never kept over a simpler one it does not beat by more than
+    their own difference's standard error (checked pairwise, not only against the best)."""
     errors = [float(np.sqrt(e.sum() / max(y.sum(), 1e-300))) for e, y in terms]
     best = int(np.argmin(errors))
     table, pick = [], None
-    for c, t, err in zip(candidates, terms, errors, strict=True):
+    for k, (t, err) in enumerate(zip(terms, errors, strict=True)):
         delta, se = _difference(t, terms[best])
-        table.append({"value": getattr(c, axis), "held_out": err, "delta": delta, "se": se})
+        table.append({"value": getattr(candidates[k], axis), "held_out": err, "delta": delta, "se": se})
         if pick is None and delta <= SELECT_SE * se:
-            pick = c
-    return pick, table
+            pick = k
+    for k in range(pick):  # a simpler candidate the pick does not beat by more than the noise wins
+        delta, se = _difference(terms[pick], terms[k])
+        if delta > -SELECT_SE * se:
+            pick = k
+            break
+    margin = None
+    if pick > 0:  # a richer structure kept: by how much it won over the best simpler one
+        k = min(range(pick), key=lambda j: errors[j])
+        delta, se = _difference(terms[k], terms[pick])
+        margin = {"over": table[k]["value"], "delta": delta, "se": se, "held_out": errors[k] - errors[pick]}
+    return candidates[pick], table, margin
 
 
 def fit_chosen(fit: Callable, ds, score_terms: Callable, *, free: tuple, base: Structure, planar: bool,
