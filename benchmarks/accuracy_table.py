@@ -190,14 +190,16 @@ def markdown(results: dict, args) -> str:
 
 
 def write_between_markers(path: Path, text: str, name: str = "benchmarks/accuracy_table.py") -> None:
-    """Replace what lies between the markers of script ``name`` in ``path`` (the prose around it stays), or
-    write it all."""
+    """Replace what lies between the markers of script ``name`` in ``path`` (the prose around it stays),
+    add the section at the end of a page without them, or write a new page."""
     BEGIN, END = f"<!-- {name}: begin -->", f"<!-- {name}: end -->"  # noqa: N806 — the markers
     block = f"{BEGIN}\n{text}\n{END}\n"
     old = path.read_text() if path.exists() else ""
     if BEGIN in old and END in old:
         head, rest = old.split(BEGIN, 1)
         block = head + block + rest.split(END, 1)[1].lstrip("\n")
+    elif old:  # a page without this script's section yet: it is added at the end
+        block = old.rstrip("\n") + "\n\n" + block
     path.write_text(block)
 
 
