@@ -120,6 +120,28 @@ def targets(results: dict) -> list[str]:
     return out
 
 
+def table_rows(fits: dict, first: str = "") -> list[str]:
+    """The table's rows of one sample's fits (label -> errors), the truth's noise last; ``first`` is put
+    before each row (the sample's cell)."""
+    rows = []
+    for label, s in fits.items():
+        b, en = s["beyond_noise"], s["energy_error"]
+        rows.append(
+            f"{first}| {label} | {pct(s['rel_l2'])} | {pct(s['rel_l2_near'])} | "
+            f"{pct(s['rel_l2_mid'])} | {pct(s['rel_l2_far'])} | {pct(b['all'])} | {pct(b['near'])} | "
+            f"{pct(en['near'])} | {pct(en['mid'])} | {pct(en['total'])} | "
+            f"{pct(s['in_sample']['rel_l2'])} |"
+        )
+    s = next(iter(fits.values()))
+    nf, ne = s["noise_floor"], s["energy_noise"]
+    rows.append(
+        f"{first}| *truth noise* | {pct(nf['all'])} | {pct(nf['near'])} | {pct(nf['mid'])} | "
+        f"{pct(nf['far'])} | 0 | 0 | {pct(ne['near'])} | {pct(ne['mid'])} | | "
+        f"*{pct(s['in_sample']['noise_floor']['all'])}* |"
+    )
+    return rows
+
+
 def markdown(results: dict, args) -> str:
     head = [
         "# Accuracy of the planar fits (held-out)",
@@ -154,23 +176,7 @@ def markdown(results: dict, args) -> str:
         "E mid | ρ total | in-sample all |",
         "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |",
     ]
-    rows = []
-    for sample, fits in results.items():
-        for label, s in fits.items():
-            b, en = s["beyond_noise"], s["energy_error"]
-            rows.append(
-                f"| {sample} | {label} | {pct(s['rel_l2'])} | {pct(s['rel_l2_near'])} | "
-                f"{pct(s['rel_l2_mid'])} | {pct(s['rel_l2_far'])} | {pct(b['all'])} | {pct(b['near'])} | "
-                f"{pct(en['near'])} | {pct(en['mid'])} | {pct(en['total'])} | "
-                f"{pct(s['in_sample']['rel_l2'])} |"
-            )
-        s = next(iter(fits.values()))
-        nf, ne = s["noise_floor"], s["energy_noise"]
-        rows.append(
-            f"| {sample} | *truth noise* | {pct(nf['all'])} | {pct(nf['near'])} | {pct(nf['mid'])} | "
-            f"{pct(nf['far'])} | 0 | 0 | {pct(ne['near'])} | {pct(ne['mid'])} | | "
-            f"*{pct(s['in_sample']['noise_floor']['all'])}* |"
-        )
+    rows = [row for sample, fits in results.items() for row in table_rows(fits, f"| {sample} ")]
     tail = [
         "",
         "The *truth noise* row's last cell is the fitted data's own noise (the in-sample floor).",
@@ -197,7 +203,7 @@ def write_between_markers(path: Path, text: str, name: str = "benchmarks/accurac
     old = path.read_text() if path.exists() else ""
     if BEGIN in old and END in old:
         head, rest = old.split(BEGIN, 1)
-        block = head + block + rest.split(END, 1)[1].lstrip("\n")
+        block = head + block + "\n" + rest.split(END, 1)[1].lstrip("\n")
     elif old:  # a page without this script's section yet: it is added at the end
         block = old.rstrip("\n") + "\n\n" + block
     path.write_text(block)
