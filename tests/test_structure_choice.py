@@ -74,14 +74,20 @@ def test_a_richer_structure_needs_to_win_by_more_than_the_split_noise():
     assert "n_directions 2 over 1 by" in choice.summary_line()
 
 
-def test_a_noisy_richer_candidate_near_the_best_does_not_beat_a_steady_simpler_one():
-    # n = 4 is the best on every point; n = 2 misses by 0.1 on each (a sure loss); n = 3 has the same sum
-    # as n = 2 but swings ±0.6 between points: within one standard error of the best, yet it does not beat
-    # n = 2 at all, so the simpler n = 2 is kept (the pairwise guard)
-    e = {1: [9.0] * 4, 2: [1.1] * 4, 3: [0.5, 1.7, 0.5, 1.7], 4: [1.0] * 4}
-    choice = choose(lambda s: _terms(e[s.n_terms]), Structure(n_terms=1), ("n_terms",))
+def test_the_prior_is_kept_within_the_noise_and_a_choice_never_loses_to_a_simpler_one_beyond_it():
+    # n = 4 is the best on average, n = 2 and n = 3 swing ±0.6 between points: both within one standard
+    # error of it, so the prior n = 3 is kept ...
+    e = {1: [9.0] * 4, 2: [0.5, 1.7, 0.5, 1.7], 3: [0.5, 1.7, 0.5, 1.7], 4: [1.0] * 4}
+    assert choose(lambda s: _terms(e[s.n_terms]), Structure(), ("n_terms",)).structure.n_terms == 3
+    # ... unless n = 3 is worse than the simpler n = 2 on every point (beyond their own noise): the guard
+    e[3] = [0.55, 1.75, 0.55, 1.75]
+    choice = choose(lambda s: _terms(e[s.n_terms]), Structure(), ("n_terms",))
     assert choice.structure.n_terms == 2
     assert choice.margins["n_terms"]["over"] == 1 and choice.margins["n_terms"]["delta"] > 0
+    # the colour's prior (one fall-off per channel) is kept when the shared colour gains within the noise
+    c = {"shared": [0.8, 1.15, 0.9, 1.0], "per-channel": [1.0] * 4}
+    choice = choose(lambda s: _terms(c[s.colour]), Structure(), ("colour",))
+    assert choice.structure.colour == "per-channel" and "within the noise" in choice.summary_line()
 
 
 def test_the_search_stops_after_candidates_that_lower_nothing_and_the_guard_keeps_the_base():

@@ -16,14 +16,17 @@ Two candidates b, c fitted and scored on the same halves differ by
 :math:`\Delta = \sum_i (e_i(c) - e_i(b)) / \sum_i y_i`, whose standard error over the points,
 :math:`\mathrm{SE} = \sqrt{P}\, \mathrm{std}_i(e_i(c) - e_i(b)) / \sum_i y_i`, is the split's noise.
 
-**Rule** (the one-standard-error rule of cross-validated λ in glmnet).  Along each axis the candidates
-are nested, simplest first — shared ⊂ per-channel colour, n ⊂ n + 1 terms, m = 1 ⊂ 2 ⊂ 4 ⊂ 8 ⊂ 16
-directions (a blend of equal directions is the isotropic profile) — and the simplest candidate whose Δ
-to the best is within one SE is chosen: a richer structure is kept only where it wins by more than the
-split's noise, and the record says by how much.  The axes are taken in the order of :data:`AXES`, each
-with what the earlier ones chose; an axis the caller fixes is not searched.  A last guard compares the
-choice with the base structure (isotropic, n = 3, one fall-off per channel, where not fixed) and keeps the
-base unless the choice wins there too (:func:`choose`).
+**Rule** (after the one-standard-error rule of cross-validated λ in glmnet).  Along each axis the
+candidates are nested, simplest first — shared ⊂ per-channel colour, n ⊂ n + 1 terms, m = 1 ⊂ 2 ⊂ 4 ⊂ 8 ⊂
+16 directions (a blend of equal directions is the isotropic profile).  Each axis has a prior value, the
+base structure's: one fall-off per channel (the colour of light that crossed a body), n = 3 (the paper's),
+m = 1.  The prior is kept unless the best candidate beats it by more than one SE; otherwise the candidate
+within one SE of the best nearest to the prior is chosen.  So a structure departs from the prior only
+where the data say so beyond the split's noise, and the record says by how much.  The bias guard: a
+choice worse than a simpler candidate of its axis by more than their difference's SE gives way to that
+simpler one.  The axes are taken in the order of :data:`AXES`, each with what the earlier ones chose; an
+axis the caller fixes is not searched.  A last guard compares the choice with the base structure on the
+same halves and keeps the base unless the choice wins there too (:func:`choose`).
 
 **Cost.**  The candidates run on a subset of the incident points (:func:`selection_points`: a share
 :data:`SELECT_SHARE`, at least :data:`SELECT_MIN_POINTS`, spread by a fixed seed), as many side by side
@@ -167,15 +170,20 @@ class Choice:
         return {"label": label, "held_out": best["held_out"], "axis": best["axis"]}
 
     def summary_line(self) -> str:
-        """One line for the run's summary: the structure, its held-out error and how it won."""
-        won = [
-            f"{axis} {asdict(self.structure)[axis]} over {m['over']} by {100 * m['held_out']:.2f} pt "
-            f"({m['delta'] / m['se']:.1f} standard errors)" if m["se"] > 0 else
-            f"{axis} {asdict(self.structure)[axis]} over {m['over']} by {100 * m['held_out']:.2f} pt"
-            for axis, m in self.margins.items()
-            if axis in self.axes
-        ]  # fmt: skip
-        how = "; ".join(won) if won else "no richer candidate won by more than the split's noise"
+        """One line for the run's summary: the structure, its held-out error and, per axis where a richer
+        value was kept, by how much it won over the best simpler one (or that the simpler one was within
+        the noise)."""
+        said = []
+        for axis, m in self.margins.items():
+            value, gain = asdict(self.structure)[axis], 100 * m["held_out"]
+            units = f", {abs(m['delta']) / m['se']:.1f} standard errors" if m["se"] > 0 else ""
+            if gain > 0:
+                said.append(f"{axis} {value} over {m['over']} by {gain:.2f} pt{units}")
+            else:
+                said.append(
+                    f"{axis} {value} kept: {m['over']} {-gain:.2f} pt better, within the noise{units}"
+                )
+        how = "; ".join(said) if said else "nothing richer than the simplest candidates"
         where = f"held-out {100 * self.held_out:.2f} % on {self.points} points"
         return f"structure {self.structure.label} ({where}; {how})"
 
@@ -341,7 +349,7 @@ def choose(score: Callable[[Structure], tuple], base: Structure, free: tuple, *,
                     err = e.sum() / max(y.sum(), 1e-300)
                     worse = 0 if err < best else worse + 1
                     best = min(best, err)
-            current, axes[axis], margin = _one_se(candidates, scores, axis)
+            current, axes[axis], margin = _one_se(candidates, scores, axis, getattr(base, axis))
             if margin is not None:
                 margins[axis] = margin
         (e_base, e_current) = terms(base, current)
@@ -368,25 +376,32 @@ def _difference(a: tuple, b: tuple) -> tuple[float, float]:
     return float(d.sum() / y), float(se)
 
 
-def _one_se(candidates: list, terms: list, axis: str):
-    """The simplest candidate within one SE of the best, the axis's table (see :class:`Choice`) and the
-    margin of a richer choice over its best simpler candidate (None when the simplest is chosen).
+def _one_se(candidates: list, terms: list, axis: str, prior):
+    """The axis's choice, its table (see :class:`Choice`) and the margin of a richer choice over its best
+    simpler candidate (None when nothing simpler was tried).
 
-    The bias guard: a richer candidate is never kept over a simpler one it does not beat by more than
-    their own difference's standard error (checked pairwise, not only against the best)."""
+    ``prior`` (the base structure's value) is kept unless the best candidate beats it by more than one
+    standard error; otherwise the candidate within one standard error of the best nearest to ``prior``
+    (the simpler at equal distance) is chosen.  The bias guard: a choice worse than a simpler candidate by
+    more than their own difference's standard error gives way to the best of those simpler ones."""
     errors = [float(np.sqrt(e.sum() / max(y.sum(), 1e-300))) for e, y in terms]
     best = int(np.argmin(errors))
-    table, pick = [], None
+    table, near_best = [], []
     for k, (t, err) in enumerate(zip(terms, errors, strict=True)):
         delta, se = _difference(t, terms[best])
         table.append({"value": getattr(candidates[k], axis), "held_out": err, "delta": delta, "se": se})
-        if pick is None and delta <= SELECT_SE * se:
-            pick = k
-    for k in range(pick):  # a simpler candidate the pick does not beat by more than the noise wins
-        delta, se = _difference(terms[pick], terms[k])
-        if delta > -SELECT_SE * se:
-            pick = k
-            break
+        if delta <= SELECT_SE * se:
+            near_best.append(k)
+    values = [row["value"] for row in table]
+    home = values.index(prior) if prior in values else 0
+    pick = home if home in near_best else min(near_best, key=lambda k: (abs(k - home), k))
+    beaten = [
+        k
+        for k in range(pick)
+        if _difference(terms[pick], terms[k])[0] > SELECT_SE * _difference(terms[pick], terms[k])[1]
+    ]
+    if beaten:  # the bias guard
+        pick = min(beaten, key=lambda k: errors[k])
     margin = None
     if pick > 0:  # a richer structure kept: by how much it won over the best simpler one
         k = min(range(pick), key=lambda j: errors[j])
