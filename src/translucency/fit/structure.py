@@ -72,8 +72,8 @@ AXES = {
     "n_terms": (1, 2, 3, 4),
     "n_directions": (1, 2, 4, 8, 16),
 }
-#: a candidate may be chosen over the best when its held-out squared error is within this many standard
-#: errors of the best one's (the one-standard-error rule)
+#: a candidate is as good as the best when its held-out squared error is within this many standard errors
+#: of the best one's (the one-standard-error rule)
 SELECT_SE = 1.0
 #: the share of the incident points the candidates are fitted on ...
 SELECT_SHARE = 0.0625
@@ -152,11 +152,12 @@ class Choice:
             "points": self.points,
             "of_points": self.of_points,
             "seconds": round(self.seconds, 2),
-            "rule": f"simplest within {SELECT_SE:g} standard error of the best held-out error",
+            "rule": f"each axis keeps its prior (per-channel, n=3, m=1) unless the best candidate beats it by "
+            f"more than {SELECT_SE:g} standard error; then the candidate within that of the best nearest the prior",
         }
 
     def runner_up(self) -> dict | None:
-        """The candidate nearest to the choice on any axis: its label, held-out error and the margin."""
+        """The best candidate not chosen, on any axis: its structure's label, held-out error and axis."""
         rows = [
             {**row, "axis": axis}
             for axis, table in self.axes.items()
