@@ -75,6 +75,11 @@ AXES = {
 #: a candidate is as good as the best when its held-out squared error is within this many standard errors
 #: of the best one's (the one-standard-error rule)
 SELECT_SE = 1.0
+#: the rule in words, as the record states it
+RULE = (
+    f"each axis keeps its prior (per-channel, n=3, m=1) unless the best candidate beats it by more than "
+    f"{SELECT_SE:g} standard error; then the candidate within that of the best nearest the prior"
+)
 #: the share of the incident points the candidates are fitted on ...
 SELECT_SHARE = 0.0625
 #: ... and at least this many (all of them when the data set has fewer)
@@ -152,8 +157,7 @@ class Choice:
             "points": self.points,
             "of_points": self.of_points,
             "seconds": round(self.seconds, 2),
-            "rule": f"each axis keeps its prior (per-channel, n=3, m=1) unless the best candidate beats it by "
-            f"more than {SELECT_SE:g} standard error; then the candidate within that of the best nearest the prior",
+            "rule": RULE,
         }
 
     def runner_up(self) -> dict | None:
