@@ -190,7 +190,9 @@ class Choice:
                 )
         how = "; ".join(said) if said else "nothing richer than the simplest candidates"
         where = f"held-out {100 * self.held_out:.2f} % on {self.points} points"
-        return f"structure {self.structure.label} ({where}; {how})"
+        second = self.runner_up()
+        runner = f"; runner-up {second['label']} {100 * second['held_out']:.2f} %" if second else ""
+        return f"structure {self.structure.label} ({where}; {how}{runner})"
 
 
 def free_axes(model: str, n_terms, n_directions, colour, *, planar: bool):
