@@ -24,7 +24,11 @@ import numpy as np
 from accuracy_table import SAMPLES, acquire, pct, write_between_markers
 from translucency.data import default_dataset_path
 from translucency.evaluate.errors import finite_or_null, planar_errors
+from translucency.fit.mesh import fit_mesh
 from translucency.fit.planar import fit_planar
+from translucency.fit.structure import selection_points
+from translucency.io.datasets import open_any_dataset
+from translucency.io.mesh_dataset import MeshDataset
 
 #: (sample, volume seed, photons, truth photons): the table's seven, and the two kept for this check
 KEPT = [("homogeneous:potato", 1, 20_000, 400_000), ("fibers", 2, 20_000, 400_000)]
@@ -52,28 +56,29 @@ def score(ds: Path, truth: Path) -> dict:
     return out
 
 
-def timing(repeats: int) -> dict:
-    """Median seconds of the default fit, the chosen structure fitted directly, and iso, on the main job's
-    data (after one warm-up of each, so that compiled kernels are loaded)."""
-    ds = default_dataset_path()
-    chosen = fit_planar(ds).options["structure"]["chosen"]
+def timing(repeats: int, ds=None) -> dict:
+    """Median seconds of the default fit, the chosen structure fitted directly, and iso n = 3, on ``ds`` (a
+    planar or mesh data set; default the main job's planar data), after one warm-up of each so that
+    compiled kernels are loaded."""
+    ds = ds or default_dataset_path()
+    on_mesh = isinstance(open_any_dataset(ds), MeshDataset)
+    fit = fit_mesh if on_mesh else fit_planar
+    chosen = fit(ds).options["structure"]["chosen"]
+    alone = dict(model=chosen["model"], n_terms=chosen["n_terms"], colour=chosen["colour"])
+    if not on_mesh:
+        alone["n_directions"] = max(2, chosen["n_directions"])
     runs = {
         "default (choice + fit)": {},
-        f"chosen structure alone ({chosen['label']})": dict(
-            model=chosen["model"],
-            n_terms=chosen["n_terms"],
-            n_directions=max(2, chosen["n_directions"]),
-            colour=chosen["colour"],
-        ),
-        "iso n=3 alone": dict(model="iso"),
+        f"chosen structure alone ({chosen['label']})": alone,
+        "iso n=3 alone": dict(model="iso", n_terms=3),
     }
     out = {}
     for label, kw in runs.items():
-        fit_planar(ds, **kw)  # warm-up
+        fit(ds, **kw)  # warm-up
         times = []
         for _ in range(repeats):
             t = time.perf_counter()
-            fit_planar(ds, **kw)
+            fit(ds, **kw)
             times.append(time.perf_counter() - t)
         out[label] = float(np.median(times))
         print(f"  {label:48s} {out[label]:.2f} s", flush=True)
@@ -98,7 +103,7 @@ def markdown(results: dict, times: dict, args) -> str:
             f"{pct(fixed[PAPER]['rel_l2'])} | {pct(noise)} | "
             f"{'**met**' if met else '**not met**'} |"
         )
-    (d_label, d), (c_label, c), (i_label, i) = times.items()
+    (d_label, d), (c_label, c), (i_label, i) = times["planar"].items()
     return "\n".join(
         [
             "## The default's structure against every fixed one (held-out)",
@@ -123,8 +128,23 @@ def markdown(results: dict, times: dict, args) -> str:
             f"{i_label} {i:.2f} s.  Ratio **{d / c:.2f}×** the chosen structure's own fit, "
             f"**{d / i:.2f}×** the isotropic fit (target ≤ 2× one fit).",
             "",
+            *mesh_cost(times.get("mesh"), args),
         ]
     )
+
+
+def mesh_cost(times: dict | None, args) -> list[str]:
+    """The choice's cost on a mesh data set, when one was timed (``--mesh-data``)."""
+    if not times:
+        return []
+    (d_label, d), (c_label, c), (i_label, i) = times.items()
+    return [
+        f"On a mesh data set (`--mesh-data {args.mesh_data.name}`, {args.mesh_points} incident points, "
+        f"{args.mesh_vertices:,} vertices; the candidates on {args.mesh_subset} of them): {d_label} "
+        f"{d:.2f} s; {c_label} {c:.2f} s; {i_label} {i:.2f} s.  Ratio **{d / c:.2f}×** the chosen "
+        f"structure's own fit, **{d / i:.2f}×** iso n = 3's.",
+        "",
+    ]
 
 
 def main() -> None:
@@ -134,6 +154,9 @@ def main() -> None:
     ap.add_argument("--cache", type=Path, default=Path("bench_data"))
     ap.add_argument("--samples", default=",".join(SAMPLES))
     ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument(
+        "--mesh-data", type=Path, default=None, help="Also time the choice on this mesh data set."
+    )
     ap.add_argument("--out", type=Path, default=None, help="Markdown file to write the section into.")
     args = ap.parse_args()
     args.cache.mkdir(parents=True, exist_ok=True)
@@ -147,7 +170,12 @@ def main() -> None:
         print(name, flush=True)
         results[name] = score(ds, truth)
     print("timing", flush=True)
-    times = timing(args.repeats)
+    times = {"planar": timing(args.repeats)}
+    if args.mesh_data is not None:  # a mesh data set, e.g. a `make demo` folder's pig.zarr
+        mesh = open_any_dataset(args.mesh_data)
+        args.mesh_points, args.mesh_vertices = mesh.n_points, int(mesh.header["n_vertices"])
+        args.mesh_subset = len(selection_points(mesh.n_points))
+        times["mesh"] = timing(args.repeats, args.mesh_data)
     text = markdown(results, times, args)
     print(text)
     if args.out:
