@@ -28,7 +28,7 @@ from ..geometry import tangent_frames
 from ..io.mesh_dataset import open_mesh_dataset
 from ..model import VertexAlpha
 from ._rounds import alternate
-from ._vertex_pool import VertexDiscPool
+from ._vertex_pool import disc_pool
 from .families import FAMILIES
 from .held_out import mesh_held_out_terms, vertex_half
 from .lean import fit_lean
@@ -75,7 +75,9 @@ class _MeshSource:
         # α's statistics pooled over a disc of alpha_radius (default ALPHA_RADIUS_EDGES edge lengths): a
         # vertex is lit by few incident points, and α from its own pairs alone is mostly photon noise
         rad = alpha_pool_radius(self.pitch) if alpha_radius is None else float(alpha_radius)
-        self._pool = VertexDiscPool(v, rad)  # (through cells on a scan finer than the disc)
+        self._pool = disc_pool(
+            v, rad
+        )  # (through cells on a scan finer than the disc; built once per surface)
         photons = float(header["photons"])
         self.poisson = (1.0 / (photons * np.maximum(self.area, 1e-12)))[None, :, None].astype(np.float32)
 

@@ -83,7 +83,7 @@ RULE = (
 #: the share of the incident points the candidates are fitted on ...
 SELECT_SHARE = 0.0625
 #: ... and at least this many (all of them when the data set has fewer)
-SELECT_MIN_POINTS = 64
+SELECT_MIN_POINTS = 32
 #: an axis's search stops after this many candidates in a row that do not lower its best held-out error
 #: (richer ones are not fitted: on a homogeneous sample m = 8 and 16 cost more than the rest together)
 PATIENCE = 2
@@ -291,7 +291,7 @@ def selection_points(n_points: int) -> np.ndarray:
     Examples
     --------
     >>> len(selection_points(1024)), len(selection_points(100)), len(selection_points(25))
-    (64, 64, 25)
+    (64, 32, 25)
     """
     k = min(n_points, max(SELECT_MIN_POINTS, int(np.ceil(SELECT_SHARE * n_points))))
     if k == n_points:
