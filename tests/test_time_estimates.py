@@ -89,7 +89,7 @@ def test_planar_acquisition_and_fit_estimates_within_2x(tmp_path):
     calibrated(evaluations)
     cache = json.loads(resources.timing_file().read_text())
     (runs,) = [entry[resources.RUNS_KEY] for entry in cache.values()]
-    assert len(runs["acquire planar"]) >= 2 and len(runs["fit iso"]) >= 2 and len(runs["evaluate"]) >= 2
+    assert len(runs["acquire planar"]) >= 2 and len(runs["fit auto"]) >= 2 and len(runs["evaluate"]) >= 2
 
 
 @pytest.mark.parametrize(

@@ -53,6 +53,7 @@ import numpy as np
 
 from .._validate import TranslucencyError
 from ..io.point_subset import point_subset
+from ..resources.timing import register_terms
 from .families import FAMILIES
 
 __all__ = [
@@ -84,6 +85,11 @@ RULE = (
 SELECT_SHARE = 0.0625
 #: ... and at least this many (all of them when the data set has fewer)
 SELECT_MIN_POINTS = 32
+#: the seconds of a fit whose structure is chosen (``fit --model auto``'s time estimate, before this
+#: machine's own runs calibrate it): the candidates cost about one anisotropic fit beside the final one
+#: (benchmarks/structure_choice.py), and their fixed costs (a subset written, ~8 fits started) ~1 s
+TIME_TERMS = {"overhead": 1.0, "point_pixels": 6.4e-6}
+register_terms({"fit auto": TIME_TERMS})
 #: an axis's search stops after this many candidates in a row that do not lower its best held-out error
 #: (richer ones are not fitted: on a homogeneous sample m = 8 and 16 cost more than the rest together)
 PATIENCE = 2

@@ -331,9 +331,10 @@ def mesh_acquisition_units(*, points: int, photons: int, vertices: int) -> dict:
     return {"points": points, "photons": 3 * points * photons, "point_vertices": points * vertices}
 
 
-def fit_units(*, points: int, pixels: int, rounds: int, candidates: int = 1) -> dict:
-    """``fit``: P points x J window pixels (or vertices) x rounds x the candidates of an ``auto`` choice."""
-    return {"point_pixels": points * pixels * rounds * candidates}
+def fit_units(*, points: int, pixels: int, rounds: int) -> dict:
+    """``fit``: P points x J window pixels (or vertices) x rounds (a chosen structure's candidates are in
+    the "fit auto" terms)."""
+    return {"point_pixels": points * pixels * rounds}
 
 
 def evaluation_units(*, points: int, pixels: int, params: list[int], datasets: int = 1) -> dict:

@@ -184,14 +184,9 @@ def fit_model(
     checked, n, m, c, free, _ = resolve_structure(family, n_terms, None if on_mesh else n_directions, colour,
                                                   planar=not on_mesh)  # fmt: skip
     check_fit_options(checked, n, m, c, weighting=weighting)
-    run = Run("fit", max_memory=max_memory, reporter=reporter, timer=f"fit {checked}")
-    estimate = {
-        "family": checked,
-        "n_terms": n,
-        "n_directions": m,
-        "colour": c,
-        "candidates": 2 if free else 1,
-    }
+    # a chosen structure has its own time terms and calibration ("fit auto": the choice and the fit)
+    run = Run("fit", max_memory=max_memory, reporter=reporter, timer="fit auto" if free else f"fit {checked}")
+    estimate = {"family": checked, "n_terms": n, "n_directions": m, "colour": c}
     out = None if out is None else Path(out)
     if out is not None:
         claim_output(out, "model file", overwrite=overwrite, inputs=[data.path], option="out")
@@ -242,8 +237,8 @@ def _count_or_auto(name: str, value):
 
 
 def _fit_mesh(run: Run, data: MeshDataset, family: str, out: Path | None, args: dict, est: dict) -> FitResult:
-    """The per-vertex fit under ``run``: its estimates (``est``: the family, options and candidates they
-    count), then :func:`translucency.fit.fit_mesh`."""
+    """The per-vertex fit under ``run``: its estimates (``est``: the family and options they count), then
+    :func:`translucency.fit.fit_mesh`."""
     V = int(data.header["n_vertices"])
     params = FAMILIES[est["family"]].params_per_point(est["n_terms"], 1, est["colour"])
     workers = os.cpu_count() or 1
@@ -251,9 +246,7 @@ def _fit_mesh(run: Run, data: MeshDataset, family: str, out: Path | None, args: 
         points=data.n_points, vertices=V, chunk=MESH_FIT_CHUNK, workers=workers, params=params
     )
     run.check(need, out)
-    units = resources.timing.fit_units(
-        points=data.n_points, pixels=V, rounds=args["max_rounds"], candidates=est["candidates"]
-    )
+    units = resources.timing.fit_units(points=data.n_points, pixels=V, rounds=args["max_rounds"])
     timing = run.time(units)
     run.info(f"fit {family} on {data.n_points} incident points x {V:,} vertices; time {timing.text()}")
     with run.work(f"fit {family} per vertex") as work:
@@ -263,8 +256,8 @@ def _fit_mesh(run: Run, data: MeshDataset, family: str, out: Path | None, args: 
 def _fit_planar(
     run: Run, data: PlanarDataset, family: str, out: Path | None, args: dict, est: dict
 ) -> FitResult:
-    """The planar fit under ``run``: its estimates (``est``: the family, options and candidates they count),
-    a checkpoint beside ``out`` to resume from, then :func:`translucency.fit.fit_planar`."""
+    """The planar fit under ``run``: its estimates (``est``: the family and options they count), a
+    checkpoint beside ``out`` to resume from, then :func:`translucency.fit.fit_planar`."""
     chunk = None if args["chunk_points"] is None else min(args["chunk_points"], data.n_points)
     H, W = data.window
     stored = int(data.group["R_d"].chunks[0])
@@ -282,10 +275,7 @@ def _fit_planar(
     done = _rounds_done(ckpt)  # a checkpoint of an interrupted fit: only the rounds left are estimated
     max_rounds = args["max_rounds"]
     units = resources.timing.fit_units(
-        points=data.n_points,
-        pixels=H * W,
-        rounds=max(1, max_rounds - (done or 0)),
-        candidates=est["candidates"],
+        points=data.n_points, pixels=H * W, rounds=max(1, max_rounds - (done or 0))
     )
     timing = run.time(units)
     if ckpt is not None:
