@@ -188,12 +188,10 @@ class Choice:
         for axis, m in self.margins.items():
             value, gain = asdict(self.structure)[axis], 100 * m["held_out"]
             units = f", {abs(m['delta']) / m['se']:.1f} standard errors" if m["se"] > 0 else ""
-            if gain > 0:
+            if m["delta"] > SELECT_SE * m["se"]:  # won beyond the split's noise
                 said.append(f"{axis} {value} over {m['over']} by {gain:.2f} pt{units}")
-            else:
-                said.append(
-                    f"{axis} {value} kept: {m['over']} {-gain:.2f} pt better, within the noise{units}"
-                )
+            else:  # the prior, kept: the simpler value was within the noise
+                said.append(f"{axis} {value} kept, {m['over']} within the noise ({-gain:+.2f} pt{units})")
         how = "; ".join(said) if said else "nothing richer than the simplest candidates"
         where = f"held-out {100 * self.held_out:.2f} % on {self.points} points"
         second = self.runner_up()
