@@ -77,13 +77,12 @@ def test_a_richer_structure_needs_to_win_by_more_than_the_split_noise():
 def test_the_prior_is_kept_within_the_noise_and_a_choice_never_loses_to_a_simpler_one_beyond_it():
     # n = 4 is the best on average, n = 2 and n = 3 swing ±0.6 between points: both within one standard
     # error of it, so the prior n = 3 is kept ...
-    e = {1: [9.0] * 4, 2: [0.5, 1.7, 0.5, 1.7], 3: [0.5, 1.7, 0.5, 1.7], 4: [1.0] * 4}
+    e = {2: [0.5, 1.7, 0.5, 1.7], 3: [0.5, 1.7, 0.5, 1.7], 4: [1.0] * 4}
     assert choose(lambda s: _terms(e[s.n_terms]), Structure(), ("n_terms",)).structure.n_terms == 3
     # ... unless n = 3 is worse than the simpler n = 2 on every point (beyond their own noise): the guard
     e[3] = [0.55, 1.75, 0.55, 1.75]
     choice = choose(lambda s: _terms(e[s.n_terms]), Structure(), ("n_terms",))
-    assert choice.structure.n_terms == 2
-    assert choice.margins["n_terms"]["over"] == 1 and choice.margins["n_terms"]["delta"] > 0
+    assert choice.structure.n_terms == 2 and "n_terms" not in choice.margins  # the simplest: no margin
     # the colour's prior (one fall-off per channel) is kept when the shared colour gains within the noise
     c = {"shared": [0.8, 1.15, 0.9, 1.0], "per-channel": [1.0] * 4}
     choice = choose(lambda s: _terms(c[s.colour]), Structure(), ("colour",))
@@ -262,9 +261,8 @@ def test_homogeneous_material_gets_one_direction(homogeneous):
     e = _errors(record, "n_directions")
     # no direction count buys anything on held-out pairs (none more than 3 % below the isotropic error) ...
     assert min(e.values()) >= e[1] / 1.03
-    # ... and more terms than the data support do not help either: one term is clearly short
-    n = _errors(record, "n_terms")
-    assert n[1] > 1.5 * min(n.values())
+    # ... and the terms were searched too (two to four; the record lists each one tried)
+    assert set(_errors(record, "n_terms")) <= {2, 3, 4} and len(_errors(record, "n_terms")) >= 2
 
 
 def test_fibers_get_many_directions(fibers):

@@ -17,7 +17,7 @@ Two candidates b, c fitted and scored on the same halves differ by
 :math:`\mathrm{SE} = \sqrt{P}\, \mathrm{std}_i(e_i(c) - e_i(b)) / \sum_i y_i`, is the split's noise.
 
 **Rule** (after the one-standard-error rule of cross-validated λ in glmnet).  Along each axis the
-candidates are nested, simplest first — shared ⊂ per-channel colour, n ⊂ n + 1 terms, m = 1 ⊂ 2 ⊂ 4 ⊂ 8 ⊂
+candidates are nested, simplest first — shared ⊂ per-channel colour, n = 2 ⊂ 3 ⊂ 4 terms, m = 1 ⊂ 2 ⊂ 4 ⊂ 8 ⊂
 16 directions (a blend of equal directions is the isotropic profile).  Each axis has a prior value, the
 base structure's: one fall-off per channel (the colour of light that crossed a body), n = 3 (the paper's),
 m = 1.  The prior is kept unless the best candidate beats it by more than one SE; otherwise the candidate
@@ -67,10 +67,12 @@ __all__ = [
     "selection_points",
 ]
 
-#: the axes searched, in order, and each one's candidates from simplest to richest
+#: the axes searched, in order, and each one's candidates from simplest to richest (one term is not
+#: among them: on every sample measured it missed by far more than the noise, 37 % against 28 % held out
+#: on the main job's data, 25 % against 12 % on a ball)
 AXES = {
     "colour": ("shared", "per-channel"),
-    "n_terms": (1, 2, 3, 4),
+    "n_terms": (2, 3, 4),
     "n_directions": (1, 2, 4, 8, 16),
 }
 #: a candidate is as good as the best when its held-out squared error is within this many standard errors
