@@ -212,7 +212,7 @@ def free_axes(model: str, n_terms, n_directions, colour, *, planar: bool):
     -------
     (tuple of str, Structure)
         The free axes (in :data:`AXES` order; empty: nothing to choose) and the base structure (the
-        fixed values, and the simplest-but-safe defaults for the free ones).
+        fixed values, and the priors for the free ones: per channel, n = 3, m = 1).
 
     Examples
     --------
@@ -233,7 +233,8 @@ def free_axes(model: str, n_terms, n_directions, colour, *, planar: bool):
             "n_directions": 8 if FAMILIES[model].directional else 1,
         }
         given = {axis: defaults[axis] if v is None else v for axis, v in given.items()}
-        if model == "aniso" and given["n_directions"] != "auto" and int(given["n_directions"]) < 2:
+        m = given["n_directions"]
+        if model == "aniso" and m != "auto" and _count("n_directions", m) < 2:
             raise TranslucencyError(f"directions: the anisotropic model needs m >= 2, got {n_directions}")
     if not planar:
         given["n_directions"] = 1
