@@ -166,6 +166,7 @@ class Choice:
             "of_points": self.of_points,
             "seconds": round(self.seconds, 2),
             "rule": RULE,
+            "summary": self.summary_line(),
         }
 
     def runner_up(self) -> dict | None:
@@ -384,9 +385,8 @@ def _difference(a: tuple, b: tuple) -> tuple[float, float]:
     y = 0.5 * (y_a.sum() + y_b.sum())
     if not y > 0:  # no held-out data at all: nothing tells the candidates apart
         return 0.0, 0.0
-    d = e_a - e_b
-    n = int(np.count_nonzero((y_a > 0) | (y_b > 0)))
-    se = np.sqrt(n) * float(np.std(d[(y_a > 0) | (y_b > 0)], ddof=1)) / y if n > 1 else 0.0
+    d = (e_a - e_b)[(y_a > 0) | (y_b > 0)]  # the points with held-out data
+    se = np.sqrt(len(d)) * float(np.std(d, ddof=1)) / y if len(d) > 1 else 0.0
     return float(d.sum() / y), float(se)
 
 
@@ -409,11 +409,8 @@ def _one_se(candidates: list, terms: list, axis: str, prior):
     values = [row["value"] for row in table]
     home = values.index(prior) if prior in values else 0
     pick = home if home in near_best else min(near_best, key=lambda k: (abs(k - home), k))
-    beaten = [
-        k
-        for k in range(pick)
-        if _difference(terms[pick], terms[k])[0] > SELECT_SE * _difference(terms[pick], terms[k])[1]
-    ]
+    against = {k: _difference(terms[pick], terms[k]) for k in range(pick)}  # (Δ, SE) to each simpler one
+    beaten = [k for k, (delta, se) in against.items() if delta > SELECT_SE * se]
     if beaten:  # the bias guard
         pick = min(beaten, key=lambda k: errors[k])
     margin = None
@@ -472,6 +469,5 @@ def fit_chosen(fit: Callable, ds, score_terms: Callable, *, free: tuple, base: S
     choice.points, choice.of_points, choice.seconds = len(points), ds.n_points, time.perf_counter() - t0
     result = fit(ds.path, **choice.structure.options(planar=planar), progress=progress, **kw)
     result.options["structure"] = choice.record()
-    result.options["structure"]["summary"] = choice.summary_line()
     result.seconds += choice.seconds
     return result
