@@ -22,8 +22,8 @@ runner = CliRunner()
 
 
 def readme_session() -> str:
-    """The first Python block of the README's "Python API" section."""
-    section = README.read_text().split("## Python API", 1)[1]
+    """The first Python block of the README's "Python" section."""
+    section = README.read_text().split("## Python\n", 1)[1]
     return re.search(r"```python\n(.*?)```", section, re.S).group(1)
 
 
