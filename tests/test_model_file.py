@@ -12,6 +12,7 @@ from hypothesis import strategies as st
 from helpers import random_exponential_model
 from translucency import ModelFileError, TranslucencyError, load_model, save_model
 from translucency.io import model_file as mf
+from translucency.io._model_arrays import ALPHA_BITS, bit_rounded, checksum, required_arrays
 from translucency.model import (
     MATERIALS,
     BurleyModel,
@@ -25,14 +26,14 @@ from translucency.model import (
 
 
 def assert_same(a, b, dtype="float32"):
-    """Equal, but for a per-vertex α stored at float32, which keeps mf.ALPHA_BITS mantissa bits."""
+    """Equal, but for a per-vertex α stored at float32, which keeps ALPHA_BITS mantissa bits."""
     assert type(a) is type(b)
     np.testing.assert_array_equal(a.x_i, b.x_i)
     if isinstance(a.alpha, VertexAlpha) and dtype == "float32":
-        np.testing.assert_array_equal(b.alpha.values, mf.bit_rounded(a.alpha.values, mf.ALPHA_BITS))
+        np.testing.assert_array_equal(b.alpha.values, bit_rounded(a.alpha.values, ALPHA_BITS))
     else:
         np.testing.assert_array_equal(a.alpha.values, b.alpha.values)
-    for name in mf._PARAMS[a.kind]:
+    for name in type(a).STORED:
         va, vb = getattr(a, name), getattr(b, name)
         assert (va is None) == (vb is None)
         if va is not None:
@@ -164,7 +165,7 @@ def test_failed_write_keeps_the_old_file(tmp_path, rng, monkeypatch):
     def boom(*a, **k):
         raise OSError("disk full")
 
-    monkeypatch.setattr(mf, "_checksum", lambda arrays: "x")
+    monkeypatch.setattr(mf, "checksum", lambda arrays: "x")
     import zarr
 
     monkeypatch.setattr(zarr, "create_group", boom)
@@ -223,11 +224,11 @@ def test_truncated_file_is_refused(tmp_path, good_file, frac):
 def _rewrite(src, dst, edit_header=None, edit_arrays=None, fix_checksum=True):
     """Re-pack a model file with a doctored header or arrays (bypassing save_model's checks)."""
     root, header = mf._open(src)
-    arrays = {k: np.asarray(root[k][...]) for k in mf._required(header)}
+    arrays = {k: np.asarray(root[k][...]) for k in required_arrays(header)}
     if edit_arrays:
         edit_arrays(arrays)
     if fix_checksum:
-        header["checksum"] = mf._checksum(arrays)
+        header["checksum"] = checksum(arrays)
     if edit_header:
         edit_header(header)
     mf._write_store(dst, header, arrays)
@@ -363,7 +364,7 @@ def test_compressed_mesh_renders_as_the_full_one(tmp_path, fitted_ball):
         m.alpha.vertices[m.faces[:, 2]] - m.alpha.vertices[m.faces[:, 0]],
     ).sum(axis=0)
     assert np.allclose(area(loaded), area(model), atol=1e-3 * np.abs(area(model)).max() + 1e-6)
-    change = np.abs(loaded.alpha.values / model.alpha.values - 1)  # α at 8 mantissa bits (mf.ALPHA_BITS)
+    change = np.abs(loaded.alpha.values / model.alpha.values - 1)  # α at 8 mantissa bits (ALPHA_BITS)
     assert change.max() <= 2.0**-9 and change.max() > 0
     full = tl.render_model(model, size=(64, 48)).picture
     decoded = tl.render_model(loaded, size=(64, 48)).picture

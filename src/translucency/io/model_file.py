@@ -43,7 +43,9 @@ that corruption that survives decompression is still caught.
 Each model class (:data:`translucency.model.MODEL_KINDS`, by ``kind``) declares what it
 stores: its parameter arrays (``STORED``, ``required_params``), its header fields
 (``header_fields``), how it is rebuilt (``from_stored``) and how values beyond float32 are
-made inert (``store_inert``); this module is the same for every kind.
+made inert (``store_inert``); this module is the same for every kind.  What becomes of a model's
+values on the way to the arrays and back (the casts, inert values, α's bits, the checksum, the checks
+of a model built from them) is :mod:`._model_arrays`; this module holds the header and the container.
 
 Arrays are compressed with Blosc (zstd, byte shuffle), one chunk per field (all
 points of one parameter, term and direction), which keeps spatially coherent
@@ -53,7 +55,6 @@ temporary file in the target directory and are moved into place with an atomic r
 
 from __future__ import annotations
 
-import hashlib
 import json
 import warnings
 import zipfile
@@ -63,11 +64,16 @@ import numpy as np
 
 from .._validate import TranslucencyError
 from .._version import __version__
-from ..model import MODEL_KINDS, PlanarAlpha, ReflectanceModel, VertexAlpha
+from ..model import MODEL_KINDS, PlanarAlpha, ReflectanceModel
 from ..model.bounds import check_physics
-from ..model.extent import extent_from_dict
-from ..model.lean import KAPPA_MAX, LAMBDA_MAX
-from ..model.through import COS_EDGES, R_EDGES
+from ._model_arrays import (
+    checksum,
+    inert_where_unstorable,
+    model_arrays,
+    model_from_arrays,
+    overflow_message,
+    required_arrays,
+)
 from .atomic import atomic_path
 from .mesh_codec import decode_mesh, encode_mesh
 from .outputs import claim_output
@@ -75,16 +81,11 @@ from .outputs import claim_output
 FORMAT = "translucency-model"
 VERSION = 1
 HEADER_KEY = "translucency_model"
-#: mantissa bits a per-vertex α keeps (float32 keeps 23): a relative change ≤ 2⁻⁹ ≈ 0.2 %, below the
-#: percent-level photon noise of a fitted α, and — the picture being linear in α — a render's change too
-ALPHA_BITS = 8
 #: the array of a compressed mesh, and the two it stands for
 MESH_ARRAY = "mesh/draco"
 _MESH_KEYS = ("alpha/vertices", "mesh/faces")
 
 _STORABLE = tuple(MODEL_KINDS.values())
-#: the parameter arrays of each kind, in file order (as each model class declares them)
-_PARAMS = {kind: cls.STORED for kind, cls in MODEL_KINDS.items()}
 
 
 class ModelFileError(TranslucencyError):
@@ -109,97 +110,6 @@ class ModelFileError(TranslucencyError):
 
 
 # -- writing -------------------------------------------------------------------
-
-
-def _through_shape(model) -> tuple:
-    """The shape of a model's through-body table: (N, cos cells, r cells, 3)."""
-    return (model.n_points, len(COS_EDGES) - 1, len(R_EDGES) - 1, 3)
-
-
-def _model_arrays(model: ReflectanceModel, dtype: str, params: dict | None = None) -> dict[str, np.ndarray]:
-    """Every array of the file, keyed by its path in the store, already cast."""
-    if params is None:
-        params = model.stored()
-    with np.errstate(over="ignore"):  # overflow in the cast is reported by save_model
-        return _cast_arrays(model, params, dtype)
-
-
-def _points_over(value: np.ndarray, dtype) -> np.ndarray:
-    """Per incident point (axis 0): does any value of ``value`` overflow ``dtype``?"""
-    with np.errstate(over="ignore", invalid="ignore"):
-        bad = ~np.isfinite(np.asarray(value, dtype=np.float64).astype(dtype))
-    return bad.reshape(len(bad), -1).any(axis=1) if bad.ndim else np.array([bool(bad)])
-
-
-def _inert_where_unstorable(model: ReflectanceModel) -> tuple[dict, dict]:
-    """The parameters to store, with every value that overflows float32 made inert, and those points.
-
-    A noisy fit can reach amplitudes beyond float32 (a term c e^{d r} with d ≈ −2000 mm⁻¹ and
-    c ≈ 10¹³⁰ mm⁻² that spikes inside the excluded centre pixel): not a storage problem but an
-    unphysical fit.  Such terms are stored inert (the model class's ``store_inert``: c = 0,
-    d = −1 mm⁻¹; for Burley A = 0, s = 1), which changes R_d only where the spike exceeded every
-    float; the point is flagged.  Returns ``(params, {point: [names]})``.  The (σ_a, σ_s') families
-    have no inert setting: refused.
-    """
-    params = model.stored()
-    params = {k: None if v is None else np.array(v, dtype=np.float64) for k, v in params.items()}
-    over = {k: _points_over(v, np.float32) for k, v in params.items() if v is not None}
-    points = sorted({int(i) for v in over.values() for i in np.flatnonzero(v)})
-    if not points:
-        return params, {}
-    names = {i: [k for k, v in over.items() if v[i]] for i in points}
-    if not model.store_inert(params, over, points):
-        listed = ", ".join(f"{i} ({'/'.join(names[i])})" for i in points[:10])
-        raise TranslucencyError(
-            f"the {model.kind} fit is unphysical at incident points {listed}"
-            f"{' …' if len(points) > 10 else ''}: values beyond float32 (3.4e38 mm^-1); "
-            "refit with more photons or a coarser --pitch"
-        )
-    return params, names
-
-
-def _cast_arrays(model: ReflectanceModel, params: dict, dtype: str) -> dict[str, np.ndarray]:
-    arrays = {"x_i": model.x_i.astype(np.float32)}
-    if model.frame is not None:
-        arrays["frame"] = model.frame.astype(np.float32)
-    arrays["alpha/values"] = model.alpha.values.astype(dtype)
-    if isinstance(model.alpha, VertexAlpha):
-        arrays["alpha/vertices"] = model.alpha.vertices.astype(np.float32)
-        if dtype == "float32":  # a scan's α: its trailing bits are noise (ALPHA_BITS)
-            arrays["alpha/values"] = bit_rounded(arrays["alpha/values"], ALPHA_BITS)
-    for name, value in params.items():
-        if value is not None:
-            arrays[f"params/{name}"] = value.astype(dtype)
-    if model.faces is not None:
-        arrays["mesh/faces"] = np.asarray(model.faces).astype(np.int32)
-    for name, value in (model.measured or {}).items():
-        arrays[f"measured/{name}"] = np.asarray(value).astype(np.float32)
-    return arrays
-
-
-def bit_rounded(values: np.ndarray, keep: int) -> np.ndarray:
-    """float32 ``values`` rounded to the nearest number with ``keep`` mantissa bits, the rest zero: a
-    relative change of at most :math:`2^{-(keep+1)}`, and runs of zero bits the byte shuffle and zstd
-    then store in almost nothing.
-
-    Examples
-    --------
-    >>> bit_rounded(np.array([1.0, 1.2345678, 3.0e-3], np.float32), 8)
-    array([1.        , 1.234375  , 0.00299835], dtype=float32)
-    """
-    bits = np.ascontiguousarray(values, np.float32).view(np.uint32)
-    drop = 23 - int(keep)
-    half, mask = np.uint32(1 << (drop - 1)), np.uint32((0xFFFFFFFF << drop) & 0xFFFFFFFF)
-    return ((bits + half) & mask).view(np.float32)
-
-
-def _checksum(arrays: dict[str, np.ndarray]) -> str:
-    h = hashlib.sha256()
-    for key in sorted(arrays):
-        a = np.ascontiguousarray(arrays[key])
-        h.update(f"{key}:{a.dtype.str}:{a.shape}".encode())
-        h.update(a.tobytes())
-    return h.hexdigest()
 
 
 def save_model(
@@ -250,7 +160,7 @@ def save_model(
         raise TranslucencyError(f"model: cannot store a {type(model).__name__}")
     claim_output(path, "model file", overwrite=overwrite)
     try:
-        params, unstorable = _inert_where_unstorable(model)
+        params, unstorable = inert_where_unstorable(model)
     except TranslucencyError as exc:
         raise TranslucencyError(f"{path}: {exc}") from None
     if unstorable:
@@ -265,7 +175,7 @@ def save_model(
             "--pitch avoid it",
             stacklevel=2,
         )
-    arrays = _model_arrays(model, dtype, params)
+    arrays = model_arrays(model, dtype, params)
     mesh = None  # the mesh as Draco bytes (io/mesh_codec.py), its arrays replaced by what they decode to
     if "mesh/faces" in arrays:
         mesh = encode_mesh(arrays["alpha/vertices"], arrays["mesh/faces"])
@@ -274,12 +184,12 @@ def save_model(
     # the stored (cast) values must still form a valid model
     for key, a in arrays.items():
         if not np.isfinite(a).all():
-            raise TranslucencyError(f"{path}: {_overflow_message(key, a, dtype, model)}")
+            raise TranslucencyError(f"{path}: {overflow_message(key, a, dtype, model)}")
     try:
-        stored = _from_arrays(arrays, _header(model, dtype, meta, ""))
+        stored = model_from_arrays(arrays, _header(model, dtype, meta, ""))
     except TranslucencyError as exc:
         raise TranslucencyError(f"{path}: not representable in {dtype}: {exc}") from None
-    header = _header(model, dtype, meta, _checksum(arrays))
+    header = _header(model, dtype, meta, checksum(arrays))
     if unstorable:
         header["unstorable"] = {str(i): v for i, v in unstorable.items()}
     header["physics"] = check_physics(stored).summary()  # what the stored values promise (model/bounds.py)
@@ -289,22 +199,6 @@ def save_model(
         arrays[MESH_ARRAY] = np.frombuffer(mesh[0], dtype=np.uint8)
     _write_store(path, header, arrays)
     return path
-
-
-def _overflow_message(key: str, cast: np.ndarray, dtype: str, model: ReflectanceModel) -> str:
-    """What overflowed where, and what to do (only float16, or a non-parameter array, gets here)."""
-    where = np.argwhere(~np.isfinite(cast))
-    if key.startswith("params/") or key in ("x_i", "frame"):
-        points = sorted({int(i) for i in where[:, 0]})
-        place = f"incident points {points[:10]}{' …' if len(points) > 10 else ''}"
-    else:
-        place = f"index {tuple(int(v) for v in where[0])}"
-    if dtype == "float16":
-        return (
-            f"{key} overflows float16 (largest 65504) at {place}; store as float32 "
-            "(without --float16, or dtype='float32')"
-        )
-    return f"{key} overflows float32 (3.4e38) at {place}: the model is unphysical there"
 
 
 def _write_store(path: Path, header: dict, arrays: dict[str, np.ndarray]) -> None:
@@ -327,8 +221,8 @@ def _write_store(path: Path, header: dict, arrays: dict[str, np.ndarray]) -> Non
         store.close()
 
 
-def _header(model: ReflectanceModel, dtype: str, meta: dict | None, checksum: str) -> dict:
-
+def _header(model: ReflectanceModel, dtype: str, meta: dict | None, digest: str) -> dict:
+    """The file's JSON header (module docstring), ``digest`` its arrays' checksum."""
     header = {
         "format": FORMAT,
         "version": VERSION,
@@ -339,7 +233,7 @@ def _header(model: ReflectanceModel, dtype: str, meta: dict | None, checksum: st
         "n_points": model.n_points,
         "software": {"translucency": __version__},
         "meta": meta or {},
-        "checksum": checksum,
+        "checksum": digest,
     }
     if isinstance(model.alpha, PlanarAlpha):
         header["alpha"] = {"origin": [float(v) for v in model.alpha.origin], "pitch": model.alpha.pitch}
@@ -365,66 +259,6 @@ def _object_record(model: ReflectanceModel) -> dict:
 
 
 # -- reading -------------------------------------------------------------------
-def _from_arrays(arrays: dict[str, np.ndarray], header: dict) -> ReflectanceModel:
-    """Build (and so validate) a model from decoded arrays and the header."""
-    x_i = arrays["x_i"]
-    frame = arrays.get("frame")
-    if header["geometry"] == "planar":
-        a = header["alpha"]
-        alpha = PlanarAlpha(arrays["alpha/values"], np.asarray(a["origin"]), a["pitch"])
-    else:
-        alpha = VertexAlpha(arrays["alpha/values"], arrays["alpha/vertices"])
-    cls = MODEL_KINDS[header["kind"]]
-    model = cls.from_stored(
-        x_i, {name: arrays.get(f"params/{name}") for name in cls.STORED}, alpha, frame, header
-    )
-    _attach_surface(model, arrays)
-    record = header.get("object") or {}
-    if "extent" in record:
-        model.extent = extent_from_dict(record["extent"])
-    if record.get("tally_photons"):
-        model.tally_photons = int(record["tally_photons"])
-    return model
-
-
-def _attach_surface(model: ReflectanceModel, arrays: dict[str, np.ndarray]) -> None:
-    """The optional mesh and measured near field of a mesh model, checked (one-line errors)."""
-    faces = arrays.get("mesh/faces")
-    if faces is not None:
-        V = len(model.alpha.values)
-        if model.geometry != "mesh" or faces.ndim != 2 or faces.shape[1] != 3 or len(faces) == 0:
-            raise TranslucencyError(
-                f"mesh/faces: expected (F, 3) triangles of a mesh model, got {faces.shape}"
-            )
-        if faces.min() < 0 or faces.max() >= V:
-            raise TranslucencyError(f"mesh/faces: vertex indices outside 0..{V - 1}")
-        model.faces = faces.astype(np.int64)
-    measured = {k.split("/", 1)[1]: v for k, v in arrays.items() if k.startswith("measured/")}
-    if measured:
-        N = model.n_points
-        shapes = {"own": (N, 3), "total": (N, 3), "through": _through_shape(model), "lean": (N, 2, 3)}
-        for name, value in measured.items():
-            if name not in shapes or value.shape != shapes[name]:
-                raise TranslucencyError(
-                    f"measured/{name}: expected 'own' or 'total' of shape ({N}, 3), 'lean' ({N}, 2, 3) or "
-                    f"'through' {_through_shape(model)}, got {value.shape}"
-                )
-            if not (np.isfinite(value).all() and (value >= 0).all()):
-                raise TranslucencyError(f"measured/{name}: values must be finite and >= 0")
-        if "lean" in measured and (
-            measured["lean"][:, 0].max() > KAPPA_MAX or measured["lean"][:, 1].max() > LAMBDA_MAX
-        ):
-            raise TranslucencyError(
-                f"measured/lean: κ must lie in [0, {KAPPA_MAX:g}] and λ in [0, {LAMBDA_MAX:g}] mm⁻¹"
-            )
-        model.measured = {k: v.astype(np.float64) for k, v in measured.items()}
-
-
-def _required(header: dict) -> list[str]:
-    keys = ["x_i", "alpha/values"]
-    if header["geometry"] == "mesh":
-        keys += ["frame", "alpha/vertices"]
-    return keys + [f"params/{p}" for p in MODEL_KINDS[header["kind"]].required_params(header)]
 
 
 def read_header(path) -> dict:
@@ -579,7 +413,7 @@ def _read_model(path: Path, root, header: dict) -> ReflectanceModel:
     """The model of the opened file at ``path`` (:func:`_open`: its Zarr group and checked header)."""
     want_dtype = np.dtype(header["dtype"])
     arrays = {}
-    required = _required(header)
+    required = required_arrays(header)
     optional = [f"params/{p}" for p in MODEL_KINDS[header["kind"]].STORED if f"params/{p}" not in required]
     if header["geometry"] == "mesh":
         optional += ["mesh/faces", "measured/own", "measured/total", "measured/through", "measured/lean"]
@@ -617,9 +451,9 @@ def _read_model(path: Path, root, header: dict) -> ReflectanceModel:
             idx = tuple(int(v) for v in np.argwhere(~np.isfinite(a))[0])
             raise ModelFileError(f"{path}: array {key!r} holds a non-finite value at index {idx}")
         arrays[key] = a
-    if _checksum(arrays) != header.get("checksum"):
+    if checksum(arrays) != header.get("checksum"):
         raise ModelFileError(f"{path}: checksum mismatch: the file's arrays were altered or corrupted")
     try:
-        return _from_arrays({k: v.astype(np.float64) for k, v in arrays.items()}, header)
+        return model_from_arrays({k: v.astype(np.float64) for k, v in arrays.items()}, header)
     except (TranslucencyError, KeyError, TypeError) as exc:
         raise ModelFileError(f"{path}: invalid model: {_first_line(exc)}") from None
