@@ -154,7 +154,8 @@ def server_side(model: Path) -> dict:
 
     from translucency.io.model_file import load_model, read_header
     from translucency.render import object_of_model
-    from translucency.view.object_page import prepare_object, reduced_mesh
+    from translucency.view.object_page import prepare_object
+    from translucency.view.surface import reduced_mesh
 
     m = load_model(model)
     mesh, _ = object_of_model(m, read_header(model))

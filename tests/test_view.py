@@ -222,8 +222,8 @@ def _get(url, data=None):
 
 
 def test_server_serves_the_page_and_relights(prepared):
-    from translucency.view.object_page import surface_data
     from translucency.view.server import ViewServer
+    from translucency.view.surface import surface_data
 
     view = prepared
     surface = surface_data(view.model, view.mesh, name="small")
@@ -250,8 +250,8 @@ def test_server_serves_the_page_and_relights(prepared):
 
 
 def test_a_port_in_use_takes_another_and_says_which(prepared):
-    from translucency.view.object_page import surface_data
     from translucency.view.server import ViewServer
+    from translucency.view.surface import surface_data
 
     with socket.socket() as taken:
         taken.bind(("127.0.0.1", 0))

@@ -8,8 +8,8 @@ gives each point the irradiance :math:`E = \sum_k L_k E^{(k)}`,
 :math:`E^{(k)} = \int Y_k(\omega) \cos^+\theta\, d\omega`, and the sample leaves
 :math:`B_o = a_o E` with :math:`a_o = \alpha(x_o)\, \rho(x_o) / \pi` — its response to a uniform
 irradiance, ρ the total diffuse reflectance of the nearest incident points (blended as the maps are).
-The page stores it in the per-vertex format of :mod:`.object_page` (the rest r = 0, :math:`\bar E = E^{(k)}`,
-local = a), so one page serves both.
+The page stores it in the per-vertex format of :mod:`.transfer_codec` (the rest r = 0,
+:math:`\bar E = E^{(k)}`, local = a), so one page serves both.
 """
 
 from __future__ import annotations
@@ -22,15 +22,10 @@ from ..model.bounds import check_physics
 from ..render import sh
 from ..render.lights import EnvironmentLight
 from ..render.transfer import DEFAULT_BANDS, Transfer
+from .defaults import DEFAULT_LIGHT, IRRADIANCE, POINT_DISTANCE, point_intensity
 from .maps import page_maps
-from .object_page import (
-    DEFAULT_LIGHT,
-    EXIT_TABLE,
-    IRRADIANCE,
-    POINT_DISTANCE,
-    encode_transfer,
-    point_intensity,
-)
+from .object_page import EXIT_TABLE
+from .transfer_codec import encode_transfer
 
 #: the most vertices along a side of the sample's mesh
 MAX_SIDE = 192

@@ -1,7 +1,7 @@
 """The live viewer: the page served from this machine, with point and spot lights relit here.
 
 :class:`ViewServer` serves the page (:mod:`.page`) at once with what needs no transport (the mesh, the
-maps, the profiles: :func:`.object_page.surface_data`) and prepares the relighting in a thread; the page
+maps, the profiles: :func:`.surface.surface_data`) and prepares the relighting in a thread; the page
 polls ``light.json`` until it is there.  A point or spot light the user moves goes to ``POST /relight``:
 the irradiance with shadow rays and the sparse transport (:meth:`.object_page.ObjectView.relight`),
 answered as float16 radiance per vertex — of the reduced mesh's vertices only while the light moves

@@ -177,7 +177,7 @@ class _ObjectViews:
 
     def surface(self):
         """What the live page shows at once: the mesh, the maps, the profiles (and the reference)."""
-        from ..view.object_page import surface_data  # heavy: the render stage
+        from ..view.surface import surface_data  # heavy: the render stage
 
         surface = surface_data(self.m, self.mesh, name=_name(self.model), dataset=self.ds)
         if self.figure is not None:
