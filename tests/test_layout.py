@@ -27,7 +27,7 @@ import pytest
 SRC = Path(__file__).resolve().parents[1] / "src" / "translucency"
 
 #: the package root's private modules, shared by design by every package
-ROOT_SHARED = frozenset({"_validate", "_version", "_plotting"})
+ROOT_SHARED = frozenset({"_validate", "_version", "_plotting", "_extras"})
 
 #: the shared homes (sideways imports): one concern used by several stages
 SHARED = frozenset(

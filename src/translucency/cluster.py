@@ -38,6 +38,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ._extras import require
 from ._validate import TranslucencyError
 
 #: the default: this process, chunks in threads
@@ -106,13 +107,20 @@ def parse_scheduler(spec) -> SchedulerSpec:
             raise TranslucencyError(
                 f"scheduler: local:N needs 1 to {MAX_LOCAL_WORKERS} worker processes, got {spec!r}"
             )
-        return SchedulerSpec("local", workers=int(n))
+        return _with_dask(SchedulerSpec("local", workers=int(n)))
     match = _TCP.match(text)
     if match:
         if not 1 <= int(match["port"]) <= 65535:
             raise TranslucencyError(f"scheduler: port {match['port']} of {spec!r} is not 1-65535")
-        return SchedulerSpec("tcp", address=text)
+        return _with_dask(SchedulerSpec("tcp", address=text))
     raise TranslucencyError(f"scheduler: expected 'threads', 'local:N' or 'tcp://HOST:PORT', got {spec!r}")
+
+
+def _with_dask(spec: SchedulerSpec) -> SchedulerSpec:
+    """``spec``, once Dask's distributed (the cluster extra) is found: a missing extra is one line, before
+    any work."""
+    require("cluster", what=f"scheduler={str(spec)!r}")
+    return spec
 
 
 class Cluster:
@@ -168,7 +176,8 @@ class Cluster:
         with its error (a :class:`TranslucencyError` stays one); a task that killed the workers it ran
         on more than Dask's ``allowed-failures`` times is one line.
         """
-        from distributed import as_completed  # the package is imported with this module (below)
+        from distributed import as_completed  # loaded by open_cluster already (the cluster extra)
+        from distributed.scheduler import KilledWorker
 
         prefix = name or getattr(fn, "__name__", "task")
         n = len(tasks)
@@ -195,7 +204,7 @@ class Cluster:
                     result = fut.result()
                 except TranslucencyError:
                     raise
-                except _KilledWorker as exc:
+                except KilledWorker as exc:
                     raise TranslucencyError(
                         f"scheduler {self.spec}: task {i} of {prefix} killed its workers repeatedly ({exc})"
                     ) from None
@@ -248,17 +257,6 @@ def _token() -> str:
     return uuid.uuid4().hex[:12]
 
 
-try:  # the cluster's package; "threads" works without it
-    import dask
-    from distributed import Client, LocalCluster
-    from distributed.scheduler import KilledWorker as _KilledWorker
-except ImportError:  # pragma: no cover - dask[distributed] is a dependency
-    Client = LocalCluster = dask = None
-
-    class _KilledWorker(Exception):
-        pass
-
-
 _TRIM = "MALLOC_TRIM_THRESHOLD_"
 
 
@@ -290,6 +288,8 @@ def worker_environ() -> dict:
     >>> "MALLOC_TRIM_THRESHOLD_" in worker_environ()
     False
     """
+    import dask  # loaded with the cluster extra (open_cluster asks for it first)
+
     env = dict(dask.config.get("distributed.nanny.pre-spawn-environ", default={}) or {})
     env.pop(_TRIM, None)
     return env
@@ -336,11 +336,12 @@ def open_cluster(
     if spec.kind == THREADS:
         yield None
         return
-    if Client is None:  # pragma: no cover
-        raise TranslucencyError(f"scheduler {spec}: dask[distributed] is not installed")
+    distributed = require("cluster", what=f"scheduler={str(spec)!r}")  # threads need no Dask
+    import dask  # installed with distributed (the cluster extra, found above)
+
     if spec.kind == "local":
         with dask.config.set({"distributed.nanny.pre-spawn-environ": worker_environ()}), _without_env(_TRIM):
-            local = LocalCluster(
+            local = distributed.LocalCluster(
                 n_workers=spec.workers,
                 threads_per_worker=1,
                 processes=True,
@@ -348,11 +349,11 @@ def open_cluster(
                 dashboard_address=None,
                 silence_logs=logging.ERROR,
             )
-        client = Client(local, set_as_default=False)
+        client = distributed.Client(local, set_as_default=False)
         cluster = Cluster(client, spec, local)
     else:
         try:
-            client = Client(spec.address, timeout=timeout, set_as_default=False)
+            client = distributed.Client(spec.address, timeout=timeout, set_as_default=False)
         except (OSError, TimeoutError) as exc:
             reason = str(exc).splitlines()[0][:120] if str(exc) else type(exc).__name__
             raise TranslucencyError(

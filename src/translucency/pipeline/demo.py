@@ -27,6 +27,7 @@ from ..io.dataset import open_dataset
 from ..io.model_file import read_header, save_model
 from ..io.outputs import claim_folder
 from ..model import MATERIALS
+from ..render.compare import FLIP_SKIPPED, flip_available
 from ..resources.run import Reporter
 from .default_data import demo_volume
 from .figure2 import run_figure2
@@ -102,6 +103,8 @@ def run_demo(
     translucency._validate.TranslucencyError: out ...: exists and is not a translucency output folder; ...
     """
     if reporter is not None:
+        if not flip_available():  # Figure 2's numbers without FLIP: the job goes on and says so
+            reporter.info(FLIP_SKIPPED)
         with reporter.progress("demo", DEMO_STEPS) as update:
             begun = itertools.count(1)
 
@@ -196,7 +199,7 @@ def run_demo(
                 "path-traced by Mitsuba volpath (left) and rendered from the per-vertex model fitted to its "
                 "virtual acquisition as fit does by default (middle: its structure chosen by held-out "
                 f"error, {fig2_structure}; each point's profile with the through-body table, as render "
-                f"draws it); FLIP {fig2['flip_mean_object']:.3f}, "
+                f"draws it); {_flip(fig2)}"
                 f"relative RMSE {fig2['rel_rmse']:.2f} over the object; "
                 "by region (relative RMSE, pixels): "
                 + ", ".join(
@@ -212,7 +215,7 @@ def run_demo(
                 "(1, s_g, s_b), fitted to the same data and rendered from each point's radial profile alone "
                 "(render --paper: without the through-body table, each pair's profile corrected by its "
                 "measured energy per cell of normal cosine × distance); "
-                f"FLIP {paper['flip_mean_object']:.3f}, "
+                f"{_flip(paper)}"
                 f"relative RMSE {paper['rel_rmse']:.3f} (the default above: {fig2['rel_rmse']:.3f}).",
             ),
         ],
@@ -225,3 +228,15 @@ def run_demo(
         "pig": out_dir / "pig.zarr",
         "report": out_dir / "report" / "index.html",
     }
+
+
+def _flip(numbers: dict) -> str:
+    """The report's words for a comparison's FLIP: its mean over the object, or that it was not measured.
+
+    Examples
+    --------
+    >>> _flip({"flip_mean_object": 0.1234}), _flip({})
+    ('FLIP 0.123, ', 'FLIP not measured (the flip extra), ')
+    """
+    flip = numbers.get("flip_mean_object")
+    return "FLIP not measured (the flip extra), " if flip is None else f"FLIP {flip:.3f}, "

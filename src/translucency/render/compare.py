@@ -1,22 +1,25 @@
 """How our picture compares with the reference: relative RMSE, FLIP, and the errors by region.
 
 * :func:`rel_rmse`: relative RMSE over the pixels the object covers;
-* :func:`compare`: that, and FLIP (NVIDIA's perceptual difference, PyPI ``flip-evaluator``) on the
-  tone-mapped pair;
+* :func:`compare`: that, and FLIP (NVIDIA's perceptual difference, PyPI ``flip-evaluator``: the ``flip``
+  extra; without it the relative RMSE alone, :data:`FLIP_SKIPPED` says so) on the tone-mapped pair;
 * :func:`region_errors`: the relative RMSE in the regions where a local model is expected to err
   (thin and thick parts, the shadow edge, the unlit side, the silhouette).
 """
 
 from __future__ import annotations
 
-import flip_evaluator
 import numpy as np
 from scipy.ndimage import binary_erosion
 
+from .._extras import optional, skipped
 from ..mitsuba import rays
 from .camera import Camera
 from .picture import VertexPicture
 from .tonemap import auto_exposure, tonemap
+
+#: the information line of a comparison without the flip extra
+FLIP_SKIPPED = skipped("flip", "FLIP beside the relative RMSE")
 
 
 def rel_rmse(image: np.ndarray, reference: np.ndarray, mask: np.ndarray) -> float:
@@ -44,6 +47,9 @@ def rel_rmse(image: np.ndarray, reference: np.ndarray, mask: np.ndarray) -> floa
 def compare(reference: np.ndarray, ours: np.ndarray, mask: np.ndarray) -> dict:
     """Relative RMSE over the object's pixels and mean FLIP of the tone-mapped pair.
 
+    Without the ``flip`` extra the FLIP entries (``flip_mean_object``, ``flip_mean_image``) are left out
+    and ``flip_map`` is None (:data:`FLIP_SKIPPED`; :func:`flip_available`).
+
     Examples
     --------
     >>> reference = np.full((8, 8, 3), 0.2)
@@ -67,6 +73,9 @@ def compare(reference: np.ndarray, ours: np.ndarray, mask: np.ndarray) -> dict:
     """
     error = rel_rmse(ours, reference, mask)
     exposure = auto_exposure(reference, mask)
+    flip_evaluator = optional("flip")
+    if flip_evaluator is None:  # the relative RMSE alone
+        return {"rel_rmse": error, "exposure": exposure, "flip_map": None}
     ref_ldr, our_ldr = tonemap(reference, exposure), tonemap(ours, exposure)
     # the per-pixel FLIP error itself (applyMagma=False): with flip-evaluator's default the map comes back
     # coloured by magma, whose red channel is no error (0.0015 where the images agree, 0.997 at 0.84)
@@ -82,6 +91,17 @@ def compare(reference: np.ndarray, ours: np.ndarray, mask: np.ndarray) -> dict:
         "exposure": exposure,
         "flip_map": fm,
     }
+
+
+def flip_available() -> bool:
+    """Whether :func:`compare` measures FLIP (the ``flip`` extra is installed).
+
+    Examples
+    --------
+    >>> flip_available()   # installed here
+    True
+    """
+    return optional("flip") is not None
 
 
 def region_errors(

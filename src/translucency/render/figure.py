@@ -210,15 +210,17 @@ def plot_comparison(ref_ldr, our_ldr, error_map, path, titles) -> None:
 
 
 def _plot(ldr, flip_map, mask, cmp, path, title: str) -> None:
-    """reference | ours | FLIP error into ``path``; ``ldr``: the tone-mapped (reference, ours)."""
+    """reference | ours | FLIP error into ``path``; ``ldr``: the tone-mapped (reference, ours).  Without
+    the flip extra (``flip_map`` None) the third panel is the tone-mapped pair's difference."""
+    if flip_map is None:
+        error = np.abs(ldr[1] - ldr[0]).mean(axis=-1)
+        what = "|ours - reference| tone-mapped (FLIP: the flip extra)"
+    else:
+        error, what = flip_map, f"FLIP (object mean {cmp['flip_mean_object']:.3f})"
     plot_comparison(
         ldr[0],
         ldr[1],
-        np.where(mask, flip_map, np.nan),
+        np.where(mask, error, np.nan),
         path,
-        (
-            "reference: Mitsuba volpath of the volume",
-            title,
-            f"FLIP (object mean {cmp['flip_mean_object']:.3f}); rel. RMSE {cmp['rel_rmse']:.2f}",
-        ),
+        ("reference: Mitsuba volpath of the volume", title, f"{what}; rel. RMSE {cmp['rel_rmse']:.2f}"),
     )

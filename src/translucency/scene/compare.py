@@ -58,7 +58,7 @@ def scene_errors(reference: np.ndarray, ours: np.ndarray, objects: np.ndarray, l
         else {"flip_mean_object": float("nan"), "flip_map": None}
     )
     out = {
-        "object": {**part(objects), "flip": cmp["flip_mean_object"]},
+        "object": {**part(objects), "flip": cmp.get("flip_mean_object", float("nan"))},  # nan: no flip extra
         "lit": part(lit),
         "rest": part(~objects),
         "flip_map": cmp["flip_map"],

@@ -27,6 +27,7 @@ from ..model.incidence import INCIDENCE_LAWS
 from ..model.lean import NO_LEAN, has_lean
 from ..render import MAX_PAIRS, Camera, default_radius, parse_light
 from ..render.camera import view_direction
+from ..render.compare import FLIP_SKIPPED, flip_available
 from ..render.figure import figure2, plot_comparison
 from ..render.lights import Placement, place_light
 from ..render.object import boundary_eta, check_light_outside, object_of_model, volume_of_dataset
@@ -203,6 +204,8 @@ def render_model(
             f"{f'; a smaller {flags} lowers it' if flags else ''})"
         )
         run.info(f"{placement.describe()}; light {lit!r}")
+        if reference and not flip_available():  # the comparison goes on with the relative RMSE
+            run.info(FLIP_SKIPPED)
         if angles and not has_lean(fitted):  # one line: what is drawn instead
             run.info(NO_LEAN)
         elif angles and not lit.delta:
@@ -349,6 +352,8 @@ def render_scene(
     )
     for note in fs.notes:
         run.info(note)
+    if reference and not flip_available():  # the comparison goes on with the relative RMSE
+        run.info(FLIP_SKIPPED)
     if angles:  # one line for each object drawn without a lean
         for o in fs.objects:
             if not has_lean(o.model):

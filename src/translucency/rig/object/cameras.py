@@ -31,6 +31,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..._extras import require
 from ..._validate import TranslucencyError
 
 #: the largest RMS reprojection error (pixels) of a pose or an intrinsic calibration accepted by default
@@ -148,7 +149,7 @@ class Camera:
 
     def project(self, points) -> np.ndarray:
         """Pixel coordinates (N, 2) of object points (N, 3) mm (``cv2.projectPoints``)."""
-        import cv2  # heavy: OpenCV loads only where a camera projects
+        cv2 = require("rig")  # the rig extra; OpenCV loads only where a camera projects
 
         X = np.asarray(points, dtype=np.float64).reshape(-1, 3)
         rvec, _ = cv2.Rodrigues(self.R)
@@ -213,7 +214,7 @@ class Camera:
         >>> np.round(xy, 6).tolist()  # the edge: x (1 − 0.1 x²) = tan 15°
         [[0.0, 0.0], [0.269916, 0.0]]
         """
-        import cv2  # heavy: OpenCV loads only where a camera casts rays
+        cv2 = require("rig")  # the rig extra; OpenCV loads only where a camera casts rays
 
         uv = np.asarray(pixels, dtype=np.float64).reshape(-1, 2)
         if not np.isfinite(uv).all():
@@ -299,7 +300,7 @@ def _lens(xy: np.ndarray, dist: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _rotation(rvec) -> np.ndarray:
-    import cv2  # heavy: OpenCV loads only where a Rodrigues vector is read
+    cv2 = require("rig")  # the rig extra; OpenCV loads only where a Rodrigues vector is read
 
     r = np.asarray(rvec, dtype=np.float64).reshape(3, 1)
     return cv2.Rodrigues(r)[0]
@@ -321,7 +322,7 @@ def estimate_pose(
     whose error exceeds ``max_rms_px``, or that puts a marked point behind the camera, is refused in one
     line naming the camera.
     """
-    import cv2  # heavy: OpenCV loads only where a pose is estimated
+    cv2 = require("rig")  # the rig extra; OpenCV loads only where a pose is estimated
 
     X = np.asarray(points, dtype=np.float64).reshape(-1, 3)
     uv = np.asarray(pixels, dtype=np.float64).reshape(-1, 2)
@@ -369,7 +370,7 @@ def calibrate_intrinsics(
     decentring), which pins the principal point: free, p1 and p2 trade off against it (on eight 240 × 180
     px photographs of a 7 × 5 board, c is found within ≈ 1.5 px with them free, 0.6 px without).
     """
-    import cv2  # heavy: OpenCV loads only where a camera is calibrated
+    cv2 = require("rig")  # the rig extra; OpenCV loads only where a camera is calibrated
 
     from ..shared.checkerboard import find_corners
 

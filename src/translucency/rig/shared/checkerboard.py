@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..._extras import require
 from ..._validate import TranslucencyError
 from .homography import Homography, homography_from_points
 
@@ -99,7 +100,7 @@ def find_corners(image: np.ndarray, inner: tuple[int, int], *, name: str = "chec
     """The inner corners (nx·ny, 2) of a checkerboard photograph in pixels, in OpenCV's order (row by row
     of the pattern, nx to a row), found by ``cv2.findChessboardCornersSB`` on the photograph scaled to 8
     bits and refined by ``cv2.cornerSubPix`` on it in floating point."""
-    import cv2  # heavy: OpenCV loads only where a calibration photograph is read
+    cv2 = require("rig")  # the rig extra; OpenCV loads only where a calibration photograph is read
 
     nx, ny = (int(v) for v in inner)
     if nx < 2 or ny < 2:

@@ -24,6 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..._extras import require
 from ..._validate import TranslucencyError, as_float_array
 
 #: two marked points closer than this fraction of the points' spread (RMS distance from their centroid)
@@ -136,7 +137,7 @@ def homography_from_points(sample_mm, image_px, *, name: str = "calibration") ->
     translucency._validate.TranslucencyError: calibration: marked points 1, 2, 3 lie on one line in the \
 sample plane; a homography needs four points with no three collinear
     """
-    import cv2  # heavy: OpenCV loads only where a calibration is estimated
+    cv2 = require("rig")  # the rig extra; OpenCV loads only where a calibration is estimated
 
     xy = as_float_array(f"{name}: marked points (sample mm)", sample_mm, shape=(None, 2))
     uv = as_float_array(f"{name}: marked points (image px)", image_px, shape=(None, 2))
