@@ -39,12 +39,12 @@ FLAGS = {
     "material": "--material",
     "light": "--light",
     "points": "--points",
-    "spp": "--spp",
-    "radius": "--radius",
     "size": "--size",
     "view": "--view",
-    "exposure": "--exposure",
     "incidence": "--incidence",
+    "spp": "--spp",
+    "radius": "--radius",
+    "exposure": "--exposure",
     "samples": "--samples",
     "passes": "--passes",
     "roughness": "--roughness",
@@ -60,7 +60,12 @@ FLAGS = {
     "port": "--port",
     "sky": "--sky",
     "export": "--export",
-    "reference_render": "--reference",
+    "reference_render": "--reference-render",
+    "incidence_law": "--incidence-law",
+    "objects": "--object",
+    "profiles": "--profiles",
+    "gain": "--gain",
+    "extra_cameras": "--extra-camera",
 }
 
 #: arguments translated only where a message begins with them and a colon (``chunk_points: …``), the place
@@ -93,7 +98,6 @@ AT_START = {
     "specular_radius": "--specular-radius",
     "beam_rms": "--beam-rms",
     "sample_size": "--sample-size",
-    "views": "--view",
 }
 
 #: arguments that are paths: translated where a message begins with the argument and its path

@@ -25,7 +25,7 @@ from ._common import (
 from ._run import RichReporter
 
 #: the sample generators, as --help lists them (the one list make_sample refuses others with)
-SAMPLES = ", ".join(GENERATORS) + " (<name>: one of `translucency materials`)"
+SAMPLES = ", ".join(GENERATORS).replace("<name>", "NAME") + " (NAME: one of `translucency materials`)"
 
 app = typer.Typer(
     help="Virtual DISCO: simulate measurements by photon transport (Mitsuba 3 / Dr.Jit).",

@@ -12,7 +12,7 @@ from ..workflow import GENERATORS
 from ._common import finish, json_option, overwrite_option, quiet_option, user_errors
 from ._run import RichReporter
 
-SAMPLES = ", ".join(GENERATORS)
+SAMPLES = ", ".join(GENERATORS).replace("<name>", "NAME") + " (NAME: one of `translucency materials`)"
 
 
 class ObjectPhotographsOptions:

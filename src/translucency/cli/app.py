@@ -28,13 +28,17 @@ from . import (
     view,
 )
 from ._common import console, err_console
+from ._renamed import renamed
+from ._vocabulary import METAVARS
 
 
 class _OneLineErrors(typer.core.TyperGroup):
     """The top command: a usage error (unknown option, a value of the wrong type) is one ``error:`` line
-    naming the option, exit status 2, like every other error — not Click's usage box."""
+    naming the option, exit status 2, like every other error — not Click's usage box.  An option's old
+    name (cli/_renamed.py) is read as its new one, with one warning line."""
 
     def main(self, args=None, prog_name=None, complete_var=None, standalone_mode=True, **extra):
+        args = renamed(self, list(sys.argv[1:] if args is None else args))
         if not standalone_mode:
             return super().main(args, prog_name, complete_var, standalone_mode=False, **extra)
         try:
@@ -83,7 +87,7 @@ app.command("materials")(materials.materials)
 app.command("info")(info.info)
 app.command("fit")(fit.fit)
 app.command("render")(render.render)
-app.command("evaluate", cls=evaluate.EvaluateCommand)(evaluate.evaluate)
+app.command("evaluate")(evaluate.evaluate)
 app.command("export")(export.export)
 app.command("view")(view.view)
 acquire.app.command("object-photographs")(acquire_object.acquire_object_photographs_cmd)
@@ -92,28 +96,35 @@ app.add_typer(acquire.app, name="acquire")
 app.add_typer(imports.app, name="import")
 
 
-#: what --help shows for each kind of value (Typer would print <float>, <bool>, ...)
-_METAVARS = {
-    "Path": "PATH",
-    "int": "INT",
-    "float": "FLOAT",
-    "str": "TEXT",
-    "bool": "",
-    "list[str]": "TEXT",
-    "list[Path]": "PATH",
-    "tuple[int, int]": "W H",
-    "tuple[float, float, float]": "W H T",
-}
+class _Command(typer.core.TyperCommand):
+    """Every command: --help names the kind of each value as the options' metavars do (PATH, INT), never
+    Typer's type names (<path>, <bool> after --help)."""
+
+    def get_params(self, ctx):
+        params = super().get_params(ctx)
+        for param in params:
+            shown = param.display_type_rich(ctx=ctx)
+            if shown and shown.startswith("<"):
+                kind = "" if shown == "<bool>" else shown.strip("<>").upper()
+                param.display_type_rich = lambda ctx=None, kind=kind: kind
+        return params
 
 
 def _name_metavars(*typer_apps) -> None:
-    """Give every option of every command a real metavar (FLOAT, PATH, ...) unless it has one."""
+    """Give every option and argument of every command a real metavar (FLOAT, PATH, ...) unless it has one:
+    the option's from the vocabulary (cli/_vocabulary.py), an argument its name in capitals (Typer would
+    print <float>, <path>, ...)."""
     for typer_app in typer_apps:
         for command in typer_app.registered_commands:
+            if command.cls in (None, typer.core.TyperCommand):
+                command.cls = _Command
             for param in inspect.signature(command.callback).parameters.values():
                 info = param.default
                 if isinstance(info, typer.models.OptionInfo) and info.metavar is None:
-                    info.metavar = _METAVARS.get(str(param.annotation))
+                    decls = info.param_decls or ("--" + param.name.replace("_", "-"),)
+                    info.metavar = METAVARS.get(decls[0].split("/")[0])  # none: the test names it
+                elif isinstance(info, typer.models.ArgumentInfo) and info.metavar is None:
+                    info.metavar = param.name.upper()
 
 
 _name_metavars(app, acquire.app, imports.app)

@@ -17,7 +17,6 @@ from ._common import (
     quiet_option,
     scheduler_option,
     user_errors,
-    warn,
 )
 from ._run import RichReporter
 
@@ -54,12 +53,16 @@ def evaluate(
         None,
         "--json-out",
         help="Also write the summary (the object --json prints: rel_l2, rel_l2_near/mid/far, ...) to this "
-        "file. The former --json PATH still works, with a warning.",
+        "file.",
     ),
     compare: list[Path] = typer.Option(
         None, "--compare", help="Other model files of the same data (repeatable)."
     ),
-    points: str = typer.Option(None, "--points", help="Incident points for the profiles, e.g. '0,17,40'."),
+    profiles: str = typer.Option(
+        None,
+        "--profiles",
+        help="The incident points whose profiles are drawn, e.g. 0,17,40 (planar data sets).",
+    ),
     truth: Path = _TRUTH,
     paper: bool = _PAPER,
     overwrite: bool = overwrite_option(),
@@ -76,7 +79,7 @@ def evaluate(
         data,
         report,
         compare=compare or (),
-        points=points,
+        profiles=profiles,
         truth=truth,
         json_out=json_out,
         overwrite=overwrite,
@@ -119,53 +122,3 @@ def _table(evaluation, title: str, held_out: bool) -> Table:
         *(f"[dim]{100 * nf[k]:.2f} %[/]" for k in ("all", "near", "mid", "far")),
     )
     return table
-
-
-class EvaluateCommand(typer.core.TyperCommand):
-    """``evaluate``'s command line: the former ``--json PATH`` is read as ``--json-out PATH`` and
-    ``--json -`` as ``--json``, each with a one-line deprecation warning."""
-
-    def parse_args(self, ctx, args):
-        return super().parse_args(ctx, _former_json(self, list(args)))
-
-
-def _former_json(command, args: list[str]) -> list[str]:
-    """``args`` with the former forms of ``--json`` rewritten: ``--json -``, ``--json=PATH`` and
-    ``--json PATH`` where PATH is a third positional word (the command takes two: MODEL DATA)."""
-    flags = {"--help"} | {
-        name for p in command.params if getattr(p, "is_flag", False) for name in (*p.opts, *p.secondary_opts)
-    }
-    arguments = sum(1 for p in command.params if p.param_type_name == "argument")
-    positional, i = [], 0
-    while i < len(args):  # the indices of the positional words (each option's value skipped)
-        word = args[i]
-        if word == "--":
-            positional += range(i + 1, len(args))
-            break
-        if word.startswith("-") and word != "-":
-            i += 1 if word in flags or "=" in word else 2
-            continue
-        positional.append(i)
-        i += 1
-    out, i = [], 0
-    while i < len(args):
-        word, after = args[i], args[i + 1] if i + 1 < len(args) else None
-        if word.startswith("--json="):
-            after, word = word.split("=", 1)[1], "--json"
-            i -= 1  # the value was part of this word
-        elif (
-            word != "--json"
-            or after is None
-            or not (after == "-" or (i + 1 in positional and len(positional) > arguments))
-        ):
-            out.append(word)
-            i += 1
-            continue
-        if after == "-":
-            warn("--json - is deprecated; --json alone prints the summary on stdout")
-            out.append("--json")
-        else:
-            warn("--json PATH is deprecated; use --json > PATH or --json-out PATH")
-            out += ["--json-out", after]
-        i += 2
-    return out

@@ -41,7 +41,6 @@ _TERMS = typer.Option(
 _DIRECTIONS = typer.Option(
     None,
     "--directions",
-    "-m",
     help="Directions m of the anisotropic model (>= 2), or auto (m in 1, 2, 4, 8, 16 by held-out error). "
     "Default: chosen with --model auto, 8 with --model aniso (the paper's).",
 )
@@ -49,7 +48,7 @@ _WEIGHTING = typer.Option(
     "poisson",
     "--weighting",
     help="poisson: residuals weighted by the model's Poisson variance (more photons never hurt); "
-    "relative: adds a 5 % relative error (the former default).",
+    "relative: the data's variance with a 5 % relative error added (its share grows with the photons).",
 )
 _COLOUR = typer.Option(
     None,

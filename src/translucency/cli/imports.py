@@ -16,11 +16,11 @@ app = typer.Typer(
 )
 
 
-def _parse_view(text: str) -> tuple[Path, Path, Path]:
-    """``--view FOLDER,POSITIONS,CALIBRATION`` → three paths (the library checks that they exist)."""
+def _parse_camera(text: str) -> tuple[Path, Path, Path]:
+    """``--extra-camera FOLDER,POSITIONS,CALIBRATION`` → three paths (the library checks that they exist)."""
     parts = [p.strip() for p in str(text).split(",")]
     if len(parts) != 3 or not all(parts):
-        raise TranslucencyError(f"--view: expected FOLDER,POSITIONS,CALIBRATION, got {text!r}")
+        raise TranslucencyError(f"--extra-camera: expected FOLDER,POSITIONS,CALIBRATION, got {text!r}")
     folder, positions, calibration = (Path(p) for p in parts)
     return folder, positions, calibration
 
@@ -44,10 +44,10 @@ class ImagesOptions:
         help="JSON: homography | points | checkerboard, scale or reference, dark, flat, ...",
     )
     out = typer.Option(..., "--out", "-o", help="Output planar data set (Zarr directory).")
-    scale = typer.Option(
+    gain = typer.Option(
         None,
-        "--scale",
-        help="Pixel value per unit exitance (W/mm^2) per second; overrides the calibration's.",
+        "--gain",
+        help="Pixel value per unit exitance (W/mm^2) per second; overrides the calibration's scale.",
     )
     pitch = typer.Option(0.25, "--pitch", help="Pixel size of the windows on the sample, mm.")
     window = typer.Option(8.0, "--window", help="Window side around each incident point, mm.")
@@ -70,12 +70,11 @@ class ImagesOptions:
     )
     chunk = typer.Option(16, "--chunk", help="Incident points per chunk (unit of resuming).")
     dtype = typer.Option("float32", "--dtype", help="Storage of R_d and variance: float32 or float16.")
-    view = typer.Option(
+    extra_camera = typer.Option(
         None,
-        "--view",
-        metavar="FOLDER,POSITIONS,CALIBRATION",
+        "--extra-camera",
         help="Another camera's photographs of the same laser positions, with its own table and calibration "
-        "(repeatable): the views are averaged onto the same windows where all of them are valid — two "
+        "(repeatable): the cameras are averaged onto the same windows where all of them are valid — two "
         "cameras on opposite sides cancel the slant of light leaving obliquely.",
     )
     overwrite = typer.Option(
@@ -93,7 +92,7 @@ def import_images_cmd(
     positions: Path = ImagesOptions.positions,
     calibration: Path = ImagesOptions.calibration,
     out: Path = ImagesOptions.out,
-    scale: float = ImagesOptions.scale,
+    gain: float = ImagesOptions.gain,
     pitch: float = ImagesOptions.pitch,
     window: float = ImagesOptions.window,
     supersample: int = ImagesOptions.supersample,
@@ -105,7 +104,7 @@ def import_images_cmd(
     beam_rms: float = ImagesOptions.beam_rms,
     chunk: int = ImagesOptions.chunk,
     dtype: str = ImagesOptions.dtype,
-    view: list[str] = ImagesOptions.view,
+    extra_camera: list[str] = ImagesOptions.extra_camera,
     overwrite: bool = ImagesOptions.overwrite,
     scheduler: str = ImagesOptions.scheduler,
 ):
@@ -118,8 +117,8 @@ def import_images_cmd(
         calibration,
         out,
         overwrite=overwrite,
-        views=[_parse_view(text) for text in view or ()],
-        scale=scale,
+        extra_cameras=[_parse_camera(text) for text in extra_camera or ()],
+        gain=gain,
         scheduler=scheduler,
         reporter=RichReporter(False),
         pitch=pitch,

@@ -15,8 +15,8 @@ from ._run import RichReporter
 #: the light of a render when none is given (the library's ``DEFAULT_LIGHT``, stated here so that
 #: ``--help`` loads no renderer)
 DEFAULT_LIGHT = "point:60,-80,120,2e4"
-#: the camera direction and picture size when none is given (the library's defaults)
-DEFAULT_VIEW, DEFAULT_SIZE = "1,-1.6,0.7", (320, 240)
+#: the camera direction and picture resolution when none is given (the library's defaults)
+DEFAULT_VIEW, DEFAULT_RESOLUTION = "1,-1.6,0.7", (320, 240)
 
 
 # -- the options (their help is what --help shows) --------------------------------------------------
@@ -56,7 +56,7 @@ _EXPOSURE = typer.Option(
     "linear radiance (the 'exposure' render.json states, to match another render). The EXRs are "
     "linear whatever the exposure.",
 )
-_SIZE = typer.Option(DEFAULT_SIZE, "--size", help="Image width and height in pixels.")
+_RESOLUTION = typer.Option(DEFAULT_RESOLUTION, "--resolution", help="Image width and height, pixels.")
 _REFERENCE = typer.Option(
     False, "--reference", help="Also path-trace the reference (Mitsuba volpath) and compare."
 )
@@ -68,9 +68,9 @@ _RADIUS = typer.Option(
     "hierarchical far field (default: the 99% energy radius, or less where the pairs would not fit in a "
     "quarter of --max-memory or of the machine's memory). A smaller radius lowers the memory.",
 )
-_INCIDENCE = typer.Option(
+_INCIDENCE_LAW = typer.Option(
     "half-space",
-    "--incidence",
+    "--incidence-law",
     metavar="LAW",
     help="How light arriving at an angle counts against the data's normal-incidence beams: 'half-space' "
     "(Chandrasekhar's plane albedo per vertex from its measured total: oblique light comes back more, "
@@ -96,11 +96,11 @@ _SCENE = typer.Option(
     None,
     "--scene",
     help="A Mitsuba 3 scene file (XML) to render the fitted objects in: its emitters, shapes, sensor "
-    "and film as they are; name the objects with --model (docs/objects.md, 'Your scene').",
+    "and film as they are; name the objects with --object (docs/objects.md, 'Your scene').",
 )
-_MODELS = typer.Option(
+_OBJECTS = typer.Option(
     [],
-    "--model",
+    "--object",
     metavar="ID=FILE",
     help="With --scene: the shape with this id is this per-vertex model (its mesh from 'translucency "
     "export MODEL --ply', placed by to_world). Repeat for several objects.",
@@ -132,15 +132,15 @@ def render(
     light: list[str] = _LIGHT,
     view: str = _VIEW,
     exposure: str = _EXPOSURE,
-    size: tuple[int, int] = _SIZE,
+    resolution: tuple[int, int] = _RESOLUTION,
     reference: bool = _REFERENCE,
     spp: int = _SPP,
     radius: float = _RADIUS,
-    incidence: str = _INCIDENCE,
+    incidence_law: str = _INCIDENCE_LAW,
     paper: bool = _PAPER,
     angles: bool = _ANGLES,
     scene: Path = _SCENE,
-    models: list[str] = _MODELS,
+    objects: list[str] = _OBJECTS,
     scene_unit: float = _SCENE_UNIT,
     samples: int = _SAMPLES,
     passes: int = _PASSES,
@@ -156,24 +156,24 @@ def render(
     from ..workflow.rendering import render_model, render_scene  # heavy: Mitsuba, Numba, trimesh
 
     # what both kinds of render take, as the library names it
-    common = dict(incidence=incidence, radius=radius, exposure=exposure, reference=reference, spp=spp)
+    common = dict(incidence_law=incidence_law, radius=radius, exposure=exposure, reference=reference, spp=spp)
     common.update(overwrite=overwrite, max_memory=max_memory, reporter=RichReporter(quiet))
     if scene is not None:
-        _refuse_object_options(model, light, view, size)
+        _refuse_object_options(model, light, view, resolution)
         per_scene = dict(scene_unit=scene_unit, samples=samples, passes=passes, max_depth=max_depth)
         per_scene.update(angles=angles, paper=paper)
         per_scene.update(roughness=roughness, picture_spp=picture_spp)
-        shot = render_scene(scene, parse_models(models), out, **per_scene, **common)
+        shot = render_scene(scene, parse_objects(objects), out, **per_scene, **common)
         finish(as_json, quiet, shot.summary, [_scene_table(scene, shot.summary, reference), f"images: {out}"])
         return
-    if models:
-        raise TranslucencyError("--model: names the objects of a --scene; give the scene file too")
+    if objects:
+        raise TranslucencyError("--object: names the objects of a --scene; give the scene file too")
     if model is None:
-        raise TranslucencyError("render: give a per-vertex model file, or --scene SCENE.xml --model ID=FILE")
+        raise TranslucencyError("render: give a per-vertex model file, or --scene SCENE.xml --object ID=FILE")
     if len(light) > 1:
         raise TranslucencyError("--light: one light per render for now (run once per light)")
     rendering = render_model(
-        model, out, light=light[0], view=view, size=size, paper=paper, angles=angles, **common
+        model, out, light=light[0], view=view, resolution=resolution, paper=paper, angles=angles, **common
     )
     table = Table(title=f"render of {model.name}", show_header=False)
     for k, v in rendering.numbers.items():
@@ -181,17 +181,17 @@ def render(
     finish(as_json, quiet, rendering.summary, [table, f"images: {out}"])
 
 
-def _refuse_object_options(model, light, view, size) -> None:
+def _refuse_object_options(model, light, view, resolution) -> None:
     """With --scene the scene file says where the light and the camera are: one line for an option that
     would be ignored."""
     if model is not None:
-        raise TranslucencyError(f"{model}: with --scene, name the objects with --model ID=FILE instead")
+        raise TranslucencyError(f"{model}: with --scene, name the objects with --object ID=FILE instead")
     given = [
         f
         for f, v, d in (
             ("--light", light, [DEFAULT_LIGHT]),
             ("--view", view, DEFAULT_VIEW),
-            ("--size", tuple(size), DEFAULT_SIZE),
+            ("--resolution", tuple(resolution), DEFAULT_RESOLUTION),
         )
         if v != d
     ]
@@ -201,21 +201,21 @@ def _refuse_object_options(model, light, view, size) -> None:
         )
 
 
-def parse_models(texts: list[str]) -> dict[str, Path]:
-    """``ID=FILE`` pairs (``--model``) as {id: path}; one line for a malformed or repeated one."""
+def parse_objects(texts: list[str]) -> dict[str, Path]:
+    """``ID=FILE`` pairs (``--object``) as {id: path}; one line for a malformed or repeated one."""
     out: dict[str, Path] = {}
     for text in texts:
         key, eq, path = text.partition("=")
         if not eq or not key.strip() or not path.strip():
             raise TranslucencyError(
-                f"--model {text!r}: expected ID=FILE (a shape id of the scene = a model file)"
+                f"--object {text!r}: expected ID=FILE (a shape id of the scene = a model file)"
             )
         if key.strip() in out:
-            raise TranslucencyError(f"--model: the shape id {key.strip()!r} is given twice")
+            raise TranslucencyError(f"--object: the shape id {key.strip()!r} is given twice")
         out[key.strip()] = Path(path.strip())
     if not out:
         raise TranslucencyError(
-            "--scene: name the fitted objects with --model ID=FILE (shape id = model file)"
+            "--scene: name the fitted objects with --object ID=FILE (shape id = model file)"
         )
     return out
 

@@ -38,9 +38,9 @@ _COMPARE = typer.Option(
     help="A second per-vertex model of the same mesh (another fit, another family): shown beside the "
     "first and as their difference |B - A| / A under the same directional or environment light.",
 )
-_REFERENCE = typer.Option(
+_REFERENCE_RENDER = typer.Option(
     None,
-    "--reference",
+    "--reference-render",
     help="A render folder with its path-traced reference (translucency render --reference, or the main "
     "job's results/report): its error map (FLIP) and numbers beside the model.",
 )
@@ -78,7 +78,7 @@ def view(
     sky: str = _SKY,
     bands: int = _BANDS,
     compare: Path = _COMPARE,
-    reference: Path = _REFERENCE,
+    reference_render: Path = _REFERENCE_RENDER,
     truth: Path = _TRUTH,
     radius: float = _RADIUS,
     angles: bool = _ANGLES,
@@ -100,7 +100,7 @@ def view(
         sky=sky,
         bands=bands,
         compare=compare,
-        reference_render=reference,
+        reference_render=reference_render,
         truth=truth,
         radius=radius,
         angles=angles,

@@ -25,7 +25,7 @@ from ..io.model_file import load_model, read_header
 from ..io.outputs import claim_output
 from ..io.records import jsonable
 from ..resources.run import Reporter, Run
-from ._arguments import as_path, model_and_record, whole_number
+from ._arguments import as_path, model_and_record, renamed_keywords, whole_number
 from .datasets import open_dataset
 
 __all__ = ["Evaluation", "evaluate_model", "evaluate_report"]
@@ -157,13 +157,14 @@ class Evaluation:
     noise: str  # what the noise floor is (the truth's noise, or the data's own), for a table's last row
 
 
+@renamed_keywords(points="profiles")
 def evaluate_report(
     model,
     dataset,
     report=None,
     *,
     compare=(),
-    points=None,
+    profiles=None,
     truth=None,
     json_out=None,
     overwrite: bool = False,
@@ -191,8 +192,9 @@ def evaluate_report(
         ``iso.report/``).
     compare : sequence of paths
         Other model files of the same data, evaluated beside ``model``.
-    points : str or sequence of int, optional
-        Incident points for the profiles (``"0,17,40"`` or ``[0, 17, 40]``; planar data sets only).
+    profiles : str or sequence of int, optional
+        The incident points whose profiles are drawn (``"0,17,40"`` or ``[0, 17, 40]``; planar data sets
+        only; ``points`` still works for one release, with a DeprecationWarning).
     truth : str or Path, optional
         An independent acquisition of the same incident points (another seed, more photons; on a mesh
         the same mesh and points): the errors against it, with the in-sample errors beside.
@@ -244,10 +246,10 @@ def evaluate_report(
     paths = dict(model=model, dataset=dataset, compare=compare, truth=truth, report=report)
     outputs = dict(json_out=json_out, overwrite=overwrite)
     if is_mesh_dataset(dataset):  # per-vertex models on a mesh data set
-        summary = _mesh_report(run, paths, outputs, points=points, scheduler=scheduler, paper=paper)
+        summary = _mesh_report(run, paths, outputs, points=profiles, scheduler=scheduler, paper=paper)
         geometry = "mesh"
     else:
-        summary = _planar_report(run, paths, outputs, points=points, scheduler=scheduler)
+        summary = _planar_report(run, paths, outputs, points=profiles, scheduler=scheduler)
         geometry = "planar"
     summary = run.summary({"command": "evaluate", "report": report / "index.html", **summary})
     if json_out is not None:  # the object the command's --json prints
@@ -288,10 +290,10 @@ def _parse_points(points) -> list[int] | None:
         try:
             return [int(v) for v in points.split(",") if v.strip()]
         except ValueError:
-            raise TranslucencyError(f"points: expected comma-separated integers, got {points!r}") from None
+            raise TranslucencyError(f"profiles: expected comma-separated integers, got {points!r}") from None
     if isinstance(points, (int, np.integer)):
         points = [points]
-    return [whole_number("points", p, lo=0) for p in points]
+    return [whole_number("profiles", p, lo=0) for p in points]
 
 
 def _read_models(paths: list[Path], geometry: str, data: Path, check=None):
@@ -343,7 +345,9 @@ def _planar_report(run: Run, paths: dict, outputs: dict, *, points, scheduler) -
     ds = open_planar(data)
     for p in picks or []:
         if not 0 <= p < ds.n_points:
-            raise TranslucencyError(f"points: {p} is not an incident point of {data} (0..{ds.n_points - 1})")
+            raise TranslucencyError(
+                f"profiles: {p} is not an incident point of {data} (0..{ds.n_points - 1})"
+            )
     H, W = ds.window
     params = [int(np.prod(m.param_shape)) for m in models.values()]
     d = 2 if truth is not None else 1
@@ -376,7 +380,7 @@ def _mesh_report(run: Run, paths: dict, outputs: dict, *, points, scheduler, pap
 
     data, truth, report = paths["dataset"], paths["truth"], paths["report"]
     if points is not None:
-        raise TranslucencyError("points: profiles are drawn for planar data sets; a mesh report has none")
+        raise TranslucencyError("profiles: drawn for planar data sets; a mesh report has none")
     if scheduler not in (None, "threads"):
         warnings.warn(f"scheduler {scheduler}: a mesh data set is evaluated in this process", stacklevel=3)
     run.timer = "evaluate mesh"  # its own time terms and calibration (resources.timing.TIME_TERMS)

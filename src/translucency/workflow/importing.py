@@ -27,7 +27,7 @@ from ..rig import ImportSetup, load_calibration
 from ..rig import import_images as import_planar
 from ..rig.object.importer import import_object as import_mesh
 from ..rig.object.setup import read_object_rig
-from ._arguments import as_path, whole_number
+from ._arguments import as_path, renamed_keywords, whole_number
 
 __all__ = ["EXIT_LAWS", "import_images", "import_object"]
 
@@ -35,6 +35,7 @@ __all__ = ["EXIT_LAWS", "import_images", "import_object"]
 EXIT_LAWS = ("from-views", "dielectric", "lambertian")
 
 
+@renamed_keywords(views="extra_cameras", scale="gain")
 def import_images(
     folder,
     positions,
@@ -42,8 +43,8 @@ def import_images(
     out,
     *,
     overwrite: bool = False,
-    views=(),
-    scale: float | None = None,
+    extra_cameras=(),
+    gain: float | None = None,
     progress: Callable[[int, int], None] | None = None,
     scheduler: str | None = "threads",
     reporter: Reporter | None = None,
@@ -66,10 +67,12 @@ def import_images(
         The data set folder; an unfinished import of the same inputs resumes.
     overwrite : bool
         Replace a data set of translucency made from other inputs (never anything else).
-    views : sequence of (folder, positions, Calibration or path)
-        Further cameras photographing the same laser positions, averaged onto the same windows.
-    scale : float, optional
-        Pixel value per unit exitance (W/mm²) per second: replaces every calibration's.
+    extra_cameras : sequence of (folder, positions, Calibration or path)
+        Further cameras photographing the same laser positions, averaged onto the same windows
+        (``views`` still works for one release, with a DeprecationWarning).
+    gain : float, optional
+        Pixel value per unit exitance (W/mm²) per second: replaces every calibration's ``scale``
+        (``scale`` still works for one release, with a DeprecationWarning).
     progress : callable(done, total), optional
     scheduler : str, optional
         ``"threads"``, ``"local:N"`` or ``"tcp://HOST:PORT"``; the data are the same bit for bit.
@@ -101,15 +104,15 @@ def import_images(
     """
     parse_scheduler(scheduler)  # a bad value or an unreachable cluster: one line, before work
     setup = _import_setup(setup)
-    check_option("scale", scale, lo=0, open_lo=True)
+    check_option("gain", gain, lo=0, open_lo=True)
     folder, out = as_path("folder", folder), as_path("out", out)
-    views = [_view(v) for v in views]
+    views = [_view(v) for v in extra_cameras]
     run = Run("import images", reporter=reporter)
     files = [p for p in (positions, calibration, *(p for v in views for p in v)) if _a_path(p)]
     claim_output(out, "planar data set", overwrite=overwrite, inputs=[folder, *files], reuse=True)
-    calib = _calibration(calibration, scale)
+    calib = _calibration(calibration, gain)
     others = [
-        (v_folder, v_positions, _calibration(v_calib, scale)) for v_folder, v_positions, v_calib in views
+        (v_folder, v_positions, _calibration(v_calib, gain)) for v_folder, v_positions, v_calib in views
     ]
     run.kept = lambda: kept_chunks(out, open_dataset)  # Ctrl-C: the chunks kept, and how to resume
     cal_files = [c for c in (calibration, *(v[2] for v in views)) if _a_path(c)]
@@ -177,24 +180,26 @@ def _view(view) -> tuple:
     try:
         folder, positions, calibration = view
     except (TypeError, ValueError):
-        raise TranslucencyError(f"views: expected (folder, positions, calibration), got {view!r}") from None
+        raise TranslucencyError(
+            f"extra_cameras: expected (folder, positions, calibration), got {view!r}"
+        ) from None
     for what, value in (("folder", folder), ("positions", positions), ("calibration", calibration)):
         if isinstance(value, (str, os.PathLike)) and not Path(value).exists():
-            raise TranslucencyError(f"views: {what} {value}: no such file or folder")
+            raise TranslucencyError(f"extra_cameras: {what} {value}: no such file or folder")
     return Path(folder), positions, calibration
 
 
-def _calibration(calibration, scale: float | None):
-    """A Calibration (read from its file), with ``scale`` in place of its own when given (a caller's object
-    is copied, not changed)."""
+def _calibration(calibration, gain: float | None):
+    """A Calibration (read from its file), with ``gain`` in place of its ``scale`` when given (a caller's
+    object is copied, not changed)."""
     if isinstance(calibration, (str, os.PathLike)):
         if not Path(calibration).is_file():
             raise TranslucencyError(f"calibration {calibration}: no such file")
         calibration = load_calibration(calibration)
-    elif scale is not None:
+    elif gain is not None:
         calibration = copy.copy(calibration)
-    if scale is not None:
-        calibration.scale = scale
+    if gain is not None:
+        calibration.scale = gain
     return calibration
 
 

@@ -118,7 +118,7 @@ def acquire_photographs(
     >>> shots = tl.acquire_photographs("homogeneous:skin1", tempfile.mkdtemp() + "/shots", grid=1,
     ...                                size=(8, 8, 3), voxel_mm=1.0, spp=8)  # doctest: +SKIP
     >>> ds = tl.import_images(shots.folder, shots.folder / "positions.csv",
-    ...                       shots.folder / "calibration.json", "d.zarr", scale=1e5)  # doctest: +SKIP
+    ...                       shots.folder / "calibration.json", "d.zarr", gain=1e5)  # doctest: +SKIP
     """
     grid = int(check_option("grid", whole_number("grid", grid), hi=64))
     spp, seed = whole_number("spp", spp), whole_number("seed", seed, lo=0)

@@ -40,7 +40,7 @@ from ..scene import FittedScene
 from ..scene.compare import lit_pixels, object_pixels, scene_errors
 from ..scene.irradiance import samples_per_wavefront
 from ..scene.reference import converged_scene_reference
-from ._arguments import model_and_record, whole_number
+from ._arguments import model_and_record, renamed_keywords, whole_number
 
 __all__ = ["DEFAULT_LIGHT", "Rendering", "SceneRendering", "render_model", "render_scene"]
 
@@ -67,18 +67,19 @@ class Rendering:
     summary: dict = dataclasses.field(default_factory=dict)  # ``translucency render --json``
 
 
+@renamed_keywords(size="resolution", incidence="incidence_law")
 def render_model(
     model,
     out=None,
     *,
     light=DEFAULT_LIGHT,
     view=(1.0, -1.6, 0.7),
-    size=(320, 240),
+    resolution=(320, 240),
     exposure: str = "fixed",
     reference: bool = False,
     spp: int = 32,
     radius: float | None = None,
-    incidence: str = "half-space",
+    incidence_law: str = "half-space",
     paper: bool = False,
     angles: bool = False,
     overwrite: bool = False,
@@ -103,8 +104,8 @@ def render_model(
     view : (float, float, float) or str
         Direction from the object's centre towards the camera (the camera looks at the centre from 1.9
         object sizes).
-    size : (int, int)
-        Width and height in pixels.
+    resolution : (int, int)
+        Width and height in pixels (``size`` still works for one release, with a DeprecationWarning).
     exposure : str
         Of the PNGs: ``fixed``, ``fixed+STOPS``, ``auto`` or a factor on the linear radiance (the EXRs are
         linear whatever the exposure).
@@ -115,8 +116,9 @@ def render_model(
     radius : float, optional
         Near radius of the transport, mm (default: the 99 % energy radius, or less where the pairs
         would not fit in a quarter of ``max_memory`` or of the machine's memory).
-    incidence : {"half-space", "half-space-in", "normal"}
-        How light arriving at an angle counts against the data's normal-incidence beams.
+    incidence_law : {"half-space", "half-space-in", "normal"}
+        How light arriving at an angle counts against the data's normal-incidence beams (``incidence``
+        still works for one release, with a DeprecationWarning).
     paper : bool
         Draw the paper's model: each point's radial profile alone.  By default the model's through-body
         table (:mod:`translucency.model.through`) is drawn with it wherever the model holds one (every fit
@@ -140,19 +142,19 @@ def render_model(
     Examples
     --------
     >>> import translucency as tl
-    >>> pic = tl.render_model("pig_iso.model.zip", size=(160, 120))  # doctest: +SKIP
+    >>> pic = tl.render_model("pig_iso.model.zip", resolution=(160, 120))  # doctest: +SKIP
     >>> pic.picture.shape  # doctest: +SKIP
     (120, 160, 3)
     """
-    if incidence not in INCIDENCE_LAWS:
-        raise TranslucencyError(f"incidence: {incidence!r} is not one of {', '.join(INCIDENCE_LAWS)}")
+    if incidence_law not in INCIDENCE_LAWS:
+        raise TranslucencyError(f"incidence_law: {incidence_law!r} is not one of {', '.join(INCIDENCE_LAWS)}")
     check_option("spp", whole_number("spp", spp), lo=1)
     check_option("radius", radius, lo=1e-6, hi=1e9)  # 1 nm to 1000 km (the far field divides by r²)
-    size = tuple(whole_number("size", v) for v in np.atleast_1d(size))
+    size = tuple(whole_number("resolution", v) for v in np.atleast_1d(resolution))
     if len(size) != 2:
-        raise TranslucencyError(f"size: expected (width, height), got {size!r}")
+        raise TranslucencyError(f"resolution: expected (width, height), got {resolution!r}")
     for v in size:
-        check_option("size", v, hi=16384)
+        check_option("resolution", v, hi=16384)
     chosen_exposure = parse_exposure(exposure, name="exposure")
     relative = parse_light(light) if isinstance(light, str) else light  # placed once the object is known
     if not hasattr(relative, "place"):  # a light, or one placed relative to the object
@@ -225,7 +227,7 @@ def render_model(
                 max_pairs=min(MAX_PAIRS, 2 * budget),
                 eta=eta,
                 exposure=chosen_exposure,
-                incidence=incidence,
+                incidence=incidence_law,
                 through=False if paper else None,
                 angles=angles,
                 progress=work.step(),
@@ -256,9 +258,10 @@ class SceneRendering:
     summary: dict  # scene.json and ``translucency render --scene --json``
 
 
+@renamed_keywords(models="objects", incidence="incidence_law")
 def render_scene(
     scene,
-    models: dict,
+    objects: dict,
     out,
     *,
     scene_unit: float = 1.0,
@@ -267,7 +270,7 @@ def render_scene(
     max_depth: int = 8,
     roughness: float = 0.0,
     picture_spp: int = 16,
-    incidence: str = "half-space",
+    incidence_law: str = "half-space",
     radius: float | None = None,
     exposure: str = "fixed",
     reference: bool = False,
@@ -287,8 +290,9 @@ def render_scene(
     ----------
     scene : path
         A Mitsuba 3 scene file (XML): its emitters, shapes, sensor and film as they are.
-    models : dict of str to path
-        Shape id of the scene → per-vertex model file (its mesh from ``translucency export --ply``).
+    objects : dict of str to path
+        Shape id of the scene → per-vertex model file (its mesh from ``translucency export --ply``;
+        ``models`` still works for one release, with a DeprecationWarning).
     out : str or Path
         Folder for ``ours.exr/.png``, ``scene.json`` (and ``reference.exr/.png``, ``scene.png``).
     scene_unit : float
@@ -303,7 +307,7 @@ def render_scene(
     angles : bool
         Objects whose model has a lean lean toward the scene's light, by its irradiance-weighted mean
         lean vector per vertex (the summary's ``angles`` per object says whether it did).
-    incidence, radius, exposure, reference, spp, paper, overwrite, max_memory, reporter
+    incidence_law, radius, exposure, reference, spp, paper, overwrite, max_memory, reporter
         As in :func:`render_model`.
 
     Returns
@@ -317,8 +321,8 @@ def render_scene(
     >>> shot.summary["objects"]["pig"]["vertices"]  # doctest: +SKIP
     27012
     """
-    if incidence not in INCIDENCE_LAWS:
-        raise TranslucencyError(f"incidence: {incidence!r} is not one of {', '.join(INCIDENCE_LAWS)}")
+    if incidence_law not in INCIDENCE_LAWS:
+        raise TranslucencyError(f"incidence_law: {incidence_law!r} is not one of {', '.join(INCIDENCE_LAWS)}")
     for name, value in (
         ("samples", samples),
         ("passes", passes),
@@ -332,9 +336,9 @@ def render_scene(
     chosen = parse_exposure(exposure, name="exposure")
     check_option("radius", radius, lo=1e-6, hi=1e9)
     scene, out = Path(scene), Path(out)
-    pairs = {str(k): Path(v) for k, v in models.items()}
+    pairs = {str(k): Path(v) for k, v in objects.items()}
     if not pairs:
-        raise TranslucencyError("models: name the fitted objects (shape id = model file)")
+        raise TranslucencyError("objects: name the fitted objects (shape id = model file)")
     run = Run("render", max_memory=max_memory, reporter=reporter, timer="render scene")
     t = time.perf_counter()
     # the scene, the models and their places first (one line for each mistake), then the estimates
@@ -342,7 +346,7 @@ def render_scene(
         scene,
         pairs,
         scene_unit_mm=scene_unit,
-        incidence=incidence,
+        incidence=incidence_law,
         roughness=roughness,
         samples=samples,
         passes=passes,
