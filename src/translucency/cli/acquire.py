@@ -275,7 +275,7 @@ class MeshOptions:
         "apart",
         "--unscattered",
         help="Light that leaves without scattering (a beam through a thin part, seen only head-on): apart "
-        "(kept out of R_d, its fraction stored) or counted (in R_d, as data sets made before).",
+        "(kept out of R_d, its fraction stored) or counted (in R_d).",
     )
     incidence = AngleOptions.incidence
     azimuths = AngleOptions.azimuths

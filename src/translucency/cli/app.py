@@ -32,7 +32,32 @@ from ._renamed import renamed
 from ._vocabulary import METAVARS
 
 
-class _OneLineErrors(typer.core.TyperGroup):
+def _plain_kinds(params: list, ctx) -> list:
+    """``params`` with --help naming the kind of each value as the options' metavars do (PATH, INT), never
+    Typer's type names (<path>, <bool> after --help)."""
+    for param in params:
+        shown = param.display_type_rich(ctx=ctx)
+        if shown and shown.startswith("<"):
+            kind = "" if shown == "<bool>" else shown.strip("<>").upper()
+            param.display_type_rich = lambda ctx=None, kind=kind: kind
+    return params
+
+
+class _Group(typer.core.TyperGroup):
+    """A group of commands (acquire, import) whose --help shows no Typer type names."""
+
+    def get_params(self, ctx):
+        return _plain_kinds(super().get_params(ctx), ctx)
+
+
+class _Command(typer.core.TyperCommand):
+    """A command whose --help shows no Typer type names."""
+
+    def get_params(self, ctx):
+        return _plain_kinds(super().get_params(ctx), ctx)
+
+
+class _OneLineErrors(_Group):
     """The top command: a usage error (unknown option, a value of the wrong type) is one ``error:`` line
     naming the option, exit status 2, like every other error — not Click's usage box.  An option's old
     name (cli/_renamed.py) is read as its new one, with one warning line."""
@@ -92,22 +117,8 @@ app.command("export")(export.export)
 app.command("view")(view.view)
 acquire.app.command("object-photographs")(acquire_object.acquire_object_photographs_cmd)
 imports.app.command("object")(import_object.import_object_cmd)
-app.add_typer(acquire.app, name="acquire")
-app.add_typer(imports.app, name="import")
-
-
-class _Command(typer.core.TyperCommand):
-    """Every command: --help names the kind of each value as the options' metavars do (PATH, INT), never
-    Typer's type names (<path>, <bool> after --help)."""
-
-    def get_params(self, ctx):
-        params = super().get_params(ctx)
-        for param in params:
-            shown = param.display_type_rich(ctx=ctx)
-            if shown and shown.startswith("<"):
-                kind = "" if shown == "<bool>" else shown.strip("<>").upper()
-                param.display_type_rich = lambda ctx=None, kind=kind: kind
-        return params
+app.add_typer(acquire.app, name="acquire", cls=_Group)
+app.add_typer(imports.app, name="import", cls=_Group)
 
 
 def _name_metavars(*typer_apps) -> None:

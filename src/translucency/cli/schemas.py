@@ -666,7 +666,7 @@ INFO_MESH = record(
         "unscattered": field(
             ["array", "null"],
             "A tally: the mean fraction of a beam that left without scattering, kept apart from R_d, R, G, B "
-            "(null: counted in R_d, as the tallies made before, or photographs).",
+            "(null: counted in R_d, or photographs).",
             items=NUMBER,
         ),
         **_INFO_ANGLES,
@@ -770,9 +770,8 @@ _INTRO = """\
 
 Every command that takes `--json` prints one JSON object on stdout and nothing else there (progress and
 warnings go to stderr): numbers as numbers, booleans as booleans, objects as objects, nothing cut short;
-NaN and infinity as `null`. `evaluate --json-out PATH` writes the same object to a file (the former
-`evaluate --json PATH` still works, with a deprecation warning). Errors are one `error:` line on stderr,
-exit status 2.
+NaN and infinity as `null`. `evaluate --json-out PATH` writes the same object to a file. Errors are one
+`error:` line on stderr, exit status 2.
 
 Below, each command's keys, their types and units ("fraction": 0.05 is 5 %). `a.b` is key `b` inside
 object `a`; `a.*` any key of an object keyed by names. This page is generated from
