@@ -174,6 +174,28 @@ def json_option():
     return typer.Option(False, "--json", help="Print a summary as one JSON object on stdout (for scripts).")
 
 
+def chunk_option(default: int):
+    """``--chunk`` of the commands that write a resumable data set: one rule, its default by geometry."""
+    return typer.Option(
+        default,
+        "--chunk",
+        help="Incident points (laser shots) per chunk, the unit of resuming and of the memory at work: 16 "
+        "on a slab (acquire planar, import images); 8 on an object (acquire mesh, import object), where a "
+        "chunk holds R_d at every vertex and all its photons (or its shots' photographs) at once.",
+    )
+
+
+def voxel_option(default: float):
+    """``--voxel`` of the commands that generate a sample: one rule, its default by what is simulated."""
+    return typer.Option(
+        default,
+        "--voxel",
+        help="Voxel size of the generated sample or filling, mm: 0.25 on a measured slab (acquire planar: "
+        "its default --pitch); 0.5 where a filling spans an object or Mitsuba photographs it (acquire "
+        "mesh, photographs, object-photographs), its voxels costing memory and time.",
+    )
+
+
 def dataset_overwrite_option():
     """``--overwrite`` of a command that writes a resumable data set (acquire planar|mesh)."""
     return typer.Option(

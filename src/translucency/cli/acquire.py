@@ -13,6 +13,7 @@ import typer
 from .._validate import TranslucencyError
 from ..workflow import GENERATORS
 from ._common import (
+    chunk_option,
     console,
     dataset_overwrite_option,
     finish,
@@ -21,6 +22,7 @@ from ._common import (
     quiet_option,
     scheduler_option,
     user_errors,
+    voxel_option,
 )
 from ._run import RichReporter
 
@@ -54,7 +56,7 @@ class PhotographsOptions:
     grid = typer.Option(2, "--grid", help="Incident points per axis (grid x grid).")
     span = typer.Option(4.0, "--span", help="Side of the incident grid, mm (centred on the sample).")
     size = typer.Option((12.0, 12.0, 4.0), "--size", help="Generated slab: width height thickness, mm.")
-    voxel = typer.Option(0.5, "--voxel", help="Voxel size of generated samples, mm.")
+    voxel = voxel_option(0.5)
     camera = typer.Option(
         (0.0, -8.0, 11.0), "--camera", help="Camera position relative to the sample's centre, mm."
     )
@@ -144,7 +146,7 @@ class PlanarOptions:
     volume = typer.Option(
         None, "--volume", help="A user's volume: .npz with sigma_s, sigma_a (Z,Y,X,3) in 1/mm, voxel_mm."
     )
-    photons = typer.Option(10_000, "--photons", "-N", help="Photons per incident point and channel.")
+    photons = typer.Option(20_000, "--photons", "-N", help="Photons per incident point and channel.")
     seed = typer.Option(
         0, "--seed", help="Random seed of the photons (results are deterministic for a seed)."
     )
@@ -159,14 +161,14 @@ class PlanarOptions:
     pitch = typer.Option(0.25, "--pitch", help="Pixel size, mm.")
     window = typer.Option(8.0, "--window", help="Window side around each incident point, mm.")
     size = typer.Option((20.0, 20.0, 8.0), "--size", help="Generated slab: width height thickness, mm.")
-    voxel = typer.Option(0.25, "--voxel", help="Voxel size of generated samples, mm.")
+    voxel = voxel_option(0.25)
     g = typer.Option(0.0, "--g", help="Henyey-Greenstein anisotropy of generated samples.")
     angle = typer.Option(0.0, "--angle", help="Angle of incidence from the normal, degrees.")
     incidence = AngleOptions.incidence
     azimuths = AngleOptions.azimuths
     exit_bins = AngleOptions.exit_bins
     index_matched = typer.Option(False, "--index-matched", help="No Fresnel reflection at the boundary.")
-    chunk = typer.Option(16, "--chunk", help="Incident points per chunk (unit of resuming).")
+    chunk = chunk_option(16)
     dtype = typer.Option("float32", "--dtype", help="Storage of R_d and variance: float32 or float16.")
     overwrite = dataset_overwrite_option()
     scheduler = scheduler_option()
@@ -254,7 +256,7 @@ class MeshOptions:
         "bounding box (z index 0 at the top).",
     )
     up = typer.Option("z", "--up", help="The mesh file's up axis (z, y or x), turned to +z.")
-    voxel = typer.Option(0.5, "--voxel", help="Voxel size of the filling, mm.")
+    voxel = voxel_option(0.5)
     points = typer.Option(
         64,
         "--points",
@@ -264,7 +266,7 @@ class MeshOptions:
     photons = typer.Option(20_000, "--photons", "-N", help="Photons per incident point and channel.")
     seed = typer.Option(0, "--seed", help="Random seed.")
     g = typer.Option(0.0, "--g", help="Henyey-Greenstein anisotropy.")
-    chunk = typer.Option(8, "--chunk", help="Incident points per chunk (unit of resuming).")
+    chunk = chunk_option(8)
     index_matched = typer.Option(False, "--index-matched", help="No Fresnel reflection at the surface.")
     reentry = typer.Option(
         True,

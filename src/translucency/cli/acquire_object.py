@@ -9,7 +9,7 @@ from pathlib import Path
 import typer
 
 from ..workflow import GENERATORS
-from ._common import finish, json_option, overwrite_option, quiet_option, user_errors
+from ._common import finish, json_option, overwrite_option, quiet_option, user_errors, voxel_option
 from ._run import RichReporter
 
 SAMPLES = ", ".join(GENERATORS).replace("<name>", "NAME") + " (NAME: one of `translucency materials`)"
@@ -23,7 +23,7 @@ class ObjectPhotographsOptions:
     scale = typer.Option(1.0, "--scale", help="Millimetres per mesh-file unit.")
     up = typer.Option("z", "--up", help="The mesh file's up axis (z, y or x), turned to +z.")
     material = typer.Option("marble", "--material", "-m", help=f"Filling: {SAMPLES}.")
-    voxel = typer.Option(0.5, "--voxel", help="Voxel size of the filling, mm.")
+    voxel = voxel_option(0.5)
     points = typer.Option(8, "--points", help="Laser positions (farthest-point sample of the vertices).")
     cameras = typer.Option(6, "--cameras", help="Cameras on a sphere around the object.")
     resolution = typer.Option((128, 128), "--resolution", help="Image width and height, pixels.")

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import typer
 
-from ._common import dataset_overwrite_option, finish, json_option, quiet_option, user_errors
+from ._common import chunk_option, dataset_overwrite_option, finish, json_option, quiet_option, user_errors
 from ._run import RichReporter
 
 
@@ -26,7 +26,7 @@ def import_object_cmd(
         "walk (photon walks at each shot's fitted material, per cell and camera) or from-views; default "
         "the rig file's.",
     ),
-    chunk: int = typer.Option(8, "--chunk", help="Laser shots per chunk (unit of resuming and memory)."),
+    chunk: int = chunk_option(8),
     overwrite: bool = dataset_overwrite_option(),
     quiet: bool = quiet_option(),
     as_json: bool = json_option(),

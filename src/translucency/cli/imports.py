@@ -8,7 +8,7 @@ from pathlib import Path
 import typer
 
 from .._validate import TranslucencyError
-from ._common import console, scheduler_option, user_errors
+from ._common import chunk_option, console, scheduler_option, user_errors
 from ._run import RichReporter
 
 app = typer.Typer(
@@ -68,7 +68,7 @@ class ImagesOptions:
         "irradiance from its centre; a uniform disc of radius b has b/sqrt(2)). Windows are corrected to a "
         "pencil beam's response by its second moment. Default 0: a pencil beam, no correction.",
     )
-    chunk = typer.Option(16, "--chunk", help="Incident points per chunk (unit of resuming).")
+    chunk = chunk_option(16)
     dtype = typer.Option("float32", "--dtype", help="Storage of R_d and variance: float32 or float16.")
     extra_camera = typer.Option(
         None,

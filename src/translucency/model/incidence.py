@@ -306,7 +306,7 @@ class _FactorKernel:
         return mi.Color3f(*out)
 
 
-#: the incidence laws by the name ``render --incidence`` takes: the default, its ablation, the data's own
+#: the incidence laws by the name ``render --incidence-law`` takes: the default, its ablation, the data's own
 INCIDENCE_LAWS = ("half-space", "half-space-in", "normal")
 
 

@@ -379,10 +379,10 @@ def rendering(
     parts = {
         "the transport: --radius": PAIR_BYTES * pairs,
         "the vertices": VERTEX_BYTES * vertices,
-        "the picture: --size": pixels * (64 + 10 * 16),
+        "the picture: --resolution": pixels * (64 + 10 * 16),
     }
     if reference:
-        parts["the reference: --size x --spp"] = 2 * 10 * pixels * spp_reference
+        parts["the reference: --resolution x --spp"] = 2 * 10 * pixels * spp_reference
     disk = pixels * 60 * (3 if reference else 1) + MiB
     return Need(BASE_MITSUBA + sum(parts.values()), disk, max(parts, key=parts.get))
 

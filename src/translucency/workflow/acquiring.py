@@ -56,7 +56,7 @@ def acquire_planar(
     span=8.0,
     pitch: float = 0.25,
     window: float = 8.0,
-    photons: int = 10_000,
+    photons: int = 20_000,
     seed: int = 0,
     sample_seed: int | None = None,
     size=(20.0, 20.0, 8.0),

@@ -284,7 +284,7 @@ def render_scene(
     """Fitted objects in a user's Mitsuba 3 scene: prepared, lit (light in, through the body), drawn
     through the scene's camera; with ``reference`` the scene path-traced with the volumes in place.
 
-    ``translucency render --scene SCENE --model ID=FILE`` is this function.
+    ``translucency render --scene SCENE --object ID=FILE`` is this function.
 
     Parameters
     ----------
