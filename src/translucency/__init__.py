@@ -60,6 +60,7 @@ _WORKFLOW = (
     "export_gltf",
     "view_model",
     "run_demo",
+    "copy_examples",
     "Fitting",
     "Photographs",
     "Evaluation",

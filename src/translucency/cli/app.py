@@ -18,6 +18,7 @@ from . import (
     acquire_object,
     demo,
     evaluate,
+    examples,
     export,
     fit,
     import_object,
@@ -108,6 +109,7 @@ def _main(
 
 # -- the commands, in the order of `translucency --help` ------------------------------------------------
 app.command("demo")(demo.demo)
+app.command("examples")(examples.examples)
 app.command("materials")(materials.materials)
 app.command("info")(info.info)
 app.command("fit")(fit.fit)

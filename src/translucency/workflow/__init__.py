@@ -22,6 +22,7 @@ module              functions                                                   
 :mod:`.exporting`   :func:`export_model`, :func:`export_ply`, :func:`export_gltf`  ``export``
 :mod:`.viewing`     :func:`view_model`                                             ``view``
 :mod:`.demo`        :func:`run_demo` (the main job, :mod:`translucency.pipeline`)   ``demo``
+:mod:`.examples`    :func:`copy_examples` (the documentation's files)               ``examples``
 ==================  =============================================================  ===========================
 
 The modules load on
@@ -62,6 +63,7 @@ _HOMES = {
     "export_gltf": "exporting",
     "view_model": "viewing",
     "run_demo": "demo",
+    "copy_examples": "examples",
     "Reporter": "run",
     "Run": "run",
 }

@@ -371,8 +371,7 @@ def calibrate_intrinsics(
     px photographs of a 7 × 5 board, c is found within ≈ 1.5 px with them free, 0.6 px without).
     """
     cv2 = require("rig")  # the rig extra; OpenCV loads only where a camera is calibrated
-
-    from ..shared.checkerboard import find_corners
+    from ..shared.checkerboard import find_corners  # used here only, with OpenCV (above)
 
     nx, ny = (int(v) for v in inner)
     k = np.arange(nx * ny)

@@ -1,0 +1,31 @@
+"""``translucency examples``: the documentation's example files into a folder
+(:func:`translucency.workflow.examples.copy_examples`)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import typer
+
+from ._common import finish, json_option, quiet_option, user_errors
+
+_OUT = typer.Argument(..., help="The folder to copy them into (made if missing).")
+_OVERWRITE = typer.Option(
+    False, "--overwrite", help="Replace files of the same names with other contents (else refused)."
+)
+
+
+@user_errors
+def examples(
+    out: Path = _OUT,
+    overwrite: bool = _OVERWRITE,
+    quiet: bool = quiet_option(),
+    as_json: bool = json_option(),
+):
+    """Copy the example files into OUT: spot.obj and cow.obj (meshes), sky.exr (a sky), scene.xml (a
+    Mitsuba scene around object.ply), filling.npz (a volume for --volume) and LICENSES.md."""
+    from ..workflow.examples import copy_examples  # the package's data folder and the atomic writes
+
+    done = copy_examples(out, overwrite=overwrite)
+    written = ", ".join(done["written"]) or "nothing (every file already there)"
+    finish(as_json, quiet, done, [f"examples in {done['out']}: {written}"])
