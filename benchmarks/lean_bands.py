@@ -1,5 +1,5 @@
 """Where an oblique beam's power goes, by distance from its entry, against the normal beam's shape and the
-lean (model/lean.py): the table of docs/objects.md, "The lean".
+lean (model/lean.py): the table of docs/lean.md, "The lean".
 
 For up to ``--points`` incident points of a mesh data set acquired with ``--incidence`` (green channel),
 the share of each oblique beam's power per band of |x_o − x_i| and through the body (d̂ · n_i < −0.5):

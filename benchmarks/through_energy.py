@@ -8,7 +8,7 @@ the pairs whose normals face the same way (n_i · n_o > 0.5), sideways, and apar
     python benchmarks/through_energy.py DIR/spot-marble-backlit.zarr
 
 prints model / measured per channel (1 is right; the paper's model carried 0.45 / 0.57 / 0.79 of the back
-pairs' energy on the back-lit marble spot of docs/objects.md).
+pairs' energy on the back-lit marble spot of docs/through-body.md).
 """
 
 from __future__ import annotations
