@@ -2,8 +2,8 @@ r"""The angle axes of a mesh data set: the directions light arrives from, and th
 
 The paper's data are diffuse: :math:`R_d(x_i, x_o)` for a beam entering along the normal, the exits
 counted whatever their direction.  Light from behind an object enters obliquely and leaves toward the
-side a camera sees, and both angles move a back-lit picture by tens of percent (docs/objects.md, "Back
-lit: which angle").  A mesh data set may therefore hold two more axes; both live in the frame of the
+side a camera sees, and both angles move a back-lit picture by tens of percent (docs/lean.md, "Why:
+which angle matters").  A mesh data set may therefore hold two more axes; both live in the frame of the
 surface, so they mean the same on any mesh:
 
 **Incidence** (:class:`Incidence`): besides the normal beam, beams arriving at polar angles

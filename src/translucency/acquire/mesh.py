@@ -19,7 +19,7 @@ recorded apart, the fraction of each beam that left so (``unscattered``, per poi
 left out of R_d.  Counted in R_d (``"counted"``, the data sets made before), it was drawn as diffuse light
 and turned a back-lit potato's thin parts pale blue-grey: the oracle of that case, every vertex a source,
 reads 0.456 from the reference with it and 0.284 without (``benchmarks/objects_budget.py --orders``,
-docs/objects.md).
+docs/through-body.md).
 
 **Angles** (:mod:`translucency.angles`): with an :class:`~translucency.angles.Incidence` of oblique
 directions each incident point is also lit from them (N photons each, reflected and refracted at the

@@ -160,8 +160,8 @@ def fit_mesh(
         scale (``"shared"``, one fall-off scaled by (1, s_g, s_b)) gives light that crossed a body the
         hue of the light near its entry: a back-lit marble or potato drawn grey where the reference is
         brown or yellow (the unlit side's blue share 1.21–1.22× the reference's; per channel 1.04 and
-        0.82), and the main job's pig's unlit parts too blue (docs/objects.md, "The colour of light that
-        crossed the body").
+        0.82), and the main job's pig's unlit parts too blue (docs/through-body.md, "The unscattered
+        light and the colour, measured").
     exclusion_mm : float, optional
         Vertices closer than this to x_i are left out; default half the mean edge length.
     alpha_radius : float, optional

@@ -7,8 +7,8 @@ going the way it was refracted: its light comes out downstream of :math:`x_i` an
 through the body.  Measured on the virtual DISCO's oblique beams (``acquire mesh --incidence``), the
 azimuthal Fourier content of :math:`R_d` about the beam is that of a von Mises lobe — first harmonic
 0.5–1.6 of the mean, second 0.2–0.8, as :math:`2 I_1(k)/I_0(k)` and :math:`2 I_2(k)/I_0(k)` are
-(docs/objects.md, "What the data say").  The lean is that lobe, written in 3D so that it also covers pairs
-across a thin part:
+(docs/lean.md, "What the axes say about a model").  The lean is that lobe, written in 3D so that it also
+covers pairs across a thin part:
 
 .. math:: R_d(x_i, \omega_i \to x_o, \omega_o) = R_d(x_i, x_o)\;
           \frac{e^{\kappa_i\, \vec\ell(\omega_i, n_i) \cdot \hat d

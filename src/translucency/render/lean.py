@@ -18,7 +18,7 @@ an environment map) leans by the mean of its lean vectors weighted by the irradi
 (:func:`light_lean`): its first moment, as a vector irradiance would carry it.
 
 ``render --angles`` draws the light's lean only: the exit's, the reciprocal half, is built (``exit=True``)
-and measured too bright (docs/objects.md, "The lean"), so the default transport is not reciprocal in
+and measured too bright (docs/lean.md), so the default transport is not reciprocal in
 the camera's direction — a measured choice, stated, not an oversight.
 """
 
@@ -291,7 +291,7 @@ def leaned(transport, mesh, scene, light, eye, *, eta: float = 1.0, exit: bool =
         Relative index of the boundary (1: index-matched).
     exit : bool
         Also the exit's lean toward the camera (off by default: it draws the back-lit spots 29–70 % too
-        bright, docs/objects.md "The lean"; the light's lean alone is not reciprocal).
+        bright, docs/lean.md; the light's lean alone is not reciprocal).
     pairs : LeanPairs, optional
         :func:`lean_pairs`' result, to reuse between lights and cameras.
 

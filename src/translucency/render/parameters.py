@@ -114,7 +114,7 @@ def measured_per_vertex(model, weights, vertices, area):
     .. math:: \mathrm{total}_v = \sum_j w_{vj}\,\mathrm{total}_j, \qquad
               \mathrm{own}_v = \frac{\mathrm{total}_v}{A_v} \sum_j w_{vj}\, f_j
 
-    (how much each choice errs against a converged reference: docs/objects.md, "The near field").
+    (how much each choice errs against a converged reference: docs/near-field.md).
     """
     if not model.measured or not {"own", "total"} <= set(model.measured):
         return None, None

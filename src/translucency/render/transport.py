@@ -139,8 +139,8 @@ def transport_matrices(
     the profile weights, before the normalisations; the table is per channel, so the transport holds
     three matrices even for a shared-colour model.  ``through=None`` (the default) uses the table wherever
     the model holds one — every fit on a mesh stores it, and with the unscattered light kept out of the data
-    it wins or ties every case of docs/objects.md's table; ``through=False``, or a model without the table,
-    is the paper's model.
+    it wins or ties every case of docs/through-body.md's table; ``through=False``, or a model without the
+    table, is the paper's model.
 
     **Far field.**  The pairs beyond ``radius`` are not dropped: ``far_field`` (default) adds them
     hierarchically (:mod:`translucency.render._far_field`: ``clusters`` source clusters, K², default
