@@ -118,9 +118,12 @@ def skipped(extra: str, what: str) -> str:
 
 def _command() -> str | None:
     """The command that runs (``translucency import images``), or None: Click's current context, where the
-    command line (the only user of Click here) has loaded it; the library itself never imports Click."""
-    click = sys.modules.get("click")
-    context = click.get_current_context(silent=True) if click is not None else None
+    command line (the only user of Click here, Typer's own copy or the package) has loaded it; the library
+    itself never imports Click."""
+    context = None
+    for name in ("typer._click.globals", "click.globals"):
+        click = sys.modules.get(name)
+        context = context or (click.get_current_context(silent=True) if click is not None else None)
     names = []
     while context is not None:
         names.append(context.info_name)

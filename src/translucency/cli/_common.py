@@ -12,6 +12,7 @@ import warnings
 
 import typer
 from rich.console import Console
+from rich.markup import escape
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 
 from .._validate import TranslucencyError
@@ -40,7 +41,7 @@ def user_errors(func):
                     return func(*args, **kwargs)
             except TranslucencyError as exc:
                 _run.failed()  # a failed run leaves nothing behind
-                line = f"[bold red]error:[/] {cli_words(str(exc))}"
+                line = f"[bold red]error:[/] {escape(cli_words(str(exc)))}"  # [..] is text, not markup
                 err_console.print(line, highlight=False, soft_wrap=True)
                 raise typer.Exit(2) from None
             except KeyboardInterrupt:

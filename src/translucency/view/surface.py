@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
+from .._extras import require
 from ..geometry import vertex_areas
 from ..model.bounds import check_physics
 from ..render.parameters import neighbour_weights
@@ -84,9 +85,23 @@ def reduced_mesh(mesh):
     """
     if len(mesh.faces) <= REDUCED_FACES:
         return None
+    check_reduced_mesh(len(mesh.faces))
     reduced = mesh.simplify_quadric_decimation(face_count=REDUCED_FACES)
     _, source = cKDTree(np.asarray(mesh.vertices)).query(np.asarray(reduced.vertices))
     return reduced, source
+
+
+def check_reduced_mesh(n_faces: int) -> None:
+    """One line, before any work, where a mesh of ``n_faces`` triangles needs a reduced mesh and the
+    package that makes it (``fast_simplification``, the viewer extra) is missing.
+
+    Examples
+    --------
+    >>> check_reduced_mesh(REDUCED_FACES)  # no larger: drawn as it is
+    >>> check_reduced_mesh(10 * REDUCED_FACES)  # the viewer extra, installed here
+    """
+    if n_faces > REDUCED_FACES:
+        require("viewer")
 
 
 def _reduced_mesh(mesh, arrays: dict) -> None:

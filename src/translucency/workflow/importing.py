@@ -17,6 +17,8 @@ from pathlib import Path
 
 import numpy as np
 
+from .. import resources
+from .._extras import require
 from .._validate import TranslucencyError, check_option
 from ..cluster import parse_scheduler
 from ..io.dataset import PlanarDataset, open_dataset
@@ -248,6 +250,7 @@ def import_object(
     >>> ds.summary["exit_law"]["law"]  # doctest: +SKIP
     'dielectric'
     """
+    require("rig")  # the cameras' projection (OpenCV): a missing extra is one line before any work
     chunk_points = whole_number("chunk_points", chunk_points)
     if exit_law is not None and exit_law not in EXIT_LAWS:
         raise TranslucencyError(f"exit_law: one of {', '.join(EXIT_LAWS)}; got {exit_law!r}")

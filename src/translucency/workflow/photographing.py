@@ -14,6 +14,8 @@ from pathlib import Path
 
 import numpy as np
 
+from .. import resources
+from .._extras import require
 from .._validate import TranslucencyError, check_option
 from ..acquire import PlanarSetup, load_volume, make_sample
 from ..acquire.mesh import check_filling, object_volume
@@ -120,6 +122,7 @@ def acquire_photographs(
     >>> ds = tl.import_images(shots.folder, shots.folder / "positions.csv",
     ...                       shots.folder / "calibration.json", "d.zarr", gain=1e5)  # doctest: +SKIP
     """
+    require("rig")  # the photographs' calibration (OpenCV): a missing extra is one line before any work
     grid = int(check_option("grid", whole_number("grid", grid), hi=64))
     spp, seed = whole_number("spp", spp), whole_number("seed", seed, lo=0)
     fov = float(check_option("fov", fov, lo=1, hi=120))
@@ -242,6 +245,7 @@ def acquire_object_photographs(
     ...                                       resolution=(64, 64), spp=8)  # doctest: +SKIP
     >>> ds = tl.import_object(shots.folder / "object.json", "pig.zarr")  # doctest: +SKIP
     """
+    require("rig")  # the cameras' projection (OpenCV): a missing extra is one line before any work
     points = whole_number("points", points)
     cameras = int(check_option("cameras", whole_number("cameras", cameras), hi=64))
     spp, seed = whole_number("spp", spp), whole_number("seed", seed, lo=0)

@@ -26,6 +26,7 @@ from ..io.outputs import claim_folder, kind_of
 from ..model.lean import NO_LEAN, has_lean
 from ..resources.run import Reporter, Silent
 from ..view.page import write_page
+from ..view.surface import check_reduced_mesh
 
 __all__ = ["PAGE_BUDGET_MB", "view_model"]
 
@@ -127,6 +128,7 @@ def view_model(
         return _serve_until(_server((meta, arrays), None, port), model, serving, reporter)
     if truth is not None:
         raise TranslucencyError("truth: for a planar model (a mesh model's profiles show its own data)")
+    check_reduced_mesh(len(m.faces))  # a large mesh without the viewer extra: one line, before any work
     other = _companion(Path(compare), m) if compare is not None else None
     figure = _reference_figure(Path(reference_render)) if reference_render is not None else None
     if export is not None:  # claimed before any work
