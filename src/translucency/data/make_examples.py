@@ -32,9 +32,9 @@ from ..mitsuba import mitsuba
 
 #: the sky's (width, height) in pixels: 5.6 degrees a pixel
 SKY_SIZE = (64, 32)
-#: the sun's elevation above the horizon and its azimuth (degrees from +y towards +x: front right of a
-#: camera on −y looking at +y)
-SUN_ELEVATION_DEG, SUN_AZIMUTH_DEG = 45.0, 150.0
+#: the sun's elevation above the horizon and its azimuth (degrees from +y towards +x: front right of
+#: scene.xml's camera, on +y looking at −y)
+SUN_ELEVATION_DEG, SUN_AZIMUTH_DEG = 45.0, 330.0
 #: the filling's voxels per axis and their size (mm)
 FILLING_VOXELS, FILLING_VOXEL_MM = 27, 4.0
 FILLING_SIZE_MM = FILLING_VOXELS * FILLING_VOXEL_MM
