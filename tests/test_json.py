@@ -1,5 +1,6 @@
 """``--json`` that scripts can use: every command's output against its documented schema (docs/json.md),
-numbers as numbers, nothing cut; ``evaluate --json`` a flag like the others, its former path form kept."""
+numbers as numbers, nothing cut; ``evaluate --json`` a flag like the others, its old path form kept for
+one release."""
 
 import json
 from pathlib import Path
@@ -41,7 +42,9 @@ def outputs(tmp_path_factory):
     out["evaluate (mesh)"] = _json(
         ["evaluate", tmp / "b.model.zip", tmp / "b.zarr", "--report", tmp / "mrep", "-q"]
     )
-    out["render"] = _json(["render", tmp / "b.model.zip", "--out", tmp / "img", "--size", "24", "16", "-q"])
+    out["render"] = _json(
+        ["render", tmp / "b.model.zip", "--out", tmp / "img", "--resolution", "24", "16", "-q"]
+    )
     out["export"] = _json(
         ["export", tmp / "b.model.zip", "--ply", tmp / "object.ply", "--gltf", tmp / "object.glb", "-q"]
     )
@@ -51,7 +54,7 @@ def outputs(tmp_path_factory):
             "render",
             "--scene",
             tmp / "scene.xml",
-            "--model",
+            "--object",
             f"ball={tmp / 'b.model.zip'}",
             "--out",
             tmp / "scn",
@@ -61,8 +64,41 @@ def outputs(tmp_path_factory):
     for name in ("a.zarr", "b.zarr", "a.model.zip", "b.model.zip"):
         out[f"info {name}"] = _json(["info", tmp / name])
     out["materials"] = _json(["materials"])
+    out["view"] = _json(["view", tmp / "b.model.zip", "--export", tmp / "page", "--bands", "2", "-q"])
+    out["acquire photographs"] = _json([*PHOTOGRAPHS, "--out", tmp / "shots", "-q"])
+    shots = tmp / "shots"
+    out["import images"] = _json(
+        ["import", "images", shots, "-p", shots / "positions.csv", "-c", shots / "calibration.json"]
+        + ["--gain", "1e5", "--window", "2", "--pitch", "0.5", "-o", tmp / "i.zarr", "-q"]
+    )
+    out["acquire object-photographs"] = _json(
+        [*OBJECT_PHOTOGRAPHS, "--mesh", tmp / "ball.ply", "--out", tmp / "rig", "-q"]
+    )
+    with pytest.MonkeyPatch.context() as patch:  # the main job itself runs in make demo; here its printing
+        patch.setattr("translucency.workflow.demo.main_job", lambda out_dir, **kw: _demo_outputs(out_dir))
+        out["demo"] = _json(["demo", "--out", tmp / "results", "-q"])
     out["tmp"] = tmp
     return out
+
+
+def _demo_outputs(out_dir) -> dict:
+    """What the main job returns (translucency.pipeline.run_demo): where each output is."""
+    names = (
+        "baselines.png",
+        "baselines.json",
+        "dipole_fits.model.zip",
+        "fits",
+        "pig.zarr",
+        "report/index.html",
+    )
+    return dict(zip(("figure", "summary", "model", "fits", "pig", "report"), (out_dir / n for n in names)))
+
+
+#: tiny photographs of a slab and of a ball (acquire photographs, acquire object-photographs)
+PHOTOGRAPHS = ["acquire", "photographs", "--material", "homogeneous:skin1", "--grid", "1", "--span", "1"]
+PHOTOGRAPHS += ["--size", "8", "8", "3", "--voxel", "1", "--spp", "4"]
+OBJECT_PHOTOGRAPHS = ["acquire", "object-photographs", "--material", "homogeneous:skin1", "--points", "2"]
+OBJECT_PHOTOGRAPHS += ["--cameras", "3", "--resolution", "32", "32", "--spp", "4"]
 
 
 #: a small scene around the mesh of b.model.zip (render --scene)
@@ -87,6 +123,11 @@ NAMES = [
     "render (scene)",
     "export",
     "materials",
+    "view",
+    "acquire photographs",
+    "import images",
+    "acquire object-photographs",
+    "demo",
 ]
 NAMES += ["info a.zarr", "info b.zarr", "info a.model.zip", "info b.model.zip"]
 
@@ -97,9 +138,21 @@ def test_output_follows_its_documented_schema(outputs, name):
     assert check(summary, schema_of(summary)) == []
 
 
+#: schemas whose command takes long enough to be checked by a slow test (test_import_object_json)
+SLOW = {"import object"}
+
+
 def test_every_schema_is_exercised(outputs):
     used = {id(schema_of(outputs[name])) for name in NAMES}
-    assert {name for name, s in SCHEMAS.items() if id(s) not in used} == set()
+    assert {name for name, s in SCHEMAS.items() if id(s) not in used} == SLOW
+
+
+@pytest.mark.slow  # the import's near-peak model and walks: about a minute on two cores
+def test_import_object_json(outputs):
+    tmp = outputs["tmp"]
+    summary = _json(["import", "object", tmp / "rig", "-o", tmp / "o.zarr", "-q"])
+    assert check(summary, schema_of(summary)) == []
+    assert summary["estimate"]["dominated_by"].startswith("a chunk")
 
 
 def test_docs_page_is_the_schemas():
@@ -145,9 +198,10 @@ def test_materials_json(outputs):
     assert marble["sigma_s_prime"] == [2.19, 2.62, 3.00] and len(marble["R_d_dipole"]) == 3
 
 
-def test_evaluate_json_is_a_flag_and_the_former_path_form_still_works(outputs):
+def test_evaluate_json_is_a_flag_and_the_old_path_form_still_works(outputs):
     """evaluate --json prints the summary on stdout like every other command; --json-out PATH writes the
-    same object; the former --json PATH (and --json -) still work, each with one deprecation line."""
+    same object; the old --json PATH (and --json -) still work for one release, each with one warning
+    line."""
     tmp = outputs["tmp"]
     args = ["evaluate", str(tmp / "a.model.zip"), str(tmp / "a.zarr"), "-q"]
     res = runner.invoke(
@@ -157,12 +211,15 @@ def test_evaluate_json_is_a_flag_and_the_former_path_form_still_works(outputs):
     assert json.loads(res.stdout)["rel_l2"] == json.loads((tmp / "x.json").read_text())["rel_l2"]
     res = runner.invoke(app, [*args, "--report", str(tmp / "r2"), "--json", str(tmp / "old.json")])
     assert res.exit_code == 0, res.output
-    assert res.stdout.strip() == ""  # the former form wrote the file only
-    assert res.stderr.strip() == "warning: --json PATH is deprecated; use --json > PATH or --json-out PATH"
+    assert res.stdout.strip() == ""  # the old form wrote the file only
+    assert res.stderr.strip() == (
+        "warning: translucency evaluate --json PATH is renamed --json-out PATH; the old form goes in the "
+        "next release"
+    )
     assert check(json.loads((tmp / "old.json").read_text()), SCHEMAS["evaluate"]) == []
     res = runner.invoke(app, ["evaluate", "--json", "-", *args[1:], "--report", str(tmp / "r3")])
     assert res.exit_code == 0, res.output
-    assert json.loads(res.stdout)["command"] == "evaluate" and "deprecated" in res.stderr
+    assert json.loads(res.stdout)["command"] == "evaluate" and "--json - is renamed --json" in res.stderr
     res = runner.invoke(app, ["evaluate", "--json", *args[1:], "--report", str(tmp / "r4")])
     assert res.exit_code == 0 and res.stderr == "", res.output  # the flag before the arguments
     assert json.loads(res.stdout)["command"] == "evaluate"

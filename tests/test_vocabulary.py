@@ -121,7 +121,7 @@ def test_no_help_text_carries_history_or_type_names():
         args = [*command.split(), "--help"]
         output = runner.invoke(app, args, terminal_width=200, env={"COLUMNS": "200"}).output
         text = " ".join(re.sub(r"[│╭╮╰╯─]", " ", output).split())  # one line: a phrase may wrap
-        pattern = rf"<(path|bool|int|float|text|list|tuple|name)\b|{HISTORY}"
+        pattern = rf"<(path|bool|int|float|text|list|tuple)\b|{HISTORY}"
         bad += [
             f"{command or 'translucency'}: …{text[m.start() - 40 : m.end() + 20]}…"
             for m in re.finditer(pattern, text)

@@ -14,7 +14,6 @@ from .._validate import TranslucencyError
 from ..workflow import GENERATORS
 from ._common import (
     chunk_option,
-    console,
     dataset_overwrite_option,
     finish,
     json_option,
@@ -27,7 +26,7 @@ from ._common import (
 from ._run import RichReporter
 
 #: the sample generators, as --help lists them (the one list make_sample refuses others with)
-SAMPLES = ", ".join(GENERATORS).replace("<name>", "NAME") + " (NAME: one of `translucency materials`)"
+SAMPLES = ", ".join(GENERATORS) + " (<name>: one of `translucency materials`)"
 
 app = typer.Typer(
     help="Virtual DISCO: simulate measurements by photon transport (Mitsuba 3 / Dr.Jit).",
@@ -68,6 +67,9 @@ class PhotographsOptions:
     overwrite = typer.Option(
         False, "--overwrite", help="Replace an earlier output folder of translucency (never anything else)."
     )
+    max_memory = max_memory_option()
+    quiet = quiet_option()
+    as_json = json_option()
 
 
 @app.command("photographs")
@@ -87,6 +89,9 @@ def acquire_photographs_cmd(
     seed: int = PhotographsOptions.seed,
     image_format: str = PhotographsOptions.image_format,
     overwrite: bool = PhotographsOptions.overwrite,
+    max_memory: str = PhotographsOptions.max_memory,
+    quiet: bool = PhotographsOptions.quiet,
+    as_json: bool = PhotographsOptions.as_json,
 ):
     """Photograph a virtual sample with Mitsuba 3 (narrow beam per point, oblique perspective camera,
     sensor noise, dark offset, vignetting, saturation): a lab's hand-over for `translucency import images`."""
@@ -106,12 +111,12 @@ def acquire_photographs_cmd(
         seed=seed,
         image_format=image_format,
         overwrite=overwrite,
-        reporter=RichReporter(False),
+        max_memory=max_memory,
+        reporter=RichReporter(quiet),
     )
     s = shots.summary
-    console.print(
-        f"photographs: {out} (markers fit to {s['rms_px']:.3f} px rms; true homography {s['homography']})"
-    )
+    line = f"photographs: {out} (markers fit to {s['rms_px']:.3f} px rms; true homography {s['homography']})"
+    finish(as_json, quiet, s, [line])
 
 
 class AngleOptions:

@@ -9,10 +9,18 @@ from pathlib import Path
 import typer
 
 from ..workflow import GENERATORS
-from ._common import finish, json_option, overwrite_option, quiet_option, user_errors, voxel_option
+from ._common import (
+    finish,
+    json_option,
+    max_memory_option,
+    overwrite_option,
+    quiet_option,
+    user_errors,
+    voxel_option,
+)
 from ._run import RichReporter
 
-SAMPLES = ", ".join(GENERATORS).replace("<name>", "NAME") + " (NAME: one of `translucency materials`)"
+SAMPLES = ", ".join(GENERATORS) + " (<name>: one of `translucency materials`)"
 
 
 class ObjectPhotographsOptions:
@@ -41,6 +49,7 @@ class ObjectPhotographsOptions:
     seed = typer.Option(0, "--seed", help="Random seed of the filling, the renders and the sensor.")
     image_format = typer.Option("pfm", "--format", help="pfm or exr.")
     overwrite = overwrite_option()
+    max_memory = max_memory_option()
     quiet = quiet_option()
     as_json = json_option()
 
@@ -64,6 +73,7 @@ def acquire_object_photographs_cmd(
     seed: int = ObjectPhotographsOptions.seed,
     image_format: str = ObjectPhotographsOptions.image_format,
     overwrite: bool = ObjectPhotographsOptions.overwrite,
+    max_memory: str = ObjectPhotographsOptions.max_memory,
     quiet: bool = ObjectPhotographsOptions.quiet,
     as_json: bool = ObjectPhotographsOptions.as_json,
 ):
@@ -90,6 +100,7 @@ def acquire_object_photographs_cmd(
         seed=seed,
         image_format=image_format,
         overwrite=overwrite,
+        max_memory=max_memory,
         reporter=RichReporter(quiet),
     )
     line = f"photographs: {shots.folder / 'object.json'} (import with `translucency import object`)"

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import typer
 
-from ._common import console, overwrite_option, user_errors
+from ._common import finish, json_option, max_memory_option, overwrite_option, quiet_option, user_errors
 from ._run import RichReporter
 
 
@@ -16,11 +16,16 @@ def demo(
     out: Path = typer.Option(Path("results"), "--out", "-o", help="Directory for the figures and files."),
     terms: int = typer.Option(3, "--terms", "-n", min=1, max=8, help="Exponential terms n of the fits."),
     overwrite: bool = overwrite_option(),
+    max_memory: str = max_memory_option(),
+    quiet: bool = quiet_option(),
+    as_json: bool = json_option(),
 ):
     """The main job on the embedded default data: baselines per material, then planar fits
     (iso, aniso, dipole, Burley) with alpha and the Figure 1 report."""
     from ..workflow.demo import run_demo  # heavy: the main job loads every stage and Mitsuba
 
-    outputs = run_demo(out, n_terms=terms, overwrite=overwrite, reporter=RichReporter(False))
-    for what, path in outputs.items():
-        console.print(f"{what:>8}: {path}")
+    outputs = run_demo(
+        out, n_terms=terms, overwrite=overwrite, max_memory=max_memory, reporter=RichReporter(quiet)
+    )
+    summary = {"command": "demo", "out": out, "outputs": outputs}
+    finish(as_json, quiet, summary, [f"{what:>8}: {path}" for what, path in outputs.items()])

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import typer
 
-from ._common import finish, json_option, overwrite_option, quiet_option, user_errors
+from ._common import finish, json_option, max_memory_option, overwrite_option, quiet_option, user_errors
 
 #: the light baked when none is given (the library's ``DEFAULT_LIGHT``, stated here so that ``--help``
 #: loads no renderer)
@@ -43,13 +43,16 @@ def export(
         "--angles); a model without one bakes the paper's model.",
     ),
     overwrite: bool = overwrite_option(),
+    max_memory: str = max_memory_option(),
     quiet: bool = quiet_option(),
     as_json: bool = json_option(),
 ):
     """Take a per-vertex model to other tools: its mesh as PLY (render --scene) or glTF (Blender)."""
     from ..workflow.exporting import export_model  # heavy: the bake loads Mitsuba and the transport
 
-    summary = export_model(model, ply=ply, gltf=gltf, light=light, angles=angles, overwrite=overwrite)
+    summary = export_model(
+        model, ply=ply, gltf=gltf, light=light, angles=angles, overwrite=overwrite, max_memory=max_memory
+    )
     lines = []
     if ply is not None:
         lines.append(f"mesh: {ply} ({summary['vertices']:,} vertices, {summary['faces']:,} triangles, mm)")

@@ -8,7 +8,15 @@ from pathlib import Path
 
 import typer
 
-from ._common import chunk_option, dataset_overwrite_option, finish, json_option, quiet_option, user_errors
+from ._common import (
+    chunk_option,
+    dataset_overwrite_option,
+    finish,
+    json_option,
+    max_memory_option,
+    quiet_option,
+    user_errors,
+)
 from ._run import RichReporter
 
 
@@ -28,6 +36,7 @@ def import_object_cmd(
     ),
     chunk: int = chunk_option(8),
     overwrite: bool = dataset_overwrite_option(),
+    max_memory: str = max_memory_option(),
     quiet: bool = quiet_option(),
     as_json: bool = json_option(),
 ):
@@ -35,7 +44,13 @@ def import_object_cmd(
     from ..workflow.importing import import_object  # heavy: Mitsuba, OpenCV and trimesh load when it runs
 
     ds = import_object(
-        rig, out, exit_law=exit_law, chunk_points=chunk, overwrite=overwrite, reporter=RichReporter(quiet)
+        rig,
+        out,
+        exit_law=exit_law,
+        chunk_points=chunk,
+        overwrite=overwrite,
+        max_memory=max_memory,
+        reporter=RichReporter(quiet),
     )
     s = ds.summary
     errors = ", ".join(f"{c['name']} {_pose_check(c['reprojection_px'])}" for c in s["cameras"])

@@ -8,7 +8,15 @@ from pathlib import Path
 import typer
 
 from .._validate import TranslucencyError
-from ._common import chunk_option, console, scheduler_option, user_errors
+from ._common import (
+    chunk_option,
+    finish,
+    json_option,
+    max_memory_option,
+    quiet_option,
+    scheduler_option,
+    user_errors,
+)
 from ._run import RichReporter
 
 app = typer.Typer(
@@ -83,6 +91,9 @@ class ImagesOptions:
         help="Replace a data set of translucency made from other inputs (never anything else).",
     )
     scheduler = scheduler_option()
+    max_memory = max_memory_option()
+    quiet = quiet_option()
+    as_json = json_option()
 
 
 @app.command("images")
@@ -107,6 +118,9 @@ def import_images_cmd(
     extra_camera: list[str] = ImagesOptions.extra_camera,
     overwrite: bool = ImagesOptions.overwrite,
     scheduler: str = ImagesOptions.scheduler,
+    max_memory: str = ImagesOptions.max_memory,
+    quiet: bool = ImagesOptions.quiet,
+    as_json: bool = ImagesOptions.as_json,
 ):
     """Import HDR photographs of a scanned laser spot (with the camera calibration) as a planar data set."""
     from ..workflow.importing import import_images  # heavy: Dask, SciPy and scikit-image load when it runs
@@ -120,7 +134,8 @@ def import_images_cmd(
         extra_cameras=[_parse_camera(text) for text in extra_camera or ()],
         gain=gain,
         scheduler=scheduler,
-        reporter=RichReporter(False),
+        max_memory=max_memory,
+        reporter=RichReporter(quiet),
         pitch=pitch,
         window=window,
         supersample=supersample,
@@ -134,7 +149,8 @@ def import_images_cmd(
         beam_rms=beam_rms,
     )
     s, rms = ds.summary, ds.summary["rms_px"]
-    console.print(
+    line = (
         f"data set: {out} ({s['points']} points, windows {s['window_pixels'][0]} x {s['window_pixels'][1]} "
         f"at {s['pitch']} mm" + (f"; marked points fit to {rms:.3f} px rms" if rms is not None else "") + ")"
     )
+    finish(as_json, quiet, s, [line])

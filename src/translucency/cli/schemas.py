@@ -516,6 +516,8 @@ EXPORT = record(
             "With --gltf, one line when the lean is not baked: a model with a lean without --angles, or "
             "--angles for a model without one — the paper's model is baked.",
         ),
+        "estimate": ESTIMATE,
+        "seconds": field("number", "Time the export took.", "s"),
     },
     optional=(
         "ply",
@@ -526,6 +528,128 @@ EXPORT = record(
         "angles",
         "lean",
     ),  # fmt: skip
+)
+
+# -- photographs, imports, view, demo -----------------------------------------------------------------
+_ESTIMATED = {"estimate": ESTIMATE, "seconds": field("number", "Time the work took.", "s")}
+ACQUIRE_PHOTOGRAPHS = record(
+    "`translucency acquire photographs --json`: the folder of photographs written.",
+    {
+        "command": _command("acquire photographs"),
+        "out": field("string", "The folder written (images, positions.csv, calibration.json)."),
+        "photographs": field("integer", "Photographs taken: one per incident point."),
+        "rms_px": field("number", "The marked points' fit of the calibration, rms.", "pixels"),
+        "homography": array("The true homography from the camera's pose, 3 x 3 (rows).", {"type": "array"}),
+        **_ESTIMATED,
+    },
+)
+ACQUIRE_OBJECT_PHOTOGRAPHS = record(
+    "`translucency acquire object-photographs --json`: the rig folder written.",
+    {
+        "command": _command("acquire object-photographs"),
+        "out": field("string", "The folder written (object.json, object.ply, cameras, shots)."),
+        "points": field("integer", "Laser positions."),
+        "cameras": field("integer", "Cameras around the object."),
+        "incident": array("The vertex each laser position hits.", INTEGER),
+        **_ESTIMATED,
+    },
+)
+IMPORT_IMAGES = record(
+    "`translucency import images --json`: the planar data set written.",
+    {
+        "command": _command("import images"),
+        "out": field("string", "The data set written (a Zarr folder)."),
+        "points": field("integer", "Laser positions (incident points)."),
+        "window_pixels": array("Window height, width around each incident point.", INTEGER, "pixels"),
+        "pitch": field("number", "Pixel size of the windows on the sample.", "mm"),
+        "rms_px": field(
+            ["number", "null"], "The marked points' fit of the calibration (null: none).", "pixels"
+        ),
+        **_ESTIMATED,
+    },
+)
+_CAMERA = record(
+    "One camera of the rig.",
+    {
+        "name": field("string", "The camera's name in the rig file."),
+        "reprojection_px": record(
+            "What checked its pose (none of either: a pose given, unchecked).",
+            {
+                "pose": field("number", "Its marks' reprojection error, rms.", "pixels"),
+                "laser_spot": field("number", "Its laser spots' miss, median.", "pixels"),
+            },
+            optional=("pose", "laser_spot"),
+        ),
+        "vertices_seen": field("integer", "Vertices it sees."),
+    },
+)
+IMPORT_OBJECT = record(
+    "`translucency import object --json`: the mesh data set written.",
+    {
+        "command": _command("import object"),
+        "out": field("string", "The data set written (a Zarr folder)."),
+        "points": field("integer", "Laser shots (incident points)."),
+        "vertices": field("integer", "Vertices of the mesh."),
+        "cameras": array("The cameras and their checks.", _CAMERA),
+        "exit_law": record(
+            "Radiance to exitance (--exit-law): its name and, estimated from views, its parameters.",
+            {"law": field("string", "The law.")},
+            extra={"description": "A parameter of the law."},
+        ),
+        "flags": record(
+            "Vertex-shot pairs by what was done with them (unseen, saturated, grazing, spot, ...).",
+            {},
+            extra=field("integer", "Pairs."),
+        ),
+        "saturated_views": field("integer", "Cameras' views of a cell dropped for a saturated pixel."),
+        "near_peak": field("integer", "Pairs from the near-peak model."),
+        "rays_per_pixel": record("Rays per pixel of each camera's map.", {}, extra=field("integer", "Rays.")),
+        "energy": array("Per shot, the energy of R_d over the surface, R, G, B.", RGB),
+        "energy_sigma": array("Per shot, its uncertainty (1 sigma), R, G, B.", RGB),
+        "beam_polar_deg": array("Per shot, the beam's angle from the surface normal.", NUMBER, "degrees"),
+        "images_MB": field("number", "Image bytes read.", "MiB"),
+        "throughput_MB_s": field("number", "Image bytes read per second.", "MiB/s"),
+        **_ESTIMATED,
+    },
+)
+VIEW = record(
+    "`translucency view MODEL --json`: the page written (--export) or the address served.",
+    {
+        "command": _command("view"),
+        "model": field("string", "The model file."),
+        "url": field("string", "Where the viewer was served."),
+        "page": field("string", "The page written (index.html; --export)."),
+        "page_mb": field("number", "The page's size (--export).", "MiB"),
+        "vertices": field("integer", "Vertices of the mesh (a per-vertex model, --export)."),
+        "bands": field("integer", "Bands of the light basis (--bands)."),
+        "angles": field("boolean", "Whether the page draws the model's lean (--angles)."),
+        "error_vs_render": record(
+            "The relighting's relative RMSE against render for the same light, per light.",
+            {},
+            extra=field("number", "Relative RMSE.", "fraction"),
+        ),
+        **_ESTIMATED,
+    },
+    optional=("url", "page", "page_mb", "vertices", "bands", "angles", "error_vs_render", "estimate"),
+    extra=field("number", "Seconds of one step of preparing the page (`*_s`).", "s"),
+)
+DEMO = record(
+    "`translucency demo --json`: the main job's outputs.",
+    {
+        "command": _command("demo"),
+        "out": field("string", "The output folder."),
+        "outputs": record(
+            "Where each output is.",
+            {
+                "figure": field("string", "baselines.png: R_d(r) of the baselines per material."),
+                "summary": field("string", "baselines.json."),
+                "model": field("string", "dipole_fits.model.zip."),
+                "fits": field("string", "The planar fits' model files."),
+                "pig": field("string", "Figure 2's mesh data set."),
+                "report": field("string", "The report's index.html."),
+            },
+        ),
+    },
 )
 
 # -- info ---------------------------------------------------------------------------------------------
@@ -703,14 +827,20 @@ MATERIALS = record(
 
 #: the schema of each command's ``--json`` output (``info``: one per kind of path, by its ``what``)
 SCHEMAS = {
+    "demo": DEMO,
     "acquire planar": ACQUIRE_PLANAR,
     "acquire mesh": ACQUIRE_MESH,
+    "acquire photographs": ACQUIRE_PHOTOGRAPHS,
+    "acquire object-photographs": ACQUIRE_OBJECT_PHOTOGRAPHS,
+    "import images": IMPORT_IMAGES,
+    "import object": IMPORT_OBJECT,
     "fit": FIT,
     "evaluate": EVALUATE,
     "evaluate (mesh data set)": EVALUATE_MESH,
     "render": RENDER,
     "render (scene)": RENDER_SCENE,
     "export": EXPORT,
+    "view": VIEW,
     "info (model file)": INFO_MODEL,
     "info (planar data set)": INFO_PLANAR,
     "info (mesh data set)": INFO_MESH,

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import typer
 
-from ._common import finish, json_option, overwrite_option, quiet_option, user_errors
+from ._common import finish, json_option, max_memory_option, overwrite_option, quiet_option, user_errors
 from ._run import RichReporter
 
 #: the options with long help, named here so that the command reads as its calls
@@ -86,6 +86,7 @@ def view(
         0.0, "--seconds", help="Serve this long, then stop (0: until Ctrl-C; for scripts and tests)."
     ),
     overwrite: bool = overwrite_option(),
+    max_memory: str = max_memory_option(),
     quiet: bool = quiet_option(),
     as_json: bool = json_option(),
 ):
@@ -106,6 +107,7 @@ def view(
         angles=angles,
         seconds=seconds,
         overwrite=overwrite,
+        max_memory=max_memory,
         reporter=RichReporter(quiet),
     )
     if export is None:  # served: the address was said while serving

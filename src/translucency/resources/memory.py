@@ -273,6 +273,66 @@ def mesh_acquisition(
     return Need(BASE_MITSUBA + sum(parts.values()), disk + 40 * (vertices + faces), max(parts, key=parts.get))
 
 
+def photographs(
+    *, voxels: float, width: int, height: int, spp: int, files: int, mesh_elements: int = 0
+) -> Need:
+    r"""``acquire photographs`` and ``acquire object-photographs``: a filling of V_vox voxels that Mitsuba's
+    volpath photographs, one W × H render of s samples a pixel at a time, ``files`` images written; E
+    vertices and faces of an object's mesh.
+
+    .. math:: M = M_{mi} + 100\,V_{vox} + W H\,(64 + 10\,s) + 300\,E
+
+    the filling (as the acquisitions: about 100 bytes a voxel), the film and the render's samples in
+    flight (as ``render``'s reference: 64 bytes a pixel, 10 a sample) and the mesh with its ray-tracing
+    scene (as ``acquire mesh``).  Output: :math:`D = 12\,W H` bytes a file (float32 RGB) + 1 MiB.
+    """
+    pixels = width * height
+    parts = {
+        "the filling: --voxel": 100 * voxels,
+        "a render: --resolution x --spp": pixels * (64 + 10 * spp),
+        "the mesh": 300 * mesh_elements,
+    }
+    return Need(BASE_MITSUBA + sum(parts.values()), 12 * pixels * files + MiB, max(parts, key=parts.get))
+
+
+def photograph_import(*, positions: int, chunk: int, images: int, pixels: int, cells: int) -> Need:
+    r"""``import images`` and ``import object``: N laser positions, k a chunk, each with I = ``images``
+    photographs (every camera's frames) of P pixels, and C cells of the output a position (a planar
+    window's pixels, an object's vertices).
+
+    .. math:: M = M_{mi} + 24\,k\,I\,P + 40 \cdot 3\,k\,C
+
+    a chunk's photographs read (float32 RGB) with their dark- and flat-corrected copy, and the chunk's
+    R_d, variance and counts per cell and channel (as the acquisitions: 40 bytes).  Output: the R_d and
+    variance (float32 RGB) and a mask byte of every cell, :math:`D = 25\,N C` (uncompressed).
+    """
+    parts = {
+        "a chunk of photographs: --chunk": 24 * chunk * images * pixels,
+        "a chunk of R_d: --chunk": 40 * 3 * chunk * cells,
+    }
+    return Need(BASE_MITSUBA + sum(parts.values()), 25 * positions * cells, max(parts, key=parts.get))
+
+
+def relighting(*, vertices: int, faces: int, pairs: float, coefficients: int = 0) -> Need:
+    r"""``export``'s bake and ``view``'s relighting: a mesh of V vertices and F faces, its transport of
+    p vertex pairs (none: the mesh alone), and with ``view`` its transfer of K coefficients per vertex and
+    channel.
+
+    .. math:: M = M_{mi} + 300\,(V + F) + 300\,p + 4600\,V + 4 \cdot 3\,K V
+
+    the mesh with its ray-tracing scene (as ``acquire mesh``), the transport's pairs and per-vertex arrays
+    (as ``render``) and the transfer (float32).  Output: :math:`D = 100\,V + 25\,F` (a PLY or glTF's
+    positions, colours and attributes) + 1 MiB.
+    """
+    parts = {"the mesh": 300 * (vertices + faces)}
+    if pairs:
+        parts["the transport"] = PAIR_BYTES * pairs + VERTEX_BYTES * vertices
+    if coefficients:
+        parts["the transfer: --bands"] = 12 * coefficients * vertices
+    base = BASE_MITSUBA if pairs else BASE
+    return Need(base + sum(parts.values()), 100 * vertices + 25 * faces + MiB, max(parts, key=parts.get))
+
+
 def planar_fit(
     *, points: int, pixels: int, chunk: int, workers: int, params: int, block: int, cache: float = 512 * MiB
 ) -> Need:

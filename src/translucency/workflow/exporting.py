@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .. import resources
 from .._validate import TranslucencyError
 from ..io.atomic import atomic_path
 from ..io.gltf import MM_PER_GLTF_UNIT, write_glb
@@ -22,10 +23,19 @@ from ..io.inputs import expect_input
 from ..io.outputs import PLY_COMMENT, claim_output
 from ..model.burley import burley_of_exponentials, burley_shape
 from ..model.lean import NO_LEAN, has_lean
-from ..render import boundary_eta, object_of_model, relight_vertices, transport_matrices, vertex_irradiance
+from ..render import (
+    MAX_PAIRS,
+    boundary_eta,
+    object_of_model,
+    relight_vertices,
+    transport_matrices,
+    vertex_irradiance,
+)
 from ..render.lean import leaned
 from ..render.lights import Placement, parse_light, place_light
-from ..render.transport import vertex_parameters
+from ..render.transport import default_radius, vertex_parameters
+from ..resources.memory import transport_pairs
+from ..resources.run import Run
 from ._arguments import as_path, model_and_record
 
 __all__ = ["DEFAULT_LIGHT", "export_gltf", "export_model", "export_ply"]
@@ -35,7 +45,14 @@ DEFAULT_LIGHT = "point:60,-80,120,2e4"
 
 
 def export_model(
-    model, *, ply=None, gltf=None, light: str = DEFAULT_LIGHT, angles: bool = False, overwrite: bool = False
+    model,
+    *,
+    ply=None,
+    gltf=None,
+    light: str = DEFAULT_LIGHT,
+    angles: bool = False,
+    overwrite: bool = False,
+    max_memory: str | int | None = None,
 ) -> dict:
     """Take a per-vertex model to other tools: its mesh as PLY and/or glTF with the bake.
 
@@ -58,6 +75,9 @@ def export_model(
         ``render --angles``); otherwise the paper's model is baked and ``lean`` says so in one line.
     overwrite : bool
         Replace an earlier mesh file of translucency at ``ply`` or ``gltf`` (never anything else).
+    max_memory : str or int, optional
+        Most memory the export may use; a larger estimate (the bake's transport) is refused before any
+        file is written.
 
     Returns
     -------
@@ -81,8 +101,16 @@ def export_model(
         raise TranslucencyError("say what to write: ply=OUT.ply or gltf=OUT.glb")
     ply = None if ply is None else _named("ply", ply, ".ply", "")
     gltf = None if gltf is None else _named("gltf", gltf, ".glb", " (binary glTF)")
+    run = Run("export", max_memory=max_memory)
     fitted, mesh, acquisition, inputs = _object(model)
-    summary = {"command": "export", "model": model, "vertices": len(mesh.vertices), "faces": len(mesh.faces)}
+    V, F = len(mesh.vertices), len(mesh.faces)
+    pairs = 0.0
+    if gltf is not None:  # the bake's transport, at the default radius (as render's)
+        radius = default_radius(fitted, mesh, max_pairs=MAX_PAIRS)
+        area = float(mesh.area)
+        pairs = transport_pairs(vertices=V, surface_mm2=area, radius_mm=radius, max_pairs=MAX_PAIRS)
+    run.check(resources.memory.relighting(vertices=V, faces=F, pairs=pairs))  # (the files are small)
+    summary = {"command": "export", "model": model, "vertices": V, "faces": F}
     if ply is not None:
         claim_output(ply, "mesh file", overwrite=overwrite, inputs=inputs, option="ply")
         _write_ply(mesh, ply)
@@ -96,7 +124,7 @@ def export_model(
             summary["lean"] = "not baked: the glTF draws the paper's model (--angles bakes the lean)"
         elif angles and not lean:
             summary["lean"] = NO_LEAN
-    return summary
+    return run.summary(summary)  # with the estimate and the seconds
 
 
 def export_ply(model, out, *, overwrite: bool = False) -> Path:

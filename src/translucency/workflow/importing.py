@@ -22,6 +22,7 @@ from .._extras import require
 from .._validate import TranslucencyError, check_option
 from ..cluster import parse_scheduler
 from ..io.dataset import PlanarDataset, open_dataset
+from ..io.mesh import load_mesh
 from ..io.mesh_dataset import MeshDataset, open_mesh_dataset
 from ..io.outputs import claim_output
 from ..resources.run import Reporter, Run, kept_chunks
@@ -29,6 +30,8 @@ from ..rig import ImportSetup, load_calibration
 from ..rig import import_images as import_planar
 from ..rig.object.importer import import_object as import_mesh
 from ..rig.object.setup import read_object_rig
+from ..rig.planar.frames import image_shape
+from ..rig.planar.positions import read_positions
 from ._arguments import as_path, renamed_keywords, whole_number
 
 __all__ = ["EXIT_LAWS", "import_images", "import_object"]
@@ -49,6 +52,7 @@ def import_images(
     gain: float | None = None,
     progress: Callable[[int, int], None] | None = None,
     scheduler: str | None = "threads",
+    max_memory: str | int | None = None,
     reporter: Reporter | None = None,
     **setup,
 ) -> PlanarDataset:
@@ -78,6 +82,9 @@ def import_images(
     progress : callable(done, total), optional
     scheduler : str, optional
         ``"threads"``, ``"local:N"`` or ``"tcp://HOST:PORT"``; the data are the same bit for bit.
+    max_memory : str or int, optional
+        Most memory the import may use; a larger estimate (a chunk of photographs and of windows) is
+        refused before any work.
     reporter : Reporter, optional
         Hears the run's information lines (default: silent).
     **setup
@@ -109,7 +116,10 @@ def import_images(
     check_option("gain", gain, lo=0, open_lo=True)
     folder, out = as_path("folder", folder), as_path("out", out)
     views = [_view(v) for v in extra_cameras]
-    run = Run("import images", reporter=reporter)
+    run = Run("import images", max_memory=max_memory, reporter=reporter)
+    need = _planar_need(folder, positions, views, setup)
+    if need is not None:  # (None: an input the importer names in its own words below)
+        run.check(need, out)
     files = [p for p in (positions, calibration, *(p for v in views for p in v)) if _a_path(p)]
     claim_output(out, "planar data set", overwrite=overwrite, inputs=[folder, *files], reuse=True)
     calib = _calibration(calibration, gain)
@@ -144,8 +154,38 @@ def import_images(
     return ds
 
 
+def _planar_need(folder: Path, positions, views: list, setup: ImportSetup):
+    """The memory and disk of a planar import, from its first photograph's size and the frames of a laser
+    position (every camera's); None where an input cannot be read (the importer says why)."""
+    try:
+        shots = list(positions) if isinstance(positions, list | tuple) else read_positions(positions, folder)
+        frames = max(len(s.files) for s in shots)
+        for v_folder, v_positions, _ in views:
+            listed = isinstance(v_positions, list | tuple)
+            v_shots = list(v_positions) if listed else read_positions(v_positions, v_folder)
+            frames += max(len(s.files) for s in v_shots)
+        H, W = image_shape(shots[0])[:2]
+    except (TranslucencyError, OSError, ValueError):
+        return None
+    n = setup.window_pixels()
+    return resources.memory.photograph_import(
+        positions=len(shots), chunk=setup.chunk_points, images=frames, pixels=H * W, cells=n * n
+    )
+
+
 def _a_path(value) -> bool:
     return isinstance(value, (str, os.PathLike))
+
+
+def _object_need(setup, chunk_points: int):
+    """The memory and disk of an object import: a chunk's photographs (every camera's frames of a shot,
+    at the largest camera's size) and its R_d per vertex."""
+    images = max((sum(len(f) for f in shot.frames.values()) for shot in setup.shots), default=0)
+    pixels = max((c.width * c.height for c in setup.cameras), default=0)
+    vertices = len(load_mesh(setup.mesh_file, scale_mm=setup.scale_mm, up=setup.up).vertices)
+    return resources.memory.photograph_import(
+        positions=len(setup.shots), chunk=chunk_points, images=images, pixels=pixels, cells=vertices
+    )
 
 
 def _import_setup(setup: dict) -> ImportSetup:
@@ -213,6 +253,7 @@ def import_object(
     chunk_points: int = 8,
     overwrite: bool = False,
     progress: Callable[[int, int], None] | None = None,
+    max_memory: str | int | None = None,
     reporter: Reporter | None = None,
 ) -> MeshDataset:
     """A lab's multi-view HDR photographs of a laser stepped over a scanned object → a mesh data set.
@@ -235,6 +276,9 @@ def import_object(
     overwrite : bool
         Replace a data set of translucency made from other inputs (never anything else).
     progress : callable(done, total), optional
+    max_memory : str or int, optional
+        Most memory the import may use; a larger estimate (a chunk of photographs, every camera's, and
+        of R_d per vertex) is refused before any work.
     reporter : Reporter, optional
         Hears the run's progress (default: silent).
 
@@ -256,7 +300,8 @@ def import_object(
         raise TranslucencyError(f"exit_law: one of {', '.join(EXIT_LAWS)}; got {exit_law!r}")
     out = as_path("out", out)
     setup = read_object_rig(rig)  # a bad rig file: one line before the output is judged
-    run = Run("import object", reporter=reporter)
+    run = Run("import object", max_memory=max_memory, reporter=reporter)
+    run.check(_object_need(setup, chunk_points), out)
     claim_output(out, "mesh data set", overwrite=overwrite, inputs=setup.files, reuse=True)
     run.kept = lambda: kept_chunks(out, open_mesh_dataset)  # Ctrl-C: the chunks kept, and how to resume
     with run.reporter.progress("import", len(setup.shots)) as update:

@@ -71,6 +71,7 @@ def acquire_photographs(
     seed: int = 0,
     image_format: str = "pfm",
     overwrite: bool = False,
+    max_memory: str | int | None = None,
     reporter: Reporter | None = None,
 ) -> Photographs:
     """Photograph a virtual planar sample with Mitsuba 3, as a lab's rig would for
@@ -106,6 +107,9 @@ def acquire_photographs(
     image_format : {"pfm", "exr"}
     overwrite : bool
         Replace an earlier output folder of translucency (never anything else).
+    max_memory : str or int, optional
+        Most memory the photographs may use; a larger estimate (the volume, a render) is refused before
+        any is taken.
     reporter : Reporter, optional
         Hears the run's information line (default: silent).
 
@@ -130,7 +134,7 @@ def acquire_photographs(
     image_format = _image_format(image_format)
     size, voxel_mm, _ = slab_of(size, voxel_mm, 0.0)
     out = as_path("out", out)
-    run = Run("acquire photographs", reporter=reporter)
+    run = Run("acquire photographs", max_memory=max_memory, reporter=reporter)
     name, volume, path = sample_of(sample)
     run.claim_folder(out, overwrite=overwrite, inputs=[path])
     if name is not None:
@@ -141,6 +145,11 @@ def acquire_photographs(
     setup = PlanarSetup(grid=(grid, grid), span=(span, span), pitch=0.25, window=min(W, H) / 2)
     setup.check(volume)
     x_i = setup.incident_points(volume)
+    W_px, H_px = resolution
+    need = resources.memory.photographs(
+        voxels=float(np.prod(volume.sigma_s.shape[:3])), width=W_px, height=H_px, spp=spp, files=len(x_i) + 3
+    )
+    run.check(need, out)  # the shots, the marked points', dark and flat frames
     centre = np.array([W / 2, H / 2, 0.0])
     cam = VirtualCamera(tuple(centre + np.asarray(camera)), tuple(centre), fov, *resolution)
     run.info(f"{len(x_i)} photographs x 3 channels at {spp} spp ({resolution[0]} x {resolution[1]} px)")
@@ -193,6 +202,7 @@ def acquire_object_photographs(
     image_format: str = "pfm",
     overwrite: bool = False,
     progress: Callable[[int, int], None] | None = None,
+    max_memory: str | int | None = None,
     reporter: Reporter | None = None,
 ) -> Photographs:
     """Photograph a virtual object with Mitsuba 3, as a lab's object rig would for
@@ -230,7 +240,7 @@ def acquire_object_photographs(
     seed : int
         Random seed of the filling, the renders and the sensor.
     image_format : {"pfm", "exr"}
-    overwrite, progress, reporter
+    overwrite, progress, max_memory, reporter
         As in :func:`acquire_photographs` (``progress(done, total)``: shots photographed).
 
     Returns
@@ -259,13 +269,23 @@ def acquire_object_photographs(
     if up not in UP_AXES:
         raise TranslucencyError(f"up: expected one of z, y, x, got {up!r}")
     out, mesh_file = as_path("out", out), mesh_file_of(mesh)
-    run = Run("acquire object-photographs", reporter=reporter)
+    run = Run("acquire object-photographs", max_memory=max_memory, reporter=reporter)
     run.claim_folder(out, overwrite=overwrite, inputs=[mesh_file])
     obj = object_of(mesh, mesh_file, scale_mm, up)
     if points > len(obj.vertices):
         raise TranslucencyError(f"points: need 1 to {len(obj.vertices):,} laser positions, got {points:,}")
     volume = object_volume(sample, obj, voxel_mm, seed=seed)
     check_filling(obj, volume)
+    frames = 3 if exposures == "brackets" else 1  # two long exposures and a short one, or one
+    need = resources.memory.photographs(
+        voxels=float(np.prod(volume.sigma_s.shape[:3])),
+        width=resolution[0],
+        height=resolution[1],
+        spp=spp,
+        files=points * cameras * frames + 2 * cameras,  # the shots, each camera's dark and flat frames
+        mesh_elements=len(obj.vertices) + len(obj.faces),
+    )
+    run.check(need, out)
     run.info(
         f"{points} laser positions x {cameras} cameras x 3 channels x {2 if exposures == 'brackets' else 1} "
         f"frames at {spp} spp "

@@ -17,6 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .. import resources
 from .._validate import TranslucencyError, check_option
 from ..io.dataset import open_dataset
 from ..io.inputs import expect_input
@@ -24,7 +25,9 @@ from ..io.mesh_dataset import is_mesh_dataset, open_mesh_dataset
 from ..io.model_file import load_model, read_header
 from ..io.outputs import claim_folder, kind_of
 from ..model.lean import NO_LEAN, has_lean
-from ..resources.run import Reporter, Silent
+from ..render import MAX_PAIRS
+from ..resources.memory import transport_pairs
+from ..resources.run import Reporter, Run, Silent
 from ..view.page import write_page
 from ..view.surface import check_reduced_mesh
 
@@ -49,6 +52,7 @@ def view_model(
     angles: bool = False,
     seconds: float = 0.0,
     overwrite: bool = False,
+    max_memory: str | int | None = None,
     reporter: Reporter | None = None,
 ) -> dict:
     """Look at a fitted model in the browser: relight it, read its maps and profiles, or write a static page.
@@ -91,6 +95,9 @@ def view_model(
         Serve this long, then stop (0: until Ctrl-C).
     overwrite : bool
         Replace an earlier page of translucency at ``export`` (never anything else).
+    max_memory : str or int, optional
+        Most memory the viewer may use; a larger estimate (a per-vertex model's transport and transfer) is
+        refused before any work.
     reporter : Reporter, optional
         Hears the information lines: the steps, the address (default: silent).
 
@@ -114,6 +121,7 @@ def view_model(
     """
     reporter = reporter or Silent()
     environment = _check_options(sky, bands, radius, port)
+    run = Run("view", max_memory=max_memory, reporter=reporter)  # (a bad size: one line, before any work)
     model = Path(model)
     expect_input(model, ("model file",))
     m = load_model(model)
@@ -124,11 +132,12 @@ def view_model(
         meta, arrays = _planar(m, header, model, truth, bands)
         if export is not None:
             claim_folder(export, overwrite=overwrite, inputs=[model, truth], option="export")
-            return _write(export, meta, arrays, {"model": model})
-        return _serve_until(_server((meta, arrays), None, port), model, serving, reporter)
+            return run.summary(_write(export, meta, arrays, {"model": model}))
+        return run.summary(_serve_until(_server((meta, arrays), None, port), model, serving, reporter))
     if truth is not None:
         raise TranslucencyError("truth: for a planar model (a mesh model's profiles show its own data)")
     check_reduced_mesh(len(m.faces))  # a large mesh without the viewer extra: one line, before any work
+    run.check(_relighting_need(m, radius, bands, compare))
     other = _companion(Path(compare), m) if compare is not None else None
     figure = _reference_figure(Path(reference_render)) if reference_render is not None else None
     if export is not None:  # claimed before any work
@@ -143,8 +152,21 @@ def view_model(
     if export is None:
         reporter.info("the maps first; the relighting follows once the transport is prepared.")
         server = _server(views.surface(), lambda say: views.prepare(say, False), port)
-        return _serve_until(server, model, serving, reporter)
-    return views.export(export, reporter)
+        return run.summary(_serve_until(server, model, serving, reporter))
+    return run.summary(views.export(export, reporter))
+
+
+def _relighting_need(m, radius, bands: int, compare):
+    """A per-vertex model's relighting: its transport at the near radius (``radius``, or as render's
+    default its 99 % energy radius) and its transfer of bands² coefficients (both twice with ``compare``)."""
+    v, f = np.asarray(m.alpha.vertices, dtype=np.float64), np.asarray(m.faces)
+    area = 0.5 * np.linalg.norm(np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]]), axis=1).sum()
+    r = float(np.max(m.energy_radius(0.99))) if radius is None else float(radius)
+    pairs = transport_pairs(vertices=len(v), surface_mm2=float(area), radius_mm=r, max_pairs=MAX_PAIRS)
+    models = 1 if compare is None else 2
+    return resources.memory.relighting(
+        vertices=len(v), faces=len(f), pairs=models * pairs, coefficients=models * bands**2
+    )
 
 
 def _check_options(sky, bands: int, radius, port: int):
