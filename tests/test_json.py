@@ -223,3 +223,35 @@ def test_evaluate_json_is_a_flag_and_the_old_path_form_still_works(outputs):
     res = runner.invoke(app, ["evaluate", "--json", *args[1:], "--report", str(tmp / "r4")])
     assert res.exit_code == 0 and res.stderr == "", res.output  # the flag before the arguments
     assert json.loads(res.stdout)["command"] == "evaluate"
+
+
+#: the commands whose --max-memory is checked against an estimate of their own (the others' in
+#: tests/test_resources.py): their arguments, with {tmp} the fixture's folder, and the output they must
+#: not write
+MAX_MEMORY = {
+    "demo": (["demo", "--out", "{tmp}/m-demo"], "m-demo"),
+    "acquire photographs": ([*PHOTOGRAPHS, "--out", "{tmp}/m-shots"], "m-shots"),
+    "acquire object-photographs": (
+        [*OBJECT_PHOTOGRAPHS, "--mesh", "{tmp}/ball.ply", "--out", "{tmp}/m-rig"],
+        "m-rig",
+    ),
+    "import images": (
+        ["import", "images", "{tmp}/shots", "-p", "{tmp}/shots/positions.csv", "-c"]
+        + ["{tmp}/shots/calibration.json", "--gain", "1e5", "-o", "{tmp}/m.zarr"],
+        "m.zarr",
+    ),
+    "import object": (["import", "object", "{tmp}/rig", "-o", "{tmp}/mo.zarr"], "mo.zarr"),
+    "export": (["export", "{tmp}/b.model.zip", "--gltf", "{tmp}/m.glb"], "m.glb"),
+    "view": (["view", "{tmp}/b.model.zip", "--export", "{tmp}/m-page"], "m-page"),
+}
+
+
+@pytest.mark.parametrize("name", list(MAX_MEMORY))
+def test_max_memory_is_checked_before_any_work(outputs, name):
+    """--max-memory below a command's estimate: one line naming it, exit status 2, nothing written."""
+    args, written = MAX_MEMORY[name]
+    tmp = outputs["tmp"]
+    res = runner.invoke(app, [a.format(tmp=tmp) for a in args] + ["--max-memory", "1M"])
+    assert res.exit_code == 2, res.output
+    assert res.stderr.startswith("error: ") and "more than --max-memory (1 MiB)" in res.stderr, res.stderr
+    assert len(res.stderr.strip().splitlines()) == 1 and not (tmp / written).exists()
