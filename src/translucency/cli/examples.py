@@ -8,6 +8,7 @@ from pathlib import Path
 import typer
 
 from ._common import finish, json_option, quiet_option, user_errors
+from ._run import RichReporter
 
 _OUT = typer.Argument(..., help="The folder to copy them into (made if missing).")
 _OVERWRITE = typer.Option(
@@ -26,6 +27,6 @@ def examples(
     Mitsuba scene around object.ply), filling.npz (a volume for --volume) and LICENSES.md."""
     from ..workflow.examples import copy_examples  # the package's data folder and the atomic writes
 
-    done = copy_examples(out, overwrite=overwrite)
-    written = ", ".join(done["written"]) or "nothing (every file already there)"
+    done = copy_examples(out, overwrite=overwrite, reporter=RichReporter(quiet or as_json))
+    written = ", ".join(done["written"]) or "nothing new"
     finish(as_json, quiet, done, [f"examples in {done['out']}: {written}"])

@@ -102,6 +102,17 @@ EXAMPLES = ("spot.obj", "cow.obj", "sky.exr", "scene.xml", "filling.npz", "LICEN
 def example_path(name: str) -> Path:
     """Path of the installed example file ``name`` (one of :data:`EXAMPLES`).
 
+    Parameters
+    ----------
+    name : str
+        The file's name: ``spot.obj``, ``cow.obj``, ``sky.exr``, ``scene.xml``, ``filling.npz`` or
+        ``LICENSES.md``.
+
+    Returns
+    -------
+    Path
+        Where the package keeps it (read it there; ``translucency examples OUT`` copies them all).
+
     Examples
     --------
     >>> p = example_path("spot.obj")

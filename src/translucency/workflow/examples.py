@@ -9,10 +9,11 @@ import shutil
 from .._validate import TranslucencyError
 from ..data import EXAMPLES, example_path
 from ..io.atomic import atomic_path
+from ..resources.run import Reporter
 from ._arguments import as_path
 
 
-def copy_examples(out, *, overwrite: bool = False) -> dict:
+def copy_examples(out, *, overwrite: bool = False, reporter: Reporter | None = None) -> dict:
     """Copy the example files (:data:`translucency.data.EXAMPLES`) into the folder ``out``.
 
     ``translucency examples OUT`` is this function.  Each file is written atomically; a file of the same
@@ -25,6 +26,8 @@ def copy_examples(out, *, overwrite: bool = False) -> dict:
         The folder (made if missing).
     overwrite : bool
         Replace files of the same names with other contents.
+    reporter : Reporter, optional
+        Hears one information line where files were already there (default: silent).
 
     Returns
     -------
@@ -61,6 +64,8 @@ def copy_examples(out, *, overwrite: bool = False) -> dict:
             "choose another folder or pass overwrite=True"
         )
     written = [name for name in EXAMPLES if name not in same]
+    if same and reporter is not None:
+        reporter.info(f"already there, the same: {', '.join(same)}")
     for name in written:
         with atomic_path(out / name) as tmp:
             shutil.copyfile(example_path(name), tmp)
