@@ -143,7 +143,7 @@ def figure2(
         }
     )
     scale = _exposure(exposure, model, mesh, light, out, auto=lambda: cmp["exposure"])
-    if scale != cmp["exposure"]:
+    if scale != cmp["exposure"] and flip_map is not None:  # FLIP measured at another exposure
         out["flip_exposure"] = cmp["exposure"]
     save_images(reference, out_dir / "reference", scale)
     save_images(ours, out_dir / "ours", scale)
@@ -214,7 +214,7 @@ def _plot(ldr, flip_map, mask, cmp, path, title: str) -> None:
     the flip extra (``flip_map`` None) the third panel is the tone-mapped pair's difference."""
     if flip_map is None:
         error = np.abs(ldr[1] - ldr[0]).mean(axis=-1)
-        what = "|ours - reference| tone-mapped (FLIP: the flip extra)"
+        what = "|ours - ref.| tone-mapped (no FLIP)"
     else:
         error, what = flip_map, f"FLIP (object mean {cmp['flip_mean_object']:.3f})"
     plot_comparison(
