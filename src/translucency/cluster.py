@@ -12,6 +12,9 @@ One option names it, the same string on the command line (``--scheduler``) and i
     an existing Dask cluster (``dask scheduler`` + ``dask worker``); the data set's path must be
     visible to the workers under the same name (a shared file system).
 
+The last two need Dask's distributed scheduler, the ``cluster`` extra (``pip install
+"translucency[cluster]"``); without it they are refused in one line where the option is read.
+
 Tasks carry paths, index ranges and parameters, never the data: each worker reads and writes its own
 chunks of the store.  Results come back to this process, which reduces them in chunk order, so a
 result does not depend on where or in which order the tasks ran (docs/scaling.md).  A worker that dies
