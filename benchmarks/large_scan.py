@@ -149,7 +149,7 @@ def main() -> int:
             rows.append(run_stage(name, command, kill))
     if "render --scene" not in args.skip:
         scene = scene_folder("pig", work / "scene", model, (160, 120))
-        command = ["render", "--scene", str(scene), "--model", f"object={model}", "--out", str(work / "lit")]
+        command = ["render", "--scene", str(scene), "--object", f"object={model}", "--out", str(work / "lit")]
         rows.append(run_stage("render --scene", command + ["--overwrite", "--json"], kill))
     page = [p for p in (work / "page").glob("*") if p.name != ".translucency-output.json"]
     sizes = {

@@ -95,7 +95,7 @@ def main() -> int:
     ap.add_argument("--size", type=int, nargs=2, default=(128, 96))
     ap.add_argument("--polar", type=float, default=60.0, help="the oblique beams' polar angle, degrees")
     ap.add_argument("--colour", default="shared", help="the fit's colour: shared (the paper's), per-channel")
-    ap.add_argument("--incidence", default="half-space", help="the incidence law (render --incidence)")
+    ap.add_argument("--incidence", default="half-space", help="the incidence law (render --incidence-law)")
     ap.add_argument("--through", action="store_true", help="with the through-body table (render --through)")
     ap.add_argument("--work", type=Path, default=Path(tempfile.mkdtemp(prefix="lean_objects_")))
     args = ap.parse_args()

@@ -167,7 +167,7 @@ def main() -> int:
     ap.add_argument("--size", type=int, nargs=2, default=(128, 96))
     ap.add_argument("--work", type=Path, default=Path(tempfile.mkdtemp(prefix="objects_budget_")))
     ap.add_argument(
-        "--incidence", default="half-space", help="the incidence law of every row (render --incidence)"
+        "--incidence", default="half-space", help="the incidence law of every row (render --incidence-law)"
     )
     ap.add_argument("--oracle-only", action="store_true", help="the oracle with and without re-entry only")
     ap.add_argument("--no-reentry", action="store_true", help="the pipeline's data without re-entry")

@@ -117,7 +117,7 @@ def test_library_errors_name_python_arguments(tmp_path):
         (lambda: tl.fit_model(data, rounds=2), "rounds: not an option of fit on a planar data set"),
         (lambda: tl.fit_model(data, exclusion_mm=float("nan")), "exclusion_mm: must be a finite number"),
         (lambda: tl.evaluate_model(model, data, truth=5), "truth: expected a planar data set"),
-        (lambda: tl.render_model(model, size=(0, 10)), "size: must be >= 1, got 0"),
+        (lambda: tl.render_model(model, resolution=(0, 10)), "resolution: must be >= 1, got 0"),
         (lambda: tl.render_model(model), "model: a planar model; render needs a per-vertex model"),
         (lambda: tl.acquire_planar("no-such.npz", tmp_path / "d.zarr"), "no-such.npz"),
         (lambda: tl.acquire_planar(object(), tmp_path / "d.zarr"), "sample: expected a Volume"),
@@ -179,16 +179,16 @@ def test_acquire_fit_and_render_an_object(tmp_path):
     assert type(tl.open_dataset(ds.path)).__name__ == "MeshDataset"
     result = tl.fit_model(ds, max_rounds=1)
     assert result.model.geometry == "mesh" and result.model.n_points == 4
-    shown = tl.render_model(result, size=(16, 12))
+    shown = tl.render_model(result, resolution=(16, 12))
     assert shown.picture.shape == (12, 16, 3) and np.isfinite(shown.picture).all() and shown.picture.max() > 0
     assert (
         shown.folder is None and shown.reference is None and shown.numbers["vertices"] == len(ball.vertices)
     )
-    kept = tl.render_model(result, tmp_path / "r", size=(16, 12))
+    kept = tl.render_model(result, tmp_path / "r", resolution=(16, 12))
     assert kept.folder == tmp_path / "r" and (tmp_path / "r" / "ours.exr").is_file()
     np.testing.assert_array_equal(kept.picture, shown.picture)
     with pytest.raises(tl.TranslucencyError, match="pass overwrite=True"):
-        tl.render_model(result, tmp_path / "r", size=(16, 12))
+        tl.render_model(result, tmp_path / "r", resolution=(16, 12))
     errors = tl.evaluate_model(result, ds)  # per-vertex errors (tests/test_evaluate_mesh.py)
     assert type(errors).__name__ == "MeshErrors" and np.isfinite(errors.rel_l2)
 

@@ -47,8 +47,8 @@ def test_bad_numbers_are_one_line_naming_the_option(command, option, value):
 
 
 def test_render_size_is_checked():
-    res = runner.invoke(app, [*RENDER, "--size", "0", "10"])
-    assert res.exit_code == 2 and "--size" in res.output
+    res = runner.invoke(app, [*RENDER, "--resolution", "0", "10"])
+    assert res.exit_code == 2 and "--resolution" in res.output
 
 
 @pytest.mark.parametrize(

@@ -119,21 +119,21 @@ def test_a_failed_render_leaves_nothing_behind(ball, tmp_path, monkeypatch):
 
     monkeypatch.setattr(render_cli, "figure2", _failing_figure2)
     new = tmp_path / "new"
-    res = runner.invoke(app, ["render", str(ball["model"]), "--out", str(new), "--size", "32", "24"])
+    res = runner.invoke(app, ["render", str(ball["model"]), "--out", str(new), "--resolution", "32", "24"])
     assert res.exit_code == 2 and "half-way" in words(res)
     assert not new.exists()  # the folder it created is gone
 
     empty = tmp_path / "empty"
     empty.mkdir()
-    res = runner.invoke(app, ["render", str(ball["model"]), "--out", str(empty), "--size", "32", "24"])
+    res = runner.invoke(app, ["render", str(ball["model"]), "--out", str(empty), "--resolution", "32", "24"])
     assert res.exit_code == 2 and empty.is_dir() and not any(empty.iterdir())  # a folder there before stays
 
     old = tmp_path / "old"
     old.mkdir()
     (old / MARKER).write_text(json.dumps({"written_by": "translucency"}))
     (old / "figure2.png").write_bytes(b"an earlier render")
-    res = runner.invoke(app, ["render", str(ball["model"]), "--out", str(old), "--overwrite", "--size", "32",
-                              "24"])  # fmt: skip
+    args = ["render", str(ball["model"]), "--out", str(old), "--overwrite", "--resolution", "32", "24"]
+    res = runner.invoke(app, args)
     assert res.exit_code == 2
     assert sorted(p.name for p in old.iterdir()) == sorted([MARKER, "figure2.png"])  # only its own removed
     assert (old / "figure2.png").read_bytes() == b"an earlier render"
@@ -142,7 +142,7 @@ def test_a_failed_render_leaves_nothing_behind(ball, tmp_path, monkeypatch):
 # -- the default transport radius and the estimates --------------------------------------------------------
 def test_the_default_radius_fits_a_share_of_the_memory_and_the_estimate_names_radius(ball, tmp_path):
     def radius(*extra):
-        res = runner.invoke(app, ["render", str(ball["model"]), "--size", "32", "24", *extra])
+        res = runner.invoke(app, ["render", str(ball["model"]), "--resolution", "32", "24", *extra])
         assert res.exit_code == 0, res.output
         text = words(res)
         assert "a smaller --radius lowers it" in text, text
@@ -262,7 +262,7 @@ def test_the_reference_of_a_users_filling_renders_while_the_file_is_unchanged(ba
     header = zarr.open_group(str(ball["data"]), mode="r").attrs["translucency_mesh_dataset"]
     assert header["filling"]["path"] == str(ball["filling"].resolve())
     assert len(header["filling"]["sha256"]) == 64
-    args = ["render", str(ball["model"]), "--reference", "--size", "24", "18", "--spp", "2", "-q"]
+    args = ["render", str(ball["model"]), "--reference", "--resolution", "24", "18", "--spp", "2", "-q"]
     res = runner.invoke(app, [*args, "--out", str(tmp_path / "r")])
     assert res.exit_code == 0, res.output
     assert (tmp_path / "r" / "reference.exr").is_file()

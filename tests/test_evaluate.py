@@ -115,9 +115,9 @@ def test_fit_and_evaluate_cli(marble, tmp_path):
             str(dip),
             "--report",
             str(tmp_path / "rep"),
-            "--json",
+            "--json-out",
             str(js),
-            "--points",
+            "--profiles",
             "0,4",
         ],
     )

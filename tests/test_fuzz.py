@@ -203,7 +203,7 @@ def test_damaged_planar_data_set(pristine, tmp_path_factory, data):
     outcome = check(_run(["info", ds]), names)
     res = _run(["fit", ds, "--out", tmp / "out.model.zip", "--rounds", "1", "--quiet"])
     check(res, names)
-    res = _run(["evaluate", model, ds, "--report", tmp / "rep", "--json", "-", "--quiet"])
+    res = _run(["evaluate", model, ds, "--report", tmp / "rep", "--json", "--quiet"])
     if check(res, names) == "ok":
         _strict_json(res.stdout)
     _finite_outputs(tmp)
@@ -235,7 +235,7 @@ def test_damaged_model_file(pristine, tmp_path_factory, which, how):
     before = _hashes(model) if model.exists() else {}
     outcome = check(_run(["info", model]), [which], allow_invalid=True)
     if which == "d.model.zip":
-        res = _run(["evaluate", model, pristine / "d.zarr", "--report", tmp / "rep", "--json", "-", "-q"])
+        res = _run(["evaluate", model, pristine / "d.zarr", "--report", tmp / "rep", "--json", "-q"])
         if check(res, [which]) == "ok":
             _strict_json(res.stdout)
     assert (_hashes(model) if model.exists() else {}) == before
@@ -317,7 +317,7 @@ OPTIONS = {
         ["--terms", "--directions", "--exclusion", "--rounds", "--chunk"],
     ),
     "fit mesh": (["fit", "b.zarr", "--rounds", "1"], ["--terms", "--exclusion", "--rounds"]),
-    "evaluate": (["evaluate", "d.model.zip", "d.zarr", "--json", "-"], ["--points"]),
+    "evaluate": (["evaluate", "d.model.zip", "d.zarr", "--json"], ["--profiles"]),
     "materials": (["materials"], ["--eta"]),
     "demo": (["demo", "--help"], ["--terms"]),
 }
@@ -337,7 +337,7 @@ def test_option_values(pristine, tmp_path_factory, case, value):
         args += ["--out", tmp / ("out.model.zip" if command.startswith("fit") else "out.zarr"), "-q"]
     if command == "evaluate":
         args += ["--report", tmp / "rep", "-q"]
-        value = ",".join([value, value])  # --points takes a list
+        value = ",".join([value, value])  # --profiles takes a list
     before = {n: _hashes(tmp / n) for n in ("d.zarr", "d.model.zip", "b.zarr", "ball.ply")}
     res = _run([*args, option, value])
     outcome = check(res, [option, option.lstrip("-") + ":", "--points", "--out"])
@@ -382,7 +382,7 @@ def renderable(tmp_path_factory):
     return root
 
 
-RENDER_BASE = ["--size", "24", "18", "-q"]
+RENDER_BASE = ["--resolution", "24", "18", "-q"]
 
 
 def _rendered_finite(out: Path) -> None:
@@ -454,7 +454,7 @@ LIGHTS = [
     "spot:0,-30,30,{},0,0,{},{}",
     "env:{}",
 ]
-RENDER_OPTIONS = ["--size", "--radius", "--spp", "--view"]
+RENDER_OPTIONS = ["--resolution", "--radius", "--spp", "--view"]
 
 
 @fuzz_settings(12)
@@ -474,9 +474,9 @@ def test_render_option_values(renderable, tmp_path_factory, case, values):
     if kind == "light":
         args += ["--light", what.format(*values[: what.count("{}")])]
         names = ["light"]
-    elif what == "--size":
-        args += ["--size", values[0], values[1]]
-        names = ["--size"]
+    elif what == "--resolution":
+        args += ["--resolution", values[0], values[1]]
+        names = ["--resolution"]
     elif what == "--view":
         args += ["--view", ",".join(values)]
         names = ["--view"]

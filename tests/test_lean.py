@@ -310,7 +310,7 @@ def test_render_angles_from_the_command_line(leaned_ball, tmp_path):
     from translucency.cli.app import app
 
     _, _, path, _ = leaned_ball
-    args = ["render", str(path), "--size", "48", "36", "--light", "directional:1,-0.3,-0.2"]
+    args = ["render", str(path), "--resolution", "48", "36", "--light", "directional:1,-0.3,-0.2"]
     runs = {}
     for flag in ([], ["--angles"]):
         out = tmp_path / ("lean" if flag else "paper")
@@ -324,7 +324,7 @@ def test_render_angles_from_the_command_line(leaned_ball, tmp_path):
     said = " ".join(res.output.split())  # (the console may wrap the line)
     assert res.exit_code == 0 and "leans by its irradiance-weighted mean direction" in said, res.output
     assert json.loads((sky / "render.json").read_text())["angles"] is True
-    line = error_line(["render", "--scene", str(tmp_path / "s.xml"), "--model", "a=b", "--angles"])
+    line = error_line(["render", "--scene", str(tmp_path / "s.xml"), "--object", "a=b", "--angles"])
     assert "s.xml" in line and "--angles" not in line  # a scene takes --angles: the missing file is the fault
     # glTF bakes the paper's model and says so in one line, or with --angles the lean: its colours are
     # render's leaned exitance under the same light (8 bits)

@@ -366,8 +366,8 @@ def test_compressed_mesh_renders_as_the_full_one(tmp_path, fitted_ball):
     assert np.allclose(area(loaded), area(model), atol=1e-3 * np.abs(area(model)).max() + 1e-6)
     change = np.abs(loaded.alpha.values / model.alpha.values - 1)  # α at 8 mantissa bits (ALPHA_BITS)
     assert change.max() <= 2.0**-9 and change.max() > 0
-    full = tl.render_model(model, size=(64, 48)).picture
-    decoded = tl.render_model(loaded, size=(64, 48)).picture
+    full = tl.render_model(model, resolution=(64, 48)).picture
+    decoded = tl.render_model(loaded, resolution=(64, 48)).picture
     lit = full.mean(axis=2) > 0
     assert lit.sum() > 500
     assert tl.render.rel_rmse(decoded, full, lit) < 0.005

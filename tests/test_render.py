@@ -219,8 +219,8 @@ def test_fit_and_render_cli_on_a_mesh(tmp_path):
     bad = runner.invoke(app, ["render", str(model), "--light", "point:0,0,0"])
     assert bad.exit_code == 2 and "inside the object" in bad.output
     assert fig["incidence"] == "half-space"  # an index-matched object with measured totals
-    bad = runner.invoke(app, ["render", str(model), "--incidence", "oblique"])
-    assert bad.exit_code == 2 and "--incidence: 'oblique' is not one of half-space" in bad.output
+    bad = runner.invoke(app, ["render", str(model), "--incidence-law", "oblique"])
+    assert bad.exit_code == 2 and "--incidence-law: 'oblique' is not one of half-space" in bad.output
 
 
 def test_spot_and_environment_irradiance(ball):

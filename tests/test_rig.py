@@ -238,11 +238,13 @@ def test_two_views_average_where_both_see(tmp_path):
         "-o",
         str(tmp_path / "c.zarr"),
     ]
-    res = runner.invoke(cli, [*args, "--view", f"{other},{other / 'positions.csv'},{tmp_path / 'cal2.json'}"])
+    res = runner.invoke(
+        cli, [*args, "--extra-camera", f"{other},{other / 'positions.csv'},{tmp_path / 'cal2.json'}"]
+    )
     assert res.exit_code == 0, res.output
     np.testing.assert_allclose(open_dataset(tmp_path / "c.zarr")["R_d"], R, rtol=1e-6)
-    res = runner.invoke(cli, [*args[:-1], str(tmp_path / "d.zarr"), "--view", f"{other},nowhere.csv"])
-    assert res.exit_code == 2 and res.output.startswith("error: --view"), res.output
+    res = runner.invoke(cli, [*args[:-1], str(tmp_path / "d.zarr"), "--extra-camera", f"{other},nowhere.csv"])
+    assert res.exit_code == 2 and res.output.startswith("error: --extra-camera"), res.output
 
 
 def test_corrections_undo_dark_flat_and_vignetting(tmp_path, rng):
@@ -503,7 +505,7 @@ def test_cli_photographs_then_imports(tmp_path):
         cli,
         ["import", "images", str(out), "-p", str(out / "positions.csv"), "-c", str(out / "calibration.json")]
         + [
-            "--scale",
+            "--gain",
             "1e5",
             "--window",
             "3",

@@ -254,7 +254,7 @@ def test_render_scene_from_the_command_line_against_its_reference(fitted_ball):
     folder, model = fitted_ball
     scene = _write_scene(folder)
     out = folder / "render"
-    args = ["render", "--scene", str(scene), "--model", f"ball={model}", "--out", str(out), "--reference"]
+    args = ["render", "--scene", str(scene), "--object", f"ball={model}", "--out", str(out), "--reference"]
     res = runner.invoke(app, args + ["--spp", "32", "--samples", "32"])
     assert res.exit_code == 0, res.output
     summary = json.loads((out / "scene.json").read_text())
@@ -313,7 +313,7 @@ def test_python_api_renders_a_scene_dict_with_two_objects(fitted_ball):
         ("parse error", 'scene.xml" failed: Start-end tags mismatch (line 3, col 3)'),
         ("planar model", "a planar model; the scene's object 'ball' needs a per-vertex model"),
         ("other mesh", "shape 'ball': 162 vertices and 320 triangles, but the model's mesh has 642"),
-        ("model twice", "--model: the shape id 'ball' is given twice"),
+        ("model twice", "--object: the shape id 'ball' is given twice"),
         ("light given", "--light: the scene file says this"),
         ("re-ordered", "shape 'ball': re-triangulated or re-ordered — 58 of 1,280 triangles and 10 of 642"),
         (
@@ -385,7 +385,7 @@ def test_bad_scene_input_is_one_line(fitted_ball, tmp_path, case, expected):
         (tmp_path / "object.ply").symlink_to(folder / "object.ply")
     args = ["render", "--scene", str(scene), "--out", str(tmp_path / "r")]
     for m in models:
-        args += ["--model", m]
+        args += ["--object", m]
     line = error_line(args + extra)
     assert expected in line, line
     assert not (tmp_path / "r").exists()  # refused before any output

@@ -32,8 +32,7 @@ PLANAR = [
 
 def run_json(args) -> dict:
     """The command in a fresh process, as a user runs it (its own imports and kernel caches)."""
-    to_stdout = ["--json", "-"] if args[0] == "evaluate" else ["--json"]  # evaluate's --json takes a path
-    cmd = [sys.executable, "-m", "translucency", *map(str, args), *to_stdout, "-q"]
+    cmd = [sys.executable, "-m", "translucency", *map(str, args), "--json", "-q"]
     res = subprocess.run(cmd, capture_output=True, text=True)
     assert res.returncode == 0, res.stderr[-2000:]
     return json.loads(res.stdout)
@@ -156,9 +155,12 @@ def test_mesh_acquisition_fit_and_render_estimates_within_2x(tmp_path):
         return run_json(["fit", tmp_path / "b0.zarr", "--out", tmp_path / f"b{k}.model.zip"])
 
     def renders(k):
-        run_json(["render", tmp_path / "a0.model.zip", "--out", tmp_path / f"r{k}", "--size", "64", "48"])
-        return run_json(["render", tmp_path / "b0.model.zip", "--out", tmp_path / f"s{k}", "--size", "160",
-                         "120"])  # fmt: skip
+        run_json(
+            ["render", tmp_path / "a0.model.zip", "--out", tmp_path / f"r{k}", "--resolution", "64", "48"]
+        )
+        return run_json(
+            ["render", tmp_path / "b0.model.zip", "--out", tmp_path / f"s{k}", "--resolution", "160", "120"]
+        )
 
     ratios = [calibrated(acquisitions), calibrated(fits), calibrated(renders)]
     assert np.all(np.isfinite(ratios))

@@ -527,7 +527,7 @@ def test_reference_error_map_beside_the_model(browser, small_model, tmp_path):
     (render / "render.json").write_text(json.dumps(summary))
     out = tmp_path / "page"
     res = runner.invoke(
-        app, ["view", str(small_model), "--reference", str(render), "--export", str(out), "-q"]
+        app, ["view", str(small_model), "--reference-render", str(render), "--export", str(out), "-q"]
     )
     assert res.exit_code == 0, res.output
     page, errors = _open(browser, (out / "index.html").as_uri())
@@ -537,6 +537,6 @@ def test_reference_error_map_beside_the_model(browser, small_model, tmp_path):
     page.close()
     (render / "render.json").write_text(json.dumps({"light": "point"}))  # a render without a reference
     res = runner.invoke(
-        app, ["view", str(small_model), "--reference", str(render), "--export", str(tmp_path / "q")]
+        app, ["view", str(small_model), "--reference-render", str(render), "--export", str(tmp_path / "q")]
     )
-    assert res.exit_code == 2 and "--reference" in res.output and "Traceback" not in res.output
+    assert res.exit_code == 2 and "--reference-render" in res.output and "Traceback" not in res.output
