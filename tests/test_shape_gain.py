@@ -132,7 +132,7 @@ def test_behind_a_dielectric_the_gained_profile_is_the_tally_of_that_boundary(tm
     from translucency.acquire.mesh import acquire_mesh, object_volume
     from translucency.io.mesh_dataset import open_mesh_dataset
     from translucency.model.half_space import half_space_R_d
-    from translucency.rig.object.near_peak import cell_quadrature
+    from translucency.rig.object.quadrature import cell_quadrature
 
     ball = trimesh.creation.icosphere(4, radius=8.0)
     vol = object_volume("homogeneous:skin1", ball, 0.5, seed=1)

@@ -11,16 +11,16 @@ measured ring around it:
   least :data:`RING_CELLS` of them;
 * the **model**, through an index-matched boundary: the half-space's own profile
   :math:`\sigma_t^2 f(\sigma_t r; \alpha)` (:mod:`translucency.model.half_space`) at its calibrated level,
-  fitted to the pixels that see the ring and the peak (:class:`PixelEvidence`; the clipped ones as lower
-  bounds) or, without them, to the ring's cell means (:func:`_half_space_channel`); behind a dielectric
-  the same profile times the gains of walks through that boundary (:mod:`.shape_gain`: they hold the
-  light the boundary keeps inside), or, without the scan's walks, Jensen's dipole profile
+  fitted to the pixels that see the ring and the peak (:class:`.pixel_evidence.PixelEvidence`; the
+  clipped ones as lower bounds) or, without them, to the ring's cell means (:func:`_half_space_channel`);
+  behind a dielectric the same profile times the gains of walks through that boundary (:mod:`.shape_gain`:
+  they hold the light the boundary keeps inside), or, without the scan's walks, Jensen's dipole profile
   :math:`s\,R_d^{dip}(r; \sigma_a, \sigma_s', \eta)` with a free scale s (three parameters a channel,
   fitted to the ring's cell means in log space) — or, where it fits the ring worse or its whole profile
   would return more light than came in (:math:`s\,R^{dip} > 1`: energy is conserved), the exponential
   :math:`a e^{-b r}`;
 * the **value**: the model's own cell mean :math:`\int \phi_v\, R\, dA / A_v` over each target cell
-  (:func:`cell_quadrature`, graded towards the hit; r the distance from the hit, mm);
+  (:func:`.quadrature.cell_quadrature`, graded towards the hit; r the distance from the hit, mm);
 * its **variance**: for the half-space, :func:`_half_space_channel`'s; for the dipole, half the difference
   between the two models, squared (the model's form is what is least known), plus the ring's relative
   residual scatter applied to the value.
@@ -32,10 +32,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...acquire.mesh import exit_barycentric
 from ...model.dipole import dipole_R_d, dipole_total_reflectance
 from ...model.half_space import albedo_range, half_space_R_d
-from .surface_map import GRAZING_DEG
+from .pixel_evidence import MODEL_FLOOR, PIXEL_SUB, PixelEvidence
+from .quadrature import cell_quadrature
 
 #: the ring reaches this far beyond the farthest target cell, mm (or further, for :data:`RING_CELLS`)
 RING_MM = 2.0
@@ -44,125 +44,8 @@ RING_CELLS = 12
 #: starting albedos of the half-space's fit, and how close to the best a fit's cost must be to count
 STARTS = 6
 COST_TOLERANCE = 0.1
-#: the profile's form is known to this relative error (a bright pixel's weight is capped by it)
-MODEL_FLOOR = 0.05
-#: a near-peak model reading below this share of the clipped pixels' value (median) cannot hold the peak
-CLIP_REACH = 0.8
-#: sub-triangles a face side of the cells' quadrature (n² centroids a face)
-QUADRATURE_N = 6
-#: halvings of the graded rule towards the hit
-GRADED_LEVELS = 8
-#: rays a pixel side when the near peak's pixels are sampled again
-PIXEL_SUB = 8
-#: a ray this many footprint radii from the hit or nearer reads the mean of the profile over its footprint
-CORE_FOOTPRINTS = 3.0
-#: points of equal area over the unit disc (a sunflower): a footprint's mean
-_DISC = (
-    lambda k: (
-        np.sqrt((k + 0.5) / len(k))[:, None]
-        * np.column_stack([np.cos(k * 2.39996323), np.sin(k * 2.39996323)])
-    )
-)(np.arange(64.0))
 #: the ratio between neighbouring σ_t of the scan's table of walks (:mod:`.shape_gain`)
 SIGMA_STEP = 2.0
-
-
-def subtriangle_centroids(n: int = QUADRATURE_N) -> np.ndarray:
-    """Barycentric coordinates (n², 3) of the centroids of a triangle cut into n² equal sub-triangles: a
-    rule of equal weights exact for linear functions.
-
-    Examples
-    --------
-    >>> b = subtriangle_centroids(3)
-    >>> b.shape, bool(np.allclose(b.sum(axis=1), 1)), np.round(b.mean(axis=0), 6).tolist()
-    ((9, 3), True, [0.333333, 0.333333, 0.333333])
-    """
-    up = [((i + 1 / 3) / n, (j + 1 / 3) / n) for i in range(n) for j in range(n - i)]
-    down = [((i + 2 / 3) / n, (j + 2 / 3) / n) for i in range(n - 1) for j in range(n - 1 - i)]
-    ab = np.array(up + down)
-    return np.column_stack([ab, 1.0 - ab.sum(axis=1)])
-
-
-def graded_centroids(n: int = QUADRATURE_N, levels: int = GRADED_LEVELS):
-    """Barycentric points (K, 3) and weights (K,) summing to 1 over a triangle, graded towards its first
-    corner: the triangle is cut in four, the three children away from the corner take
-    :func:`subtriangle_centroids`, the corner's child is cut again, ``levels`` times.  For a profile with a
-    1/r core at that corner (the first scattering's) the plain rule misses part of the core's share.
-
-    Examples
-    --------
-    ∫ 1/r over the unit right triangle with the corner at r = 0 is √2 ln(1 + √2); the rule's share of it,
-    plain and graded three times:
-
-    >>> exact = np.sqrt(2) * np.log(1 + np.sqrt(2))
-    >>> for levels in (0, 3):
-    ...     b, w = graded_centroids(4, levels)
-    ...     share = float(w @ (1 / np.hypot(b[:, 1], b[:, 2]))) / 2 / exact
-    ...     print(levels, round(share, 3), round(w.sum(), 6))
-    0 0.965 1.0
-    3 0.996 1.0
-    """
-    rule = subtriangle_centroids(n)
-    corner = np.eye(3)
-    points, weights, scale = [], [], 1.0
-    for _ in range(levels):
-        A, B, C = corner
-        ab, ac, bc = (A + B) / 2, (A + C) / 2, (B + C) / 2
-        for child in ((ab, B, bc), (ac, bc, C), (ab, bc, ac)):
-            points.append(rule @ np.array(child))
-            weights.append(np.full(len(rule), scale / 4 / len(rule)))
-        corner, scale = np.array([A, ab, ac]), scale / 4
-    points.append(rule @ corner)
-    weights.append(np.full(len(rule), scale / len(rule)))
-    return np.concatenate(points), np.concatenate(weights)
-
-
-def cell_quadrature(mesh, vertices, n: int = QUADRATURE_N, toward=None):
-    r"""Points and weights over the cells of ``vertices``: for a function f on the surface,
-    :math:`\int \phi_v f\, dA \approx \sum_k w_k f(y_k)` over the points k of v, so Σ_k w_k = A_v.
-    With ``toward`` (a point, mm), the faces with a corner there (within a thousandth of their longest
-    edge) take the rule graded towards it (:func:`graded_centroids`): the hit's 1/r core.
-
-    Returns ``points`` (K, 3) mm, ``weights`` (K,) mm² and ``owner`` (K,): the index into ``vertices``.
-
-    Examples
-    --------
-    >>> import trimesh
-    >>> from translucency.geometry import vertex_areas
-    >>> mesh = trimesh.creation.icosphere(2, radius=3.0)
-    >>> _, w, owner = cell_quadrature(mesh, [0, 5])
-    >>> bool(np.allclose(np.bincount(owner, weights=w), vertex_areas(mesh)[[0, 5]]))
-    True
-    """
-    bary = subtriangle_centroids(n)
-    graded, graded_w = graded_centroids(n) if toward is not None else (None, None)
-    faces = np.asarray(mesh.faces)
-    verts = np.asarray(mesh.vertices, dtype=np.float64)
-    face_area = np.asarray(mesh.area_faces, dtype=np.float64)
-    points, weights, owner = [], [], []
-    vertex_faces = mesh.vertex_faces
-    for k, v in enumerate(np.asarray(vertices, dtype=np.int64)):
-        fs = vertex_faces[v]
-        fs = fs[fs >= 0]
-        tri = faces[fs]  # (F, 3)
-        corner = np.argmax(tri == v, axis=1)  # where v sits in each face
-        P = np.einsum("kc,fcd->fkd", bary, verts[tri])  # (F, n², 3)
-        phi = bary[:, corner].T  # (F, n²): v's barycentric coordinate at each point
-        keep = np.ones(len(fs), dtype=bool)
-        if toward is not None:  # faces with a corner at the hit: the graded rule, rolled to that corner
-            dist = np.linalg.norm(verts[tri] - np.asarray(toward), axis=2)  # (F, 3)
-            edge = np.linalg.norm(verts[tri] - verts[np.roll(tri, 1, axis=1)], axis=2).max(axis=1)
-            at = np.argmin(dist, axis=1)
-            keep = dist[np.arange(len(fs)), at] > 1e-3 * edge
-            for f in np.flatnonzero(~keep):
-                b = np.roll(graded, at[f], axis=1)  # the graded corner moved to corner `at`
-                points.append(b @ verts[tri[f]])
-                weights.append(b[:, corner[f]] * graded_w * face_area[fs[f]])
-                owner.append(np.full(len(b), k))
-        points.append(P[keep].reshape(-1, 3))
-        weights.append((phi[keep] * face_area[fs[keep], None] / len(bary)).ravel())
-        owner.append(np.full(int(keep.sum()) * len(bary), k))
-    return np.concatenate(points), np.concatenate(weights), np.concatenate(owner)
 
 
 def _half_space_channel(y, r_ring, mean_of, misfit=None, shape=None, quick=False):
@@ -171,15 +54,16 @@ def _half_space_channel(y, r_ring, mean_of, misfit=None, shape=None, quick=False
     whether the profile reads short of the clipped pixels, and the fitted (σ_t, α).
 
     The fit is to the ring's log cell means ``y`` — or, with ``misfit`` (the residuals of a radial profile
-    against the pixels that see the zone, :class:`PixelEvidence`), to the pixels themselves: their
-    footprints blur the peak into the ring, and the clipped ones say how bright the core at least is.
+    against the pixels that see the zone, :class:`.pixel_evidence.PixelEvidence`), to the pixels
+    themselves: their footprints blur the peak into the ring, and the clipped ones say how bright the core
+    at least is.
     The ring holds two numbers well (its level and its slope) and (σ_t, α) can trade one for the other,
     so the fit starts from :data:`STARTS` albedos (σ_t from the ring's slope, σ_tr = σ_t √(3(1 − α))) and
     keeps the best; the variance takes half the spread of the core among the fits as good as the best
     (within :data:`COST_TOLERANCE`), half the difference from the same profile fitted with a free scale
     (what the data say against the calibrated level), and the relative scatter of the data about it
-    beyond their noise (the pixels', :meth:`PixelEvidence.relative_scatter`, or the ring's cell means')
-    plus :data:`MODEL_FLOOR` (the profile's form), in quadrature."""
+    beyond their noise (the pixels', :meth:`.pixel_evidence.PixelEvidence.relative_scatter`, or the ring's
+    cell means') plus :data:`.pixel_evidence.MODEL_FLOOR` (the profile's form), in quadrature."""
     from scipy.optimize import least_squares  # heavy: SciPy's optimisers load where a peak is recovered
 
     n_ring = len(y)
@@ -233,157 +117,6 @@ def _half_space_channel(y, r_ring, mean_of, misfit=None, shape=None, quick=False
     sigma_t, albedo = np.exp(best.x[0]), -np.expm1(best.x[1])
     short = bool(misfit) and misfit.short_of_clip(profile(best.x))  # (the gains left at the best fit's)
     return value, variance, short, (sigma_t, albedo)
-
-
-class PixelEvidence:
-    r"""The pixels whose whole footprint lies within ``r_zone`` of the hit, seen within
-    :data:`~.surface_map.GRAZING_DEG` of the normal, one channel at a time: the misfit of a radial
-    profile f against them.
-
-    A pixel reads the solid-angle mean of what its rays see, :math:`m_p = \sum_s \Omega_s G_s f(|y_s -
-    x_i|) / \sum_s \Omega_s` over its sub-pixel rays s that meet the mesh
-    (:attr:`.surface_map.SurfaceMap.rays`, grazing ones included; G_s the cells' gains,
-    :mod:`.shape_gain`, interpolated over the ray's face, 1 without) — exact for a profile as steep as the
-    near peak, where interpolating cell means would not be, and for a pixel that sees the surface at
-    grazing angles in part, where a footprint-weighted mean would not be.  Usable pixels give
-    :math:`(m_p - E_p)/\sqrt{\mathrm{Var}\,E_p + (\epsilon E_p)^2}` (ε = :data:`MODEL_FLOOR`: the
-    profile's form is known to a few per cent, not to the photon noise of a bright pixel); clipped ones
-    count only where the profile falls below what they show,
-    :math:`\min(0, m_p - E^{clip}_p)/(\epsilon E^{clip}_p)`.
-
-    The map's rays (a few a pixel, enough for its cells) are too few for a pixel over the peak: with
-    ``sample`` (a function of a map and pixels giving the rays of those pixels, as :attr:`rays`) the kept
-    pixels are sampled again, :data:`PIXEL_SUB` × :data:`PIXEL_SUB` rays each; a ray within
-    :data:`CORE_FOOTPRINTS` of its footprint's radius of the hit reads the profile's mean over its
-    footprint (a disc of the same area).
-    """
-
-    def __init__(self, views, hit, r_zone: float, mesh=None, sample=None):
-        self.parts, self.cells, self.radii, self.points = [], [], [], []
-        for m, E, var, usable, floor in views:
-            pixel, y, omega, a_s, face = m.rays  # each ray's solid angle (its reading's weight), footprint
-            n = len(m.used)
-            col = np.minimum(np.searchsorted(m.used, pixel), n - 1)  # each ray's pixel among the used ones
-            read = m.used[col] == pixel  # (a pixel whose rays all graze is not read: no value to fit)
-            pixel, y, omega, a_s, face, col = (a[read] for a in (pixel, y, omega, a_s, face, col))
-            r_s = np.linalg.norm(y.astype(np.float64) - hit, axis=1)
-            far = np.bincount(col, weights=(r_s > r_zone).astype(float), minlength=n) > 0
-            clipped = ~usable & (floor > 0).any(axis=1)
-            inside = np.bincount(col, minlength=n) > 0
-            # a pixel seen at a grazing angle (its centre's) is left out, as the cells' fusion leaves it out:
-            # there the exit law is least known and a footprint longest
-            facing = m.mu[m.used] > np.cos(np.radians(GRAZING_DEG))
-            keep = inside & ~far & facing & (usable | clipped)
-            if not keep.any():
-                continue
-            if sample is not None:  # the kept pixels sampled finely: a few rays miss the core's share
-                pixel, y, omega, a_s, face = sample(m, m.used[keep])
-                col = np.searchsorted(m.used, pixel)
-                r_s = np.linalg.norm(y.astype(np.float64) - hit, axis=1)
-            rays = keep[col]
-            index = np.cumsum(keep) - 1  # the kept pixels renumbered
-            self.parts.append(
-                (
-                    index[col[rays]],
-                    r_s[rays],
-                    omega[rays].astype(np.float64),
-                    int(keep.sum()),
-                    E[keep],
-                    var[keep],
-                    usable[keep],
-                    floor[keep],
-                )
-            )
-            # each ray's face's corners and its barycentric weights there: where the cells' gains multiply
-            # the profile (the face, not the nearest vertex: across a sheet thinner than a cell that is
-            # the far side's)
-            self.cells.append(exit_barycentric(mesh, face[rays], y[rays]) if mesh is not None else None)
-            self.radii.append(np.sqrt(a_s[rays].astype(np.float64) / np.pi))  # its footprint's radius, mm
-            self.points.append((y[rays].astype(np.float64), self.radii[-1]))
-        self.channel = 0
-        #: (V, 3) per-cell gains of the profile (:mod:`.shape_gain`), or None
-        self.gain = None
-        #: per channel the power of light leaving at one point (:meth:`delta`), and the pixels that see it
-        self.deltas, self.delta_pixels = [None, None, None], None
-
-    def __bool__(self):
-        return bool(self.parts)
-
-    def delta(self, ch: int, point, power: float) -> None:
-        """Light of ``power`` (per unit incident) leaving at one ``point`` (mm), in channel ``ch``: the
-        pixel whose rays come nearest it (within two of their footprint radii) reads power / its
-        footprint's area; the others nothing."""
-        if point is None or power <= 0:
-            self.deltas[ch] = None
-            return
-        if self.delta_pixels is None:  # where the point is seen: the same for every σ_t
-            self.delta_pixels = []
-            for (col, *_), (y, rho) in zip(self.parts, self.points):
-                d = np.linalg.norm(y - point, axis=1)
-                s = int(np.argmin(d))
-                if d[s] > 2 * rho[s]:
-                    self.delta_pixels.append(None)
-                    continue
-                p = col[s]
-                self.delta_pixels.append((p, 1.0 / float(np.pi * np.sum(rho[col == p] ** 2))))
-        self.deltas[ch] = power
-
-    def _readings(self, profile):
-        """Each kept pixel's reading of ``profile``: Σ_s Ω_s G_s f(r_s) / Σ_s Ω_s (plus the point of
-        unscattered light, :meth:`delta`), per camera."""
-        power = self.deltas[self.channel]
-        for k, ((col, r_s, omega, n, *_), cell, rho) in enumerate(zip(self.parts, self.cells, self.radii)):
-            f = profile(r_s)
-            core = r_s < CORE_FOOTPRINTS * rho  # the 1/r core within a footprint or two: its disc's mean
-            if core.any():
-                d = np.hypot(r_s[core, None] + rho[core, None] * _DISC[:, 0], rho[core, None] * _DISC[:, 1])
-                f[core] = profile(d.ravel()).reshape(d.shape).mean(axis=1)
-            if self.gain is not None and cell is not None:
-                tri, bary = cell
-                f = f * np.einsum("ij,ij->i", bary, self.gain[tri, self.channel])
-            m = np.bincount(col, weights=omega * f, minlength=n) / np.bincount(col, omega, minlength=n)
-            seen = self.delta_pixels[k] if power and self.delta_pixels else None
-            if seen is not None:  # the point of unscattered light, in the one pixel that sees it
-                m[seen[0]] += power * seen[1]
-            yield m
-
-    def short_of_clip(self, profile) -> bool:
-        """Whether the profile reads below :data:`CLIP_REACH` of what the clipped pixels show (median over
-        them): the near peak is steeper than any half-space's (a horn's tip, a thin part)."""
-        ratios = []
-        for part, m in zip(self.parts, self._readings(profile)):
-            usable, floor = part[6], part[7]
-            f = floor[:, self.channel]
-            clip = ~usable & (f > 0)
-            ratios.append(m[clip] / f[clip])
-        ratios = np.concatenate(ratios) if ratios else np.zeros(0)
-        return bool(len(ratios)) and float(np.median(ratios)) < CLIP_REACH
-
-    def relative_scatter(self, profile) -> float:
-        r"""The usable pixels' relative scatter about ``profile`` beyond their own noise,
-        :math:`\big(\sum_p w_p (\rho_p^2 - v_p) / \sum_p w_p\big)^{1/2}` with
-        :math:`\rho_p = (m_p - E_p)/E_p`, :math:`v_p = \mathrm{Var}\,E_p / E_p^2` and
-        :math:`w_p = 1/(v_p + \epsilon^2)` (0 where the noise explains it all)."""
-        num = den = 0.0
-        for (*_, E, var, usable, _floor), m in zip(self.parts, self._readings(profile)):
-            e = E[usable, self.channel].astype(np.float64)
-            ok = e > 0
-            e, mm = e[ok], m[usable][ok]
-            v = np.maximum(var[usable, self.channel][ok], 0) / e**2
-            w = 1.0 / (v + MODEL_FLOOR**2)
-            num += float(w @ (((mm - e) / e) ** 2 - v))
-            den += float(w.sum())
-        return float(np.sqrt(max(num, 0.0) / den)) if den > 0 else 0.0
-
-    def __call__(self, profile):
-        ch, out = self.channel, []
-        for (*_, E, var, usable, floor), m in zip(self.parts, self._readings(profile)):
-            e, f = E[:, ch], floor[:, ch]
-            scale = np.sqrt(np.maximum(var[:, ch], 0) + (MODEL_FLOOR * e) ** 2) + 1e-30
-            out.append(np.where(usable, (m - e) / scale, 0.0))
-            clip = ~usable & (f > 0)
-            out.append(np.where(clip, np.minimum(0.0, m - f) / (MODEL_FLOOR * f + 1e-30), 0.0))
-        return np.concatenate(out)
 
 
 def _near_peak_channel(y, r_ring, mean_of, eta, misfit=None, shape=None, quick=False):
@@ -441,14 +174,14 @@ def recover_near_peak(mesh, hit, R, var, target, measured, eta: float, views=(),
         The medium's index (the dipole's boundary term).
     views : sequence
         Per camera (map, E, Var E, usable, clip floor) from :func:`.radiance.shot_cell_means`: the pixels
-        the index-matched fit reads (:class:`PixelEvidence`).
+        the index-matched fit reads (:class:`.pixel_evidence.PixelEvidence`).
     shape : object with ``table(sigma_ts, reach)``, optional
         The scan's own shape (:class:`.shape_gain.MeshWalkGain`): the
         half-space's profile times the walks' per-cell gains, fitted jointly (σ_t and α move the gains
         too; a table of walks over σ_t around the flat fit's, :data:`SIGMA_STEP` apart).
     scene : mitsuba.Scene, optional
         The mesh's scene: the pixels of ``views`` near the hit sampled again, finely
-        (:data:`PIXEL_SUB`).
+        (:data:`.pixel_evidence.PIXEL_SUB`).
 
     Returns
     -------
@@ -458,7 +191,7 @@ def recover_near_peak(mesh, hit, R, var, target, measured, eta: float, views=(),
         False where no ring of :data:`RING_CELLS` measured cells surrounds the targets (R, var unchanged).
     short : ndarray of bool, shape (3,)
         Per channel, whether the model reads below what the clipped pixels of ``views`` show
-        (:meth:`PixelEvidence.short_of_clip`): the peak is steeper than the model can be.
+        (:meth:`.pixel_evidence.PixelEvidence.short_of_clip`): the peak is steeper than the model can be.
     params : list
         Per channel the half-space's fitted (σ_t mm⁻¹, α), or None (the dipole, or not recovered).
 
@@ -553,4 +286,4 @@ def _sigma_grid(params) -> np.ndarray:
     return np.geomspace(lo, hi, n)
 
 
-__all__ = ["recover_near_peak", "cell_quadrature", "subtriangle_centroids", "RING_MM", "RING_CELLS"]
+__all__ = ["recover_near_peak", "RING_MM", "RING_CELLS"]

@@ -92,7 +92,7 @@ def shot_cell_means(
     and distance from ``hit``: the law varies across a cell near the hit); and the bytes read.  With
     ``pixels`` (and ``law``), also per camera the pixels themselves: (its surface map, the exitance of
     its used pixels (n, 3), its variance, usable (n,), the clipped pixels' least exitance (n, 3)), None
-    for a camera without frames — the near peak's evidence (:class:`.near_peak.PixelEvidence`).  The
+    for a camera without frames — the near peak's evidence (:class:`.pixel_evidence.PixelEvidence`).  The
     cameras run on threads (reading, NumPy and the sparse products release the GIL).  ``aside``: per camera
     name, used pixels (bool) set aside — neither used nor a lower bound where they clip (:mod:`.glint`).
     ``view_law``: γ per camera and pixel instead of ``law``'s (:class:`.walk_law.ShotWalkLaw`)."""

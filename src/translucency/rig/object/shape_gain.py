@@ -39,7 +39,7 @@ from ...acquire.mesh import exit_barycentric
 from ...acquire.mesh_walk import EXIT, mesh_random_walk
 from ...acquire.volume import Volume
 from ...model.half_space import half_space_R_d
-from .near_peak import cell_quadrature
+from .quadrature import cell_quadrature
 
 #: photons of each walk
 PHOTONS = 50_000
