@@ -4,8 +4,9 @@ lab hands them over (:func:`acquire_photographs`, :func:`acquire_object_photogra
 
 ``translucency acquire planar|mesh|photographs|object-photographs`` are these functions: the arguments
 checked at the boundary, the memory and time estimated before the work (refused in one line beyond
-``max_memory``), the output claimed (an unfinished acquisition with the same arguments resumes; Ctrl-C
-keeps the chunks done), the work, and the summary the command prints.  Units: mm, σ in mm⁻¹.
+``max_memory``), the output claimed (an unfinished acquisition with the same arguments resumes,
+:mod:`._resuming`; Ctrl-C keeps the chunks done), the work, and the summary the command prints.
+Units: mm, σ in mm⁻¹.
 """
 
 from __future__ import annotations
@@ -13,9 +14,6 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import NamedTuple
-
-import numpy as np
 
 from .. import resources
 from .._validate import TranslucencyError, check_option
@@ -40,6 +38,7 @@ from ._arguments import (
     slab_of,
     whole_number,
 )
+from ._resuming import Resumed, matches, resumable, resuming, to_acquire
 
 __all__ = [
     "acquire_mesh",
@@ -185,7 +184,7 @@ def acquire_planar(
     state = _timed_planar(run, volume, setup, out, estimate)
     P = setup.grid[0] * setup.grid[1]
     with run.work("acquire", total=P, fresh=state is None and bytes_at(out) == 0) as work:
-        work.update(completed=P - _left(state, P), item="points")
+        work.update(completed=P - to_acquire(state, P), item="points")
         scan_planar(
             volume,
             setup,
@@ -241,7 +240,7 @@ def _timed_planar(run: Run, volume: Volume, setup: PlanarSetup, out: Path, estim
     P = setup.grid[0] * setup.grid[1]
     want = setup_request(setup)  # the same setup and the same angle axes (none: none)
     same = lambda request: all(request.get(k) == want.get(k) for k in ("setup", "angles"))  # noqa: E731
-    state = _resumable(out, open_dataset, same)
+    state = resumable(out, open_dataset, same)
     share = 1.0 if state is None else state.points_left / P  # what is left of the work
     D = setup.incidence.count  # photons × directions
     units = resources.timing.planar_acquisition_units(
@@ -253,7 +252,7 @@ def _timed_planar(run: Run, volume: Volume, setup: PlanarSetup, out: Path, estim
     timing = run.time(units, (first, "from a probe of the walk on this sample"))
     run.kept = lambda: kept_chunks(out, open_dataset)
     run.info(
-        f"{_resuming(state)}{round(share * P)} incident points x {setup.photons:,} photons x 3 channels"
+        f"{resuming(state)}{round(share * P)} incident points x {setup.photons:,} photons x 3 channels"
         f"{f' x {D} directions' if D > 1 else ''}"
         f"{f' ({setup.exit_bins.count} exit bins)' if setup.exit_bins else ''} on a "
         f"{' x '.join(f'{v:g}' for v in volume.size_mm)} mm slab; time {timing.text()}, "
@@ -392,22 +391,22 @@ def acquire_mesh(
         "vertices": V,
         "reentry": bool(reentry),
     }
-    state = _resumable(out, open_mesh_dataset, lambda request: _matches(request, same))
+    state = resumable(out, open_mesh_dataset, lambda request: matches(request, same))
     timing = run.time(
         resources.timing.mesh_acquisition_units(
-            points=_left(state, points), photons=photons * angles.count, vertices=V
+            points=to_acquire(state, points), photons=photons * angles.count, vertices=V
         )
     )
     run.kept = lambda: kept_chunks(out, open_mesh_dataset)
     run.info(
-        f"{_resuming(state)}{_left(state, points)} incident points x {photons:,} photons x 3 channels"
+        f"{resuming(state)}{to_acquire(state, points)} incident points x {photons:,} photons x 3 channels"
         f"{f' x {angles.count} directions' if angles.count > 1 else ''}"
         f"{f' ({bins.count} exit bins)' if bins else ''} on a "
         f"mesh of {V:,} vertices, {' x '.join(f'{v:.1f}' for v in obj.extents)} mm; "
         f"time {timing.text()}, memory ~{estimate.memory / 2**20:,.0f} MiB",
     )
     with run.work("acquire", total=points, fresh=state is None and bytes_at(out) == 0) as work:
-        work.update(completed=points - _left(state, points), item="points")
+        work.update(completed=points - to_acquire(state, points), item="points")
         scan_mesh(
             obj,
             volume,
@@ -444,6 +443,12 @@ def acquire_mesh(
     return ds
 
 
+def _angle_axes(incidence, azimuths, exit_bins) -> tuple[Incidence, ExitBins | None]:
+    """The angle axes of an acquisition (``--incidence``, ``--azimuths``, ``--exit-bins``), checked."""
+    angles = Incidence(tuple(float(t) for t in incidence), whole_number("azimuths", azimuths))
+    return angles, ExitBins(whole_number("exit_bins", exit_bins)) if exit_bins else None
+
+
 def _steps(work, progress: Callable[[int, int], None] | None) -> Callable[[int, int], None]:
     """The stage's ``progress(done, total)``: the run's progress bar, and the caller's ``progress``."""
 
@@ -453,58 +458,3 @@ def _steps(work, progress: Callable[[int, int], None] | None) -> Callable[[int, 
             progress(done, total)
 
     return step
-
-
-# -- resuming -------------------------------------------------------------------------------------------
-class Resumed(NamedTuple):
-    """A data set an acquisition resumes: its chunks done, of how many, and the points left to acquire."""
-
-    done: int
-    chunks: int
-    points_left: int
-
-
-def _chunks_of(ds) -> tuple[np.ndarray, np.ndarray]:
-    """The done flags of a data set's chunks and the points of each."""
-    done = np.asarray(ds.group["chunk_done"][...], dtype=bool)
-    k, P = ds.chunk_points, ds.n_points
-    return done, np.array([min(P, (c + 1) * k) - c * k for c in range(len(done))])
-
-
-def _resumable(out: Path, opener, same) -> Resumed | None:
-    """The data set at ``out`` that this acquisition resumes (made with the same arguments: ``same`` of its
-    header's request), or None when it starts afresh."""
-    try:
-        ds = opener(out)
-        if not same(ds.header.get("request", {})):
-            return None
-        done, points = _chunks_of(ds)
-    except Exception:  # noqa: BLE001 — no data set, or one that cannot be read: a fresh start (checked later)
-        return None
-    if not done.any():
-        return None
-    return Resumed(int(done.sum()), len(done), int(points[~done].sum()))
-
-
-def _left(state: Resumed | None, points: int) -> int:
-    """Incident points left to acquire."""
-    return points if state is None else state.points_left
-
-
-def _matches(request: dict, same: dict) -> bool:
-    return all(request.get(k) == v for k, v in same.items())
-
-
-def _angle_axes(incidence, azimuths, exit_bins) -> tuple[Incidence, ExitBins | None]:
-    """The angle axes of an acquisition (``--incidence``, ``--azimuths``, ``--exit-bins``), checked."""
-    angles = Incidence(tuple(float(t) for t in incidence), whole_number("azimuths", azimuths))
-    return angles, ExitBins(whole_number("exit_bins", exit_bins)) if exit_bins else None
-
-
-def _resuming(state: Resumed | None) -> str:
-    """The start of the information line of a resumed acquisition."""
-    if state is None:
-        return ""
-    if state.points_left == 0:
-        return f"nothing left to acquire ({state.chunks}/{state.chunks} chunks done): "
-    return f"resuming ({state.done}/{state.chunks} chunks done, kept): the "
