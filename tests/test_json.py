@@ -2,6 +2,7 @@
 numbers as numbers, nothing cut; ``evaluate --json`` a flag like the others, its old path form kept for
 one release."""
 
+import functools
 import json
 from pathlib import Path
 
@@ -11,6 +12,7 @@ from typer.testing import CliRunner
 
 from translucency.cli.app import app
 from translucency.cli.schemas import SCHEMAS, check, markdown, schema_of
+from translucency.workflow import demo as workflow_demo
 
 runner = CliRunner()
 DOCS = Path(__file__).resolve().parents[1] / "docs" / "json.md"
@@ -75,7 +77,8 @@ def outputs(tmp_path_factory):
         [*OBJECT_PHOTOGRAPHS, "--mesh", tmp / "ball.ply", "--out", tmp / "rig", "-q"]
     )
     with pytest.MonkeyPatch.context() as patch:  # the main job itself runs in make demo; here its printing
-        patch.setattr("translucency.workflow.demo.main_job", lambda out_dir, **kw: _demo_outputs(out_dir))
+        job = functools.wraps(workflow_demo.main_job)(lambda out_dir, **kw: _demo_outputs(out_dir))
+        patch.setattr(workflow_demo, "main_job", job)
         out["demo"] = _json(["demo", "--out", tmp / "results", "-q"])
     out["tmp"] = tmp
     return out

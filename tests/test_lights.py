@@ -213,57 +213,17 @@ def test_two_lights_on_one_object_share_one_exposure(ball_model, tmp_path):
 def test_render_writes_render_json_and_places_the_light(ball_model, tmp_path):
     _, _, path = ball_model
     out = tmp_path / "r"
-    res = runner.invoke(
-        app,
-        [
-            "render",
-            str(path),
-            "--out",
-            str(out),
-            "--resolution",
-            "24",
-            "18",
-            "--light",
-            "spot@back,3x,25,1e3",
-        ],
-    )
+    render = ["render", str(path), "--out", str(out), "--resolution", "24", "18"]
+    res = runner.invoke(app, [*render, "--light", "spot@back,3x,25,1e3"])
     assert res.exit_code == 0, res.output
     assert "object: centre (" in res.output and "size" in res.output  # where the object sits
     assert (out / "render.json").exists() and not (out / "figure2.json").exists()
     summary = json.loads((out / "render.json").read_text())
     assert summary["light"].startswith("SpotLight(") and summary["exposure_rule"].startswith("fixed")
-    res = runner.invoke(
-        app,
-        [
-            "render",
-            str(path),
-            "--out",
-            str(out),
-            "--resolution",
-            "24",
-            "18",
-            "--exposure",
-            "auto",
-            "--overwrite",
-        ],
-    )
+    res = runner.invoke(app, [*render, "--exposure", "auto", "--overwrite"])
     assert res.exit_code == 0, res.output
     assert "exposure_rule" not in json.loads((out / "render.json").read_text())
-    res = runner.invoke(
-        app,
-        [
-            "render",
-            str(path),
-            "--out",
-            str(out),
-            "--resolution",
-            "24",
-            "18",
-            "--exposure",
-            "3.5",
-            "--overwrite",
-        ],
-    )
+    res = runner.invoke(app, [*render, "--exposure", "3.5", "--overwrite"])
     assert res.exit_code == 0, res.output
     assert json.loads((out / "render.json").read_text())["exposure"] == 3.5
 

@@ -5,7 +5,6 @@ its memory estimated and checked before it starts."""
 from __future__ import annotations
 
 import os
-from collections.abc import Callable
 
 from .. import resources
 from ..acquire.objects import make_pig
@@ -16,6 +15,7 @@ from ..io.dataset import open_dataset
 from ..pipeline.demo import DEMO_FITS, DEMO_STEPS
 from ..pipeline.demo import run_demo as main_job
 from ..resources.run import Reporter, Run
+from ._arguments import refuse_unknown
 from .fitting import MESH_FIT_CHUNK
 
 __all__ = ["DEMO_STEPS", "demo_need", "run_demo"]
@@ -26,22 +26,15 @@ FIGURE2_ACQUISITION = {"points": 96, "photons": 8000, "chunk": 16, "voxel_mm": 1
 
 
 def run_demo(
-    out_dir,
-    *,
-    n_terms: int = 3,
-    step: Callable[[str], None] | None = None,
-    dataset=None,
-    max_rounds: int = 3,
-    overwrite: bool = False,
-    max_memory: str | int | None = None,
-    reporter: Reporter | None = None,
+    out_dir, *, max_memory: str | int | None = None, reporter: Reporter | None = None, **job
 ) -> dict:
     """Run the main job and write its outputs under ``out_dir``: :func:`translucency.pipeline.run_demo`
     after its memory (:func:`demo_need`) is checked against ``max_memory`` (default: the machine's
     available memory), refused in one line before any work.
 
-    ``translucency demo`` is this function; ``n_terms``, ``step``, ``dataset``, ``max_rounds``,
-    ``overwrite`` and ``reporter`` as in :func:`translucency.pipeline.run_demo`, whose outputs it returns.
+    ``translucency demo`` is this function; ``reporter`` and the keywords ``n_terms``, ``step``,
+    ``dataset``, ``max_rounds`` and ``overwrite`` as in :func:`translucency.pipeline.run_demo`, whose
+    outputs it returns.
 
     Examples
     --------
@@ -50,17 +43,10 @@ def run_demo(
     ...
     translucency._validate.TranslucencyError: demo: needs about ... of memory (...), more than --max-memory...
     """
+    refuse_unknown("run_demo", job, main_job)
     run = Run("demo", max_memory=max_memory, reporter=reporter)
-    run.check(demo_need(dataset), out_dir)
-    outputs = main_job(
-        out_dir,
-        n_terms=n_terms,
-        step=step,
-        dataset=dataset,
-        max_rounds=max_rounds,
-        overwrite=overwrite,
-        reporter=reporter,
-    )
+    run.check(demo_need(job.get("dataset")), out_dir)
+    outputs = main_job(out_dir, reporter=reporter, **job)
     run.summary({})  # the run is done: its outputs stay
     return outputs
 
