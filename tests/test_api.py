@@ -39,7 +39,7 @@ def test_readme_session_prints_the_held_out_error_of_translucency_evaluate(tmp_p
     model = tmp_path / "marble_iso.model.zip"
     truth = tl.data.default_truth_path()
     args = ["evaluate", str(model), str(tl.data.default_dataset_path()), "--truth", str(truth)]
-    res = runner.invoke(app, [*args, "--report", str(tmp_path / "report"), "--json", "-"])
+    res = runner.invoke(app, [*args, "--report", str(tmp_path / "report"), "--json"])
     assert res.exit_code == 0, res.output
     cli = json.loads(res.stdout[res.stdout.index("{") :])
     assert cli["evaluated_against"].startswith("truth")

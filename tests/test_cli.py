@@ -278,7 +278,7 @@ def test_quiet_and_json_for_scripts(tmp_path):
     res = runner.invoke(
         app,
         ["evaluate", str(tmp_path / "a.model.zip"), str(tmp_path / "a.zarr"), "--report", str(tmp_path / "r")]
-        + ["--json", "-", "--quiet"],
+        + ["--json", "--quiet"],
     )
     ev = json.loads(res.stdout, parse_constant=lambda c: pytest.fail(f"{c} in JSON"))
     assert res.exit_code == 0 and ev["command"] == "evaluate" and 0 < ev["rel_l2"] < 10
