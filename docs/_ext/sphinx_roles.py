@@ -1,7 +1,8 @@
 """A Griffe extension for the site's API reference: what the docstrings write in reStructuredText, as
 Markdown.  Sphinx roles (``:func:`~a.b```) become code (``b``); ``:math:`` becomes MathJax's inline
 mathematics; a definition list (a line holding only ``literals``, its description indented below) becomes
-Markdown's (``def_list``).  mkdocs.yml loads it (mkdocstrings' ``extensions``)."""
+Markdown's (``def_list``); doctest directives are left out.  mkdocs.yml loads it (mkdocstrings'
+``extensions``)."""
 
 from __future__ import annotations
 
@@ -15,6 +16,8 @@ ROLE = re.compile(
 )
 #: inline mathematics, :math:`\\vec x_i`, drawn by MathJax (pymdownx.arithmatex)
 MATH = re.compile(r":math:`([^`]+)`")
+#: a doctest directive at the end of an example's line (``# doctest: +SKIP``): the reader's copy goes without
+DIRECTIVE = re.compile(r"[ \t]*# doctest:[^\n]*")
 #: a definition list's term: literals only (``baselines.png``, ``a``, ``b``)
 TERM = re.compile(r"^(\s*)``[^`]+``(?:\s*,\s*``[^`]+``)*\s*$")
 
@@ -57,4 +60,4 @@ class SphinxRoles(griffe.Extension):
 
     def on_instance(self, *, obj: griffe.Object, **kwargs) -> None:
         if obj.docstring is not None:
-            obj.docstring.value = definitions(plain(obj.docstring.value))
+            obj.docstring.value = definitions(plain(DIRECTIVE.sub("", obj.docstring.value)))
