@@ -295,22 +295,27 @@ def photographs(
     return Need(BASE_MITSUBA + sum(parts.values()), 12 * pixels * files + MiB, max(parts, key=parts.get))
 
 
-def photograph_import(*, positions: int, chunk: int, images: int, pixels: int, cells: int) -> Need:
+def photograph_import(
+    *, positions: int, chunk: int, images: int, pixels: int, cells: int, mitsuba: bool = False
+) -> Need:
     r"""``import images`` and ``import object``: N laser positions, k a chunk, each with I = ``images``
     photographs (every camera's frames) of P pixels, and C cells of the output a position (a planar
     window's pixels, an object's vertices).
 
-    .. math:: M = M_{mi} + 24\,k\,I\,P + 40 \cdot 3\,k\,C
+    .. math:: M = M_0 + 24\,k\,I\,P + 40 \cdot 3\,k\,C
 
-    a chunk's photographs read (float32 RGB) with their dark- and flat-corrected copy, and the chunk's
-    R_d, variance and counts per cell and channel (as the acquisitions: 40 bytes).  Output: the R_d and
-    variance (float32 RGB) and a mask byte of every cell, :math:`D = 25\,N C` (uncompressed).
+    the process (:data:`BASE`, :data:`BASE_MITSUBA` with ``mitsuba``: an object's import traces its
+    cameras' rays), a chunk's photographs read (float32 RGB) with their dark- and flat-corrected copy,
+    and the chunk's R_d, variance and counts per cell and channel (as the acquisitions: 40 bytes).
+    Output: the R_d and variance (float32 RGB) and a mask byte of every cell, :math:`D = 25\,N C`
+    (uncompressed).
     """
     parts = {
         "a chunk of photographs: --chunk": 24 * chunk * images * pixels,
         "a chunk of R_d: --chunk": 40 * 3 * chunk * cells,
     }
-    return Need(BASE_MITSUBA + sum(parts.values()), 25 * positions * cells, max(parts, key=parts.get))
+    base = BASE_MITSUBA if mitsuba else BASE
+    return Need(base + sum(parts.values()), 25 * positions * cells, max(parts, key=parts.get))
 
 
 def relighting(*, vertices: int, faces: int, pairs: float, coefficients: int = 0) -> Need:

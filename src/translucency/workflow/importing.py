@@ -184,7 +184,12 @@ def _object_need(setup, chunk_points: int):
     pixels = max((c.width * c.height for c in setup.cameras), default=0)
     vertices = len(load_mesh(setup.mesh_file, scale_mm=setup.scale_mm, up=setup.up).vertices)
     return resources.memory.photograph_import(
-        positions=len(setup.shots), chunk=chunk_points, images=images, pixels=pixels, cells=vertices
+        positions=len(setup.shots),
+        chunk=chunk_points,
+        images=images,
+        pixels=pixels,
+        cells=vertices,
+        mitsuba=True,  # the cameras' rays traced on the mesh
     )
 
 
