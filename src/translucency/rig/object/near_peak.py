@@ -279,9 +279,20 @@ def recover_near_peak(mesh, hit, R, var, target, measured, eta: float, views=(),
 
 def _sigma_grid(params) -> np.ndarray:
     """σ_t (mm⁻¹) of the walks a shape's table takes: from a fifth of the flat fits' least to twice
-    their largest (a thin part's flat fit reads σ_t up to 4× high), :data:`SIGMA_STEP` apart in ratio."""
+    their largest (a thin part's flat fit reads σ_t up to 4× high), :data:`SIGMA_STEP` apart in ratio;
+    within 0.02-30 mm⁻¹ and at least one step wide (a noisy flat fit can read σ_t below the floor).
+
+    Examples
+    --------
+    >>> g = _sigma_grid([(1.0, 0.9), (4.0, 0.8), None])
+    >>> float(g[0]), float(g[-1]), bool((g[1:] / g[:-1] <= SIGMA_STEP * (1 + 1e-12)).all())
+    (0.2, 8.0, True)
+    >>> _sigma_grid([(0.005, 0.9)])  # below the floor: the floor and one step
+    array([0.02, 0.04])
+    """
     sigma_t = [p[0] for p in params if p is not None]
-    lo, hi = max(min(sigma_t) / 5.0, 0.02), min(2.0 * max(sigma_t), 30.0)
+    lo = max(min(sigma_t) / 5.0, 0.02)
+    hi = max(min(2.0 * max(sigma_t), 30.0), lo * SIGMA_STEP)
     n = max(2, int(np.ceil(np.log(hi / lo) / np.log(SIGMA_STEP))) + 1)
     return np.geomspace(lo, hi, n)
 
