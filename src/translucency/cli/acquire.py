@@ -266,7 +266,7 @@ class MeshOptions:
         64,
         "--points",
         help="Incident points (farthest-point sample of the vertices). On small objects more points with "
-        "fewer photons each, for the same time, render closer (docs/objects.md).",
+        "fewer photons each, for the same time, render closer (docs/through-body.md).",
     )
     photons = typer.Option(20_000, "--photons", "-N", help="Photons per incident point and channel.")
     seed = typer.Option(0, "--seed", help="Random seed.")

@@ -82,13 +82,13 @@ _PAPER = typer.Option(
     "--paper",
     help="Draw the paper's model: each point's radial profile alone, without the through-body table the "
     "model holds (light between sides whose normals face apart, measured against the fit; drawn by default, "
-    "docs/objects.md).",
+    "docs/through-body.md).",
 )
 _ANGLES = typer.Option(
     False,
     "--angles",
     help="Lean the transport toward the light's direction (the model's lean, fitted from a data set "
-    "acquired with --incidence; model/lean.py): back-lit objects, docs/objects.md. A light of many "
+    "acquired with --incidence; model/lean.py): back-lit objects, docs/lean.md. A light of many "
     "directions (env, a scene's) leans by its irradiance-weighted mean direction; a model without a lean "
     "is drawn without it.",
 )
@@ -96,7 +96,7 @@ _SCENE = typer.Option(
     None,
     "--scene",
     help="A Mitsuba 3 scene file (XML) to render the fitted objects in: its emitters, shapes, sensor "
-    "and film as they are; name the objects with --object (docs/objects.md, 'Your scene').",
+    "and film as they are; name the objects with --object (docs/scenes.md).",
 )
 _OBJECTS = typer.Option(
     [],
