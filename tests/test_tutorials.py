@@ -31,11 +31,11 @@ from translucency.cli.app import app
 
 TUTORIALS = Path(__file__).resolve().parents[1] / "docs" / "tutorials"
 PAGES = sorted(TUTORIALS.glob("*.md"))
-#: pages whose commands take more than ~20 s on 2 cores (the acquisitions, renders and photographs);
-#: run by `make test-slow`, each page's time shown by `pytest --durations=0`
+#: pages whose commands take more than ~20 s on 2 cores (the objects' acquisitions and renders, the
+#: photographs): run by `make test-slow`; each page's time shown by `pytest -s` (per command) or
+#: `--durations=0`. planar-sample stays in the fast suite (about 15 s).
 SLOW = {
     "first-hour",
-    "planar-sample",
     "object-from-mesh",
     "lab-photographs",
     "mitsuba-scene",
