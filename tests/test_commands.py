@@ -9,29 +9,16 @@ import pytest
 import typer
 
 import translucency as tl
-from translucency.cli import _flags
+from translucency.cli import reference
 from translucency.cli.app import app
 
 API = Path(__file__).resolve().parents[1] / "docs" / "api.md"
 
-#: options every working command has that are the command line's own (how it prints), not the library's
-PRINTING = {"--help", "--quiet", "--json", "--version"}
-
-#: flags whose Python argument has another name than the messages' tables say: the library's ``sample``
-#: takes a generator's name (``--material``) as well as a volume's file (``--volume``)
-ALIASES = {"--material": {"sample"}}
-
-#: a table row: | `translucency CMD` | `tl.function` (, `tl.other`) | …
-_ROW = re.compile(r"^\|\s*`translucency ([a-z -]+?)`\s*\|\s*([^|]+)\|")
+PRINTING = reference.PRINTING
 
 
 def _table() -> dict[str, list[str]]:
-    rows = {}
-    for line in API.read_text().splitlines():
-        match = _ROW.match(line)
-        if match:
-            rows[match.group(1).strip()] = re.findall(r"`tl\.(\w+)`", match.group(2))
-    return rows
+    return reference.library_functions(API.read_text())
 
 
 def _commands(group=None, prefix=()):
@@ -41,15 +28,6 @@ def _commands(group=None, prefix=()):
             yield from _commands(command, (*prefix, name))
         else:
             yield " ".join((*prefix, name)), command
-
-
-def _python_names(option: str, param) -> set[str]:
-    """The Python arguments a flag may be: its parameter's name, and every name the messages translate to
-    it (``cli/_flags.py``)."""
-    tables = [_flags.FLAGS, getattr(_flags, "AT_START", {}), getattr(_flags, "PATHS", {})]
-    names = {param.name, option.lstrip("-").replace("-", "_")} | ALIASES.get(option, set())
-    names |= {py for table in tables for py, flag in table.items() if flag == option}
-    return names
 
 
 def test_every_command_is_in_the_table():
@@ -85,6 +63,15 @@ def test_every_option_is_an_argument_of_the_library_function(name, command):
         options = [o for o in param.opts if o.startswith("--")]
         if set(options) & PRINTING:
             continue
-        if not any(_python_names(o, param) & (arguments | keywords) for o in options):
+        if not any(reference.python_names(o, param) & (arguments | keywords) for o in options):
             missing.append(options[0])
     assert not missing, f"translucency {name}: no Python argument of {_table()[name]} for {missing}"
+
+
+def test_the_pages_option_lists_are_written_from_the_commands():
+    """docs/api.md's option → argument lists are the commands' and the signatures' own: a renamed option or
+    argument changes them (``python -m translucency.cli.reference --api docs/api.md``)."""
+    page = API.read_text()
+    block = page.split(reference.API_BEGIN, 1)[1].split(reference.API_END, 1)[0].strip("\n")
+    assert block == reference.api_options(page), "run: python -m translucency.cli.reference --api docs/api.md"
+    assert "(none)" not in block and "→ `out`" in block and "--resolution → `resolution`" in block

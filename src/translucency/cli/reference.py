@@ -1,24 +1,40 @@
-"""The command line's reference page, docs/reference/cli.md, written from the commands' own help.
+"""The command line's reference pages, written from the commands themselves: docs/reference/cli.md from
+their help, and docs/api.md's option → argument lists from their options and the library's signatures.
 
 Every command and its options as ``--help`` shows them: the usage line, the command's help, and a table of
 its arguments and options (metavar, default, help).  The page depends only on the commands' declarations,
 never on the terminal's width, so that a test can hold the page to the commands::
 
     python -m translucency.cli.reference > docs/reference/cli.md
+    python -m translucency.cli.reference --api docs/api.md     # the block between its markers
 """
 
 from __future__ import annotations
 
+import inspect
 import re
 import sys
+from pathlib import Path
 
 import typer
 
+from .. import workflow
+from . import _flags
 from .app import app
 
 #: the page's name in the repository and the command that writes it
 PAGE = "docs/reference/cli.md"
 COMMAND = f"python -m translucency.cli.reference > {PAGE}"
+
+#: docs/api.md: its table names each command's library function; the block between the markers is written
+API_PAGE = "docs/api.md"
+API_BEGIN, API_END = "<!-- options: begin -->", "<!-- options: end -->"
+#: a row of that table: | `translucency CMD` | `tl.function` (, `tl.other`) | …
+_API_ROW = re.compile(r"^\|\s*`translucency ([a-z -]+?)`\s*\|\s*([^|]+)\|")
+#: options that are the command line's own (how it prints), not the library's
+PRINTING = {"--help", "--quiet", "--json", "--version"}
+#: the library's ``sample`` takes a generator's name (``--material``) as well as a volume's file
+ALIASES = {"--material": {"sample"}}
 
 #: a code span, kept as it is; Markdown's specials are escaped only outside one
 _CODE = re.compile(r"(`[^`]*`)")
@@ -157,6 +173,118 @@ def markdown(typer_app: typer.Typer = app, prog: str = "translucency") -> str:
     return "\n".join(lines).rstrip("\n") + "\n"
 
 
+def library_functions(page: str) -> dict[str, list[str]]:
+    """Each command's library functions, read from the table of docs/api.md (the text ``page``).
+
+    Examples
+    --------
+    >>> library_functions("| `translucency fit` | `tl.fit_model` | `Fitting` |")
+    {'fit': ['fit_model']}
+    """
+    rows = {}
+    for line in page.splitlines():
+        match = _API_ROW.match(line)
+        if match:
+            rows[match.group(1).strip()] = re.findall(r"`tl\.(\w+)`", match.group(2))
+    return rows
+
+
+def python_names(option: str, param) -> set[str]:
+    """The Python arguments an option may set: its parameter's name, its own word, and every argument the
+    messages' tables translate to it (``cli/_flags.py``)."""
+    tables = [_flags.FLAGS, _flags.AT_START, _flags.PATHS]
+    names = {param.name, option.lstrip("-").replace("-", "_")} | ALIASES.get(option, set())
+    return names | {py for table in tables for py, flag in table.items() if flag == option}
+
+
+def _argument_of(param, functions, position: int) -> str:
+    """The library argument a command's parameter sets: a command's argument the function's at its
+    ``position``; an option the argument it names (``name (a field of **setup)`` for a keyword a function
+    takes through ``**``); empty where none does."""
+    signatures = [inspect.signature(f).parameters for f in functions]
+    if param.param_type_name == "argument":
+        kinds = (inspect.Parameter.POSITIONAL_ONLY, inspect.Parameter.POSITIONAL_OR_KEYWORD)
+        positional = [name for name, p in signatures[0].items() if p.kind in kinds]
+        return positional[position] if position < len(positional) else ""
+    options = [o for o in param.opts if o.startswith("--")]
+    names = set().union(*(python_names(o, param) for o in options))
+    for parameters in signatures:
+        for name in parameters:  # the signature's order: the first that the option may set
+            if name in names and parameters[name].kind is not inspect.Parameter.VAR_KEYWORD:
+                return name
+    for f, parameters in zip(functions, signatures, strict=True):
+        var = [p.name for p in parameters.values() if p.kind is p.VAR_KEYWORD]
+        documented = set(re.findall(r"``(\w+)``", f.__doc__ or ""))
+        found = sorted(names & documented)
+        if var and found:
+            return f"{found[0]} (a field of **{var[0]})"
+    return ""
+
+
+def api_options(page: str, typer_app: typer.Typer = app, prog: str = "translucency") -> str:
+    """docs/api.md's block: for each command, each of its options → the library argument it sets.
+
+    Parameters
+    ----------
+    page : str
+        The text of docs/api.md (its table names each command's functions).
+    typer_app : typer.Typer
+        The command line.
+    prog : str
+        Its name.
+
+    Returns
+    -------
+    str
+        One section per command: ``OPTION → `argument```, in ``--help``'s order; an option no argument of
+        the functions takes reads ``→ (none)``, which tests/test_commands.py refuses.
+
+    Examples
+    --------
+    >>> block = api_options("| `translucency fit` | `tl.fit_model` | `Fitting` |")
+    >>> block.splitlines()[0]
+    '### `translucency fit` → `tl.fit_model`'
+    >>> "DATA → `dataset`" in block and "--model → `family`" in block and "--quiet" not in block
+    True
+    """
+    table = library_functions(page)
+    top = typer.main.get_command(typer_app)
+    ctx = top.context_class(top, info_name=prog)
+    lines = []
+    for path, command, command_ctx, _ in _walk(top, ctx, prog, 2):
+        name = path[len(prog) + 1 :]
+        if hasattr(command, "commands") or name not in table:
+            continue
+        functions = [getattr(workflow, f) for f in table[name]]
+        pairs, position = [], 0
+        for param in command.get_params(command_ctx):
+            options = [o for o in param.opts if o.startswith("--")]
+            is_argument = param.param_type_name == "argument"
+            if not is_argument and (not options or set(options) & PRINTING):
+                continue
+            shown = (param.metavar or param.name.upper()) if is_argument else options[0]
+            argument = _argument_of(param, functions, position)
+            position += is_argument
+            pairs.append(f"{shown} → `{argument}`" if argument else f"{shown} → (none)")
+        names = ", ".join(f"`tl.{f}`" for f in table[name])
+        lines += [f"### `{path}` → {names}", "", ", ".join(pairs), ""]
+    return "\n".join(lines).rstrip("\n")
+
+
+def write_api(path: Path | str = API_PAGE) -> Path:
+    """Rewrite the block between docs/api.md's markers from the commands (the prose around it stays)."""
+    path = Path(path)
+    old = path.read_text()
+    if API_BEGIN not in old or API_END not in old:
+        raise SystemExit(f"{path}: no {API_BEGIN} ... {API_END} markers")
+    head, rest = old.split(API_BEGIN, 1)
+    path.write_text(f"{head}{API_BEGIN}\n{api_options(old)}\n{API_END}{rest.split(API_END, 1)[1]}")
+    return path
+
+
 if __name__ == "__main__":
     sys.stdout.reconfigure(encoding="utf-8")
-    sys.stdout.write(markdown())
+    if sys.argv[1:2] == ["--api"]:
+        print(write_api(*sys.argv[2:3]))
+    else:
+        sys.stdout.write(markdown())
