@@ -11,6 +11,8 @@ import contextlib
 import functools
 from collections.abc import Callable, Iterator
 
+from rich.markup import escape
+
 from ..workflow import run as library
 from ._common import err_console, info, progress
 
@@ -25,7 +27,7 @@ class RichReporter:
         self.quiet = quiet
 
     def info(self, text: str) -> None:
-        info(self.quiet, text)
+        info(self.quiet, escape(text))  # the library's lines are text: "[flip]" is not markup
 
     @contextlib.contextmanager
     def progress(self, description: str, total: int | None) -> Iterator[Callable[..., None]]:
