@@ -243,8 +243,15 @@ def test_tutorial_runs_as_written(page: Path, tmp_path):
         times.append(f"{time.perf_counter() - start:7.1f} s  {command.line}")
         assert done.returncode == 0, (
             f"{page.name}: `{command.line}` exited {done.returncode}\n"
-            f"stdout:\n{done.stdout[-3000:]}\nstderr:\n{done.stderr[-3000:]}"
+            f"stdout:\n{done.stdout[-3000:]}\nstderr:\n{done.stderr[-3000:]}\nthe page's commands:\n"
+            + "\n".join(times)
         )
     missing = [name for name in files_to_look_at(text) if not (tmp_path / name).exists()]
     assert not missing, f"{page.name}: the page says to look at {missing}, which its commands did not write"
+    empty = [
+        name
+        for name in files_to_look_at(text)
+        if (tmp_path / name).is_file() and not (tmp_path / name).stat().st_size
+    ]
+    assert not empty, f"{page.name}: the page says to look at {empty}, which its commands left empty"
     print(f"\n{page.name}:\n" + "\n".join(times))
