@@ -873,3 +873,19 @@ def test_reduced_vertices_keep_the_terminator_sharp():
     near = np.abs(n @ light) < 0.1  # the terminator's band
     assert np.abs(E - exact)[near].mean() < 0.3 * np.abs(blurred - exact)[near].mean()
     assert np.abs(E - exact).max() < 0.05  # elsewhere: the gradient times the neighbours' offset
+
+
+def test_a_scene_file_python_cannot_parse_is_one_line_naming_it(tmp_path):
+    """Mitsuba reads a ``--`` inside an XML comment; the reference's rewrite of the file (ElementTree) does
+    not: one error naming the file, not a traceback."""
+    from translucency._validate import TranslucencyError
+    from translucency.mitsuba.user_scenes import load_user_scene, user_scene_with_media
+
+    path = tmp_path / "scene.xml"
+    path.write_text(
+        '<scene version="3.0.0">\n<!-- made with translucency --scene -->\n'
+        '<emitter type="constant"/>\n<shape type="sphere"/>\n</scene>\n'
+    )
+    assert load_user_scene(path) is not None  # Mitsuba reads it
+    with pytest.raises(TranslucencyError, match=r"scene\.xml: not well-formed XML"):
+        user_scene_with_media(path, {}, {"type": "volpath"})

@@ -198,7 +198,12 @@ def user_scene_with_media(source, replace: dict, integrator: dict, frame=None):
             scene["integrator"] = integrator
             return load_user_scene(scene)
         path = Path(source)
-        tree = ET.parse(path)
+        try:  # Mitsuba reads more than XML allows (a "--" inside a comment); the rewrite needs real XML
+            tree = ET.parse(path)
+        except ET.ParseError as exc:
+            raise TranslucencyError(
+                f"{path}: not well-formed XML ({exc}); the reference rewrites the file"
+            ) from None
         root = tree.getroot()
         for child in list(root):
             if child.tag == "integrator" or (child.tag == "shape" and child.get("id") in shapes):
