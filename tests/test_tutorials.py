@@ -255,3 +255,78 @@ def test_tutorial_runs_as_written(page: Path, tmp_path):
     ]
     assert not empty, f"{page.name}: the page says to look at {empty}, which its commands left empty"
     print(f"\n{page.name}:\n" + "\n".join(times))
+
+
+# -- the README and the other pages: their command lines -----------------------------------------------
+
+README = TUTORIALS.parents[1] / "README.md"
+#: a shell block of the README or a page (no ``$ `` prompt: every line is a command, # starts a comment)
+SHELL = re.compile(r"^```(?:sh|bash|console|shell)[ \t]*\n(.*?)^```[ \t]*$", re.S | re.M)
+
+
+def shell_lines(text: str, heading: str | None = None) -> list[str]:
+    """The ``translucency …`` and other command lines of the shell blocks of ``text`` (of its section
+    ``heading`` alone if given), continuation lines joined, ``$ `` prompts and output lines dropped."""
+    if heading is not None:
+        text = text.split(f"\n## {heading}\n", 1)[1].split("\n## ", 1)[0]
+    out = []
+    for block in SHELL.finditer(text):
+        current = None
+        for raw in block.group(1).splitlines():
+            line = raw.strip().removeprefix("$ ")
+            if current is not None:
+                current += " " + line
+            elif re.match(r"(translucency|make|pip|python) ", line):
+                current = line
+            else:
+                continue
+            if current.endswith("\\"):
+                current = current[:-1].rstrip()
+            else:
+                out.append(current)
+                current = None
+    return out
+
+
+def test_every_command_line_of_the_readme_and_the_other_pages_parses():
+    pages = [README, *sorted(p for p in TUTORIALS.parent.rglob("*.md") if TUTORIALS not in p.parents)]
+    checked = 0
+    for page in pages:
+        for line in shell_lines(page.read_text()):
+            if line.startswith("translucency "):
+                checked += 1
+                try:
+                    _parse(line)
+                except AssertionError as exc:
+                    raise AssertionError(f"{page.name}: {exc}") from None
+    assert checked >= 20, f"only {checked} command lines found in the README and the pages"
+
+
+def _run_lines(lines: list[str], folder: Path) -> None:
+    bin_dir = Path(sys.executable).parent
+    env = {**os.environ, "PATH": f"{bin_dir}{os.pathsep}{os.environ.get('PATH', '')}"}
+    for line in lines:
+        done = subprocess.run(
+            line, shell=True, executable="/bin/bash", cwd=folder, env=env, capture_output=True, text=True
+        )
+        assert done.returncode == 0, f"README: `{line}` exited {done.returncode}\n{done.stderr[-3000:]}"
+
+
+def test_the_readmes_first_result_runs_as_written(tmp_path):
+    """The README's first result (about 20 s on 2 cores): a scan, a fit, a truth, a report."""
+    lines = shell_lines(README.read_text(), "A first result in five minutes")
+    assert [line.split()[1] for line in lines] == ["acquire", "fit", "acquire", "evaluate"], lines
+    _run_lines(lines, tmp_path)
+    report = tmp_path / "report"
+    assert (report / "index.html").stat().st_size and (report / "report.json").stat().st_size
+
+
+@pytest.mark.slow
+def test_the_readmes_three_paths_run_as_written(tmp_path):
+    """The README's three paths, after its first result (their inputs): a planar sample, an object, a
+    lab's photographs."""
+    text = README.read_text()
+    first = shell_lines(text, "A first result in five minutes")
+    _run_lines(first + shell_lines(text, "Three paths"), tmp_path)
+    for name in ("paper.model.zip", "spot.model.zip", "render/ours.png", "scene", "shots.zarr", "cow.zarr"):
+        assert (tmp_path / name).exists(), name

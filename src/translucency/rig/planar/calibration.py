@@ -122,6 +122,11 @@ class Calibration:
     def check(self, shape) -> None:
         """Refuse corrections that do not fit images of ``shape`` (H, W, 3)."""
         s = np.asarray(self.scale, dtype=np.float64)
+        if s.shape == () and np.isnan(s):  # no scale in the file, no reference, no gain given
+            raise TranslucencyError(
+                "calibration scale: none given (pixel value per unit exitance per second): put a scale or a "
+                "reference in the calibration file, or give gain=VALUE"
+            )
         if s.shape not in ((), (3,)) or not np.all(np.isfinite(s) & (s > 0)):
             raise TranslucencyError(
                 f"calibration scale: must be one positive number or three (R, G, B), got {self.scale}"
