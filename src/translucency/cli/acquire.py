@@ -269,7 +269,8 @@ class MeshOptions:
         "fewer photons each, for the same time, render closer (docs/through-body.md).",
     )
     photons = typer.Option(20_000, "--photons", "-N", help="Photons per incident point and channel.")
-    seed = typer.Option(0, "--seed", help="Random seed.")
+    seed = PlanarOptions.seed
+    sample_seed = PlanarOptions.sample_seed
     g = typer.Option(0.0, "--g", help="Henyey-Greenstein anisotropy.")
     chunk = chunk_option(8)
     index_matched = typer.Option(False, "--index-matched", help="No Fresnel reflection at the surface.")
@@ -307,6 +308,7 @@ def acquire_mesh_cmd(
     points: int = MeshOptions.points,
     photons: int = MeshOptions.photons,
     seed: int = MeshOptions.seed,
+    sample_seed: int = MeshOptions.sample_seed,
     g: float = MeshOptions.g,
     chunk: int = MeshOptions.chunk,
     index_matched: bool = MeshOptions.index_matched,
@@ -335,6 +337,7 @@ def acquire_mesh_cmd(
         points=points,
         photons=photons,
         seed=seed,
+        sample_seed=sample_seed,
         chunk_points=chunk,
         index_matched=index_matched,
         reentry=reentry,

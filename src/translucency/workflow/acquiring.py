@@ -12,6 +12,7 @@ Units: mm, σ in mm⁻¹.
 from __future__ import annotations
 
 import dataclasses
+import json
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
@@ -271,6 +272,7 @@ def acquire_mesh(
     points: int = 64,
     photons: int = 20_000,
     seed: int = 0,
+    sample_seed: int | None = None,
     chunk_points: int = 8,
     index_matched: bool = False,
     reentry: bool = True,
@@ -300,11 +302,15 @@ def acquire_mesh(
         The mesh data set folder; an unfinished acquisition with the same arguments resumes.
     sample : str, Volume or path
         The filling: a generator name (``"marble"``, ``"homogeneous:skin1"``, …) made over the mesh's
-        bounding box at ``voxel_mm`` with ``g`` and ``seed``, a Volume, or a ``.npz`` volume over that box.
+        bounding box at ``voxel_mm`` with ``g`` and ``sample_seed``, a Volume, or a ``.npz`` volume over
+        that box.
     points : int
         Incident points (a farthest-point sample of the vertices).
     photons, seed, chunk_points : int
-        Photons per point and channel, random seed, incident points per chunk.
+        Photons per point and channel, their random seed, incident points per chunk.
+    sample_seed : int, optional
+        Seed of a generated filling (default ``seed``): the same ``sample_seed`` with another ``seed`` is
+        a held-out truth of the same object.
     index_matched : bool
         No Fresnel reflection at the surface.
     reentry : bool
@@ -343,6 +349,7 @@ def acquire_mesh(
     parse_scheduler(scheduler)  # a bad value or an unreachable cluster: one line, before work
     out = as_path("out", out)
     photons, seed = whole_number("photons", photons), whole_number("seed", seed, lo=0)
+    sample_seed = whole_number("sample_seed", seed if sample_seed is None else sample_seed, lo=0)
     points, chunk_points = whole_number("points", points), whole_number("chunk_points", chunk_points)
     angles, bins = _angle_axes(incidence, azimuths, exit_bins)
     g = float(check_option("g", g, lo=-1, hi=1, open_lo=True, open_hi=True))
@@ -381,9 +388,10 @@ def acquire_mesh(
         estimate = need(volume.sigma_s.size / 3)
     else:  # before the filling is generated
         estimate = need(resources.memory.object_voxels(obj.extents, voxel_mm))
-        volume = object_volume(name, obj, voxel_mm, g=g, seed=seed)
+        volume = object_volume(name, obj, voxel_mm, g=g, seed=sample_seed)
     check_filling(obj, volume)
     same = {
+        "volume": json.loads(json.dumps(volume.description)),  # as the header records it
         "n_points": points,
         "photons": photons,
         "seed": seed,
