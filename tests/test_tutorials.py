@@ -328,5 +328,6 @@ def test_the_readmes_three_paths_run_as_written(tmp_path):
     text = README.read_text()
     first = shell_lines(text, "A first result in five minutes")
     _run_lines(first + shell_lines(text, "Three paths"), tmp_path)
-    for name in ("paper.model.zip", "spot.model.zip", "render/ours.png", "scene", "shots.zarr", "cow.zarr"):
+    written = ("paper.model.zip", "spot.model.zip", "render/ours.png", "scene", "shots.zarr", "spot-rig.zarr")
+    for name in written:
         assert (tmp_path / name).exists(), name
