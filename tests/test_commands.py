@@ -1,8 +1,6 @@
 """The command line only parses and prints: each command calls one library function (docs/api.md's table),
 and each of its options is an argument of that function, so a Python user can do what the command does."""
 
-import inspect
-import re
 from pathlib import Path
 
 import pytest
@@ -41,30 +39,14 @@ def test_every_command_is_in_the_table():
 def test_every_option_is_an_argument_of_the_library_function(name, command):
     functions = [getattr(tl, f) for f in _table()[name]]
     assert functions, f"docs/api.md names no library function for translucency {name}"
-    arguments = {p for f in functions for p in inspect.signature(f).parameters}
-    # a function that takes further keywords (``**setup``) names each in its docstring
-    keywords = {
-        word
-        for f in functions
-        if any(p.kind is p.VAR_KEYWORD for p in inspect.signature(f).parameters.values())
-        for word in re.findall(r"``(\w+)``", f.__doc__ or "")
-    }
-    missing = []
-    arguments_given = [p for p in command.params if p.param_type_name == "argument"]
-    positional = [
-        p
-        for p in inspect.signature(functions[0]).parameters.values()
-        if p.kind in (p.POSITIONAL_ONLY, p.POSITIONAL_OR_KEYWORD)
-    ]
-    assert len(positional) >= len(arguments_given), f"translucency {name}: its arguments, by position"
-    for param in command.params:
-        if param.param_type_name == "argument":
-            continue
+    missing, position = [], 0
+    for param in command.params:  # each argument by position, each option by its names (cli/reference.py)
         options = [o for o in param.opts if o.startswith("--")]
-        if set(options) & PRINTING:
+        if param.param_type_name != "argument" and set(options) & PRINTING:
             continue
-        if not any(reference.python_names(o, param) & (arguments | keywords) for o in options):
-            missing.append(options[0])
+        if not reference.library_argument(param, functions, position):
+            missing.append(options[0] if options else param.name.upper())
+        position += param.param_type_name == "argument"
     assert not missing, f"translucency {name}: no Python argument of {_table()[name]} for {missing}"
 
 

@@ -197,7 +197,7 @@ def python_names(option: str, param) -> set[str]:
     return names | {py for table in tables for py, flag in table.items() if flag == option}
 
 
-def _argument_of(param, functions, position: int) -> str:
+def library_argument(param, functions, position: int) -> str:
     """The library argument a command's parameter sets: a command's argument the function's at its
     ``position``; an option the argument it names (``name (a field of **setup)`` for a keyword a function
     takes through ``**``); empty where none does."""
@@ -263,7 +263,7 @@ def api_options(page: str, typer_app: typer.Typer = app, prog: str = "translucen
             if not is_argument and (not options or set(options) & PRINTING):
                 continue
             shown = (param.metavar or param.name.upper()) if is_argument else options[0]
-            argument = _argument_of(param, functions, position)
+            argument = library_argument(param, functions, position)
             position += is_argument
             pairs.append(f"{shown} → `{argument}`" if argument else f"{shown} → (none)")
         names = ", ".join(f"`tl.{f}`" for f in table[name])
