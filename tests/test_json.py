@@ -201,10 +201,9 @@ def test_materials_json(outputs):
     assert marble["sigma_s_prime"] == [2.19, 2.62, 3.00] and len(marble["R_d_dipole"]) == 3
 
 
-def test_evaluate_json_is_a_flag_and_the_old_path_form_still_works(outputs):
+def test_evaluate_json_is_a_flag_and_json_out_writes_the_same(outputs):
     """evaluate --json prints the summary on stdout like every other command; --json-out PATH writes the
-    same object; the old --json PATH (and --json -) still work for one release, each with one warning
-    line."""
+    same object."""
     tmp = outputs["tmp"]
     args = ["evaluate", str(tmp / "a.model.zip"), str(tmp / "a.zarr"), "-q"]
     res = runner.invoke(
@@ -212,17 +211,6 @@ def test_evaluate_json_is_a_flag_and_the_old_path_form_still_works(outputs):
     )
     assert res.exit_code == 0, res.output
     assert json.loads(res.stdout)["rel_l2"] == json.loads((tmp / "x.json").read_text())["rel_l2"]
-    res = runner.invoke(app, [*args, "--report", str(tmp / "r2"), "--json", str(tmp / "old.json")])
-    assert res.exit_code == 0, res.output
-    assert res.stdout.strip() == ""  # the old form wrote the file only
-    assert res.stderr.strip() == (
-        "warning: translucency evaluate --json PATH is renamed --json-out PATH; the old form goes in the "
-        "next release"
-    )
-    assert check(json.loads((tmp / "old.json").read_text()), SCHEMAS["evaluate"]) == []
-    res = runner.invoke(app, ["evaluate", "--json", "-", *args[1:], "--report", str(tmp / "r3")])
-    assert res.exit_code == 0, res.output
-    assert json.loads(res.stdout)["command"] == "evaluate" and "--json - is renamed --json" in res.stderr
     res = runner.invoke(app, ["evaluate", "--json", *args[1:], "--report", str(tmp / "r4")])
     assert res.exit_code == 0 and res.stderr == "", res.output  # the flag before the arguments
     assert json.loads(res.stdout)["command"] == "evaluate"

@@ -1,6 +1,5 @@
 """One vocabulary: an option name means one thing in every command (cli/_vocabulary.py holds each name's
-meaning and metavar), and an old name (cli/_renamed.py) still works for one release with one warning line,
-landing on its new option."""
+meaning and metavar)."""
 
 import re
 import typing
@@ -10,7 +9,7 @@ import pytest
 import typer
 from typer.testing import CliRunner
 
-from translucency.cli import _renamed, _vocabulary
+from translucency.cli import _vocabulary
 from translucency.cli.app import app
 
 runner = CliRunner()
@@ -131,76 +130,13 @@ def test_no_help_text_carries_history_or_type_names():
 
 # -- the old names ------------------------------------------------------------------------------------
 #: command, an old option with a value, the new option, the parameter it lands on, the value there
-OLD = [
-    ("render", ["--size", "64", "48"], "--resolution", "resolution", (64, 48)),
-    ("render", ["--incidence", "normal"], "--incidence-law", "incidence_law", "normal"),
-    ("render", ["--incidence=normal"], "--incidence-law", "incidence_law", "normal"),
-    ("render", ["--model", "pig=p.model.zip"], "--object", "objects", ["pig=p.model.zip"]),
-    ("import images", ["--view", "a,b,c"], "--extra-camera", "extra_camera", ["a,b,c"]),
-    ("import images", ["--scale", "2.5"], "--gain", "gain", 2.5),
-    ("evaluate", ["--points", "0,17"], "--profiles", "profiles", "0,17"),
-    ("fit", ["-m", "4"], "--directions", "directions", "4"),
-    ("fit", ["-m8"], "--directions", "directions", "8"),
-    ("view", ["--reference", "r"], "--reference-render", "reference_render", Path("r")),
-]
-#: each command's required arguments and options, to reach its parsing
-REQUIRED = {
-    "render": ["m.model.zip"],
-    "import images": ["f", "-p", "p.csv", "-c", "c.json", "-o", "o.zarr"],
-    "evaluate": ["m.model.zip", "d.zarr"],
-    "fit": ["d.zarr", "-o", "m.model.zip"],
-    "view": ["m.model.zip"],
-}
-
-
-@pytest.mark.parametrize("command,old,new,param,value", OLD, ids=[f"{c} {o[0]}" for c, o, *_ in OLD])
-def test_an_old_name_still_works_with_one_warning_line(monkeypatch, command, old, new, param, value):
-    seen = {}
-
-    def parsed(self, ctx, args):  # the command's parse, recorded, then stopped before any work
-        original(self, ctx, args)
-        seen.update(ctx.params)
-        raise typer.Exit(0)
-
-    original = typer.core.TyperCommand.parse_args
-    monkeypatch.setattr(typer.core.TyperCommand, "parse_args", parsed)
-    res = runner.invoke(app, [*command.split(), *REQUIRED[command], *old])
-    assert res.exit_code == 0, res.output
-    name = old[0].split("=")[0] if old[0].startswith("--") else "-m"
-    assert res.stderr == (
-        f"warning: translucency {command} {name} is renamed {new}; the old name goes in the next release\n"
-    )
-    got = seen[param]
-    assert (tuple(got) if isinstance(value, tuple) else got) == value
-
-
-def test_an_old_name_warns_once_however_often_it_is_given():
-    args = _renamed.renamed(
-        typer.main.get_command(app), ["render", "--scene", "s.xml", "--model", "a=1", "--model", "b=2"]
-    )
-    assert args == ["render", "--scene", "s.xml", "--object", "a=1", "--object", "b=2"]
-
-
-def test_old_names_are_rewritten_only_in_their_command():
-    """acquire's --incidence (degrees), --size (mm) and -m (--material) stay as they are; the words after
-    ``--`` are positional."""
-    top = typer.main.get_command(app)
-    args = ["acquire", "planar", "-m", "marble", "--size", "6", "6", "3", "--incidence", "30"]
-    assert _renamed.renamed(top, args) == args
-    assert _renamed.renamed(top, ["render", "--", "--size"]) == ["render", "--", "--size"]
-
-
 def test_fit_m_is_no_longer_short_for_directions():
     fit = dict(_commands())["fit"]
     assert not any("-m" in p.opts for p in fit.params)
-    assert _renamed.RENAMED["fit"] == {"-m": "--directions"}
 
 
-def test_the_old_library_keywords_still_work_with_a_deprecation_warning():
-    import translucency as tl
-
-    with pytest.warns(DeprecationWarning, match="size= is renamed resolution="):
-        with pytest.raises(tl.TranslucencyError, match="resolution: must be >= 1"):
-            tl.render_model("m.model.zip", size=(0, 10))
-    with pytest.raises(tl.TranslucencyError, match="give resolution alone"):
-        tl.render_model("m.model.zip", size=(8, 6), resolution=(8, 6))
+def test_an_old_name_before_the_first_release_is_an_unknown_option():
+    """No release shipped the names changed before 0.1.0 (docs/changelog.md): they are not read as others."""
+    res = runner.invoke(app, ["render", "m.model.zip", "--size", "8", "6"])
+    assert res.exit_code == 2
+    assert "--size" in res.output

@@ -3,7 +3,7 @@ it, and the metavar ``--help`` shows for it.
 
 A new option takes a name from here with its meaning, or adds a new name; a name is never given a second
 meaning (tests/test_vocabulary.py walks every command against this table).  Options whose name changed
-are in cli/_renamed.py.
+were renamed before the first release (docs/changelog.md).
 """
 
 from __future__ import annotations

@@ -29,7 +29,6 @@ from . import (
     view,
 )
 from ._common import console, err_console
-from ._renamed import renamed
 from ._vocabulary import METAVARS
 
 
@@ -60,11 +59,9 @@ class _Command(typer.core.TyperCommand):
 
 class _OneLineErrors(_Group):
     """The top command: a usage error (unknown option, a value of the wrong type) is one ``error:`` line
-    naming the option, exit status 2, like every other error — not Click's usage box.  An option's old
-    name (cli/_renamed.py) is read as its new one, with one warning line."""
+    naming the option, exit status 2, like every other error — not Click's usage box."""
 
     def main(self, args=None, prog_name=None, complete_var=None, standalone_mode=True, **extra):
-        args = renamed(self, list(sys.argv[1:] if args is None else args))
         if not standalone_mode:
             return super().main(args, prog_name, complete_var, standalone_mode=False, **extra)
         try:

@@ -2,10 +2,8 @@
 
 from __future__ import annotations
 
-import functools
 import inspect
 import os
-import warnings
 from pathlib import Path
 
 import numpy as np
@@ -42,39 +40,6 @@ def one_or_two(name: str, value, kind):
     if values.ndim != 1 or len(values) not in (1, 2):
         raise TranslucencyError(f"{name}: expected one number or two (x, y), got {value!r}")
     return tuple(kind(v) for v in (values if len(values) == 2 else (values[0], values[0])))
-
-
-def renamed_keywords(**new_names):
-    """A function whose keywords were renamed (old name=new name): the old one still works for one release,
-    with a :class:`DeprecationWarning`; both at once are refused in one line.
-
-    Examples
-    --------
-    >>> @renamed_keywords(size="resolution")
-    ... def picture(*, resolution=(4, 3)):
-    ...     return resolution
-    >>> with warnings.catch_warnings(record=True) as caught:
-    ...     warnings.simplefilter("always")
-    ...     picture(size=(8, 6)), str(caught[0].message)
-    ((8, 6), 'size= is renamed resolution=; the old name goes in the next release')
-    """
-
-    def decorate(func):
-        @functools.wraps(func)
-        def wrapper(*args, **kwargs):
-            for old, new in new_names.items():
-                if old not in kwargs:
-                    continue
-                if new in kwargs:
-                    raise TranslucencyError(f"{old}: renamed {new}; give {new} alone")
-                message = f"{old}= is renamed {new}=; the old name goes in the next release"
-                warnings.warn(message, DeprecationWarning, stacklevel=2)
-                kwargs[new] = kwargs.pop(old)
-            return func(*args, **kwargs)
-
-        return wrapper
-
-    return decorate
 
 
 def refuse_unknown(where: str, options: dict, stage) -> None:

@@ -25,7 +25,7 @@ from ..io.model_file import load_model, read_header
 from ..io.outputs import claim_output
 from ..io.records import jsonable
 from ..resources.run import Reporter, Run
-from ._arguments import as_path, model_and_record, renamed_keywords, whole_number
+from ._arguments import as_path, model_and_record, whole_number
 from .datasets import open_dataset
 
 __all__ = ["Evaluation", "evaluate_model", "evaluate_report"]
@@ -157,7 +157,6 @@ class Evaluation:
     noise: str  # what the noise floor is (the truth's noise, or the data's own), for a table's last row
 
 
-@renamed_keywords(points="profiles")
 def evaluate_report(
     model,
     dataset,

@@ -32,7 +32,7 @@ from ..rig.object.importer import import_object as import_mesh
 from ..rig.object.setup import read_object_rig
 from ..rig.planar.frames import image_shape
 from ..rig.planar.positions import read_positions
-from ._arguments import as_path, renamed_keywords, whole_number
+from ._arguments import as_path, whole_number
 
 __all__ = ["EXIT_LAWS", "import_images", "import_object"]
 
@@ -40,7 +40,6 @@ __all__ = ["EXIT_LAWS", "import_images", "import_object"]
 EXIT_LAWS = ("from-views", "dielectric", "lambertian")
 
 
-@renamed_keywords(views="extra_cameras", scale="gain")
 def import_images(
     folder,
     positions,

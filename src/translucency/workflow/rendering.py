@@ -40,7 +40,7 @@ from ..scene import FittedScene
 from ..scene.compare import lit_pixels, object_pixels, scene_errors
 from ..scene.irradiance import samples_per_wavefront
 from ..scene.reference import converged_scene_reference
-from ._arguments import model_and_record, renamed_keywords, whole_number
+from ._arguments import model_and_record, whole_number
 
 __all__ = ["DEFAULT_LIGHT", "Rendering", "SceneRendering", "render_model", "render_scene"]
 
@@ -67,7 +67,6 @@ class Rendering:
     summary: dict = dataclasses.field(default_factory=dict)  # ``translucency render --json``
 
 
-@renamed_keywords(size="resolution", incidence="incidence_law")
 def render_model(
     model,
     out=None,
@@ -258,7 +257,6 @@ class SceneRendering:
     summary: dict  # scene.json and ``translucency render --scene --json``
 
 
-@renamed_keywords(models="objects", incidence="incidence_law")
 def render_scene(
     scene,
     objects: dict,
