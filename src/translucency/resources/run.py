@@ -45,7 +45,8 @@ import numpy as np
 
 from ..io.outputs import claim_folder, release_output
 from ..io.records import jsonable
-from .memory import Need, check_resources, memory_limit
+from .machine import Need, memory_limit
+from .memory import check_resources
 from .timing import TimeEstimate, estimate_time, kernel_caches_cold, process_seconds, record_time
 
 __all__ = [
