@@ -22,7 +22,6 @@ FLAGS = {
     "max_rounds": "--rounds",
     "exclusion_mm": "--exclusion",
     "alpha_radius": "--alpha-radius",
-    "batch_photons": "--batch",
     "max_memory": "--max-memory",
     "exit_law": "--exit-law",
     "family": "--model",
