@@ -17,6 +17,7 @@ import numpy as np
 
 from ..geometry import SampleGrid, window_geometry
 from ..io.dataset import PlanarDataset
+from .mesh_pairs import read_pairs
 from .options import FitResult
 
 __all__ = ["held_out_error", "held_out_terms", "mesh_held_out_terms", "pair_half", "vertex_half"]
@@ -119,8 +120,6 @@ def mesh_held_out_terms(fit: FitResult, group, *, chunk_points: int = 32):
     --------
     >>> sq_err, sq_data = mesh_held_out_terms(fit_mesh("object.zarr", half=0), group)   # doctest: +SKIP
     """
-    from .mesh import read_pairs  # circular at the top: mesh.py fits with the halves defined here
-
     model, fitted = fit.model, int(fit.options["half"])
     vertices = np.asarray(group["vertices"][...], dtype=np.float64)
     area = np.asarray(group["vertex_area"][...], dtype=np.float64)

@@ -33,8 +33,10 @@ from .families import FAMILIES
 from .held_out import mesh_held_out_terms, vertex_half
 from .lean import fit_lean
 from .lean_shots import fit_lean_from_shots
+from .mesh_pairs import exclusion_radius, mean_edge_length, read_pairs
 from .options import FitContext, FitResult, check_fit_options
 from .structure import fit_chosen, resolve_structure
+from .through import measure_through
 
 #: α's pooling radius in mean edge lengths.  Measured on the main job's pig against its converged reference
 #: (relative RMSE at 96 x 8,000 / 384 x 2,000 / 1,536 x 500 photons): 3 edges 0.082 / 0.070 / 0.078,
@@ -95,35 +97,9 @@ class _MeshSource:
         return VertexAlpha(values.copy(), self.vertices)
 
 
-def read_pairs(group, vertices: np.ndarray, x_i: np.ndarray, exclusion: float, s: int, e: int):
-    """Rows ``s:e`` of a mesh data set's group as the fit reads them: the measured R_d (k, V, 3) float32
-    (mm⁻²), the Euclidean distance r = |v − x_i| (k, V) in mm, and the pairs that count (finite, r at least
-    ``exclusion``: the incident vertex's own tally is left out; in a data set measured from photographs,
-    the pairs its ``flags`` mark as not measured).  ``vertices`` (V, 3) and ``x_i`` (P, 3) float64 mm.
-    The evaluation reads the pairs the same way (:mod:`translucency.evaluate.mesh_errors`)."""
-    y = np.asarray(group["R_d"][s:e], dtype=np.float32)
-    r = np.linalg.norm(vertices[None] - x_i[s:e, None], axis=2)
-    valid = np.isfinite(y).all(axis=2) & (r >= exclusion)
-    if "flags" in group:
-        valid &= np.asarray(group["flags"][s:e]) == 0
-    return y, r, valid
-
-
-def mean_edge_length(vertices: np.ndarray, faces: np.ndarray) -> float:
-    """Mean length (mm) of the first edge of every face: the mesh fit's pitch; its default exclusion
-    radius is half of it."""
-    return float(np.mean(np.linalg.norm(vertices[faces[:, 0]] - vertices[faces[:, 1]], axis=1)))
-
-
 def _held_out(fit: FitResult, ds):
     """Per point, the held-out squared error and data norm of a half fit (structure choice)."""
     return mesh_held_out_terms(fit, ds.group)
-
-
-def exclusion_radius(pitch: float, exclusion_mm: float | None = None) -> float:
-    """The radius (mm) within which pairs are left out: ``exclusion_mm``, or the fit's default, half the
-    mesh's pitch (:func:`mean_edge_length`: the incident vertex's own cell)."""
-    return pitch / 2 if exclusion_mm is None else float(exclusion_mm)
 
 
 def fit_mesh(
@@ -198,6 +174,34 @@ def fit_mesh(
     translucency._validate.TranslucencyError: colour: expected 'shared', 'per-channel' or 'auto', got 'grey'
     """
     t0 = time.perf_counter()
+    model, n_terms, colour, free, base = _mesh_structure(model, n_terms, colour, rel_sigma, half)
+    ds = _open_complete(path)
+    if free:  # n and the colour chosen by held-out error on a subset of the points, then fitted on all
+        kw = dict(exclusion_mm=exclusion_mm, rel_sigma=rel_sigma, max_rounds=max_rounds, tol=tol,
+                  alpha_radius=alpha_radius, max_rate=max_rate, chunk_points=chunk_points, workers=workers,
+                  scheduler=scheduler)  # fmt: skip
+        return _fit_chosen(ds, free, base, half, progress, kw)
+    if half is None:  # a lab's oblique laser shots (import object): one line, not silence
+        _warn_oblique(ds)
+    source = _MeshSource(ds.group, ds.header, alpha_radius, half)
+    exclusion = exclusion_radius(source.pitch, exclusion_mm)
+    rate_bounds, a_max = _rate_bounds(source, max_rate)
+    settings = dict(rel_sigma=rel_sigma, max_rounds=max_rounds, tol=tol, alpha_radius=alpha_radius)
+    options = _mesh_options(model, n_terms, colour, exclusion, source.pitch, a_max, half, **settings)
+    ctx = _mesh_context(ds.header, source, rate_bounds, model, n_terms, colour, exclusion, rel_sigma)
+    request = _request(ds, options)
+    rounds = dict(chunk_points=chunk_points, workers=workers, checkpoint=None, progress=progress, t0=t0)
+    result = alternate(ctx, options, request, max_rounds=max_rounds, tol=tol, scheduler=scheduler, **rounds)
+    if model == "iso":
+        result.options["scaled_to_albedo_bound"] = bound_albedo(result.model).tolist()
+    if half is not None:  # a held-out fit: its profiles and α are what is scored
+        return result
+    _attach_measured(result, ds, exclusion, chunk_points)
+    return result
+
+
+def _mesh_structure(model, n_terms, colour, rel_sigma, half):
+    """The model's structure (model, n, colour, the free choices and their base), checked; refused options."""
     if model == "aniso":
         raise TranslucencyError(
             "model: on meshes the isotropic model is fitted (r = |x_o - x_i|, as in the paper)"
@@ -206,30 +210,39 @@ def fit_mesh(
     check_fit_options(model, n_terms, 1, colour, rel_sigma)
     if half not in (None, 0, 1):
         raise TranslucencyError(f"half: expected 0 or 1, got {half!r}")
+    return model, n_terms, colour, free, base
+
+
+def _open_complete(path):
+    """The mesh data set at ``path``, refused while its acquisition is unfinished."""
     ds = open_mesh_dataset(path)
     if not ds.complete():
         raise TranslucencyError(f"{ds.path}: the acquisition is unfinished; resume it before fitting")
-    if free:  # n and the colour chosen by held-out error on a subset of the points, then fitted on all
-        if half is not None:
-            raise TranslucencyError("half: a held-out fit needs its structure given, not chosen")
-        kw = dict(exclusion_mm=exclusion_mm, rel_sigma=rel_sigma, max_rounds=max_rounds, tol=tol,
-                  alpha_radius=alpha_radius, max_rate=max_rate, chunk_points=chunk_points, workers=workers,
-                  scheduler=scheduler)  # fmt: skip
-        return fit_chosen(
-            fit_mesh, ds, _held_out, free=free, base=base, planar=False, progress=progress, **kw
-        )
-    group, header = ds.group, ds.header
-    polar = np.asarray((header.get("photographs") or {}).get("beam_polar_deg", ()), dtype=np.float64)
+    return ds
+
+
+def _fit_chosen(ds, free, base, half, progress, kw: dict) -> FitResult:
+    """The fit with n and the colour chosen by held-out error (:func:`.structure.fit_chosen`)."""
+    if half is not None:
+        raise TranslucencyError("half: a held-out fit needs its structure given, not chosen")
+    return fit_chosen(fit_mesh, ds, _held_out, free=free, base=base, planar=False, progress=progress, **kw)
+
+
+def _warn_oblique(ds) -> None:
+    """Warn where the data set's photographed beams arrive beyond :data:`OBLIQUE_DEG` off the normal."""
+    polar = np.asarray((ds.header.get("photographs") or {}).get("beam_polar_deg", ()), dtype=np.float64)
     oblique = polar[polar > OBLIQUE_DEG]
-    if len(oblique) and half is None:  # a lab's oblique laser shots (import object): one line, not silence
+    if len(oblique):
         warnings.warn(
             f"{ds.path}: {len(oblique)} beam(s) arrive {oblique.min():.0f}–{oblique.max():.0f}° off the "
             "normal (photographs.beam_polar_deg): the profile is fitted to them as if they were normal "
             "beams, and the lean (render --angles) from their asymmetry",
-            stacklevel=2,
+            stacklevel=3,  # fit_mesh's caller (1: this function, 2: fit_mesh)
         )
-    source = _MeshSource(group, header, alpha_radius, half)
-    exclusion = exclusion_radius(source.pitch, exclusion_mm)
+
+
+def _rate_bounds(source, max_rate):
+    """ln of the fall-off rates' bounds (ln mm⁻¹) and the steepest rate a_max (mm⁻¹), checked."""
     diagonal = float(np.linalg.norm(np.ptp(source.vertices, axis=0)))
     a_max = 3.0 / source.pitch if max_rate is None else float(max_rate)
     if not (np.isfinite(a_max) and a_max > 0):
@@ -239,9 +252,13 @@ def fit_mesh(
         raise TranslucencyError(
             f"max_rate: {a_max:.3g} 1/mm is below what the object's size allows ({a_min:.3g})"
         )
-    rate_bounds = (float(np.log(a_min)), float(np.log(a_max)))
-    x_i = source.vertices[source.incident]
-    C = 1 if colour == "shared" and FAMILIES[model].shared_colour else 3
+    return (float(np.log(a_min)), float(np.log(a_max))), a_max
+
+
+def _mesh_options(
+    model, n_terms, colour, exclusion, pitch, a_max, half, *, rel_sigma, max_rounds, tol, alpha_radius
+) -> dict:
+    """The options the result records (lengths in mm, the rate in mm⁻¹)."""
     options = {
         "model": model,
         "n_terms": int(n_terms),
@@ -251,28 +268,31 @@ def fit_mesh(
         "rel_sigma": rel_sigma,
         "max_rounds": max_rounds,
         "tol": tol,
-        "radius_step": source.pitch / 2,
+        "radius_step": pitch / 2,
         "alpha_radius": alpha_radius,
         "max_rate": a_max,
         "geometry": "mesh",
     }
     if half is not None:
         options["half"] = int(half)
-    request = json.dumps(
-        {
-            "dataset": str(ds.path.resolve()),
-            "header": hashlib.sha256(json.dumps(header, sort_keys=True).encode()).hexdigest(),
-            **options,
-        },
-        sort_keys=True,
-    )
-    ctx = FitContext(
+    return options
+
+
+def _request(ds, options: dict) -> str:
+    """The request a checkpoint is matched against: the data set's path, its header's hash, the options."""
+    header = hashlib.sha256(json.dumps(ds.header, sort_keys=True).encode()).hexdigest()
+    return json.dumps({"dataset": str(ds.path.resolve()), "header": header, **options}, sort_keys=True)
+
+
+def _mesh_context(header, source, rate_bounds, model, n_terms, colour, exclusion, rel_sigma) -> FitContext:
+    """The alternation's context: vertices as pixels, one direction, the medium's η and g from the header."""
+    return FitContext(
         rate_bounds=rate_bounds,
         source=source,
         kind=model,
         n=int(n_terms),
         m=1,
-        C=C,
+        C=1 if colour == "shared" and FAMILIES[model].shared_colour else 3,
         exclusion=exclusion,
         rel_sigma=rel_sigma,
         eta=float(header.get("eta", 1.3)),
@@ -280,32 +300,16 @@ def fit_mesh(
         radius_step=source.pitch / 2,
         sweeps=1,
         balance=True,
-        x_i=x_i,
+        x_i=source.vertices[source.incident],
         cache_left=512 * 2**20,
     )
-    result = alternate(
-        ctx,
-        options,
-        request,
-        max_rounds=max_rounds,
-        tol=tol,
-        chunk_points=chunk_points,
-        workers=workers,
-        checkpoint=None,
-        progress=progress,
-        t0=t0,
-        scheduler=scheduler,
-    )
-    if model == "iso":
-        result.options["scaled_to_albedo_bound"] = bound_albedo(result.model).tolist()
-    if half is not None:  # a held-out fit: its profiles and α are what is scored
-        return result
-    # the model carries its surface and what was measured where the fit does not look (module docstring)
-    result.model.faces = np.asarray(group["faces"][...], dtype=np.int64)
+
+
+def _attach_measured(result: FitResult, ds, exclusion: float, chunk_points: int) -> None:
+    """Give the model what the fit does not look at but a renderer needs (module docstring), in place."""
+    result.model.faces = np.asarray(ds.group["faces"][...], dtype=np.int64)
     result.model.measured = measured_near_field(ds, chunk_points)
     # the light through the body, measured against the fitted profile (model/through.py): the extension
-    from .through import measure_through  # circular at the top: through.py reads pairs with read_pairs here
-
     if result.model.kind == "exponential":  # the paper's model (the baselines have no c, d to correct)
         result.model.measured["through"] = measure_through(ds, result.model, exclusion=exclusion)
     # the lean (model/lean.py): how the kernel tilts toward the beam's direction, from the oblique beams
@@ -314,9 +318,8 @@ def fit_mesh(
     elif (from_shots := fit_lean_from_shots(ds)) is not None:  # a lab's oblique shots
         result.model.measured["lean"] = from_shots
     # the photons per point: how far the physical bounds let a total exceed 1 by noise (model/bounds.py)
-    result.model.tally_photons = int(header["photons"]) if header.get("photons") else None
-    result.acquisition = header
-    return result
+    result.model.tally_photons = int(ds.header["photons"]) if ds.header.get("photons") else None
+    result.acquisition = ds.header
 
 
 def bound_albedo(model) -> np.ndarray:

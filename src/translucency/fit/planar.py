@@ -117,30 +117,14 @@ def default_chunk_points(n_points: int, stored: int) -> int:
     return stored * -(-want // stored) if stored <= 512 else want
 
 
-def fit_planar(
-    dataset,
-    model: str = "auto",
-    *,
-    n_terms: int | str | None = None,
-    n_directions: int | str | None = None,
-    colour: str | None = None,
-    exclusion_mm: float | None = None,
-    weighting: str = "poisson",
-    rel_sigma: float = 0.05,
-    max_rounds: int = 3,
-    tol: float = 1e-3,
-    radius_step: float | None | str = "auto",
-    sweeps: int = 1,
-    balance: bool = True,
-    chunk_points: int | None = None,
-    workers: int | None = None,
-    cache_mb: float = 512,
-    checkpoint=None,
-    half: int | None = None,
-    progress: Callable[[int, int, str], None] | None = None,
-    scheduler: str | None = "threads",
-    alpha_radius: float | None = None,
-) -> FitResult:
+def fit_planar(dataset, model: str = "auto", *, n_terms: int | str | None = None,
+    n_directions: int | str | None = None, colour: str | None = None, exclusion_mm: float | None = None,
+    weighting: str = "poisson", rel_sigma: float = 0.05, max_rounds: int = 3, tol: float = 1e-3,
+    radius_step: float | None | str = "auto", sweeps: int = 1, balance: bool = True,
+    chunk_points: int | None = None, workers: int | None = None, cache_mb: float = 512, checkpoint=None,
+    half: int | None = None, progress: Callable[[int, int, str], None] | None = None,
+    scheduler: str | None = "threads", alpha_radius: float | None = None,
+) -> FitResult:  # fmt: skip
     """Fit a model family to every incident point of a planar data set, with α.
 
     Parameters
@@ -214,25 +198,54 @@ def fit_planar(
     >>> fit = fit_planar(default_dataset_path(), "iso", max_rounds=1)   # doctest: +SKIP
     """
     t0 = time.perf_counter()
-    model, n_terms, n_directions, colour, free, base = resolve_structure(
-        model, n_terms, n_directions, colour, planar=True
-    )
+    structure = _planar_structure(model, n_terms, n_directions, colour, rel_sigma, weighting)
+    model, n_terms, n_directions, colour, free, base = structure
+    ds, pool = _open_checked(dataset, alpha_radius)
+    kw = dict(exclusion_mm=exclusion_mm, weighting=weighting, rel_sigma=rel_sigma, max_rounds=max_rounds,
+              tol=tol, radius_step=radius_step, sweeps=sweeps, balance=balance, chunk_points=chunk_points,
+              workers=workers, cache_mb=cache_mb, checkpoint=checkpoint, scheduler=scheduler,
+              alpha_radius=alpha_radius)  # fmt: skip
+    if free:  # the structure chosen by held-out error on a subset of the points, then fitted on all
+        return _fit_chosen(ds, free, base, half, progress, kw)
+    exclusion, step, chunk_points = _radii_and_chunk(ds, exclusion_mm, radius_step, chunk_points)
+    options = _planar_options(structure, exclusion, step, pool, kw)
+    request = _request(ds, options, chunk_points, half)
+    source = _planar_source(ds, half, pool)
+    ctx = _planar_context(source, options, cache_mb)
+    rounds = dict(chunk_points=chunk_points, workers=workers, checkpoint=checkpoint, progress=progress, t0=t0)
+    result = alternate(ctx, options, request, max_rounds=max_rounds, tol=tol, scheduler=scheduler, **rounds)
+    _bound_model(result, source, ds, model)
+    return result
+
+
+def _planar_structure(model, n_terms, n_directions, colour, rel_sigma, weighting):
+    """The structure (model, n, m, colour, the free choices and their base), resolved and checked."""
+    structure = resolve_structure(model, n_terms, n_directions, colour, planar=True)
+    model, n_terms, n_directions, colour, _, _ = structure
     check_fit_options(model, n_terms, n_directions, colour, rel_sigma, weighting)
+    return structure
+
+
+def _open_checked(dataset, alpha_radius):
+    """The data set, refused while its acquisition is unfinished, and α's pooling radius (mm, 0: none)."""
     ds = dataset if isinstance(dataset, PlanarDataset) else open_dataset(dataset)
     if not ds.complete():
         raise TranslucencyError(f"{ds.path}: the acquisition is unfinished; resume it before fitting")
     pool = 0.0 if alpha_radius is None else float(alpha_radius)
     if not (pool >= 0 and np.isfinite(pool)):
         raise TranslucencyError(f"alpha_radius: must be >= 0 mm, got {alpha_radius}")
-    if free:  # the structure chosen by held-out error on a subset of the points, then fitted on all
-        if half is not None:
-            raise TranslucencyError("half: a held-out fit needs its structure given, not chosen")
-        kw = dict(exclusion_mm=exclusion_mm, weighting=weighting, rel_sigma=rel_sigma, max_rounds=max_rounds,
-                  tol=tol, radius_step=radius_step, sweeps=sweeps, balance=balance, chunk_points=chunk_points,
-                  workers=workers, cache_mb=cache_mb, checkpoint=checkpoint, scheduler=scheduler,
-                  alpha_radius=alpha_radius)  # fmt: skip
-        return fit_chosen(fit_planar, ds, _held_out, free=free, base=base, planar=True,
-                          progress=progress, **kw)  # fmt: skip
+    return ds, pool
+
+
+def _fit_chosen(ds, free, base, half, progress, kw: dict) -> FitResult:
+    """The fit with its structure chosen by held-out error (:func:`.structure.fit_chosen`)."""
+    if half is not None:
+        raise TranslucencyError("half: a held-out fit needs its structure given, not chosen")
+    return fit_chosen(fit_planar, ds, _held_out, free=free, base=base, planar=True, progress=progress, **kw)
+
+
+def _radii_and_chunk(ds, exclusion_mm, radius_step, chunk_points):
+    """The exclusion radius and the ring width (mm), and the points per chunk, checked."""
     pitch = ds.pitch
     exclusion = pitch if exclusion_mm is None else float(exclusion_mm)
     if exclusion < 0 or not np.isfinite(exclusion):
@@ -244,32 +257,35 @@ def fit_planar(
         raise TranslucencyError(f"chunk: must be >= 1 point, got {chunk_points}")
     # whole blocks of the pooled cold starts, so that the fit does not depend on the chunking
     chunk_points = POOL_POINTS * -(-int(chunk_points) // POOL_POINTS)
-    m = int(n_directions) if FAMILIES[model].directional else 1
-    n = int(n_terms)
+    return exclusion, step, chunk_points
+
+
+def _planar_options(structure, exclusion: float, step, pool: float, kw: dict) -> dict:
+    """The options the result records (lengths in mm), from the structure and the keyword settings."""
+    model, n_terms, n_directions, colour, _, _ = structure
     shared = FAMILIES[model].shared_colour  # the exponential families have the colour scale
-    C = 1 if (colour == "shared" and shared) else 3
-    x_i = ds["x_i"].astype(np.float64)
-    origin = ds["window_origin"].astype(np.float64)
-    grid = SampleGrid.covering(origin, pitch, ds.window)
-    photons = ds.header.get("acquisition", {}).get("photons")
-    eta = float(ds.header.get("sample", {}).get("eta", 1.3))
-    g = float(ds.header.get("sample", {}).get("g", 0.0))  # the medium's mean cosine, 0 where unknown
     options = {
         "model": model,
-        "n_terms": n,
-        "n_directions": m,
+        "n_terms": int(n_terms),
+        "n_directions": int(n_directions) if FAMILIES[model].directional else 1,
         "colour": colour if shared else "per-channel",
         "exclusion_mm": exclusion,
-        "weighting": weighting,
-        "rel_sigma": rel_sigma,
-        "max_rounds": max_rounds,
-        "tol": tol,
+        "weighting": kw["weighting"],
+        "rel_sigma": kw["rel_sigma"],
+        "max_rounds": kw["max_rounds"],
+        "tol": kw["tol"],
         "radius_step": step,
-        "sweeps": sweeps,
-        "balance": balance,
+        "sweeps": kw["sweeps"],
+        "balance": kw["balance"],
     }
     if pool > 0:  # recorded only when set: per-pixel fits keep their options (and checkpoints) as before
         options["alpha_radius"] = pool
+    return options
+
+
+def _request(ds, options: dict, chunk_points: int, half) -> str:
+    """The request a checkpoint is matched against (data set, header hash, chunk, options); records ``half``
+    in ``options``, checked."""
     request = json.dumps(
         {
             "dataset": str(Path(ds.path).resolve()),
@@ -279,52 +295,55 @@ def fit_planar(
         },
         sort_keys=True,
     )
-
     if half is not None:
         if half not in (0, 1):
             raise TranslucencyError(f"half: expected 0 or 1, got {half!r}")
         options["half"] = int(half)
         request = json.dumps({**json.loads(request), "half": int(half)}, sort_keys=True)
-    source = _PlanarSource(ds, grid, origin, photons and 1.0 / (float(photons) * pitch * pitch), half, pool)
-    ctx = FitContext(
+    return request
+
+
+def _planar_source(ds, half, pool: float) -> _PlanarSource:
+    """The windows on the grid covering them, with the Poisson factor 1/(N p²) (mm⁻²) where N is known."""
+    origin = ds["window_origin"].astype(np.float64)
+    grid = SampleGrid.covering(origin, ds.pitch, ds.window)
+    photons = ds.header.get("acquisition", {}).get("photons")
+    poisson = photons and 1.0 / (float(photons) * ds.pitch * ds.pitch)
+    return _PlanarSource(ds, grid, origin, poisson, half, pool)
+
+
+def _planar_context(source: _PlanarSource, options: dict, cache_mb: float) -> FitContext:
+    """The alternation's context, from the recorded options and the sample's η and g (header)."""
+    sample = source.ds.header.get("sample", {})
+    return FitContext(
         source=source,
-        kind=model,
-        n=n,
-        m=m,
-        C=C,
-        exclusion=exclusion,
-        rel_sigma=rel_sigma,
-        weighting=weighting,
-        eta=eta,
-        g=g,
-        radius_step=step,
-        sweeps=sweeps,
-        balance=balance,
-        x_i=x_i,
+        kind=options["model"],
+        n=options["n_terms"],
+        m=options["n_directions"],
+        C=1 if options["colour"] == "shared" else 3,  # the colour scale of the exponential families
+        exclusion=options["exclusion_mm"],
+        rel_sigma=options["rel_sigma"],
+        weighting=options["weighting"],
+        eta=float(sample.get("eta", 1.3)),
+        g=float(sample.get("g", 0.0)),  # the medium's mean cosine, 0 where unknown
+        radius_step=options["radius_step"],
+        sweeps=options["sweeps"],
+        balance=options["balance"],
+        x_i=source.ds["x_i"].astype(np.float64),
         cache_left=cache_mb * 2**20,
     )
-    result = alternate(
-        ctx,
-        options,
-        request,
-        max_rounds=max_rounds,
-        tol=tol,
-        chunk_points=chunk_points,
-        workers=workers,
-        checkpoint=checkpoint,
-        progress=progress,
-        t0=t0,
-        scheduler=scheduler,
-    )
-    # the energy guard's bound on the model returned (after α's last normalisation), and what the
-    # physical bounds need (model/bounds.py): the sample the windows lie on, the tally's photons
+
+
+def _bound_model(result: FitResult, source: _PlanarSource, ds, model: str) -> None:
+    """The energy guard's bound on the model returned (after α's last normalisation), and what the physical
+    bounds need (model/bounds.py): the sample the windows lie on, the tally's photons; in place."""
     bound = np.where(source.noisy_points()[:, None], source.total_bound(0, ds.n_points), np.inf)
     scaled = FAMILIES[model].keep_totals(result.model, bound)  # noise-free profiles keep their own tails
     if scaled.size:
         result.options["scaled_to_total_bound"] = scaled.tolist()
     result.model.extent = sample_extent(ds)
+    photons = ds.header.get("acquisition", {}).get("photons")
     result.model.tally_photons = int(photons) if photons and source.tally_total else None
-    return result
 
 
 def sample_extent(ds: PlanarDataset) -> Rectangle | None:

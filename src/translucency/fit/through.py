@@ -11,7 +11,7 @@ dim pairs of one point does not follow its photon noise; a cell without pairs ke
 the renderer — so a pair's factor is its cell's only at the centre.  (Choosing the node values so that the
 *interpolated* table carries every cell's energy exactly was tried: it oscillates between neighbouring
 nodes, down to 0, wherever the data change steeply between cells.)  The pairs are those the fit reads
-(:func:`translucency.fit.mesh.read_pairs`: r at least the exclusion radius, flagged pairs left out).
+(:func:`translucency.fit.mesh_pairs.read_pairs`: r at least the exclusion radius, flagged pairs left out).
 """
 
 from __future__ import annotations
@@ -20,7 +20,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from ..model.through import COS_EDGES, K_LIMIT, R_EDGES, cells
-from .mesh import exclusion_radius, mean_edge_length, read_pairs
+from .mesh_pairs import exclusion_radius, mean_edge_length, read_pairs
 
 #: incident points whose sums pool into each point's table
 POOL = 8
