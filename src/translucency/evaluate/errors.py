@@ -150,49 +150,70 @@ def planar_errors(
     origin = ds["window_origin"].astype(np.float64)
     grid = SampleGrid.covering(origin, ds.pitch, ds.window)
     flagged = np.zeros(ds.n_points, bool) if flagged is None else np.asarray(flagged, bool)
-    err2 = {b: 0.0 for b in BANDS}
-    ref2 = {b: 0.0 for b in BANDS}
-    var = {b: 0.0 for b in BANDS}
-    per_point = np.full(ds.n_points, np.nan)
-    pt_err2, pt_ref2, pt_var = (np.zeros(ds.n_points) for _ in range(3))
-    # per point and band: the energy Σ R_d p² of model and data (RGB summed), for the energy-weighted errors
-    e_model = {b: np.zeros(ds.n_points) for b in (*BANDS, "window")}
-    e_data = {b: np.zeros(ds.n_points) for b in (*BANDS, "window")}
-    e_var = {b: np.zeros(ds.n_points) for b in (*BANDS, "window")}
-    n_px = grid.shape[0] * grid.shape[1]
-    pix_err, pix_ref, pix_var = (np.zeros(n_px) for _ in range(3))
     ranges = [(s, min(s + chunk_points, ds.n_points)) for s in range(0, ds.n_points, chunk_points)]
     common = (x_i, origin, grid, exclusion, flagged, map_radius)
+    sums = _sum_chunks(model, ds, ranges, common, scheduler, grid.shape[0] * grid.shape[1])
+    energy, energy_noise = _energy_errors(model, ds, sums, ~flagged)
+    return _planar_result(sums, energy, energy_noise, grid, map_radius)
+
+
+def _ratio(a, b) -> float:
+    """sqrt(a / b), NaN where b is not positive."""
+    return float(np.sqrt(a / b)) if b > 0 else float("nan")
+
+
+def _sum_chunks(model, ds, ranges, common, scheduler, n_px: int) -> dict:
+    """Every chunk's :func:`_chunk_sums` added up in chunk order: per band, point, point energy and pixel."""
+    P = ds.n_points
+    sums = {key: {b: 0.0 for b in BANDS} for key in ("err2", "ref2", "var")}
+    sums["per_point"] = np.full(P, np.nan)
+    sums.update({key: np.zeros(P) for key in ("pt_err2", "pt_ref2", "pt_var")})
+    # per point and band: the energy Σ R_d p² of model and data (RGB summed), for the energy-weighted errors
+    sums.update({key: {b: np.zeros(P) for b in (*BANDS, "window")} for key in ("e_model", "e_data", "e_var")})
+    sums.update({key: np.zeros(n_px) for key in ("pix_err", "pix_ref", "pix_var")})
+    e_model, e_data, e_var = sums["e_model"], sums["e_data"], sums["e_var"]
     # every chunk's sums, added in chunk order (in this process, or as tasks that read their own chunks)
-    for (s, e), sums in zip(ranges, _chunk_sums_in_order(model, ds, ranges, common, scheduler)):
-        for b in BANDS:
-            err2[b] += sums["err2"][b]
-            ref2[b] += sums["ref2"][b]
-            var[b] += sums["var"][b]
+    for (s, e), chunk in zip(ranges, _chunk_sums_in_order(model, ds, ranges, common, scheduler)):
+        for key in ("err2", "ref2", "var"):
+            for b in BANDS:
+                sums[key][b] += chunk[key][b]
         for b in e_model:
-            e_model[b][s:e], e_data[b][s:e], e_var[b][s:e] = sums["energy"][b]
-        pt_err2[s:e], pt_ref2[s:e], pt_var[s:e], per_point[s:e] = sums["per_point"]
-        pix_err += expand(sums["pix_err"], n_px)
-        pix_ref += expand(sums["pix_ref"], n_px)
-        pix_var += expand(sums["pix_var"], n_px)
+            e_model[b][s:e], e_data[b][s:e], e_var[b][s:e] = chunk["energy"][b]
+        point_sums = (sums["pt_err2"], sums["pt_ref2"], sums["pt_var"], sums["per_point"])
+        for acc, x in zip(point_sums, chunk["per_point"]):
+            acc[s:e] = x
+        for key in ("pix_err", "pix_ref", "pix_var"):
+            sums[key] += expand(chunk[key], n_px)
+    return sums
 
-    def ratio(a, b):
-        return float(np.sqrt(a / b)) if b > 0 else float("nan")
 
-    tot_e, tot_r, tot_v = sum(err2.values()), sum(ref2.values()), sum(var.values())
-    keep = ~flagged
+def _energy_errors(model, ds, sums: dict, keep) -> tuple[dict, dict]:
+    """The relative errors of the per-point energies per band and window, of the total diffuse reflectance
+    (the model's times its mean α against the data set's ``total_diffuse``), and the energies' noise."""
+    e_model, e_data, e_var = sums["e_model"], sums["e_data"], sums["e_var"]
     energy = {
-        b: ratio(float(((e_model[b] - e_data[b])[keep] ** 2).sum()), float((e_data[b][keep] ** 2).sum()))
+        b: _ratio(float(((e_model[b] - e_data[b])[keep] ** 2).sum()), float((e_data[b][keep] ** 2).sum()))
         for b in e_model
     }
     total_data = ds["total_diffuse"].astype(np.float64).sum(axis=1)  # (P,) RGB summed
     with np.errstate(invalid="ignore", over="ignore"):
         alpha_mean = float(np.mean(model.alpha.values))
         total_model = model.total_reflectance().sum(axis=1) * alpha_mean
-    energy["total"] = ratio(
+    energy["total"] = _ratio(
         float(((total_model - total_data)[keep] ** 2).sum()), float((total_data[keep] ** 2).sum())
     )
-    energy_noise = {b: ratio(float(e_var[b][keep].sum()), float((e_data[b][keep] ** 2).sum())) for b in e_var}
+    energy_noise = {
+        b: _ratio(float(e_var[b][keep].sum()), float((e_data[b][keep] ** 2).sum())) for b in e_var
+    }
+    return energy, energy_noise
+
+
+def _planar_result(sums: dict, energy: dict, energy_noise: dict, grid, map_radius: float) -> PlanarErrors:
+    """The relative errors of the summed squares: overall, per band, beyond the noise, per point and pixel."""
+    err2, ref2, var = sums["err2"], sums["ref2"], sums["var"]
+    pix_err, pix_ref, pix_var = sums["pix_err"], sums["pix_ref"], sums["pix_var"]
+    per_point, pt_err2, pt_ref2, pt_var = sums["per_point"], sums["pt_err2"], sums["pt_ref2"], sums["pt_var"]
+    tot_e, tot_r, tot_v = sum(err2.values()), sum(ref2.values()), sum(var.values())
     safe = np.where(pix_ref > 0, pix_ref, 1.0)
     per_pixel = np.where(pix_ref > 0, np.sqrt(pix_err / safe), np.nan)
     per_pixel_noise = np.where(pix_ref > 0, np.sqrt(pix_var / safe), np.nan)
@@ -200,9 +221,9 @@ def planar_errors(
     per_point_noise = np.where(np.isfinite(per_point), np.sqrt(pt_var / pt_safe), np.nan)
     per_point_beyond = np.where(np.isfinite(per_point), beyond(pt_err2, pt_var, pt_safe), np.nan)
     return PlanarErrors(
-        rel_l2=ratio(tot_e, tot_r),
-        bands={b: ratio(err2[b], ref2[b]) for b in BANDS},
-        noise={"all": ratio(tot_v, tot_r), **{b: ratio(var[b], ref2[b]) for b in BANDS}},
+        rel_l2=_ratio(tot_e, tot_r),
+        bands={b: _ratio(err2[b], ref2[b]) for b in BANDS},
+        noise={"all": _ratio(tot_v, tot_r), **{b: _ratio(var[b], ref2[b]) for b in BANDS}},
         energy=energy,
         per_point=per_point,
         per_pixel=per_pixel.reshape(grid.shape),
