@@ -27,8 +27,6 @@ def plot_error_maps(
     reference is an independent truth (default: whether the errors beyond its noise are there), which
     names the noise on the colour bars."""
     plt = pyplot()
-    from matplotlib.colors import LogNorm  # matplotlib is loaded by pyplot() above
-
     names = list(errors)
     has_noise = all(e.per_pixel_beyond is not None for e in errors.values())
     noise_name = noise_label(has_noise if held_out is None else held_out)
@@ -38,22 +36,11 @@ def plot_error_maps(
         "per_pixel_beyond": f"per pixel, beyond {noise_name}",
         "per_point": "per incident point, rel_l2 {e:.1f} %",
     }
-
-    def norm_of(keys, noise_key):
-        v = np.concatenate([np.ravel(getattr(e, k)) for e in errors.values() for k in keys])
-        v = v[np.isfinite(v) & (v > 0)]
-        if not v.size:
-            return LogNorm(1e-3, 1.0)
-        lo, hi = np.quantile(v, [0.02, 0.99])
-        noise = getattr(next(iter(errors.values())), noise_key)
-        noise = np.ravel(noise)[np.isfinite(np.ravel(noise))] if noise is not None else np.zeros(0)
-        if noise.size:  # the noise marks stay on the bar
-            lo, hi = min(lo, np.quantile(noise, 0.1) / 1.2), max(hi, np.quantile(noise, 0.9) * 1.2)
-        return LogNorm(max(lo, 1e-4), max(hi, 2 * max(lo, 1e-4)))
-
     keys = ["per_pixel", "per_pixel_beyond"] if has_noise else ["per_pixel"]
-    pixel_norm = norm_of(keys, "per_pixel_noise")
-    point_norm = norm_of(["per_point"], "per_point_noise")
+    norms = {
+        "pixel": _norm_of(errors, keys, "per_pixel_noise"),
+        "point": _norm_of(errors, ["per_point"], "per_point_noise"),
+    }
     fig, axes = plt.subplots(  # constrained: titles, axis labels and colour bars do not overlap
         len(rows),
         len(names),
@@ -66,44 +53,72 @@ def plot_error_maps(
     mappables = {}
     for j, name in enumerate(names):
         e = errors[name]
-        h, w = e.grid.shape
-        ext = [
-            e.grid.origin[0],
-            e.grid.origin[0] + w * e.grid.pitch,
-            e.grid.origin[1],
-            e.grid.origin[1] + h * e.grid.pitch,
-        ]
+        model = None if models is None else models[name]
         for row, key in enumerate(rows):
             ax = axes[row][j]
-            vals = getattr(e, key)
-            if key == "per_point":
-                im = point_map(ax, x_i, np.maximum(vals, 1e-12), cmap=cmap, norm=point_norm)
-                if models is not None and getattr(models[name], "n_directions", 1) > 1:
-                    draw_directions(ax, models[name], x_i)
-            else:
-                shown = np.where(np.isfinite(vals), np.maximum(vals, 1e-12), np.nan)
-                im = ax.imshow(shown, origin="lower", extent=ext, cmap=cmap, norm=pixel_norm)
-                ax.set_xlabel("x [mm]")
-                ax.set_ylabel("y [mm]")
+            mappables[key] = _draw_map(ax, e, key, x_i, model, cmap, norms)
             ax.set_xlim(lo[0], hi[0])
             ax.set_ylim(lo[1], hi[1])
             if j > 0:
                 ax.set_ylabel("")
             head = f"{name}\n" if row == 0 else ""
             ax.set_title(head + titles[key].format(r=e.map_radius, e=100 * e.rel_l2), fontsize=9)
-            mappables[key] = im
     first = errors[names[0]]
     for row, key in enumerate(rows):
-        noise = first.per_point_noise if key == "per_point" else first.per_pixel_noise
-        label = "relative L2 error" + (" (black: within noise)" if key.endswith("beyond") else "")
-        finite = None if noise is None else np.ravel(noise)[np.isfinite(np.ravel(noise))]
-        if finite is not None and finite.size:
-            label += f"\ncyan: {noise_name}, median {100 * np.median(finite):.1f} %"
-        cb = fig.colorbar(mappables[key], ax=axes[row].tolist(), shrink=0.85, extend="both", label=label)
-        log_ticks(cb)
-        if finite is not None:
-            mark_noise(cb, finite)
+        _colour_bar(fig, axes[row].tolist(), mappables[key], key, first, noise_name)
     save_figure(fig, Path(path))
+
+
+def _norm_of(errors: dict, keys, noise_key: str):
+    """A row's logarithmic colour scale: the 2nd–99th percentile of its positive errors over every model,
+    widened to hold the first model's noise (10–90 %)."""
+    from matplotlib.colors import LogNorm  # matplotlib is loaded by pyplot() before this is called
+
+    v = np.concatenate([np.ravel(getattr(e, k)) for e in errors.values() for k in keys])
+    v = v[np.isfinite(v) & (v > 0)]
+    if not v.size:
+        return LogNorm(1e-3, 1.0)
+    lo, hi = np.quantile(v, [0.02, 0.99])
+    noise = getattr(next(iter(errors.values())), noise_key)
+    noise = np.ravel(noise)[np.isfinite(np.ravel(noise))] if noise is not None else np.zeros(0)
+    if noise.size:  # the noise marks stay on the bar
+        lo, hi = min(lo, np.quantile(noise, 0.1) / 1.2), max(hi, np.quantile(noise, 0.9) * 1.2)
+    return LogNorm(max(lo, 1e-4), max(hi, 2 * max(lo, 1e-4)))
+
+
+def _draw_map(ax, e: PlanarErrors, key: str, x_i, model, cmap, norms: dict):
+    """One panel: a model's error per incident point (with its directions) or per pixel of the sample."""
+    vals = getattr(e, key)
+    if key == "per_point":
+        im = point_map(ax, x_i, np.maximum(vals, 1e-12), cmap=cmap, norm=norms["point"])
+        if model is not None and getattr(model, "n_directions", 1) > 1:
+            draw_directions(ax, model, x_i)
+        return im
+    h, w = e.grid.shape
+    ext = [
+        e.grid.origin[0],
+        e.grid.origin[0] + w * e.grid.pitch,
+        e.grid.origin[1],
+        e.grid.origin[1] + h * e.grid.pitch,
+    ]
+    shown = np.where(np.isfinite(vals), np.maximum(vals, 1e-12), np.nan)
+    im = ax.imshow(shown, origin="lower", extent=ext, cmap=cmap, norm=norms["pixel"])
+    ax.set_xlabel("x [mm]")
+    ax.set_ylabel("y [mm]")
+    return im
+
+
+def _colour_bar(fig, axes: list, mappable, key: str, first: PlanarErrors, noise_name: str) -> None:
+    """A row's colour bar with log ticks, the first model's noise marked (cyan: median, 10–90 % band)."""
+    noise = first.per_point_noise if key == "per_point" else first.per_pixel_noise
+    label = "relative L2 error" + (" (black: within noise)" if key.endswith("beyond") else "")
+    finite = None if noise is None else np.ravel(noise)[np.isfinite(np.ravel(noise))]
+    if finite is not None and finite.size:
+        label += f"\ncyan: {noise_name}, median {100 * np.median(finite):.1f} %"
+    cb = fig.colorbar(mappable, ax=axes, shrink=0.85, extend="both", label=label)
+    log_ticks(cb)
+    if finite is not None:
+        mark_noise(cb, finite)
 
 
 def plot_error_ratios(
