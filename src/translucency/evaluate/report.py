@@ -111,36 +111,11 @@ def write_report(
     exclusion = exclusion or {}
     fine = _load_fine(fine)
     truth = None if truth is None else truth if isinstance(truth, PlanarDataset) else open_dataset(truth)
-    with open_cluster(scheduler) as cluster:  # one cluster (if any) for every model's errors
-
-        def errors_on(data, name, m):
-            return planar_errors(
-                m, data, flagged=flagged.get(name), exclusion_mm=exclusion.get(name), scheduler=cluster
-            )
-
-        in_sample = {name: errors_on(ds, name, m) for name, m in models.items()}
-        held_out = None if truth is None else {name: errors_on(truth, name, m) for name, m in models.items()}
-    if truth is None:
-        for e in in_sample.values():  # against the fitted data the noise cannot be subtracted
-            e.per_pixel_beyond = e.per_point_beyond = None
-    errors = held_out or in_sample
-    shown = truth or ds
+    in_sample, held_out = _all_errors(models, ds, truth, flagged, exclusion, scheduler)
     if points is None:
         points = [int(p) for p in fine["points"]] if fine is not None else default_points(ds.n_points)
     points = list(points)
-    plot_profiles(
-        models,
-        shown,
-        points,
-        out_dir / "profiles.png",
-        fitted=ds if truth is not None else None,
-        fine=fine if truth is not None else None,
-        exclusion=exclusion,
-    )
-    plot_error_maps(errors, ds["x_i"], out_dir / "error_maps.png", models=models, held_out=truth is not None)
-    plot_error_ratios(errors, ds["x_i"], out_dir / "error_ratios.png", models=models)
-    plot_alpha(models, out_dir / "alpha.png")
-    plot_parameters(models, out_dir / "params.png")
+    _draw_figures(models, held_out or in_sample, ds, truth, points, fine, exclusion, out_dir)
     summary = report_summary(
         models,
         in_sample,
@@ -159,3 +134,42 @@ def write_report(
         write_json(json_path, strict)
     write_page(out_dir / "index.html", ds, strict, extra or [])
     return summary
+
+
+def _all_errors(
+    models: dict, ds, truth, flagged: dict, exclusion: dict, scheduler
+) -> tuple[dict, dict | None]:
+    """Every model's errors in-sample and (with a truth) held out; in-sample alone, none beyond the noise."""
+    with open_cluster(scheduler) as cluster:  # one cluster (if any) for every model's errors
+
+        def errors_on(data, name, m):
+            return planar_errors(
+                m, data, flagged=flagged.get(name), exclusion_mm=exclusion.get(name), scheduler=cluster
+            )
+
+        in_sample = {name: errors_on(ds, name, m) for name, m in models.items()}
+        held_out = None if truth is None else {name: errors_on(truth, name, m) for name, m in models.items()}
+    if truth is None:
+        for e in in_sample.values():  # against the fitted data the noise cannot be subtracted
+            e.per_pixel_beyond = e.per_point_beyond = None
+    return in_sample, held_out
+
+
+def _draw_figures(
+    models: dict, errors: dict, ds, truth, points: list, fine, exclusion: dict, out_dir: Path
+) -> None:
+    """The report's five figures: profiles, error maps, error ratios, α and the parameters."""
+    shown = truth or ds
+    plot_profiles(
+        models,
+        shown,
+        points,
+        out_dir / "profiles.png",
+        fitted=ds if truth is not None else None,
+        fine=fine if truth is not None else None,
+        exclusion=exclusion,
+    )
+    plot_error_maps(errors, ds["x_i"], out_dir / "error_maps.png", models=models, held_out=truth is not None)
+    plot_error_ratios(errors, ds["x_i"], out_dir / "error_ratios.png", models=models)
+    plot_alpha(models, out_dir / "alpha.png")
+    plot_parameters(models, out_dir / "params.png")
