@@ -200,90 +200,126 @@ def mesh_errors(
     normals = np.asarray(ds["normals"], dtype=np.float64) if table is not None else None
     # σ² per pair = R_d · (factor / (N A_v)), mm⁻⁴ (module docstring)
     var_scale = TALLY_VARIANCE_FACTOR / (float(ds.header["photons"]) * np.maximum(area, 1e-12))
-    edges = DISTANCE_EDGES
-    names = (*BANDS, "surface")
-    err2, ref2, var = ({b: 0.0 for b in BANDS} for _ in range(3))
-    ring_err, ring_ref, ring_var, ring_n = (np.zeros(len(edges) - 1) for _ in range(4))
-    pt_err2, pt_ref2, pt_var = (np.zeros(P) for _ in range(3))
-    e_model, e_data, e_var = ({b: np.zeros(P) for b in names} for _ in range(3))
-    vx_err, vx_ref, vx_var = (np.zeros(V) for _ in range(3))
+    sums = _empty_sums(P, V)
     for s in range(0, P, chunk_points):
         e = min(s + chunk_points, P)
         y, r, ok = read_pairs(ds.group, vertices, x_i, exclusion, s, e)
         y = y.astype(np.float64)
         ok = ok & ~flagged[s:e, None]
-        i = np.broadcast_to(np.arange(s, e)[:, None], r.shape)
-        pred = model.R_d(
-            i, np.broadcast_to(vertices, (e - s, V, 3)), alpha_o=np.broadcast_to(alpha_o, r.shape)
-        )
-        if table is not None:  # k_i(n_i · n_v, r) per channel, dimensionless
-            cos = normals[ds["incident"][s:e]] @ normals.T
-            for c in range(3):
-                k = through_factor(table[..., c], i.ravel(), cos.ravel(), r.ravel())
-                pred[..., c] *= k.reshape(r.shape)
-        d2 = np.where(ok, ((pred - y) ** 2).sum(2), 0.0)  # (k, V), mm⁻⁴
-        y2 = np.where(ok, (y**2).sum(2), 0.0)
-        v2 = np.where(ok, (y * var_scale[None, :, None]).sum(2), 0.0)
-        p_e = np.where(ok, pred.sum(2), 0.0) * area  # energy per pair (RGB summed), per unit power
-        y_e = np.where(ok, y.sum(2), 0.0) * area
-        v_e = v2 * area**2
-        for b, (lo, hi) in BANDS.items():
-            sel = (r >= lo) & (r < hi)
-            err2[b] += float(d2[sel].sum())
-            ref2[b] += float(y2[sel].sum())
-            var[b] += float(v2[sel].sum())
-            for acc, x in ((e_model, p_e), (e_data, y_e), (e_var, v_e)):
-                acc[b][s:e] = np.where(sel, x, 0.0).sum(1)
-        for acc, x in ((e_model, p_e), (e_data, y_e), (e_var, v_e)):
-            acc["surface"][s:e] = x.sum(1)
-        pt_err2[s:e], pt_ref2[s:e], pt_var[s:e] = d2.sum(1), y2.sum(1), v2.sum(1)
-        ring = np.clip(np.searchsorted(edges, r, side="right") - 1, 0, len(edges) - 2)
-        for acc, x in ((ring_err, d2), (ring_ref, y2), (ring_var, v2), (ring_n, ok.astype(float))):
-            acc += np.bincount(ring[ok], x[ok], minlength=len(edges) - 1)
-        near = r < map_radius
-        vx_err += np.where(near, d2, 0.0).sum(0)
-        vx_ref += np.where(near, y2, 0.0).sum(0)
-        vx_var += np.where(near, v2, 0.0).sum(0)
+        pred = _predict_pairs(model, ds, vertices, alpha_o, table, normals, s, e, r)
+        terms = _pair_terms(pred, y, ok, var_scale, area)
+        _add_chunk(sums, s, e, r, ok, terms, map_radius)
+    return _mesh_result(sums, flagged, map_radius, exclusion, table is not None)
 
-    def ratio(a, b):
-        return float(np.sqrt(a / b)) if b > 0 else float("nan")
 
-    def ratios(a, b):
-        with np.errstate(invalid="ignore", divide="ignore"):
-            return np.where(b > 0, np.sqrt(a / np.where(b > 0, b, 1.0)), np.nan)
+def _empty_sums(P: int, V: int) -> dict:
+    """Zeroed accumulators: per band, per point, per band's point energies, per vertex and per ring."""
+    n_rings = len(DISTANCE_EDGES) - 1
+    names = (*BANDS, "surface")
+    sums = {key: {b: 0.0 for b in BANDS} for key in ("err2", "ref2", "var")}
+    sums.update({key: {b: np.zeros(P) for b in names} for key in ("e_model", "e_data", "e_var")})
+    sums.update({key: np.zeros(P) for key in ("pt_err2", "pt_ref2", "pt_var")})
+    sums.update({key: np.zeros(V) for key in ("vx_err", "vx_ref", "vx_var")})
+    sums.update({key: np.zeros(n_rings) for key in ("ring_err", "ring_ref", "ring_var", "ring_n")})
+    return sums
 
+
+def _predict_pairs(model, ds, vertices, alpha_o, table, normals, s: int, e: int, r) -> np.ndarray:
+    """The model's R_d (k, V, 3) of points [s, e) at every vertex, times k_i(n_i · n_v, r) with a table."""
+    V = len(vertices)
+    i = np.broadcast_to(np.arange(s, e)[:, None], r.shape)
+    pred = model.R_d(i, np.broadcast_to(vertices, (e - s, V, 3)), alpha_o=np.broadcast_to(alpha_o, r.shape))
+    if table is not None:  # k_i(n_i · n_v, r) per channel, dimensionless
+        cos = normals[ds["incident"][s:e]] @ normals.T
+        for c in range(3):
+            k = through_factor(table[..., c], i.ravel(), cos.ravel(), r.ravel())
+            pred[..., c] *= k.reshape(r.shape)
+    return pred
+
+
+def _pair_terms(pred, y, ok, var_scale, area) -> tuple:
+    """Per pair (RGB summed, 0 where the pair does not count): error², reference², variance (mm⁻⁴) and
+    the energies A_v R_d of model, reference and their variance."""
+    d2 = np.where(ok, ((pred - y) ** 2).sum(2), 0.0)  # (k, V), mm⁻⁴
+    y2 = np.where(ok, (y**2).sum(2), 0.0)
+    v2 = np.where(ok, (y * var_scale[None, :, None]).sum(2), 0.0)
+    p_e = np.where(ok, pred.sum(2), 0.0) * area  # energy per pair (RGB summed), per unit power
+    y_e = np.where(ok, y.sum(2), 0.0) * area
+    v_e = v2 * area**2
+    return d2, y2, v2, p_e, y_e, v_e
+
+
+def _add_chunk(sums: dict, s: int, e: int, r, ok, terms: tuple, map_radius: float) -> None:
+    """Add the pairs of points [s, e) to the accumulators: per band, point, ring and near vertex."""
+    d2, y2, v2, p_e, y_e, v_e = terms
+    energies = ((sums["e_model"], p_e), (sums["e_data"], y_e), (sums["e_var"], v_e))
+    for b, (lo, hi) in BANDS.items():
+        sel = (r >= lo) & (r < hi)
+        sums["err2"][b] += float(d2[sel].sum())
+        sums["ref2"][b] += float(y2[sel].sum())
+        sums["var"][b] += float(v2[sel].sum())
+        for acc, x in energies:
+            acc[b][s:e] = np.where(sel, x, 0.0).sum(1)
+    for acc, x in energies:
+        acc["surface"][s:e] = x.sum(1)
+    sums["pt_err2"][s:e], sums["pt_ref2"][s:e], sums["pt_var"][s:e] = d2.sum(1), y2.sum(1), v2.sum(1)
+    edges = DISTANCE_EDGES
+    ring = np.clip(np.searchsorted(edges, r, side="right") - 1, 0, len(edges) - 2)
+    for key, x in (("ring_err", d2), ("ring_ref", y2), ("ring_var", v2), ("ring_n", ok.astype(float))):
+        sums[key] += np.bincount(ring[ok], x[ok], minlength=len(edges) - 1)
+    near = r < map_radius
+    sums["vx_err"] += np.where(near, d2, 0.0).sum(0)
+    sums["vx_ref"] += np.where(near, y2, 0.0).sum(0)
+    sums["vx_var"] += np.where(near, v2, 0.0).sum(0)
+
+
+def _ratio(a, b) -> float:
+    """sqrt(a / b), NaN where b is not positive."""
+    return float(np.sqrt(a / b)) if b > 0 else float("nan")
+
+
+def _ratios(a, b) -> np.ndarray:
+    """Element-wise sqrt(a / b), NaN where b is not positive."""
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(b > 0, np.sqrt(a / np.where(b > 0, b, 1.0)), np.nan)
+
+
+def _mesh_result(sums: dict, flagged, map_radius: float, exclusion: float, through: bool) -> MeshErrors:
+    """The relative errors of the summed squares, with the flagged points left out of the per-point ones."""
+    err2, ref2, var = sums["err2"], sums["ref2"], sums["var"]
+    e_model, e_data, e_var = sums["e_model"], sums["e_data"], sums["e_var"]
+    pt_err2, pt_ref2, pt_var = sums["pt_err2"], sums["pt_ref2"], sums["pt_var"]
     keep = ~flagged
     tot_e, tot_r, tot_v = sum(err2.values()), sum(ref2.values()), sum(var.values())
-    per_point = np.where(keep, ratios(pt_err2, pt_ref2), np.nan)
     return MeshErrors(
-        rel_l2=ratio(tot_e, tot_r),
-        bands={b: ratio(err2[b], ref2[b]) for b in BANDS},
-        noise={"all": ratio(tot_v, tot_r), **{b: ratio(var[b], ref2[b]) for b in BANDS}},
+        rel_l2=_ratio(tot_e, tot_r),
+        bands={b: _ratio(err2[b], ref2[b]) for b in BANDS},
+        noise={"all": _ratio(tot_v, tot_r), **{b: _ratio(var[b], ref2[b]) for b in BANDS}},
         beyond_noise={
             "all": beyond(tot_e, tot_v, tot_r),
             **{b: beyond(err2[b], var[b], ref2[b]) for b in BANDS},
         },
         energy={
-            b: ratio(float(((e_model[b] - e_data[b])[keep] ** 2).sum()), float((e_data[b][keep] ** 2).sum()))
-            for b in names
+            b: _ratio(float(((e_model[b] - e_data[b])[keep] ** 2).sum()), float((e_data[b][keep] ** 2).sum()))
+            for b in e_model
         },
         energy_noise={
-            b: ratio(float(e_var[b][keep].sum()), float((e_data[b][keep] ** 2).sum())) for b in names
+            b: _ratio(float(e_var[b][keep].sum()), float((e_data[b][keep] ** 2).sum())) for b in e_model
         },
-        per_point=per_point,
-        per_point_noise=np.where(keep, ratios(pt_var, pt_ref2), np.nan),
+        per_point=np.where(keep, _ratios(pt_err2, pt_ref2), np.nan),
+        per_point_noise=np.where(keep, _ratios(pt_var, pt_ref2), np.nan),
         per_point_beyond=np.where(keep, beyond(pt_err2, pt_var, pt_ref2), np.nan),
-        per_vertex=ratios(vx_err, vx_ref),
-        per_vertex_noise=ratios(vx_var, vx_ref),
+        per_vertex=_ratios(sums["vx_err"], sums["vx_ref"]),
+        per_vertex_noise=_ratios(sums["vx_var"], sums["vx_ref"]),
         distance={
-            "edges_mm": edges,
-            "rel_l2": ratios(ring_err, ring_ref),
-            "noise": ratios(ring_var, ring_ref),
-            "pairs": ring_n,
+            "edges_mm": DISTANCE_EDGES,
+            "rel_l2": _ratios(sums["ring_err"], sums["ring_ref"]),
+            "noise": _ratios(sums["ring_var"], sums["ring_ref"]),
+            "pairs": sums["ring_n"],
         },
         map_radius=float(map_radius),
         exclusion_mm=exclusion,
-        through=table is not None,
+        through=through,
     )
 
 
