@@ -118,25 +118,43 @@ def write_mesh_report(
         out_dir / "mesh_errors.png",
         held_out=truth is not None,
     )
-    per_model = {}
-    for name, e in errors.items():
-        s = e.summary()
-        if held_out is None:
-            s["beyond_noise"] = None  # in-sample: the fit has followed the noise
-        fl = flagged.get(name)
-        s["flagged_points"] = [] if fl is None else np.flatnonzero(fl).tolist()
-        s["physics"] = check_physics(models[name]).summary()
-        if held_out is not None:
-            s_in = in_sample[name].summary()
-            s_in.pop("beyond_noise", None)
-            s["in_sample"] = s_in
-        # light arriving at an angle: the oblique beams of the truth (or the data), with and without the lean
-        oblique = oblique_errors(models[name], truth or ds, exclusion_mm=exclusion.get(name))
-        if oblique is not None:
-            s["oblique"] = oblique
-        per_model[name] = s
-    first = next(iter(models))
-    summary = {
+    per_model = {
+        name: _model_summary(
+            name, e, models[name], in_sample[name], held_out, truth or ds, flagged, exclusion
+        )
+        for name, e in errors.items()
+    }
+    summary = _report_summary(ds, truth, out_dir, command, next(iter(models)), per_model)
+    strict = finite_or_null(summary)  # no NaN in the files: an empty band is null
+    write_json(out_dir / "report.json", strict)
+    if json_path is not None:
+        write_json(json_path, strict)
+    (out_dir / "index.html").write_text(_page(strict), encoding="utf-8")
+    return summary
+
+
+def _model_summary(name, e, model, in_sample, held_out, reference, flagged: dict, exclusion: dict) -> dict:
+    """A model's JSON fields: its errors, flagged points, physics, in-sample errors and oblique beams."""
+    s = e.summary()
+    if held_out is None:
+        s["beyond_noise"] = None  # in-sample: the fit has followed the noise
+    fl = flagged.get(name)
+    s["flagged_points"] = [] if fl is None else np.flatnonzero(fl).tolist()
+    s["physics"] = check_physics(model).summary()
+    if held_out is not None:
+        s_in = in_sample.summary()
+        s_in.pop("beyond_noise", None)
+        s["in_sample"] = s_in
+    # light arriving at an angle: the oblique beams of the truth (or the data), with and without the lean
+    oblique = oblique_errors(model, reference, exclusion_mm=exclusion.get(name))
+    if oblique is not None:
+        s["oblique"] = oblique
+    return s
+
+
+def _report_summary(ds, truth, out_dir: Path, command, first: str, per_model: dict) -> dict:
+    """The report's JSON summary: provenance, what was compared, the first model's fields, every model's."""
+    return {
         "written_by": f"translucency {__version__}",
         "command_line": command
         if command is not None
@@ -157,64 +175,60 @@ def write_mesh_report(
         "models": per_model,
         "definition": MESH_DEFINITIONS,
     }
-    strict = finite_or_null(summary)  # no NaN in the files: an empty band is null
-    write_json(out_dir / "report.json", strict)
-    if json_path is not None:
-        write_json(json_path, strict)
-    (out_dir / "index.html").write_text(_page(strict), encoding="utf-8")
-    return summary
+
+
+def _pct(v) -> str:
+    """A table cell's percentage ('–' for null)."""
+    return "–" if v is None else f"{100 * v:.2f}&nbsp;%"
+
+
+def _band_row(label: str, cells) -> str:
+    """A table row: its label, then the percentages overall and per band."""
+    return f"<tr><td>{label}</td>" + "".join(f"<td>{_pct(v)}</td>" for v in cells) + "</tr>"
+
+
+def _model_rows(name: str, m: dict) -> list[str]:
+    """A model's table rows: its errors, beyond the noise, on the oblique beams and in-sample."""
+    rows = [_band_row(html.escape(name), [m["rel_l2"], m["rel_l2_near"], m["rel_l2_mid"], m["rel_l2_far"]])]
+    if m.get("beyond_noise"):
+        b = m["beyond_noise"]
+        rows.append(_band_row("&nbsp;beyond the noise", [b["all"], b["near"], b["mid"], b["far"]]))
+    if m.get("oblique"):
+        ob = m["oblique"]
+        lean = "" if ob["lean"] is None else f", with its lean {_pct(ob['lean'])}"
+        rows.append(
+            f"<tr><td colspan='5'>&nbsp;oblique beams ({ob['beams']} a point): the paper's model "
+            f"{_pct(ob['paper'])}{lean}; noise {_pct(ob['noise'])}</td></tr>"
+        )
+    if m.get("in_sample"):
+        i = m["in_sample"]
+        rows.append(
+            _band_row("&nbsp;in-sample", [i["rel_l2"], i["rel_l2_near"], i["rel_l2_mid"], i["rel_l2_far"]])
+        )
+    return rows
 
 
 def _page(s: dict) -> str:
     """The report's HTML page: one sentence on what was compared, the table, the figure, the definitions."""
-
-    def pct(v):
-        return "–" if v is None else f"{100 * v:.2f}&nbsp;%"
-
     against = (
         "the independent truth " + html.escape(str(s["truth"]))
         if s["truth"]
         else "the fitted data (in-sample)"
     )
     head = "".join(f"<th>{h}</th>" for h in ("model", "all", "near &lt;1 mm", "mid 1–4 mm", "far &gt;4 mm"))
-    rows = []
-    for name, m in s["models"].items():
-        cells = [m["rel_l2"], m["rel_l2_near"], m["rel_l2_mid"], m["rel_l2_far"]]
-        rows.append(
-            f"<tr><td>{html.escape(name)}</td>" + "".join(f"<td>{pct(v)}</td>" for v in cells) + "</tr>"
-        )
-        if m.get("beyond_noise"):
-            b = m["beyond_noise"]
-            cells = [b["all"], b["near"], b["mid"], b["far"]]
-            rows.append(
-                "<tr><td>&nbsp;beyond the noise</td>" + "".join(f"<td>{pct(v)}</td>" for v in cells) + "</tr>"
-            )
-        if m.get("oblique"):
-            ob = m["oblique"]
-            lean = "" if ob["lean"] is None else f", with its lean {pct(ob['lean'])}"
-            rows.append(
-                f"<tr><td colspan='5'>&nbsp;oblique beams ({ob['beams']} a point): the paper's model "
-                f"{pct(ob['paper'])}{lean}; noise {pct(ob['noise'])}</td></tr>"
-            )
-        if m.get("in_sample"):
-            i = m["in_sample"]
-            cells = [i["rel_l2"], i["rel_l2_near"], i["rel_l2_mid"], i["rel_l2_far"]]
-            rows.append(
-                "<tr><td>&nbsp;in-sample</td>" + "".join(f"<td>{pct(v)}</td>" for v in cells) + "</tr>"
-            )
+    rows = [row for name, m in s["models"].items() for row in _model_rows(name, m)]
     nf = s["noise_floor"]
     noise = noise_label(s["truth"] is not None)
-    rows.append(
-        f"<tr><td><i>{noise}</i></td>" + "".join(f"<td>{pct(nf[k])}</td>" for k in ("all", *BANDS)) + "</tr>"
-    )
+    rows.append(_band_row(f"<i>{noise}</i>", [nf[k] for k in ("all", *BANDS)]))
     first = s["models"][s["model"]]
     verdict = (
-        f"{html.escape(s['model'])}: {pct(first['rel_l2'])} overall against a noise floor of {pct(nf['all'])}"
+        f"{html.escape(s['model'])}: {_pct(first['rel_l2'])} overall "
+        f"against a noise floor of {_pct(nf['all'])}"
     )
     if first.get("beyond_noise"):
         verdict += (
-            f"; {pct(first['beyond_noise']['all'])} beyond the truth's noise, "
-            f"{pct(first['in_sample']['rel_l2'])} in-sample"
+            f"; {_pct(first['beyond_noise']['all'])} beyond the truth's noise, "
+            f"{_pct(first['in_sample']['rel_l2'])} in-sample"
         )
     defs = "".join(f"<dt>{html.escape(k)}</dt><dd>{html.escape(v)}</dd>" for k, v in s["definition"].items())
     return (
