@@ -37,34 +37,17 @@ def planar_page_data(
     """(meta, arrays) of the whole page of a planar ``model`` (module docstring); ``dataset``: the planar
     data set it was fitted to (its windows' ring means), ``truth``: an independent acquisition of the same
     points."""
-    alpha = model.alpha
-    H, W = alpha.shape
-    step = max(1, -(-max(H, W) // MAX_SIDE))
-    rows, cols = np.arange(0, H, step), np.arange(0, W, step)
-    xs = alpha.origin[0] + (cols + 0.5) * alpha.pitch
-    ys = alpha.origin[1] + (rows + 0.5) * alpha.pitch
-    X, Y = np.meshgrid(xs, ys)
-    xy = np.stack([X.ravel(), Y.ravel()], axis=1)
+    xs, ys, xy, faces = _flat_mesh(model.alpha)
     V = len(xy)
     position = np.concatenate([xy, np.zeros((V, 1))], axis=1)
-    h, w = len(rows), len(cols)
-    idx = np.arange(V).reshape(h, w)
-    a, b, c, d = idx[:-1, :-1], idx[:-1, 1:], idx[1:, :-1], idx[1:, 1:]
-    faces = np.concatenate([np.stack([a, b, d], -1).reshape(-1, 3), np.stack([a, d, c], -1).reshape(-1, 3)])
-    # the maps: each vertex blends its 4 nearest incident points (inverse square distance)
-    k = min(4, model.n_points)
-    dist, near = cKDTree(model.x_i[:, :2]).query(xy, k=k)
-    dist, near = dist.reshape(V, k), near.reshape(V, k)
-    wts = 1.0 / np.maximum(dist, 1e-9) ** 2
-    wts /= wts.sum(axis=1, keepdims=True)
-    blend = lambda per_point: np.einsum("vk,vk...->v...", wts, np.asarray(per_point, np.float64)[near])  # noqa: E731
-    rho = blend(model.total_reflectance())  # (V, 3)
-    a_alpha = np.asarray(alpha.at(xy), np.float64)
+    wts, near = _blend_weights(model, xy)
+    rho = _blend(wts, near, model.total_reflectance())  # (V, 3)
+    a_alpha = np.asarray(model.alpha.at(xy), np.float64)
     check = check_physics(model)
     maps_values = {
         "map_alpha": ("modulation texture α", "", a_alpha),
         "map_reflectance": ("total diffuse reflectance (mean of R, G, B)", "", rho.mean(axis=1)),
-        "map_radius": ("99 % energy radius", "mm", blend(model.energy_radius(0.99))),
+        "map_radius": ("99 % energy radius", "mm", _blend(wts, near, model.energy_radius(0.99))),
     }
     arrays = {
         "position": position.astype(np.float32),
@@ -75,27 +58,70 @@ def planar_page_data(
     maps = page_maps(maps_values, check.flagged[near[:, 0]], legend, arrays)
     profiles = _profiles(model, dataset, truth, arrays)
     # the relighting: every point alike, Ē = E^(k), local a = α ρ / π and t = a Ē (the rest r = 0)
+    local = np.clip(a_alpha[:, None] * rho / np.pi, 0.0, None)
+    transfer_meta, transfer_arrays = encode_transfer(_flat_transfer(local, bands))
+    arrays.update(transfer_arrays)
+    meta = _page_meta(model, name, (xs, ys), len(faces), maps, profiles, transfer_meta, local, bands)
+    return meta, arrays
+
+
+def _flat_mesh(alpha) -> tuple:
+    """The flat mesh on α's grid: pixel centres xs, ys (mm), the vertices' (x, y), two triangles a cell."""
+    H, W = alpha.shape
+    step = max(1, -(-max(H, W) // MAX_SIDE))
+    rows, cols = np.arange(0, H, step), np.arange(0, W, step)
+    xs = alpha.origin[0] + (cols + 0.5) * alpha.pitch
+    ys = alpha.origin[1] + (rows + 0.5) * alpha.pitch
+    X, Y = np.meshgrid(xs, ys)
+    xy = np.stack([X.ravel(), Y.ravel()], axis=1)
+    idx = np.arange(len(xy)).reshape(len(rows), len(cols))
+    a, b, c, d = idx[:-1, :-1], idx[:-1, 1:], idx[1:, :-1], idx[1:, 1:]
+    faces = np.concatenate([np.stack([a, b, d], -1).reshape(-1, 3), np.stack([a, d, c], -1).reshape(-1, 3)])
+    return xs, ys, xy, faces
+
+
+def _blend_weights(model, xy) -> tuple[np.ndarray, np.ndarray]:
+    """Each vertex's 4 nearest incident points (V, k) and their inverse-square-distance weights (sum 1)."""
+    V = len(xy)
+    k = min(4, model.n_points)
+    dist, near = cKDTree(model.x_i[:, :2]).query(xy, k=k)
+    dist, near = dist.reshape(V, k), near.reshape(V, k)
+    wts = 1.0 / np.maximum(dist, 1e-9) ** 2
+    wts /= wts.sum(axis=1, keepdims=True)
+    return wts, near
+
+
+def _blend(wts, near, per_point) -> np.ndarray:
+    """A per-point quantity blended at every vertex with its nearest points' weights."""
+    return np.einsum("vk,vk...->v...", wts, np.asarray(per_point, np.float64)[near])
+
+
+def _flat_transfer(local, bands: int) -> Transfer:
+    """The flat sample's exact transfer: every vertex sees E^(k) = ∫ Y_k cos⁺θ dω, leaves local times it."""
     lattice = sh.sphere_directions(4096)
     Ek = sh.basis(lattice, bands).T @ np.maximum(lattice[:, 2], 0.0) * (4 * np.pi / len(lattice))  # (K,)
-    local = np.clip(a_alpha[:, None] * rho / np.pi, 0.0, None)
-    transfer = Transfer(
+    return Transfer(
         coefficients=local[:, None, :] * Ek[None, :, None],
-        irradiance=np.broadcast_to(Ek, (V, len(Ek))),
+        irradiance=np.broadcast_to(Ek, (len(local), len(Ek))),
         local=local,
         bands=bands,
         directions=len(lattice),
     )
-    transfer_meta, transfer_arrays = encode_transfer(transfer)
-    arrays.update(transfer_arrays)
+
+
+def _page_meta(model, name, centres, n_faces, maps, profiles, transfer_meta, local, bands) -> dict:
+    """The page's meta: title, mesh, view and lights, maps, profiles, transfer and exposure."""
+    alpha, (xs, ys) = model.alpha, centres
+    H, W = alpha.shape
     size = float(np.hypot(xs[-1] - xs[0], ys[-1] - ys[0])) or 1.0
     environment = EnvironmentLight(IRRADIANCE / np.pi)
     bright = float(np.quantile(local.max(axis=1), 0.99)) * IRRADIANCE
-    meta = {
+    return {
         "title": name,
         "subtitle": f"planar sample, {H} x {W} α pixels of {alpha.pitch:g} mm, "
         f"{model.n_points} incident points",
-        "vertices": V,
-        "faces": len(faces),
+        "vertices": len(xs) * len(ys),
+        "faces": n_faces,
         "centre": [float(xs.mean()), float(ys.mean()), 0.0],
         "size": size,
         "view": {"az": -90.0, "el": 60.0},
@@ -117,7 +143,6 @@ def planar_page_data(
         "relit sample is α ρ / π times the irradiance (exact for the paper's model with a Lambertian exit).",
         "live": False,
     }
-    return meta, arrays
 
 
 def _profiles(model, dataset, truth, arrays: dict) -> dict | None:
