@@ -159,57 +159,25 @@ def acquire_planar(
     run = Run("acquire planar", max_memory=max_memory, reporter=reporter)
     name, volume, path = sample_of(sample)
 
-    def need(voxels):
-        n = resources.memory.planar_acquisition(
-            grid=setup.grid,
-            pitch=setup.pitch,
-            window=setup.window,
-            photons=setup.photons,
-            chunk=setup.chunk_points,
-            voxels=voxels,
-            dtype=setup.dtype,
-            directions=setup.incidence.count,
-            exit_bins=0 if setup.exit_bins is None else setup.exit_bins.count,
-        )
-        return run.check(n, out, resumed=True)  # a resumed acquisition keeps what is there
-
     if name is not None:  # before the sample is generated
-        estimate = need(resources.memory.slab_voxels(size, voxel_mm))
+        estimate = _planar_estimate(run, out, setup, resources.memory.slab_voxels(size, voxel_mm))
     claim_output(out, "planar data set", overwrite=overwrite, inputs=[path], reuse=True)
     if name is not None:
         volume = make_sample(name, size, voxel_mm, g=g, seed=sample_seed)
     else:
         volume = volume if path is None else load_volume(path)
-        estimate = need(volume.sigma_s.size / 3)
+        estimate = _planar_estimate(run, out, setup, volume.sigma_s.size / 3)
     setup.check(volume)
     state = _timed_planar(run, volume, setup, out, estimate)
     P = setup.grid[0] * setup.grid[1]
     with run.work("acquire", total=P, fresh=state is None and bytes_at(out) == 0) as work:
         work.update(completed=P - to_acquire(state, P), item="points")
+        steps = _steps(work, progress)
         scan_planar(
-            volume,
-            setup,
-            out,
-            overwrite=overwrite,
-            inputs=[path],
-            progress=_steps(work, progress),
-            scheduler=scheduler,
+            volume, setup, out, overwrite=overwrite, inputs=[path], progress=steps, scheduler=scheduler
         )
     ds = open_dataset(out)
-    ds.summary = run.summary(
-        {
-            "command": "acquire planar",
-            "out": out,
-            "points": ds.n_points,
-            "window_pixels": ds.window,
-            "directions": setup.incidence.count,
-            "exit_bins": 0 if setup.exit_bins is None else setup.exit_bins.count,
-            "photons": setup.photons,
-            "seed": setup.seed,
-            "complete": ds.complete(),
-            "seconds": run.seconds(),
-        }
-    )
+    ds.summary = _planar_summary(run, out, ds, setup)
     return ds
 
 
@@ -231,6 +199,40 @@ def _planar_setup(grid, span, pitch, window, photons, seed, angle, index_matched
         index_matched=bool(index_matched),
         chunk_points=whole_number("chunk_points", chunk_points),
         dtype=dtype,
+    )
+
+
+def _planar_estimate(run: Run, out: Path, setup: PlanarSetup, voxels):
+    """The planar scan's memory estimate for ``voxels`` voxels, checked against the run's limit."""
+    n = resources.memory.planar_acquisition(
+        grid=setup.grid,
+        pitch=setup.pitch,
+        window=setup.window,
+        photons=setup.photons,
+        chunk=setup.chunk_points,
+        voxels=voxels,
+        dtype=setup.dtype,
+        directions=setup.incidence.count,
+        exit_bins=0 if setup.exit_bins is None else setup.exit_bins.count,
+    )
+    return run.check(n, out, resumed=True)  # a resumed acquisition keeps what is there
+
+
+def _planar_summary(run: Run, out: Path, ds: PlanarDataset, setup: PlanarSetup) -> dict:
+    """The numbers of ``translucency acquire planar --json``."""
+    return run.summary(
+        {
+            "command": "acquire planar",
+            "out": out,
+            "points": ds.n_points,
+            "window_pixels": ds.window,
+            "directions": setup.incidence.count,
+            "exit_bins": 0 if setup.exit_bins is None else setup.exit_bins.count,
+            "photons": setup.photons,
+            "seed": setup.seed,
+            "complete": ds.complete(),
+            "seconds": run.seconds(),
+        }
     )
 
 
@@ -262,32 +264,13 @@ def _timed_planar(run: Run, volume: Volume, setup: PlanarSetup, out: Path, estim
     return state
 
 
-def acquire_mesh(
-    mesh,
-    out,
-    sample="marble",
-    *,
-    voxel_mm: float = 0.5,
-    g: float = 0.0,
-    points: int = 64,
-    photons: int = 20_000,
-    seed: int = 0,
-    sample_seed: int | None = None,
-    chunk_points: int = 8,
-    index_matched: bool = False,
-    reentry: bool = True,
-    unscattered: str = "apart",
-    incidence: Sequence[float] = (),
-    azimuths: int = 4,
-    exit_bins: int = 0,
-    scale_mm: float = 1.0,
-    up: str = "z",
-    overwrite: bool = False,
-    progress: Callable[[int, int], None] | None = None,
-    scheduler: str | None = "threads",
-    max_memory: str | int | None = None,
-    reporter: Reporter | None = None,
-) -> MeshDataset:
+def acquire_mesh(mesh, out, sample="marble", *, voxel_mm: float = 0.5, g: float = 0.0, points: int = 64,
+    photons: int = 20_000, seed: int = 0, sample_seed: int | None = None, chunk_points: int = 8,
+    index_matched: bool = False, reentry: bool = True, unscattered: str = "apart",
+    incidence: Sequence[float] = (), azimuths: int = 4, exit_bins: int = 0, scale_mm: float = 1.0,
+    up: str = "z", overwrite: bool = False, progress: Callable[[int, int], None] | None = None,
+    scheduler: str | None = "threads", max_memory: str | int | None = None, reporter: Reporter | None = None,
+) -> MeshDataset:  # fmt: skip
     """Virtual DISCO on an object: pencil beams at surface points of a closed mesh, exits per vertex.
 
     ``translucency acquire mesh`` is this function (:func:`translucency.acquire.mesh.acquire_mesh` under
@@ -352,6 +335,34 @@ def acquire_mesh(
     sample_seed = whole_number("sample_seed", seed if sample_seed is None else sample_seed, lo=0)
     points, chunk_points = whole_number("points", points), whole_number("chunk_points", chunk_points)
     angles, bins = _angle_axes(incidence, azimuths, exit_bins)
+    g, scale_mm, voxel_mm = _object_numbers(g, scale_mm, voxel_mm, up, unscattered)
+    run = Run("acquire mesh", max_memory=max_memory, reporter=reporter)
+    name, volume, path = sample_of(sample)
+    mesh_file = mesh_file_of(mesh)
+    claim_output(out, "mesh data set", overwrite=overwrite, inputs=[mesh_file, path], reuse=True)
+    obj = _object_with_points(mesh, mesh_file, scale_mm, up, points)
+    scan = dict(n_points=points, photons=photons, seed=seed, chunk_points=chunk_points,
+                index_matched=bool(index_matched), reentry=bool(reentry), unscattered=unscattered,
+                incidence=angles, exit_bins=bins)  # fmt: skip
+    if name is None:
+        volume = volume if path is None else load_volume(path)
+        estimate = _mesh_estimate(run, out, obj, scan, volume.sigma_s.size / 3)
+    else:  # before the filling is generated
+        estimate = _mesh_estimate(run, out, obj, scan, resources.memory.object_voxels(obj.extents, voxel_mm))
+        volume = object_volume(name, obj, voxel_mm, g=g, seed=sample_seed)
+    check_filling(obj, volume)
+    state = _timed_mesh(run, out, obj, volume, scan, estimate)
+    with run.work("acquire", total=points, fresh=state is None and bytes_at(out) == 0) as work:
+        work.update(completed=points - to_acquire(state, points), item="points")
+        rest = dict(overwrite=overwrite, progress=_steps(work, progress), scheduler=scheduler)
+        scan_mesh(obj, volume, out, inputs=[mesh_file, path], **scan, **rest)
+    ds = open_mesh_dataset(out)
+    ds.summary = _mesh_summary(run, out, ds, len(obj.vertices), photons, seed)
+    return ds
+
+
+def _object_numbers(g, scale_mm, voxel_mm, up, unscattered):
+    """The object's numbers (g; mm per file unit; voxel side, mm) and its options, checked before reading."""
     g = float(check_option("g", g, lo=-1, hi=1, open_lo=True, open_hi=True))
     scale_mm = float(check_option("scale_mm", scale_mm, lo=0, open_lo=True))
     voxel_mm = float(check_option("voxel_mm", voxel_mm, lo=0, open_lo=True))
@@ -359,45 +370,48 @@ def acquire_mesh(
         raise TranslucencyError(f"up: expected one of z, y, x, got {up!r}")
     if unscattered not in UNSCATTERED:
         raise TranslucencyError(f"unscattered: expected one of {', '.join(UNSCATTERED)}, got {unscattered!r}")
-    run = Run("acquire mesh", max_memory=max_memory, reporter=reporter)
-    name, volume, path = sample_of(sample)
-    mesh_file = mesh_file_of(mesh)
-    claim_output(out, "mesh data set", overwrite=overwrite, inputs=[mesh_file, path], reuse=True)
+    return g, scale_mm, voxel_mm
+
+
+def _object_with_points(mesh, mesh_file, scale_mm: float, up: str, points: int):
+    """The object's mesh in mm, refused where it has fewer vertices than incident ``points``."""
     obj = object_of(mesh, mesh_file, scale_mm, up)
     V = len(obj.vertices)
     if points > V:  # before any estimate: the incident points are vertices of the mesh
         raise TranslucencyError(
             f"points: need 1 to {V:,} incident points (the mesh's vertices), got {points:,}"
         )
+    return obj
 
-    def need(voxels):
-        n = resources.memory.mesh_acquisition(
-            vertices=V,
-            faces=len(obj.faces),
-            points=points,
-            photons=photons,
-            chunk=chunk_points,
-            voxels=voxels,
-            directions=angles.count,
-            exit_bins=0 if bins is None else bins.count,
-        )
-        return run.check(n, out, resumed=True)  # a resumed acquisition keeps what is there
 
-    if name is None:
-        volume = volume if path is None else load_volume(path)
-        estimate = need(volume.sigma_s.size / 3)
-    else:  # before the filling is generated
-        estimate = need(resources.memory.object_voxels(obj.extents, voxel_mm))
-        volume = object_volume(name, obj, voxel_mm, g=g, seed=sample_seed)
-    check_filling(obj, volume)
+def _mesh_estimate(run: Run, out: Path, obj, scan: dict, voxels):
+    """The object scan's memory estimate for ``voxels`` voxels, checked against the run's limit."""
+    n = resources.memory.mesh_acquisition(
+        vertices=len(obj.vertices),
+        faces=len(obj.faces),
+        points=scan["n_points"],
+        photons=scan["photons"],
+        chunk=scan["chunk_points"],
+        voxels=voxels,
+        directions=scan["incidence"].count,
+        exit_bins=0 if scan["exit_bins"] is None else scan["exit_bins"].count,
+    )
+    return run.check(n, out, resumed=True)  # a resumed acquisition keeps what is there
+
+
+def _timed_mesh(run: Run, out: Path, obj, volume: Volume, scan: dict, estimate) -> Resumed | None:
+    """The object scan's time estimate, its information line and its note for Ctrl-C; the data set it
+    resumes, if any."""
+    points, photons, V = scan["n_points"], scan["photons"], len(obj.vertices)
+    angles, bins = scan["incidence"], scan["exit_bins"]
     same = {
         "volume": json.loads(json.dumps(volume.description)),  # as the header records it
         "n_points": points,
         "photons": photons,
-        "seed": seed,
-        "chunk": chunk_points,
+        "seed": scan["seed"],
+        "chunk": scan["chunk_points"],
         "vertices": V,
-        "reentry": bool(reentry),
+        "reentry": scan["reentry"],
     }
     state = resumable(out, open_mesh_dataset, lambda request: matches(request, same))
     timing = run.time(
@@ -413,28 +427,12 @@ def acquire_mesh(
         f"mesh of {V:,} vertices, {' x '.join(f'{v:.1f}' for v in obj.extents)} mm; "
         f"time {timing.text()}, memory ~{estimate.memory / 2**20:,.0f} MiB",
     )
-    with run.work("acquire", total=points, fresh=state is None and bytes_at(out) == 0) as work:
-        work.update(completed=points - to_acquire(state, points), item="points")
-        scan_mesh(
-            obj,
-            volume,
-            out,
-            n_points=points,
-            photons=photons,
-            seed=seed,
-            chunk_points=chunk_points,
-            index_matched=bool(index_matched),
-            reentry=bool(reentry),
-            unscattered=unscattered,
-            incidence=angles,
-            exit_bins=bins,
-            overwrite=overwrite,
-            inputs=[mesh_file, path],
-            progress=_steps(work, progress),
-            scheduler=scheduler,
-        )
-    ds = open_mesh_dataset(out)
-    ds.summary = run.summary(
+    return state
+
+
+def _mesh_summary(run: Run, out: Path, ds: MeshDataset, V: int, photons: int, seed: int) -> dict:
+    """The numbers of ``translucency acquire mesh --json``."""
+    return run.summary(
         {
             "command": "acquire mesh",
             "out": out,
@@ -448,7 +446,6 @@ def acquire_mesh(
             "seconds": run.seconds(),
         }
     )
-    return ds
 
 
 def _angle_axes(incidence, azimuths, exit_bins) -> tuple[Incidence, ExitBins | None]:

@@ -172,14 +172,7 @@ def fit_model(
     stage = fit_mesh if on_mesh else fit_planar
     refuse_unknown(f"fit on a {'mesh' if on_mesh else 'planar'} data set", options, stage)
     if on_mesh:  # what a per-vertex fit does not take, one line each
-        if family in FAMILIES and FAMILIES[family].directional:
-            raise TranslucencyError(
-                f"family={family!r}: the anisotropic model is for planar data sets; {data.path} is a "
-                "mesh data set, where the isotropic model is fitted per vertex (r = |x_o - x_i|, as in the "
-                "paper): use family='iso'"
-            )
-        if weighting != "poisson":
-            raise TranslucencyError("weighting: mesh fits weight by the Poisson variance only")
+        _refuse_on_mesh(data, family, weighting)
     # the family the estimates count (the richest a choice may fit), and whether a structure is chosen
     checked, n, m, c, free, _ = resolve_structure(family, n_terms, None if on_mesh else n_directions, colour,
                                                   planar=not on_mesh)  # fmt: skip
@@ -200,12 +193,27 @@ def fit_model(
         args.update(n_directions=n_directions, weighting=weighting, chunk_points=chunk_points)
         result = _fit_planar(run, data, family, out, args, estimate)
         meta = {**result.metadata(data.path), "dataset_identity": dataset_identity(data.header)}
-    path = None
-    if out is not None:
-        dtype = "float16" if float16 else "float32"
-        path = save_model(result.model, out, dtype=dtype, meta=meta, overwrite=overwrite)
+    path = None if out is None else _save(result, out, meta, float16, overwrite)
     record = _record(result, path, data, on_mesh)  # the warnings for flagged and unphysical points too
     return Fitting(result, path, run.summary(record))
+
+
+def _refuse_on_mesh(data: MeshDataset, family: str, weighting: str) -> None:
+    """Refuse what a per-vertex fit does not take: a directional family, a weighting other than Poisson."""
+    if family in FAMILIES and FAMILIES[family].directional:
+        raise TranslucencyError(
+            f"family={family!r}: the anisotropic model is for planar data sets; {data.path} is a "
+            "mesh data set, where the isotropic model is fitted per vertex (r = |x_o - x_i|, as in the "
+            "paper): use family='iso'"
+        )
+    if weighting != "poisson":
+        raise TranslucencyError("weighting: mesh fits weight by the Poisson variance only")
+
+
+def _save(result: FitResult, out: Path, meta: dict, float16: bool, overwrite: bool) -> Path:
+    """Write the fitted model to ``out`` (parameters as float16 or float32) with its metadata."""
+    dtype = "float16" if float16 else "float32"
+    return save_model(result.model, out, dtype=dtype, meta=meta, overwrite=overwrite)
 
 
 def _data_set(dataset) -> PlanarDataset | MeshDataset:

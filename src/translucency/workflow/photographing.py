@@ -264,10 +264,7 @@ def acquire_object_photographs(
     voxel_mm = float(check_option("voxel_mm", voxel_mm, lo=0, open_lo=True))
     scale_mm = float(check_option("scale_mm", scale_mm, lo=0, open_lo=True))
     resolution, image_format = _resolution(resolution), _image_format(image_format)
-    if exposures not in ("brackets", "single"):
-        raise TranslucencyError(f"exposures: brackets or single, got {exposures!r}")
-    if up not in UP_AXES:
-        raise TranslucencyError(f"up: expected one of z, y, x, got {up!r}")
+    _check_exposures_and_up(exposures, up)
     out, mesh_file = as_path("out", out), mesh_file_of(mesh)
     run = Run("acquire object-photographs", max_memory=max_memory, reporter=reporter)
     run.claim_folder(out, overwrite=overwrite, inputs=[mesh_file])
@@ -276,6 +273,36 @@ def acquire_object_photographs(
         raise TranslucencyError(f"points: need 1 to {len(obj.vertices):,} laser positions, got {points:,}")
     volume = object_volume(sample, obj, voxel_mm, seed=seed)
     check_filling(obj, volume)
+    _check_object_shots(run, out, obj, volume, points, cameras, resolution, spp, exposures)
+    with run.reporter.progress("photograph", points) as update:
+        update(item="shots")
+        record = photograph_object(
+            obj, volume, out, n_points=points, n_cameras=cameras, resolution=resolution, spp=spp, seed=seed,
+            beam=LaserBeam(radius_mm=beam_mm), image_format=image_format, checkerboards=bool(checkerboards),
+            exposures=exposures, spot_radius_mm=max(0.5, 2 * beam_mm), boundary_eta=eta,
+            progress=_shot_steps(update, progress),
+        )  # fmt: skip
+    summary = {
+        "command": "acquire object-photographs",
+        "out": out,
+        "points": points,
+        "cameras": cameras,
+        "incident": record["incident"],
+        "seconds": record["seconds"],
+    }
+    return Photographs(out, record, run.summary(summary))
+
+
+def _check_exposures_and_up(exposures: str, up: str) -> None:
+    """Refuse an unknown ``exposures`` or ``up`` (options: before the mesh is read)."""
+    if exposures not in ("brackets", "single"):
+        raise TranslucencyError(f"exposures: brackets or single, got {exposures!r}")
+    if up not in UP_AXES:
+        raise TranslucencyError(f"up: expected one of z, y, x, got {up!r}")
+
+
+def _check_object_shots(run: Run, out: Path, obj, volume, points, cameras, resolution, spp, exposures):
+    """The photographs' memory estimate checked against the run's limit, and the run's information line."""
     frames = 3 if exposures == "brackets" else 1  # two long exposures and a short one, or one
     need = resources.memory.photographs(
         voxels=float(np.prod(volume.sigma_s.shape[:3])),
@@ -291,37 +318,14 @@ def acquire_object_photographs(
         f"frames at {spp} spp "
         f"({resolution[0]} x {resolution[1]} px), mesh of {len(obj.vertices):,} vertices"
     )
-    with run.reporter.progress("photograph", points) as update:
-        update(item="shots")
 
-        def step(done: int, total: int) -> None:
-            update(completed=done)
-            if progress is not None:
-                progress(done, total)
 
-        record = photograph_object(
-            obj,
-            volume,
-            out,
-            n_points=points,
-            n_cameras=cameras,
-            resolution=resolution,
-            spp=spp,
-            seed=seed,
-            beam=LaserBeam(radius_mm=beam_mm),
-            image_format=image_format,
-            checkerboards=bool(checkerboards),
-            exposures=exposures,
-            spot_radius_mm=max(0.5, 2 * beam_mm),
-            boundary_eta=eta,
-            progress=step,
-        )
-    summary = {
-        "command": "acquire object-photographs",
-        "out": out,
-        "points": points,
-        "cameras": cameras,
-        "incident": record["incident"],
-        "seconds": record["seconds"],
-    }
-    return Photographs(out, record, run.summary(summary))
+def _shot_steps(update, progress: Callable[[int, int], None] | None) -> Callable[[int, int], None]:
+    """The photographing's progress: the run's bar, and the caller's ``progress(done, total)`` if given."""
+
+    def step(done: int, total: int) -> None:
+        update(completed=done)
+        if progress is not None:
+            progress(done, total)
+
+    return step
