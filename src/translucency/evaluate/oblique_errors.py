@@ -87,21 +87,9 @@ def oblique_errors(
         paper = F[:, :, None, :] * pred[:, None]  # (k, D, V, 3)
         predictions = {"paper": paper}
         if lean is not None:
-            d = vertices[None] - x_i[s:e, None]  # (k, V, 3)
-            d /= np.maximum(np.linalg.norm(d, axis=2, keepdims=True), 1e-12)
-            ell = lean_vector(w[s:e], frames[s:e, None, 2], eta)  # (k, D, 3)
-            g = lean_exponent(
-                lean[s:e, 0, None, None, :],
-                lean[s:e, 1, None, None, :],
-                ell[:, :, None, None, :],
-                d[:, None, :, None, :],
-                frames[s:e, None, None, None, 2],
-                r[:, None, :, None],
-            )  # (k, D, V, 3)
-            lobe = np.exp(g) * ok[..., None]
-            base = pred[:, None] * area[None, None, :, None] * ok[..., None]
-            Z = (base * lobe).sum(2) / np.maximum(base.sum(2), 1e-300)  # (k, D, 3)
-            predictions["lean"] = paper * lobe / np.maximum(Z[:, :, None, :], 1e-300)
+            predictions["lean"] = _lean_prediction(
+                paper, pred, lean[s:e], vertices, x_i[s:e], w[s:e], frames[s:e], eta, r, ok, area
+            )
         for name, p in predictions.items():
             err2[name] += float(np.where(ok[..., None], (p - y) ** 2, 0.0).sum())
         ref2 += float(np.where(ok[..., None], y**2, 0.0).sum())
@@ -114,3 +102,22 @@ def oblique_errors(
         "beams": int(inc.count - 1),
         "polar_deg": [float(t) for t in inc.polar_deg],
     }
+
+
+def _lean_prediction(paper, pred, lean, vertices, x_i, w, frames, eta, r, ok, area) -> np.ndarray:
+    """A chunk's lean R_d (k, D, V, 3), mm⁻²: the paper's times e^g / Z, Z over the pairs that count."""
+    d = vertices[None] - x_i[:, None]  # (k, V, 3)
+    d /= np.maximum(np.linalg.norm(d, axis=2, keepdims=True), 1e-12)
+    ell = lean_vector(w, frames[:, None, 2], eta)  # (k, D, 3)
+    g = lean_exponent(
+        lean[:, 0, None, None, :],
+        lean[:, 1, None, None, :],
+        ell[:, :, None, None, :],
+        d[:, None, :, None, :],
+        frames[:, None, None, None, 2],
+        r[:, None, :, None],
+    )  # (k, D, V, 3)
+    lobe = np.exp(g) * ok[..., None]
+    base = pred[:, None] * area[None, None, :, None] * ok[..., None]
+    Z = (base * lobe).sum(2) / np.maximum(base.sum(2), 1e-300)  # (k, D, 3)
+    return paper * lobe / np.maximum(Z[:, :, None, :], 1e-300)
