@@ -104,52 +104,18 @@ def _alternate(
         if rnd == 1 and state.added[0] == 0:  # round 1's result weights every later round
             state.keep("ref")
         todo = list(range(int(state.added[0]), len(chunks)))  # the chunks before are added
-        next_save = 0.0  # perf_counter time of the next checkpoint (the round's first addition: at once)
         # chunks in parallel threads (NumPy releases the GIL) or tasks on a cluster; each works on a
         # private copy of its points and hands back its α statistics, so results do not depend on timing
         if cluster is None:
             results = _thread_chunks(ctx, state, chunks, todo, workers)
         else:
             results = _cluster_chunks(cluster, ctx_task, state, chunks, todo)
-        for ci, result in results:
-            # in chunk order (float sums are not associative): a chunk that finished early is held
-            # until every chunk before it is in, then added and dropped
-            state.held[ci] = result
-            first = int(state.added[0])
-            with lock:
-                while int(state.added[0]) in state.held:
-                    nxt = int(state.added[0])
-                    state.add(nxt, *_with_range(state.held.pop(nxt), chunks[nxt]))
-                if ckpt is not None and state.added[0] > first and time.perf_counter() >= next_save:
-                    t_save = time.perf_counter()
-                    state.save(ckpt, request)
-                    now = time.perf_counter()
-                    next_save = now + (now - t_save) * (1 - CHECKPOINT_SHARE) / CHECKPOINT_SHARE
-            if progress:
-                for done in range(first + 1, int(state.added[0]) + 1):
-                    progress(rnd * len(chunks) + done, total, f"round {rnd + 1}")
+        _add_in_order(state, results, chunks, lock, ckpt, request, progress, rnd, total)
         if state.held or state.added[0] != len(chunks):  # pragma: no cover - a runner lost a chunk
             raise RuntimeError(
                 f"fit: chunks {sorted(state.held)} finished but {int(state.added[0])} is missing"
             )
-        # α in closed form (the scale fixed by mean α = 1), and Φ of the new state (parameters and α):
-        # Φ with the round's α, plus what the α step changed (exact: Φ is quadratic in each α_j)
-        change = update_alpha(state, ctx.family, getattr(ctx.source, "smooth_alpha", None))
-        phi = float(state.phi.sum()) + change  # summed in chunk order: deterministic
-        if rnd == 1:  # round 1's own state, scored under the common weights it defines
-            state.history = np.array([float(state.phi_ref.sum())])
-            state.best_score[:] = (state.history[0], 0)  # the best arrays hold round 1's state already
-        state.history = np.append(state.history, phi)
-        if phi < state.best_score[0] or rnd == 0:
-            state.best_score[:] = (phi, rnd)
-            state.keep("best")
-        state.phi[:] = 0.0
-        state.phi_ref[:] = 0.0
-        state.added[0] = 0
-        state.round[0] = rnd + 1
-        h = state.history
-        if rnd >= 1 and h[-2] - h[-1] <= tol * h[-2]:  # converged, or Φ rose: the best state is kept
-            state.round[0] = max_rounds
+        _close_round(ctx, state, rnd, max_rounds, tol)
         if ckpt is not None:
             state.save(ckpt, request)
     if progress:
@@ -166,6 +132,50 @@ def _alternate(
         options,
         best_round=int(state.best_score[1]) + 1,
     )
+
+
+def _add_in_order(state, results, chunks, lock, ckpt, request, progress, rnd: int, total: int) -> None:
+    """Add a round's chunk results to ``state`` in chunk order, checkpointing and telling progress."""
+    next_save = 0.0  # perf_counter time of the next checkpoint (the round's first addition: at once)
+    for ci, result in results:
+        # in chunk order (float sums are not associative): a chunk that finished early is held
+        # until every chunk before it is in, then added and dropped
+        state.held[ci] = result
+        first = int(state.added[0])
+        with lock:
+            while int(state.added[0]) in state.held:
+                nxt = int(state.added[0])
+                state.add(nxt, *_with_range(state.held.pop(nxt), chunks[nxt]))
+            if ckpt is not None and state.added[0] > first and time.perf_counter() >= next_save:
+                t_save = time.perf_counter()
+                state.save(ckpt, request)
+                now = time.perf_counter()
+                next_save = now + (now - t_save) * (1 - CHECKPOINT_SHARE) / CHECKPOINT_SHARE
+        if progress:
+            for done in range(first + 1, int(state.added[0]) + 1):
+                progress(rnd * len(chunks) + done, total, f"round {rnd + 1}")
+
+
+def _close_round(ctx, state, rnd: int, max_rounds: int, tol: float) -> None:
+    """End round ``rnd``: α's update, Φ's history, the best state kept, the sums reset, convergence."""
+    # α in closed form (the scale fixed by mean α = 1), and Φ of the new state (parameters and α):
+    # Φ with the round's α, plus what the α step changed (exact: Φ is quadratic in each α_j)
+    change = update_alpha(state, ctx.family, getattr(ctx.source, "smooth_alpha", None))
+    phi = float(state.phi.sum()) + change  # summed in chunk order: deterministic
+    if rnd == 1:  # round 1's own state, scored under the common weights it defines
+        state.history = np.array([float(state.phi_ref.sum())])
+        state.best_score[:] = (state.history[0], 0)  # the best arrays hold round 1's state already
+    state.history = np.append(state.history, phi)
+    if phi < state.best_score[0] or rnd == 0:
+        state.best_score[:] = (phi, rnd)
+        state.keep("best")
+    state.phi[:] = 0.0
+    state.phi_ref[:] = 0.0
+    state.added[0] = 0
+    state.round[0] = rnd + 1
+    h = state.history
+    if rnd >= 1 and h[-2] - h[-1] <= tol * h[-2]:  # converged, or Φ rose: the best state is kept
+        state.round[0] = max_rounds
 
 
 def _with_range(result, chunk):
