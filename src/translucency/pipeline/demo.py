@@ -102,26 +102,59 @@ def run_demo(
     ...
     translucency._validate.TranslucencyError: out ...: exists and is not a translucency output folder; ...
     """
-    if reporter is not None:
-        if not flip_available():  # Figure 2's numbers without FLIP: the job goes on and says so
-            reporter.info(FLIP_SKIPPED)
-        with reporter.progress("demo", DEMO_STEPS) as update:
-            begun = itertools.count(1)
-
-            def told(name: str) -> None:
-                if step:
-                    step(name)
-                update(completed=next(begun), item=name)
-
-            return run_demo(
-                out_dir,
-                n_terms=n_terms,
-                step=told,
-                dataset=dataset,
-                max_rounds=max_rounds,
-                overwrite=overwrite,
-            )
+    if reporter is not None:  # the steps as one progress, then the job itself
+        job = dict(n_terms=n_terms, dataset=dataset, max_rounds=max_rounds, overwrite=overwrite)
+        return _with_progress(reporter, out_dir, step, job)
     out_dir = claim_folder(out_dir, overwrite=overwrite, inputs=[dataset])
+    png, js, mpath = _baselines(out_dir, n_terms, step)
+    # -- the embedded measurement: planar fits and Figure 1 -------------------------
+    ds = open_dataset(dataset or default_dataset_path())
+    embedded = dataset is None  # the default data come with their held-out truth and fine profiles
+    truth = open_dataset(default_truth_path()) if embedded else None
+    models, flagged = _demo_fits(ds, out_dir, max_rounds, step)
+    _relight(ds, models, out_dir, embedded, step)
+    if step:
+        step("report")
+    # -- Figure 2: the pig, acquired per vertex, fitted, rendered beside volpath ------------
+    if step:
+        step("figure 2")
+    fig2, paper, fig2_structure = _figure2(out_dir)
+    write_report(
+        models,
+        ds,
+        out_dir / "report",
+        flagged=flagged,
+        truth=truth,
+        fine=default_fine_profiles_path() if embedded else None,
+        extra=_report_extras(fig2, paper, fig2_structure),
+    )
+    return {
+        "figure": png,
+        "summary": js,
+        "model": mpath,
+        "fits": out_dir / "fits",
+        "pig": out_dir / "pig.zarr",
+        "report": out_dir / "report" / "index.html",
+    }
+
+
+def _with_progress(reporter: Reporter, out_dir, step: Callable[[str], None] | None, job: dict) -> dict:
+    """The main job with its steps shown by ``reporter`` as one progress of :data:`DEMO_STEPS`."""
+    if not flip_available():  # Figure 2's numbers without FLIP: the job goes on and says so
+        reporter.info(FLIP_SKIPPED)
+    with reporter.progress("demo", DEMO_STEPS) as update:
+        begun = itertools.count(1)
+
+        def told(name: str) -> None:
+            if step:
+                step(name)
+            update(completed=next(begun), item=name)
+
+        return run_demo(out_dir, step=told, **job)
+
+
+def _baselines(out_dir, n_terms: int, step: Callable[[str], None] | None):
+    """Step 1: dipole, Burley and exponential fit per material; the figure, the numbers, the model file."""
     profiles = []
     for name, mat in MATERIALS.items():
         if step:
@@ -141,11 +174,11 @@ def run_demo(
         overwrite=True,
         meta={"materials": list(MATERIALS), "source": "3-term fits of the Jensen 2001 dipole"},
     )
+    return png, js, mpath
 
-    # -- the embedded measurement: planar fits and Figure 1 -------------------------
-    ds = open_dataset(dataset or default_dataset_path())
-    embedded = dataset is None  # the default data come with their held-out truth and fine profiles
-    truth = open_dataset(default_truth_path()) if embedded else None
+
+def _demo_fits(ds, out_dir, max_rounds: int, step: Callable[[str], None] | None):
+    """Step 2's planar fits (:data:`DEMO_FITS`), each saved under ``fits/``: the models and flagged points."""
     models, flagged = {}, {}
     for label, kw in DEMO_FITS.items():
         if step:
@@ -155,7 +188,11 @@ def run_demo(
             fit.model, out_dir / "fits" / f"{label}.model.zip", overwrite=True, meta=fit.metadata(ds.path)
         )
         models[label], flagged[label] = fit.model, fit.flagged
-    # -- relighting: a stripe of light, models against photon transport ------------------
+    return models, flagged
+
+
+def _relight(ds, models: dict, out_dir, embedded: bool, step: Callable[[str], None] | None) -> None:
+    """Relighting: a stripe of light, models against photon transport (``report/relight.png``, ``.json``)."""
     if step:
         step("relighting")
     relit = relight_check(
@@ -165,11 +202,10 @@ def run_demo(
         volume=demo_volume() if embedded else None,
     )
     write_json(out_dir / "report" / "relight.json", relit)
-    if step:
-        step("report")
-    # -- Figure 2: the pig, acquired per vertex, fitted, rendered beside volpath ------------
-    if step:
-        step("figure 2")
+
+
+def _figure2(out_dir):
+    """Figure 2 made under ``report/``: its numbers, those of the paper's choice, and the structure chosen."""
     fig2 = run_figure2(
         out_dir / "report",
         out_dir / "pig.zarr",
@@ -180,54 +216,41 @@ def run_demo(
     paper = json.loads((out_dir / "report" / "paper" / "figure2_paper.json").read_text())
     pig_fit = read_header(out_dir / "fits" / "pig_iso.model.zip")["meta"]["fit"]
     fig2_structure = pig_fit["structure"]["chosen"]["label"] if pig_fit.get("structure") else "as given"
-    write_report(
-        models,
-        ds,
-        out_dir / "report",
-        flagged=flagged,
-        truth=truth,
-        fine=default_fine_profiles_path() if embedded else None,
-        extra=[
-            (
-                "relight.png",
-                "Relighting: the sample under a 2 mm stripe of light, photon transport (reference) against "
-                "the fitted models (superposition of R_d over the incident cells); green channel.",
-            ),
-            (
-                "figure2.png",
-                "Figure 2: the procedural alabaster pig (generated marble filling, index-matched), "
-                "path-traced by Mitsuba volpath (left) and rendered from the per-vertex model fitted to its "
-                "virtual acquisition as fit does by default (middle: its structure chosen by held-out "
-                f"error, {fig2_structure}; each point's profile with the through-body table, as render "
-                f"draws it); {_flip(fig2)}"
-                f"relative RMSE {fig2['rel_rmse']:.2f} over the object; "
-                "by region (relative RMSE, pixels): "
-                + ", ".join(
-                    f"{k} {v['rel_rmse']:.2f} ({v['pixels']})"
-                    for k, v in fig2["regions"].items()
-                    if k != "all"
-                )
-                + ".",
-            ),
-            (
-                "paper/figure2_paper.png",
-                "Figure 2 with the paper's choice: the isotropic model with n = 3 and the colour scale "
-                "(1, s_g, s_b), fitted to the same data and rendered from each point's radial profile alone "
-                "(render --paper: without the through-body table, each pair's profile corrected by its "
-                "measured energy per cell of normal cosine × distance); "
-                f"{_flip(paper)}"
-                f"relative RMSE {paper['rel_rmse']:.3f} (the default above: {fig2['rel_rmse']:.3f}).",
-            ),
-        ],
-    )
-    return {
-        "figure": png,
-        "summary": js,
-        "model": mpath,
-        "fits": out_dir / "fits",
-        "pig": out_dir / "pig.zarr",
-        "report": out_dir / "report" / "index.html",
-    }
+    return fig2, paper, fig2_structure
+
+
+def _report_extras(fig2: dict, paper: dict, fig2_structure: str) -> list:
+    """The report's extra figures with their captions: the relighting and Figure 2 (default, paper's)."""
+    return [
+        (
+            "relight.png",
+            "Relighting: the sample under a 2 mm stripe of light, photon transport (reference) against "
+            "the fitted models (superposition of R_d over the incident cells); green channel.",
+        ),
+        (
+            "figure2.png",
+            "Figure 2: the procedural alabaster pig (generated marble filling, index-matched), "
+            "path-traced by Mitsuba volpath (left) and rendered from the per-vertex model fitted to its "
+            "virtual acquisition as fit does by default (middle: its structure chosen by held-out "
+            f"error, {fig2_structure}; each point's profile with the through-body table, as render "
+            f"draws it); {_flip(fig2)}"
+            f"relative RMSE {fig2['rel_rmse']:.2f} over the object; "
+            "by region (relative RMSE, pixels): "
+            + ", ".join(
+                f"{k} {v['rel_rmse']:.2f} ({v['pixels']})" for k, v in fig2["regions"].items() if k != "all"
+            )
+            + ".",
+        ),
+        (
+            "paper/figure2_paper.png",
+            "Figure 2 with the paper's choice: the isotropic model with n = 3 and the colour scale "
+            "(1, s_g, s_b), fitted to the same data and rendered from each point's radial profile alone "
+            "(render --paper: without the through-body table, each pair's profile corrected by its "
+            "measured energy per cell of normal cosine × distance); "
+            f"{_flip(paper)}"
+            f"relative RMSE {paper['rel_rmse']:.3f} (the default above: {fig2['rel_rmse']:.3f}).",
+        ),
+    ]
 
 
 def _flip(numbers: dict) -> str:

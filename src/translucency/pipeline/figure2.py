@@ -9,10 +9,11 @@ from ..acquire.objects import make_pig
 from ..fit.mesh import fit_mesh
 from ..io.model_file import save_model
 from ..render import Camera, PointLight
-from ..render.figure import figure2
 from ..render.picture import coverage
 from ..render.reference import SHIPPED as SHIPPED_REFERENCES
 from ..render.reference import converged_reference
+from ..render.still import render_still
+from ..transport import PreparedObject, TransportOptions
 
 #: samples per pixel of each of the two reference renders of Figure 2 (its noise: figure2.json)
 FIGURE2_REFERENCE_SPP = 256
@@ -115,9 +116,8 @@ def run_figure2(
         meta=fit.metadata(Path(data_path).resolve()),
     )
     # Figure 2 exposes its pair at the reference's own level (auto) and keeps its names
-    default = figure2(
-        fit.model,
-        pig,
+    default = render_still(
+        PreparedObject(fit.model, pig),
         light,
         report_dir,
         volume=volume,
@@ -127,23 +127,26 @@ def run_figure2(
         name="figure2",
     )
     if paper_dir is not None:
-        paper = fit_mesh(data_path, "iso", n_terms=3, colour="shared")  # the paper's structure
-        paper_dir = Path(paper_dir)
-        save_model(paper.model, paper_dir / "pig_paper.model.zip", dtype="float16", overwrite=True,
-                   meta=paper.metadata(Path(data_path).resolve()))  # fmt: skip
-        figure2(
-            paper.model,
-            pig,
-            light,
-            paper_dir,
-            volume=volume,
-            camera=camera,
-            spp_reference=spp,
-            exposure="auto",
-            name="figure2_paper",
-            through=False,
-        )
+        _paper_figure(data_path, paper_dir, pig, volume, light, camera, spp)
     return default
+
+
+def _paper_figure(data_path, paper_dir, pig, volume, light, camera, spp: int) -> None:
+    """The paper's choice fitted to the same data, drawn from its radial profiles alone into ``paper_dir``."""
+    paper = fit_mesh(data_path, "iso", n_terms=3, colour="shared")  # the paper's structure
+    paper_dir = Path(paper_dir)
+    save_model(paper.model, paper_dir / "pig_paper.model.zip", dtype="float16", overwrite=True,
+               meta=paper.metadata(Path(data_path).resolve()))  # fmt: skip
+    render_still(
+        PreparedObject(paper.model, pig, options=TransportOptions(kind="paper")),
+        light,
+        paper_dir,
+        volume=volume,
+        camera=camera,
+        spp_reference=spp,
+        exposure="auto",
+        name="figure2_paper",
+    )
 
 
 def write_figure2_reference(folder=None, *, spp: int = FIGURE2_REFERENCE_SPP, size=(160, 120)) -> dict:
