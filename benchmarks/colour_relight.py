@@ -15,9 +15,9 @@ from pathlib import Path
 from translucency.fit.mesh import fit_mesh
 from translucency.mitsuba import mesh_scene
 from translucency.pipeline import figure2_scene
-from translucency.render.irradiance import vertex_irradiance
-from translucency.render.relight import relight_vertices
-from translucency.render.transport import transport_matrices
+from translucency.transport.irradiance import vertex_irradiance
+from translucency.transport.relight import relight_vertices
+from translucency.transport.matrices import transport_matrices
 
 
 def main() -> int:

@@ -147,10 +147,10 @@ def main() -> int:
     for name, command in stages.items():
         if name not in args.skip:
             rows.append(run_stage(name, command, kill))
-    if "render --scene" not in args.skip:
+    if "render scene" not in args.skip:
         scene = scene_folder("pig", work / "scene", model, (160, 120))
-        command = ["render", "--scene", str(scene), "--object", f"object={model}", "--out", str(work / "lit")]
-        rows.append(run_stage("render --scene", command + ["--overwrite", "--json"], kill))
+        command = ["render", "scene", str(scene), "--object", f"object={model}", "--out", str(work / "lit")]
+        rows.append(run_stage("render scene", command + ["--overwrite", "--json"], kill))
     page = [p for p in (work / "page").glob("*") if p.name != ".translucency-output.json"]
     sizes = {
         "model file": model.stat().st_size if model.exists() else None,

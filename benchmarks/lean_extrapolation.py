@@ -29,7 +29,7 @@ from translucency.fit.mesh import fit_mesh
 from translucency.io.mesh_dataset import open_mesh_dataset
 from translucency.model.lean import lean_vector
 from translucency.pipeline import figure2_scene
-from translucency.render.parameters import neighbour_weights
+from translucency.transport.parameters import neighbour_weights
 
 
 def main() -> int:

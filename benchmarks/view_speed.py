@@ -154,12 +154,13 @@ def server_side(model: Path) -> dict:
 
     from translucency.io.model_file import load_model, read_header
     from translucency.render import object_of_model
-    from translucency.view.object_page import prepare_object
+    from translucency.transport import PreparedObject
+    from translucency.view.object_page import viewed_object
     from translucency.view.surface import reduced_mesh
 
     m = load_model(model)
     mesh, _ = object_of_model(m, read_header(model))
-    view = prepare_object(m, mesh, check_error=False)
+    view = viewed_object(PreparedObject(m, mesh), check_error=False)
     _, receivers = reduced_mesh(mesh)  # the page's own reduced mesh
     view.relight(view.light_at("point", (1, 0, 1)), receivers=receivers)  # the draft's transport, once
     full, draft, err = [], [], []

@@ -11,9 +11,9 @@ from scipy.spatial import cKDTree
 from helpers import random_exponential_model
 from translucency import TranslucencyError
 from translucency.geometry import farthest_points, vertex_areas
-from translucency.render.parameters import neighbour_weights, vertex_parameters
-from translucency.render.relight import relight_vertices
-from translucency.render.transport import transport_matrices
+from translucency.transport.matrices import transport_matrices
+from translucency.transport.parameters import neighbour_weights, vertex_parameters
+from translucency.transport.relight import relight_vertices
 
 #: a steep term and one whose 1/|d| (5 to 12 mm) spans the capsule (10 mm thick, 26 mm long)
 ACROSS = (((1.5, 3.0), (0.05, 0.2)), ((0.08, 0.2), (0.002, 0.006)))

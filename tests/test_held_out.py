@@ -69,7 +69,7 @@ def test_evaluate_against_an_independent_truth(tmp_path):
             str(truth),
             "--report",
             str(tmp_path / "rep"),
-            "--json",
+            "--json-out",
             str(tmp_path / "rep.json"),
         ],
     )

@@ -19,7 +19,8 @@ from translucency.model.incidence import (
     incidence_law,
     plane_albedo,
 )
-from translucency.render import DirectionalLight, EnvironmentLight, vertex_irradiance
+from translucency.render import DirectionalLight, EnvironmentLight
+from translucency.transport import vertex_irradiance
 
 
 def _gauss(n=64):

@@ -8,10 +8,10 @@ from pathlib import Path
 
 import pytest
 import trimesh
+from json_schemas import COMMAND, SCHEMAS, check, markdown, schema_of
 from typer.testing import CliRunner
 
 from translucency.cli.app import app
-from translucency.cli.schemas import SCHEMAS, check, markdown, schema_of
 from translucency.workflow import demo as workflow_demo
 
 runner = CliRunner()
@@ -54,7 +54,7 @@ def outputs(tmp_path_factory):
     out["render (scene)"] = _json(
         [
             "render",
-            "--scene",
+            "scene",
             tmp / "scene.xml",
             "--object",
             f"ball={tmp / 'b.model.zip'}",
@@ -104,7 +104,7 @@ OBJECT_PHOTOGRAPHS = ["acquire", "object-photographs", "--material", "homogeneou
 OBJECT_PHOTOGRAPHS += ["--cameras", "3", "--resolution", "32", "32", "--spp", "4"]
 
 
-#: a small scene around the mesh of b.model.zip (render --scene)
+#: a small scene around the mesh of b.model.zip (render scene)
 SCENE = """<scene version="3.0.0">
   <sensor type="perspective"><float name="fov" value="40"/>
     <transform name="to_world"><lookat origin="0, -30, 10" target="0, 0, 0" up="0, 0, 1"/></transform>
@@ -159,8 +159,8 @@ def test_import_object_json(outputs):
 
 
 def test_docs_page_is_the_schemas():
-    """docs/json.md is generated from translucency/cli/schemas.py: regenerate it when a schema changes."""
-    assert DOCS.read_text() == markdown(), "run: python -m translucency.cli.schemas > docs/json.md"
+    """docs/json.md is generated from docs/_gen/json_schemas.py: regenerate it when a schema changes."""
+    assert DOCS.read_text() == markdown(), f"run: {COMMAND}"
 
 
 def test_info_json_is_typed_and_whole(outputs):

@@ -1,4 +1,4 @@
-"""The lean (model/lean.py, fit/lean.py, render/lean.py): Snell's law, the exit normalisation against a
+"""The lean (model/lean.py, fit/lean.py, transport/lean.py): Snell's law, the exit normalisation against a
 plain double integral over the hemisphere, the fit recovering a known κ, and the leaned transport keeping
 each source's energy, drawing the paper's model at κ = 0 and being reciprocal where the model is."""
 
@@ -17,6 +17,7 @@ from translucency.fit.lean import fit_point
 from translucency.geometry import vertex_areas
 from translucency.io.mesh_dataset import open_mesh_dataset
 from translucency.model.boundary import fresnel_transmittance
+from translucency.transport import TransportOptions
 from translucency.model.lean import exit_normalisation, lean_vector, refracted, von_mises_harmonics
 
 
@@ -126,9 +127,9 @@ def test_a_fit_on_oblique_beams_carries_a_lean_the_model_file_keeps(leaned_ball)
 
 def test_the_leaned_transport_keeps_each_source_s_energy_and_is_the_paper_s_at_kappa_zero(leaned_ball):
     from translucency.mitsuba import mesh_scene
-    from translucency.render.lean import leaned
     from translucency.render.lights import parse_light
-    from translucency.render.transport import transport_matrices
+    from translucency.transport.lean import leaned
+    from translucency.transport.matrices import transport_matrices
 
     ball, model, _, _ = leaned_ball
     scene = mesh_scene(ball)
@@ -159,9 +160,9 @@ def test_a_uniform_sky_leans_by_a_third_of_the_normal(leaned_ball):
     n − ⟨cos θ⟩_cos n = n / 3 (cosine-weighted: ⟨cos θ⟩ = 2/3), within the 64 rays' noise; a sky cut to
     one direction by a wall would lean like a directional light — here its mean over the rays only."""
     from translucency.mitsuba import mesh_scene
-    from translucency.render.lean import lean_applies, light_lean
     from translucency.render.lights import parse_light
-    from translucency.render.transport import transport_matrices
+    from translucency.transport.lean import lean_applies, light_lean
+    from translucency.transport.matrices import transport_matrices
 
     ball, model, _, _ = leaned_ball
     sky = parse_light("env:0.3")
@@ -179,14 +180,14 @@ def test_a_uniform_sky_leans_by_a_third_of_the_normal(leaned_ball):
 
 def test_the_fused_relight_is_the_lean_s_formula_written_plainly(leaned_ball):
     """relight_vertices on a leaned transport (one pass over the sources, the kernel's own exponential, one
-    core's share each) against the formula of render/lean.py written pair by pair in NumPy, both ways, with
+    core's share each) against the formula of transport/lean.py written pair by pair in NumPy, both ways, with
     one matrix shared by the channels and with one matrix per channel."""
     from translucency.mitsuba import mesh_scene
     from translucency.model.lean import exit_normalisation
-    from translucency.render.lean import leaned
     from translucency.render.lights import parse_light
-    from translucency.render.relight import relight_vertices
-    from translucency.render.transport import transport_matrices
+    from translucency.transport.lean import leaned
+    from translucency.transport.matrices import transport_matrices
+    from translucency.transport.relight import relight_vertices
 
     ball, model, _, _ = leaned_ball
     scene = mesh_scene(ball)
@@ -229,9 +230,9 @@ def test_the_fused_relight_is_the_lean_s_formula_written_plainly(leaned_ball):
 
 
 def test_the_kernel_s_exponential_is_numpy_s_to_float32_precision():
-    """render/lean.py's exponential (range reduction to 2^k 2^f, a Taylor series, the exponent's bits)
+    """transport/lean.py's exponential (range reduction to 2^k 2^f, a Taylor series, the exponent's bits)
     against NumPy's in float64, over the exponents the lean meets and far beyond."""
-    from translucency.render.lean import _exp_inplace
+    from translucency.transport.lean import _exp_inplace
 
     x = np.concatenate([np.linspace(-30, 30, 200_001), np.random.default_rng(0).normal(0, 3, 10_000)])
     got = x.astype(np.float32)
@@ -248,13 +249,13 @@ def test_the_page_s_transfer_leans_each_direction_of_its_lattice(leaned_ball):
     direction a directional light (its irradiance by vertex_irradiance, its lean by leaned from the light's
     arrival), relit, projected on the basis — and, with κ = 0, the paper's transfer (K relights)."""
     from translucency.mitsuba import mesh_scene
-    from translucency.render import sh
-    from translucency.render.irradiance import vertex_irradiance
-    from translucency.render.lean import leaned
+    from translucency.transport import sh
     from translucency.render.lights import DirectionalLight
-    from translucency.render.relight import relight_vertices
-    from translucency.render.transfer import transfer_vectors
-    from translucency.render.transport import transport_matrices
+    from translucency.transport.irradiance import vertex_irradiance
+    from translucency.transport.lean import leaned
+    from translucency.transport.matrices import transport_matrices
+    from translucency.transport.relight import relight_vertices
+    from translucency.transport.transfer import transfer_vectors
 
     ball, model, _, _ = leaned_ball
     scene = mesh_scene(ball)
@@ -319,23 +320,23 @@ def test_render_angles_from_the_command_line(leaned_ball, tmp_path):
         runs[bool(flag)] = json.loads((out / "render.json").read_text())
     assert runs[True]["angles"] is True and runs[False]["angles"] is False
     sky = tmp_path / "sky"
-    env_args = [*args[:2], "--size", "48", "36", "--light", "env:1", "--angles", "--out", str(sky)]
+    env_args = [*args[:2], "--resolution", "48", "36", "--light", "env:1", "--angles", "--out", str(sky)]
     res = CliRunner().invoke(app, env_args)
     said = " ".join(res.output.split())  # (the console may wrap the line)
     assert res.exit_code == 0 and "leans by its irradiance-weighted mean direction" in said, res.output
     assert json.loads((sky / "render.json").read_text())["angles"] is True
-    line = error_line(["render", "--scene", str(tmp_path / "s.xml"), "--object", "a=b", "--angles"])
+    line = error_line(["render", "scene", str(tmp_path / "s.xml"), "--object", "a=b", "--angles"])
     assert "s.xml" in line and "--angles" not in line  # a scene takes --angles: the missing file is the fault
     # glTF bakes the paper's model and says so in one line, or with --angles the lean: its colours are
     # render's leaned exitance under the same light (8 bits)
     from translucency import export_model
     from translucency.io.gltf import read_glb
     from translucency.mitsuba import mesh_scene
-    from translucency.render.irradiance import vertex_irradiance
-    from translucency.render.lean import leaned
     from translucency.render.lights import parse_light
-    from translucency.render.relight import relight_vertices
-    from translucency.render.transport import transport_matrices
+    from translucency.transport.irradiance import vertex_irradiance
+    from translucency.transport.lean import leaned
+    from translucency.transport.matrices import transport_matrices
+    from translucency.transport.relight import relight_vertices
 
     summary = export_model(path, gltf=tmp_path / "ball.glb")
     assert "paper's model" in summary["lean"] and summary["angles"] is False
@@ -397,18 +398,18 @@ def test_a_lean_out_of_range_is_refused_before_it_is_written(leaned_ball, tmp_pa
 
 
 def test_a_scene_leans_its_objects_as_render_does(leaned_ball):
-    """``render --scene --angles``: the leaned ball turned 90° about z and moved, under one directional
+    """``render scene --angles``: the leaned ball turned 90° about z and moved, under one directional
     emitter, one pass (nothing glows back onto a convex ball).  Its exitance is π T' E with the scene's
     irradiance and the light's lean vector gathered in the scene's frame and turned back to the model's —
     the same, vertex by vertex, as the lean of the same light written in the model's frame
     (:func:`leaned`); and the lean moves it (against the paper's model in the same scene)."""
     from translucency.mitsuba import mesh_scene, mitsuba
-    from translucency.render.irradiance import vertex_irradiance
-    from translucency.render.lean import leaned
     from translucency.render.lights import DirectionalLight
-    from translucency.render.relight import relight_vertices
-    from translucency.render.transport import transport_matrices
     from translucency.scene import FittedScene
+    from translucency.transport.irradiance import vertex_irradiance
+    from translucency.transport.lean import leaned
+    from translucency.transport.matrices import transport_matrices
+    from translucency.transport.relight import relight_vertices
 
     mi = mitsuba()
     ball, model, path, _ = leaned_ball
@@ -434,7 +435,7 @@ def test_a_scene_leans_its_objects_as_render_does(leaned_ball):
     }
     exitance = {}
     for angles in (False, True):
-        fs = FittedScene(scene, {"ball": path}, samples=4, passes=1, angles=angles)
+        fs = FittedScene(scene, {"ball": path}, samples=4, passes=1, transport=TransportOptions(angles=angles))
         fs.light()
         exitance[angles] = fs.objects[0].glowing.exitance
     # the same light in the model's frame: its flight turned back by the rotation's transpose, on the

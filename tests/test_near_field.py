@@ -14,8 +14,8 @@ from translucency.cli.app import app
 from translucency.fit.mesh import fit_mesh
 from translucency.geometry import same_triangles, vertex_areas
 from translucency.io.mesh_dataset import open_mesh_dataset
-from translucency.render.relight import relight_vertices
-from translucency.render.transport import transport_matrices
+from translucency.transport.matrices import transport_matrices
+from translucency.transport.relight import relight_vertices
 
 runner = CliRunner()
 
@@ -113,7 +113,7 @@ def test_a_model_renders_after_its_data_set_is_deleted(ball_fit, tmp_path):
     assert same_triangles(back.faces, fit.model.faces)  # (in the mesh codec's order)
     np.testing.assert_allclose(back.measured["own"], fit.model.measured["own"], rtol=1e-6)
     shutil.rmtree(copy)
-    res = runner.invoke(app, ["render", str(path), "--out", str(tmp_path / "r"), "--size", "48", "36"])
+    res = runner.invoke(app, ["render", str(path), "--out", str(tmp_path / "r"), "--resolution", "48", "36"])
     assert res.exit_code == 0, res.output
     assert json.loads((tmp_path / "r" / "render.json").read_text())["vertices"] == len(ball.vertices)
     assert (tmp_path / "r" / "ours.exr").stat().st_size > 500
@@ -140,10 +140,10 @@ def test_skin_under_a_spot_renders_close_to_its_reference(tmp_path):
     from translucency.mitsuba import mesh_scene
     from translucency.render.camera import Camera
     from translucency.render.compare import compare
-    from translucency.render.irradiance import vertex_irradiance
     from translucency.render.lights import parse_light
     from translucency.render.picture import VertexPicture, coverage
     from translucency.render.reference import converged_reference
+    from translucency.transport.irradiance import vertex_irradiance
 
     pig = make_pig()
     vol = object_volume("skin", pig, 1.0, seed=3)

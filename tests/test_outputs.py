@@ -115,7 +115,7 @@ def writers(inp, out):
             *acquire,
         ],
         "fit": ["fit", str(inp["data"]), "--out", str(out), "--overwrite"],
-        "render": ["render", str(inp["mesh_model"]), "--out", str(out), "--size", "16", "12", "--overwrite"],
+        "render": ["render", str(inp["mesh_model"]), "--out", str(out), "--resolution", "16", "12", "--overwrite"],
         "evaluate --report": [
             "evaluate",
             str(inp["model"]),
@@ -124,13 +124,13 @@ def writers(inp, out):
             str(out),
             "--overwrite",
         ],
-        "evaluate --json": [
+        "evaluate --json-out": [
             "evaluate",
             str(inp["model"]),
             str(inp["data"]),
             "--report",
             str(out) + ".report",
-            "--json",
+            "--json-out",
             str(out),
             "--overwrite",
         ],
@@ -146,7 +146,7 @@ def test_overwrite_never_deletes_the_current_folder(inputs, tmp_path, monkeypatc
     before = snapshot(work)
     monkeypatch.chdir(work)
     for name, args in writers(inputs, ".").items():
-        if name == "evaluate --json":
+        if name == "evaluate --json-out":
             continue  # --json . names a folder: covered below
         msg = refused(runner.invoke(app, args))
         assert "current folder" in msg, (name, msg)
@@ -203,7 +203,7 @@ def test_own_outputs_are_replaced_only_with_overwrite(inputs, tmp_path):
     assert res.exit_code == 0, res.output
     assert kind_of(out) == "model file"
     # a render folder: created with the marker, reused only with --overwrite
-    render = ["render", str(inputs["mesh_model"]), "--out", str(tmp_path / "r"), "--size", "16", "12"]
+    render = ["render", str(inputs["mesh_model"]), "--out", str(tmp_path / "r"), "--resolution", "16", "12"]
     assert runner.invoke(app, render).exit_code == 0
     assert kind_of(tmp_path / "r") == "output folder" and (tmp_path / "r" / MARKER).is_file()
     refused(runner.invoke(app, render), recommends_overwrite=True)

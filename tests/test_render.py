@@ -24,7 +24,7 @@ from translucency.render import (
     vertex_irradiance,
 )
 from translucency.render.picture import coverage
-from translucency.render.transport import default_radius
+from translucency.transport.matrices import default_radius
 
 
 @pytest.fixture(scope="module")
@@ -67,7 +67,7 @@ def test_three_channels_on_one_set_of_pairs_against_a_plain_loop():
     summed pair by pair."""
     import scipy.sparse as sp
 
-    from translucency.render.relight import Transport
+    from translucency.transport.relight import Transport
 
     rng = np.random.default_rng(7)
     V = 60
@@ -93,7 +93,7 @@ def test_three_channels_on_one_set_of_pairs_against_a_plain_loop():
 
 def test_profiles_are_blended_not_parameters(ball):
     """Between incident points the profile is the weighted mean of their profiles (no new exponential)."""
-    from translucency.render.parameters import vertex_parameters
+    from translucency.transport.parameters import vertex_parameters
 
     rng = np.random.default_rng(2)
     model = _model_on(ball, rng, np.array([0, 5, 9, 40]))
@@ -219,8 +219,10 @@ def test_fit_and_render_cli_on_a_mesh(tmp_path):
     bad = runner.invoke(app, ["render", str(model), "--light", "point:0,0,0"])
     assert bad.exit_code == 2 and "inside the object" in bad.output
     assert fig["incidence"] == "half-space"  # an index-matched object with measured totals
-    bad = runner.invoke(app, ["render", str(model), "--incidence-law", "oblique"])
-    assert bad.exit_code == 2 and "--incidence-law: 'oblique' is not one of half-space" in bad.output
+    from translucency.transport import TransportOptions
+
+    with pytest.raises(TranslucencyError, match="transport: 'oblique' is not one of default, paper"):
+        TransportOptions(kind="oblique")
 
 
 def test_spot_and_environment_irradiance(ball):
@@ -379,7 +381,7 @@ def test_parameters_follow_the_surface_not_the_gap():
     """Two blocks 0.3 mm apart: a vertex on one takes no parameters from the other (geodesic
     neighbours), while straight-line neighbours would mix them; graph distances on a ball
     approximate great-circle arcs."""
-    from translucency.render.parameters import geodesic_neighbours, vertex_parameters
+    from translucency.transport.parameters import geodesic_neighbours, vertex_parameters
 
     a = trimesh.creation.box(extents=(10, 10, 2)).subdivide().subdivide()
     b = a.copy().apply_translation((0, 0, 2.3))

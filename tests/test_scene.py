@@ -1,4 +1,4 @@
-"""Fitted objects in a user's Mitsuba scene (translucency.scene, render --scene, export --ply): the glowing
+"""Fitted objects in a user's Mitsuba scene (translucency.scene, render scene, export --ply): the glowing
 surfaces sampled without bias (light sampling alone = BSDF sampling alone = the closed form of a
 Lambertian sphere), the irradiance at vertices against closed forms (a point light's I cos/d², a constant
 sky's πL, the furnace's geometric series), the pose, the reference and every bad input in one line."""
@@ -254,7 +254,7 @@ def test_render_scene_from_the_command_line_against_its_reference(fitted_ball):
     folder, model = fitted_ball
     scene = _write_scene(folder)
     out = folder / "render"
-    args = ["render", "--scene", str(scene), "--object", f"ball={model}", "--out", str(out), "--reference"]
+    args = ["render", "scene", str(scene), "--object", f"ball={model}", "--out", str(out), "--reference"]
     res = runner.invoke(app, args + ["--spp", "32", "--samples", "32"])
     assert res.exit_code == 0, res.output
     summary = json.loads((out / "scene.json").read_text())
@@ -297,7 +297,9 @@ def test_python_api_renders_a_scene_dict_with_two_objects(fitted_ball):
     assert abs(left / right - 1) < 0.1  # the two mirror each other
     assert np.allclose(E_b.mean(), E_a.mean(), rtol=0.05)
     # traced at one vertex in ~4 and interpolated: the same light, the same shadow of the other ball
-    reduced = FittedScene(scene, {"a": model, "b": model}, samples=16, irradiance_spacing=2.0)
+    from translucency.experimental import ReducedScene
+
+    reduced = ReducedScene(scene, {"a": model, "b": model}, samples=16, irradiance_spacing=2.0)
     R_a, _ = reduced.light(seed=3)
     assert len(reduced.reduced[0].traced) < 0.4 * len(E_a)
     assert abs(R_a.mean() / E_a.mean() - 1) < 0.03
@@ -383,7 +385,7 @@ def test_bad_scene_input_is_one_line(fitted_ball, tmp_path, case, expected):
             .replace(floor, floor + '<medium type="homogeneous" name="interior"/>')
         )
         (tmp_path / "object.ply").symlink_to(folder / "object.ply")
-    args = ["render", "--scene", str(scene), "--out", str(tmp_path / "r")]
+    args = ["render", "scene", str(scene), "--out", str(tmp_path / "r")]
     for m in models:
         args += ["--object", m]
     line = error_line(args + extra)
@@ -501,7 +503,7 @@ def _against_volpath_and_in_metres(fitted_ball, tmp_path, light_in, tag: str) ->
     """The ball's scene with ``light_in(u)`` (lights and props written for ``u`` mm a unit) in millimetres:
     our picture against its volpath reference over the ball; that reference written in metres equal to the
     millimetre one.  Returns the comparison's errors."""
-    from translucency.workflow.rendering import render_scene
+    from translucency.workflow.scene_rendering import render_scene
 
     folder, model = fitted_ball
     (tmp_path / "object.ply").symlink_to(folder / "object.ply")
@@ -855,7 +857,7 @@ def test_reduced_vertices_keep_the_terminator_sharp():
     interpolated, the vertices refined where the neighbours disagree are those along the terminator; with
     them traced the terminator holds a third of the error interpolation alone leaves there, and the
     smooth rest is within 0.05 of the light's irradiance."""
-    from translucency.scene.reduced import ReducedVertices
+    from translucency.experimental.reduced import ReducedVertices
 
     ball = trimesh.creation.icosphere(5, radius=10.0)
     n = ball.vertex_normals

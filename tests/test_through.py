@@ -16,8 +16,8 @@ from translucency.fit.through import measure_through
 from translucency.geometry import vertex_areas
 from translucency.io.mesh_dataset import open_mesh_dataset
 from translucency.model.through import COS_EDGES, R_EDGES, _centres, interpolation_nodes, through_factor
-from translucency.render.relight import relight_vertices
-from translucency.render.transport import transport_matrices
+from translucency.transport.matrices import transport_matrices
+from translucency.transport.relight import relight_vertices
 
 
 def test_interpolation_is_exact_at_the_centres_and_a_partition_of_unity():

@@ -47,7 +47,7 @@ COMMAND_TIMEOUT_S = 1800
 BLOCK = re.compile(r"^```console[ \t]*\n(.*?)^```[ \t]*$", re.S | re.M)
 SKIP = re.compile(r"<!--\s*test:\s*skip\b[^>]*-->\s*\Z")
 FILES = re.compile(r"<!--\s*test:\s*files\s+(.*?)-->", re.S)
-INLINE = re.compile(r"`([a-z][a-z-]*(?: [^`]+)?)`")  # `translucency view M --export page`, `render --scene`
+INLINE = re.compile(r"`([a-z][a-z-]*(?: [^`]+)?)`")  # `translucency view M --export page`, `render scene`
 
 
 @dataclass(frozen=True)
@@ -126,6 +126,8 @@ def _resolve(words: list[str]):
     command, path, rest = typer.main.get_command(app), ["translucency"], list(words)
     while hasattr(command, "commands") and rest and not rest[0].startswith("-"):
         name = rest.pop(0)
+        if rest and f"{name} {rest[0]}" in command.commands:  # a command of two words (render scene)
+            name = f"{name} {rest.pop(0)}"
         sub = command.get_command(Context(command), name)
         assert sub is not None, f"`{' '.join(path)}` has no command {name!r}"
         command, path = sub, [*path, name]
@@ -186,7 +188,7 @@ def test_every_command_line_of_the_tutorials_parses():
 
 def test_every_command_named_in_the_text_exists_with_its_options():
     """The commands quoted in the text — `translucency view MODEL --export page`, or without the program's
-    name, `render --scene`, `import images --extra-camera F,P,C`: the command exists and its options do
+    name, `render scene`, `import images --extra-camera F,P,C`: the command exists and its options do
     (the placeholders are not parsed)."""
     commands_ = set(typer.main.get_command(app).commands)
     checked = 0

@@ -20,7 +20,7 @@ from typer.testing import CliRunner
 
 from helpers import random_exponential_model
 from translucency.cli.app import app
-from translucency.render import sh
+from translucency.transport import sh
 
 runner = CliRunner()
 
@@ -101,11 +101,12 @@ def small_model(tmp_path_factory):
 def prepared(small_model):
     from translucency.io.model_file import load_model, read_header
     from translucency.render import object_of_model
-    from translucency.view.object_page import prepare_object
+    from translucency.transport import PreparedObject
+    from translucency.view.object_page import viewed_object
 
     m = load_model(small_model)
     mesh, _ = object_of_model(m, read_header(small_model))
-    return prepare_object(m, mesh, name="small", directions=512)
+    return viewed_object(PreparedObject(m, mesh), name="small", directions=512)
 
 
 def test_transfer_under_a_constant_sky_is_the_closed_form(prepared):
@@ -114,8 +115,8 @@ def test_transfer_under_a_constant_sky_is_the_closed_form(prepared):
     radiance is the transport of that."""
     from translucency.model.incidence import HalfSpaceIncidence, cosine_mean
     from translucency.render.lights import EnvironmentLight
-    from translucency.render.relight import relight_vertices
-    from translucency.render.transfer import transfer_vectors
+    from translucency.transport.relight import relight_vertices
+    from translucency.transport.transfer import transfer_vectors
 
     view = prepared
     L = 0.2
@@ -142,8 +143,8 @@ def test_directional_light_page_formula_is_close_to_the_full_relight(prepared):
 
 
 def test_coarse_transport_on_every_vertex_is_the_transport(prepared):
-    from translucency.render.irradiance import vertex_irradiance
-    from translucency.render.relight import relight_vertices
+    from translucency.transport.irradiance import vertex_irradiance
+    from translucency.transport.relight import relight_vertices
 
     view = prepared
     light = view.light_at("point", (0.3, -1.0, 0.5))
@@ -386,7 +387,7 @@ def test_planar_model_page_and_its_relit_sample(tmp_path):
     """A planar model: the sample's mesh over its α grid, its maps, and the relit sample is exactly α ρ / π
     times the irradiance (a flat index-matched sample: no shadows, one sky for every point)."""
     from translucency import save_model
-    from translucency.render import sh
+    from translucency.transport import sh
     from translucency.view.planar_page import planar_page_data
 
     model = random_exponential_model(np.random.default_rng(2), n_points=6)

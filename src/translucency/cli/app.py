@@ -26,6 +26,7 @@ from . import (
     info,
     materials,
     render,
+    render_scene,
     view,
 )
 from ._common import console, err_console
@@ -60,6 +61,13 @@ class _Command(typer.core.TyperCommand):
 class _OneLineErrors(_Group):
     """The top command: a usage error (unknown option, a value of the wrong type) is one ``error:`` line
     naming the option, exit status 2, like every other error — not Click's usage box."""
+
+    def resolve_command(self, ctx, args):
+        """``render scene ...`` is the command ``render scene`` (its own command, listed as such): two
+        words, where a one-word command takes one."""
+        if len(args) > 1 and f"{args[0]} {args[1]}" in self.commands:
+            return super().resolve_command(ctx, [f"{args[0]} {args[1]}", *args[2:]])
+        return super().resolve_command(ctx, args)
 
     def main(self, args=None, prog_name=None, complete_var=None, standalone_mode=True, **extra):
         if not standalone_mode:
@@ -111,6 +119,7 @@ app.command("materials")(materials.materials)
 app.command("info")(info.info)
 app.command("fit")(fit.fit)
 app.command("render")(render.render)
+app.command("render scene")(render_scene.render_scene)
 app.command("evaluate")(evaluate.evaluate)
 app.command("export")(export.export)
 app.command("view")(view.view)

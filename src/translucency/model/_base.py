@@ -63,7 +63,7 @@ class ReflectanceModel(ABC):
     #: mesh models: what the acquisition measured per incident point, (N, 3) each — ``own``: R_d averaged
     #: over the incident vertex's own area A_i (mm⁻², the pairs the fit excludes); ``total``: the diffuse
     #: exitance Σ_v A_v R_d(x_i, v) per unit incident power.  The renderer takes the near field and each
-    #: kernel's total from them (:func:`translucency.render.transport.transport_matrices`).
+    #: kernel's total from them (:func:`translucency.transport.matrices.transport_matrices`).
     measured: dict | None = None
     #: the object the model describes (:mod:`translucency.model.extent`); None: α's support (a planar
     #: sample at least as large as its windows, a mesh's bounding box).  The fitters set it from the data

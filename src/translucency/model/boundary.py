@@ -6,7 +6,7 @@ diffusion approximation, the radiance
 .. math:: L(\theta_o) = M\, \frac{F_t(\theta_o)}{\pi\,(1 - F_{dr,e})}
 
 for the exitance M (W/mm²), normalised so that :math:`\int L \cos\theta_o\, d\omega = M`.  The
-renderer draws exitance with this law (:mod:`translucency.render.relight`) and an object rig's
+renderer draws exitance with this law (:mod:`translucency.transport.relight`) and an object rig's
 importer inverts it (:mod:`translucency.rig.object.exit_law`): one home for both.
 """
 

@@ -23,7 +23,7 @@ point whose normal-incidence reflectance :math:`R_1` was measured gets the albed
 
 which is 1 at normal incidence, grows toward grazing, and keeps :math:`R(\mu_0) \le 1` (reflectance
 bounded).  The renderer applies F per vertex and channel to the irradiance
-(:func:`translucency.render.irradiance.vertex_irradiance`); it holds for index-matched objects only — a
+(:func:`translucency.transport.irradiance.vertex_irradiance`); it holds for index-matched objects only — a
 dielectric boundary's internal reflection changes the law, and there only the Fresnel transmittance's
 ratio is applied.
 """
@@ -306,7 +306,8 @@ class _FactorKernel:
         return mi.Color3f(*out)
 
 
-#: the incidence laws by the name ``render --incidence-law`` takes: the default, its ablation, the data's own
+#: the incidence laws by name: the default every renderer draws, its ablation, the data's own (the last two
+#: as transports of :mod:`translucency.experimental.incidence`)
 INCIDENCE_LAWS = ("half-space", "half-space-in", "normal")
 
 

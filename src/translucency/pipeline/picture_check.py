@@ -4,7 +4,7 @@ against one converged ``volpath`` reference of the object they measured.
 A lab judges an import by the object rendered from it, not by energy per shot.  :func:`picture_check`
 fits every data set it is given the same way (``fit_mesh``, isotropic; the through-body table as ``fit``
 stores it), draws each with ``render``'s default transport under one light and camera
-(:func:`translucency.render.relight.relight_object`, :class:`~translucency.render.picture.VertexPicture`),
+(:func:`translucency.transport.relight.relight_object`, :class:`~translucency.render.picture.VertexPicture`),
 and compares over the object's pixels: the relative RMSE
 :math:`\sqrt{\sum (A - B)^2 / \sum B^2}` (:func:`translucency.render.compare.compare`) of each against the
 first data set's picture and against the reference, and the brightness (mean over the object, A / B).
@@ -18,14 +18,12 @@ from pathlib import Path
 
 from ..fit.mesh import fit_mesh
 from ..io.mesh_dataset import open_mesh_dataset
-from ..mitsuba import mesh_scene
 from ..render import boundary_eta
 from ..render.compare import compare
 from ..render.picture import VertexPicture, coverage
 from ..render.reference import converged_reference
-from ..render.relight import relight_object
 from ..render.tonemap import auto_exposure, save_images
-from ..render.transport import transport_matrices
+from ..transport import PreparedObject, TransportOptions
 
 
 def picture_check(mesh, volume, datasets: dict, light, camera, *, eta: float = 1.0, reference_spp: int = 256,
@@ -76,14 +74,12 @@ def picture_check(mesh, volume, datasets: dict, light, camera, *, eta: float = 1
         out = Path(out)
         out.mkdir(parents=True, exist_ok=True)
         save_images(reference, out / "reference", exposure)
-    scene = mesh_scene(mesh)
     drawn = {}
     for name, data in datasets.items():
         model = fit_mesh(data, "iso").model
         eta_data = boundary_eta(open_mesh_dataset(data).header)
-        L, _, _ = relight_object(
-            transport_matrices(model, mesh), mesh, scene, light, camera.origin, eta=eta_data, angles=angles
-        )
+        prepared = PreparedObject(model, mesh, eta=eta_data, options=TransportOptions(angles=angles))
+        L, _ = prepared.relight(light, camera.origin)
         drawn[name] = VertexPicture(mesh, camera, spp=16, eta=eta_data, light=light).draw(L)
         if out is not None:
             save_images(drawn[name], out / name, exposure)

@@ -119,7 +119,8 @@ def region_errors(
     --------
     >>> import trimesh
     >>> from translucency.mitsuba import mesh_scene
-    >>> from translucency.render import DirectionalLight, coverage, render_vertex_radiance, vertex_irradiance
+    >>> from translucency.render import DirectionalLight, coverage, render_vertex_radiance
+    >>> from translucency.transport import vertex_irradiance
     >>> ball = trimesh.creation.icosphere(2, radius=20.0)  # 40 mm through: thick everywhere, nothing thin
     >>> scene, camera = mesh_scene(ball), Camera.looking_at(ball, direction=(1, 0, 0), width=16, height=12)
     >>> E = vertex_irradiance(ball, scene, DirectionalLight((0.0, 0.0, -1.0)))  # lit from above

@@ -7,7 +7,7 @@ other).  Per vertex the exitance is
 
 .. math:: M_v = \pi\,(T E)_v \qquad (\text{W per scene-unit}^2 \text{ for } E \text{ in W per scene-unit}^2),
 
-:math:`T` the sparse near field plus the far field of :func:`translucency.render.transport_matrices`, and
+:math:`T` the sparse near field plus the far field of :func:`translucency.transport.transport_matrices`, and
 it leaves with the exit law :math:`g_v(\mu)` of the object's boundary: a dielectric's
 :math:`F_t(\mu)/(1 - F_{dr,e})`, the half-space incidence law's :math:`F(\mu)/\langle F \rangle` (index-
 matched objects with measured totals), or Lambertian.
@@ -21,13 +21,11 @@ from pathlib import Path
 import numpy as np
 import trimesh
 
-from .._validate import TranslucencyError
 from ..io.vertex_model import check_vertex_model, load_vertex_model
 from ..mitsuba import load_plugin
 from ..model.boundary import exit_factor
-from ..model.incidence import INCIDENCE_LAWS
-from ..render import boundary_eta, object_of_model, relight_vertices, transport_matrices
-from ..render.lean import lean_pairs, tilted
+from ..render import boundary_eta, object_of_model
+from ..transport import PreparedObject, TransportOptions
 from .pose import Pose, pose_of
 from .surfaces import Glowing, exit_table
 
@@ -56,32 +54,46 @@ def coat_of(eta: float, roughness: float):
 
 @dataclass
 class FittedObject:
-    """One fitted object of a scene (module docstring): placed by :func:`fitted_object`, its transport
-    built by :meth:`prepare`."""
+    """One fitted object of a scene (module docstring): placed by :func:`fitted_object`, drawn through its
+    :class:`~translucency.transport.PreparedObject`, glowing once :meth:`prepare` has built it."""
 
     name: str
-    model: object
-    mesh: trimesh.Trimesh  # the model's mesh, model frame (mm)
-    eta: float
+    prepared: PreparedObject  # the model on its mesh (model frame, mm) behind its boundary, its transport
     pose: Pose
     shape: object  # the Mitsuba shape it is in the scene
-    incidence: str = "half-space"
     coat: object = None
     acquisition: dict = field(default_factory=dict)  # the data set's header (the filling, for a reference)
     scene_unit_mm: float = 1.0
-    transport: object = None  # translucency.render.relight.Transport, once prepared
-    law: object = None  # the incidence law, once prepared
     glowing: Glowing = None  # the object as a light of the scene, once prepared
-    lean_pairs: object = None  # the lean's near pairs (render/lean.py), once prepared, where it has a lean
 
-    def prepare(self, radius: float | None = None, through: bool | None = None) -> None:
-        """Build the transport (near radius ``radius`` mm, default the model's 99 % energy radius; the
-        through-body table as :func:`~translucency.render.transport.transport_matrices` takes it), the
-        incidence law and the glowing surface."""
-        self.transport = transport_matrices(self.model, self.mesh, radius=radius, through=through)
-        self.law = self.transport.incidence(self.incidence, self.eta)
-        if self.transport.lean is not None:
-            self.lean_pairs = lean_pairs(self.transport, self.mesh, self.eta)
+    @property
+    def model(self):
+        """The per-vertex model."""
+        return self.prepared.model
+
+    @property
+    def mesh(self) -> trimesh.Trimesh:
+        """The model's mesh, model frame (mm), in the scene's triangle order."""
+        return self.prepared.mesh
+
+    @property
+    def eta(self) -> float:
+        """The boundary's relative index (1: index-matched)."""
+        return self.prepared.eta
+
+    @property
+    def transport(self):
+        """The prepared transport (:class:`~translucency.transport.relight.Transport`)."""
+        return self.prepared.transport
+
+    @property
+    def law(self):
+        """The incidence law of the object's boundary."""
+        return self.prepared.law
+
+    def prepare(self) -> None:
+        """Build the transport (its near radius chosen by the prepared object) and the glowing surface."""
+        self.prepared.build()
         self.glowing = Glowing(
             self.shape,
             self.vertices,
@@ -109,12 +121,10 @@ class FittedObject:
     def exitance(self, E: np.ndarray, lean: np.ndarray | None = None) -> np.ndarray:
         r"""(V, 3) exitance :math:`M = \pi T E` for the effective irradiance ``E`` (V, 3); with ``lean``
         (V, 3), the light's mean lean vector at each vertex in the scene's frame, the transport leans
-        toward it (:func:`translucency.render.lean.tilted`; a model without a lean draws the paper's)."""
-        T = self.transport
-        if lean is not None and T.lean is not None:  # the scene's frame turned to the model's: R^T ℓ
-            ell = np.asarray(lean, np.float64) @ self.pose.rotation
-            T = tilted(T, self.mesh, ell, eta=self.eta, pairs=self.lean_pairs)
-        return np.pi * relight_vertices(T, E).astype(np.float64)
+        toward it where the lean is drawn (:meth:`~translucency.transport.PreparedObject.through_leaning`)."""
+        # the scene's frame turned to the model's: R^T ℓ
+        ell = None if lean is None else np.asarray(lean, np.float64) @ self.pose.rotation
+        return np.pi * self.prepared.through_leaning(E, ell).astype(np.float64)
 
     def exit_law(self) -> np.ndarray:
         """(V, EXIT_NODES, 3) the exit's angular law g_v(μ) (module docstring)."""
@@ -140,7 +150,7 @@ def fitted_object(
     shape_faces,
     *,
     scene_unit_mm: float = 1.0,
-    incidence: str = "half-space",
+    transport: TransportOptions | None = None,
     roughness: float = 0.0,
 ) -> FittedObject:
     """The fitted object ``name``: the model ``source`` (a file or a loaded per-vertex model) placed as the
@@ -148,10 +158,9 @@ def fitted_object(
     not built yet: :meth:`FittedObject.prepare`).
 
     Refuses, in one line each, a model that is not per-vertex, a shape that is not the model's mesh or is
-    resized (:func:`~translucency.scene.pose.pose_of`), an unknown incidence law.
+    resized (:func:`~translucency.scene.pose.pose_of`).  ``transport``: the transport's choices
+    (:class:`~translucency.transport.TransportOptions`).
     """
-    if incidence not in INCIDENCE_LAWS:
-        raise TranslucencyError(f"incidence: {incidence!r} is not one of {', '.join(INCIDENCE_LAWS)}")
     model, header = read_vertex_model(source, name=name)
     mesh, acquisition = object_of_model(model, header or {"meta": {"acquisition": {}}})
     pose = pose_of(name, mesh.vertices, mesh.faces, shape_vertices, shape_faces, scene_unit_mm=scene_unit_mm)
@@ -160,12 +169,9 @@ def fitted_object(
     eta = boundary_eta(acquisition)  # 1 (index-matched) for a loaded model without its header
     return FittedObject(
         name=name,
-        model=model,
-        mesh=mesh,
-        eta=eta,
+        prepared=PreparedObject(model, mesh, eta=eta, options=transport),
         pose=pose,
         shape=shape,
-        incidence=incidence,
         coat=coat_of(eta, roughness),
         acquisition=acquisition,
         scene_unit_mm=float(scene_unit_mm),

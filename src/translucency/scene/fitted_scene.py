@@ -29,10 +29,10 @@ from .._validate import TranslucencyError
 from ..mitsuba import mitsuba
 from ..mitsuba.user_scenes import load_user_scene, mesh_buffers, segments_hit, shapes_by_id
 from ..model.lean import lean_vector
+from ..transport import TransportOptions
 from .fitted import fitted_object
 from .integrator import STRATEGIES, integrator_class
 from .irradiance import scene_irradiance
-from .reduced import ReducedVertices
 from .surfaces import GlowingSurfaces
 
 
@@ -48,8 +48,6 @@ class FittedScene:
         (``translucency export MODEL --ply``) placed by its ``to_world``.
     scene_unit_mm : float
         Millimetres per scene unit (the models are in mm).
-    incidence : str
-        The incidence law of index-matched objects (:mod:`translucency.model.incidence`).
     roughness : float
         GGX α of a dielectric object's boundary (0: smooth).
     samples : int
@@ -57,22 +55,14 @@ class FittedScene:
     glow_samples : int, optional
         Samples per vertex of each later pass (the objects' glow alone; :meth:`light`); default a
         quarter of ``samples``.
-    irradiance_spacing : float
-        The irradiance is traced at one vertex per cell of a grid this many mean edges wide and at the
-        shadow edges between them, interpolated elsewhere (:mod:`~translucency.scene.reduced`); 0 (the
-        default): traced at every vertex.  On the 27 k-vertex pig at 32 samples, 2 saves a sixth of the
-        light's time and adds a quarter to its picture's error against a converged irradiance; at 16
-        it saves nothing (``benchmarks/scene_speed.py``).
     passes : int
         Light-in / through-the-body passes (module docstring).
     max_depth : int
         Longest path (bounces) of the picture and of the irradiance's rays.
-    angles : bool
-        Objects whose model has a lean (:mod:`translucency.model.lean`) lean toward the light arriving
-        from the scene, by its irradiance-weighted mean lean vector (the paper's model otherwise).
-    through : bool, optional
-        Each model's through-body table (:mod:`translucency.model.through`): default, wherever the model
-        holds one; False: the paper's model.
+    transport : TransportOptions, optional
+        The objects' transport (:class:`~translucency.transport.TransportOptions`: its kind, near radius,
+        the lean — objects whose model has one lean toward the light arriving from the scene, by its
+        irradiance-weighted mean lean vector); default: the defaults.
 
     Examples
     --------
@@ -88,16 +78,13 @@ class FittedScene:
         models: dict,
         *,
         scene_unit_mm: float = 1.0,
-        incidence: str = "half-space",
         roughness: float = 0.0,
         samples: int = 32,
         glow_samples: int | None = None,
-        irradiance_spacing: float = 0.0,
         passes: int = 2,
         max_depth: int = 8,
         strategy: str = "mis",
-        angles: bool = False,
-        through: bool | None = None,
+        transport: TransportOptions | None = None,
     ):
         mi = mitsuba()
         glow_samples = max(1, samples // 4) if glow_samples is None else glow_samples
@@ -119,13 +106,7 @@ class FittedScene:
         self.scene = scene if isinstance(scene, mi.Scene) else load_user_scene(scene)
         self.samples, self.passes, self.max_depth = samples, passes, max_depth
         self.glow_samples = glow_samples
-        if not (irradiance_spacing == 0 or irradiance_spacing >= 1):
-            raise TranslucencyError(f"irradiance_spacing: 0 or >= 1 mean edges, got {irradiance_spacing!r}")
-        self.irradiance_spacing = float(irradiance_spacing)
-        self.reduced = [None] * len(models)  # each object's ReducedVertices (light(); None: every vertex)
-        self._reduced_at = 0.0  # the spacing self.reduced was built for
-        self.angles = bool(angles)
-        self.through = through
+        self.transport = TransportOptions() if transport is None else transport
         shapes = shapes_by_id(self.scene)
         self.objects = []
         for name, source in models.items():
@@ -151,7 +132,7 @@ class FittedScene:
                     vertices,
                     faces,
                     scene_unit_mm=scene_unit_mm,
-                    incidence=incidence,
+                    transport=self.transport,
                     roughness=roughness,
                 )
             )
@@ -175,17 +156,15 @@ class FittedScene:
         self.prepare_s = None
         self.irradiance = [None] * len(self.objects)
 
-    def prepare(self, radius=None, progress=None) -> None:
-        """Build each object's transport (near radius ``radius`` mm, one for all or one per object; default
-        each model's 99 % energy radius) and the integrator: once per scene.  ``progress(k, n, name)``
-        before each object."""
+    def prepare(self, progress=None) -> None:
+        """Build each object's transport (at the near radius its prepared object chose) and the
+        integrator: once per scene.  ``progress(k, n, name)`` before each object."""
         mi = mitsuba()
         t = time.perf_counter()
-        radii = radius if isinstance(radius, (list, tuple)) else [radius] * len(self.objects)
-        for k, (o, r) in enumerate(zip(self.objects, radii)):
+        for k, o in enumerate(self.objects):
             if progress:
                 progress(k, len(self.objects), o.name)
-            o.prepare(r, through=self.through)
+            o.prepare()
         self.glow = GlowingSurfaces([o.glowing for o in self.objects])
         props = mi.Properties()
         props["max_depth"], props["strategy"] = int(self.max_depth), str(self.strategy)
@@ -275,14 +254,6 @@ class FittedScene:
         the same every pass."""
         if self.glow is None:
             self.prepare()
-        if self._reduced_at != self.irradiance_spacing:  # the reduced vertex sets, once per spacing
-            self.reduced = [
-                ReducedVertices(o.vertices, o.normals, o.mean_edge * o.pose.scale, self.irradiance_spacing)
-                if self.irradiance_spacing > 0
-                else None
-                for o in self.objects
-            ]
-            self._reduced_at = self.irradiance_spacing
         for o in self.objects:
             o.set_exitance(np.zeros((len(o.mesh.vertices), 3)))
         self.glow.update()
@@ -302,45 +273,30 @@ class FittedScene:
 
     def _irradiance(self, k: int, o, sources: str, samples: int, seed: int):
         """Object k's irradiance (V, 3) from ``sources`` and, where it leans, the light's mean lean vector
-        (V, 3) (None otherwise): traced at the reduced vertices and at the shadow edges between them,
-        interpolated elsewhere (:mod:`~translucency.scene.reduced`), or traced at every vertex."""
-        lean = self.angles and o.transport.lean is not None
+        (V, 3) (None otherwise), traced at every vertex."""
+        return self._traced(k, o, slice(None), o.law, sources, samples, seed)
+
+    def _traced(self, k: int, o, at, law, sources: str, samples: int, seed: int, salt: int = 0):
+        """Object k's irradiance and mean lean vector (or None) traced at its vertices ``at`` with the
+        incidence ``law`` of those vertices (:func:`~translucency.scene.irradiance.scene_irradiance`)."""
+        lean = o.prepared.has_lean
         x, n = o.vertices, o.normals
         offset = 5e-4 * float(np.ptp(x, axis=0).max())  # the rays' start above the surface, whole object
-
-        def traced(at, law, salt=0):
-            e = scene_irradiance(
-                self.scene,
-                self.glow,
-                x[at],
-                n[at],
-                samples=samples,
-                seed=seed + 104729 * k + 15485863 * salt,
-                offset=offset,
-                incidence=law,
-                eta=o.eta,
-                max_depth=self.max_depth,
-                moment=(lambda w, nn, eta=o.eta: lean_vector(w, nn, eta)) if lean else None,
-                sources=sources,
-            )
-            return e if lean else (e, None)
-
-        reduced = self.reduced[k]
-        if reduced is None:
-            return traced(slice(None), o.law)
-        at = reduced.traced
-        e_s, ell_s = traced(at, o.law.at(at))
-        E = reduced.interpolate(e_s)
-        ell = None if ell_s is None else reduced.interpolate(ell_s)
-        E[at] = e_s
-        if ell is not None:
-            ell[at] = ell_s
-        edge = reduced.to_refine(e_s)
-        if len(edge):  # a shadow's edge crosses here: traced at its own vertices
-            E[edge], ell_edge = traced(edge, o.law.at(edge), salt=1)
-            if ell is not None:
-                ell[edge] = ell_edge
-        return E, ell
+        e = scene_irradiance(
+            self.scene,
+            self.glow,
+            x[at],
+            n[at],
+            samples=samples,
+            seed=seed + 104729 * k + 15485863 * salt,
+            offset=offset,
+            incidence=law,
+            eta=o.eta,
+            max_depth=self.max_depth,
+            moment=(lambda w, nn, eta=o.eta: lean_vector(w, nn, eta)) if lean else None,
+            sources=sources,
+        )
+        return e if lean else (e, None)
 
     def render(self, *, spp: int = 16, seed: int = 0, sensor: int = 0, glowing: bool = True) -> np.ndarray:
         """The picture (H, W, 3), linear RGB, through the scene's ``sensor`` (index), ``spp`` samples a

@@ -8,7 +8,7 @@ Per vertex v (position :math:`x_v` in scene units, outward normal :math:`n_v`) t
 :math:`L_i` the radiance arriving from the scene (:func:`translucency.scene.integrator.trace`),
 :math:`F_v` the incidence law's factor (:mod:`translucency.model.incidence`; 1 for the ``normal`` law)
 and :math:`T = F_t(\cos\theta)/F_t(1)` the dielectric boundary's transmittance against the data's normal
-beam (1 where index-matched, as :func:`translucency.render.irradiance.vertex_irradiance`).
+beam (1 where index-matched, as :func:`translucency.transport.irradiance.vertex_irradiance`).
 It is estimated with K samples per vertex and three strategies combined by multiple importance sampling
 (power heuristic): next-event estimation toward one Mitsuba emitter, toward one point of the glowing
 surfaces, and a cosine-distributed direction whose ray is traced through the scene:
@@ -22,7 +22,7 @@ included (the incidence law's table looked up by
 samples.  With ``moment`` (a function f of the direction toward the light and the normal) the same
 samples also give the irradiance-weighted mean
 :math:`\int E(\omega) f(\omega)\, d\omega / E` (grey: the channels' mean) — the lean's mean vector of the
-light arriving from the whole scene (:func:`translucency.render.lean.light_lean`).
+light arriving from the whole scene (:func:`translucency.transport.lean.light_lean`).
 """
 
 from __future__ import annotations

@@ -34,10 +34,11 @@ picture (:mod:`translucency.scene.integrator`).
      - integer
      - 8
      - longest light path (picture and irradiance)
-   * - ``incidence``
+   * - ``transport``
      - string
-     - ``half-space``
-     - the incidence law of index-matched objects (``half-space``, ``half-space-in``, ``normal``)
+     - ``default``
+     - the objects' transport (:data:`~translucency.transport.kinds.TRANSPORTS`: ``default``, or
+       ``paper`` for the paper's model alone)
    * - ``roughness``
      - float
      - 0
@@ -64,6 +65,7 @@ from pathlib import Path
 
 from .._validate import TranslucencyError
 from ..mitsuba import mitsuba
+from ..transport import TransportOptions
 from .fitted_scene import FittedScene
 from .integrator import integrator_class
 
@@ -120,8 +122,8 @@ def register_mitsuba_plugin() -> None:
                 "samples": int(get("samples", 32)),
                 "passes": int(get("passes", 2)),
                 "max_depth": int(get("max_depth", 8)),
-                "incidence": str(get("incidence", "half-space")),
                 "roughness": float(get("roughness", 0.0)),
+                "transport": TransportOptions(kind=str(get("transport", "default"))),
             }
             self.fitted = None
 

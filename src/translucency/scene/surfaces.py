@@ -1,6 +1,6 @@
 r"""A fitted object's surface as a light source of the scene: its exitance per vertex, evaluated and sampled.
 
-The subsurface transport (:mod:`translucency.render.transport`) gives every vertex v of a fitted object
+The subsurface transport (:mod:`translucency.transport.matrices`) gives every vertex v of a fitted object
 its exitance :math:`M_v` (W per scene-unit², RGB).  Leaving through the boundary it becomes the radiance
 
 .. math:: L(x, \omega_o) = \frac{1}{\pi} \sum_{j=0}^{2} b_j\, M_{v_j}\, g_{v_j}(\mu_o),

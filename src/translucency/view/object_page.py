@@ -1,7 +1,7 @@
 r"""What the page shows of a per-vertex model: its relighting — the transport, the transfer, the exit law.
 
-:func:`prepare_object` does the work once per model (the transport, the transfer of
-:mod:`translucency.render.transfer`, the error against the full relight); :meth:`ObjectView.page_data`
+:func:`viewed_object` does the work once per model (the transport, the transfer of
+:mod:`translucency.transport.transfer`, the error against the full relight); :meth:`ObjectView.page_data`
 turns it into the arrays and the description the page (``static/viewer.js``) reads — with the mesh, the
 maps and the profiles of :mod:`.surface` — and :meth:`ObjectView.relight` gives the live viewer the
 radiance of a point or spot light.  The camera and the lights by default: :mod:`.defaults`.
@@ -25,18 +25,16 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..mitsuba import mesh_scene
 from ..model.boundary import exit_factor, fresnel_transmittance
 from ..model.incidence import HalfSpaceIncidence, cosine_mean, incidence_factor
 from ..render.camera import Camera
 from ..render.compare import rel_rmse
-from ..render.irradiance import vertex_irradiance
-from ..render.lean import lean_pairs, leaned
 from ..render.lights import DirectionalLight, EnvironmentLight, PointLight, SpotLight
 from ..render.picture import VertexPicture, coverage
-from ..render.relight import relight_vertices, view_cosines
-from ..render.transfer import DEFAULT_BANDS, DEFAULT_DIRECTIONS, Transfer, transfer_vectors
-from ..render.transport import transport_matrices
+from ..transport import PreparedObject
+from ..transport.irradiance import vertex_irradiance
+from ..transport.relight import relight_vertices, view_cosines
+from ..transport.transfer import DEFAULT_BANDS, DEFAULT_DIRECTIONS, Transfer, transfer_vectors
 from .defaults import DEFAULT_LIGHT, DEFAULT_VIEW, IRRADIANCE, POINT_DISTANCE, direction, point_intensity
 from .surface import surface_data
 from .transfer_codec import encode_transfer, quantised
@@ -47,15 +45,11 @@ EXIT_TABLE = 64
 
 @dataclass
 class ObjectView:
-    """A per-vertex model prepared for viewing (:func:`prepare_object`)."""
+    """A per-vertex model prepared for viewing (:func:`viewed_object`): the prepared object every renderer
+    draws, and its transfer."""
 
-    model: object
-    mesh: object
-    transport: object
-    law: object
-    scene: object
+    prepared: PreparedObject
     transfer: Transfer
-    eta: float
     environment: EnvironmentLight
     name: str
     dataset: object = None
@@ -63,8 +57,16 @@ class ObjectView:
     seconds: dict = field(default_factory=dict)
     drafts: dict = field(default_factory=dict)  # coarse transports by their receivers (:meth:`relight`)
     companion: ObjectView | None = None  # a second model of the same mesh, shown beside and against this one
-    angles: bool = False  # the transfer and the full relights lean toward the light (the model's lean)
-    pairs: object = None  # the lean's pairs of the transport (render/lean.py), prepared on the first lean
+
+    model = property(lambda self: self.prepared.model, doc="The per-vertex model.")
+    mesh = property(lambda self: self.prepared.mesh, doc="Its mesh, mm.")
+    eta = property(lambda self: self.prepared.eta, doc="The boundary's relative index.")
+    transport = property(lambda self: self.prepared.transport, doc="The prepared transport.")
+    law = property(lambda self: self.prepared.law, doc="The incidence law.")
+    scene = property(lambda self: self.prepared.shadow_scene, doc="The object alone, for shadow rays.")
+    angles = property(
+        lambda self: self.prepared.has_lean, doc="The transfer and the full relights lean toward the light."
+    )
 
     @property
     def centre(self) -> np.ndarray:
@@ -97,28 +99,18 @@ class ObjectView:
     def relight(self, light, receivers=None) -> np.ndarray:
         """Radiance per vertex (V, 3) of a light, before the exit law (the page applies it): irradiance
         with shadow rays, then the sparse transport (with :attr:`angles`, leaned toward the light:
-        :func:`~translucency.render.lean.leaned`).  With ``receivers`` (vertex indices) a draft at
+        :func:`~translucency.transport.lean.leaned`).  With ``receivers`` (vertex indices) a draft at
         those only: their irradiance through the transport coarsened to their cells
-        (:meth:`~translucency.render.relight.Transport.coarse`, prepared on the first call; the paper's
+        (:meth:`~translucency.transport.relight.Transport.coarse`, prepared on the first call; the paper's
         model, a draft while the light moves)."""
-        if receivers is None:
-            E = vertex_irradiance(self.mesh, self.scene, light, self.eta, self.law)
-            return relight_vertices(self._leaned(light) or self.transport, E)
+        if receivers is None:  # (the camera's lean, the exit's, is off: unread)
+            return self.prepared.through(self.prepared.irradiance(light), light, eye=self.centre)
         key = hash(np.asarray(receivers).tobytes())
         if key not in self.drafts:
             self.drafts[key] = (self.transport.coarse(self.mesh.vertices, receivers), self.law.at(receivers))
         coarse, law = self.drafts[key]
         E = vertex_irradiance(self.mesh, self.scene, light, self.eta, law, at=receivers)
         return relight_vertices(coarse, E)
-
-    def _leaned(self, light):
-        """The transport leaned toward ``light`` with :attr:`angles` (None: the paper's, or not leaned)."""
-        if not self.angles:
-            return None
-        if self.pairs is None:
-            self.pairs = lean_pairs(self.transport, self.mesh, self.eta)
-        eye = self.centre  # (the camera's lean, the exit's, is off: unread)
-        return leaned(self.transport, self.mesh, self.scene, light, eye, eta=self.eta, pairs=self.pairs)
 
     def exit(self, viewpoint) -> np.ndarray:
         """The exit law toward ``viewpoint`` (V, 3), as the page computes it."""
@@ -153,58 +145,53 @@ class ObjectView:
         return {**meta, **light_meta, "live": False}, {**arrays, **light_arrays}
 
 
-def prepare_object(
-    model,
-    mesh,
+def viewed_object(
+    prepared: PreparedObject,
     *,
-    eta: float = 1.0,
-    incidence: str = "half-space",
     environment: EnvironmentLight | None = None,
     bands: int = DEFAULT_BANDS,
     directions: int = DEFAULT_DIRECTIONS,
-    radius: float | None = None,
     dataset=None,
     name: str = "model",
     check_error: bool = True,
-    angles: bool = False,
     progress=None,
 ) -> ObjectView:
-    """The transport and the transfer of ``model`` on ``mesh``, and (``check_error``) the transfer's error
-    against the full relight for a directional light and the environment, through the default camera.
+    """The transfer of a prepared object (:class:`~translucency.transport.PreparedObject`: the transport
+    every renderer draws, built here if it is not yet), and (``check_error``) the transfer's error against
+    the full relight for a directional light and the environment, through the default camera.
 
     ``environment``: the page's sky (default: a constant sky); ``dataset``: the mesh data set the model
-    was fitted to, for the measured profiles (None: the fit's alone); ``angles``: with a model that has
-    a lean, the transfer and the full relights lean toward the light (:mod:`translucency.render.transfer`);
-    ``progress(step)`` names each step.
+    was fitted to, for the measured profiles (None: the fit's alone); with the prepared object's lean
+    drawn (``angles``, a model that has one), the transfer and the full relights lean toward the light
+    (:mod:`translucency.transport.transfer`); ``progress(step)`` names each step.
+
+    Examples
+    --------
+    >>> from translucency.transport import PreparedObject
+    >>> view = viewed_object(PreparedObject(model, mesh), name="pig")  # doctest: +SKIP
+    >>> view.errors["directional (side)"] < 0.03  # doctest: +SKIP
+    True
     """
     say = progress or (lambda step: None)
     seconds = {}
     t = time.perf_counter()
     say("transport")
-    transport = transport_matrices(model, mesh, radius=radius)
-    scene = mesh_scene(mesh)
-    law = transport.incidence(incidence, eta)
+    prepared.build()
     seconds["transport"] = time.perf_counter() - t
     t = time.perf_counter()
     say("transfer")
-    angles = bool(angles and transport.lean is not None)
     transfer = transfer_vectors(
-        transport, mesh, scene, law, bands=bands, directions=directions, eta=eta, angles=angles
-    )
+        prepared.transport, prepared.mesh, prepared.shadow_scene, prepared.law, bands=bands,
+        directions=directions, eta=prepared.eta, angles=prepared.has_lean,
+    )  # fmt: skip
     seconds["transfer"] = time.perf_counter() - t
     view = ObjectView(
-        model=model,
-        mesh=mesh,
-        transport=transport,
-        law=law,
-        scene=scene,
+        prepared=prepared,
         transfer=transfer,
-        eta=eta,
         environment=environment or EnvironmentLight(IRRADIANCE / math.pi, samples=128),
         name=name,
         dataset=dataset,
         seconds=seconds,
-        angles=angles,
     )
     if check_error:
         say("error against the full relight")
@@ -232,8 +219,8 @@ def transfer_errors(view: ObjectView, size=(160, 120)) -> dict:
     stored = quantised(view.transfer)  # what the page holds: 8 bits and float16 scales
     out = {}
     for name, light in lights.items():
-        E = vertex_irradiance(view.mesh, view.scene, light, view.eta, view.law)
-        full = relight_vertices(view._leaned(light) or view.transport, E)
+        E = view.prepared.irradiance(light)
+        full = view.prepared.through(E, light, eye=view.centre)
         local = E if light.delta else None  # the page: its shadow map
         ours = np.maximum(stored.radiance(light.sh_coefficients(stored.bands), local), 0.0)
         out[name] = rel_rmse(picture.draw(full * exit_law), picture.draw(ours * exit_law), mask)

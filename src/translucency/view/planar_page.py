@@ -19,9 +19,9 @@ from scipy.spatial import cKDTree
 
 from ..evaluate.rings import ring_stats
 from ..model.bounds import check_physics
-from ..render import sh
 from ..render.lights import EnvironmentLight
-from ..render.transfer import DEFAULT_BANDS, Transfer
+from ..transport import sh
+from ..transport.transfer import DEFAULT_BANDS, Transfer
 from .defaults import DEFAULT_LIGHT, IRRADIANCE, POINT_DISTANCE, point_intensity
 from .maps import page_maps
 from .object_page import EXIT_TABLE

@@ -13,7 +13,7 @@ from scipy.spatial import cKDTree
 from .._extras import require
 from ..geometry import vertex_areas
 from ..model.bounds import check_physics
-from ..render.parameters import neighbour_weights
+from ..transport.parameters import neighbour_weights
 from .defaults import DEFAULT_LIGHT, DEFAULT_VIEW, IRRADIANCE, POINT_DISTANCE, point_intensity
 from .maps import page_maps
 

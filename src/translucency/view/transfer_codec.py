@@ -2,7 +2,7 @@ r"""The transfer as the page holds it: 8 bits a coefficient, float16 scales (:fu
 and the transfer the page decodes from them (:func:`quantised`).
 
 Per vertex four runs — the rest :math:`r = t - a \bar E` of R, G, B, then :math:`\bar E`
-(:mod:`translucency.render.transfer`: sharp lights) — packed into RGBA texels of a texture
+(:mod:`translucency.transport.transfer`: sharp lights) — packed into RGBA texels of a texture
 :data:`TEXTURE_WIDTH` wide.
 """
 
@@ -12,7 +12,7 @@ import dataclasses
 
 import numpy as np
 
-from ..render.transfer import Transfer
+from ..transport.transfer import Transfer
 
 #: texels per row of the transfer texture (WebGL2 guarantees 2048 at least; 4096 everywhere we know)
 TEXTURE_WIDTH = 2048
@@ -30,7 +30,7 @@ def encode_transfer(transfer: Transfer) -> tuple[dict, dict]:
     """(meta, arrays): the transfer as the page holds it, in 8 bits.
 
     Per vertex four runs of ⌈K/4⌉ RGBA texels — the rest r = t − a Ē of R, G, B, then Ē
-    (:mod:`translucency.render.transfer`: sharp lights) — each value over its run's largest magnitude;
+    (:mod:`translucency.transport.transfer`: sharp lights) — each value over its run's largest magnitude;
     the runs' scales in float16 per vertex (``transfer_run``, ``irradiance_run``) over one global scale
     each (``transfer_scale``, ``irradiance_scale``); ``local`` a in float16.  The page adds a Ē back for
     the sky.

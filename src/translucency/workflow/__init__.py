@@ -18,7 +18,8 @@ module              functions                                                   
 :mod:`.importing`   :func:`import_images`, :func:`import_object`                   ``import images|object``
 :mod:`.fitting`     :func:`fit_model`                                              ``fit``
 :mod:`.evaluating`  :func:`evaluate_report`, :func:`evaluate_model`                ``evaluate``
-:mod:`.rendering`   :func:`render_model`, :func:`render_scene`                     ``render [--scene]``
+:mod:`.rendering`   :func:`render_model`                                           ``render``
+:mod:`.scene_rendering` :func:`render_scene`                                       ``render scene``
 :mod:`.exporting`   :func:`export_model`, :func:`export_ply`, :func:`export_gltf`  ``export``
 :mod:`.viewing`     :func:`view_model`                                             ``view``
 :mod:`.demo`        :func:`run_demo` (the main job, :mod:`translucency.pipeline`)   ``demo``
@@ -53,9 +54,9 @@ _HOMES = {
     "evaluate_report": "evaluating",
     "Evaluation": "evaluating",
     "Rendering": "rendering",
-    "SceneRendering": "rendering",
+    "SceneRendering": "scene_rendering",
     "render_model": "rendering",
-    "render_scene": "rendering",
+    "render_scene": "scene_rendering",
     "describe": "inspecting",
     "describe_materials": "inspecting",
     "export_model": "exporting",

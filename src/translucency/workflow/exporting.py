@@ -23,19 +23,12 @@ from ..io.inputs import expect_input
 from ..io.outputs import PLY_COMMENT, claim_output
 from ..model.burley import burley_of_exponentials, burley_shape
 from ..model.lean import NO_LEAN, has_lean
-from ..render import (
-    MAX_PAIRS,
-    boundary_eta,
-    object_of_model,
-    relight_vertices,
-    transport_matrices,
-    vertex_irradiance,
-)
-from ..render.lean import leaned
+from ..render import boundary_eta, object_of_model
 from ..render.lights import Placement, parse_light, place_light
-from ..render.transport import default_radius, vertex_parameters
 from ..resources.memory import transport_pairs
 from ..resources.run import Run
+from ..transport import PreparedObject, TransportOptions
+from ..transport.parameters import vertex_parameters
 from ._arguments import as_path, model_and_record
 
 __all__ = ["DEFAULT_LIGHT", "export_gltf", "export_model", "export_ply"]
@@ -51,6 +44,7 @@ def export_model(
     gltf=None,
     light: str = DEFAULT_LIGHT,
     angles: bool = False,
+    transport: TransportOptions | None = None,
     overwrite: bool = False,
     max_memory: str | int | None = None,
 ) -> dict:
@@ -73,6 +67,9 @@ def export_model(
     angles : bool
         With ``gltf`` and a model that has a lean: bake it (the transport leaned toward the light, as
         ``render --angles``); otherwise the paper's model is baked and ``lean`` says so in one line.
+    transport : TransportOptions, optional
+        The bake's transport as one object (:class:`translucency.transport.TransportOptions`, e.g. a
+        variant registered by name); ``angles`` is laid over it.
     overwrite : bool
         Replace an earlier mesh file of translucency at ``ply`` or ``gltf`` (never anything else).
     max_memory : str or int, optional
@@ -104,11 +101,18 @@ def export_model(
     run = Run("export", max_memory=max_memory)
     fitted, mesh, acquisition, inputs = _object(model)
     V, F = len(mesh.vertices), len(mesh.faces)
+    lean = has_lean(fitted)
+    # the bake's object, prepared as render's: its transport's near radius chosen once, here
+    prepared = PreparedObject(
+        fitted,
+        mesh,
+        eta=boundary_eta(acquisition),
+        options=TransportOptions.of(transport, angles=angles and lean),
+    )
     pairs = 0.0
-    if gltf is not None:  # the bake's transport, at the default radius (as render's)
-        radius = default_radius(fitted, mesh, max_pairs=MAX_PAIRS)
-        area = float(mesh.area)
-        pairs = transport_pairs(vertices=V, surface_mm2=area, radius_mm=radius, max_pairs=MAX_PAIRS)
+    if gltf is not None:
+        radius, limit = prepared.radius, prepared.options.max_pairs
+        pairs = transport_pairs(vertices=V, surface_mm2=float(mesh.area), radius_mm=radius, max_pairs=limit)
     run.check(resources.memory.relighting(vertices=V, faces=F, pairs=pairs))  # (the files are small)
     summary = {"command": "export", "model": model, "vertices": V, "faces": F}
     if ply is not None:
@@ -117,8 +121,7 @@ def export_model(
         summary["ply"] = ply
     if gltf is not None:
         claim_output(gltf, "mesh file", overwrite=overwrite, inputs=inputs, option="gltf")
-        lean = has_lean(fitted)
-        record = _bake(fitted, mesh, acquisition, gltf, light, angles and lean)
+        record = _bake(prepared, gltf, light)
         summary.update(gltf=gltf, **record)
         if lean and not angles:  # one line: what the bake draws
             summary["lean"] = "not baked: the glTF draws the paper's model (--angles bakes the lean)"
@@ -224,11 +227,12 @@ def _write_ply(mesh, path: Path) -> None:
         write_ply(tmp, mesh.vertices, mesh.faces, comment=PLY_COMMENT)
 
 
-def _bake(model, mesh, acquisition: dict, path, light_text: str, angles: bool) -> dict:
+def _bake(prepared, path, light_text: str) -> dict:
     """Write ``path`` (glTF) and return what the summary states (the reduction's error, the colour's
     scale, whether the lean was baked)."""
-    albedo, mfp, burley_s, error = _burley(model, mesh)
-    radiance = _baked_radiance(model, mesh, acquisition, light_text, angles)
+    mesh, angles = prepared.mesh, prepared.options.angles
+    albedo, mfp, burley_s, error = _burley(prepared.model, mesh)
+    radiance = _baked_radiance(prepared, light_text)
     top = float(np.quantile(radiance, 0.99)) if np.any(radiance > 0) else 1.0
     scale = 1.0 / top if top > 0 else 1.0
     extras = {
@@ -272,17 +276,10 @@ def _burley(model, mesh):
     return albedo, mfp, burley_s, error
 
 
-def _baked_radiance(model, mesh, acquisition: dict, light_text: str, angles: bool) -> np.ndarray:
-    """The exitance under the light, W/(mm² sr) per vertex: the irradiance with shadows and the transport
-    (render's chain, a Lambertian exit; with ``angles``, the transport leaned toward the light)."""
-    from ..mitsuba import mesh_scene  # Mitsuba loads only to bake
-
-    eta = boundary_eta(acquisition)
-    transport = transport_matrices(model, mesh)
-    placement = Placement.of(mesh, (1.0, -1.6, 0.7))
-    lit = place_light(parse_light(light_text), placement)
-    law = transport.incidence("half-space", eta)
-    scene = mesh_scene(mesh)
-    E = vertex_irradiance(mesh, scene, lit, eta, law)
-    tilted = leaned(transport, mesh, scene, lit, mesh.centroid, eta=eta) if angles else None
-    return relight_vertices(tilted or transport, E).astype(np.float64)
+def _baked_radiance(prepared, light_text: str) -> np.ndarray:
+    """The exitance under the light, W/(mm² sr) per vertex: the prepared object's irradiance with shadows
+    and its transport (render's chain, a Lambertian exit; with the lean drawn, leaned toward the light)."""
+    mesh = prepared.mesh
+    lit = place_light(parse_light(light_text), Placement.of(mesh, (1.0, -1.6, 0.7)))
+    E = prepared.irradiance(lit)
+    return prepared.through(E, lit, eye=mesh.centroid).astype(np.float64)

@@ -25,7 +25,6 @@ from ..io.mesh_dataset import is_mesh_dataset, open_mesh_dataset
 from ..io.model_file import load_model, read_header
 from ..io.outputs import claim_folder, kind_of
 from ..model.lean import NO_LEAN, has_lean
-from ..render import MAX_PAIRS
 from ..resources.memory import transport_pairs
 from ..resources.run import Reporter, Run, Silent
 from ..view.page import write_page
@@ -50,6 +49,7 @@ def view_model(
     truth=None,
     radius: float | None = None,
     angles: bool = False,
+    transport=None,
     seconds: float = 0.0,
     overwrite: bool = False,
     max_memory: str | int | None = None,
@@ -90,7 +90,10 @@ def view_model(
     angles : bool
         With a model that has a lean (fitted from a data set acquired with ``incidence``): the page draws
         it, every light and sky leaning the transport toward the directions it arrives from (the transfer
-        takes one tilted relight per direction of its lattice: :mod:`translucency.render.transfer`).
+        takes one tilted relight per direction of its lattice: :mod:`translucency.transport.transfer`).
+    transport : TransportOptions, optional
+        The transport's choices as one object (:class:`translucency.transport.TransportOptions`, e.g. a
+        variant registered by name); ``radius`` and ``angles`` are laid over it.
     seconds : float
         Serve this long, then stop (0: until Ctrl-C).
     overwrite : bool
@@ -137,18 +140,20 @@ def view_model(
     if truth is not None:
         raise TranslucencyError("truth: for a planar model (a mesh model's profiles show its own data)")
     check_reduced_mesh(len(m.faces))  # a large mesh without the viewer extra: one line, before any work
-    run.check(_relighting_need(m, radius, bands, compare))
+    from ..transport import TransportOptions  # heavy: Numba, SciPy load only for a mesh model
+
     other = _companion(Path(compare), m) if compare is not None else None
-    figure = _reference_figure(Path(reference_render)) if reference_render is not None else None
+    lean = has_lean(m)
+    options = TransportOptions.of(transport, angles=angles and lean, radius=radius)
+    views = _ObjectViews(m, header, model, other, compare, environment, bands, options)
+    run.check(_relighting_need(views, bands))
+    views.figure = _reference_figure(Path(reference_render)) if reference_render is not None else None
     if export is not None:  # claimed before any work
         claim_folder(export, overwrite=overwrite, inputs=[model], option="export")
-    lean = has_lean(m)
     if lean and not angles:  # one line: what is drawn
         reporter.info("the page draws the paper's model; --angles draws the model's lean")
     elif angles and not lean:
         reporter.info(NO_LEAN)
-    leaning = angles and lean
-    views = _ObjectViews(m, header, model, other, compare, figure, environment, bands, radius, leaning)
     if export is None:
         reporter.info("the maps first; the relighting follows once the transport is prepared.")
         server = _server(views.surface(), lambda say: views.prepare(say, False), port)
@@ -156,16 +161,21 @@ def view_model(
     return run.summary(views.export(export, reporter))
 
 
-def _relighting_need(m, radius, bands: int, compare):
-    """A per-vertex model's relighting: its transport at the near radius (``radius``, or as render's
-    default its 99 % energy radius) and its transfer of bands² coefficients (both twice with ``compare``)."""
-    v, f = np.asarray(m.alpha.vertices, dtype=np.float64), np.asarray(m.faces)
-    area = 0.5 * np.linalg.norm(np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]]), axis=1).sum()
-    r = float(np.max(m.energy_radius(0.99))) if radius is None else float(radius)
-    pairs = transport_pairs(vertices=len(v), surface_mm2=float(area), radius_mm=r, max_pairs=MAX_PAIRS)
-    models = 1 if compare is None else 2
+def _relighting_need(views, bands: int):
+    """A per-vertex model's relighting: its transport at the near radius its prepared object chose and its
+    transfer of bands² coefficients (both twice with a second model to compare)."""
+    mesh, objects = views.mesh, views.prepared
+    pairs = sum(
+        transport_pairs(
+            vertices=len(mesh.vertices),
+            surface_mm2=float(mesh.area),
+            radius_mm=o.radius,
+            max_pairs=o.options.max_pairs,
+        )
+        for o in objects
+    )
     return resources.memory.relighting(
-        vertices=len(v), faces=len(f), pairs=models * pairs, coefficients=models * bands**2
+        vertices=len(mesh.vertices), faces=len(mesh.faces), pairs=pairs, coefficients=len(objects) * bands**2
     )
 
 
@@ -185,19 +195,22 @@ def _check_options(sky, bands: int, radius, port: int):
 
 
 class _ObjectViews:
-    """A per-vertex model's view (and ``compare``'s beside it): its surface first, the transport and the
-    transfer once prepared, or all of it written as a page."""
+    """A per-vertex model's view (and ``compare``'s beside it): its surface first, its prepared object's
+    transport and transfer once built, or all of it written as a page."""
 
-    def __init__(self, m, header, model: Path, other, compare, figure, environment, bands, radius, angles):
+    def __init__(self, m, header, model: Path, other, compare, environment, bands, options):
         from ..render import boundary_eta, object_of_model  # heavy: trimesh, Mitsuba, Numba load only to view
+        from ..transport import PreparedObject
 
-        self.m, self.model, self.other, self.compare, self.figure = m, model, other, compare, figure
+        self.m, self.model, self.other, self.compare, self.figure = m, model, other, compare, None
         self.mesh, acquisition = object_of_model(m, header)
         self.ds = _mesh_dataset(m, header)
-        self.bands = bands
-        self.options = dict(
-            eta=boundary_eta(acquisition), environment=environment, bands=bands, radius=radius, angles=angles
-        )
+        self.bands, self.environment = bands, environment
+        eta = boundary_eta(acquisition)
+        #: the model's prepared object (and the second model's): the near radius chosen once, here
+        self.prepared = [
+            PreparedObject(x, self.mesh, eta=eta, options=options) for x in (m, other) if x is not None
+        ]
 
     def surface(self):
         """What the live page shows at once: the mesh, the maps, the profiles (and the reference)."""
@@ -210,26 +223,16 @@ class _ObjectViews:
 
     def prepare(self, say, check_error: bool):
         """The model's view (and ``compare``'s beside it): the transport and the transfer."""
-        from ..view.object_page import prepare_object  # heavy: the render stage
+        from ..view.object_page import viewed_object  # heavy: the render stage
 
-        view = prepare_object(
-            self.m,
-            self.mesh,
-            **self.options,
-            dataset=self.ds,
-            name=_name(self.model),
-            check_error=check_error,
-            progress=say,
+        shown = dict(environment=self.environment, bands=self.bands, progress=say)
+        view = viewed_object(
+            self.prepared[0], dataset=self.ds, name=_name(self.model), check_error=check_error, **shown
         )
         if self.other is not None:
             say(f"{Path(self.compare).name}: the second model")
-            view.companion = prepare_object(
-                self.other,
-                self.mesh,
-                **self.options,
-                name=_name(Path(self.compare)),
-                check_error=False,
-                progress=say,
+            view.companion = viewed_object(
+                self.prepared[1], name=_name(Path(self.compare)), check_error=False, **shown
             )
         return view
 

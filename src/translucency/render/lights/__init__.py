@@ -8,7 +8,7 @@ apart and a new kind of light is one class — one module of this package (:mod:
 - :meth:`Light.irradiance_at`: the irradiance E (W/mm²) it brings to points with their normals, with
   shadow rays traced by Mitsuba (``ray_test``), behind a boundary weighted by
   :math:`F_t(\theta_i)/F_t(0)` and with an incidence law per channel
-  (:mod:`translucency.render.irradiance` states the integral);
+  (:mod:`translucency.transport.irradiance` states the integral);
 - :meth:`Light.sh_coefficients`: its projection on the real spherical harmonics (:mod:`.sh`), for a
   :attr:`~Light.distant` light — one that is the same at every point;
 - :attr:`Light.delta`: whether it arrives along one direction at a point (sharp shadows; unseen in a

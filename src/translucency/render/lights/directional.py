@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..._validate import TranslucencyError
-from .. import sh
+from ...transport import sh
 from .light import DEFAULT_IRRADIANCE, _DeltaLight
 
 if TYPE_CHECKING:  # the placement's types, for the signatures only

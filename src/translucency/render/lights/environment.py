@@ -12,7 +12,7 @@ from ..._validate import TranslucencyError
 from ...geometry import tangent_frames
 from ...mitsuba import drjit, load_plugin, mitsuba, rays
 from ...model.boundary import fresnel_transmittance
-from .. import sh
+from ...transport import sh
 from .light import MAX_POWER, Light
 
 #: rays of the sky's visibility in one wavefront (Dr.Jit's and NumPy's arrays of a batch: ~1 GB)

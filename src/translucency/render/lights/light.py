@@ -140,7 +140,7 @@ class Light(ABC):
         ``scene`` (rays leave a fraction of ``extent``, the object's largest extent in mm, off the
         surface): (N,), or (N, 3) for an environment map or with an ``incidence`` law; with ``eta`` ≠ 1
         each arriving direction weighted by :math:`F_t(\theta_i)/F_t(0)`
-        (:func:`translucency.render.irradiance.vertex_irradiance`)."""
+        (:func:`translucency.transport.irradiance.vertex_irradiance`)."""
 
     def sh_coefficients(self, bands: int) -> np.ndarray:
         """Its coefficients (K, 3) on the first ``bands`` bands of real spherical harmonics (:mod:`.sh`)."""

@@ -2,7 +2,7 @@
 //
 // Distant lights (directional, environment) by precomputed radiance transfer: every vertex holds its
 // response t_{o,k} (radiance per unit weight of the real spherical harmonic Y_k, shadows and the
-// subsurface transport included; translucency.render.transfer), and the vertex shader sums
+// subsurface transport included; translucency.transport.transfer), and the vertex shader sums
 //     B_o = sum_k L_k t_{o,k}                                        (W/(mm^2 sr), per channel)
 // with L_k the light's coefficients: the sky's projected coefficients turned about +z for the
 // environment.  A directional light from w_l (L_k = E Y_k(w_l)) is sharp: its local part is taken
@@ -42,7 +42,7 @@
   const index = decode("index");             // (F, 3) uint32
   const V = meta.vertices, F = meta.faces;
 
-  // ---- real spherical harmonics (translucency.render.sh: the same recurrence) -------------------
+  // ---- real spherical harmonics (translucency.transport.sh: the same recurrence) -------------------
   function shBasis(w, bands) {
     const [x, y] = w, z = Math.max(-1, Math.min(1, w[2]));
     const phi = Math.atan2(y, x), s = Math.sqrt(Math.max(1 - z * z, 0));

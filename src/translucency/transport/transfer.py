@@ -7,8 +7,8 @@ A distant light of radiance :math:`L(\omega)` (W/(mm² sr)) gives vertex i the e
           \frac{F_t(\theta_i)}{F_t(0)}\, d\omega
 
 (visibility :math:`V_i`, the incidence law :math:`F_i` per channel and, behind a dielectric boundary,
-the Fresnel ratio: :func:`translucency.render.irradiance.vertex_irradiance`), and the transport
-(:func:`~translucency.render.relight.relight_vertices`, linear in E) turns it into the radiance
+the Fresnel ratio: :func:`translucency.transport.irradiance.vertex_irradiance`), and the transport
+(:func:`~translucency.transport.relight.relight_vertices`, linear in E) turns it into the radiance
 :math:`B_o = (T E)_o` (Lambertian exit, before the exit law).  With the light in real spherical
 harmonics, :math:`L \approx \sum_k L_k Y_k` (:mod:`.sh`, :meth:`.lights.Light.sh_coefficients`),
 everything is linear:

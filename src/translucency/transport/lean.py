@@ -2,7 +2,7 @@ r"""The lean in the renderer: the near transport tilted toward the light's and t
 (:mod:`translucency.model.lean`).
 
 For a light of one direction per vertex (directional, point, spot: ``light.arrival``) and a camera at
-``eye``, every near pair (o, i) of the prepared transport (:mod:`.transport`) is weighted per channel by
+``eye``, every near pair (o, i) of the prepared transport (:mod:`.matrices`) is weighted per channel by
 
 .. math:: T'_{oi} = T_{oi}\, \frac{e^{g_{oi}}}{Z_i}\,
           \frac{e^{-\kappa_o \vec\ell'_o \cdot \hat d_{oi}}}{N_{oi}}, \qquad
@@ -99,7 +99,7 @@ def lean_pairs(transport, mesh, eta: float = 1.0, exit: bool = False) -> LeanPai
 @dataclass(frozen=True)
 class Tilt:
     r"""One light's (and camera's) lean on a transport's near pairs — what :func:`leaned` computes per light;
-    :func:`~translucency.render.relight.relight_vertices` applies it in one pass over the sources
+    :func:`~translucency.transport.relight.relight_vertices` applies it in one pass over the sources
     (:meth:`apply`), no matrix rebuilt."""
 
     pairs: LeanPairs
@@ -279,7 +279,7 @@ def leaned(transport, mesh, scene, light, eye, *, eta: float = 1.0, exit: bool =
     Parameters
     ----------
     transport : Transport
-        Prepared by :func:`~translucency.render.transport.transport_matrices` from a model with a lean
+        Prepared by :func:`~translucency.transport.matrices.transport_matrices` from a model with a lean
         (``transport.lean``: κ and λ, (V, 2, 3)).
     mesh, scene
         The object and its Mitsuba scene.
@@ -299,7 +299,7 @@ def leaned(transport, mesh, scene, light, eye, *, eta: float = 1.0, exit: bool =
     -------
     Transport or None
         The same matrices, own area and far field, with the light's :class:`Tilt` (``tilt``), which
-        :func:`~translucency.render.relight.relight_vertices` applies to the near pairs.
+        :func:`~translucency.transport.relight.relight_vertices` applies to the near pairs.
 
     Examples
     --------

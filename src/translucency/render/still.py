@@ -1,8 +1,9 @@
-"""The paper's Figure 2: a fitted object rendered beside its path-traced reference.
+"""One still of a fitted object, with its path-traced reference on request (the paper's Figure 2 is one).
 
-:func:`figure2` lights the object (:mod:`.object`), renders ours (:mod:`.transport`, :mod:`.relight`,
-:mod:`.picture`) and the ``volpath`` reference (:mod:`.reference`) through one camera (:mod:`.camera`),
-compares them (:mod:`.compare`) and writes reference | ours | FLIP error with the numbers.
+:func:`render_still` lights a :class:`~translucency.transport.PreparedObject` (the transport every
+renderer draws), draws it through one camera (:mod:`.camera`, :mod:`.picture`), and with a volume renders
+the ``volpath`` reference (:mod:`.reference`), compares them (:mod:`.compare`) and writes
+reference | ours | FLIP error with the numbers.
 """
 
 from __future__ import annotations
@@ -15,57 +16,37 @@ import numpy as np
 
 from .._plotting import pyplot
 from ..io.atomic import atomic_path, write_json
-from ..mitsuba import mesh_scene
 from .camera import Camera
 from .compare import compare, region_errors
-from .lean import lean_applies, lean_pairs
 from .lights import DEFAULT_DISTANCE, Placement
 from .picture import VertexPicture, coverage
 from .reference import converged_reference
-from .relight import relight_object
 from .tonemap import Exposure, auto_exposure, parse_exposure, save_images, tonemap
-from .transport import MAX_PAIRS, transport_matrices
 
 
-def figure2(
-    model,
-    mesh,
+def render_still(
+    prepared,
     light,
     out_dir,
     *,
     volume=None,
     camera: Camera | None = None,
     spp_reference: int = 32,
-    radius: float | None = None,
-    max_pairs: float = MAX_PAIRS,
-    eta: float = 1.0,
     spp: int = 16,
     reference_cache=True,
     progress=None,
     exposure: Exposure | str = "fixed",
     name: str = "render",
-    incidence: str = "half-space",
-    through: bool | None = None,
-    angles: bool = False,
 ) -> dict:
-    """Render ``model`` on ``mesh`` under ``light``; with ``volume`` also the reference and the comparison.
+    """Draw ``prepared`` under ``light``; with ``volume`` also the reference and the comparison.
 
-    ``eta``: the boundary the data set was acquired with (:func:`boundary_eta`);
-    ≠ 1 adds the Fresnel factors, the surface reflection and a dielectric reference.
+    ``prepared``: a :class:`~translucency.transport.PreparedObject` (the model, its mesh, its boundary η
+    and the transport's options: what is drawn, its docstring says).
     ``spp``: samples per pixel of our picture (anti-aliasing only: at 16 the drawing adds ≲ 0.005 of
     relative error at the silhouettes). The reference is the mean of two independent renders of
     ``spp_reference`` samples each, with its noise measured and cached
     (:func:`translucency.render.reference.converged_reference`; ``reference_cache`` as there).
-    ``radius``: the transport's near radius, mm (default :func:`~translucency.render.transport.default_radius`
-    at ``max_pairs``, shrunk where the vertices crowd).
     ``progress(done, total, step)`` is called as each step begins (transport, light, picture, reference).
-    ``incidence``: how light arriving at an angle counts against the normal-incidence data
-    (:mod:`translucency.model.incidence`: ``half-space``, Chandrasekhar's plane albedo per vertex, or
-    ``normal``; a dielectric object or a model without measured totals gets ``normal``).
-    ``through``: the model's through-body table in the transport (:mod:`translucency.model.through`;
-    default: where the model holds one; False: the paper's model).
-    ``angles``: the model's lean toward the light's and the camera's directions
-    (:mod:`translucency.render.lean`; the summary's ``angles`` says whether it applied).
     ``exposure``: of the PNGs (:class:`~translucency.render.tonemap.Exposure` or its text: ``fixed``,
     ``fixed+STOPS``, ``auto``, a factor); the FLIP comparison tone-maps the pair at the reference's auto
     exposure whatever the pictures' (``flip_exposure`` in the summary where they differ).
@@ -73,51 +54,52 @@ def figure2(
     Writes ``ours.exr/.png`` (and ``reference.exr/.png`` and ``NAME.png``, reference | ours | FLIP) and
     the summary ``NAME.json`` (``name``: ``render``; the paper's Figure 2 is ``figure2``) into
     ``out_dir``; returns the numbers.  The summary states the exposure (``exposure``, the factor on the
-    linear radiance, and, unless it is ``auto``, ``exposure_rule``).
+    linear radiance, and, unless it is ``auto``, ``exposure_rule``) and what was drawn (``incidence``,
+    ``through``, ``angles``: :meth:`~translucency.transport.PreparedObject.describe`).
     """
     exposure = parse_exposure(exposure) if isinstance(exposure, str) else exposure
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
+    mesh = prepared.mesh
     camera = camera or Camera.looking_at(mesh)
     steps = 3 if volume is None else 4
 
-    def step(k, name):
+    def step(k, what):
         if progress:
-            progress(k, steps, name)
+            progress(k, steps, what)
 
     # the calls run down the stage once: transport, picture, reference, comparison, files
     step(0, "transport (once per object)")
     t = time.perf_counter()
-    mats = transport_matrices(model, mesh, radius=radius, through=through, max_pairs=max_pairs)
-    scene = mesh_scene(mesh)  # for shadow rays
-    pairs = lean_pairs(mats, mesh, eta) if angles and lean_applies(mats, light) else None  # once per object
+    prepared.build()  # the transport (and the lean's pairs, if drawn): once per object
+    scene = prepared.shadow_scene  # for shadow rays
     t_prepare = time.perf_counter() - t
     step(1, "irradiance and relight")
     t = time.perf_counter()
-    L, E, law = relight_object(
-        mats, mesh, scene, light, camera.origin, eta=eta, incidence=incidence, angles=angles, pairs=pairs
-    )
+    L, E = prepared.relight(light, camera.origin)
     t_relight = time.perf_counter() - t
     step(2, "picture")
     t = time.perf_counter()
-    picture = VertexPicture(mesh, camera, spp=spp, eta=eta, light=light)  # the scene, built once
+    picture = VertexPicture(mesh, camera, spp=spp, eta=prepared.eta, light=light)  # the scene, built once
     t_prepare += time.perf_counter() - t  # building the picture's scene is part of the preparation
     t = time.perf_counter()
     ours = picture.draw(L)
     t_draw = time.perf_counter() - t
     mask = coverage(mesh, camera)
+    drawn = prepared.describe()
     out = {
         "vertices": len(mesh.vertices),
-        "transport_nonzeros": mats.nnz,
+        "transport_nonzeros": prepared.transport.nnz,
         "prepare_s": t_prepare,
         "relight_s": t_relight,
         "draw_s": t_draw,
         "light": repr(light),
-        "eta": eta,
-        "incidence": law.name,
-        "through": mats.through,
-        "angles": bool(angles and lean_applies(mats, light)),
+        "eta": prepared.eta,
+        "incidence": drawn["incidence"],
+        "through": drawn["through"],
+        "angles": prepared.leans_for(light),
     }
+    model = prepared.model
     if volume is None:
         scale = _exposure(exposure, model, mesh, light, out, auto=lambda: auto_exposure(ours, mask))
         save_images(ours, out_dir / "ours", scale)
@@ -125,33 +107,43 @@ def figure2(
         return out
     step(3, "volpath reference (2 renders, cached)")
     reference, ref_info = converged_reference(
-        mesh, volume, light, camera, mask, spp=spp_reference, eta=eta, cache=reference_cache
+        mesh, volume, light, camera, mask, spp=spp_reference, eta=prepared.eta, cache=reference_cache
     )
-    t_ref = ref_info["seconds"]
-    regions = region_errors(mesh, scene, camera, E, reference, ours, mask)
-    cmp = compare(reference, ours, mask)
-    flip_map = cmp.pop("flip_map")
-    out.update(cmp)
-    out["regions"] = regions
-    out.update(
-        {
-            "reference_s": t_ref,
-            "reference_noise": ref_info["noise"],
-            "reference_cached": ref_info["cached"],
-            "reference_spp": spp_reference,
-            "speedup_vs_reference": t_ref / (t_prepare + t_relight + t_draw),
-        }
-    )
+    cmp = _compared(out, reference, ours, mask, region_errors(mesh, scene, camera, E, reference, ours, mask))
+    _timed(out, ref_info, spp_reference, t_prepare + t_relight + t_draw)
     scale = _exposure(exposure, model, mesh, light, out, auto=lambda: cmp["exposure"])
-    if scale != cmp["exposure"] and flip_map is not None:  # FLIP measured at another exposure
+    if scale != cmp["exposure"] and cmp["flip_map"] is not None:  # FLIP measured at another exposure
         out["flip_exposure"] = cmp["exposure"]
     save_images(reference, out_dir / "reference", scale)
     save_images(ours, out_dir / "ours", scale)
     ldr = tonemap(reference, scale), tonemap(ours, scale)
     what = "fitted per-vertex model + through-body table" if out["through"] else "fitted per-vertex model"
-    _plot(ldr, flip_map, mask, cmp, out_dir / f"{name}.png", f"ours: {what}, sparse transport")
+    _plot(ldr, cmp["flip_map"], mask, out, out_dir / f"{name}.png", f"ours: {what}, sparse transport")
     write_json(out_dir / f"{name}.json", out)
     return out
+
+
+def _compared(out: dict, reference, ours, mask, regions) -> dict:
+    """The comparison of ours with the reference into ``out`` (its numbers, ``regions``); returns it with
+    its ``flip_map`` (None without the flip extra) and ``exposure``."""
+    cmp = compare(reference, ours, mask)
+    flip_map = cmp.pop("flip_map")
+    out.update(cmp)
+    out["regions"] = regions
+    return {**cmp, "flip_map": flip_map}
+
+
+def _timed(out: dict, ref_info: dict, spp_reference: int, ours_s: float) -> None:
+    """The reference's time, noise and samples into ``out``, and our speed-up over it."""
+    out.update(
+        {
+            "reference_s": ref_info["seconds"],
+            "reference_noise": ref_info["noise"],
+            "reference_cached": ref_info["cached"],
+            "reference_spp": spp_reference,
+            "speedup_vs_reference": ref_info["seconds"] / ours_s,
+        }
+    )
 
 
 def _exposure(exposure: Exposure, model, mesh, light, out: dict, auto) -> float:
@@ -209,7 +201,7 @@ def plot_comparison(ref_ldr, our_ldr, error_map, path, titles) -> None:
     plt.close(fig)
 
 
-def _plot(ldr, flip_map, mask, cmp, path, title: str) -> None:
+def _plot(ldr, flip_map, mask, cmp: dict, path, title: str) -> None:
     """reference | ours | FLIP error into ``path``; ``ldr``: the tone-mapped (reference, ours).  Without
     the flip extra (``flip_map`` None) the third panel is the tone-mapped pair's difference."""
     if flip_map is None:

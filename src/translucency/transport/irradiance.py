@@ -12,13 +12,13 @@ light, K sampled directions for a constant sky or an environment map, importance
 **Boundary.**  For an object acquired behind a dielectric boundary (index η) the measured R_d already holds
 the transmission of the normally incident calibration beam, :math:`F_t(0)`; a light arriving at
 :math:`\theta_i` is therefore scaled by :math:`F_t(\theta_i)/F_t(0)` (1 for index-matched objects, η = 1).
-The exit side is :func:`translucency.render.relight.exit_fresnel`.
+The exit side is :func:`translucency.transport.relight.exit_fresnel`.
 
 **Incidence.**  The data's beams arrive normally; light arriving at :math:`\theta_i` enters shallower and
 more of it comes back.  With an incidence law (:mod:`translucency.model.incidence`, ``half-space`` by
 default) each arriving direction is weighted by Chandrasekhar's :math:`F_v = F(\cos\theta_i; R_{1,v}) =
 R(\cos\theta_i)/R(1)` per vertex and channel, R_1 the vertex's measured total
-(:attr:`translucency.render.relight.Transport.reflectance`), so the irradiance becomes (V, 3): the
+(:attr:`translucency.transport.relight.Transport.reflectance`), so the irradiance becomes (V, 3): the
 *effective* irradiance.
 """
 

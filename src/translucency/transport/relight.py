@@ -6,7 +6,7 @@ Per channel λ, the radiance leaving vertex o (W/(mm² sr)) for the irradiance E
 .. math:: L_\lambda = T_\lambda E \;+\; \mathrm{own}_\lambda \odot E \;+\;
           \alpha \odot W F_\lambda B_\lambda (s_\lambda E)
 
-— the sparse near matrices, the measured own area and the far field (:mod:`.transport` builds them) —
+— the sparse near matrices, the measured own area and the far field (:mod:`.matrices` builds them) —
 one sparse product per channel (:func:`relight_vertices`); :meth:`Transport.rows` keeps a few receivers'
 rows and :meth:`Transport.coarse` sums the columns of cells for a draft.  The exitance :math:`\pi L`
 leaves Lambertian, or behind a dielectric boundary with the angular shape of the transmission,
@@ -54,7 +54,7 @@ class Transport:
     measured near field the own-area term is kept apart per channel:
     :math:`L_\lambda \mathrel{+}= \mathrm{own}_\lambda E`; the pairs beyond the near radius are the
     far field, :math:`L_\lambda \mathrel{+}= \alpha \odot W F_\lambda B_\lambda (s_\lambda E)`
-    (:class:`translucency.render._far_field.FarField`).
+    (:class:`translucency.transport._far_field.FarField`).
     """
 
     matrices: list  # CSR (V × V), float32: one or three
@@ -64,8 +64,9 @@ class Transport:
     reflectance: np.ndarray | None = None  # (V, 3) measured normal-incidence total reflectance, blended
     through: bool = False  # the model's through-body table is in the matrices (model/through.py)
     lean: np.ndarray | None = None  # (V, 2, 3) κ and λ of the lean per vertex (model/lean.py), or None
-    tilt: Tilt | None = None  # one light's lean on the near pairs (render/lean.py: leaned), or None
+    tilt: Tilt | None = None  # one light's lean on the near pairs (transport/lean.py: leaned), or None
     receivers: np.ndarray | None = None  # the vertices whose radiance it gives (None: all; :meth:`rows`)
+    radius: float | None = None  # the near radius it was built at, mm (the far field takes the pairs beyond)
 
     def incidence(self, name: str = "half-space", eta: float = 1.0):
         """The incidence law ``name`` for this object (:func:`translucency.model.incidence.incidence_law`)."""
@@ -175,8 +176,8 @@ def relight_vertices(transport: Transport, E: np.ndarray) -> np.ndarray:
     With one shared matrix the three channels go through it together (the matrix is read once,
     rows on all cores, Numba); so do three matrices on the same pairs (a fall-off per channel: the pairs
     read once, three values each); otherwise one SciPy product per channel.  A transport with one light's
-    lean (``tilt``, :func:`translucency.render.lean.leaned`) goes through its sources' pairs once, the
-    lobes computed on the way (:meth:`~translucency.render.lean.Tilt.apply`).  The far field (if
+    lean (``tilt``, :func:`translucency.transport.lean.leaned`) goes through its sources' pairs once, the
+    lobes computed on the way (:meth:`~translucency.transport.lean.Tilt.apply`).  The far field (if
     prepared) adds two sparse products and one K × K product per channel.
 
     Examples
@@ -195,7 +196,7 @@ def relight_vertices(transport: Transport, E: np.ndarray) -> np.ndarray:
     E = np.repeat(E[:, None], 3, axis=1) if E.ndim == 1 else E
     rows = transport.matrices[0].shape[0]
     X = E if transport.scale is None else np.ascontiguousarray(E * transport.scale)
-    if transport.tilt is not None:  # one light's lean, source by source (render/lean.py)
+    if transport.tilt is not None:  # one light's lean, source by source (transport/lean.py)
         out = transport.tilt.apply(X, rows)
     elif len(transport.matrices) == 3 and transport.one_pattern:  # one matrix per channel, one set of pairs
         T, out = transport.matrices, np.empty((rows, 3), np.float32)
@@ -232,10 +233,11 @@ def relight_object(
     (:func:`exit_fresnel`, η ≠ 1) or the incidence law's reciprocal exit (η = 1).  ``angles``: with a
     model that has a lean (:mod:`translucency.model.lean`), the near pairs lean toward the light's
     direction — its one direction per vertex, or its irradiance-weighted mean for light from many
-    (:func:`translucency.render.lean.leaned`); otherwise the paper's diffuse transport
-    (:func:`translucency.render.lean.lean_applies` says which is drawn); ``pairs``: the lean's pairs
-    prepared once per transport (:func:`translucency.render.lean.lean_pairs`), to keep them out of the
-    per-light time.
+    (:func:`translucency.transport.lean.leaned`); otherwise the paper's diffuse transport
+    (:func:`translucency.transport.lean.lean_applies` says which is drawn); ``pairs``: the lean's pairs
+    prepared once per transport (:func:`translucency.transport.lean.lean_pairs`), to keep them out of the
+    per-light time; ``incidence``: a law's name (:data:`~translucency.model.incidence.INCIDENCE_LAWS`) or
+    the law itself, prepared once (:class:`~translucency.transport.PreparedObject`).
 
     Returns
     -------
@@ -248,7 +250,7 @@ def relight_object(
     --------
     >>> L, E, law = relight_object(T, mesh, scene, light, camera.origin)  # doctest: +SKIP
     """
-    law = transport.incidence(incidence, eta)
+    law = transport.incidence(incidence, eta) if isinstance(incidence, str) else incidence
     E = vertex_irradiance(mesh, scene, light, eta, law)
     tilted = leaned(transport, mesh, scene, light, viewpoint, eta=eta, pairs=pairs) if angles else None
     L = relight_vertices(tilted or transport, E) * exit_fresnel(mesh, viewpoint, eta)[:, None]

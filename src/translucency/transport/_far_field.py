@@ -1,6 +1,6 @@
 r"""The far field of the transport: the light that crosses a body beyond the near radius R.
 
-The sparse near matrix of :func:`translucency.render.transport.transport_matrices` holds the vertex
+The sparse near matrix of :func:`translucency.transport.matrices.transport_matrices` holds the vertex
 pairs closer than R.  The rest of the sum
 
 .. math:: L^{far}(x_o) = \alpha_o \sum_{i:\,|x_o - x_i| > R} b_i\, X_i\, P_i(|x_o - x_i|), \qquad
@@ -123,7 +123,7 @@ def far_field_operator(model, *, v, area, alpha, weights, c, d, radius, surface,
     (:math:`b_i = A_i/\pi`); ``None`` when every pair of vertices lies within it.
 
     ``weights`` = (w, idx): each vertex's blend of incident points, ``c, d``: the blended profiles
-    (V, C, T) (:func:`translucency.render.parameters.vertex_parameters`), ``surface``: the mesh's area
+    (V, C, T) (:func:`translucency.transport.parameters.vertex_parameters`), ``surface``: the mesh's area
     (mm²), ``clusters``: K (default :func:`default_clusters`).  ``through`` = (table (V, 4, 8, 3), normals
     (V, 3)): the through-body table (:mod:`translucency.model.through`) at the cluster level — each
     :math:`F_{OJ}` times cluster J's area-weighted mean table at the cosine between the seed's normal and

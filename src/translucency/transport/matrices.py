@@ -12,7 +12,7 @@ per channel (radiance in W/(mm² sr) per W/mm² of irradiance, so :math:`T` in s
 parameters :math:`c_k, d_k` of every vertex from :mod:`.parameters`.  :math:`T` holds the pairs closer
 than a near radius R (mm), found with a k-d tree — no O(V²) loop — and the pairs beyond it go through a
 hierarchical far field (clustered sources, a K × K operator, interpolation back to the vertices:
-:mod:`translucency.render._far_field`).
+:mod:`translucency.transport._far_field`).
 """
 
 from __future__ import annotations
@@ -64,24 +64,25 @@ def default_radius(model, mesh, *, max_pairs: float = MAX_PAIRS) -> float:
     return float(min(np.max(model.energy_radius(0.99)), fit_pairs))
 
 
-def _near_pairs(model, mesh, v: np.ndarray, radius: float | None, max_pairs: float):
+def _near_pairs(model, mesh, v: np.ndarray, radius: float | None, max_pairs: float, shrink: bool | None):
     r"""The near radius (mm) and the vertex pairs within it (P, 2), at most ``max_pairs`` both ways with
     the diagonal.  A radius of the user's that gives more is refused; the default
-    (:func:`default_radius`, which assumes the vertices evenly spread) shrinks until the pairs fit:
-    they grow as r², so each try scales r by :math:`0.95 \sqrt{p_{max} / p}` (the far field takes what
-    the near field no longer holds)."""
+    (:func:`default_radius`, which assumes the vertices evenly spread; ``shrink``: a radius passed in
+    that was the default) shrinks until the pairs fit: they grow as r², so each try scales r by
+    :math:`0.95 \sqrt{p_{max} / p}` (the far field takes what the near field no longer holds)."""
     V = len(v)
     tree = cKDTree(v)
+    shrink = radius is None if shrink is None else shrink
     rad = default_radius(model, mesh, max_pairs=max_pairs) if radius is None else float(radius)
     for _ in range(8):
         pairs = tree.query_pairs(rad, output_type="ndarray")
         count = 2 * len(pairs) + V
         if count <= max_pairs:
             return rad, pairs
-        if radius is not None or V >= max_pairs:
+        if not shrink or V >= max_pairs:
             break
         rad *= 0.95 * np.sqrt(max(max_pairs - V, 1.0) / max(count - V, 1.0))
-    given = radius is not None
+    given = not shrink
     raise TranslucencyError(
         f"radius: {rad:.3g} mm gives {count:,} vertex pairs (at most {max_pairs:,.0f}); "
         + ("lower --radius" if given else f"{V:,} vertices are too many for the near field's pairs")
@@ -99,11 +100,14 @@ def transport_matrices(
     clusters: int | None = None,
     balance_rows: bool = True,
     through: bool | None = None,
+    shrink: bool | None = None,
 ):
     r"""The sparse transport T of the module docstring, as a :class:`Transport` (one matrix per
     channel, or one matrix and the colour scale for the shared-colour model).
 
-    ``radius`` defaults to the model's 99 % energy radius (largest over points and channels).
+    ``radius`` defaults to the model's 99 % energy radius (largest over points and channels); a default
+    radius shrinks where its pairs exceed ``max_pairs``, a given one is refused there (``shrink=True``:
+    the given radius is the default, chosen beforehand — :class:`~translucency.transport.PreparedObject`).
     Distances below ``r_min`` (default: half the mean edge length, the fit's exclusion radius)
     are evaluated at ``r_min``: the profiles were fitted from there out, and their steepest
     terms must not be extrapolated to two vertices that happen to lie very close.
@@ -143,7 +147,7 @@ def transport_matrices(
     table, is the paper's model.
 
     **Far field.**  The pairs beyond ``radius`` are not dropped: ``far_field`` (default) adds them
-    hierarchically (:mod:`translucency.render._far_field`: ``clusters`` source clusters, K², default
+    hierarchically (:mod:`translucency.transport._far_field`: ``clusters`` source clusters, K², default
     about 4 · surface / (π radius²), 256 to 3,000, with members opened near the radius; the smooth
     result interpolated back to the vertices), so light that enters one side of a thick body leaves
     the other.  With a measured near field the column normalisation above applies to near and far
@@ -162,7 +166,7 @@ def transport_matrices(
     weights = neighbour_weights(model, mesh)
     c, d, s = vertex_parameters(model, mesh, weights=weights)
     own, total = measured_per_vertex(model, weights, v, area)
-    rad, pairs = _near_pairs(model, mesh, v, radius, max_pairs)
+    rad, pairs = _near_pairs(model, mesh, v, radius, max_pairs, shrink)
     # both directions of every pair; each vertex with itself below
     i = np.concatenate([pairs[:, 0], pairs[:, 1]])
     o = np.concatenate([pairs[:, 1], pairs[:, 0]])
@@ -177,7 +181,7 @@ def transport_matrices(
     if through is not False and model.measured and "through" in model.measured:
         w_b, idx_b = weights
         table = np.einsum("vk,vkabc->vabc", w_b, model.measured["through"][idx_b])
-    # the lean's κ and λ blended to every vertex (V, 2, 3) (model/lean.py; render/lean.py applies it)
+    # the lean's κ and λ blended to every vertex (V, 2, 3) (model/lean.py; transport/lean.py applies it)
     lean = None
     if has_lean(model):
         w_b, idx_b = weights
@@ -258,7 +262,9 @@ def transport_matrices(
         data = vals if diag is None else np.concatenate([vals, diag])
         mats.append(sp.csr_matrix((data.astype(np.float32), (rows, cols)), shape=(V, V)))
     if own is None:
-        return Transport(matrices=mats, scale=s.astype(np.float32) if shared else None, far=far, lean=lean)
+        return Transport(
+            matrices=mats, scale=s.astype(np.float32) if shared else None, far=far, lean=lean, radius=rad
+        )
     scale = tau if shared else None
     return Transport(
         matrices=mats,
@@ -268,4 +274,5 @@ def transport_matrices(
         reflectance=total,
         through=table is not None,
         lean=lean,
+        radius=rad,
     )
