@@ -265,6 +265,45 @@ def photograph_object(
     ['object.json', 'truth.json']
     """
     t0 = time.perf_counter()
+    _refuse_options(image_format, spp, exposures, boundary_eta)
+    k_auto, sensor, beam = sensor is None, sensor or Sensor(), beam or LaserBeam()
+    volume, spot_radius_mm = _behind_glass(volume, spot_radius_mm, beam, boundary_eta)
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    W, H = (int(v) for v in resolution)
+    cameras = cameras if cameras is not None else cameras_around(mesh, n_cameras, W, H, seed=seed)
+    rng = np.random.default_rng(seed)
+    scene = mesh_scene(mesh)
+    verts = np.asarray(mesh.vertices, dtype=np.float64)
+    # the normals before the export: trimesh writes them into object.ply once computed
+    normals = np.asarray(mesh.vertex_normals, dtype=np.float64)
+    incident = farthest_points(verts, n_points)
+    _write_mesh(folder, mesh)
+    cam_entries = _write_cameras(folder, mesh, cameras, sensor, rng, image_format, checkerboards)
+    shoot = _Shoot(folder, image_format, exposures, spp, seed, beam, boundary_eta)
+    shots = _photograph_shots(
+        shoot, mesh, volume, cameras, scene, (verts, normals), incident, sensor, k_auto, cam_entries, progress
+    )
+    _write_records(folder, volume, boundary_eta, spot_radius_mm, cameras, cam_entries, shots, incident)
+    seconds = time.perf_counter() - t0
+    return {"folder": str(folder), "incident": incident.tolist(), "cameras": cameras, "seconds": seconds}
+
+
+@dataclass(frozen=True)
+class _Shoot:
+    """What every shot of one rig shares: its folder, its files' format, its exposures and its renders."""
+
+    folder: Path
+    image_format: str
+    exposures: str
+    spp: int
+    seed: int
+    beam: LaserBeam
+    eta: float
+
+
+def _refuse_options(image_format: str, spp: int, exposures: str, boundary_eta: float) -> None:
+    """Refuse, before any render, a format, sample count, exposure plan or boundary index out of range."""
     if image_format not in ("pfm", "exr"):
         raise TranslucencyError(f"format: pfm or exr, got {image_format!r}")
     if spp < 1:
@@ -273,26 +312,26 @@ def photograph_object(
         raise TranslucencyError(f"exposures: brackets or single, got {exposures!r}")
     if boundary_eta < 1.0:
         raise TranslucencyError(f"boundary_eta: must be >= 1, got {boundary_eta}")
-    repeats = 2 if exposures == "brackets" else 1
-    k_auto = sensor is None
-    sensor = sensor or Sensor()
-    beam = beam or LaserBeam()
+
+
+def _behind_glass(volume, spot_radius_mm: float, beam: LaserBeam, boundary_eta: float):
+    """The volume with the boundary's η and the spot radius (mm) widened over the laser's window (η > 1)."""
     if (
         boundary_eta != 1.0
     ):  # behind glass: the window over the laser's disc is the spot the import sets aside
         volume = replace(volume, eta=float(boundary_eta))
         spot_radius_mm = max(spot_radius_mm, 4.0 * beam.radius_mm / 3.0)
-    folder = Path(folder)
-    folder.mkdir(parents=True, exist_ok=True)
-    W, H = (int(v) for v in resolution)
-    cameras = cameras if cameras is not None else cameras_around(mesh, n_cameras, W, H, seed=seed)
-    rng = np.random.default_rng(seed)
-    scene = mesh_scene(mesh)
-    verts = np.asarray(mesh.vertices, dtype=np.float64)
-    normals = np.asarray(mesh.vertex_normals, dtype=np.float64)
-    incident = farthest_points(verts, n_points)
+    return volume, spot_radius_mm
+
+
+def _write_mesh(folder: Path, mesh) -> None:
+    """Write the object (mm) as ``object.ply``, with whatever per-vertex arrays trimesh has computed."""
     with atomic_path(folder / "object.ply") as tmp:
         mesh.export(tmp, file_type="ply")
+
+
+def _write_cameras(folder: Path, mesh, cameras, sensor: Sensor, rng, image_format: str, checkerboards: bool):
+    """Each camera's folder (dark frame, flat field, checkerboards) and its ``object.json`` entry."""
     cam_entries = []
     for i, c in enumerate(cameras):
         (folder / c.name).mkdir(exist_ok=True)
@@ -314,68 +353,115 @@ def photograph_object(
                 "saturation": sensor.saturation,
             },
         }
-        if checkerboards:
-            names = []
-            for b, img in enumerate(render_checkerboards(c, (7, 5), 4.0 * np.linalg.norm(mesh.extents) / 80)):
-                name = f"{c.name}/board_{b:02d}.{image_format}"
-                write_hdr(folder / name, img)
-                names.append(name)
-            entry["intrinsics"] = {
-                "checkerboards": names,
-                "inner": [7, 5],
-                "square_mm": 4.0 * float(np.linalg.norm(mesh.extents)) / 80,
-            }
-        else:
-            entry["intrinsics"] = {"K": c.K.tolist(), "dist": c.dist.tolist()}
+        entry["intrinsics"] = _intrinsics(folder, mesh, c, image_format, checkerboards)
         cam_entries.append(entry)
-    (folder / "shots").mkdir(exist_ok=True)
+    return cam_entries
+
+
+def _intrinsics(folder: Path, mesh, c: Camera, image_format: str, checkerboards: bool) -> dict:
+    """A camera's intrinsics entry: its checkerboard photographs (written; squares in mm), else K and dist."""
+    if not checkerboards:
+        return {"K": c.K.tolist(), "dist": c.dist.tolist()}
+    names = []
+    for b, img in enumerate(render_checkerboards(c, (7, 5), 4.0 * np.linalg.norm(mesh.extents) / 80)):
+        name = f"{c.name}/board_{b:02d}.{image_format}"
+        write_hdr(folder / name, img)
+        names.append(name)
+    return {
+        "checkerboards": names,
+        "inner": [7, 5],
+        "square_mm": 4.0 * float(np.linalg.norm(mesh.extents)) / 80,
+    }
+
+
+def _photograph_shots(
+    shoot: _Shoot,
+    mesh,
+    volume,
+    cameras,
+    scene,
+    surface,
+    incident,
+    sensor: Sensor,
+    k_auto,
+    cam_entries,
+    progress,
+) -> list:
+    """Render and expose every shot (the first one setting the gain when ``k_auto``); their records."""
+    verts, normals = surface  # the mesh's vertices (mm) and their unit normals
+    (shoot.folder / "shots").mkdir(exist_ok=True)
     shots = []
     for j, v in enumerate(incident):
         power = 1.0 + 0.1 * np.sin(1.3 * j)  # the laser drifts; a power monitor records it
-        # repeated frames: two independent renders per camera
-        radiance = [
-            [
-                render_shot(
-                    mesh,
-                    volume,
-                    c,
-                    verts[v],
-                    normals[v],
-                    beam,
-                    spp=spp,
-                    seed=seed * 1000 + 2 * j + rep,
-                    scene=scene,
-                    eta=boundary_eta,
-                )
-                for rep in range(repeats)
-            ]
-            for c in cameras
-        ]
-        if k_auto:  # the first shot sets the gain: the brightest 0.5 % of its brightest camera saturate
-            top = [float(np.percentile(L[L > 0], 99.5)) for L, *_ in radiance if (L > 0).any()]
-            k = 0.8 * sensor.saturation / max(top) if top else sensor.k
-            sensor = Sensor(**{**sensor.__dict__, "k": k})
-            for entry in cam_entries:
-                entry["radiometry"]["k"] = k
+        radiance = _shot_radiance(shoot, mesh, volume, cameras, scene, verts[v], normals[v], j)
+        if k_auto:  # the first shot sets the gain
+            sensor = _auto_gain(sensor, radiance, cam_entries)
             k_auto = False
-        images = {}
-        for i, c in enumerate(cameras):
-            frames = []
-            noise = seed * 7919 + 97 * j + 13 * i  # the sensor's noise of this shot and camera
-            for rep, L in enumerate(radiance[i]):
-                raw = _expose(sensor, L * power, 1.0, noise + 3 * rep, i)
-                name = f"shots/{j:03d}_{c.name}_{'ab'[rep]}.{image_format}"
-                write_hdr(folder / name, raw)
-                frames.append({"file": name, "exposure_s": 1.0})
-                if rep == 0 and exposures == "brackets":  # the short exposure, from the same radiance
-                    raw = _expose(sensor, L * power, SHORT_EXPOSURE, noise + 2, i)
-                    name = f"shots/{j:03d}_{c.name}_short.{image_format}"
-                    write_hdr(folder / name, raw)
-                    frames.append({"file": name, "exposure_s": SHORT_EXPOSURE})
-            images[c.name] = frames
+        images = _write_shot(shoot, sensor, cameras, radiance, power, j)
         shots.append({"hit": {"point": verts[v].tolist()}, "power": power, "images": images})
         if progress:
             progress(j + 1, len(incident))
+    return shots
+
+
+def _shot_radiance(shoot: _Shoot, mesh, volume, cameras, scene, point, normal, j: int) -> list:
+    """Radiance per W of laser power of shot ``j`` from every camera: one render per repeated frame."""
+    repeats = 2 if shoot.exposures == "brackets" else 1
+    # repeated frames: two independent renders per camera
+    return [
+        [
+            render_shot(
+                mesh,
+                volume,
+                c,
+                point,
+                normal,
+                shoot.beam,
+                spp=shoot.spp,
+                seed=shoot.seed * 1000 + 2 * j + rep,
+                scene=scene,
+                eta=shoot.eta,
+            )
+            for rep in range(repeats)
+        ]
+        for c in cameras
+    ]
+
+
+def _auto_gain(sensor: Sensor, radiance: list, cam_entries: list) -> Sensor:
+    """The sensor with its gain k set so that the brightest 0.5 % of the brightest camera saturate."""
+    top = [float(np.percentile(L[L > 0], 99.5)) for L, *_ in radiance if (L > 0).any()]
+    k = 0.8 * sensor.saturation / max(top) if top else sensor.k
+    sensor = Sensor(**{**sensor.__dict__, "k": k})
+    for entry in cam_entries:
+        entry["radiometry"]["k"] = k
+    return sensor
+
+
+def _write_shot(shoot: _Shoot, sensor: Sensor, cameras, radiance: list, power: float, j: int) -> dict:
+    """Expose and write shot ``j``'s frames per camera: repeated long ones, a short one with brackets."""
+    images = {}
+    for i, c in enumerate(cameras):
+        frames = []
+        noise = shoot.seed * 7919 + 97 * j + 13 * i  # the sensor's noise of this shot and camera
+        for rep, L in enumerate(radiance[i]):
+            raw = _expose(sensor, L * power, 1.0, noise + 3 * rep, i)
+            name = f"shots/{j:03d}_{c.name}_{'ab'[rep]}.{shoot.image_format}"
+            write_hdr(shoot.folder / name, raw)
+            frames.append({"file": name, "exposure_s": 1.0})
+            if rep == 0 and shoot.exposures == "brackets":  # the short exposure, from the same radiance
+                raw = _expose(sensor, L * power, SHORT_EXPOSURE, noise + 2, i)
+                name = f"shots/{j:03d}_{c.name}_short.{shoot.image_format}"
+                write_hdr(shoot.folder / name, raw)
+                frames.append({"file": name, "exposure_s": SHORT_EXPOSURE})
+        images[c.name] = frames
+    return images
+
+
+def _write_records(
+    folder: Path, volume, boundary_eta: float, spot_radius_mm: float, cameras, cam_entries, shots, incident
+) -> None:
+    """Write ``object.json`` (the lab's hand-over) and ``truth.json`` (the true cameras, for tests)."""
     rig = {
         "format": FORMAT,
         "version": VERSION,
@@ -398,12 +484,6 @@ def photograph_object(
         folder / "truth.json",
         {"cameras": [dict(c.to_dict(), name=c.name) for c in cameras], "incident": incident.tolist()},
     )
-    return {
-        "folder": str(folder),
-        "incident": incident.tolist(),
-        "cameras": cameras,
-        "seconds": time.perf_counter() - t0,
-    }
 
 
 def _expose(
