@@ -215,84 +215,16 @@ def read_object_rig(path) -> ObjectRig:
     ...     print(str(exc).split("/")[-1])
     object.json: shot 0: images of unknown camera 'cam1'
     """
-    path = Path(path)
-    if path.is_dir():
-        path = path / "object.json"
-    try:
-        raw = json.loads(path.read_text())
-    except OSError as exc:
-        raise TranslucencyError(f"{path}: cannot read ({exc.strerror})") from None
-    except ValueError as exc:
-        raise TranslucencyError(f"{path}: not JSON ({exc})") from None
-    if not isinstance(raw, dict) or raw.get("format") != FORMAT or raw.get("version") != VERSION:
-        raise TranslucencyError(f"{path}: not an object rig file ({FORMAT} v{VERSION})")
+    path = _rig_path(path)
+    raw = _read_json(path)
     folder = path.parent
     mesh = raw.get("mesh") or {}
     mesh_file = _file(folder, mesh.get("file"), f"{path}: mesh")
     eta = _number(raw.get("boundary") or {}, "eta", f"{path}: boundary", 1.0, positive=True)
     if eta < 1.0:
         raise TranslucencyError(f"{path}: boundary: eta must be >= 1 (the object's index over the air's)")
-    cams = raw.get("cameras")
-    if not isinstance(cams, list) or not cams:
-        raise TranslucencyError(f"{path}: cameras: expected a non-empty list")
-    cameras = []
-    for i, c in enumerate(cams):
-        name = str(c.get("name", f"camera{i}"))
-        where = f"{path}: camera {name}"
-        if any(cam.name == name for cam in cameras):
-            raise TranslucencyError(f"{where}: the name is used twice")
-        intr, pose, rad = c.get("intrinsics"), c.get("pose"), c.get("radiometry") or {}
-        if not isinstance(intr, dict) or not ({"K"} <= intr.keys() or {"checkerboards"} <= intr.keys()):
-            raise TranslucencyError(f"{where}: intrinsics: give K (and dist) or checkerboards")
-        for f in intr.get("checkerboards", []):
-            _file(folder, f, f"{where}: checkerboards")
-        if not isinstance(pose, dict) or not ({"t"} <= pose.keys() or {"marks"} <= pose.keys()):
-            raise TranslucencyError(f"{where}: pose: give R (or rvec) and t, or marks")
-        radiometry = Radiometry(
-            k=_number(rad, "k", f"{where}: radiometry", positive=True),
-            dark=_file(folder, rad["dark"], f"{where}: dark") if rad.get("dark") else None,
-            flat=_file(folder, rad["flat"], f"{where}: flat") if rad.get("flat") else None,
-            vignetting=tuple(float(v) for v in rad.get("vignetting", ())),
-            gain=_number(rad, "gain", f"{where}: radiometry", 0.0),
-            read_noise=_number(rad, "read_noise", f"{where}: radiometry", 0.0),
-            saturation=_number(rad, "saturation", f"{where}: radiometry", float("inf"), positive=True)
-            if rad.get("saturation") is not None
-            else float("inf"),
-        )
-        width = int(_number(c, "width", where, positive=True))
-        height = int(_number(c, "height", where, positive=True))
-        cameras.append(CameraSetup(name, width, height, intr, pose, radiometry))
-    names = {c.name for c in cameras}
-    shots_raw = raw.get("shots")
-    if not isinstance(shots_raw, list) or not shots_raw:
-        raise TranslucencyError(f"{path}: shots: expected a non-empty list")
-    shots = []
-    for j, s in enumerate(shots_raw):
-        where = f"{path}: shot {j}"
-        hit = s.get("hit")
-        if not isinstance(hit, dict) or len(hit.keys() & {"vertex", "point", "ray"}) != 1:
-            raise TranslucencyError(f"{where}: hit: give exactly one of vertex, point or ray")
-        power = _number(s, "power", where, positive=True)
-        images = s.get("images")
-        if not isinstance(images, dict) or not images:
-            raise TranslucencyError(f"{where}: images: expected {{camera: [frames]}}")
-        unknown = images.keys() - names
-        if unknown:
-            raise TranslucencyError(f"{where}: images of unknown camera {sorted(unknown)[0]!r}")
-        frames = {}
-        for cam, lst in images.items():
-            if not isinstance(lst, list) or not lst:
-                raise TranslucencyError(f"{where}: camera {cam}: expected a list of frames")
-            frames[cam] = [
-                Exposure(
-                    _file(folder, f.get("file") if isinstance(f, dict) else f, f"{where}: camera {cam}"),
-                    _number(f, "exposure_s", f"{where}: camera {cam}", 1.0, positive=True)
-                    if isinstance(f, dict)
-                    else 1.0,
-                )
-                for f in lst
-            ]
-        shots.append(ObjectShot(j, hit, power, frames))
+    cameras = _read_cameras(raw, folder, path)
+    shots = _read_shots(raw, folder, path, {c.name for c in cameras})
     # default (measured, docs/object-rig.md §7): π L for index-matched, the diffusion law for a dielectric
     law = str(raw.get("exit_law", "dielectric" if eta > 1.0 else "lambertian"))
     return ObjectRig(
@@ -315,6 +247,108 @@ def read_object_rig(path) -> ObjectRig:
         sample=raw.get("sample"),
         raw=raw,
     )
+
+
+def _rig_path(path) -> Path:
+    """The rig file: ``path`` itself, or the ``object.json`` in the folder ``path``."""
+    path = Path(path)
+    if path.is_dir():
+        path = path / "object.json"
+    return path
+
+
+def _read_json(path: Path) -> dict:
+    """The rig file's JSON, refused unless it reads, parses and names this format and version."""
+    try:
+        raw = json.loads(path.read_text())
+    except OSError as exc:
+        raise TranslucencyError(f"{path}: cannot read ({exc.strerror})") from None
+    except ValueError as exc:
+        raise TranslucencyError(f"{path}: not JSON ({exc})") from None
+    if not isinstance(raw, dict) or raw.get("format") != FORMAT or raw.get("version") != VERSION:
+        raise TranslucencyError(f"{path}: not an object rig file ({FORMAT} v{VERSION})")
+    return raw
+
+
+def _read_cameras(raw: dict, folder: Path, path: Path) -> list[CameraSetup]:
+    """The ``cameras`` entries, checked in order (a non-empty list, no name twice)."""
+    cams = raw.get("cameras")
+    if not isinstance(cams, list) or not cams:
+        raise TranslucencyError(f"{path}: cameras: expected a non-empty list")
+    cameras = []
+    for i, c in enumerate(cams):
+        name = str(c.get("name", f"camera{i}"))
+        where = f"{path}: camera {name}"
+        if any(cam.name == name for cam in cameras):
+            raise TranslucencyError(f"{where}: the name is used twice")
+        cameras.append(_read_camera(c, name, folder, where))
+    return cameras
+
+
+def _read_camera(c: dict, name: str, folder: Path, where: str) -> CameraSetup:
+    """One camera entry: its intrinsics and pose (as given, files found), radiometry and size (px)."""
+    intr, pose, rad = c.get("intrinsics"), c.get("pose"), c.get("radiometry") or {}
+    if not isinstance(intr, dict) or not ({"K"} <= intr.keys() or {"checkerboards"} <= intr.keys()):
+        raise TranslucencyError(f"{where}: intrinsics: give K (and dist) or checkerboards")
+    for f in intr.get("checkerboards", []):
+        _file(folder, f, f"{where}: checkerboards")
+    if not isinstance(pose, dict) or not ({"t"} <= pose.keys() or {"marks"} <= pose.keys()):
+        raise TranslucencyError(f"{where}: pose: give R (or rvec) and t, or marks")
+    radiometry = _read_radiometry(rad, folder, where)
+    width = int(_number(c, "width", where, positive=True))
+    height = int(_number(c, "height", where, positive=True))
+    return CameraSetup(name, width, height, intr, pose, radiometry)
+
+
+def _read_radiometry(rad: dict, folder: Path, where: str) -> Radiometry:
+    """A camera's ``radiometry`` entry (module notes): k, its frames' files, vignetting and noise."""
+    return Radiometry(
+        k=_number(rad, "k", f"{where}: radiometry", positive=True),
+        dark=_file(folder, rad["dark"], f"{where}: dark") if rad.get("dark") else None,
+        flat=_file(folder, rad["flat"], f"{where}: flat") if rad.get("flat") else None,
+        vignetting=tuple(float(v) for v in rad.get("vignetting", ())),
+        gain=_number(rad, "gain", f"{where}: radiometry", 0.0),
+        read_noise=_number(rad, "read_noise", f"{where}: radiometry", 0.0),
+        saturation=_number(rad, "saturation", f"{where}: radiometry", float("inf"), positive=True)
+        if rad.get("saturation") is not None
+        else float("inf"),
+    )
+
+
+def _read_shots(raw: dict, folder: Path, path: Path, names: set) -> list[ObjectShot]:
+    """The ``shots`` entries, checked in order: each hit, laser power and frames of known cameras."""
+    shots_raw = raw.get("shots")
+    if not isinstance(shots_raw, list) or not shots_raw:
+        raise TranslucencyError(f"{path}: shots: expected a non-empty list")
+    shots = []
+    for j, s in enumerate(shots_raw):
+        where = f"{path}: shot {j}"
+        hit = s.get("hit")
+        if not isinstance(hit, dict) or len(hit.keys() & {"vertex", "point", "ray"}) != 1:
+            raise TranslucencyError(f"{where}: hit: give exactly one of vertex, point or ray")
+        power = _number(s, "power", where, positive=True)
+        images = s.get("images")
+        if not isinstance(images, dict) or not images:
+            raise TranslucencyError(f"{where}: images: expected {{camera: [frames]}}")
+        unknown = images.keys() - names
+        if unknown:
+            raise TranslucencyError(f"{where}: images of unknown camera {sorted(unknown)[0]!r}")
+        frames = {cam: _read_frames(lst, folder, f"{where}: camera {cam}") for cam, lst in images.items()}
+        shots.append(ObjectShot(j, hit, power, frames))
+    return shots
+
+
+def _read_frames(lst, folder: Path, where: str) -> list[Exposure]:
+    """A camera's frames of one shot: files (found) or ``{"file", "exposure_s"}`` (s; default 1)."""
+    if not isinstance(lst, list) or not lst:
+        raise TranslucencyError(f"{where}: expected a list of frames")
+    return [
+        Exposure(
+            _file(folder, f.get("file") if isinstance(f, dict) else f, where),
+            _number(f, "exposure_s", where, 1.0, positive=True) if isinstance(f, dict) else 1.0,
+        )
+        for f in lst
+    ]
 
 
 def calibrated_camera(setup: CameraSetup, folder: Path, max_rms_px: float) -> Camera:
