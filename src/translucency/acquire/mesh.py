@@ -108,15 +108,38 @@ def acquire_mesh(
     -------
     pathlib.Path
     """
+    _refuse_options(photons, unscattered, scheduler)
+    check_filling(mesh, volume)
+    incident = farthest_points(np.asarray(mesh.vertices), n_points)
+    incidence = incidence or Incidence()
+    angles = angle_record(incidence, exit_bins)
+    request = _request(
+        mesh, volume, len(incident), photons, seed, chunk_points, index_matched, reentry, unscattered, angles
+    )
+    area = vertex_areas(mesh)
+    header = _header(mesh, volume, len(incident), photons, seed, index_matched, request, angles)
+    with output_lock(out):  # one writer at a time
+        ds = create_mesh_dataset(
+            out, header, mesh, area, incident, chunk_points=chunk_points, overwrite=overwrite, inputs=inputs
+        )
+        walk = (photons, seed, index_matched, reentry, incidence, exit_bins, unscattered == "apart")
+        _scan_chunks(ds, mesh, volume, area, incident, chunk_points, walk, scheduler, progress)
+        return Path(out)
+
+
+def _refuse_options(photons: int, unscattered: str, scheduler: str | None) -> None:
+    """Refuse, in one line before any work, a photon count, unscattered mode or scheduler out of range."""
     if photons < 1:
         raise TranslucencyError(f"photons: must be >= 1, got {photons}")
     if unscattered not in UNSCATTERED:
         raise TranslucencyError(f"unscattered: expected one of {', '.join(UNSCATTERED)}, got {unscattered!r}")
     parse_scheduler(scheduler)  # a bad option is one line before any work
-    check_filling(mesh, volume)
-    V = len(mesh.vertices)
-    incident = farthest_points(np.asarray(mesh.vertices), n_points)
-    P = len(incident)
+
+
+def _request(
+    mesh, volume: Volume, P: int, photons, seed, chunk_points, index_matched, reentry, unscattered, angles
+) -> dict:
+    """The scan's request as recorded (JSON round-tripped): what a resume must match."""
     request = {
         "n_points": P,
         "photons": int(photons),
@@ -124,7 +147,7 @@ def acquire_mesh(
         "chunk": int(chunk_points),
         "index_matched": bool(index_matched),
         "reentry": bool(reentry),
-        "vertices": V,
+        "vertices": len(mesh.vertices),
         "faces": len(mesh.faces),
         "volume": volume.description,
         "bounds": np.round(mesh.bounds, 6).tolist(),
@@ -133,15 +156,16 @@ def acquire_mesh(
     }
     if unscattered == "apart":  # (absent otherwise: the data sets made before resume as they were)
         request["unscattered"] = "apart"
-    incidence = incidence or Incidence()
-    angles = angle_record(incidence, exit_bins)
     if angles:  # (absent otherwise: the data sets made before the axes existed resume as they were)
         request["angles"] = angles
-    request = json.loads(json.dumps(request))
-    area = vertex_areas(mesh)
+    return json.loads(json.dumps(request))
+
+
+def _header(mesh, volume: Volume, P: int, photons, seed, index_matched: bool, request: dict, angles) -> dict:
+    """The data set's header: sizes, the medium, the request, the boundary's η and a user's filling."""
     header = mesh_header(
         n_points=P,
-        n_vertices=V,
+        n_vertices=len(mesh.vertices),
         photons=photons,
         seed=seed,
         eta=volume.eta,  # the medium's own index
@@ -153,32 +177,34 @@ def acquire_mesh(
     )
     if volume.description.get("generator") == "file":  # a user's filling: where it is and what it was
         header["filling"] = filling_record(volume.description["path"])
-    with output_lock(out):  # one writer at a time
-        ds = create_mesh_dataset(
-            out, header, mesh, area, incident, chunk_points=chunk_points, overwrite=overwrite, inputs=inputs
-        )
-        root = ds.group
-        n_chunks = root["chunk_done"].shape[0]
-        done = np.asarray(root["chunk_done"][...])
-        todo = [(c, c * chunk_points, min(P, (c + 1) * chunk_points)) for c in range(n_chunks) if not done[c]]
-        finished = P - sum(hi - lo for _, lo, hi in todo)
-        walk = (photons, seed, index_matched, reentry, incidence, exit_bins, unscattered == "apart")
-        with open_cluster(scheduler) as cluster:
-            if cluster is None:  # this process, chunk after chunk (Dr.Jit uses every core)
-                scene = mesh_scene(mesh)
-                for c, lo, hi in todo:
-                    _acquire_mesh_chunk(mesh, volume, area, ds, c, lo, hi, incident[lo:hi], walk, scene)
-                    finished += hi - lo
-                    if progress:
-                        progress(finished, P)
-            else:  # a task per chunk: each builds the scene once per worker, writes its rows and flag
-                shared = (cluster.keep(mesh), cluster.keep(volume), cluster.keep(area))
-                tasks = [(ds, c, lo, hi, incident[lo:hi], walk) for c, lo, hi in todo]
-                for i, _ in cluster.run(_acquire_mesh_chunk, tasks, shared=shared):
-                    finished += todo[i][2] - todo[i][1]
-                    if progress:
-                        progress(finished, P)
-        return Path(out)
+    return header
+
+
+def _scan_chunks(
+    ds, mesh, volume: Volume, area, incident, chunk_points: int, walk, scheduler, progress
+) -> None:
+    """Acquire the chunks not yet done, here or on a cluster, reporting the points finished."""
+    P = len(incident)
+    root = ds.group
+    n_chunks = root["chunk_done"].shape[0]
+    done = np.asarray(root["chunk_done"][...])
+    todo = [(c, c * chunk_points, min(P, (c + 1) * chunk_points)) for c in range(n_chunks) if not done[c]]
+    finished = P - sum(hi - lo for _, lo, hi in todo)
+    with open_cluster(scheduler) as cluster:
+        if cluster is None:  # this process, chunk after chunk (Dr.Jit uses every core)
+            scene = mesh_scene(mesh)
+            for c, lo, hi in todo:
+                _acquire_mesh_chunk(mesh, volume, area, ds, c, lo, hi, incident[lo:hi], walk, scene)
+                finished += hi - lo
+                if progress:
+                    progress(finished, P)
+        else:  # a task per chunk: each builds the scene once per worker, writes its rows and flag
+            shared = (cluster.keep(mesh), cluster.keep(volume), cluster.keep(area))
+            tasks = [(ds, c, lo, hi, incident[lo:hi], walk) for c, lo, hi in todo]
+            for i, _ in cluster.run(_acquire_mesh_chunk, tasks, shared=shared):
+                finished += todo[i][2] - todo[i][1]
+                if progress:
+                    progress(finished, P)
 
 
 def check_filling(mesh, volume: Volume) -> None:
