@@ -277,7 +277,19 @@ def acquire_planar(
     P = len(x_i)
     origin = x_i - setup.pitch * n / 2.0
     request = {**setup_request(setup), "volume": _volume_fingerprint(volume)}
-    header = {
+    header = _header(volume, setup, n, P, request, mi_versions)
+    with output_lock(out):  # one writer at a time
+        ds = create_dataset(out, header, overwrite=overwrite, inputs=inputs)
+        g = ds.group
+        _every_chunk(g)("x_i")[...] = x_i.astype(np.float32)
+        _every_chunk(g)("window_origin")[...] = origin.astype(np.float32)
+        _scan_chunks(ds, volume, setup, x_i, origin, batch_photons, scheduler, progress)
+        return ds
+
+
+def _header(volume: Volume, setup: PlanarSetup, n: int, P: int, request: dict, mi_versions: dict) -> dict:
+    """The data set's header: units, windows of n × n pixels, the sample, the acquisition and the request."""
+    return {
         "format": FORMAT,
         "version": VERSION,
         "units": {"length": "mm", "R_d": "mm^-2", "variance": "mm^-4"},
@@ -307,32 +319,33 @@ def acquire_planar(
         # file is damage; stores made before say nothing here and may lack their all-zero chunks
         "chunk_files": "every",
     }
-    with output_lock(out):  # one writer at a time
-        ds = create_dataset(out, header, overwrite=overwrite, inputs=inputs)
-        g = ds.group
-        _every_chunk(g)("x_i")[...] = x_i.astype(np.float32)
-        _every_chunk(g)("window_origin")[...] = origin.astype(np.float32)
-        done = np.asarray(g["chunk_done"][...])
-        k = setup.chunk_points
-        todo = [(c, c * k, min(P, (c + 1) * k)) for c in range(len(done)) if not done[c]]
-        finished = P - sum(hi - lo for _, lo, hi in todo)  # points of the chunks done before
-        if progress and finished:
-            progress(finished, P)
-        with open_cluster(scheduler) as cluster:
-            if cluster is None:  # this process, chunk after chunk (Dr.Jit uses every core)
-                for c, lo, hi in todo:
-                    _acquire_chunk(volume, setup, ds, c, lo, hi, x_i[lo:hi], origin[lo:hi], batch_photons)
-                    finished += hi - lo
-                    if progress:
-                        progress(finished, P)
-            else:  # a task per chunk: each writes its part of the store and its done flag
-                tasks = [(ds, c, lo, hi, x_i[lo:hi], origin[lo:hi], batch_photons) for c, lo, hi in todo]
-                shared = (cluster.keep(volume), setup)
-                for i, _ in cluster.run(_acquire_chunk, tasks, shared=shared):
-                    finished += todo[i][2] - todo[i][1]
-                    if progress:
-                        progress(finished, P)
-        return ds
+
+
+def _scan_chunks(
+    ds, volume: Volume, setup: PlanarSetup, x_i, origin, batch_photons: int, scheduler, progress
+):
+    """Acquire the chunks not yet done, here or on a cluster, reporting the points finished."""
+    P = len(x_i)
+    done = np.asarray(ds.group["chunk_done"][...])
+    k = setup.chunk_points
+    todo = [(c, c * k, min(P, (c + 1) * k)) for c in range(len(done)) if not done[c]]
+    finished = P - sum(hi - lo for _, lo, hi in todo)  # points of the chunks done before
+    if progress and finished:
+        progress(finished, P)
+    with open_cluster(scheduler) as cluster:
+        if cluster is None:  # this process, chunk after chunk (Dr.Jit uses every core)
+            for c, lo, hi in todo:
+                _acquire_chunk(volume, setup, ds, c, lo, hi, x_i[lo:hi], origin[lo:hi], batch_photons)
+                finished += hi - lo
+                if progress:
+                    progress(finished, P)
+        else:  # a task per chunk: each writes its part of the store and its done flag
+            tasks = [(ds, c, lo, hi, x_i[lo:hi], origin[lo:hi], batch_photons) for c, lo, hi in todo]
+            shared = (cluster.keep(volume), setup)
+            for i, _ in cluster.run(_acquire_chunk, tasks, shared=shared):
+                finished += todo[i][2] - todo[i][1]
+                if progress:
+                    progress(finished, P)
 
 
 def setup_request(setup: PlanarSetup) -> dict:
