@@ -229,30 +229,9 @@ def create_mesh_dataset(
         overwrite=overwrite,
         inputs=inputs,
     )
+    surface = _surface_arrays(mesh, vertex_area, incident)
     if old is not None:  # the same acquisition: resume, and redo what is damaged
-        damaged = old.damaged_chunks()
-        surface = {
-            "vertices": mesh.vertices.astype(np.float32),
-            "faces": mesh.faces.astype(np.int32),
-            "normals": mesh.vertex_normals.astype(np.float32),
-            "vertex_area": vertex_area.astype(np.float32),
-            "incident": incident.astype(np.int32),
-        }
-        for name in _SURFACE:
-            if name in damaged:  # written whole at creation: write it again
-                old.group[name].with_config({"write_empty_chunks": True})[...] = surface[name]
-        chunks = sorted({chunk for name in (*old.PER_POINT, "chunk_done") for chunk in damaged.get(name, [])})
-        for chunk in chunks:
-            old.group["chunk_done"][chunk] = False
-        if damaged:
-            warnings.warn(
-                f"{path}: {', '.join(f'{k} chunks {v}' for k, v in damaged.items())} were missing or "
-                "damaged; acquiring them again",
-                stacklevel=2,
-            )
-        return old
-    P, V = len(incident), len(mesh.vertices)
-    n_chunks = -(-P // chunk_points)
+        return _redo_damaged(old, path, surface)
     import zarr  # heavy: Zarr loads where a store is read or written, not for --help
     from zarr.codecs import BloscCodec
 
@@ -260,14 +239,43 @@ def create_mesh_dataset(
         str(path), attributes={HEADER_KEY: header}, overwrite=False
     )  # never clears a folder
     comp = BloscCodec(cname="zstd", clevel=5, shuffle="shuffle")
-    for name, data in (
-        ("vertices", mesh.vertices.astype(np.float32)),
-        ("faces", mesh.faces.astype(np.int32)),
-        ("normals", mesh.vertex_normals.astype(np.float32)),
-        ("vertex_area", vertex_area.astype(np.float32)),
-        ("incident", incident.astype(np.int32)),
-    ):
+    for name, data in surface.items():
         root.create_array(name, data=data, compressors=comp, config={"write_empty_chunks": True})
+    _create_per_point(root, header, len(incident), len(mesh.vertices), chunk_points, comp, measured)
+    return MeshDataset(path, header, root)
+
+
+def _surface_arrays(mesh, vertex_area: np.ndarray, incident: np.ndarray) -> dict:
+    """The arrays written whole at creation: vertices (mm), faces, normals, vertex areas (mm²), incident."""
+    return {
+        "vertices": mesh.vertices.astype(np.float32),
+        "faces": mesh.faces.astype(np.int32),
+        "normals": mesh.vertex_normals.astype(np.float32),
+        "vertex_area": vertex_area.astype(np.float32),
+        "incident": incident.astype(np.int32),
+    }
+
+
+def _redo_damaged(old: MeshDataset, path: Path, surface: dict) -> MeshDataset:
+    """A reopened data set with its damaged surface arrays rewritten and damaged chunks marked not done."""
+    damaged = old.damaged_chunks()
+    for name in _SURFACE:
+        if name in damaged:  # written whole at creation: write it again
+            old.group[name].with_config({"write_empty_chunks": True})[...] = surface[name]
+    chunks = sorted({chunk for name in (*old.PER_POINT, "chunk_done") for chunk in damaged.get(name, [])})
+    for chunk in chunks:
+        old.group["chunk_done"][chunk] = False
+    if damaged:
+        warnings.warn(
+            f"{path}: {', '.join(f'{k} chunks {v}' for k, v in damaged.items())} were missing or "
+            "damaged; acquiring them again",
+            stacklevel=3,  # (the caller of create_mesh_dataset)
+        )
+    return old
+
+
+def _create_per_point(root, header: dict, P: int, V: int, chunk_points: int, comp, measured: bool) -> None:
+    """The arrays filled point by point (chunked by ``chunk_points``), zero, and the chunks' done flags."""
     every = {"write_empty_chunks": True}  # every written chunk is a file: a missing one is damage
     for name in ("R_d", "R_d_var") if measured else ("R_d",):  # (P, V, 3), chunked by points
         root.create_array(
@@ -306,8 +314,8 @@ def create_mesh_dataset(
             fill_value=0,
             config=every,
         )
+    n_chunks = -(-P // chunk_points)
     root.create_array("chunk_done", shape=(n_chunks,), dtype="bool", chunks=(1,), fill_value=False)
-    return MeshDataset(path, header, root)
 
 
 def describe_mesh(ds: MeshDataset) -> dict:
