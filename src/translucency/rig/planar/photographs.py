@@ -254,20 +254,9 @@ def photograph_sample(
     folder.mkdir(parents=True, exist_ok=True)
     x_i = np.asarray(x_i, float).reshape(-1, 2)
     power = beam.power()
-    rows = []
-    shape = (camera.height, camera.width, 3)
-    for j, p in enumerate(x_i):
-        L = render_radiance(volume, camera, beam, p, spp=spp, seed=seed + j, channels=channels)
-        raw = sensor.expose(L, seed=1000 + seed + j)
-        name = f"shot_{j:03d}.{image_format}"
-        write_hdr(folder / name, raw)
-        rows.append({"file": name, "x": f"{p[0]:.6f}", "y": f"{p[1]:.6f}", "power": f"{power:.9g}"})
-    with atomic_path(folder / "positions.csv") as tmp:
-        with open(tmp, "w", newline="") as f:
-            w = csv.DictWriter(f, fieldnames=["file", "x", "y", "power"])
-            w.writeheader()
-            w.writerows(rows)
-    dark, flat, _ = sensor.frames(shape)
+    rows = _write_shots(volume, x_i, folder, camera, beam, sensor, spp, seed, channels, image_format, power)
+    _write_positions(folder, rows)
+    dark, flat, _ = sensor.frames((camera.height, camera.width, 3))
     write_hdr(folder / "dark.pfm", dark)
     write_hdr(folder / "flat.pfm", flat)
     if markers_mm is None:
@@ -277,7 +266,41 @@ def photograph_sample(
     truth = camera.homography()
     found = match_markers(markers_mm, find_markers(photo, len(markers_mm)), truth)
     est, rms = homography_from_points(markers_mm, found)
-    calib = {
+    calib = _calibration(sensor, markers_mm, found)
+    if scale is not None:
+        calib["scale"] = np.asarray(scale).tolist()
+    if reference is not None:  # a photograph of a reference of known reflectance, at a shorter exposure
+        calib["reference"] = _write_reference(
+            folder, reference, camera, beam, sensor, spp, seed, channels, power
+        )
+    write_json(folder / "calibration.json", calib)
+    return {"homography": truth, "marked": est, "rms_px": rms, "power": power}
+
+
+def _write_shots(volume, x_i, folder: Path, camera, beam, sensor, spp, seed, channels, image_format, power):
+    """Render, expose and write a shot per incident point; the rows of ``positions.csv`` (mm, W)."""
+    rows = []
+    for j, p in enumerate(x_i):
+        L = render_radiance(volume, camera, beam, p, spp=spp, seed=seed + j, channels=channels)
+        raw = sensor.expose(L, seed=1000 + seed + j)
+        name = f"shot_{j:03d}.{image_format}"
+        write_hdr(folder / name, raw)
+        rows.append({"file": name, "x": f"{p[0]:.6f}", "y": f"{p[1]:.6f}", "power": f"{power:.9g}"})
+    return rows
+
+
+def _write_positions(folder: Path, rows: list) -> None:
+    """Write ``positions.csv``: each shot's file, incident point (mm) and laser power (W)."""
+    with atomic_path(folder / "positions.csv") as tmp:
+        with open(tmp, "w", newline="") as f:
+            w = csv.DictWriter(f, fieldnames=["file", "x", "y", "power"])
+            w.writeheader()
+            w.writerows(rows)
+
+
+def _calibration(sensor: Sensor, markers_mm, found) -> dict:
+    """``calibration.json``'s marked points (mm, px), dark and flat frames and the sensor's noise model."""
+    return {
         "points": {"sample_mm": np.asarray(markers_mm).tolist(), "image_px": found.tolist()},
         "dark": "dark.pfm",
         "flat": "flat.pfm",
@@ -286,28 +309,27 @@ def photograph_sample(
         "read_noise": sensor.read_noise,
         "saturation": sensor.saturation,
     }
-    if scale is not None:
-        calib["scale"] = np.asarray(scale).tolist()
-    if reference is not None:  # a photograph of a reference of known reflectance, at a shorter exposure
-        t = float(reference.get("exposure_s", 0.1))
-        ref_spp = int(reference.get("spp", spp))  # one image sets every shot's scale: worth more samples
-        L = render_radiance(
-            reference["volume"], camera, beam, reference["x"], spp=ref_spp, seed=seed + 999, channels=channels
-        )
-        ref_sensor = Sensor(**{**sensor.__dict__, "k": sensor.k * t})
-        write_hdr(folder / "reference.pfm", ref_sensor.expose(L, seed=seed + 4242))
-        calib["reference"] = {
-            "image": "reference.pfm",
-            "x": float(reference["x"][0]),
-            "y": float(reference["x"][1]),
-            "radius_mm": float(reference["radius_mm"]),
-            "inner_mm": float(reference.get("inner_mm", 0.0)),
-            "total": np.asarray(reference["total"], float).tolist(),
-            "power": power,
-            "exposure_s": t,
-        }
-    write_json(folder / "calibration.json", calib)
-    return {"homography": truth, "marked": est, "rms_px": rms, "power": power}
+
+
+def _write_reference(folder: Path, reference: dict, camera, beam, sensor, spp, seed, channels, power) -> dict:
+    """Photograph the reference at its exposure (s) into ``reference.pfm``; its calibration entry."""
+    t = float(reference.get("exposure_s", 0.1))
+    ref_spp = int(reference.get("spp", spp))  # one image sets every shot's scale: worth more samples
+    L = render_radiance(
+        reference["volume"], camera, beam, reference["x"], spp=ref_spp, seed=seed + 999, channels=channels
+    )
+    ref_sensor = Sensor(**{**sensor.__dict__, "k": sensor.k * t})
+    write_hdr(folder / "reference.pfm", ref_sensor.expose(L, seed=seed + 4242))
+    return {
+        "image": "reference.pfm",
+        "x": float(reference["x"][0]),
+        "y": float(reference["x"][1]),
+        "radius_mm": float(reference["radius_mm"]),
+        "inner_mm": float(reference.get("inner_mm", 0.0)),
+        "total": np.asarray(reference["total"], float).tolist(),
+        "power": power,
+        "exposure_s": t,
+    }
 
 
 def default_markers(x_i, camera: VirtualCamera, margin_px: float = 4.0) -> np.ndarray:
