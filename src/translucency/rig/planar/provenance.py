@@ -24,32 +24,13 @@ def import_header(
     ``table``: the positions' file (None when given as rows); ``views``: (folder, table, shots,
     Calibration) of each further camera; ``workers``: files hashed at once (threads).
     """
-    files = [[str(f.relative_to(folder)) for f in s.files] for s in shots]
-    flat = [f for s in shots for f in s.files]
-    with ThreadPoolExecutor(workers) as pool:  # reading, hashing and NumPy release the GIL: in parallel
-        digest = dict(zip(flat, pool.map(sha256_file, flat)))
+    digest = _digests(shots, workers)
     hashes = [[digest[f] for f in s.files] for s in shots]
-    view_provenance = []
-    for v_folder, v_table, v_shots, v_calib in views:
-        v_flat = [f for sh in v_shots for f in sh.files]
-        with ThreadPoolExecutor(workers) as pool:
-            v_digest = dict(zip(v_flat, pool.map(sha256_file, v_flat)))
-        view_provenance.append(
-            {
-                "folder": str(v_folder.resolve()),
-                "positions": None
-                if v_table is None
-                else {"file": str(v_table), "sha256": sha256_file(v_table)},
-                "files": [[str(f.relative_to(v_folder)) for f in sh.files] for sh in v_shots],
-                "sha256": [[v_digest[f] for f in sh.files] for sh in v_shots],
-                "power_W": [sh.power for sh in v_shots],
-                "calibration": v_calib.describe(),
-            }
-        )
+    view_provenance = [_view_provenance(*view, workers) for view in views]
     provenance = {
         "folder": str(folder.resolve()),
         "positions": None if table is None else {"file": str(table), "sha256": sha256_file(table)},
-        "files": files,
+        "files": [[str(f.relative_to(folder)) for f in s.files] for s in shots],
         "sha256": hashes,
         "power_W": [s.power for s in shots],
         "exposure_s": [list(s.exposures) for s in shots],
@@ -58,17 +39,7 @@ def import_header(
     }
     if view_provenance:
         provenance["views"] = view_provenance
-    request = json.loads(
-        json.dumps(
-            {
-                "setup": asdict(setup),
-                "sha256": hashes,
-                "calibration": calibration.describe(),
-                "views": [[v["sha256"], v["calibration"]] for v in view_provenance],
-            }
-        )
-    )
-    request["positions"] = x_i.round(9).tolist()
+    request = _request(setup, hashes, calibration, view_provenance, x_i)
     return {
         "format": FORMAT,
         "version": VERSION,
@@ -92,3 +63,39 @@ def import_header(
         "software": {"translucency": __version__},
         "request": request,
     }
+
+
+def _digests(shots: list, workers: int) -> dict:
+    """The SHA-256 of every shot's every file, ``workers`` files hashed at once."""
+    flat = [f for s in shots for f in s.files]
+    with ThreadPoolExecutor(workers) as pool:  # reading, hashing and NumPy release the GIL: in parallel
+        return dict(zip(flat, pool.map(sha256_file, flat)))
+
+
+def _view_provenance(v_folder: Path, v_table, v_shots: list, v_calib, workers: int) -> dict:
+    """A further camera's provenance: its folder, positions' file, images' SHA-256, powers, calibration."""
+    v_digest = _digests(v_shots, workers)
+    return {
+        "folder": str(v_folder.resolve()),
+        "positions": None if v_table is None else {"file": str(v_table), "sha256": sha256_file(v_table)},
+        "files": [[str(f.relative_to(v_folder)) for f in sh.files] for sh in v_shots],
+        "sha256": [[v_digest[f] for f in sh.files] for sh in v_shots],
+        "power_W": [sh.power for sh in v_shots],
+        "calibration": v_calib.describe(),
+    }
+
+
+def _request(setup, hashes: list, calibration, view_provenance: list, x_i: np.ndarray) -> dict:
+    """What a resume compares (JSON round-tripped): setup, hashes, calibrations and positions (mm)."""
+    request = json.loads(
+        json.dumps(
+            {
+                "setup": asdict(setup),
+                "sha256": hashes,
+                "calibration": calibration.describe(),
+                "views": [[v["sha256"], v["calibration"]] for v in view_provenance],
+            }
+        )
+    )
+    request["positions"] = x_i.round(9).tolist()
+    return request
