@@ -83,6 +83,20 @@ def read_positions(path, folder) -> list[Shot]:
         raise TranslucencyError(f"{path}: no such table of laser positions")
     if not folder.is_dir():
         raise TranslucencyError(f"{folder}: no such folder of images")
+    rows = _read_rows(path)
+    if not rows:
+        raise TranslucencyError(f"{path}: no laser positions")
+    keys = set(rows[0])
+    units, cols = _position_columns(path, keys)
+    names = _image_names(path, folder, rows, keys)
+    return [
+        _read_shot(r, files, folder, cols, units, f"{path}, row {i + 1}")
+        for i, (r, files) in enumerate(zip(rows, names))
+    ]
+
+
+def _read_rows(path: Path) -> list[dict]:
+    """The table's rows: a JSON list of objects (or one under ``"points"``), or CSV (keys lower-cased)."""
     try:
         if path.suffix.lower() == ".json":
             obj = json.loads(path.read_text())
@@ -94,54 +108,64 @@ def read_positions(path, folder) -> list[Shot]:
                 rows = [{k.strip().lower(): v for k, v in r.items() if k} for r in csv.DictReader(f)]
     except (OSError, ValueError, UnicodeDecodeError) as exc:
         raise TranslucencyError(f"{path}: not a readable table ({type(exc).__name__})") from None
-    if not rows:
-        raise TranslucencyError(f"{path}: no laser positions")
-    keys = set(rows[0])
+    return rows
+
+
+def _position_columns(path: Path, keys: set) -> tuple[str, tuple[str, str]]:
+    """The position's units and columns: ``x``, ``y`` (mm) or ``u``, ``v`` (px)."""
     if {"x", "y"} <= keys:
-        units, cols = "mm", ("x", "y")
-    elif {"u", "v"} <= keys:
-        units, cols = "px", ("u", "v")
-    else:
-        raise TranslucencyError(f"{path}: needs columns x, y (mm) or u, v (pixels); has {sorted(keys)}")
+        return "mm", ("x", "y")
+    if {"u", "v"} <= keys:
+        return "px", ("u", "v")
+    raise TranslucencyError(f"{path}: needs columns x, y (mm) or u, v (pixels); has {sorted(keys)}")
+
+
+def _image_names(path: Path, folder: Path, rows: list[dict], keys: set) -> list[list[str]]:
+    """Each row's image file names: its ``file`` column, else the folder's images in sorted order."""
     if "file" in keys:
-        names = [_split(r.get("file"), "file", path) for r in rows]
-    else:
-        found = sorted(p.name for p in folder.iterdir() if p.suffix.lower() in IMAGE_SUFFIXES)
-        if len(found) != len(rows):
-            raise TranslucencyError(
-                f"{path}: {len(rows)} laser positions but {len(found)} images in {folder}; "
-                "the counts must match (or name each row's image in a 'file' column)"
-            )
-        names = [[n] for n in found]
-    shots = []
-    for i, (r, files) in enumerate(zip(rows, names)):
-        where = f"{path}, row {i + 1}"
-        try:
-            pos = tuple(float(r[c]) for c in cols)
-            power = float(r.get("power") or 1.0)
-            times = [float(t) for t in _split(r.get("exposure"), "exposure", where)] or [1.0]
-        except (TypeError, ValueError):
-            raise TranslucencyError(f"{where}: position, power and exposure must be numbers") from None
-        if not files:
-            raise TranslucencyError(f"{where}: no image file named")
-        if not np.all(np.isfinite(pos)):
-            raise TranslucencyError(f"{where}: position {pos} is not finite")
-        if not (np.isfinite(power) and power > 0):
-            raise TranslucencyError(f"{where}: power must be > 0 W, got {power}")
-        if not all(np.isfinite(t) and t > 0 for t in times):
-            raise TranslucencyError(f"{where}: exposure times must be > 0 s, got {times}")
-        if len(times) not in (1, len(files)):
-            raise TranslucencyError(f"{where}: {len(files)} images but {len(times)} exposure times")
-        paths = tuple(folder / n for n in files)
-        for p in paths:
-            if not p.is_file():
-                raise TranslucencyError(f"{where}: image {p} is missing")
-            if p.suffix.lower() not in IMAGE_SUFFIXES:
-                raise TranslucencyError(f"{where}: {p.name} is not an image ({', '.join(IMAGE_SUFFIXES)})")
-        ldr = [p.suffix.lower() in LDR_SUFFIXES for p in paths]
-        if any(ldr) and not all(ldr):
-            raise TranslucencyError(f"{where}: mixes HDR and LDR images")
-        if all(ldr) and len(paths) > 1 and len(times) != len(paths):
-            raise TranslucencyError(f"{where}: a bracket of {len(paths)} LDR images needs as many exposures")
-        shots.append(Shot(paths, pos, units, power, tuple(times)))
-    return shots
+        return [_split(r.get("file"), "file", path) for r in rows]
+    found = sorted(p.name for p in folder.iterdir() if p.suffix.lower() in IMAGE_SUFFIXES)
+    if len(found) != len(rows):
+        raise TranslucencyError(
+            f"{path}: {len(rows)} laser positions but {len(found)} images in {folder}; "
+            "the counts must match (or name each row's image in a 'file' column)"
+        )
+    return [[n] for n in found]
+
+
+def _read_shot(r: dict, files: list[str], folder: Path, cols, units: str, where: str) -> Shot:
+    """One row as a :class:`Shot`: its position, power (W) and exposures (s) checked, its images found."""
+    try:
+        pos = tuple(float(r[c]) for c in cols)
+        power = float(r.get("power") or 1.0)
+        times = [float(t) for t in _split(r.get("exposure"), "exposure", where)] or [1.0]
+    except (TypeError, ValueError):
+        raise TranslucencyError(f"{where}: position, power and exposure must be numbers") from None
+    if not files:
+        raise TranslucencyError(f"{where}: no image file named")
+    if not np.all(np.isfinite(pos)):
+        raise TranslucencyError(f"{where}: position {pos} is not finite")
+    if not (np.isfinite(power) and power > 0):
+        raise TranslucencyError(f"{where}: power must be > 0 W, got {power}")
+    if not all(np.isfinite(t) and t > 0 for t in times):
+        raise TranslucencyError(f"{where}: exposure times must be > 0 s, got {times}")
+    if len(times) not in (1, len(files)):
+        raise TranslucencyError(f"{where}: {len(files)} images but {len(times)} exposure times")
+    paths = _image_paths(folder, files, where)
+    if all(p.suffix.lower() in LDR_SUFFIXES for p in paths) and len(paths) > 1 and len(times) != len(paths):
+        raise TranslucencyError(f"{where}: a bracket of {len(paths)} LDR images needs as many exposures")
+    return Shot(paths, pos, units, power, tuple(times))
+
+
+def _image_paths(folder: Path, files: list[str], where: str) -> tuple[Path, ...]:
+    """A row's images in ``folder``: each present and an image, all HDR or all LDR."""
+    paths = tuple(folder / n for n in files)
+    for p in paths:
+        if not p.is_file():
+            raise TranslucencyError(f"{where}: image {p} is missing")
+        if p.suffix.lower() not in IMAGE_SUFFIXES:
+            raise TranslucencyError(f"{where}: {p.name} is not an image ({', '.join(IMAGE_SUFFIXES)})")
+    ldr = [p.suffix.lower() in LDR_SUFFIXES for p in paths]
+    if any(ldr) and not all(ldr):
+        raise TranslucencyError(f"{where}: mixes HDR and LDR images")
+    return paths
