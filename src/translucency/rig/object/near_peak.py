@@ -219,13 +219,9 @@ def recover_near_peak(mesh, hit, R, var, target, measured, eta: float, views=(),
         return R, var, True, np.zeros(3, dtype=bool)
     verts = np.asarray(mesh.vertices, dtype=np.float64)
     r = np.linalg.norm(verts - hit, axis=1)
-    r_in = r[targets].max()
-    outside = np.flatnonzero(measured & (r > r_in) & np.all(R > 0, axis=1))
-    if len(outside) < RING_CELLS:
+    ring, r_out = _ring(r, targets, measured, R)
+    if ring is None:
         return R, var, False, np.zeros(3, dtype=bool), [None] * 3
-    order = outside[np.argsort(r[outside])]
-    r_out = max(r_in + RING_MM, r[order[RING_CELLS - 1]])
-    ring = order[r[order] <= r_out]
     cells = np.concatenate([ring, targets])
     pts, w, owner = cell_quadrature(mesh, cells, toward=hit)
     dist = np.linalg.norm(pts - hit, axis=1)
@@ -240,12 +236,7 @@ def recover_near_peak(mesh, hit, R, var, target, measured, eta: float, views=(),
         flat = np.bincount(owner, weights=w * profile(dist), minlength=len(cells)) / area
         return flat * gain[cells, ch] + straight[cells, ch] / area
 
-    sample = None
-    if scene is not None:
-
-        def sample(m, pixels):  # the rays of a camera's pixels, PIXEL_SUB² each
-            return m.sample_pixels(pixels, PIXEL_SUB, scene, mesh)
-
+    sample = _pixel_sampler(scene, mesh)
     pixels = PixelEvidence(views, hit, r_out, mesh if shape is not None else None, sample) if views else None
     short = np.zeros(3, dtype=bool)
     params = [None, None, None]
@@ -275,6 +266,29 @@ def recover_near_peak(mesh, hit, R, var, target, measured, eta: float, views=(),
             )
             R[targets, ch], var[targets, ch] = value, variance
     return R, var, True, short, params
+
+
+def _ring(r: np.ndarray, targets: np.ndarray, measured: np.ndarray, R: np.ndarray):
+    """The ring's cells (measured, R_d > 0, beyond the targets) and its outer radius r_out (mm), nearest
+    first: at least :data:`RING_CELLS` of them and :data:`RING_MM` wide; (None, None) with too few."""
+    r_in = r[targets].max()
+    outside = np.flatnonzero(measured & (r > r_in) & np.all(R > 0, axis=1))
+    if len(outside) < RING_CELLS:
+        return None, None
+    order = outside[np.argsort(r[outside])]
+    r_out = max(r_in + RING_MM, r[order[RING_CELLS - 1]])
+    return order[r[order] <= r_out], r_out
+
+
+def _pixel_sampler(scene, mesh):
+    """The rays of a camera's pixels near the hit, PIXEL_SUB² each, through ``scene`` (None: none)."""
+    if scene is None:
+        return None
+
+    def sample(m, pixels):  # the rays of a camera's pixels, PIXEL_SUB² each
+        return m.sample_pixels(pixels, PIXEL_SUB, scene, mesh)
+
+    return sample
 
 
 def _sigma_grid(params) -> np.ndarray:
