@@ -275,37 +275,8 @@ def load_calibration(path) -> Calibration:
     from ..shared.hdr import read_hdr  # the readers of the frames
 
     path = Path(path)
-    try:
-        spec = json.loads(path.read_text())
-    except (OSError, ValueError) as exc:
-        raise TranslucencyError(f"{path}: not a readable JSON calibration ({type(exc).__name__})") from None
-    if not isinstance(spec, dict):
-        raise TranslucencyError(f"{path}: a calibration is a JSON object")
-    kinds = [k for k in ("homography", "points", "checkerboard") if k in spec]
-    if len(kinds) != 1:
-        raise TranslucencyError(
-            f"{path}: give exactly one of homography, points or checkerboard, got {kinds}"
-        )
-    source = {"file": str(path), "method": kinds[0]}
-    if kinds[0] == "homography":
-        H = Homography.from_matrix(spec["homography"], f"{path}: homography")
-    elif kinds[0] == "points":
-        p = spec["points"]
-        if not isinstance(p, dict) or "sample_mm" not in p or "image_px" not in p:
-            raise TranslucencyError(f"{path}: points needs sample_mm and image_px lists")
-        H, rms = homography_from_points(p["sample_mm"], p["image_px"], name=f"{path}: points")
-        source["rms_px"] = rms
-    else:
-        c = spec["checkerboard"]
-        img = read_hdr(path.parent / c["image"])
-        H, rms = homography_from_checkerboard(
-            img,
-            tuple(c["inner"]),
-            float(c["square_mm"]),
-            c.get("origin_mm", (0, 0)),
-            name=f"{path}: checkerboard {c['image']}",
-        )
-        source["rms_px"] = rms
+    spec = _read_spec(path)
+    H, source = _homography(spec, path)
     frame = lambda key: None if spec.get(key) is None else read_hdr(path.parent / spec[key])  # noqa: E731
     flat = frame("flat")
     if flat is not None:
@@ -332,6 +303,49 @@ def load_calibration(path) -> Calibration:
     except (TypeError, ValueError, KeyError) as exc:
         raise TranslucencyError(f"{path}: bad calibration value ({type(exc).__name__}: {exc})") from None
     return calib
+
+
+def _read_spec(path: Path) -> dict:
+    """The calibration file's JSON object, refused in one line otherwise."""
+    try:
+        spec = json.loads(path.read_text())
+    except (OSError, ValueError) as exc:
+        raise TranslucencyError(f"{path}: not a readable JSON calibration ({type(exc).__name__})") from None
+    if not isinstance(spec, dict):
+        raise TranslucencyError(f"{path}: a calibration is a JSON object")
+    return spec
+
+
+def _homography(spec: dict, path: Path):
+    """H from the one way given (a matrix, marked points or a checkerboard) and the ``source`` record."""
+    from ..shared.hdr import read_hdr  # the readers of the frames
+
+    kinds = [k for k in ("homography", "points", "checkerboard") if k in spec]
+    if len(kinds) != 1:
+        raise TranslucencyError(
+            f"{path}: give exactly one of homography, points or checkerboard, got {kinds}"
+        )
+    source = {"file": str(path), "method": kinds[0]}
+    if kinds[0] == "homography":
+        H = Homography.from_matrix(spec["homography"], f"{path}: homography")
+    elif kinds[0] == "points":
+        p = spec["points"]
+        if not isinstance(p, dict) or "sample_mm" not in p or "image_px" not in p:
+            raise TranslucencyError(f"{path}: points needs sample_mm and image_px lists")
+        H, rms = homography_from_points(p["sample_mm"], p["image_px"], name=f"{path}: points")
+        source["rms_px"] = rms
+    else:
+        c = spec["checkerboard"]
+        img = read_hdr(path.parent / c["image"])
+        H, rms = homography_from_checkerboard(
+            img,
+            tuple(c["inner"]),
+            float(c["square_mm"]),
+            c.get("origin_mm", (0, 0)),
+            name=f"{path}: checkerboard {c['image']}",
+        )
+        source["rms_px"] = rms
+    return H, source
 
 
 def _reference_scale(calib: Calibration, ref: dict, image: np.ndarray):
