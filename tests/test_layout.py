@@ -45,25 +45,55 @@ MAY_IMPORT: dict[str, frozenset[str]] = {
     "acquire": _BASE,
     "fit": _BASE | {"acquire"},
     "evaluate": _BASE | {"acquire", "fit"},
-    "render": _BASE | {"acquire", "fit", "evaluate"},
-    # a user's Mitsuba scene with fitted objects in it: the render stage's transport inside a scene
-    "scene": _BASE | {"acquire", "fit", "evaluate", "render"},
-    # looking at a fitted model: the page and the live viewer, on the render stage's transport and transfer
-    "view": _BASE | {"acquire", "fit", "evaluate", "render"},
+    # a fitted object's light transport, prepared once and drawn by every renderer: on the model alone
+    "transport": _BASE,
+    "render": _BASE | {"acquire", "fit", "evaluate", "transport"},
+    # a user's Mitsuba scene with fitted objects in it: the prepared objects' transport inside a scene
+    "scene": _BASE | {"acquire", "fit", "evaluate", "transport", "render"},
+    # looking at a fitted model: the page and the live viewer, on the prepared object's transport and transfer
+    "view": _BASE | {"acquire", "fit", "evaluate", "transport", "render"},
+    # experiments kept for a benchmark or an ablation (unstable): beside the renderers, imported by none
+    "experimental": _BASE | {"acquire", "fit", "evaluate", "transport", "render", "scene"},
     # a real rig: photographs → a data set as acquire writes it (acquire's place in the pipeline); its
     # near peak walks photons on the scan with acquire's own mesh walk (the same stage, sideways)
     "rig": _BASE | {"acquire"},
     # cross-checks beside the pipeline (tests, benchmarks)
-    "validate": _BASE | {"acquire", "fit", "evaluate", "render"},
+    "validate": _BASE | {"acquire", "fit", "evaluate", "transport", "render"},
     # on top: the workflow as functions (``translucency.fit(...)``), the main job, the commands,
     # ``python -m translucency`` and the façade
-    "workflow": _BASE | {"acquire", "fit", "evaluate", "render", "scene", "rig", "view", "pipeline"},
-    "pipeline": _BASE | {"acquire", "fit", "evaluate", "render", "scene", "rig", "view", "validate"},
+    "workflow": _BASE
+    | {"acquire", "fit", "evaluate", "transport", "render", "scene", "rig", "view", "pipeline"},
+    "pipeline": _BASE
+    | {"acquire", "fit", "evaluate", "transport", "render", "scene", "rig", "view", "validate"},
     "cli": _BASE
-    | {"acquire", "fit", "evaluate", "render", "scene", "rig", "view", "validate", "workflow", "pipeline"},
+    | {
+        "acquire",
+        "fit",
+        "evaluate",
+        "transport",
+        "render",
+        "scene",
+        "rig",
+        "view",
+        "validate",
+        "workflow",
+        "pipeline",
+    },
     "__main__": frozenset({"cli"}),
     "translucency": _BASE
-    | {"acquire", "fit", "evaluate", "render", "scene", "rig", "view", "validate", "workflow", "pipeline"},
+    | {
+        "acquire",
+        "fit",
+        "evaluate",
+        "transport",
+        "render",
+        "scene",
+        "rig",
+        "view",
+        "validate",
+        "workflow",
+        "pipeline",
+    },
 }
 
 #: Mitsuba's calls that build a scene (or a part of one) from a description

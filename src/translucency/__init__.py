@@ -34,6 +34,9 @@ _LAZY = {
     "PlanarAlpha": "model",
     "VertexAlpha": "model",
     "material": "model",
+    "TransportOptions": "transport",  # the transport's choices, one object for every renderer
+    "PreparedObject": "transport",  # a fitted object with the transport every renderer draws
+    "register_transport": "transport",  # a transport variant drawn by name
     "FittedScene": "scene",  # fitted objects in a user's Mitsuba scene
     "register_mitsuba_plugin": "scene",  # <integrator type="translucency"> in a Mitsuba XML
 }
@@ -81,6 +84,9 @@ __all__ = [
     "MATERIALS",
     "material",
     "data",
+    "TransportOptions",
+    "PreparedObject",
+    "register_transport",
     "FittedScene",
     "register_mitsuba_plugin",
     *_WORKFLOW,
