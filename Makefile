@@ -7,7 +7,7 @@ PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 OUT    ?= results
 
-.PHONY: demo test test-slow test-all bench clean default-data default-reference docs
+.PHONY: demo test test-slow test-all bench clean default-data default-reference docs docs-pages
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -19,7 +19,7 @@ demo: $(STAMP)
 	$(VENV)/bin/translucency demo --out $(OUT) --overwrite
 
 test: $(STAMP)
-	$(VENV)/bin/ruff check src tests benchmarks && $(VENV)/bin/ruff format --check src tests benchmarks && $(PY) -m pytest -q -m "not slow" -n auto
+	$(VENV)/bin/ruff check src tests benchmarks docs/_gen && $(VENV)/bin/ruff format --check src tests benchmarks docs/_gen && $(PY) -m pytest -q -m "not slow" -n auto
 
 # the documentation site (mkdocs-material, mkdocstrings) into build/site; --strict: every warning fails the
 # build, a broken link or anchor among them
@@ -30,6 +30,13 @@ $(DOCS_STAMP): $(STAMP)
 
 docs: $(DOCS_STAMP)
 	NO_MKDOCS_2_WARNING=1 $(VENV)/bin/mkdocs build --strict --site-dir build/site
+
+# the generated pages, rewritten from the commands and the schemas of --json (docs/_gen: generators, not
+# part of the package); tests/test_docs_site.py, test_commands.py and test_json.py hold them current
+docs-pages: $(STAMP)
+	$(PY) docs/_gen/cli_reference.py > docs/reference/cli.md
+	$(PY) docs/_gen/cli_reference.py --api docs/api.md
+	$(PY) docs/_gen/json_schemas.py > docs/json.md
 
 test-slow: $(STAMP)
 	$(PY) -m pytest -q -m slow

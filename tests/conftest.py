@@ -1,4 +1,6 @@
 import os
+import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -6,6 +8,11 @@ from hypothesis import settings
 
 from helpers import FUZZ
 from translucency.acquire import PlanarSetup, acquire_planar, make_sample
+
+# The documentation's generators (docs/_gen: cli_reference writes docs/reference/cli.md and docs/api.md's
+# option lists, json_schemas holds the schemas of --json and writes docs/json.md): plain modules outside the
+# installed package, imported by the tests that hold the pages and the outputs to them.
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "docs" / "_gen"))
 
 # Hypothesis profiles.  "default": Hypothesis's own budget for the property tests, while the fuzz suite
 # (tests/test_fuzz.py) keeps to a few derandomised examples per reader so the fast suite stays fast;

@@ -3,16 +3,19 @@ and each of its options is an argument of that function, so a Python user can do
 
 from pathlib import Path
 
+import cli_reference as reference
 import pytest
 import typer
 
 import translucency as tl
-from translucency.cli import reference
+from translucency.cli._common import PANEL_RUN
 from translucency.cli.app import app
 
 API = Path(__file__).resolve().parents[1] / "docs" / "api.md"
 
 PRINTING = reference.PRINTING
+#: how a command runs and prints: listed under one heading of --help in every command that has them
+RUN_OPTIONS = {"--overwrite", "--chunk", "--scheduler", "--max-memory", "--quiet", "--json"}
 
 
 def _table() -> dict[str, list[str]]:
@@ -40,7 +43,8 @@ def test_every_option_is_an_argument_of_the_library_function(name, command):
     functions = [getattr(tl, f) for f in _table()[name]]
     assert functions, f"docs/api.md names no library function for translucency {name}"
     missing, position = [], 0
-    for param in command.params:  # each argument by position, each option by its names (cli/reference.py)
+    # each argument by position, each option by its names (docs/_gen/cli_reference.py)
+    for param in command.params:
         options = [o for o in param.opts if o.startswith("--")]
         if param.param_type_name != "argument" and set(options) & PRINTING:
             continue
@@ -50,10 +54,23 @@ def test_every_option_is_an_argument_of_the_library_function(name, command):
     assert not missing, f"translucency {name}: no Python argument of {_table()[name]} for {missing}"
 
 
+@pytest.mark.parametrize("name,command", list(_commands()), ids=[n for n, _ in _commands()])
+def test_the_run_options_share_one_panel(name, command):
+    """--overwrite, --chunk, --scheduler, --max-memory, --quiet and --json are under the same heading of
+    --help (cli/_common.py's PANEL_RUN) in every command that has them."""
+    elsewhere = [
+        option
+        for param in command.params
+        for option in param.opts
+        if option in RUN_OPTIONS and getattr(param, "rich_help_panel", None) != PANEL_RUN
+    ]
+    assert not elsewhere, f"translucency {name}: {elsewhere} not under --help's {PANEL_RUN!r} panel"
+
+
 def test_the_pages_option_lists_are_written_from_the_commands():
     """docs/api.md's option → argument lists are the commands' and the signatures' own: a renamed option or
-    argument changes them (``python -m translucency.cli.reference --api docs/api.md``)."""
+    argument changes them (``python docs/_gen/cli_reference.py --api docs/api.md``)."""
     page = API.read_text()
     block = page.split(reference.API_BEGIN, 1)[1].split(reference.API_END, 1)[0].strip("\n")
-    assert block == reference.api_options(page), "run: python -m translucency.cli.reference --api docs/api.md"
+    assert block == reference.api_options(page), f"run: {reference.API_COMMAND}"
     assert "(none)" not in block and "→ `out`" in block and "--resolution → `resolution`" in block

@@ -4,6 +4,7 @@ speaks of issue numbers, and every relative link of the pages and the README rea
 the target is a plain page, its heading).  ``make docs`` builds the site itself (mkdocs build --strict);
 the slow test here does the same where mkdocs is installed."""
 
+import doctest
 import importlib
 import os
 import re
@@ -13,14 +14,15 @@ import unicodedata
 from pathlib import Path
 
 import pytest
+from cli_reference import COMMAND, markdown
 
 import translucency
-from translucency.cli.reference import COMMAND, markdown
+from translucency.cli._common import PANEL_RUN
 
 ROOT = Path(__file__).resolve().parents[1]
 DOCS = ROOT / "docs"
-#: the site's own build helpers under docs/ (mkdocs.yml's exclude_docs), not pages
-NOT_PAGES = ("_ext",)
+#: the site's own build helpers and the pages' generators under docs/ (mkdocs.yml's exclude_docs), not pages
+NOT_PAGES = ("_ext", "_gen")
 #: the most the gallery's pictures may weigh together, bytes
 GALLERY_BYTES = 2_000_000
 
@@ -143,6 +145,23 @@ def test_command_line_reference_lists_every_command_and_option():
                 if param.name != "help" and not param.hidden and param.param_type_name == "option":
                     assert f"`{max(param.opts, key=len)}`" in section, f"{path} {name}: {param.opts}"
     assert commands >= 14
+
+
+def test_command_line_reference_groups_the_options_as_help_does():
+    """A command's options are under the panels of its --help: the essentials under Options first, the
+    rest under their own headings, how it runs and prints (--quiet, --json, ...) under Run."""
+    fit = markdown().split("## translucency fit\n", 1)[1].split("\n## ", 1)[0]
+    assert fit.index("**Options**") < fit.index("**Model structure**") < fit.index(f"**{PANEL_RUN}**")
+    options, run = fit.split("**Options**", 1)[1].split("\n**", 1)[0], fit.split(f"**{PANEL_RUN}**", 1)[1]
+    assert "`--out`" in options and "`--terms`" not in options and "`--quiet`" not in options
+    assert "`--quiet`" in run and "`--scheduler`" in run and "`--out`" not in run
+
+
+@pytest.mark.parametrize("name", ["cli_reference", "json_schemas"])
+def test_the_page_generators_examples_hold(name):
+    """The examples of docs/_gen's generators run here (the doctests cover src/translucency alone)."""
+    result = doctest.testmod(importlib.import_module(name), optionflags=doctest.ELLIPSIS)
+    assert result.attempted and not result.failed, f"docs/_gen/{name}.py: {result.failed} examples failed"
 
 
 def _api_targets() -> list[str]:

@@ -2,11 +2,15 @@
 their help, and docs/api.md's option → argument lists from their options and the library's signatures.
 
 Every command and its options as ``--help`` shows them: the usage line, the command's help, and a table of
-its arguments and options (metavar, default, help).  The page depends only on the commands' declarations,
-never on the terminal's width, so that a test can hold the page to the commands::
+its arguments and one of its options per panel of ``--help`` (Options, then Sample, Scan, ..., Run: the
+``rich_help_panel`` of each option, cli/_common.py's ``PANEL_*``), each row an option's metavar, default
+and help.  The page depends only on the commands' declarations, never on the terminal's width, so that a
+test can hold the page to the commands (tests/test_docs_site.py, tests/test_commands.py)::
 
-    python -m translucency.cli.reference > docs/reference/cli.md
-    python -m translucency.cli.reference --api docs/api.md     # the block between its markers
+    python docs/_gen/cli_reference.py > docs/reference/cli.md
+    python docs/_gen/cli_reference.py --api docs/api.md     # the block between its markers
+
+A documentation generator, not part of the installed package: nothing the command line runs imports it.
 """
 
 from __future__ import annotations
@@ -18,19 +22,24 @@ from pathlib import Path
 
 import typer
 
-from .. import workflow
-from . import _flags
-from .app import app
+from translucency import workflow
+from translucency.cli import _flags
+from translucency.cli.app import app
 
 #: the page's name in the repository and the command that writes it
 PAGE = "docs/reference/cli.md"
-COMMAND = f"python -m translucency.cli.reference > {PAGE}"
+COMMAND = f"python docs/_gen/cli_reference.py > {PAGE}"
+#: the command that rewrites docs/api.md's block
+API_COMMAND = "python docs/_gen/cli_reference.py --api docs/api.md"
 
 #: docs/api.md: its table names each command's library function; the block between the markers is written
 API_PAGE = "docs/api.md"
 API_BEGIN, API_END = "<!-- options: begin -->", "<!-- options: end -->"
 #: a row of that table: | `translucency CMD` | `tl.function` (, `tl.other`) | …
 _API_ROW = re.compile(r"^\|\s*`translucency ([a-z -]+?)`\s*\|\s*([^|]+)\|")
+#: the panel of ``--help`` an option without a ``rich_help_panel`` is listed under (Typer's, in English
+#: whatever the locale)
+DEFAULT_PANEL = "Options"
 #: options that are the command line's own (how it prints), not the library's
 PRINTING = {"--help", "--quiet", "--json", "--version"}
 #: the library's ``sample`` takes a generator's name (``--material``) as well as a volume's file
@@ -87,19 +96,39 @@ def _row(param, ctx) -> tuple[str, str, str, str] | None:
     return names, " ".join(tokens), default, " ".join([own, *(f"({n})" for n in more)])
 
 
+def panels(params) -> dict[str, list]:
+    """``params`` (options) by the panel of ``--help`` they are listed under, as Typer orders them: the
+    default panel first, then each panel where its first option comes.
+
+    Examples
+    --------
+    >>> from types import SimpleNamespace as Option
+    >>> found = panels([Option(name="a", rich_help_panel="Run"), Option(name="b"), Option(name="c")])
+    >>> {panel: [p.name for p in params] for panel, params in found.items()}
+    {'Options': ['b', 'c'], 'Run': ['a']}
+    """
+    found = {DEFAULT_PANEL: []}
+    for param in params:
+        found.setdefault(getattr(param, "rich_help_panel", None) or DEFAULT_PANEL, []).append(param)
+    return found
+
+
 def _command(command, ctx, path: str) -> list[str]:
-    """A leaf command's section: its usage, help and tables."""
+    """A leaf command's section: its usage, help, its arguments' table and a table per panel of options."""
     usage = " ".join([path, *command.collect_usage_pieces(ctx)])
     lines = ["```text", usage, "```", "", _paragraphs(command.help), ""]
-    rows = [(p.param_type_name, _row(p, ctx)) for p in command.get_params(ctx)]
-    arguments = [row for kind, row in rows if row is not None and kind == "argument"]
-    options = [row for kind, row in rows if row is not None and kind != "argument"]
+    params = command.get_params(ctx)
+    arguments = [r for p in params if p.param_type_name == "argument" and (r := _row(p, ctx)) is not None]
     if arguments:
-        lines += ["| argument | default | meaning |", "| --- | --- | --- |"]
+        lines += ["**Arguments**", "", "| argument | default | meaning |", "| --- | --- | --- |"]
         lines += [f"| {name} | {_escape(d)} | {_escape(h)} |" for name, _, d, h in arguments] + [""]
-    if options:
-        lines += ["| option | value | default | meaning |", "| --- | --- | --- | --- |"]
-        lines += [f"| {n} | {_escape(m)} | {_escape(d)} | {_escape(h)} |" for n, m, d, h in options] + [""]
+    for panel, members in panels(p for p in params if p.param_type_name != "argument").items():
+        options = [row for p in members if (row := _row(p, ctx)) is not None]
+        if options:
+            lines += [f"**{_escape(panel)}**", "", "| option | value | default | meaning |"]
+            lines += ["| --- | --- | --- | --- |"]
+            lines += [f"| {n} | {_escape(m)} | {_escape(d)} | {_escape(h)} |" for n, m, d, h in options]
+            lines += [""]
     return lines
 
 
@@ -134,8 +163,8 @@ def markdown(typer_app: typer.Typer = app, prog: str = "translucency") -> str:
     Returns
     -------
     str
-        The page: a table of the commands, then one section per command with its usage line, its help
-        and a table of its arguments and options.
+        The page: a table of the commands, then one section per command with its usage line, its help,
+        a table of its arguments and a table of its options per panel of its ``--help``.
 
     Examples
     --------

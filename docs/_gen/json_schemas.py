@@ -3,8 +3,9 @@
 Each schema is JSON Schema (the subset :func:`check` reads: ``type``, ``properties``, ``required``,
 ``additionalProperties``, ``items``, ``enum``) with two annotations of its own: ``unit`` (mm, bytes,
 seconds, ...) and ``description``.  The same data make docs/json.md (:func:`markdown`;
-``python -m translucency.cli.schemas > docs/json.md``) and the test that runs every command and checks
+``python docs/_gen/json_schemas.py > docs/json.md``) and the test that runs every command and checks
 its output against its schema (tests/test_json.py), so the page and the output cannot drift apart.
+A documentation generator, not part of the installed package: nothing the command line runs imports it.
 
 Examples
 --------
@@ -15,6 +16,10 @@ Examples
 """
 
 from __future__ import annotations
+
+#: the page's name in the repository and the command that writes it
+PAGE = "docs/json.md"
+COMMAND = f"python docs/_gen/json_schemas.py > {PAGE}"
 
 #: JSON type → the Python types that hold it (``bool`` is not a number here)
 _TYPES = {
@@ -879,7 +884,7 @@ def check(value, schema: dict, where: str = "") -> list[str]:
             if key in props:
                 errors += check(v, props[key], path)
             elif extra is False:
-                errors.append(f"{path}: not documented (translucency/cli/schemas.py, docs/json.md)")
+                errors.append(f"{path}: not documented (docs/_gen/json_schemas.py, docs/json.md)")
             elif isinstance(extra, dict):
                 errors += check(v, extra, path)
     if isinstance(value, list) and "items" in schema:
@@ -905,7 +910,7 @@ NaN and infinity as `null`. `evaluate --json-out PATH` writes the same object to
 
 Below, each command's keys, their types and units ("fraction": 0.05 is 5 %). `a.b` is key `b` inside
 object `a`; `a.*` any key of an object keyed by names. This page is generated from
-`src/translucency/cli/schemas.py` (`python -m translucency.cli.schemas > docs/json.md`), and
+`docs/_gen/json_schemas.py` (`python docs/_gen/json_schemas.py > docs/json.md`), and
 `tests/test_json.py` checks every command's actual output against it.
 """
 

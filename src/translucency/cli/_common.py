@@ -142,6 +142,33 @@ def info(quiet: bool, text: str) -> None:
         err_console.print(text, highlight=False)
 
 
+# -- the panels of --help ------------------------------------------------------------------------------
+# Each command's --help (and docs/reference/cli.md) lists its essentials under "Options", then the rest
+# under these headings, in the order of the command's first option of each; one name per kind of option,
+# the same in every command.
+#: the sample or object simulated: its size or the mesh's units and up axis, voxels, scattering, boundary
+PANEL_SAMPLE = "Sample"
+#: where light enters and what is recorded around it: incident points, beam, windows, angles, exit bins
+PANEL_SCAN = "Scan"
+#: cameras and their pictures: position, field of view, resolution, samples per pixel, exposures, masks
+PANEL_CAMERA = "Camera"
+#: the fitted model's structure: terms, directions, colour
+PANEL_MODEL = "Model structure"
+#: how a fit weighs and uses the data: weighting, exclusion, rounds, alpha's pooling
+PANEL_FITTING = "Fitting"
+#: the light a model is seen under
+PANEL_LIGHT = "Light"
+#: the transport a model is drawn with: near radius, lean, light basis
+PANEL_TRANSPORT = "Transport"
+#: what a model is compared with: a truth, other models, a path-traced reference
+PANEL_COMPARISON = "Comparison"
+#: how the output is stored and what else is written: number formats, reports, summaries to files
+PANEL_OUTPUT = "Output"
+#: how the command runs and prints, the same in every command: --overwrite, --chunk, --scheduler,
+#: --max-memory, --quiet, --json
+PANEL_RUN = "Run"
+
+
 # -- options shared by several commands ---------------------------------------------------------------
 def scheduler_option():
     """``--scheduler``: where work runs (acquire planar|mesh, fit, evaluate, import images)."""
@@ -152,6 +179,7 @@ def scheduler_option():
         help="Where work runs: threads (this process), local:N (N Dask worker processes started for this "
         "command) or tcp://HOST:PORT (a running Dask cluster; the data set's path must be visible to its "
         "workers). Results are identical whichever.",
+        rich_help_panel=PANEL_RUN,
     )
 
 
@@ -162,17 +190,27 @@ def max_memory_option():
         metavar="SIZE",
         help="Most memory the command may use, e.g. 4G or 512M (default: the machine's available memory); "
         "a larger estimate is refused before any work.",
+        rich_help_panel=PANEL_RUN,
     )
 
 
 def quiet_option():
     return typer.Option(
-        False, "--quiet", "-q", help="No progress and no information lines; errors still shown."
+        False,
+        "--quiet",
+        "-q",
+        help="No progress and no information lines; errors still shown.",
+        rich_help_panel=PANEL_RUN,
     )
 
 
 def json_option():
-    return typer.Option(False, "--json", help="Print a summary as one JSON object on stdout (for scripts).")
+    return typer.Option(
+        False,
+        "--json",
+        help="Print a summary as one JSON object on stdout (for scripts).",
+        rich_help_panel=PANEL_RUN,
+    )
 
 
 def chunk_option(default: int):
@@ -183,6 +221,7 @@ def chunk_option(default: int):
         help="Incident points (laser shots) per chunk, the unit of resuming and of the memory at work: 16 "
         "on a slab (acquire planar, import images); 8 on an object (acquire mesh, import object), where a "
         "chunk holds R_d at every vertex and all its photons (or its shots' photographs) at once.",
+        rich_help_panel=PANEL_RUN,
     )
 
 
@@ -194,6 +233,7 @@ def voxel_option(default: float):
         help="Voxel size of the generated sample or filling, mm: 0.25 on a measured slab (acquire planar: "
         "its default --pitch); 0.5 where a filling spans an object or Mitsuba photographs it (acquire "
         "mesh, photographs, object-photographs), its voxels costing memory and time.",
+        rich_help_panel=PANEL_SAMPLE,
     )
 
 
@@ -203,12 +243,16 @@ def dataset_overwrite_option():
         False,
         "--overwrite",
         help="Replace a data set of translucency made with other arguments (never anything else).",
+        rich_help_panel=PANEL_RUN,
     )
 
 
 def overwrite_option():
     return typer.Option(
-        False, "--overwrite", help="Replace an earlier output of translucency at --out (never anything else)."
+        False,
+        "--overwrite",
+        help="Replace an earlier output of translucency at --out (never anything else).",
+        rich_help_panel=PANEL_RUN,
     )
 
 

@@ -13,6 +13,11 @@ import typer
 from .._validate import TranslucencyError
 from ..workflow import GENERATORS
 from ._common import (
+    PANEL_CAMERA,
+    PANEL_OUTPUT,
+    PANEL_RUN,
+    PANEL_SAMPLE,
+    PANEL_SCAN,
     chunk_option,
     dataset_overwrite_option,
     finish,
@@ -52,20 +57,42 @@ class PhotographsOptions:
         help=f"Sample generator: {SAMPLES}.",
     )
     volume = typer.Option(None, "--volume", help="A user's volume (.npz, as acquire planar).")
-    grid = typer.Option(2, "--grid", help="Incident points per axis (grid x grid).")
-    span = typer.Option(4.0, "--span", help="Side of the incident grid, mm (centred on the sample).")
-    size = typer.Option((12.0, 12.0, 4.0), "--size", help="Generated slab: width height thickness, mm.")
+    grid = typer.Option(
+        2, "--grid", help="Incident points per axis (grid x grid).", rich_help_panel=PANEL_SCAN
+    )
+    span = typer.Option(
+        4.0,
+        "--span",
+        help="Side of the incident grid, mm (centred on the sample).",
+        rich_help_panel=PANEL_SCAN,
+    )
+    size = typer.Option(
+        (12.0, 12.0, 4.0),
+        "--size",
+        help="Generated slab: width height thickness, mm.",
+        rich_help_panel=PANEL_SAMPLE,
+    )
     voxel = voxel_option(0.5)
     camera = typer.Option(
-        (0.0, -8.0, 11.0), "--camera", help="Camera position relative to the sample's centre, mm."
+        (0.0, -8.0, 11.0),
+        "--camera",
+        help="Camera position relative to the sample's centre, mm.",
+        rich_help_panel=PANEL_CAMERA,
     )
-    fov = typer.Option(40.0, "--fov", help="Horizontal field of view, degrees.")
-    resolution = typer.Option((64, 64), "--resolution", help="Image width and height, pixels.")
-    spp = typer.Option(64, "--spp", help="Samples per pixel of Mitsuba's volpath.")
+    fov = typer.Option(40.0, "--fov", help="Horizontal field of view, degrees.", rich_help_panel=PANEL_CAMERA)
+    resolution = typer.Option(
+        (64, 64), "--resolution", help="Image width and height, pixels.", rich_help_panel=PANEL_CAMERA
+    )
+    spp = typer.Option(
+        64, "--spp", help="Samples per pixel of Mitsuba's volpath.", rich_help_panel=PANEL_CAMERA
+    )
     seed = typer.Option(0, "--seed", help="Random seed of the sample, renders and sensor noise.")
-    image_format = typer.Option("pfm", "--format", help="pfm or exr.")
+    image_format = typer.Option("pfm", "--format", help="pfm or exr.", rich_help_panel=PANEL_OUTPUT)
     overwrite = typer.Option(
-        False, "--overwrite", help="Replace an earlier output folder of translucency (never anything else)."
+        False,
+        "--overwrite",
+        help="Replace an earlier output folder of translucency (never anything else).",
+        rich_help_panel=PANEL_RUN,
     )
     max_memory = max_memory_option()
     quiet = quiet_option()
@@ -128,13 +155,17 @@ class AngleOptions:
         help="Also beams arriving at this polar angle (degrees from the normal), at --azimuths azimuths "
         "about it (a mesh point's tangent frame; a slab's x, y); repeat for more angles. Cost: photons x "
         "directions.",
+        rich_help_panel=PANEL_SCAN,
     )
-    azimuths = typer.Option(4, "--azimuths", help="Azimuths per --incidence angle.")
+    azimuths = typer.Option(
+        4, "--azimuths", help="Azimuths per --incidence angle.", rich_help_panel=PANEL_SCAN
+    )
     exit_bins = typer.Option(
         0,
         "--exit-bins",
         help="Also tally each exit by direction: this many polar bins of equal projected solid angle x "
         "2 halves (away from / back toward the incident point); 0: none.",
+        rich_help_panel=PANEL_SCAN,
     )
 
 
@@ -160,21 +191,47 @@ class PlanarOptions:
         "--sample-seed",
         help="Seed of the generated sample (default: --seed). A held-out truth of the same sample: "
         "the same --sample-seed, another --seed.",
+        rich_help_panel=PANEL_SAMPLE,
     )
-    grid = typer.Option(8, "--grid", help="Incident points per axis (grid x grid).")
-    span = typer.Option(8.0, "--span", help="Side of the incident grid, mm (centred on the sample).")
-    pitch = typer.Option(0.25, "--pitch", help="Pixel size, mm.")
-    window = typer.Option(8.0, "--window", help="Window side around each incident point, mm.")
-    size = typer.Option((20.0, 20.0, 8.0), "--size", help="Generated slab: width height thickness, mm.")
+    grid = typer.Option(
+        8, "--grid", help="Incident points per axis (grid x grid).", rich_help_panel=PANEL_SCAN
+    )
+    span = typer.Option(
+        8.0,
+        "--span",
+        help="Side of the incident grid, mm (centred on the sample).",
+        rich_help_panel=PANEL_SCAN,
+    )
+    pitch = typer.Option(0.25, "--pitch", help="Pixel size, mm.", rich_help_panel=PANEL_SCAN)
+    window = typer.Option(
+        8.0, "--window", help="Window side around each incident point, mm.", rich_help_panel=PANEL_SCAN
+    )
+    size = typer.Option(
+        (20.0, 20.0, 8.0),
+        "--size",
+        help="Generated slab: width height thickness, mm.",
+        rich_help_panel=PANEL_SAMPLE,
+    )
     voxel = voxel_option(0.25)
-    g = typer.Option(0.0, "--g", help="Henyey-Greenstein anisotropy of generated samples.")
-    angle = typer.Option(0.0, "--angle", help="Angle of incidence from the normal, degrees.")
+    g = typer.Option(
+        0.0, "--g", help="Henyey-Greenstein anisotropy of generated samples.", rich_help_panel=PANEL_SAMPLE
+    )
+    angle = typer.Option(
+        0.0, "--angle", help="Angle of incidence from the normal, degrees.", rich_help_panel=PANEL_SCAN
+    )
     incidence = AngleOptions.incidence
     azimuths = AngleOptions.azimuths
     exit_bins = AngleOptions.exit_bins
-    index_matched = typer.Option(False, "--index-matched", help="No Fresnel reflection at the boundary.")
+    index_matched = typer.Option(
+        False, "--index-matched", help="No Fresnel reflection at the boundary.", rich_help_panel=PANEL_SAMPLE
+    )
     chunk = chunk_option(16)
-    dtype = typer.Option("float32", "--dtype", help="Storage of R_d and variance: float32 or float16.")
+    dtype = typer.Option(
+        "float32",
+        "--dtype",
+        help="Storage of R_d and variance: float32 or float16.",
+        rich_help_panel=PANEL_OUTPUT,
+    )
     overwrite = dataset_overwrite_option()
     scheduler = scheduler_option()
     max_memory = max_memory_option()
@@ -203,8 +260,8 @@ def acquire_planar_cmd(
     azimuths: int = PlanarOptions.azimuths,
     exit_bins: int = PlanarOptions.exit_bins,
     index_matched: bool = PlanarOptions.index_matched,
-    chunk: int = PlanarOptions.chunk,
     dtype: str = PlanarOptions.dtype,
+    chunk: int = PlanarOptions.chunk,
     overwrite: bool = PlanarOptions.overwrite,
     scheduler: str = PlanarOptions.scheduler,
     max_memory: str = PlanarOptions.max_memory,
@@ -247,7 +304,7 @@ class MeshOptions:
 
     out = typer.Option(..., "--out", "-o", help="Output mesh data set (Zarr directory).")
     mesh = typer.Option(None, "--mesh", help="A closed mesh (OBJ/PLY/STL); default: the procedural pig.")
-    scale = typer.Option(1.0, "--scale", help="Millimetres per mesh unit.")
+    scale = typer.Option(1.0, "--scale", help="Millimetres per mesh unit.", rich_help_panel=PANEL_SAMPLE)
     material = typer.Option(
         None,
         "--material",
@@ -260,30 +317,37 @@ class MeshOptions:
         help="A user's filling: .npz with sigma_s, sigma_a (Z,Y,X,3) in 1/mm, voxel_mm, over the mesh's "
         "bounding box (z index 0 at the top).",
     )
-    up = typer.Option("z", "--up", help="The mesh file's up axis (z, y or x), turned to +z.")
+    up = typer.Option(
+        "z", "--up", help="The mesh file's up axis (z, y or x), turned to +z.", rich_help_panel=PANEL_SAMPLE
+    )
     voxel = voxel_option(0.5)
     points = typer.Option(
         64,
         "--points",
         help="Incident points (farthest-point sample of the vertices). On small objects more points with "
         "fewer photons each, for the same time, render closer (docs/through-body.md).",
+        rich_help_panel=PANEL_SCAN,
     )
     photons = typer.Option(20_000, "--photons", "-N", help="Photons per incident point and channel.")
     seed = PlanarOptions.seed
     sample_seed = PlanarOptions.sample_seed
-    g = typer.Option(0.0, "--g", help="Henyey-Greenstein anisotropy.")
+    g = typer.Option(0.0, "--g", help="Henyey-Greenstein anisotropy.", rich_help_panel=PANEL_SAMPLE)
     chunk = chunk_option(8)
-    index_matched = typer.Option(False, "--index-matched", help="No Fresnel reflection at the surface.")
+    index_matched = typer.Option(
+        False, "--index-matched", help="No Fresnel reflection at the surface.", rich_help_panel=PANEL_SAMPLE
+    )
     reentry = typer.Option(
         True,
         "--reentry/--no-reentry",
         help="Light leaving one part through the air into another (a horn by the head) walks on there.",
+        rich_help_panel=PANEL_SAMPLE,
     )
     unscattered = typer.Option(
         "apart",
         "--unscattered",
         help="Light that leaves without scattering (a beam through a thin part, seen only head-on): apart "
         "(kept out of R_d, its fraction stored) or counted (in R_d).",
+        rich_help_panel=PANEL_SCAN,
     )
     incidence = AngleOptions.incidence
     azimuths = AngleOptions.azimuths

@@ -10,6 +10,10 @@ import typer
 
 from ..workflow import GENERATORS
 from ._common import (
+    PANEL_CAMERA,
+    PANEL_OUTPUT,
+    PANEL_SAMPLE,
+    PANEL_SCAN,
     finish,
     json_option,
     max_memory_option,
@@ -28,26 +32,53 @@ class ObjectPhotographsOptions:
 
     out = typer.Option(..., "--out", "-o", help="Output folder: object.json, object.ply, cameras, shots.")
     mesh = typer.Option(None, "--mesh", help="Mesh file (OBJ/PLY/STL); default the built-in pig.")
-    scale = typer.Option(1.0, "--scale", help="Millimetres per mesh-file unit.")
-    up = typer.Option("z", "--up", help="The mesh file's up axis (z, y or x), turned to +z.")
+    scale = typer.Option(1.0, "--scale", help="Millimetres per mesh-file unit.", rich_help_panel=PANEL_SAMPLE)
+    up = typer.Option(
+        "z", "--up", help="The mesh file's up axis (z, y or x), turned to +z.", rich_help_panel=PANEL_SAMPLE
+    )
     material = typer.Option("marble", "--material", "-m", help=f"Filling: {SAMPLES}.")
     voxel = voxel_option(0.5)
-    points = typer.Option(8, "--points", help="Laser positions (farthest-point sample of the vertices).")
-    cameras = typer.Option(6, "--cameras", help="Cameras on a sphere around the object.")
-    resolution = typer.Option((128, 128), "--resolution", help="Image width and height, pixels.")
-    spp = typer.Option(64, "--spp", help="Samples per pixel of each of the two repeated frames.")
-    beam = typer.Option(0.3, "--beam", help="Radius of the laser's spot on the surface, mm.")
-    eta = typer.Option(1.0, "--eta", help="The boundary: 1 index-matched, > 1 a smooth dielectric.")
+    points = typer.Option(
+        8,
+        "--points",
+        help="Laser positions (farthest-point sample of the vertices).",
+        rich_help_panel=PANEL_SCAN,
+    )
+    cameras = typer.Option(
+        6, "--cameras", help="Cameras on a sphere around the object.", rich_help_panel=PANEL_CAMERA
+    )
+    resolution = typer.Option(
+        (128, 128), "--resolution", help="Image width and height, pixels.", rich_help_panel=PANEL_CAMERA
+    )
+    spp = typer.Option(
+        64,
+        "--spp",
+        help="Samples per pixel of each of the two repeated frames.",
+        rich_help_panel=PANEL_CAMERA,
+    )
+    beam = typer.Option(
+        0.3, "--beam", help="Radius of the laser's spot on the surface, mm.", rich_help_panel=PANEL_SCAN
+    )
+    eta = typer.Option(
+        1.0,
+        "--eta",
+        help="The boundary: 1 index-matched, > 1 a smooth dielectric.",
+        rich_help_panel=PANEL_SAMPLE,
+    )
     checkerboards = typer.Option(
-        False, "--checkerboards", help="Give intrinsics as checkerboard photographs (OpenCV calibrates)."
+        False,
+        "--checkerboards",
+        help="Give intrinsics as checkerboard photographs (OpenCV calibrates).",
+        rich_help_panel=PANEL_CAMERA,
     )
     exposures = typer.Option(
         "brackets",
         "--exposures",
         help="brackets (two long exposures and a short one a camera and shot) or single (the spot clipped).",
+        rich_help_panel=PANEL_CAMERA,
     )
     seed = typer.Option(0, "--seed", help="Random seed of the filling, the renders and the sensor.")
-    image_format = typer.Option("pfm", "--format", help="pfm or exr.")
+    image_format = typer.Option("pfm", "--format", help="pfm or exr.", rich_help_panel=PANEL_OUTPUT)
     overwrite = overwrite_option()
     max_memory = max_memory_option()
     quiet = quiet_option()

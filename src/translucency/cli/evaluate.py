@@ -10,6 +10,9 @@ import typer
 from rich.table import Table
 
 from ._common import (
+    PANEL_COMPARISON,
+    PANEL_OUTPUT,
+    PANEL_TRANSPORT,
     finish,
     json_option,
     max_memory_option,
@@ -25,12 +28,14 @@ _TRUTH = typer.Option(
     "--truth",
     help="An independent acquisition of the same incident points (another seed, more photons; on a "
     "mesh: the same mesh and --points): errors against it, with the in-sample errors beside.",
+    rich_help_panel=PANEL_COMPARISON,
 )
 _PAPER = typer.Option(
     False,
     "--paper",
     help="Evaluate a per-vertex model as the paper's model (each point's radial profile alone), not as "
     "render draws it (with the model's through-body table).",
+    rich_help_panel=PANEL_TRANSPORT,
 )
 
 
@@ -48,20 +53,24 @@ def evaluate(
         help="Directory for the figures and index.html (default: beside the model, MODEL.report/ — "
         "iso.model.zip gives iso.report/).",
     ),
-    as_json: bool = json_option(),
     json_out: Path = typer.Option(
         None,
         "--json-out",
         help="Also write the summary (the object --json prints: rel_l2, rel_l2_near/mid/far, ...) to this "
         "file.",
+        rich_help_panel=PANEL_OUTPUT,
     ),
     compare: list[Path] = typer.Option(
-        None, "--compare", help="Other model files of the same data (repeatable)."
+        None,
+        "--compare",
+        help="Other model files of the same data (repeatable).",
+        rich_help_panel=PANEL_COMPARISON,
     ),
     profiles: str = typer.Option(
         None,
         "--profiles",
         help="The incident points whose profiles are drawn, e.g. 0,17,40 (planar data sets).",
+        rich_help_panel=PANEL_OUTPUT,
     ),
     truth: Path = _TRUTH,
     paper: bool = _PAPER,
@@ -69,6 +78,7 @@ def evaluate(
     scheduler: str = scheduler_option(),
     max_memory: str = max_memory_option(),
     quiet: bool = quiet_option(),
+    as_json: bool = json_option(),
 ):
     """Relative L2 errors (overall, per distance band, energy-weighted), error maps, profiles, HTML report: a
     planar model on its planar data set, or a per-vertex model on its mesh data set."""

@@ -7,12 +7,15 @@ from pathlib import Path
 
 import typer
 
-from ._common import finish, json_option, quiet_option, user_errors
+from ._common import PANEL_RUN, finish, json_option, quiet_option, user_errors
 from ._run import RichReporter
 
 _OUT = typer.Argument(..., help="The folder to copy them into (made if missing).")
 _OVERWRITE = typer.Option(
-    False, "--overwrite", help="Replace files of the same names with other contents (else refused)."
+    False,
+    "--overwrite",
+    help="Replace files of the same names with other contents (else refused).",
+    rich_help_panel=PANEL_RUN,
 )
 
 

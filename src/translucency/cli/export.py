@@ -10,7 +10,16 @@ from pathlib import Path
 
 import typer
 
-from ._common import finish, json_option, max_memory_option, overwrite_option, quiet_option, user_errors
+from ._common import (
+    PANEL_LIGHT,
+    PANEL_TRANSPORT,
+    finish,
+    json_option,
+    max_memory_option,
+    overwrite_option,
+    quiet_option,
+    user_errors,
+)
 
 #: the light baked when none is given (the library's ``DEFAULT_LIGHT``, stated here so that ``--help``
 #: loads no renderer)
@@ -34,13 +43,18 @@ def export(
         "attributes _ALBEDO, _MFP_MM, _BURLEY_S (Christensen-Burley per channel) and _REDUCTION_ERROR.",
     ),
     light: str = typer.Option(
-        DEFAULT_LIGHT, "--light", metavar="LIGHT", help="With --gltf: the light baked (as render's)."
+        DEFAULT_LIGHT,
+        "--light",
+        metavar="LIGHT",
+        help="With --gltf: the light baked (as render's).",
+        rich_help_panel=PANEL_LIGHT,
     ),
     angles: bool = typer.Option(
         False,
         "--angles",
         help="With --gltf: bake the model's lean (the transport leaned toward the light, as render "
         "--angles); a model without one bakes the paper's model.",
+        rich_help_panel=PANEL_TRANSPORT,
     ),
     overwrite: bool = overwrite_option(),
     max_memory: str = max_memory_option(),

@@ -8,6 +8,10 @@ from pathlib import Path
 import typer
 
 from ._common import (
+    PANEL_FITTING,
+    PANEL_MODEL,
+    PANEL_OUTPUT,
+    PANEL_RUN,
     finish,
     json_option,
     max_memory_option,
@@ -37,34 +41,44 @@ _TERMS = typer.Option(
     "-n",
     help="Exponential terms n per profile (1-4), or auto (held-out choice). Default: chosen with "
     "--model auto, 3 otherwise.",
+    rich_help_panel=PANEL_MODEL,
 )
 _DIRECTIONS = typer.Option(
     None,
     "--directions",
     help="Directions m of the anisotropic model (>= 2), or auto (m in 1, 2, 4, 8, 16 by held-out error). "
     "Default: chosen with --model auto, 8 with --model aniso (the paper's).",
+    rich_help_panel=PANEL_MODEL,
 )
 _WEIGHTING = typer.Option(
     "poisson",
     "--weighting",
     help="poisson: residuals weighted by the model's Poisson variance (more photons never hurt); "
     "relative: the data's variance with a 5 % relative error added (its share grows with the photons).",
+    rich_help_panel=PANEL_FITTING,
 )
 _COLOUR = typer.Option(
     None,
     "--colour",
     help="shared: the paper's (1, s_g, s_b) scale of one fall-off; per-channel: one fall-off per "
     "channel; auto: the held-out choice. Default: chosen with --model auto, per-channel otherwise.",
+    rich_help_panel=PANEL_MODEL,
 )
 _EXCLUSION = typer.Option(
-    None, "--exclusion", help="Ignore pixels closer than this to x_i, mm (default one pixel)."
+    None,
+    "--exclusion",
+    help="Ignore pixels closer than this to x_i, mm (default one pixel).",
+    rich_help_panel=PANEL_FITTING,
 )
-_ROUNDS = typer.Option(3, "--rounds", help="Most alternation rounds (parameters, then alpha).")
+_ROUNDS = typer.Option(
+    3, "--rounds", help="Most alternation rounds (parameters, then alpha).", rich_help_panel=PANEL_FITTING
+)
 _CHUNK = typer.Option(
     None,
     "--chunk",
     help="Incident points read and fitted together, a task (default: an eighth of the points, "
     "128 to 512, in whole chunks of the store).",
+    rich_help_panel=PANEL_RUN,
 )
 _ALPHA_RADIUS = typer.Option(
     None,
@@ -72,8 +86,11 @@ _ALPHA_RADIUS = typer.Option(
     help="Pool alpha's statistics over the pixels (vertices) within this distance, mm. Default: alpha "
     "per pixel on planar data (dense scans), 12 mean edge lengths on meshes (at least 4 mm). For sparse "
     "grids of incident points or noisy data such as photographs (docs/rig.md).",
+    rich_help_panel=PANEL_FITTING,
 )
-_FLOAT16 = typer.Option(False, "--float16", help="Store parameters as float16 (smaller file).")
+_FLOAT16 = typer.Option(
+    False, "--float16", help="Store parameters as float16 (smaller file).", rich_help_panel=PANEL_OUTPUT
+)
 
 
 @user_errors
@@ -87,9 +104,9 @@ def fit(
     colour: str = _COLOUR,
     exclusion: float = _EXCLUSION,
     rounds: int = _ROUNDS,
-    chunk: int = _CHUNK,
     alpha_radius: float = _ALPHA_RADIUS,
     float16: bool = _FLOAT16,
+    chunk: int = _CHUNK,
     overwrite: bool = overwrite_option(),
     scheduler: str = scheduler_option(),
     max_memory: str = max_memory_option(),

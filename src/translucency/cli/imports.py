@@ -9,6 +9,11 @@ import typer
 
 from .._validate import TranslucencyError
 from ._common import (
+    PANEL_CAMERA,
+    PANEL_OUTPUT,
+    PANEL_RUN,
+    PANEL_SAMPLE,
+    PANEL_SCAN,
     chunk_option,
     finish,
     json_option,
@@ -57,38 +62,70 @@ class ImagesOptions:
         "--gain",
         help="Pixel value per unit exitance (W/mm^2) per second; overrides the calibration's scale.",
     )
-    pitch = typer.Option(0.25, "--pitch", help="Pixel size of the windows on the sample, mm.")
-    window = typer.Option(8.0, "--window", help="Window side around each incident point, mm.")
-    supersample = typer.Option(3, "--supersample", help="Sub-samples per output pixel side (area average).")
+    pitch = typer.Option(
+        0.25, "--pitch", help="Pixel size of the windows on the sample, mm.", rich_help_panel=PANEL_SCAN
+    )
+    window = typer.Option(
+        8.0, "--window", help="Window side around each incident point, mm.", rich_help_panel=PANEL_SCAN
+    )
+    supersample = typer.Option(
+        3,
+        "--supersample",
+        help="Sub-samples per output pixel side (area average).",
+        rich_help_panel=PANEL_SCAN,
+    )
     specular_radius = typer.Option(
-        0.0, "--specular-radius", help="Mask pixels this close to the laser, mm (direct reflection)."
+        0.0,
+        "--specular-radius",
+        help="Mask pixels this close to the laser, mm (direct reflection).",
+        rich_help_panel=PANEL_CAMERA,
     )
-    dilate = typer.Option(1, "--dilate", help="Grow the saturated mask by this many image pixels.")
-    floor = typer.Option(None, "--floor", help="Mask pixel values below this after the dark frame.")
+    dilate = typer.Option(
+        1, "--dilate", help="Grow the saturated mask by this many image pixels.", rich_help_panel=PANEL_CAMERA
+    )
+    floor = typer.Option(
+        None,
+        "--floor",
+        help="Mask pixel values below this after the dark frame.",
+        rich_help_panel=PANEL_CAMERA,
+    )
     sample_size = typer.Option(
-        None, "--sample-size", help="Sample width,height in mm (e.g. 20,20): pixels outside are masked."
+        None,
+        "--sample-size",
+        help="Sample width,height in mm (e.g. 20,20): pixels outside are masked.",
+        rich_help_panel=PANEL_SAMPLE,
     )
-    eta = typer.Option(1.3, "--eta", help="Relative index of refraction of the sample.")
+    eta = typer.Option(
+        1.3, "--eta", help="Relative index of refraction of the sample.", rich_help_panel=PANEL_SAMPLE
+    )
     beam_rms = typer.Option(
         0.0,
         "--beam-rms",
         help="The laser beam's rms radius on the sample, mm (sqrt of the mean squared distance of its "
         "irradiance from its centre; a uniform disc of radius b has b/sqrt(2)). Windows are corrected to a "
         "pencil beam's response by its second moment. Default 0: a pencil beam, no correction.",
+        rich_help_panel=PANEL_SCAN,
     )
     chunk = chunk_option(16)
-    dtype = typer.Option("float32", "--dtype", help="Storage of R_d and variance: float32 or float16.")
+    dtype = typer.Option(
+        "float32",
+        "--dtype",
+        help="Storage of R_d and variance: float32 or float16.",
+        rich_help_panel=PANEL_OUTPUT,
+    )
     extra_camera = typer.Option(
         None,
         "--extra-camera",
         help="Another camera's photographs of the same laser positions, with its own table and calibration "
         "(repeatable): the cameras are averaged onto the same windows where all of them are valid — two "
         "cameras on opposite sides cancel the slant of light leaving obliquely.",
+        rich_help_panel=PANEL_CAMERA,
     )
     overwrite = typer.Option(
         False,
         "--overwrite",
         help="Replace a data set of translucency made from other inputs (never anything else).",
+        rich_help_panel=PANEL_RUN,
     )
     scheduler = scheduler_option()
     max_memory = max_memory_option()
@@ -113,9 +150,9 @@ def import_images_cmd(
     sample_size: str = ImagesOptions.sample_size,
     eta: float = ImagesOptions.eta,
     beam_rms: float = ImagesOptions.beam_rms,
-    chunk: int = ImagesOptions.chunk,
     dtype: str = ImagesOptions.dtype,
     extra_camera: list[str] = ImagesOptions.extra_camera,
+    chunk: int = ImagesOptions.chunk,
     overwrite: bool = ImagesOptions.overwrite,
     scheduler: str = ImagesOptions.scheduler,
     max_memory: str = ImagesOptions.max_memory,

@@ -1,8 +1,8 @@
 """``translucency info``: what a model file or a data set holds, its size on disk, whether it is valid.
 
 One record per path (:func:`translucency.workflow.inspecting.describe`, JSON-ready, its schema in
-:mod:`.schemas` and docs/json.md) and its display as a table (:func:`_rows`): ``--json`` prints the
-record, numbers as numbers, nothing cut.
+docs/json.md, written by docs/_gen/json_schemas.py) and its display as a table (:func:`_rows`): ``--json``
+prints the record, numbers as numbers, nothing cut.
 """
 
 from __future__ import annotations
@@ -13,13 +13,15 @@ from pathlib import Path
 import typer
 from rich.table import Table
 
-from ._common import console, jsonable, user_errors
+from ._common import PANEL_RUN, console, jsonable, user_errors
 
 
 @user_errors
 def info(
     path: Path = typer.Argument(..., help="A model file (.model.zip) or a data set (.zarr directory)."),
-    as_json: bool = typer.Option(False, "--json", help="Print the fields as one JSON object (for scripts)."),
+    as_json: bool = typer.Option(
+        False, "--json", help="Print the fields as one JSON object (for scripts).", rich_help_panel=PANEL_RUN
+    ),
 ):
     """Describe a model file or a data set: what it holds, its size on disk, whether it is valid."""
     from ..workflow.inspecting import describe  # Zarr and NumPy: what reading the file needs

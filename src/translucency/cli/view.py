@@ -9,7 +9,18 @@ from pathlib import Path
 
 import typer
 
-from ._common import finish, json_option, max_memory_option, overwrite_option, quiet_option, user_errors
+from ._common import (
+    PANEL_COMPARISON,
+    PANEL_LIGHT,
+    PANEL_RUN,
+    PANEL_TRANSPORT,
+    finish,
+    json_option,
+    max_memory_option,
+    overwrite_option,
+    quiet_option,
+    user_errors,
+)
 from ._run import RichReporter
 
 #: the options with long help, named here so that the command reads as its calls
@@ -25,35 +36,41 @@ _SKY = typer.Option(
     metavar="ENV",
     help="The environment light: env:L (a constant sky, W/(mm^2 sr)) or env:MAP.exr[,scale] (as render's "
     "--light); default a constant sky giving 1/3 of the directional light's irradiance.",
+    rich_help_panel=PANEL_LIGHT,
 )
 _BANDS = typer.Option(
     4,
     "--bands",
     help="Bands of the light basis (spherical harmonics): bands^2 "
     "coefficients per vertex and channel; 2 to 5.",
+    rich_help_panel=PANEL_TRANSPORT,
 )
 _COMPARE = typer.Option(
     None,
     "--compare",
     help="A second per-vertex model of the same mesh (another fit, another family): shown beside the "
     "first and as their difference |B - A| / A under the same directional or environment light.",
+    rich_help_panel=PANEL_COMPARISON,
 )
 _REFERENCE_RENDER = typer.Option(
     None,
     "--reference-render",
     help="A render folder with its path-traced reference (translucency render --reference, or the main "
     "job's results/report): its error map (FLIP) and numbers beside the model.",
+    rich_help_panel=PANEL_COMPARISON,
 )
 _TRUTH = typer.Option(
     None,
     "--truth",
     help="A planar model's independent acquisition (another seed of the same points): its ring means "
     "beside the data's in each point's profile.",
+    rich_help_panel=PANEL_COMPARISON,
 )
 _RADIUS = typer.Option(
     None,
     "--radius",
     help="Near radius of the transport, mm (default as render's: the 99% energy radius).",
+    rich_help_panel=PANEL_TRANSPORT,
 )
 
 _ANGLES = typer.Option(
@@ -62,6 +79,7 @@ _ANGLES = typer.Option(
     help="Draw the model's lean (fitted from a data set acquired with --incidence; model/lean.py): every "
     "light and sky leans the transport toward the directions it arrives from, as render --angles. The "
     "transfer takes one relight per direction of its lattice (256): slower to prepare.",
+    rich_help_panel=PANEL_TRANSPORT,
 )
 
 
@@ -83,7 +101,10 @@ def view(
     radius: float = _RADIUS,
     angles: bool = _ANGLES,
     seconds: float = typer.Option(
-        0.0, "--seconds", help="Serve this long, then stop (0: until Ctrl-C; for scripts and tests)."
+        0.0,
+        "--seconds",
+        help="Serve this long, then stop (0: until Ctrl-C; for scripts and tests).",
+        rich_help_panel=PANEL_RUN,
     ),
     overwrite: bool = overwrite_option(),
     max_memory: str = max_memory_option(),
