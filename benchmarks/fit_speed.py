@@ -100,7 +100,8 @@ def solver_vs_scipy(path: Path, n_sample: int) -> dict:
     from translucency.fit._pixels import grouped as _grouped
     from translucency.fit.chunk import load_chunk as _load_chunk
     from translucency.fit.chunk import weights as _weights
-    from translucency.fit.options import FitContext
+    from translucency.fit.context import FitContext
+    from translucency.fit.families import FAMILIES
     from translucency.fit.planar import _PlanarSource
     from translucency.fit.state import FitState
     from translucency.geometry import SampleGrid
@@ -116,7 +117,7 @@ def solver_vs_scipy(path: Path, n_sample: int) -> dict:
     source = _PlanarSource(ds, grid, origin, 1 / (photons * ds.pitch**2))
     ctx = FitContext(
         source=source,
-        kind="iso",
+        family=FAMILIES["iso"],
         n=3,
         m=1,
         C=3,

@@ -11,9 +11,10 @@ shares (:class:`FitContext`, :mod:`.options`), the parameters (:class:`FitState`
 
 from ..solvers import fit_exponentials_batched
 from .chunk import FIT_BLOCK, Chunk
+from .context import FitContext
 from .families import FAMILIES, Family, describe_families
 from .mesh import fit_mesh
-from .options import KINDS, WEIGHTINGS, FitContext, FitResult, check_fit_options
+from .options import KINDS, WEIGHTINGS, FitResult, check_fit_options
 from .planar import PlanarFit, default_chunk_points, fit_planar
 from .profile import ProfileFit, fit_burley_profile, fit_dipole_profile, fit_exponential_profile
 from .state import FitState, Params

@@ -17,7 +17,7 @@ from .chunk import FIT_BLOCK, load_chunk, objective, weights
 from .state import FitState
 
 if TYPE_CHECKING:  # annotations only
-    from .options import FitContext
+    from .context import FitContext
 
 
 def _blocks(s: int, e: int) -> list[tuple[int, int]]:

@@ -17,7 +17,7 @@ from ._windows import Segments
 
 if TYPE_CHECKING:  # annotations only
     from .chunk import Chunk
-    from .options import FitContext
+    from .context import FitContext
     from .state import FitState, Params
 
 

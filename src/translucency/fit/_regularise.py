@@ -47,7 +47,7 @@ from .chunk import distance_balance
 
 if TYPE_CHECKING:  # annotations only
     from .chunk import Chunk
-    from .options import FitContext
+    from .context import FitContext
     from .state import FitState
 
 

@@ -50,7 +50,8 @@ import numpy as np
 from ..cluster import in_order_window, open_cluster
 from ._alpha import update_alpha
 from ._block import fit_chunk as _fit_chunk  # looked up here at each call (a test slows chunks down)
-from .options import FitContext, FitResult
+from .context import FitContext
+from .options import FitResult
 from .state import CHECKPOINT_SHARE, FitState
 
 

@@ -35,7 +35,7 @@ import numpy as np
 from ._windows import Segments, radius_groups
 
 if TYPE_CHECKING:  # annotations only
-    from .options import FitContext
+    from .context import FitContext
     from .state import FitState
 
 #: incident points whose pooled profile seeds their cold starts together; blocks follow the points'

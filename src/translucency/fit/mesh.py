@@ -29,12 +29,13 @@ from ..io.mesh_dataset import open_mesh_dataset
 from ..model import VertexAlpha
 from ._rounds import alternate
 from ._vertex_pool import disc_pool
+from .context import FitContext
 from .families import FAMILIES
 from .held_out import mesh_held_out_terms, vertex_half
 from .lean import fit_lean
 from .lean_shots import fit_lean_from_shots
 from .mesh_pairs import exclusion_radius, mean_edge_length, read_pairs
-from .options import FitContext, FitResult, check_fit_options
+from .options import FitResult, check_fit_options
 from .structure import fit_chosen, resolve_structure
 from .through import measure_through
 
@@ -289,7 +290,7 @@ def _mesh_context(header, source, rate_bounds, model, n_terms, colour, exclusion
     return FitContext(
         rate_bounds=rate_bounds,
         source=source,
-        kind=model,
+        family=FAMILIES[model],
         n=int(n_terms),
         m=1,
         C=1 if colour == "shared" and FAMILIES[model].shared_colour else 3,

@@ -1,4 +1,5 @@
-"""The options of a fit (checked at the API boundary), what every chunk shares, and the result."""
+"""The options of a fit (checked at the API boundary) and its result; what every chunk shares is
+:mod:`.context`."""
 
 from __future__ import annotations
 
@@ -7,14 +8,13 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .._validate import TranslucencyError
-from .families import AUTO_DIRECTIONS, AUTO_TERMS, FAMILIES, Family
+from .families import AUTO_DIRECTIONS, AUTO_TERMS, FAMILIES
 
 __all__ = [
     "AUTO_DIRECTIONS",
     "AUTO_TERMS",
     "KINDS",
     "WEIGHTINGS",
-    "FitContext",
     "FitResult",
     "check_fit_options",
 ]
@@ -141,47 +141,3 @@ def _as_count(v) -> int:
         return int(v)
     except (TypeError, ValueError):
         return -1
-
-
-@dataclass(kw_only=True)
-class FitContext:
-    """What every chunk of a fit shares: the source, the model family and the fit options.
-
-    Examples
-    --------
-    >>> ctx = FitContext(source=None, kind="aniso", n=3, m=8, C=3, exclusion=0.25, rel_sigma=0.05, eta=1.3,
-    ...                  radius_step=None, sweeps=2, balance=True, x_i=np.zeros((4, 2)), weighting="relative")
-    >>> ctx.family.name, ctx.family.directional, ctx.rho   # ρ = rel_sigma under "relative" weighting
-    ('aniso', True, 0.05)
-    >>> FitContext(source=None, kind="iso", n=3, m=1, C=3, exclusion=0.25, rel_sigma=0.05, eta=1.3,
-    ...            radius_step=None, sweeps=1, balance=True, x_i=np.zeros((4, 2))).rho   # "poisson": 0
-    0.0
-    """
-
-    source: object  # where the chunks come from: a planar or a mesh source
-    kind: str  # one of KINDS: the family's name
-    n: int  # exponential terms per profile
-    m: int  # directions (1 unless anisotropic)
-    C: int  # colour rows: 1 (shared colour scale) or 3
-    exclusion: float  # pixels closer than this to x_i are left out, mm
-    rel_sigma: float  # ρ, the relative tolerance in the weights ("relative" weighting)
-    eta: float  # refractive index (dipole)
-    radius_step: float | None  # width of the merged rings beyond 1 mm, mm; None: exact radii only
-    sweeps: int  # block-coordinate sweeps over the directions per round
-    balance: bool  # weight rings beyond 1 mm by 1 mm / r
-    x_i: np.ndarray  # (P, 2|3) incident points, mm
-    rate_bounds: tuple | None = None  # (lo, hi) of log a (a in mm⁻¹); None: what the radii resolve
-    g: float = 0.0  # the medium's mean cosine (PBD's single scattering), from the data set's header
-    cache_left: float = 0.0  # bytes the data may still occupy in memory between rounds
-    cache: dict = field(default_factory=dict)
-    weighting: str = "poisson"  # one of WEIGHTINGS (module docstring)
-
-    @property
-    def family(self) -> Family:
-        """The model family of :attr:`kind` (:data:`~translucency.fit.families.FAMILIES`)."""
-        return FAMILIES[self.kind]
-
-    @property
-    def rho(self) -> float:
-        """ρ of the weights: ``rel_sigma`` for the "relative" weighting, 0 for "poisson"."""
-        return float(self.rel_sigma) if self.weighting == "relative" else 0.0

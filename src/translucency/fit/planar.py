@@ -65,9 +65,10 @@ from ..io.dataset import PlanarDataset, open_dataset
 from ..model import PlanarAlpha, Rectangle
 from ._rounds import alternate
 from .chunk import POOL_POINTS
+from .context import FitContext
 from .families import FAMILIES
 from .held_out import held_out_terms, pair_half
-from .options import FitContext, FitResult, check_fit_options
+from .options import FitResult, check_fit_options
 from .structure import fit_chosen, resolve_structure
 
 __all__ = [
@@ -317,7 +318,7 @@ def _planar_context(source: _PlanarSource, options: dict, cache_mb: float) -> Fi
     sample = source.ds.header.get("sample", {})
     return FitContext(
         source=source,
-        kind=options["model"],
+        family=FAMILIES[options["model"]],
         n=options["n_terms"],
         m=options["n_directions"],
         C=1 if options["colour"] == "shared" else 3,  # the colour scale of the exponential families

@@ -23,7 +23,7 @@ import numpy as np
 if TYPE_CHECKING:  # annotations only (fit.options imports this package, for FAMILIES)
     from ...model import ReflectanceModel
     from ..chunk import Chunk
-    from ..options import FitContext
+    from ..context import FitContext
     from ..state import FitState, Params
 
 #: the candidates of model selection (``n_terms="auto"``, ``n_directions="auto"``)

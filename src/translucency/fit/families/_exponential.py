@@ -24,7 +24,7 @@ from ._base import AUTO_DIRECTIONS, AUTO_TERMS, Family
 
 if TYPE_CHECKING:  # annotations only
     from ..chunk import Chunk
-    from ..options import FitContext
+    from ..context import FitContext
     from ..state import FitState
 
 

@@ -9,16 +9,13 @@ from __future__ import annotations
 
 import dataclasses
 from abc import ABC, abstractmethod
-from typing import TYPE_CHECKING, ClassVar
+from typing import ClassVar
 
 import numpy as np
 
 from ..._validate import TranslucencyError
 from ...mitsuba import rays
 from ...model.boundary import fresnel_transmittance
-
-if TYPE_CHECKING:  # the placement's types, for the signatures only
-    from .placement import Placement, RelativeLight
 
 #: the largest power (I in W/sr, E in W/mm², L and a map's scale in W/(mm² sr)) a light may have: far
 #: beyond any lamp or the sun, well inside float32, so that irradiance, transport and pictures stay finite
@@ -117,13 +114,14 @@ class Light(ABC):
         """The light of its text's numbers ``v`` (finite; the power and coordinates within bounds)."""
 
     @classmethod
-    def placed(cls, relative: RelativeLight, placement: Placement) -> Light:
-        """The light that ``relative`` describes, in the object's frame (a kind with a
-        :attr:`relative_tail`)."""
+    def placed(cls, relative, placement) -> Light:
+        """The light that ``relative`` (a :class:`~.placement.RelativeLight`) describes, in the object's
+        frame (a kind with a :attr:`relative_tail`); ``placement``: a :class:`~.placement.Placement`."""
         raise TypeError(f"a {cls.__name__} cannot be placed relative to the object")
 
-    def place(self, placement: Placement) -> Light:
-        """The light in the object's frame: itself (a :class:`RelativeLight` resolves there)."""
+    def place(self, placement) -> Light:
+        """The light in the object's frame (``placement``: a :class:`~.placement.Placement`): itself (a
+        :class:`~.placement.RelativeLight` resolves there)."""
         return self
 
     @abstractmethod
