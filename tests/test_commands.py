@@ -1,5 +1,6 @@
 """The command line only parses and prints: each command calls one library function (docs/api.md's table),
-and each of its options is an argument of that function, so a Python user can do what the command does."""
+and docs/api.md lists its options as that function's arguments.  That each option reaches the function is
+tests/test_options_reach.py's: it runs every command with every option."""
 
 from pathlib import Path
 
@@ -7,13 +8,11 @@ import cli_reference as reference
 import pytest
 import typer
 
-import translucency as tl
 from translucency.cli._common import PANEL_RUN
 from translucency.cli.app import app
 
 API = Path(__file__).resolve().parents[1] / "docs" / "api.md"
 
-PRINTING = reference.PRINTING
 #: how a command runs and prints: listed under one heading of --help in every command that has them
 RUN_OPTIONS = {"--overwrite", "--chunk", "--scheduler", "--max-memory", "--quiet", "--json"}
 
@@ -36,22 +35,6 @@ def test_every_command_is_in_the_table():
     table = _table()
     assert commands <= set(table), f"commands missing from docs/api.md: {sorted(commands - set(table))}"
     assert set(table) <= commands, f"docs/api.md names no such command: {sorted(set(table) - commands)}"
-
-
-@pytest.mark.parametrize("name,command", list(_commands()), ids=[n for n, _ in _commands()])
-def test_every_option_is_an_argument_of_the_library_function(name, command):
-    functions = [getattr(tl, f) for f in _table()[name]]
-    assert functions, f"docs/api.md names no library function for translucency {name}"
-    missing, position = [], 0
-    # each argument by position, each option by its names (docs/_gen/cli_reference.py)
-    for param in command.params:
-        options = [o for o in param.opts if o.startswith("--")]
-        if param.param_type_name != "argument" and set(options) & PRINTING:
-            continue
-        if not reference.library_argument(param, functions, position):
-            missing.append(options[0] if options else param.name.upper())
-        position += param.param_type_name == "argument"
-    assert not missing, f"translucency {name}: no Python argument of {_table()[name]} for {missing}"
 
 
 @pytest.mark.parametrize("name,command", list(_commands()), ids=[n for n, _ in _commands()])
