@@ -159,10 +159,8 @@ def random_walk(
     WalkResult
     """
     mi, dr = mitsuba(), drjit()
-
     Float, UInt32 = mi.Float, mi.UInt32
-    n_pts = len(entry_xy)
-    total = n_pts * n_photons
+    total = len(entry_xy) * n_photons
     W, H, T = volume.size_mm
     eta = 1.0 if index_matched else volume.eta
 
@@ -171,40 +169,15 @@ def random_walk(
     )
 
     # -- entry: Fresnel at the top face, then refraction (Snell) -----------------------
-    if toward_light is None:  # from −x in the x–z plane
-        th = np.radians(theta_inc_deg)
-        toward_light = (-np.sin(th), 0.0, np.cos(th))
-    w = np.asarray(toward_light, dtype=np.float64)
-    cos_in = float(w[2])
-    F_in = float(mi.fresnel(Float(cos_in), Float(eta))[0][0]) if eta != 1.0 else 0.0
-    t_x, t_y = (0.0 - w[0]) / eta, (0.0 - w[1]) / eta  # Snell: the travel's tangential part shrinks by 1/η
-    d0 = mi.Vector3f(float(t_x), float(t_y), -float(np.sqrt(1.0 - t_x**2 - t_y**2)))
-    specular = rng.next_float32() < F_in
-    ex = dr.gather(Float, Float(entry_xy[:, 0].astype(np.float32)), point)
-    ey = dr.gather(Float, Float(entry_xy[:, 1].astype(np.float32)), point)
-    pos = mi.Vector3f(ex, ey, Float(0.0))
-    direction = mi.Vector3f(d0)
-    code = dr.select(specular, UInt32(TOP + 100), UInt32(ACTIVE))  # 101: specular, kept apart
+    F_in, d0 = _entry(mi, eta, theta_inc_deg, toward_light)
+    pos, direction, code = _launch(mi, dr, rng, point, entry_xy, F_in, d0)
     steps = UInt32(0)
     inf = Float(dr.inf)
-
-    def cond(pos, direction, rng, code, steps):
-        return code == ACTIVE
 
     def body(pos, direction, rng, code, steps):
         # tentative free-flight distance against the majorant (mm)
         t = -dr.log(1.0 - rng.next_float32()) / majorant
-        # distance to the box faces along the direction
-        tx = dr.select(
-            direction.x > 0, (W - pos.x) / direction.x, dr.select(direction.x < 0, -pos.x / direction.x, inf)
-        )
-        ty = dr.select(
-            direction.y > 0, (H - pos.y) / direction.y, dr.select(direction.y < 0, -pos.y / direction.y, inf)
-        )
-        tz = dr.select(
-            direction.z > 0, -pos.z / direction.z, dr.select(direction.z < 0, (-T - pos.z) / direction.z, inf)
-        )
-        t_face = dr.maximum(dr.minimum(dr.minimum(tx, ty), tz), 0.0)
+        tx, ty, tz, t_face = _face_distances(dr, pos, direction, W, H, T, inf)  # to the box's faces
         collide = t < t_face
 
         # -- inside: real or null collision at pos + t d ------------------------------------
@@ -214,24 +187,9 @@ def random_walk(
         )
 
         # -- boundary: Fresnel reflection or exit at the nearest face --------------------
-        hit = ~collide
-        on_z = (tz <= tx) & (tz <= ty)
-        on_x = ~on_z & (tx <= ty)
-        on_y = ~on_z & ~on_x
-        cos_i = dr.abs(dr.select(on_z, direction.z, dr.select(on_x, direction.x, direction.y)))
-        if eta != 1.0:
-            F = mi.fresnel(-cos_i, Float(eta))[0]  # negative cosine: incident from inside
-        else:
-            F = Float(0.0)
-        reflect = hit & (rng.next_float32() < F)
-        leave = hit & ~reflect
-        p_b = pos + direction * t_face
-        refl_dir = mi.Vector3f(
-            dr.select(on_x, -direction.x, direction.x),
-            dr.select(on_y, -direction.y, direction.y),
-            dr.select(on_z, -direction.z, direction.z),
+        on_z, reflect, leave, p_b, refl_dir = _face_event(
+            mi, dr, rng, pos, direction, tx, ty, tz, t_face, collide, eta
         )
-
         pos = dr.select(collide, p_c, p_b)
         pos = mi.Vector3f(dr.clip(pos.x, 0.0, W), dr.clip(pos.y, 0.0, H), dr.clip(pos.z, -T, 0.0))
         direction = dr.select(scatter, new_dir, dr.select(reflect, refl_dir, direction))
@@ -243,8 +201,82 @@ def random_walk(
         return pos, direction, rng, code, steps
 
     pos, direction, rng, code, steps = dr.while_loop(
-        state=(pos, direction, rng, code, steps), cond=cond, body=body, label="photon_walk"
+        state=(pos, direction, rng, code, steps), cond=_walking, body=body, label="photon_walk"
     )
+    return _slab_result(dr, pos, direction, code, steps, eta)
+
+
+def _walking(pos, direction, rng, code, steps):
+    """The loop's condition: the photons still walking."""
+    return code == ACTIVE
+
+
+def _entry(mi, eta: float, theta_inc_deg: float, toward_light):
+    """Fresnel's reflected share at the top face and the refracted direction in (Snell, 1 → η)."""
+    Float = mi.Float
+    if toward_light is None:  # from −x in the x–z plane
+        th = np.radians(theta_inc_deg)
+        toward_light = (-np.sin(th), 0.0, np.cos(th))
+    w = np.asarray(toward_light, dtype=np.float64)
+    cos_in = float(w[2])
+    F_in = float(mi.fresnel(Float(cos_in), Float(eta))[0][0]) if eta != 1.0 else 0.0
+    t_x, t_y = (0.0 - w[0]) / eta, (0.0 - w[1]) / eta  # Snell: the travel's tangential part shrinks by 1/η
+    d0 = mi.Vector3f(float(t_x), float(t_y), -float(np.sqrt(1.0 - t_x**2 - t_y**2)))
+    return F_in, d0
+
+
+def _launch(mi, dr, rng, point, entry_xy: np.ndarray, F_in: float, d0):
+    """The photons' first state: at their entry points (mm) on the top face, along ``d0``, or specular."""
+    Float, UInt32 = mi.Float, mi.UInt32
+    specular = rng.next_float32() < F_in
+    ex = dr.gather(Float, Float(entry_xy[:, 0].astype(np.float32)), point)
+    ey = dr.gather(Float, Float(entry_xy[:, 1].astype(np.float32)), point)
+    pos = mi.Vector3f(ex, ey, Float(0.0))
+    direction = mi.Vector3f(d0)
+    code = dr.select(specular, UInt32(TOP + 100), UInt32(ACTIVE))  # 101: specular, kept apart
+    return pos, direction, code
+
+
+def _face_distances(dr, pos, direction, W: float, H: float, T: float, inf):
+    """The distances (mm) along ``direction`` to the box's x, y and z faces (inf: parallel), and the least."""
+    tx = dr.select(
+        direction.x > 0, (W - pos.x) / direction.x, dr.select(direction.x < 0, -pos.x / direction.x, inf)
+    )
+    ty = dr.select(
+        direction.y > 0, (H - pos.y) / direction.y, dr.select(direction.y < 0, -pos.y / direction.y, inf)
+    )
+    tz = dr.select(
+        direction.z > 0, -pos.z / direction.z, dr.select(direction.z < 0, (-T - pos.z) / direction.z, inf)
+    )
+    t_face = dr.maximum(dr.minimum(dr.minimum(tx, ty), tz), 0.0)
+    return tx, ty, tz, t_face
+
+
+def _face_event(mi, dr, rng, pos, direction, tx, ty, tz, t_face, collide, eta: float):
+    """At the nearest face: Fresnel reflection (one draw) or exit; the face, the point and the mirror."""
+    Float = mi.Float
+    hit = ~collide
+    on_z = (tz <= tx) & (tz <= ty)
+    on_x = ~on_z & (tx <= ty)
+    on_y = ~on_z & ~on_x
+    cos_i = dr.abs(dr.select(on_z, direction.z, dr.select(on_x, direction.x, direction.y)))
+    if eta != 1.0:
+        F = mi.fresnel(-cos_i, Float(eta))[0]  # negative cosine: incident from inside
+    else:
+        F = Float(0.0)
+    reflect = hit & (rng.next_float32() < F)
+    leave = hit & ~reflect
+    p_b = pos + direction * t_face
+    refl_dir = mi.Vector3f(
+        dr.select(on_x, -direction.x, direction.x),
+        dr.select(on_y, -direction.y, direction.y),
+        dr.select(on_z, -direction.z, direction.z),
+    )
+    return on_z, reflect, leave, p_b, refl_dir
+
+
+def _slab_result(dr, pos, direction, code, steps, eta: float) -> WalkResult:
+    """The walk's end as NumPy: codes (specular −1), exit points (mm), steps and the exits' directions."""
     dr.eval(pos, direction, code, steps)
     code_np = np.asarray(code).astype(np.int64)
     code_np[code_np == TOP + 100] = -1
