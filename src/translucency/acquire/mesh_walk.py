@@ -100,8 +100,7 @@ def mesh_random_walk(
     MeshWalkResult
     """
     mi, dr = mitsuba(), drjit()
-
-    Float, UInt32 = mi.Float, mi.UInt32
+    UInt32 = mi.UInt32
     total = len(entry) * n_photons
     lo, hi = ([float(v) for v in b] for b in np.asarray(bounds, dtype=np.float64))  # Python floats: no NumPy
     eta = 1.0 if index_matched else volume.eta
@@ -110,30 +109,32 @@ def mesh_random_walk(
     sigma_s, sigma_t, majorant, point, rng = _walk_setup(
         mi, dr, volume, channel, total, n_photons, seed, first_point
     )
-
-    def gathered(a):
-        return mi.Vector3f(*(dr.gather(Float, Float(a[:, k].astype(np.float32)), point) for k in range(3)))
-
-    n_in = gathered(normal)
-    pos = gathered(entry) - n_in * eps
-    if incoming is None:  # -- entry: Fresnel at normal incidence, then straight in along −n ------
-        F_in = float(mi.fresnel(Float(1.0), Float(eta))[0][0]) if eta != 1.0 else 0.0
-        specular = rng.next_float32() < F_in
-        direction = -n_in
-    else:  # -- oblique entry: Fresnel at cos θ_i = −ω·n, refracted in (Snell, 1 → η) -----------
-        omega = gathered(np.asarray(incoming, dtype=np.float64))
-        cos_in = dr.maximum(-dr.dot(omega, n_in), 1e-6)
-        specular = rng.next_float32() < _fresnel(mi, cos_in, eta)
-        direction = _refract(dr, omega, -n_in, 1.0 / eta)
+    n_in = _gathered(mi, dr, normal, point)
+    pos = _gathered(mi, dr, entry, point) - n_in * eps
+    omega = None if incoming is None else _gathered(mi, dr, np.asarray(incoming, dtype=np.float64), point)
+    specular, direction = _enter(mi, dr, rng, n_in, eta, omega)
     code = dr.select(specular, UInt32(EXIT + 100), UInt32(ACTIVE))
-    steps = UInt32(0)
-    face = UInt32(0)
-    scatters = UInt32(0)
-    length = Float(0.0)  # the path inside the medium, mm
+    steps, face, scatters = UInt32(0), UInt32(0), UInt32(0)
+    length = mi.Float(0.0)  # the path inside the medium, mm
     exit_pos = mi.Vector3f(pos)  # the last exit point of a photon in the air (re-entry)
 
-    def cond(pos, direction, rng, code, steps, face, scatters, length, exit_pos):
-        return (code == ACTIVE) | (code == OUTSIDE)
+    pos, direction, rng, code, steps, face, scatters, length, exit_pos = dr.while_loop(
+        state=(pos, direction, rng, code, steps, face, scatters, length, exit_pos),
+        cond=_in_flight,
+        body=_walk_body(
+            mi, dr, scene, volume, (sigma_s, sigma_t, majorant), (lo, hi), eta, eps, reentry, max_steps
+        ),
+        label="mesh_photon_walk",
+    )
+    return _mesh_result(dr, pos, direction, code, steps, face, scatters, length)
+
+
+def _walk_body(
+    mi, dr, scene, volume: Volume, medium, box, eta: float, eps: float, reentry: bool, max_steps: int
+):
+    """The loop's body: one step of every photon (a flight to a collision or to the surface, and re-entry)."""
+    majorant = medium[2]  # (σ_s, σ_t, their majorant), mm⁻¹
+    UInt32 = mi.UInt32
 
     def body(pos, direction, rng, code, steps, face, scatters, length, exit_pos):
         active = code == ACTIVE
@@ -149,31 +150,12 @@ def mesh_random_walk(
         escaped = active & ~si.is_valid() & ~collide
 
         # -- inside: real or null collision (voxel of the object-space volume) ---------------
-        p_c = pos + direction * t
-        scatter, absorb, new_dir = _medium_event(
-            mi,
-            dr,
-            volume,
-            sigma_s,
-            sigma_t,
-            majorant,
-            p_c.x - lo[0],
-            p_c.y - lo[1],
-            hi[2] - p_c.z,
-            collide,
-            rng,
-            direction,
+        p_c, scatter, absorb, new_dir = _collision(
+            mi, dr, volume, medium, box, pos, direction, t, collide, rng
         )
 
         # -- surface: Fresnel reflection (TIR included) or exit -------------------------------
-        hit = active & si.is_valid() & ~collide
-        n = dr.normalize(si.n)
-        n = dr.select(dr.dot(n, direction) < 0, -n, n)  # the normal on the far side, along the flight
-        cos_i = dr.abs(dr.dot(direction, n))
-        F = _fresnel(mi, -cos_i, eta)
-        reflect = hit & (rng.next_float32() < F)
-        leave = hit & ~reflect
-        refl_dir = _reflect(dr, direction, n)
+        hit, n, reflect, leave, refl_dir = _at_surface(mi, dr, rng, si, direction, active, collide, eta)
         # the flight inside: to the collision, or to the surface
         length = length + dr.select(collide, t, dr.select(hit, si.t, 0.0))
 
@@ -182,30 +164,9 @@ def mesh_random_walk(
         direction = dr.select(scatter, new_dir, dr.select(reflect, refl_dir, direction))
         code = dr.select(absorb, UInt32(ABSORBED), code)
         if reentry:
-            # -- leaving: refracted out into the air, the exit point kept for the tally ----------
-            exit_pos = dr.select(leave, si.p, exit_pos)
-            pos = dr.select(leave, si.p + n * eps, pos)
-            direction = dr.select(leave, _refract(dr, direction, n, eta), direction)
-            code = dr.select(leave, UInt32(OUTSIDE), code)
-
-            # -- in the air: escaped (tallied at the last exit), or back at the surface ----------
-            escape = outside & ~si.is_valid()
-            land = outside & si.is_valid()
-            m = dr.normalize(si.n)
-            m = dr.select(dr.dot(m, direction) > 0, -m, m)  # the outward normal, against the flight
-            cos_o = dr.abs(dr.dot(direction, m))
-            F_o = _fresnel(mi, cos_o, eta)
-            # (the draw advances only the landing lanes: on a convex mesh the walk is the same bit for bit)
-            bounce = land & (rng.next_float32(land) < F_o)  # reflected off the outside: stays in the air
-            enter = land & ~bounce
-            pos = dr.select(bounce, si.p + m * eps, dr.select(enter, si.p - m * eps, pos))
-            direction = dr.select(
-                bounce,
-                _reflect(dr, direction, m),
-                dr.select(enter, _refract(dr, direction, -m, 1.0 / eta), direction),
+            pos, direction, code, exit_pos = _through_air(
+                mi, dr, rng, si, n, leave, outside, pos, direction, code, exit_pos, eta, eps
             )
-            pos = dr.select(escape, exit_pos, pos)
-            code = dr.select(escape, UInt32(EXIT), dr.select(enter, UInt32(ACTIVE), code))
         else:
             pos = dr.select(leave, si.p, pos)
             code = dr.select(leave, UInt32(EXIT), code)
@@ -216,12 +177,103 @@ def mesh_random_walk(
         code = dr.select(running & (steps >= max_steps), UInt32(KILLED), code)
         return pos, direction, rng, code, steps, face, scatters, length, exit_pos
 
-    pos, direction, rng, code, steps, face, scatters, length, exit_pos = dr.while_loop(
-        state=(pos, direction, rng, code, steps, face, scatters, length, exit_pos),
-        cond=cond,
-        body=body,
-        label="mesh_photon_walk",
+    return body
+
+
+def _collision(mi, dr, volume: Volume, medium, box, pos, direction, t, collide, rng):
+    """A real or null collision at pos + t d (mm), in its voxel of the volume over ``box`` (lo, hi, mm):
+    the point, the scatter and absorb masks and the scattered direction."""
+    sigma_s, sigma_t, majorant = medium
+    lo, hi = box
+    p_c = pos + direction * t
+    scatter, absorb, new_dir = _medium_event(
+        mi,
+        dr,
+        volume,
+        sigma_s,
+        sigma_t,
+        majorant,
+        p_c.x - lo[0],
+        p_c.y - lo[1],
+        hi[2] - p_c.z,
+        collide,
+        rng,
+        direction,
     )
+    return p_c, scatter, absorb, new_dir
+
+
+def _in_flight(pos, direction, rng, code, steps, face, scatters, length, exit_pos):
+    """The loop's condition: the photons inside the medium or in flight through the air."""
+    return (code == ACTIVE) | (code == OUTSIDE)
+
+
+def _gathered(mi, dr, a: np.ndarray, point):
+    """Each photon's row of the per-point array ``a`` (P, 3), as a float32 3-vector."""
+    Float = mi.Float
+    return mi.Vector3f(*(dr.gather(Float, Float(a[:, k].astype(np.float32)), point) for k in range(3)))
+
+
+def _enter(mi, dr, rng, n_in, eta: float, omega):
+    """At entry: which photons Fresnel reflects (one draw each) and the direction of the others in."""
+    if omega is None:  # -- entry: Fresnel at normal incidence, then straight in along −n ------
+        F_in = float(mi.fresnel(mi.Float(1.0), mi.Float(eta))[0][0]) if eta != 1.0 else 0.0
+        specular = rng.next_float32() < F_in
+        direction = -n_in
+    else:  # -- oblique entry: Fresnel at cos θ_i = −ω·n, refracted in (Snell, 1 → η) -----------
+        cos_in = dr.maximum(-dr.dot(omega, n_in), 1e-6)
+        specular = rng.next_float32() < _fresnel(mi, cos_in, eta)
+        direction = _refract(dr, omega, -n_in, 1.0 / eta)
+    return specular, direction
+
+
+def _at_surface(mi, dr, rng, si, direction, active, collide, eta: float):
+    """At the surface ahead: who reaches it, the normal along the flight, Fresnel's reflection (one draw)
+    or exit, and the mirror direction."""
+    hit = active & si.is_valid() & ~collide
+    n = dr.normalize(si.n)
+    n = dr.select(dr.dot(n, direction) < 0, -n, n)  # the normal on the far side, along the flight
+    cos_i = dr.abs(dr.dot(direction, n))
+    F = _fresnel(mi, -cos_i, eta)
+    reflect = hit & (rng.next_float32() < F)
+    leave = hit & ~reflect
+    refl_dir = _reflect(dr, direction, n)
+    return hit, n, reflect, leave, refl_dir
+
+
+def _through_air(mi, dr, rng, si, n, leave, outside, pos, direction, code, exit_pos, eta: float, eps: float):
+    """Re-entry: the leaving photons refracted out (exit point kept); those in the air escape (tallied at
+    that exit), bounce off the surface or are refracted back in."""
+    UInt32 = mi.UInt32
+    # -- leaving: refracted out into the air, the exit point kept for the tally ----------
+    exit_pos = dr.select(leave, si.p, exit_pos)
+    pos = dr.select(leave, si.p + n * eps, pos)
+    direction = dr.select(leave, _refract(dr, direction, n, eta), direction)
+    code = dr.select(leave, UInt32(OUTSIDE), code)
+
+    # -- in the air: escaped (tallied at the last exit), or back at the surface ----------
+    escape = outside & ~si.is_valid()
+    land = outside & si.is_valid()
+    m = dr.normalize(si.n)
+    m = dr.select(dr.dot(m, direction) > 0, -m, m)  # the outward normal, against the flight
+    cos_o = dr.abs(dr.dot(direction, m))
+    F_o = _fresnel(mi, cos_o, eta)
+    # (the draw advances only the landing lanes: on a convex mesh the walk is the same bit for bit)
+    bounce = land & (rng.next_float32(land) < F_o)  # reflected off the outside: stays in the air
+    enter = land & ~bounce
+    pos = dr.select(bounce, si.p + m * eps, dr.select(enter, si.p - m * eps, pos))
+    direction = dr.select(
+        bounce,
+        _reflect(dr, direction, m),
+        dr.select(enter, _refract(dr, direction, -m, 1.0 / eta), direction),
+    )
+    pos = dr.select(escape, exit_pos, pos)
+    code = dr.select(escape, UInt32(EXIT), dr.select(enter, UInt32(ACTIVE), code))
+    return pos, direction, code, exit_pos
+
+
+def _mesh_result(dr, pos, direction, code, steps, face, scatters, length) -> MeshWalkResult:
+    """The walk's end as NumPy: codes (specular −1), exit points and directions, faces, steps, scatters."""
     dr.eval(pos, code, steps, face, scatters, length)
     code_np = np.asarray(code).astype(np.int64)
     code_np[code_np == EXIT + 100] = -1
