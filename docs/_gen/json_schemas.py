@@ -403,8 +403,8 @@ RENDER = record(
         "eta": field("number", "Relative index of refraction at the surface."),
         "incidence": field(
             "string",
-            "The incidence law used (half-space, half-space-in or normal: --incidence; normal where the "
-            "object is dielectric or the model carries no measured totals).",
+            "The incidence law used (half-space; normal where the object is dielectric or the model carries "
+            "no measured totals).",
         ),
         "through": field(
             "boolean",
@@ -465,7 +465,7 @@ _SCENE_PART = record(
 )
 
 RENDER_SCENE = record(
-    "`translucency render --scene SCENE --model ID=FILE --json`: fitted objects in a Mitsuba scene.",
+    "`translucency render scene SCENE --object ID=FILE --json`: fitted objects in a Mitsuba scene.",
     {
         "command": _command("render"),
         "scene": field("string", "The Mitsuba scene file."),
@@ -477,7 +477,7 @@ RENDER_SCENE = record(
             "(the through-body table drawn).",
         ),
         "prepare_s": field("number", "Building the transports.", "s"),
-        "radius_mm": array("Each object's near radius of the transport.", NUMBER, "mm"),
+        "radius_mm": array("Each object's near radius of the transport, as drawn.", NUMBER, "mm"),
         "light_s": field("number", "The light-in and through-the-body passes.", "s"),
         "draw_s": field("number", "Path tracing our picture.", "s"),
         "passes": field("integer", "Light-in / through-the-body passes (--passes)."),

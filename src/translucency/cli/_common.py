@@ -16,11 +16,19 @@ from rich.markup import escape
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 
 from .._validate import TranslucencyError
+from ..workflow import run as library
 from ..workflow.run import jsonable
 from ._flags import cli_words
 
 console = Console()
 err_console = Console(stderr=True)
+
+
+def _say_interrupted(notes: list[str]) -> None:
+    """Ctrl-C: one line saying what is kept and how to resume (or that nothing is kept)."""
+    err_console.print(
+        f"[bold red]interrupted:[/] {'; '.join(notes) or 'nothing written'}", highlight=False, soft_wrap=True
+    )
 
 
 def user_errors(func):
@@ -30,8 +38,6 @@ def user_errors(func):
     def one_line(message, category, *args, **kwargs):
         warn(cli_words(" ".join(str(message).split())))
 
-    from . import _run  # _run imports this module: the runs under way are asked at call time
-
     @functools.wraps(func)
     def wrapper(*args, **kwargs):
         with _ctrl_c_watched() as ctrl_c:
@@ -40,20 +46,20 @@ def user_errors(func):
                     warnings.showwarning = one_line
                     return func(*args, **kwargs)
             except TranslucencyError as exc:
-                _run.failed()  # a failed run leaves nothing behind
+                library.failed()  # a failed run: the runs under way remove what they added
                 line = f"[bold red]error:[/] {escape(cli_words(str(exc)))}"  # [..] is text, not markup
                 err_console.print(line, highlight=False, soft_wrap=True)
                 raise typer.Exit(2) from None
             except KeyboardInterrupt:
-                _run.interrupted()  # what is kept and how to resume, in one line
+                _say_interrupted(library.interrupted())  # what is kept and how to resume, in one line
                 raise typer.Exit(130) from None
             except (typer.Exit, typer.Abort):
                 raise
             except Exception as exc:
                 if ctrl_c.seen or from_ctrl_c(exc):  # a Ctrl-C a library re-raised as an error of its own
-                    _run.interrupted()
+                    _say_interrupted(library.interrupted())
                     raise typer.Exit(130) from None
-                _run.failed()
+                library.failed()
                 raise
 
     return wrapper
@@ -158,6 +164,8 @@ PANEL_MODEL = "Model structure"
 PANEL_FITTING = "Fitting"
 #: the light a model is seen under
 PANEL_LIGHT = "Light"
+#: how many samples and bounces a picture or a light takes (render scene)
+PANEL_SAMPLING = "Sampling"
 #: the transport a model is drawn with: near radius, lean, light basis
 PANEL_TRANSPORT = "Transport"
 #: what a model is compared with: a truth, other models, a path-traced reference

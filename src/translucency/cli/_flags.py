@@ -60,7 +60,6 @@ FLAGS = {
     "sky": "--sky",
     "export": "--export",
     "reference_render": "--reference-render",
-    "incidence_law": "--incidence-law",
     "objects": "--object",
     "profiles": "--profiles",
     "gain": "--gain",

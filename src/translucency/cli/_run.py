@@ -1,8 +1,8 @@
 """How a command shows a library run: Rich progress bars and information lines on stderr, then the summary.
 
 The library runs every stage (:class:`translucency.resources.run.Run`: checks, estimates, claims, clock);
-a command hands it a :class:`RichReporter` and prints what it returns (:func:`._common.finish`).  Ctrl-C
-ends a command with one line saying what is kept and how to resume, exit status 130.
+a command hands it a :class:`RichReporter` and prints what it returns (:func:`._common.finish`).  A failure
+and Ctrl-C (one line saying what is kept and how to resume, exit status 130): :func:`._common.user_errors`.
 """
 
 from __future__ import annotations
@@ -13,10 +13,9 @@ from collections.abc import Callable, Iterator
 
 from rich.markup import escape
 
-from ..workflow import run as library
-from ._common import err_console, info, progress
+from ._common import info, progress
 
-__all__ = ["RichReporter", "failed", "interrupted"]
+__all__ = ["RichReporter"]
 
 
 class RichReporter:
@@ -34,19 +33,3 @@ class RichReporter:
         with progress(self.quiet) as bar:
             task = bar.add_task(description, total=total, item="")
             yield functools.partial(bar.update, task)
-
-
-def failed() -> None:
-    """A command failed: the runs under way remove what they added."""
-    library.failed()
-
-
-def interrupted() -> None:
-    """Ctrl-C: one line saying what is kept and how to resume (or that nothing is kept)."""
-    _say_interrupted(library.interrupted())
-
-
-def _say_interrupted(notes: list[str]) -> None:
-    err_console.print(
-        f"[bold red]interrupted:[/] {'; '.join(notes) or 'nothing written'}", highlight=False, soft_wrap=True
-    )

@@ -93,7 +93,6 @@ VOCABULARY: dict[str, tuple[str, str]] = {
     "--reference": ("", "also path-trace the reference and compare"),
     "--reference-render": ("PATH", "a render folder with its path-traced reference"),
     "--radius": ("FLOAT", "near radius of the transport, mm"),
-    "--incidence-law": ("LAW", "how light arriving at an angle counts against normal-incidence data"),
     "--angles": ("", "the model's lean drawn"),
     "--scene": ("PATH", "a Mitsuba 3 scene file"),
     "--object": ("ID=FILE", "a shape of the scene that is this per-vertex model"),

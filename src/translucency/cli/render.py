@@ -10,7 +10,19 @@ import typer
 from rich.table import Table
 
 from .._validate import TranslucencyError
-from ._common import finish, json_option, max_memory_option, overwrite_option, quiet_option, user_errors
+from ._common import (
+    PANEL_CAMERA,
+    PANEL_COMPARISON,
+    PANEL_LIGHT,
+    PANEL_OUTPUT,
+    PANEL_TRANSPORT,
+    finish,
+    json_option,
+    max_memory_option,
+    overwrite_option,
+    quiet_option,
+    user_errors,
+)
 from ._run import RichReporter
 
 #: the light of a render when none is given (the library's ``DEFAULT_LIGHT``, stated here so that
@@ -37,6 +49,7 @@ _LIGHT = typer.Option(
     "xy plane, around the object's centre; DIST in mm or object sizes with x (2x; size = the "
     "bounding box's diagonal; default 1.5x); AZ,EL may be camera (from the "
     "camera's side) or back (behind the object). Without I or E: 1e4 W/sr, 1 W/mm^2.",
+    rich_help_panel=PANEL_LIGHT,
 )
 _VIEW = typer.Option(
     DEFAULT_VIEW,
@@ -44,6 +57,7 @@ _VIEW = typer.Option(
     metavar="X,Y,Z",
     help="Direction from the object's centre towards the camera, x,y,z in the object's frame "
     "(+z up); the camera looks at the centre from 1.9 object sizes.",
+    rich_help_panel=PANEL_CAMERA,
 )
 _EXPOSURE = typer.Option(
     "fixed",
@@ -54,18 +68,30 @@ _EXPOSURE = typer.Option(
     "darker by that many stops), auto (per picture: its brightest 1% at 0.8) or a factor on the "
     "linear radiance (the 'exposure' render.json states, to match another render). The EXRs are "
     "linear whatever the exposure.",
+    rich_help_panel=PANEL_OUTPUT,
 )
-_RESOLUTION = typer.Option(DEFAULT_RESOLUTION, "--resolution", help="Image width and height, pixels.")
+_RESOLUTION = typer.Option(
+    DEFAULT_RESOLUTION, "--resolution", help="Image width and height, pixels.", rich_help_panel=PANEL_CAMERA
+)
 _REFERENCE = typer.Option(
-    False, "--reference", help="Also path-trace the reference (Mitsuba volpath) and compare."
+    False,
+    "--reference",
+    help="Also path-trace the reference (Mitsuba volpath) and compare.",
+    rich_help_panel=PANEL_COMPARISON,
 )
-_SPP = typer.Option(32, "--spp", help="Samples per pixel of each of the two reference renders.")
+_SPP = typer.Option(
+    32,
+    "--spp",
+    help="Samples per pixel of each of the two reference renders.",
+    rich_help_panel=PANEL_COMPARISON,
+)
 _RADIUS = typer.Option(
     None,
     "--radius",
     help="Near radius of the transport, mm: pairs within it summed exactly, those beyond it through the "
     "hierarchical far field (default: the 99% energy radius, or less where the pairs would not fit in a "
     "quarter of --max-memory or of the machine's memory). A smaller radius lowers the memory.",
+    rich_help_panel=PANEL_TRANSPORT,
 )
 _PAPER = typer.Option(
     False,
@@ -73,6 +99,7 @@ _PAPER = typer.Option(
     help="Draw the paper's model: each point's radial profile alone, without the through-body table the "
     "model holds (light between sides whose normals face apart, measured against the fit; drawn by default, "
     "docs/through-body.md).",
+    rich_help_panel=PANEL_TRANSPORT,
 )
 _ANGLES = typer.Option(
     False,
@@ -81,6 +108,7 @@ _ANGLES = typer.Option(
     "acquired with --incidence; model/lean.py): back-lit objects, docs/lean.md. A light of many "
     "directions (env, a scene's) leans by its irradiance-weighted mean direction; a model without a lean "
     "is drawn without it.",
+    rich_help_panel=PANEL_TRANSPORT,
 )
 
 

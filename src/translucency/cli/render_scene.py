@@ -10,7 +10,16 @@ import typer
 from rich.table import Table
 
 from .._validate import TranslucencyError
-from ._common import finish, json_option, max_memory_option, overwrite_option, quiet_option, user_errors
+from ._common import (
+    PANEL_SAMPLING,
+    PANEL_TRANSPORT,
+    finish,
+    json_option,
+    max_memory_option,
+    overwrite_option,
+    quiet_option,
+    user_errors,
+)
 from ._run import RichReporter
 from .render import _ANGLES, _EXPOSURE, _OUT, _PAPER, _RADIUS, _REFERENCE, _SPP
 
@@ -33,17 +42,26 @@ _SAMPLES = typer.Option(
     "--samples",
     help="Irradiance samples per vertex of the first pass, path-traced (a later pass, the "
     "objects' glow alone, takes a quarter of them).",
+    rich_help_panel=PANEL_SAMPLING,
 )
 _PASSES = typer.Option(
     2,
     "--passes",
     help="Light-in / through-the-body passes (2: the scene lit by the objects lights them back once).",
+    rich_help_panel=PANEL_SAMPLING,
 )
-_MAX_DEPTH = typer.Option(8, "--max-depth", help="Longest light path, bounces.")
+_MAX_DEPTH = typer.Option(
+    8, "--max-depth", help="Longest light path, bounces.", rich_help_panel=PANEL_SAMPLING
+)
 _ROUGHNESS = typer.Option(
-    0.0, "--roughness", help="GGX roughness of a dielectric object's boundary (0: smooth)."
+    0.0,
+    "--roughness",
+    help="GGX roughness of a dielectric object's boundary (0: smooth).",
+    rich_help_panel=PANEL_TRANSPORT,
 )
-_PICTURE_SPP = typer.Option(16, "--picture-spp", help="Samples per pixel of our picture.")
+_PICTURE_SPP = typer.Option(
+    16, "--picture-spp", help="Samples per pixel of our picture.", rich_help_panel=PANEL_SAMPLING
+)
 
 
 @user_errors
