@@ -302,5 +302,6 @@ def check_memory(n_photons_batch: int, volume: Volume, limit_bytes: float) -> No
     if need > limit_bytes:
         raise TranslucencyError(
             f"photons: a batch needs about {need / 2**30:.1f} GiB, more than the "
-            f"{limit_bytes / 2**30:.1f} GiB allowed; lower --batch or the volume size"
+            f"{limit_bytes / 2**30:.1f} GiB allowed; lower chunk_points or photons, or the volume's size "
+            "(voxel)"
         )

@@ -1,5 +1,5 @@
 """``translucency export``: a per-vertex model taken to other tools — its mesh as a PLY for a Mitsuba scene
-(``render --scene``), in the model's millimetres and vertex order; or as glTF 2.0 (``--gltf``) for Blender
+(``render scene``), in the model's millimetres and vertex order; or as glTF 2.0 (``--gltf``) for Blender
 and three.js: the mesh, the exitance under a light baked as vertex colours, and each vertex's profile
 reduced to Christensen–Burley's albedo and mean free path per channel (with the reduction's error):
 :func:`translucency.workflow.exporting.export_model`."""
@@ -33,7 +33,7 @@ def export(
         None,
         "--ply",
         help="Write the model's mesh here (binary PLY, mm, the model's vertex order): the shape a Mitsuba "
-        "scene places with its to_world for render --scene.",
+        "scene places with its to_world for render scene.",
     ),
     gltf: Path = typer.Option(
         None,
@@ -61,7 +61,7 @@ def export(
     quiet: bool = quiet_option(),
     as_json: bool = json_option(),
 ):
-    """Take a per-vertex model to other tools: its mesh as PLY (render --scene) or glTF (Blender)."""
+    """Take a per-vertex model to other tools: its mesh as PLY (render scene) or glTF (Blender)."""
     from ..workflow.exporting import export_model  # heavy: the bake loads Mitsuba and the transport
 
     summary = export_model(
