@@ -39,6 +39,32 @@ _PAPER = typer.Option(
 )
 
 
+_REPORT = typer.Option(
+    None,
+    "--report",
+    help="Directory for the figures and index.html (default: beside the model, MODEL.report/ — "
+    "iso.model.zip gives iso.report/).",
+)
+_JSON_OUT = typer.Option(
+    None,
+    "--json-out",
+    help="Also write the summary (the object --json prints: rel_l2, rel_l2_near/mid/far, ...) to this file.",
+    rich_help_panel=PANEL_OUTPUT,
+)
+_COMPARE = typer.Option(
+    None,
+    "--compare",
+    help="Other model files of the same data (repeatable).",
+    rich_help_panel=PANEL_COMPARISON,
+)
+_PROFILES = typer.Option(
+    None,
+    "--profiles",
+    help="The incident points whose profiles are drawn, e.g. 0,17,40 (planar data sets).",
+    rich_help_panel=PANEL_OUTPUT,
+)
+
+
 @user_errors
 def evaluate(
     model: Path = typer.Argument(..., help="The model file to evaluate (.model.zip)."),
@@ -47,31 +73,10 @@ def evaluate(
         help="The data set it was fitted to (.zarr directory): a planar data set for a planar model, a mesh "
         "data set for a per-vertex model.",
     ),
-    report: Path = typer.Option(
-        None,
-        "--report",
-        help="Directory for the figures and index.html (default: beside the model, MODEL.report/ — "
-        "iso.model.zip gives iso.report/).",
-    ),
-    json_out: Path = typer.Option(
-        None,
-        "--json-out",
-        help="Also write the summary (the object --json prints: rel_l2, rel_l2_near/mid/far, ...) to this "
-        "file.",
-        rich_help_panel=PANEL_OUTPUT,
-    ),
-    compare: list[Path] = typer.Option(
-        None,
-        "--compare",
-        help="Other model files of the same data (repeatable).",
-        rich_help_panel=PANEL_COMPARISON,
-    ),
-    profiles: str = typer.Option(
-        None,
-        "--profiles",
-        help="The incident points whose profiles are drawn, e.g. 0,17,40 (planar data sets).",
-        rich_help_panel=PANEL_OUTPUT,
-    ),
+    report: Path = _REPORT,
+    json_out: Path = _JSON_OUT,
+    compare: list[Path] = _COMPARE,
+    profiles: str = _PROFILES,
     truth: Path = _TRUTH,
     paper: bool = _PAPER,
     overwrite: bool = overwrite_option(),
@@ -85,19 +90,10 @@ def evaluate(
     from ..workflow.evaluating import evaluate_report  # heavy: Dask and Matplotlib load only to evaluate
 
     evaluation = evaluate_report(
-        model,
-        data,
-        report,
-        compare=compare or (),
-        profiles=profiles,
-        truth=truth,
-        json_out=json_out,
-        overwrite=overwrite,
-        scheduler=scheduler,
-        max_memory=max_memory,
-        reporter=RichReporter(quiet),
+        model, data, report, compare=compare or (), profiles=profiles, truth=truth, json_out=json_out,
+        overwrite=overwrite, scheduler=scheduler, max_memory=max_memory, reporter=RichReporter(quiet),
         paper=paper,
-    )
+    )  # fmt: skip
     title = (
         f"relative L2 error against the truth {truth}"
         if truth
