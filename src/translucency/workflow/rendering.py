@@ -61,23 +61,11 @@ class Rendering:
 
 
 def render_model(
-    model,
-    out=None,
-    *,
-    light=DEFAULT_LIGHT,
-    view=(1.0, -1.6, 0.7),
-    resolution=(320, 240),
-    exposure: str = "fixed",
-    reference: bool = False,
-    spp: int = 32,
-    radius: float | None = None,
-    paper: bool = False,
-    angles: bool = False,
-    transport: TransportOptions | None = None,
-    overwrite: bool = False,
-    max_memory: str | int | None = None,
-    reporter: Reporter | None = None,
-) -> Rendering:
+    model, out=None, *, light=DEFAULT_LIGHT, view=(1.0, -1.6, 0.7), resolution=(320, 240),
+    exposure: str = "fixed", reference: bool = False, spp: int = 32, radius: float | None = None,
+    paper: bool = False, angles: bool = False, transport: TransportOptions | None = None,
+    overwrite: bool = False, max_memory: str | int | None = None, reporter: Reporter | None = None,
+) -> Rendering:  # fmt: skip
     """Relight a fitted object under a light: its prepared transport drawn through a Mitsuba camera.
 
     ``translucency render MODEL`` is this function.
@@ -151,26 +139,13 @@ def render_model(
     direction = view_direction(view, "view")
     fitted, record, mesh, acquisition = _object(model)
     placement = Placement.of(mesh, direction)
-    lit = place_light(relative, placement)
-    check_light_outside(mesh, lit)
-    eta = boundary_eta(acquisition)
-    if reference:  # a light volpath cannot render, a filling gone or changed: one line, before any work
-        check_reference(lit, eta)
-    volume = volume_of_dataset(mesh, acquisition) if reference else None
-    # the object prepared with its pairs within a share of the memory: the near radius chosen once
-    budget = resources.memory.transport_budget(run.limit)
+    lit, eta, volume = _lit(mesh, acquisition, relative, placement, reference)
+    budget = resources.memory.transport_budget(run.limit)  # the pairs within a share of the memory
     options = TransportOptions.of(options, max_pairs=min(options.max_pairs, 2 * budget))
-    prepared = PreparedObject(fitted, mesh, eta=eta, options=options)
-    picture = dict(
-        vertices=len(mesh.vertices),
-        surface_mm2=float(mesh.area),
-        radius_mm=prepared.radius,
-        width=size[0],
-        height=size[1],
-        reference=reference,
-        spp_reference=spp,
-        max_pairs=options.max_pairs,
-    )
+    prepared = PreparedObject(fitted, mesh, eta=eta, options=options)  # the near radius chosen once
+    picture = dict(vertices=len(mesh.vertices), surface_mm2=float(mesh.area), radius_mm=prepared.radius,
+                   width=size[0], height=size[1], reference=reference, spp_reference=spp,
+                   max_pairs=options.max_pairs)  # fmt: skip
     inputs = [model, record.get("dataset") or None] if isinstance(model, (str, os.PathLike)) else []
     with tempfile.TemporaryDirectory(prefix="translucency-render-") as scratch:
         folder = Path(scratch) if out is None else Path(out)
@@ -179,18 +154,36 @@ def render_model(
             run.claim_folder(folder, overwrite=overwrite, inputs=inputs)
         _announce(run, need, picture, placement, lit, prepared, reference)
         camera = Camera.looking_at(mesh, direction, *size)
-        steps = 4 if reference else 3
-        with run.work("render", total=steps) as work:
-            numbers = render_still(
-                prepared, lit, folder, volume=volume, camera=camera, spp_reference=spp,
-                exposure=chosen_exposure, progress=work.step(),
-            )  # fmt: skip
-            work.update(completed=steps, item="done")
-            work.fresh = not numbers.get("reference_cached", False)
+        numbers = _drawn(run, prepared, lit, folder, volume, camera, spp, chosen_exposure)
         ours = read_hdr(folder / "ours.exr")
         ref = read_hdr(folder / "reference.exr") if reference else None
     summary = {"command": "render", "model": model, "images": out, **numbers, "light": lit.record()}
     return Rendering(ours, ref, numbers, None if out is None else folder, run.summary(summary))
+
+
+def _lit(mesh, acquisition: dict, relative, placement, reference: bool):
+    """(the light placed in the object's frame, the boundary's η, the filling for the reference or None):
+    one line, before any work, for a light inside the object, one volpath cannot render, a filling gone."""
+    lit = place_light(relative, placement)
+    check_light_outside(mesh, lit)
+    eta = boundary_eta(acquisition)
+    if reference:  # a light volpath cannot render, a filling gone or changed: one line, before any work
+        check_reference(lit, eta)
+    return lit, eta, volume_of_dataset(mesh, acquisition) if reference else None
+
+
+def _drawn(run, prepared, lit, folder: Path, volume, camera, spp: int, exposure) -> dict:
+    """The still drawn into ``folder`` (and with ``volume`` its reference and their comparison), each step
+    told to the run's progress; returns its numbers (render.json)."""
+    steps = 3 if volume is None else 4
+    with run.work("render", total=steps) as work:
+        numbers = render_still(
+            prepared, lit, folder, volume=volume, camera=camera, spp_reference=spp, exposure=exposure,
+            progress=work.step(),
+        )  # fmt: skip
+        work.update(completed=steps, item="done")
+        work.fresh = not numbers.get("reference_cached", False)
+    return numbers
 
 
 def _resolution(resolution) -> tuple[int, int]:

@@ -115,13 +115,8 @@ def render_scene(
     >>> shot.summary["objects"]["pig"]["vertices"]  # doctest: +SKIP
     27012
     """
-    for name, value in (
-        ("samples", samples),
-        ("passes", passes),
-        ("max_depth", max_depth),
-        ("picture_spp", picture_spp),
-        ("spp", spp),
-    ):
+    for name, value in (("samples", samples), ("passes", passes), ("max_depth", max_depth),
+                        ("picture_spp", picture_spp), ("spp", spp)):  # fmt: skip
         check_option(name, value, lo=1)
     check_option("scene_unit", scene_unit, lo=1e-9, hi=1e12)
     check_option("roughness", roughness, lo=0.0, hi=1.0)
@@ -141,37 +136,46 @@ def render_scene(
     _notes(run, fs, reference)
     run.claim_folder(_estimated(run, fs, out, reference, spp, picture_spp), overwrite=overwrite,
                      inputs=[scene, *pairs.values()])  # fmt: skip
-    ref = None
     with run.work("render", total=5 if reference else 4) as work:
-        step = lambda k, name: work.update(completed=k, item=name)  # noqa: E731 — one line per step
-        step(0, "transport (once per object)")
-        fs.prepare()  # each object at the radius its prepared object chose (a default one shrinks if it must)
-        step(1, "light in, through the body")
-        t1 = time.perf_counter()
-        fs.light()
-        t_light = time.perf_counter() - t1
-        step(2, "picture")
-        t1 = time.perf_counter()
-        ours = fs.render(spp=picture_spp)
-        t_draw = time.perf_counter() - t1
-        step(3, "comparison masks")
-        objects = object_pixels(fs)
-        measured = objects if objects.any() else np.ones(objects.shape, bool)  # the pixels judged
-        summary = _summary(fs, scene, pairs, out, (t_light, t_draw), picture_spp, objects)
-        auto = auto_exposure(ours, measured)
-        scale = auto if chosen.rule != "scale" else float(chosen.scale)
-        if reference:
-            step(4, "volpath reference (2 renders)")
-            ref = _compared(fs, ours, objects, measured, spp, picture_spp, t_light + t_draw, summary)
-            save_images(ref, out / "reference", scale)
-            _plot(tonemap(ref, scale), tonemap(ours, scale), summary.pop("flip_map"), objects,
-                  summary["errors"], out / "scene.png")  # fmt: skip
-        save_images(ours, out / "ours", scale)
-        summary["exposure"] = scale
-        work.update(completed=5 if reference else 4, item="done")
+        ours, ref, summary = _drawn(fs, work, (scene, pairs, out), chosen, reference, spp, picture_spp)
     summary["seconds"] = time.perf_counter() - t
     write_json(out / "scene.json", jsonable(summary))
     return SceneRendering(ours, ref, out, run.summary(summary))
+
+
+def _drawn(fs: FittedScene, work, files: tuple, chosen, reference: bool, spp: int, picture_spp: int):
+    """The render's steps, each told to ``work``: the transports, the light, our picture, the masks, and
+    with ``reference`` the path-traced reference and the comparison; the pictures written into the output
+    folder.  Returns (ours, the reference or None, the summary)."""
+    scene, pairs, out = files
+    step = lambda k, name: work.update(completed=k, item=name)  # noqa: E731 — one line per step
+    step(0, "transport (once per object)")
+    fs.prepare()  # each object at the radius its prepared object chose (a default one shrinks if it must)
+    step(1, "light in, through the body")
+    t1 = time.perf_counter()
+    fs.light()
+    t_light = time.perf_counter() - t1
+    step(2, "picture")
+    t1 = time.perf_counter()
+    ours = fs.render(spp=picture_spp)
+    t_draw = time.perf_counter() - t1
+    step(3, "comparison masks")
+    objects = object_pixels(fs)
+    measured = objects if objects.any() else np.ones(objects.shape, bool)  # the pixels judged
+    summary = _summary(fs, scene, pairs, out, (t_light, t_draw), picture_spp, objects)
+    auto = auto_exposure(ours, measured)
+    scale = auto if chosen.rule != "scale" else float(chosen.scale)
+    ref = None
+    if reference:
+        step(4, "volpath reference (2 renders)")
+        ref = _compared(fs, ours, objects, measured, spp, picture_spp, t_light + t_draw, summary)
+        save_images(ref, out / "reference", scale)
+        _plot(tonemap(ref, scale), tonemap(ours, scale), summary.pop("flip_map"), objects,
+              summary["errors"], out / "scene.png")  # fmt: skip
+    save_images(ours, out / "ours", scale)
+    summary["exposure"] = scale
+    work.update(completed=5 if reference else 4, item="done")
+    return ours, ref, summary
 
 
 def _notes(run, fs: FittedScene, reference: bool) -> None:
