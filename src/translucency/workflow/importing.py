@@ -37,7 +37,7 @@ from ._arguments import as_path, whole_number
 __all__ = ["EXIT_LAWS", "import_images", "import_object"]
 
 #: how an object's radiance becomes exitance (``import_object``'s ``exit_law``)
-EXIT_LAWS = ("from-views", "dielectric", "lambertian")
+EXIT_LAWS = ("from-views", "dielectric", "lambertian", "walk")
 
 
 def import_images(
@@ -249,6 +249,15 @@ def _calibration(calibration, gain: float | None):
     return calibration
 
 
+def _law_used(info: dict) -> dict:
+    """The exit law of an object import as its summary states it: with ``walk``, also the shots (of this
+    run's chunks) converted with the walks' law — a shot without a near peak to fit keeps π L."""
+    law = dict(info["exit_law"])
+    if law["law"] == "walk":
+        law["walked_shots"] = sorted(set(info["walked_shots"]))
+    return law
+
+
 def import_object(
     rig,
     out,
@@ -272,9 +281,11 @@ def import_object(
         The rig file ``object.json`` (or its folder): mesh, cameras, shots (docs/object-rig.md).
     out : str or Path
         The mesh data set folder; an unfinished import of the same inputs resumes.
-    exit_law : {"from-views", "dielectric", "lambertian"}, optional
+    exit_law : {"from-views", "dielectric", "lambertian", "walk"}, optional
         Radiance to exitance: a law estimated from vertices two cameras see, the boundary's
-        F_t/(1 - F_dr), or π L; default the rig file's.
+        F_t/(1 - F_dr), π L, or the transport's own law per cell and camera from photon walks on the scan
+        at the material the near peak fitted to each shot (:mod:`translucency.rig.object.walk_law`; a
+        shot without a near peak to fit keeps π L); default the rig file's.
     chunk_points : int
         Laser shots per chunk (the unit of resuming; memory holds one chunk of images).
     overwrite : bool
@@ -328,7 +339,7 @@ def import_object(
             "points": ds.n_points,
             "vertices": int(ds.header["n_vertices"]),
             "cameras": info["cameras"],
-            "exit_law": info["exit_law"],
+            "exit_law": _law_used(info),
             "flags": info["flags"],
             "saturated_views": info["saturated_views"],
             "near_peak": info["near_peak"],

@@ -91,7 +91,8 @@ def import_object(
     chunk_points : int
         Laser shots per chunk (the unit of resuming; memory holds one chunk of images).
     exit_law : str, optional
-        Overrides the rig file's ``exit_law`` (``"lambertian"``, ``"dielectric"``, ``"from-views"``).
+        Overrides the rig file's ``exit_law`` (``"lambertian"``, ``"dielectric"``, ``"from-views"``,
+        ``"walk"``).
 
     Returns
     -------
