@@ -30,7 +30,7 @@ def test_import_object_with_the_walks_exit_law(tmp_path):
     a cell's exitance over the directions it leaves in, tests/test_object_import.py), so over all shots and
     channels the walked import's energy is π L's up to how the cameras sample that lobe — the geometric
     mean of the ratios within a factor of 2.  One channel of one shot is no physics statement on a rig this
-    small (32 x 24 pixels, 4 spp: a shot's stated σ_E/E reaches 10^5): measured 1.0 to 3.9 per channel
+    small (32 x 24 pixels, 4 spp: a shot's stated σ_E/E reaches 10^6): measured 1.0 to 3.9 per channel
     (geometric mean 1.3), and 0.85 to 6.3 (1.3) at 64 x 48 pixels and 16 spp."""
     rig = tmp_path / "rig"
     _run(
