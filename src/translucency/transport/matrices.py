@@ -162,7 +162,7 @@ def transport_matrices(
     """
     v = np.asarray(mesh.vertices, dtype=np.float64)
     V = len(v)
-    area = vertex_areas(mesh)
+    area = vertex_areas(mesh)  # mm²
     weights = neighbour_weights(model, mesh)
     c, d, s = vertex_parameters(model, mesh, weights=weights)
     own, total = measured_per_vertex(model, weights, v, area)
@@ -176,16 +176,7 @@ def transport_matrices(
         r_min = 0.5 * float(e.mean())
     r = np.maximum(r, r_min)
     alpha = model.alpha.values if len(model.alpha.values) == V else model.alpha.at(v)
-    # the through-body table blended to every vertex (V, 4, 8, 3), or None: the paper's model
-    table = None
-    if through is not False and model.measured and "through" in model.measured:
-        w_b, idx_b = weights
-        table = np.einsum("vk,vkabc->vabc", w_b, model.measured["through"][idx_b])
-    # the lean's κ and λ blended to every vertex (V, 2, 3) (model/lean.py; transport/lean.py applies it)
-    lean = None
-    if has_lean(model):
-        w_b, idx_b = weights
-        lean = np.einsum("vk,vkac->vac", w_b, model.measured["lean"][idx_b]).astype(np.float32)
+    table, lean = _blended_tables(model, weights, through)
     # shared colour (one fall-off, C = 1): T_λ = T · diag(s_λ) — one matrix, the scale goes with E
     # (not with the through table: it is per channel)
     shared = c.shape[1] == 1 and table is None
@@ -194,21 +185,12 @@ def transport_matrices(
     # the pairs beyond rad: clusters and their K × K operator, b_i = A_i/π until normalised below
     far = (
         far_field_operator(
-            model,
-            v=v,
-            area=area,
-            alpha=alpha,
-            weights=weights,
-            c=c,
-            d=d,
-            radius=rad,
-            surface=float(mesh.area),
-            clusters=clusters,
-            through=None if table is None else (table, normals),
+            model, v=v, area=area, alpha=alpha, weights=weights, c=c, d=d, radius=rad,
+            surface=float(mesh.area), clusters=clusters, through=None if table is None else (table, normals),
         )
         if far_field
         else None
-    )
+    )  # fmt: skip
     # (V, 3) the spread's share of each vertex's measured total: the columns' (and rows') target
     tau = None if own is None else np.maximum(total - area[:, None] * own, 0.0)
     mats = []
@@ -224,43 +206,9 @@ def transport_matrices(
             # closest pairs (the integral from r = 0 would extrapolate the steepest fitted term)
             diag = area / np.pi * alpha * np.einsum("vn,vn->v", cc, np.exp(dd * r_min)) * scale
         else:
-            # measured own area (kept apart, per channel); the spread of column i normalised to carry
-            # 1 (shared colour: the scale below carries each channel's total_i − A_i own_i) or
-            # total_i − A_i own_i itself (one matrix per channel)
-            target = np.ones(V) if shared else tau[:, ch]
-            # what rides with a uniform irradiance through this matrix, and the rows' target (reciprocity)
-            rides = tau.mean(axis=1) if shared else np.ones(V)
-            row_target = (tau.mean(axis=1) if shared else tau[:, ch]) / np.pi
-            far_spread = far.spread(ch, area) if far is not None else 0.0  # near and far carry the total
-            x = np.ones(V)  # row factors
-            for step in range(BALANCE_STEPS if balance_rows else 1):
-                # column step: Σ_o A_o T_oi = A_i/π · target_i
-                near = np.bincount(i, weights=area[o] * vals * x[o], minlength=V) * np.pi / area
-                spread = near + far_spread
-                factor = np.divide(target, spread, out=np.zeros(V), where=spread > 0)
-                if step == BALANCE_STEPS - 1 or not balance_rows:
-                    break
-                # row step: Σ_i T_oi rides_i = row_target_o, the far field's rows held as they are
-                near_row = np.bincount(o, weights=vals * (factor * rides)[i], minlength=V)
-                far_row = 0.0
-                if far is not None:
-                    X = np.repeat((factor * rides)[:, None], 3, axis=1).astype(np.float32)
-                    far_row = far.apply(X)[:, 0 if shared else ch]
-                want = row_target - far_row
-                x = np.clip(
-                    np.divide(want, near_row, out=np.ones(V), where=(near_row > 0) & (want > 0)),
-                    1.0 / ROW_LIMIT,
-                    ROW_LIMIT,
-                )
-            vals = vals * x[o] * factor[i]
-            if far is not None:
-                far.normalise(ch, factor)
+            vals = _balanced(vals, (i, o), area, tau, far, ch, shared, balance_rows)
             diag = None  # the own area rides beside the matrix (Transport.own), per channel
-        rows, cols = (
-            (o, i) if diag is None else (np.concatenate([o, np.arange(V)]), np.concatenate([i, np.arange(V)]))
-        )
-        data = vals if diag is None else np.concatenate([vals, diag])
-        mats.append(sp.csr_matrix((data.astype(np.float32), (rows, cols)), shape=(V, V)))
+        mats.append(_csr(vals, diag, i, o, V))
     if own is None:
         return Transport(
             matrices=mats, scale=s.astype(np.float32) if shared else None, far=far, lean=lean, radius=rad
@@ -276,3 +224,68 @@ def transport_matrices(
         lean=lean,
         radius=rad,
     )
+
+
+def _blended_tables(model, weights, through: bool | None):
+    """(the through-body table blended to every vertex (V, 4, 8, 3), or None: the paper's model; the lean's
+    κ and λ blended to every vertex (V, 2, 3), or None) — each vertex's from its incident points' with the
+    profile weights (:mod:`translucency.model.through`, :mod:`translucency.model.lean`)."""
+    table = None
+    if through is not False and model.measured and "through" in model.measured:
+        w_b, idx_b = weights
+        table = np.einsum("vk,vkabc->vabc", w_b, model.measured["through"][idx_b])
+    lean = None
+    if has_lean(model):  # (transport/lean.py applies it)
+        w_b, idx_b = weights
+        lean = np.einsum("vk,vkac->vac", w_b, model.measured["lean"][idx_b]).astype(np.float32)
+    return table, lean
+
+
+def _balanced(vals, pairs, area, tau, far, ch: int, shared: bool, balance_rows: bool):
+    r"""The near values of channel ``ch`` scaled so that every column carries its measured spread (and,
+    with ``balance_rows``, every row gathers it: :func:`transport_matrices`' "Rows"), the far field's
+    columns normalised alike.
+
+    The spread of column i is normalised to carry 1 (shared colour: the scale carries each channel's
+    :math:`\tau_i = \mathrm{total}_i - A_i\,\mathrm{own}_i`) or :math:`\tau_i` itself (one matrix per
+    channel); :math:`T_{oi} = x_o K_{oi} y_i` by alternating column and row steps (Sinkhorn).
+    """
+    i, o = pairs
+    V = len(area)
+    target = np.ones(V) if shared else tau[:, ch]
+    # what rides with a uniform irradiance through this matrix, and the rows' target (reciprocity)
+    rides = tau.mean(axis=1) if shared else np.ones(V)
+    row_target = (tau.mean(axis=1) if shared else tau[:, ch]) / np.pi
+    far_spread = far.spread(ch, area) if far is not None else 0.0  # near and far carry the total
+    x = np.ones(V)  # row factors
+    for step in range(BALANCE_STEPS if balance_rows else 1):
+        # column step: Σ_o A_o T_oi = A_i/π · target_i
+        near = np.bincount(i, weights=area[o] * vals * x[o], minlength=V) * np.pi / area
+        spread = near + far_spread
+        factor = np.divide(target, spread, out=np.zeros(V), where=spread > 0)
+        if step == BALANCE_STEPS - 1 or not balance_rows:
+            break
+        # row step: Σ_i T_oi rides_i = row_target_o, the far field's rows held as they are
+        near_row = np.bincount(o, weights=vals * (factor * rides)[i], minlength=V)
+        far_row = 0.0
+        if far is not None:
+            X = np.repeat((factor * rides)[:, None], 3, axis=1).astype(np.float32)
+            far_row = far.apply(X)[:, 0 if shared else ch]
+        want = row_target - far_row
+        x = np.clip(
+            np.divide(want, near_row, out=np.ones(V), where=(near_row > 0) & (want > 0)),
+            1.0 / ROW_LIMIT,
+            ROW_LIMIT,
+        )
+    if far is not None:
+        far.normalise(ch, factor)
+    return vals * x[o] * factor[i]
+
+
+def _csr(vals, diag, i, o, V: int):
+    """The (V × V) float32 CSR matrix of the pair values ``vals`` at (receiver o, source i), with ``diag`` on
+    the diagonal (None: the own area rides beside it)."""
+    if diag is None:
+        return sp.csr_matrix((vals.astype(np.float32), (o, i)), shape=(V, V))
+    rows, cols = np.concatenate([o, np.arange(V)]), np.concatenate([i, np.arange(V)])
+    return sp.csr_matrix((np.concatenate([vals, diag]).astype(np.float32), (rows, cols)), shape=(V, V))
