@@ -3,7 +3,7 @@
 given — hashed, so that a change that must not move a number (a refactor) can be held to it.
 
     python benchmarks/renderers_identical.py OUT.json MODEL [MODEL ...] --scene SCENE.xml
-    python benchmarks/renderers_identical.py NEW.json MODEL ... --scene SCENE.xml --against OLD.json [OLD2 ...]
+    python benchmarks/renderers_identical.py NEW.json MODEL ... --scene SCENE.xml --against OLD.json [...]
 
 Prints one line per picture (its SHA-256 and, with ``--against``, ``bit-identical`` to one of the earlier
 runs or its largest difference over the peak, beside the earlier runs' own difference among themselves)
