@@ -16,8 +16,8 @@ from translucency.fit.mesh import fit_mesh
 from translucency.mitsuba import mesh_scene
 from translucency.pipeline import figure2_scene
 from translucency.transport.irradiance import vertex_irradiance
-from translucency.transport.relight import relight_vertices
 from translucency.transport.matrices import transport_matrices
+from translucency.transport.relight import relight_vertices
 
 
 def main() -> int:

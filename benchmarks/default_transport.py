@@ -34,9 +34,9 @@ from translucency.mitsuba import mesh_scene
 from translucency.render.compare import compare, region_errors
 from translucency.render.picture import VertexPicture, coverage
 from translucency.render.reference import converged_reference
-from translucency.transport.relight import relight_object
 from translucency.render.tonemap import auto_exposure, save_images
 from translucency.transport.matrices import transport_matrices
+from translucency.transport.relight import relight_object
 from unscattered import scene_of
 
 #: the transports compared: a label and ``transport_matrices``' keyword

@@ -35,12 +35,12 @@ from translucency.fit.mesh import fit_mesh
 from translucency.mitsuba import mesh_scene
 from translucency.model.lean import exit_normalisation, lean_vector
 from translucency.render.compare import compare
-from translucency.transport.irradiance import vertex_irradiance
-from translucency.transport.lean import light_lean, tilted
 from translucency.render.picture import VertexPicture, coverage
 from translucency.render.reference import converged_reference
-from translucency.transport.relight import exit_fresnel, relight_vertices, view_cosines
+from translucency.transport.irradiance import vertex_irradiance
+from translucency.transport.lean import light_lean, tilted
 from translucency.transport.matrices import transport_matrices
+from translucency.transport.relight import exit_fresnel, relight_vertices, view_cosines
 from unscattered import scene_of
 
 

@@ -45,15 +45,15 @@ from translucency.model.lean import lean_vector
 from translucency.pipeline import FIGURE2_REFERENCE_SPP, figure2_scene
 from translucency.render.camera import Camera
 from translucency.render.compare import compare, region_errors
-from translucency.transport.irradiance import vertex_irradiance
-from translucency.transport.lean import lean_pairs, leaned
 from translucency.render.lights import parse_light
-from translucency.transport.parameters import neighbour_weights
 from translucency.render.picture import VertexPicture, coverage
 from translucency.render.reference import converged_reference
-from translucency.transport.relight import exit_fresnel, relight_vertices, view_cosines
 from translucency.render.tonemap import auto_exposure, save_images
+from translucency.transport.irradiance import vertex_irradiance
+from translucency.transport.lean import lean_pairs, leaned
 from translucency.transport.matrices import transport_matrices
+from translucency.transport.parameters import neighbour_weights
+from translucency.transport.relight import exit_fresnel, relight_vertices, view_cosines
 
 CASE = "spot-marble-backlit:spot.obj:20:y:marble:128:2000:directional:0.8,-1.6,0.2,1:1,-1.6,0.7"
 

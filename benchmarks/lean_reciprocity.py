@@ -26,8 +26,8 @@ from translucency.acquire.mesh import acquire_mesh, object_volume
 from translucency.angles import Incidence
 from translucency.fit.mesh import fit_mesh
 from translucency.mitsuba import mesh_scene
-from translucency.transport.lean import leaned
 from translucency.render.lights import DirectionalLight
+from translucency.transport.lean import leaned
 from translucency.transport.matrices import transport_matrices
 
 

@@ -73,14 +73,14 @@ from translucency.model.directions import direction_weights
 from translucency.model.lean import exit_normalisation, lean_vector
 from translucency.render.camera import Camera
 from translucency.render.compare import channel_shares, compare, vertex_thickness
-from translucency.transport.irradiance import vertex_irradiance
 from translucency.render.lights import parse_light
-from translucency.transport.parameters import neighbour_weights
 from translucency.render.picture import VertexPicture, coverage
 from translucency.render.reference import converged_reference
-from translucency.transport.relight import relight_vertices, view_cosines
 from translucency.render.tonemap import auto_exposure, save_images
+from translucency.transport.irradiance import vertex_irradiance
 from translucency.transport.matrices import transport_matrices
+from translucency.transport.parameters import neighbour_weights
+from translucency.transport.relight import relight_vertices, view_cosines
 
 fit_module = importlib.import_module("translucency.fit.mesh")  # the module, not fit()'s name
 

@@ -22,8 +22,8 @@ from translucency.pipeline import FIGURE2_REFERENCE_SPP, figure2_scene
 from translucency.render.compare import compare
 from translucency.render.picture import VertexPicture, coverage
 from translucency.render.reference import converged_reference
-from translucency.transport.relight import relight_object
 from translucency.transport.matrices import transport_matrices
+from translucency.transport.relight import relight_object
 
 
 def render(model, mesh, light, camera, scene):

@@ -38,8 +38,8 @@ from translucency.render.compare import compare, region_errors
 from translucency.render.lights import parse_light
 from translucency.render.picture import VertexPicture, coverage
 from translucency.render.reference import converged_reference
-from translucency.transport.relight import relight_object
 from translucency.transport.matrices import transport_matrices
+from translucency.transport.relight import relight_object
 
 CASES = [
     "cow-skin-spot:cow.obj:8:z:skin:128:4000:spot:-60,70,90,0,0,0,25,3e4:-1,1.2,0.6",

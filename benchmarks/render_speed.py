@@ -32,11 +32,11 @@ from translucency.fit.mesh import fit_mesh
 from translucency.mitsuba import mesh_scene
 from translucency.pipeline import FIGURE2_REFERENCE_SPP, figure2_scene
 from translucency.render import PointLight
-from translucency.transport import relight_vertices, transport_matrices, vertex_irradiance
 from translucency.render.compare import rel_rmse
-from translucency.transport.lean import lean_pairs, leaned
 from translucency.render.picture import VertexPicture, coverage
 from translucency.render.reference import converged_reference, render_reference
+from translucency.transport import relight_vertices, transport_matrices, vertex_irradiance
+from translucency.transport.lean import lean_pairs, leaned
 
 
 def fitted(pig, tmp, points, photons, index_matched=True, colour=None):

@@ -41,8 +41,8 @@ from translucency.mitsuba import mesh_scene  # noqa: E402
 from translucency.render.compare import compare, region_errors  # noqa: E402
 from translucency.render.picture import VertexPicture, coverage  # noqa: E402
 from translucency.render.reference import converged_reference  # noqa: E402
-from translucency.transport.relight import relight_object  # noqa: E402
 from translucency.transport.matrices import transport_matrices  # noqa: E402
+from translucency.transport.relight import relight_object  # noqa: E402
 from unscattered import scene_of  # noqa: E402
 
 #: rates of the ``rings`` variant

@@ -27,8 +27,8 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from scenes import ACQUISITIONS, _model, run_case, scene_folder  # noqa: E402 — the benchmark's own scenes
-from translucency.mitsuba import mitsuba  # noqa: E402
 from translucency.experimental import ReducedScene as FittedScene  # noqa: E402 — the reduced irradiance is timed too
+from translucency.mitsuba import mitsuba  # noqa: E402
 from translucency.scene.compare import object_pixels  # noqa: E402
 
 

@@ -44,11 +44,11 @@ from translucency.mitsuba import load_plugin, mesh_scene, mitsuba, rays
 from translucency.mitsuba.sensors import pinhole_sensor_dict
 from translucency.render.camera import Camera
 from translucency.render.compare import compare, region_errors
-from translucency.transport.irradiance import vertex_irradiance
 from translucency.render.lights import parse_light
 from translucency.render.picture import coverage
 from translucency.render.reference import converged_reference
 from translucency.render.tonemap import auto_exposure, save_images
+from translucency.transport.irradiance import vertex_irradiance
 
 
 def case_scene(case: str, meshes: Path, size):

@@ -36,9 +36,9 @@ from translucency.render.compare import compare, region_errors
 from translucency.render.lights import parse_light
 from translucency.render.picture import VertexPicture, coverage
 from translucency.render.reference import converged_reference
-from translucency.transport.relight import relight_object
 from translucency.render.tonemap import auto_exposure, save_images
 from translucency.transport.matrices import transport_matrices
+from translucency.transport.relight import relight_object
 
 
 def scene_of(case: str, meshes: Path, size):

@@ -17,8 +17,8 @@ from translucency.fit.lean import fit_point
 from translucency.geometry import vertex_areas
 from translucency.io.mesh_dataset import open_mesh_dataset
 from translucency.model.boundary import fresnel_transmittance
-from translucency.transport import TransportOptions
 from translucency.model.lean import exit_normalisation, lean_vector, refracted, von_mises_harmonics
+from translucency.transport import TransportOptions
 
 
 def _unit(v):
@@ -249,8 +249,8 @@ def test_the_page_s_transfer_leans_each_direction_of_its_lattice(leaned_ball):
     direction a directional light (its irradiance by vertex_irradiance, its lean by leaned from the light's
     arrival), relit, projected on the basis — and, with κ = 0, the paper's transfer (K relights)."""
     from translucency.mitsuba import mesh_scene
-    from translucency.transport import sh
     from translucency.render.lights import DirectionalLight
+    from translucency.transport import sh
     from translucency.transport.irradiance import vertex_irradiance
     from translucency.transport.lean import leaned
     from translucency.transport.matrices import transport_matrices
@@ -435,7 +435,9 @@ def test_a_scene_leans_its_objects_as_render_does(leaned_ball):
     }
     exitance = {}
     for angles in (False, True):
-        fs = FittedScene(scene, {"ball": path}, samples=4, passes=1, transport=TransportOptions(angles=angles))
+        fs = FittedScene(
+            scene, {"ball": path}, samples=4, passes=1, transport=TransportOptions(angles=angles)
+        )
         fs.light()
         exitance[angles] = fs.objects[0].glowing.exitance
     # the same light in the model's frame: its flight turned back by the rotation's transpose, on the

@@ -161,8 +161,8 @@ def test_two_lights_on_one_object_share_one_exposure(ball_model, tmp_path):
     """Fixed (the default): one exposure for both lights, stated in render.json; auto: one per picture."""
     from translucency.render import Camera
     from translucency.render.still import render_still
-    from translucency.transport import PreparedObject
     from translucency.render.tonemap import tonemap
+    from translucency.transport import PreparedObject
 
     model, ball, _ = ball_model
     camera = Camera.looking_at(ball, width=48, height=36)
@@ -171,7 +171,9 @@ def test_two_lights_on_one_object_share_one_exposure(ball_model, tmp_path):
     for name, text in (("front", "point@-60,40"), ("side", "point@60,10,2x")):
         for how in ("fixed", "auto"):
             out = tmp_path / f"{name}-{how}"
-            render_still(PreparedObject(model, ball), parse_light(text, place), out, camera=camera, spp=1, exposure=how)
+            render_still(
+                PreparedObject(model, ball), parse_light(text, place), out, camera=camera, spp=1, exposure=how
+            )
             assert not (out / "figure2.json").exists()
             summary[name, how] = json.loads((out / "render.json").read_text())
             # the PNG is the linear picture at the stated exposure
@@ -187,12 +189,16 @@ def test_two_lights_on_one_object_share_one_exposure(ball_model, tmp_path):
     assert "exposure_rule" not in summary["front", "auto"]
     # a light of twice the power: a stop less
     double = tmp_path / "double"
-    render_still(PreparedObject(model, ball), parse_light("point@-60,40,1.5x,2e4", place), double, camera=camera, spp=1)
+    render_still(
+        PreparedObject(model, ball), parse_light("point@-60,40,1.5x,2e4", place), double, camera=camera, spp=1
+    )
     half = json.loads((double / "render.json").read_text())["exposure"]
     assert half == pytest.approx(summary["front", "fixed"]["exposure"] / 2)
     # a black light has no fixed exposure: auto, and the rule says why
     dark = tmp_path / "dark"
-    render_still(PreparedObject(model, ball), parse_light("point@-60,40,1.5x,0", place), dark, camera=camera, spp=1)
+    render_still(
+        PreparedObject(model, ball), parse_light("point@-60,40,1.5x,0", place), dark, camera=camera, spp=1
+    )
     assert json.loads((dark / "render.json").read_text())["exposure_rule"].startswith("auto: no fixed")
     # Figure 2 keeps its names and its auto exposure (no rule stated)
     fig = tmp_path / "fig"

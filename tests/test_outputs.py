@@ -115,7 +115,16 @@ def writers(inp, out):
             *acquire,
         ],
         "fit": ["fit", str(inp["data"]), "--out", str(out), "--overwrite"],
-        "render": ["render", str(inp["mesh_model"]), "--out", str(out), "--resolution", "16", "12", "--overwrite"],
+        "render": [
+            "render",
+            str(inp["mesh_model"]),
+            "--out",
+            str(out),
+            "--resolution",
+            "16",
+            "12",
+            "--overwrite",
+        ],
         "evaluate --report": [
             "evaluate",
             str(inp["model"]),

@@ -3,9 +3,7 @@ meaning and metavar)."""
 
 import re
 import typing
-from pathlib import Path
 
-import pytest
 import typer
 from typer.testing import CliRunner
 
