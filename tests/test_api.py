@@ -76,7 +76,8 @@ def test_import_is_light_and_keeps_the_engine_private():
 def test_functions_and_stages_have_names_of_their_own():
     import translucency.evaluate.errors  # noqa: F401 — the stages, imported after the functions
     import translucency.fit.planar  # noqa: F401
-    import translucency.render.figure  # noqa: F401
+    import translucency.render.still  # noqa: F401
+    import translucency.transport  # noqa: F401
 
     functions = ("fit_model", "evaluate_model", "render_model", "render_scene", "open_dataset")
     for name in (*functions, "acquire_planar", "acquire_mesh", "import_images"):
@@ -85,11 +86,11 @@ def test_functions_and_stages_have_names_of_their_own():
         )
         assert getattr(tl, name).__doc__ and "Examples" in getattr(tl, name).__doc__
     # a stage is its package, a function is a verb with its object: importing one never hides the other
-    for stage in ("fit", "evaluate", "render"):
+    for stage in ("fit", "evaluate", "transport", "render"):
         assert isinstance(getattr(tl, stage), types.ModuleType)
         assert getattr(tl, stage) is sys.modules[f"translucency.{stage}"]
     assert set(functions) <= set(dir(tl)) and set(functions) <= set(tl.__all__)
-    assert not {"fit", "evaluate", "render"} & set(tl.__all__)
+    assert not {"fit", "evaluate", "transport", "render"} & set(tl.__all__)
     assert not {"prepare_libllvm", "sys", "types"} & set(dir(tl))
 
 

@@ -84,9 +84,9 @@ def test_a_light_inside_the_object_is_found_by_the_winding_number():
 
 def test_render_refuses_a_light_inside_before_any_work(ball, tmp_path, monkeypatch):
     from translucency.workflow import rendering  # the module the command draws with (imported here, before
-    # the patch: a module first imported while figure2 is patched would keep the stand-in for later tests)
+    # the patch: a module first imported while the still is patched would keep the stand-in for later tests)
 
-    monkeypatch.setattr(rendering, "figure2", lambda *a, **k: pytest.fail("the transport ran"))
+    monkeypatch.setattr(rendering, "render_still", lambda *a, **k: pytest.fail("the transport ran"))
     out = tmp_path / "r"
     res = runner.invoke(app, ["render", str(ball["model"]), "--light", "point:0,0,1,10", "--out", str(out)])
     assert res.exit_code == 2
@@ -109,15 +109,15 @@ def test_fit_refuses_an_unfinished_acquisition(ball, tmp_path):
 
 
 # -- a failed run leaves nothing ------------------------------------------------------------------------
-def _failing_figure2(model, mesh, light, out_dir, **kwargs):
+def _failing_still(prepared, light, out_dir, **kwargs):
     (out_dir / "ours.exr").write_bytes(b"half written")
     raise TranslucencyError("light: something went wrong half-way")
 
 
 def test_a_failed_render_leaves_nothing_behind(ball, tmp_path, monkeypatch):
-    from translucency.workflow import rendering as render_cli  # render_model imports figure2 from here
+    from translucency.workflow import rendering as render_cli  # render_model imports render_still from here
 
-    monkeypatch.setattr(render_cli, "figure2", _failing_figure2)
+    monkeypatch.setattr(render_cli, "render_still", _failing_still)
     new = tmp_path / "new"
     res = runner.invoke(app, ["render", str(ball["model"]), "--out", str(new), "--resolution", "32", "24"])
     assert res.exit_code == 2 and "half-way" in words(res)
@@ -286,9 +286,9 @@ def test_the_reference_of_a_users_filling_renders_while_the_file_is_unchanged(ba
 
 def test_a_reference_volpath_cannot_light_is_refused_before_any_work(ball, tmp_path, monkeypatch):
     from translucency.workflow import rendering  # the module the command draws with (imported here, before
-    # the patch: a module first imported while figure2 is patched would keep the stand-in for later tests)
+    # the patch: a module first imported while the still is patched would keep the stand-in for later tests)
 
-    monkeypatch.setattr(rendering, "figure2", lambda *a, **k: pytest.fail("the transport ran"))
+    monkeypatch.setattr(rendering, "render_still", lambda *a, **k: pytest.fail("the transport ran"))
     dielectric = tmp_path / "d.zarr"  # the same ball behind a dielectric boundary (not index-matched)
     args = ["acquire", "mesh", "--mesh", str(ball["mesh"]), "--volume", str(ball["filling"]), "--points", "2"]
     res = runner.invoke(app, [*args, "--photons", "200", "--out", str(dielectric), "-q"])

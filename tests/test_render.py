@@ -13,18 +13,9 @@ from translucency import TranslucencyError
 from translucency.geometry import tangent_frames, vertex_areas
 from translucency.mitsuba import mesh_scene
 from translucency.model import ExponentialModel, VertexAlpha
-from translucency.render import (
-    Camera,
-    DirectionalLight,
-    PointLight,
-    parse_light,
-    relight_vertices,
-    render_vertex_radiance,
-    transport_matrices,
-    vertex_irradiance,
-)
+from translucency.render import Camera, DirectionalLight, PointLight, parse_light, render_vertex_radiance
 from translucency.render.picture import coverage
-from translucency.transport.matrices import default_radius
+from translucency.transport import default_radius, relight_vertices, transport_matrices, vertex_irradiance
 
 
 @pytest.fixture(scope="module")
@@ -201,7 +192,7 @@ def test_fit_and_render_cli_on_a_mesh(tmp_path):
             str(model),
             "--out",
             str(tmp_path / "r"),
-            "--size",
+            "--resolution",
             "64",
             "48",
             "--reference",

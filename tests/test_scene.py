@@ -316,7 +316,7 @@ def test_python_api_renders_a_scene_dict_with_two_objects(fitted_ball):
         ("planar model", "a planar model; the scene's object 'ball' needs a per-vertex model"),
         ("other mesh", "shape 'ball': 162 vertices and 320 triangles, but the model's mesh has 642"),
         ("model twice", "--object: the shape id 'ball' is given twice"),
-        ("light given", "--light: the scene file says this"),
+        ("light given", "No such option: --light"),  # render scene has none: the scene file says it
         ("re-ordered", "shape 'ball': re-triangulated or re-ordered — 58 of 1,280 triangles and 10 of 642"),
         (
             "metres in mm",

@@ -127,7 +127,6 @@ def test_no_help_text_carries_history_or_type_names():
 
 
 # -- the old names ------------------------------------------------------------------------------------
-#: command, an old option with a value, the new option, the parameter it lands on, the value there
 def test_fit_m_is_no_longer_short_for_directions():
     fit = dict(_commands())["fit"]
     assert not any("-m" in p.opts for p in fit.params)
