@@ -108,34 +108,10 @@ class FittedScene:
         self.glow_samples = glow_samples
         self.transport = TransportOptions() if transport is None else transport
         shapes = shapes_by_id(self.scene)
-        self.objects = []
-        for name, source in models.items():
-            shape = shapes.get(name)
-            if shape is None:
-                raise TranslucencyError(
-                    f"model {name}: the scene has no shape with id '{name}' (its shapes: "
-                    f"{', '.join(sorted(shapes)) or 'none'})"
-                )
-            if not shape.is_mesh():
-                raise TranslucencyError(f"shape '{name}': not a mesh; place the model's mesh (a ply) there")
-            if shape.is_emitter():
-                raise TranslucencyError(
-                    f"shape '{name}': carries an area emitter; a fitted object glows with its own exitance "
-                    "(remove the emitter)"
-                )
-            vertices, faces = mesh_buffers(shape)
-            self.objects.append(
-                fitted_object(
-                    name,
-                    source,
-                    shape,
-                    vertices,
-                    faces,
-                    scene_unit_mm=scene_unit_mm,
-                    transport=self.transport,
-                    roughness=roughness,
-                )
-            )
+        placed = dict(scene_unit_mm=scene_unit_mm, transport=self.transport, roughness=roughness)
+        self.objects = [
+            fitted_object(n, source, *_mesh_shape(shapes, n), **placed) for n, source in models.items()
+        ]
         if not self.scene.emitters():
             raise TranslucencyError(
                 "scene: no emitters (no light, no environment); nothing lights the fitted objects"
@@ -322,6 +298,25 @@ class FittedScene:
             ),
             dtype=np.float64,
         )[..., :3]
+
+
+def _mesh_shape(shapes: dict, name: str):
+    """(the shape, its vertices, its triangles) of the scene's shape ``name``, or one line why it cannot be
+    a fitted object (none of that id, not a mesh, an emitter)."""
+    shape = shapes.get(name)
+    if shape is None:
+        raise TranslucencyError(
+            f"model {name}: the scene has no shape with id '{name}' (its shapes: "
+            f"{', '.join(sorted(shapes)) or 'none'})"
+        )
+    if not shape.is_mesh():
+        raise TranslucencyError(f"shape '{name}': not a mesh; place the model's mesh (a ply) there")
+    if shape.is_emitter():
+        raise TranslucencyError(
+            f"shape '{name}': carries an area emitter; a fitted object glows with its own exitance "
+            "(remove the emitter)"
+        )
+    return (shape, *mesh_buffers(shape))
 
 
 def _added(first, glow):
