@@ -393,7 +393,7 @@ def test_right_poses_put_the_laser_spots_within_a_pixel(tmp_path):
     assert len(checked) >= 3 and max(checked) < 1.0, misses
 
 
-@pytest.mark.parametrize("eta", [1.0, 1.4])
+@pytest.mark.parametrize("eta", [1.0, pytest.param(1.4, marks=pytest.mark.slow)])  # (η = 1.4: 75 s, slow)
 def test_import_recovers_the_cell_means_of_an_analytic_field(tmp_path, eta):
     field = exitance
     rig = write_rig(tmp_path / "rig", eta=eta, field=field)
@@ -473,6 +473,7 @@ def base_rig(tmp_path_factory):
     return write_rig(tmp_path_factory.mktemp("base"))
 
 
+@pytest.mark.slow  # (85 s on 2 cores)
 def test_an_oblique_laser_shot_is_stored_with_its_direction_and_said_not_silently_taken_as_normal(
     base_rig, tmp_path
 ):
@@ -692,11 +693,11 @@ def load_mesh_of_rig():
 @pytest.mark.parametrize(
     "field, eta",
     [
-        (_half_space_glass, 1.4),
-        (_half_space, 1.0),
+        pytest.param(_half_space_glass, 1.4, marks=pytest.mark.slow),
+        pytest.param(_half_space, 1.0, marks=pytest.mark.slow),
         pytest.param(_two_scales, 1.0, marks=pytest.mark.slow),
     ],
-    ids=["half-space behind glass", "half-space", "steep core"],  # (the limit's case: a minute, slow)
+    ids=["half-space behind glass", "half-space", "steep core"],  # (each over a minute on 2 cores: slow)
 )
 def test_a_clipped_spot_is_flagged_counted_and_recovered_within_its_variance(tmp_path, field, eta):
     """One exposure a shot, the spot clipped (saturation 15 of peaks of 10-100): the cells under clipped
