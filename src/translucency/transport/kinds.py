@@ -8,7 +8,8 @@ every renderer applies, :math:`L_\lambda = T_\lambda E`.  Two ship:
   near radius and through the hierarchical far field beyond it, with what the acquisition measured and the
   fit cannot represent — each vertex's own area and total, and the through-body table (light between
   sides whose normals face apart, :mod:`translucency.model.through`) where the model holds one;
-- ``paper`` (:class:`PaperTransport`): the paper's model alone, each incident point's radial profile.
+- ``paper`` (:data:`PAPER`, the same class without the table): the paper's model alone, each incident
+  point's radial profile.
 
 A new transport is one more class with ``name``, ``summary``, ``incidence`` and ``build`` passed to
 :func:`register_transport`; every renderer draws it by name (``TransportOptions(kind=NAME)``), none
@@ -45,36 +46,26 @@ class TransportKind(Protocol):
 
 @dataclass(frozen=True)
 class MeasuredTransport:
-    """The default: the fitted profiles with the measured near field and the through-body table."""
+    """The fitted profiles with the measured near field, and the through-body table where the model holds
+    one (``through=None``) or never (``through=False``: the paper's model)."""
 
     name: str = "default"
     summary: str = "fitted per-vertex model + through-body table"
     incidence: str = "half-space"
+    through: bool | None = None
 
     def build(self, model, mesh, *, radius: float, shrink: bool, max_pairs: float):
-        """:func:`~.matrices.transport_matrices`, the table where the model holds one."""
+        """:func:`~.matrices.transport_matrices` with this kind's table."""
         return transport_matrices(
-            model, mesh, radius=radius, shrink=shrink, max_pairs=max_pairs, through=None
+            model, mesh, radius=radius, shrink=shrink, max_pairs=max_pairs, through=self.through
         )
 
 
-@dataclass(frozen=True)
-class PaperTransport:
-    """The paper's model: each incident point's radial profile, no through-body table."""
-
-    name: str = "paper"
-    summary: str = "fitted per-vertex model (the paper's)"
-    incidence: str = "half-space"
-
-    def build(self, model, mesh, *, radius: float, shrink: bool, max_pairs: float):
-        """:func:`~translucency.transport.matrices.transport_matrices` without the table."""
-        return transport_matrices(
-            model, mesh, radius=radius, shrink=shrink, max_pairs=max_pairs, through=False
-        )
-
+#: the paper's model: each incident point's radial profile, no through-body table
+PAPER = MeasuredTransport(name="paper", summary="fitted per-vertex model (the paper's)", through=False)
 
 #: the transports by name: the two that ship and any registered since
-TRANSPORTS: dict[str, TransportKind] = {k.name: k for k in (MeasuredTransport(), PaperTransport())}
+TRANSPORTS: dict[str, TransportKind] = {k.name: k for k in (MeasuredTransport(), PAPER)}
 
 
 def register_transport(kind: TransportKind) -> TransportKind:
