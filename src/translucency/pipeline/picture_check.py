@@ -18,6 +18,7 @@ from pathlib import Path
 
 from ..fit.mesh import fit_mesh
 from ..io.mesh_dataset import open_mesh_dataset
+from ..mitsuba import mesh_scene
 from ..render import boundary_eta
 from ..render.compare import compare
 from ..render.picture import VertexPicture, coverage
@@ -74,12 +75,13 @@ def picture_check(mesh, volume, datasets: dict, light, camera, *, eta: float = 1
         out = Path(out)
         out.mkdir(parents=True, exist_ok=True)
         save_images(reference, out / "reference", exposure)
+    scene = mesh_scene(mesh)  # the shadows of one mesh: built once for every data set
     drawn = {}
     for name, data in datasets.items():
         model = fit_mesh(data, "iso").model
         eta_data = boundary_eta(open_mesh_dataset(data).header)
         prepared = PreparedObject(model, mesh, eta=eta_data, options=TransportOptions(angles=angles))
-        L, _ = prepared.relight(light, camera.origin)
+        L, _ = prepared.relight(light, camera.origin, scene=scene)
         drawn[name] = VertexPicture(mesh, camera, spp=16, eta=eta_data, light=light).draw(L)
         if out is not None:
             save_images(drawn[name], out / name, exposure)
