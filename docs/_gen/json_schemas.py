@@ -716,8 +716,25 @@ INFO_MODEL = record(
         "measured": field(
             "array",
             "What a per-vertex model carries from its acquisition: own, total (the near field), through "
-            "(the through-body table, drawn by render unless --paper), lean (κ, render --angles); empty for "
-            "planar models.",
+            "(the through-body table, drawn by render unless --paper), lean (κ, render --angles), medium "
+            "(the medium estimated from the scan); empty for planar models.",
+        ),
+        "medium": record(
+            "The medium estimated from the scan alone (measured/medium): per channel R, G, B the "
+            "[min, median, max] over the incident points; absent for a model without one.",
+            {
+                "sigma_s": array("Scattering coefficient σ_s, per channel [min, median, max].", RGB, "mm^-1"),
+                "sigma_a": array("Absorption coefficient σ_a, per channel [min, median, max].", RGB, "mm^-1"),
+                "albedo": array("Single-scattering albedo σ_s / σ_t, per channel [min, median, max].", RGB),
+                "rings_rms_log_residual": field(
+                    "number", "RMS log residual of the half-space's match over the rings (when stored)."
+                ),
+                "g": field("number", "The mean cosine assumed: 0 (the similar medium, σ_s = σ_s')."),
+                "points": field("integer", "Incident points estimated."),
+                "index_matched": field("boolean", "The boundary assumed: index-matched (always true)."),
+                "assumed": field("string", "What the estimate assumes, in words."),
+            },
+            optional=("rings_rms_log_residual",),
         ),
         **BOUNDS,
     },
@@ -737,6 +754,7 @@ INFO_MODEL = record(
         "beyond_object_max",
         "beyond_object_bound",
         "measured",
+        "medium",
         *BOUNDS,
     ),
 )

@@ -158,6 +158,25 @@ def _model_rows(fields: dict, size_text: str, bounds: list):
         has_table = "through" in fields["measured"]
         table = " (the through-body table: render draws it, --paper not)" if has_table else ""
         rows.append(("measured", ", ".join(fields["measured"]) + table))
+    if fields.get("medium"):
+        rows += _medium_rows(fields["medium"])
+    return rows
+
+
+def _medium_rows(medium: dict):
+    """The medium estimated from the scan: per channel min / median / max over the incident points."""
+    over = f"(min / median / max over {medium['points']} points)"
+    rows = []
+    for key, label, unit in (
+        ("sigma_s", "σ_s", " mm⁻¹"),
+        ("sigma_a", "σ_a", " mm⁻¹"),
+        ("albedo", "albedo", ""),
+    ):
+        ranges = ", ".join(
+            f"{name} " + " / ".join(f"{v:.4g}" for v in channel) for name, channel in zip("RGB", medium[key])
+        )
+        rows.append((f"medium {label}", f"{ranges}{unit} {over}"))
+    rows.append(("medium", f"estimated from the scan alone: {medium['assumed']}"))
     return rows
 
 

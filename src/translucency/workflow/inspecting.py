@@ -26,6 +26,8 @@ __all__ = ["MODEL_FIELDS", "describe", "describe_materials"]
 
 #: the header fields of a model file that a description lists, in order
 MODEL_FIELDS = ("format", "version", "kind", "geometry", "n_points", "n_terms", "n_directions", "colour")
+#: what the medium estimated from the scan assumes (medium/estimate.py), stated beside its numbers
+MEDIUM_ASSUMED = "g = 0 assumed (similar medium), index-matched"
 
 
 def describe(path) -> dict:
@@ -109,7 +111,22 @@ def _model_record(path: Path) -> dict:
     )
     if model.geometry == "mesh":
         fields.update(object_bounds(model.alpha.vertices))
+    medium = _medium_record(model)
+    if medium is not None:  # (a model without the estimate: no field)
+        fields["medium"] = medium
     return fields
+
+
+def _medium_record(model) -> dict | None:
+    """The medium estimated from the scan (``measured/medium``, :mod:`translucency.medium.estimate`): per
+    channel (R, G, B) the [min, median, max] over the incident points of σ_s and σ_a (mm⁻¹) and the
+    albedo, and what the estimate assumes; None for a model without one."""
+    if "medium" not in (model.measured or {}):
+        return None
+    from .. import fit  # noqa: F401 — fit.mesh imports medium.estimate, which imports fit: fit loads first
+    from ..medium.estimate import medium_of
+
+    return {**medium_of(model).summary(), "index_matched": True, "assumed": MEDIUM_ASSUMED}
 
 
 def describe_materials(eta: float = 1.3) -> dict:
