@@ -501,7 +501,7 @@ RENDER_SCENE = record(
 
 # -- export -------------------------------------------------------------------------------------------
 EXPORT = record(
-    "`translucency export MODEL --ply OUT.ply --gltf OUT.glb --json`: what was written.",
+    "`translucency export MODEL --ply OUT.ply --gltf OUT.glb --mitsuba DIR --json`: what was written.",
     {
         "command": _command("export"),
         "model": field("string", "The model file."),
@@ -513,6 +513,13 @@ EXPORT = record(
             "Median over vertices and channels of the Christensen-Burley reduction's error (--gltf).",
         ),
         "reduction_error_p95": field("number", "Its 95th percentile (--gltf)."),
+        "mitsuba": field(
+            "string",
+            "The Mitsuba 3 scene written (DIR/scene.xml, beside object.ply, sigma_t.vol and albedo.vol; "
+            "--mitsuba).",
+        ),
+        "voxels": array("The medium's grid in the scene: voxels along x, y, z (--mitsuba).", INTEGER),
+        "voxel_mm": field("number", "The edge of its cubic voxels (--mitsuba).", "mm"),
         "vertices": field("integer", "Vertices of the mesh."),
         "faces": field("integer", "Triangles of the mesh."),
         "angles": field("boolean", "Whether the bake drew the model's lean (--gltf --angles, as render's)."),
@@ -530,6 +537,9 @@ EXPORT = record(
         "colour_scale",
         "reduction_error_median",
         "reduction_error_p95",
+        "mitsuba",
+        "voxels",
+        "voxel_mm",
         "angles",
         "lean",
     ),  # fmt: skip

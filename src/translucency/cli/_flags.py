@@ -50,6 +50,7 @@ FLAGS = {
     "eta": "--eta",
     "ply": "--ply",
     "gltf": "--gltf",
+    "mitsuba": "--mitsuba",
     "truth": "--truth",
     "compare": "--compare",
     "report": "--report",

@@ -4,7 +4,9 @@
 millimetres and vertex order; :func:`export_gltf` writes glTF 2.0 for Blender and three.js: the mesh, the
 exitance under a light baked as vertex colours (the render stage's chain) and each vertex's profile reduced
 to Christensen–Burley's albedo and mean free path per channel (with the reduction's error).
-:func:`export_model` is ``translucency export``: either or both, every check before any file is written.
+:func:`export_model` is ``translucency export``: any of these, every check before any file is written, and
+with ``mitsuba=DIR`` the medium estimated from the scan filling the mesh as a Mitsuba 3 scene
+(:func:`translucency.medium.mitsuba_scene.write_mitsuba_scene`).
 Units: mm (glTF positions in metres), radiance in W/(mm² sr), linear RGB.
 """
 
@@ -42,16 +44,18 @@ def export_model(
     *,
     ply=None,
     gltf=None,
+    mitsuba=None,
     light: str = DEFAULT_LIGHT,
     angles: bool = False,
     transport: TransportOptions | None = None,
     overwrite: bool = False,
     max_memory: str | int | None = None,
 ) -> dict:
-    """Take a per-vertex model to other tools: its mesh as PLY and/or glTF with the bake.
+    """Take a per-vertex model to other tools: its mesh as PLY, glTF with the bake, its medium as a
+    Mitsuba 3 scene.
 
-    ``translucency export MODEL [--ply OUT.ply] [--gltf OUT.glb]`` is this function: the names and the
-    model checked before any file is written, then the PLY, then the glTF.
+    ``translucency export MODEL [--ply OUT.ply] [--gltf OUT.glb] [--mitsuba DIR]`` is this function: the
+    names and the model checked before any file is written, then the PLY, then the glTF, then the scene.
 
     Parameters
     ----------
@@ -62,8 +66,14 @@ def export_model(
         places with its ``to_world`` for :func:`render_scene`.
     gltf : str or Path, optional
         Write glTF 2.0 binary here (``.glb``, metres): see :func:`export_gltf`.
+    mitsuba : str or Path, optional
+        Write a Mitsuba 3 scene into this folder: ``scene.xml`` (``volpath``, the shape filled with a
+        ``heterogeneous`` medium behind an index-matched ``null`` boundary, a default camera and the light
+        ``light``), ``object.ply`` and the medium estimated from the scan as grid volumes ``sigma_t.vol``
+        and ``albedo.vol`` (mm⁻¹, RGB): :func:`translucency.medium.mitsuba_scene.write_mitsuba_scene`.  The
+        model must carry the estimate (fitted with this version).
     light : str
-        With ``gltf``: the light baked (as :func:`render_model`'s).
+        With ``gltf``: the light baked (as :func:`render_model`'s); with ``mitsuba``: the scene's emitter.
     angles : bool
         With ``gltf`` and a model that has a lean: bake it (the transport leaned toward the light, as
         ``render --angles``); otherwise the paper's model is baked and ``lean`` says so in one line.
@@ -71,7 +81,8 @@ def export_model(
         The bake's transport as one object (:class:`translucency.transport.TransportOptions`, e.g. a
         variant registered by name); ``angles`` is laid over it.
     overwrite : bool
-        Replace an earlier mesh file of translucency at ``ply`` or ``gltf`` (never anything else).
+        Replace an earlier mesh file of translucency at ``ply`` or ``gltf``, or the files of a scene
+        folder translucency wrote at ``mitsuba`` (never anything else).
     max_memory : str or int, optional
         Most memory the export may use; a larger estimate (the bake's transport) is refused before any
         file is written.
@@ -81,12 +92,14 @@ def export_model(
     dict
         The summary of ``translucency export --json``: ``model``, ``vertices``, ``faces``, and ``ply``,
         ``gltf`` with the bake's ``colour_scale``, ``angles`` (whether the lean was baked) and the Burley
-        reduction's ``reduction_error_median``, ``reduction_error_p95`` for what was written.
+        reduction's ``reduction_error_median``, ``reduction_error_p95``, ``mitsuba`` (the ``scene.xml``
+        written) with the grid's ``voxels`` (x, y, z) and ``voxel_mm`` for what was written.
 
     Raises
     ------
     TranslucencyError
-        Nothing to write, a wrong file name, a planar model, an output that is not translucency's.
+        Nothing to write, a wrong file name, a planar model, a model without an estimated medium for
+        ``mitsuba``, an output that is not translucency's.
 
     Examples
     --------
@@ -94,12 +107,25 @@ def export_model(
     >>> tl.export_model("ball.model.zip", ply="ball.ply")["vertices"]  # doctest: +SKIP
     2562
     """
-    if ply is None and gltf is None:
-        raise TranslucencyError("say what to write: ply=OUT.ply or gltf=OUT.glb")
+    if ply is None and gltf is None and mitsuba is None:
+        raise TranslucencyError("say what to write: ply=OUT.ply, gltf=OUT.glb or mitsuba=DIR")
     ply = None if ply is None else _named("ply", ply, ".ply", "")
     gltf = None if gltf is None else _named("gltf", gltf, ".glb", " (binary glTF)")
+    mitsuba = None if mitsuba is None else as_path("mitsuba", mitsuba)
     run = Run("export", max_memory=max_memory)
     fitted, mesh, acquisition, inputs = _object(model)
+    if mitsuba is not None:  # the model's medium and the folder, checked before any file is written
+        from ..medium.mitsuba_scene import medium_or_refuse
+
+        name = str(model) if inputs else "model"
+        medium_or_refuse(fitted, name)
+        claim_output(mitsuba, "output folder", overwrite=overwrite, inputs=inputs, option="mitsuba")
+        for option, path in (("ply", ply), ("gltf", gltf)):
+            if path is not None and mitsuba.resolve() in path.resolve().parents:
+                raise TranslucencyError(
+                    f"{option} {path}: lies inside the scene's folder mitsuba={mitsuba}; give another path"
+                )
+        scene_light = place_light(parse_light(light), Placement.of(mesh, (1.0, -1.6, 0.7)))  # as the bake's
     V, F = len(mesh.vertices), len(mesh.faces)
     lean = has_lean(fitted)
     # the bake's object, prepared as render's: its transport's near radius chosen once, here
@@ -127,6 +153,8 @@ def export_model(
             summary["lean"] = "not baked: the glTF draws the paper's model (--angles bakes the lean)"
         elif angles and not lean:
             summary["lean"] = NO_LEAN
+    if mitsuba is not None:
+        summary.update(_write_scene(fitted, mesh, mitsuba, scene_light, overwrite, inputs, name))
     return run.summary(summary)  # with the estimate and the seconds
 
 
@@ -225,6 +253,18 @@ def _write_ply(mesh, path: Path) -> None:
 
     with atomic_path(path) as tmp:
         write_ply(tmp, mesh.vertices, mesh.faces, comment=PLY_COMMENT)
+
+
+def _write_scene(fitted, mesh, folder: Path, light, overwrite: bool, inputs, name: str) -> dict:
+    """Write the Mitsuba scene of the model's medium into ``folder`` under ``light`` (placed); what the
+    summary states."""
+    from ..medium.mitsuba_scene import scene_volume, write_mitsuba_scene
+
+    scene = write_mitsuba_scene(
+        fitted, mesh, folder, light=light, overwrite=overwrite, inputs=inputs, option="mitsuba", name=name
+    )
+    volume = scene_volume(fitted, mesh, name=name)
+    return {"mitsuba": scene, "voxels": list(volume.shape[::-1]), "voxel_mm": volume.voxel_mm}
 
 
 def _bake(prepared, path, light_text: str) -> dict:
