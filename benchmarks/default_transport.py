@@ -27,7 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
-from translucency import evaluate_report, save_model
+from translucency import evaluate_report, load_model, save_model
 from translucency.acquire.mesh import acquire_mesh
 from translucency.fit.mesh import fit_mesh
 from translucency.mitsuba import mesh_scene
@@ -35,12 +35,11 @@ from translucency.render.compare import compare, region_errors
 from translucency.render.picture import VertexPicture, coverage
 from translucency.render.reference import converged_reference
 from translucency.render.tonemap import auto_exposure, save_images
-from translucency.transport.matrices import transport_matrices
-from translucency.transport.relight import relight_object
+from translucency.transport import PreparedObject, TransportOptions
 from unscattered import scene_of
 
-#: the transports compared: a label and ``transport_matrices``' keyword
-TRANSPORTS = (("paper's profile", {"through": False}), ("profile x through-body table", {"through": True}))
+#: the transports compared, by kind name (``TransportOptions(kind=...)``), as ``render`` draws them
+KINDS = ("paper", "default", "walked")
 
 
 def main() -> int:
@@ -49,6 +48,7 @@ def main() -> int:
     ap.add_argument("--case", action="append", required=True, help="a case spec (unscattered.py) or pig")
     ap.add_argument("--spp", type=int, default=256, help="samples per pixel of each of the two references")
     ap.add_argument("--size", type=int, nargs=2, default=(128, 96))
+    ap.add_argument("--kinds", default=",".join(KINDS), help="the transports drawn, by name")
     ap.add_argument("--work", type=Path, default=Path(tempfile.mkdtemp(prefix="default_transport_")))
     ap.add_argument(
         "--held-out",
@@ -73,15 +73,21 @@ def main() -> int:
             chunk_points=32, index_matched=True,
         )  # fmt: skip
         t_acquire = time.perf_counter() - t
-        model = fit_mesh(data, "iso").model
+        model_path = args.work / f"{name}_{P}x{N}.model.zip"
+        if model_path.is_file():  # this script's own fit of an earlier run
+            model = load_model(model_path)
+        else:
+            model = fit_mesh(data, "iso").model
+            save_model(model, model_path)
         if args.held_out:
             _held_out(args.work, name, mesh, volume, data, model, P, N)
-        for label, keywords in TRANSPORTS:
-            T = transport_matrices(model, mesh, **keywords)
-            L, E, _ = relight_object(T, mesh, scene, light, camera.origin)
+        for label in args.kinds.split(","):
+            prepared = PreparedObject(model, mesh, eta=1.0, options=TransportOptions(kind=label))
+            t = time.perf_counter()
+            L, E = prepared.relight(light, camera.origin, scene)
+            t_draw = time.perf_counter() - t
             ours = picture.draw(L)
-            stem = "through" if keywords["through"] else "paper"
-            save_images(ours, args.work / f"{name}_{stem}", exposure)
+            save_images(ours, args.work / f"{name}_{label}", exposure)
             cmp = compare(reference, ours, mask)
             regions = region_errors(mesh, scene, camera, E, reference, ours, mask)
             row = {
@@ -94,12 +100,13 @@ def main() -> int:
                 "unlit_hue": regions["unlit"]["colour"],
                 "reference_noise": info["noise"],
                 "acquire_s": t_acquire,
+                "relight_s": t_draw,
             }
             out.append(row)
             by_region = " ".join(f"{k} {v:.2f}x" for k, v in row["regions"].items() if k != "all")
             print(
-                f"{name:<22} {label:<30} rel RMSE {row['rel_rmse']:.3f}  FLIP {row['flip']:.3f}  "
-                f"brightness {row['brightness']:.3f}  ({by_region})  unlit hue "
+                f"{name:<22} {label:<8} rel RMSE {row['rel_rmse']:.3f}  FLIP {row['flip']:.3f}  "
+                f"brightness {row['brightness']:.3f}  ({by_region}, {t_draw:.1f} s)  unlit hue "
                 f"{np.round(row['unlit_hue'], 2).tolist()}  noise {info['noise']:.3f}",
                 flush=True,
             )

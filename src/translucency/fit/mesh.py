@@ -26,6 +26,7 @@ from .._validate import TranslucencyError
 from ..angles import OBLIQUE_DEG
 from ..geometry import tangent_frames
 from ..io.mesh_dataset import open_mesh_dataset
+from ..medium.estimate import estimate_medium
 from ..model import VertexAlpha
 from ._rounds import alternate
 from ._vertex_pool import disc_pool
@@ -318,6 +319,8 @@ def _attach_measured(result: FitResult, ds, exclusion: float, chunk_points: int)
         result.model.measured["lean"] = fit_lean(ds, chunk_points)
     elif (from_shots := fit_lean_from_shots(ds)) is not None:  # a lab's oblique shots
         result.model.measured["lean"] = from_shots
+    # the medium that reproduces the scan (medium/estimate.py): what a walk of the crossed light reads
+    result.model.measured["medium"] = estimate_medium(ds).stacked()
     # the photons per point: how far the physical bounds let a total exceed 1 by noise (model/bounds.py)
     result.model.tally_photons = int(ds.header["photons"]) if ds.header.get("photons") else None
     result.acquisition = ds.header

@@ -168,11 +168,18 @@ def _attach_surface(model: ReflectanceModel, arrays: dict[str, np.ndarray]) -> N
     measured = {k.split("/", 1)[1]: v for k, v in arrays.items() if k.startswith("measured/")}
     if measured:
         N = model.n_points
-        shapes = {"own": (N, 3), "total": (N, 3), "through": _through_shape(model), "lean": (N, 2, 3)}
+        shapes = {
+            "own": (N, 3),
+            "total": (N, 3),
+            "through": _through_shape(model),
+            "lean": (N, 2, 3),
+            "medium": (N, 2, 3),
+        }
         for name, value in measured.items():
             if name not in shapes or value.shape != shapes[name]:
                 raise TranslucencyError(
-                    f"measured/{name}: expected 'own' or 'total' of shape ({N}, 3), 'lean' ({N}, 2, 3) or "
+                    f"measured/{name}: expected 'own' or 'total' of shape ({N}, 3), 'lean' or 'medium' "
+                    f"({N}, 2, 3) or "
                     f"'through' {_through_shape(model)}, got {value.shape}"
                 )
             if not (np.isfinite(value).all() and (value >= 0).all()):

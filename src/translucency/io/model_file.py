@@ -16,6 +16,8 @@ Layout::
     measured/total        (N, 3) float32   mesh only, optional: measured diffuse exitance per unit power
     measured/through      (N, 4, 8, 3) f32 mesh only, optional: the through-body table (model/through.py)
     measured/lean         (N, 2, 3) f32    mesh only, optional: the lean's κ ≥ 0, λ ≥ 0 mm⁻¹ (model/lean.py)
+    measured/medium       (N, 2, 3) f32    mesh only, optional: the medium estimated from the scan, σ_s and
+                                           σ_a ≥ 0 mm⁻¹ at each incident point (medium/estimate.py)
     params/...            per kind (the model class's ``STORED``), dtype = header["dtype"]:
         exponential:  c, d (N, C, m, n) in mm⁻² and mm⁻¹; s_g, s_b (N,) when C = 1
         dipole, pbd, ddipole:  sigma_a, sigma_s_prime (N, 3) in mm⁻¹ (and ``eta`` in the header)
@@ -417,6 +419,7 @@ def _read_model(path: Path, root, header: dict) -> ReflectanceModel:
     optional = [f"params/{p}" for p in MODEL_KINDS[header["kind"]].STORED if f"params/{p}" not in required]
     if header["geometry"] == "mesh":
         optional += ["mesh/faces", "measured/own", "measured/total", "measured/through", "measured/lean"]
+        optional += ["measured/medium"]
     if header.get("mesh_codec"):  # the vertices and triangles as one Draco array (io/mesh_codec.py)
         arrays.update(_decoded_mesh(path, root, header["mesh_codec"]))
         required = [k for k in required if k not in _MESH_KEYS]

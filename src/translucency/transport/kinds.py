@@ -24,6 +24,7 @@ from typing import Protocol
 from .._validate import TranslucencyError
 from ..model.incidence import INCIDENCE_LAWS
 from .matrices import transport_matrices
+from .walk import WalkedTransport
 
 
 class TransportKind(Protocol):
@@ -65,7 +66,7 @@ class MeasuredTransport:
 PAPER = MeasuredTransport(name="paper", summary="fitted per-vertex model (the paper's)", through=False)
 
 #: the transports by name: the two that ship and any registered since
-TRANSPORTS: dict[str, TransportKind] = {k.name: k for k in (MeasuredTransport(), PAPER)}
+TRANSPORTS: dict[str, TransportKind] = {k.name: k for k in (MeasuredTransport(), PAPER, WalkedTransport())}
 
 
 def register_transport(kind: TransportKind) -> TransportKind:

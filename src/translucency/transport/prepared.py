@@ -142,10 +142,21 @@ class PreparedObject:
             T = tilted(T, self.mesh, ell, eta=self.eta, pairs=self.lean_pairs)
         return relight_vertices(T, E)
 
+    @functools.cached_property
+    def medium_volume(self):
+        """The medium the model's fit estimated from the scan (:mod:`translucency.medium`), on the voxel grid
+        a walk reads."""
+        from ..medium import medium_of
+
+        return medium_of(self.model).volume(self.mesh)
+
     def relight(self, light, eye, scene=None):
         """Steps 1–4 under ``light`` seen from ``eye`` (mm): the radiance toward the camera per vertex
-        (V, 3), W/(mm² sr), and the irradiance E."""
+        (V, 3), W/(mm² sr), and the irradiance E.  A kind that draws a light its own way (a walk per light:
+        :class:`~translucency.transport.walk.WalkedTransport`) has a ``relight`` of its own."""
         scene = self.shadow_scene if scene is None else scene
+        if hasattr(self.kind, "relight"):
+            return self.kind.relight(self, light, eye, scene)
         pairs = self.lean_pairs if self.leans_for(light) else None
         L, E, _ = relight_object(
             self.transport,

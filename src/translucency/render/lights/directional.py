@@ -44,6 +44,15 @@ class DirectionalLight(_DeltaLight):
     direction: tuple
     irradiance: float = DEFAULT_IRRADIANCE
 
+    def __post_init__(self):
+        # a unit direction, however it was given (the irradiance E cos θ and Mitsuba's emitter agree)
+        d = np.asarray(self.direction, dtype=np.float64)
+        if d.shape != (3,) or not (np.isfinite(d).all() and np.linalg.norm(d) > 0):
+            raise TranslucencyError(
+                f"light: a directional light needs a finite non-zero direction, got {self.direction}"
+            )
+        object.__setattr__(self, "direction", tuple(float(x) for x in d / np.linalg.norm(d)))
+
     @classmethod
     def of_numbers(cls, text: str, v: list) -> DirectionalLight:
         d = np.asarray(v[:3])
