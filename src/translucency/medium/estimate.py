@@ -218,9 +218,11 @@ def estimate_medium(
     r_min = 0.5 * float(np.mean(mesh.edges_unique_length))  # half an edge: the beam's own vertex left out
     edges = np.geomspace(r_min, max(float(r_fit), 4.0 * r_min), RINGS + 1)
     flags = g["flags"] if "flags" in g else None
-    A_b, E_b, r_b = _measured_rings(mesh, incident[rows], edges, lambda k: g["R_d"][int(rows[k])],
-                                    None if flags is None else (lambda k: flags[int(rows[k])]))  # fmt: skip
+    row = lambda k: g["R_d"][int(rows[k])]  # noqa: E731 — (V, 3) R_d of the k-th point read, mm⁻²
+    flag = None if flags is None else (lambda k: flags[int(rows[k])])
+    A_b, E_b, r_b, T = _measured_rings(mesh, incident[rows], edges, row, flag)
     G = np.ones_like(E_b)  # what the object's shape does to each ring, against the half-space
+    G_T = np.ones_like(T)  # ... and to the point's whole exitance
     scene = None
     for step in range(rounds + 1):
         # each point's rings matched by the half-space, evaluated where the ring's vertices lie
@@ -228,7 +230,7 @@ def estimate_medium(
         for k in range(len(rows)):
             grid = _profile_grid(r_b[k])
             for c in range(3):
-                a, s_, resid[k, c] = _match(grid, A_b[k], E_b[k, :, c] / G[k, :, c])
+                a, s_, resid[k, c] = _match(grid, A_b[k], E_b[k, :, c] / G[k, :, c], T[k, c] / G_T[k, c])
                 a_s[k, c] = a, s_
                 H_b[k, :, c] = np.exp(grid[1][a, s_]) * A_b[k]
         albedo, sigma_t = _albedos()[a_s[..., 0]], SIGMA_T_GRID[a_s[..., 1]]
@@ -240,8 +242,10 @@ def estimate_medium(
 
         scene = mesh_scene(mesh) if scene is None else scene
         R = virtual_scan(mesh, medium.volume(mesh), incident[rows], photons, seed=seed + step, scene=scene)
-        _, S_b, _ = _measured_rings(mesh, incident[rows], edges, R.__getitem__)
+        _, S_b, _, S_T = _measured_rings(mesh, incident[rows], edges, R.__getitem__)
         G = np.where((S_b > 0) & (H_b > 0), S_b / np.maximum(H_b, 1e-300), 1.0)
+        H_T = _half_space_totals()[a_s[..., 0]]  # (n, 3) the half-space's whole exitance at each match
+        G_T = np.where(S_T > 0, S_T / H_T, 1.0)
     return medium
 
 
@@ -249,13 +253,14 @@ def _measured_rings(mesh, incident, edges, row, flag=None):
     """The rings of each incident vertex's own side: their areas (n, B) mm², the energies Σ A_o R_d
     (n, B, 3) of the rows ``row(k)`` ((V, 3) R_d, mm⁻²; ``flag(k)``: the pairs not measured, left out) and
     where their vertices lie, the area-weighted geometric mean of r (n, B) mm (the ring's geometric centre
-    where it holds none)."""
+    where it holds none); and each point's whole exitance Σ_o A_o R_d over every vertex (n, 3)."""
     v = np.asarray(mesh.vertices, dtype=np.float64)
     nrm = np.asarray(mesh.vertex_normals, dtype=np.float64)
     area = vertex_areas(mesh)
     B = len(edges) - 1
     A_b, E_b = np.zeros((len(incident), B)), np.zeros((len(incident), B, 3))
     r_b = np.tile(np.sqrt(edges[:-1] * edges[1:]), (len(incident), 1))
+    T = np.zeros((len(incident), 3))
     for k, i in enumerate(incident):
         R = np.asarray(row(k), dtype=np.float64)
         r = np.linalg.norm(v - v[i], axis=1)
@@ -268,7 +273,9 @@ def _measured_rings(mesh, incident, edges, row, flag=None):
         r_b[k] = np.where(A_b[k] > 0, np.exp(log_r / np.maximum(A_b[k], 1e-300)), r_b[k])
         for c in range(3):
             E_b[k, :, c] = np.bincount(b, area[ok] * R[ok, c], B)
-    return A_b, E_b, r_b
+        seen = np.isfinite(R).all(axis=1) & (True if flag is None else np.asarray(flag(k)) == 0)
+        T[k] = area[seen] @ R[seen]
+    return A_b, E_b, r_b, T
 
 
 @functools.cache
@@ -277,6 +284,13 @@ def _albedo_grid() -> np.ndarray:
     u = _table()[1]
     steps = [np.linspace(u[k], u[k + 1], ALBEDO_STEPS, endpoint=False) for k in range(len(u) - 1)]
     return np.append(np.concatenate(steps), u[-1])
+
+
+@functools.cache
+def _half_space_totals() -> np.ndarray:
+    """The half-space's whole diffuse reflectance at each albedo searched (the table's tally)."""
+    logc, u, logf, total = _table()
+    return np.interp(-_albedo_grid(), -u, total)
 
 
 def _albedos() -> np.ndarray:
@@ -302,9 +316,10 @@ def _profile_grid(radii: np.ndarray):
     return -np.expm1(uu), logprof
 
 
-def _match(grid, A_b: np.ndarray, E_b: np.ndarray) -> tuple[int, int, float]:
+def _match(grid, A_b: np.ndarray, E_b: np.ndarray, total: float | None = None) -> tuple[int, int, float]:
     """(albedo index, σ_t index, RMS log residual) of the half-space that best matches one point's rings in
-    one channel (``A_b`` the rings' areas mm², ``E_b`` their measured energies Σ A R_d)."""
+    one channel (``A_b`` the rings' areas mm², ``E_b`` their measured energies Σ A R_d; ``total``: the
+    point's whole exitance, matched by the half-space's total reflectance, which holds the albedo)."""
     albedo, logprof = grid
     ok = (A_b > 0) & (E_b > 0)
     if ok.sum() < 3:
@@ -317,5 +332,7 @@ def _match(grid, A_b: np.ndarray, E_b: np.ndarray) -> tuple[int, int, float]:
     P = logprof[..., ok]  # (Aα, G, B)
     shape = ((P - m) ** 2 * w).sum(axis=-1)
     energy = (np.log(np.exp(P) @ A_b[ok]) - np.log(E_b[ok].sum())) ** 2
+    if total is not None and total > 0:
+        energy = energy + (np.log(_half_space_totals()) - np.log(total))[:, None] ** 2
     a, s = np.unravel_index(np.argmin(shape + energy), shape.shape)
     return int(a), int(s), float(np.sqrt(shape[a, s]))

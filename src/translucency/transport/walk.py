@@ -47,14 +47,15 @@ from .relight import exit_fresnel
 
 #: photons per channel a light's walk sends
 PHOTONS = 400_000
-#: half-angle of the cone an exit is counted in toward the camera, degrees
-CONE_DEG = 25.0
-#: the width of the surface filter over the walk's tally, as a share of the split radius (the crossed light
-#: varies over distances of the split radius and more; the tally's photon noise from vertex to vertex)
-SMOOTH_SHARE = 0.5
+#: the exponent of the lobe an exit's direction is spread over toward the camera (:func:`_lobe`)
+LOBE = 8.0
+#: the exits a vertex's radiance gathers (:func:`_gathered`): its photon noise about 1/√GATHER
+GATHER = 256
+#: the nearest vertices a vertex gathers from, at most
+GATHER_VERTICES = 160
 #: the split radius, as the energy radius of the model's profiles (the share of a point's planar energy
 #: within it)
-SPLIT_SHARE = 0.9
+SPLIT_SHARE = 0.05
 
 
 @dataclass(frozen=True)
@@ -67,8 +68,8 @@ class WalkedTransport:
     incidence: str = "half-space"
     split_share: float = SPLIT_SHARE
     photons: int = PHOTONS
-    cone_deg: float = CONE_DEG
-    smooth_share: float = SMOOTH_SHARE
+    lobe: float = LOBE
+    gather: int = GATHER
     seed: int = 0
 
     def build(self, model, mesh, *, radius: float, shrink: bool, max_pairs: float):
@@ -119,8 +120,8 @@ class WalkedTransport:
             eye=eye,
             eta=prepared.eta,
             photons=self.photons,
-            cone_deg=self.cone_deg,
-            smooth_mm=self.smooth_share * split,
+            lobe=self.lobe,
+            gather=self.gather,
             seed=self.seed,
         )
 
@@ -162,10 +163,12 @@ def _planar_share(c: np.ndarray, d: np.ndarray, R: float) -> np.ndarray:
 
 def walk_crossed(
     mesh, volume, light, scene, *, split: float, eye=None, eta: float = 1.0, photons: int = PHOTONS,
-    cone_deg: float = CONE_DEG, smooth_mm: float = 0.0, seed: int = 0,
+    lobe: float = LOBE, gather: int = GATHER, seed: int = 0,
 ) -> np.ndarray:  # fmt: skip
-    """The radiance per vertex (V, 3), W/(mm² sr), of the light that crosses the body (module docstring):
-    ``photons`` per channel from the lit vertices along the light, walked through ``volume``."""
+    r"""The radiance per vertex (V, 3), W/(mm² sr), of the light that crosses the body (module docstring):
+    ``photons`` from the lit vertices along the light, walked through ``volume`` in each channel with the
+    same random numbers (the channels' noise is alike: it shows as brightness, not as colour); each vertex
+    gathers ``gather`` exits (:func:`_gathered`; 0: its own tally alone, :math:`\mathrm{splat}_o / A_o`)."""
     from ..acquire.mesh import exit_barycentric
     from ..acquire.mesh_walk import EXIT, mesh_random_walk
 
@@ -175,60 +178,68 @@ def walk_crossed(
     area = vertex_areas(mesh)
     E = vertex_irradiance(mesh, scene, light, eta)  # W/mm², shadowed, the entry's Fresnel against F_t(0)
     E = np.repeat(E[:, None], 3, axis=1) if E.ndim == 1 else E
+    power = E * area[:, None]  # (V, 3) W per vertex
+    mean = power.mean(axis=1)
+    if mean.sum() <= 0:
+        return np.zeros((V, 3))
     w_in = _arrival(light, scene, X, N)  # (V, 3) toward the light
     inward = np.where((np.einsum("vk,vk->v", w_in, N) > 1e-3)[:, None], -w_in, -N)
-    rng = np.random.default_rng(seed)
-    to_eye_v = None if eye is None else np.asarray(eye, dtype=np.float64)
-    cos_c = np.cos(np.radians(cone_deg))
+    # the entries, drawn by the channels' mean power; each photon carries power_c / (photons p) in channel c
+    p = mean / mean.sum()
+    src = np.random.default_rng(seed).choice(V, size=photons, p=p)
+    carried = power[src] / (photons * p[src, None])  # (photons, 3) W
     face_n = np.asarray(mesh.face_normals, dtype=np.float64)
-    L = np.zeros((V, 3))
+    splat, count = np.zeros((V, 3)), np.zeros((V, 3))
     for ch in range(3):
-        power = E[:, ch] * area  # W per vertex
-        total = power.sum()
-        if total <= 0:
-            continue
-        src = rng.choice(V, size=photons, p=power / total)  # each photon carries total / photons
         res = mesh_random_walk(
-            scene, mesh.bounds, volume, ch, X[src], N[src], 1, seed=seed + 7919 * ch,
+            scene, mesh.bounds, volume, ch, X[src], N[src], 1, seed=seed,
             index_matched=True, reentry=True, incoming=inward[src],
         )  # fmt: skip
-        ok = np.flatnonzero((res.code == EXIT) & (res.scatters > 0))
+        ok = np.flatnonzero((res.code == EXIT) & (res.scatters > 0))  # the unscattered: a delta, left out
         pos, face, j = res.position[ok].astype(np.float64), res.face[ok], src[ok]
         far = np.linalg.norm(pos - X[j], axis=1) >= split
         crossed = far | (np.einsum("nk,nk->n", N[j], face_n[face]) <= 0)  # the pairs the near part leaves
-        pos, face, d = pos[crossed], face[crossed], res.direction[ok][crossed]
-        weight = np.full(len(pos), total / photons / np.pi)  # exitance / π
-        if to_eye_v is not None and eta == 1.0:  # by its own direction, toward the camera
-            to_eye = to_eye_v - pos
-            to_eye /= np.linalg.norm(to_eye, axis=1, keepdims=True)
-            d = d / np.linalg.norm(d, axis=1, keepdims=True)
-            cos_o = np.maximum(np.einsum("nk,nk->n", face_n[face], to_eye), 0.1)
-            inside = np.einsum("nk,nk->n", d, to_eye) > cos_c
-            weight = np.where(inside, total / photons / ((1.0 - cos_c**2) * np.pi * cos_o), 0.0)
+        pos, face, d, power_c = pos[crossed], face[crossed], res.direction[ok][crossed], carried[j[crossed], ch]
         tri, bary = exit_barycentric(mesh, face, pos)
-        L[:, ch] = np.bincount(tri.ravel(), (bary * weight[:, None]).ravel(), V) / area
-    if smooth_mm > 0:
-        L = surface_filter(mesh, smooth_mm) @ L
+        radiance = power_c / np.pi  # as exitance: Φ / π per unit area
+        if eye is not None and eta == 1.0:  # by its own direction, toward the camera
+            radiance = power_c * _lobe(d, np.asarray(eye, dtype=np.float64) - pos, face_n[face], lobe)
+        splat[:, ch] = np.bincount(tri.ravel(), (bary * radiance[:, None]).ravel(), V)
+        count[:, ch] = np.bincount(tri.ravel(), bary.ravel(), V)
+    L = _gathered(mesh, splat, count.mean(axis=1), gather) if gather > 0 else splat / area[:, None]
     if eye is not None and eta != 1.0:
         L *= exit_fresnel(mesh, eye, eta)[:, None]
     return L
 
 
-def surface_filter(mesh, h: float):
-    r"""The (V × V) CSR filter :math:`S_{oq} \propto A_q\, e^{-|x_o - x_q|^2 / 2h^2}` over the vertices q
-    within 2h of o that face its way (:math:`n_o \cdot n_q > 1/2`: a thin part's two sides stay apart), each
-    row summing to 1 (h in mm)."""
+def _lobe(d, to_eye, m, n: float) -> np.ndarray:
+    r"""Each exit's radiance toward the eye per unit of its power and of area (sr⁻¹): its direction d spread
+    over the normalised lobe :math:`K = rac{n + 1}{2\pi} (d \cdot e)^n` about the direction e to the eye,
+    over the exit face's :math:`\cos	heta_o = m \cdot e` (at least 0.1)."""
+    e = to_eye / np.linalg.norm(to_eye, axis=1, keepdims=True)
+    d = d / np.linalg.norm(d, axis=1, keepdims=True)
+    cos_o = np.maximum(np.einsum("nk,nk->n", m, e), 0.1)
+    return (n + 1) / (2 * np.pi) * np.maximum(np.einsum("nk,nk->n", d, e), 0.0) ** n / cos_o
+
+
+def _gathered(mesh, splat: np.ndarray, count: np.ndarray, gather: int) -> np.ndarray:
+    r"""The radiance per vertex from the exits splatted to the vertices (``splat`` (V, 3) W/sr, ``count``
+    (V,) exits): at each vertex o, over its ``GATHER_VERTICES`` nearest vertices q that face its way,
+    :math:`L_o = \sum_q k_q\, \mathrm{splat}_q / \sum_q k_q A_q` with the Epanechnikov weight
+    :math:`k_q = 1 - |x_o - x_q|^2 / h_o^2` — the exits over the surface they fell on — and :math:`h_o` the
+    distance within which ``gather`` exits fell (a photon map's density estimate: wide where few exits
+    fell, down to the vertex spacing where many did)."""
     X = np.asarray(mesh.vertices, dtype=np.float64)
     N = np.asarray(mesh.vertex_normals, dtype=np.float64)
-    V = len(X)
-    pairs = cKDTree(X).query_pairs(2.0 * h, output_type="ndarray")
-    o = np.concatenate([pairs[:, 0], pairs[:, 1], np.arange(V)])
-    q = np.concatenate([pairs[:, 1], pairs[:, 0], np.arange(V)])
-    keep = np.einsum("mk,mk->m", N[o], N[q]) > 0.5
-    o, q = o[keep], q[keep]
-    w = vertex_areas(mesh)[q] * np.exp(-np.sum((X[o] - X[q]) ** 2, axis=1) / (2 * h * h))
-    S = sp.csr_matrix((w, (o, q)), shape=(V, V))
-    return sp.diags(1.0 / np.asarray(S.sum(axis=1)).ravel()) @ S
+    area = vertex_areas(mesh)
+    M = min(GATHER_VERTICES, len(X))
+    dist, nb = cKDTree(X).query(X, k=M)
+    facing = np.einsum("vk,vmk->vm", N, N[nb]) > 0.5
+    reached = np.cumsum(count[nb] * facing, axis=1) >= gather
+    first = np.where(reached.any(axis=1), reached.argmax(axis=1), M - 1)
+    h = np.maximum(dist[np.arange(len(X)), first], np.sqrt(area))[:, None] * 1.0001
+    k = np.maximum(1.0 - (dist / h) ** 2, 0.0) * facing
+    return np.einsum("vm,vmc->vc", k, splat[nb]) / np.einsum("vm,vm->v", k, area[nb])[:, None]
 
 
 def _arrival(light, scene, X, N) -> np.ndarray:
