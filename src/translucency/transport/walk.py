@@ -199,7 +199,8 @@ def walk_crossed(
         pos, face, j = res.position[ok].astype(np.float64), res.face[ok], src[ok]
         far = np.linalg.norm(pos - X[j], axis=1) >= split
         crossed = far | (np.einsum("nk,nk->n", N[j], face_n[face]) <= 0)  # the pairs the near part leaves
-        pos, face, d, power_c = pos[crossed], face[crossed], res.direction[ok][crossed], carried[j[crossed], ch]
+        pos, face, d = pos[crossed], face[crossed], res.direction[ok][crossed]
+        power_c = carried[j[crossed], ch]
         tri, bary = exit_barycentric(mesh, face, pos)
         radiance = power_c / np.pi  # as exitance: Φ / π per unit area
         if eye is not None and eta == 1.0:  # by its own direction, toward the camera
