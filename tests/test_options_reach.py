@@ -58,6 +58,7 @@ VALUES = {
     "--sample-size": "20,20",  # import images: width,height mm
     "--profiles": "0,3",  # evaluate: incident points
     "--scheduler": "local:2",  # threads | local:N | tcp://HOST:PORT
+    "--transport": "walked",  # render: a registered transport's name
     "--max-memory": "4G",
     "--model": "iso",  # fit: a model family
     "--terms": "2",  # fit: 1-4 or auto (demo's --terms is an int: this value is valid there too)

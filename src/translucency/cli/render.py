@@ -101,6 +101,16 @@ _PAPER = typer.Option(
     "docs/through-body.md).",
     rich_help_panel=PANEL_TRANSPORT,
 )
+_TRANSPORT = typer.Option(
+    None,
+    "--transport",
+    metavar="KIND",
+    help="The transport drawn: default (the fitted model with its through-body table) | walked (the "
+    "model's near field, and the light that crosses the body walked through the medium the fit estimated "
+    "from the scan, entered along the light's own direction; back-lit objects, docs/through-body.md) | "
+    "paper (as --paper).",
+    rich_help_panel=PANEL_TRANSPORT,
+)
 _ANGLES = typer.Option(
     False,
     "--angles",
@@ -124,6 +134,7 @@ def render(
     spp: int = _SPP,
     radius: float = _RADIUS,
     paper: bool = _PAPER,
+    transport: str = _TRANSPORT,
     angles: bool = _ANGLES,
     overwrite: bool = overwrite_option(),
     max_memory: str = max_memory_option(),
@@ -137,7 +148,8 @@ def render(
         raise TranslucencyError("--light: one light per render for now (run once per light)")
     rendering = render_model(
         model, out, light=light[0], view=view, resolution=resolution, exposure=exposure, reference=reference,
-        spp=spp, radius=radius, paper=paper, angles=angles, overwrite=overwrite, max_memory=max_memory,
+        spp=spp, radius=radius, paper=paper, transport=transport, angles=angles, overwrite=overwrite,
+        max_memory=max_memory,
         reporter=RichReporter(quiet),
     )  # fmt: skip
     table = Table(title=f"render of {model.name}", show_header=False)

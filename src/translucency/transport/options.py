@@ -56,20 +56,25 @@ class TransportOptions:
     @classmethod
     def of(
         cls,
-        options: TransportOptions | None = None,
+        options: TransportOptions | str | None = None,
         *,
         paper: bool = False,
         angles: bool = False,
         radius: float | None = None,
         max_pairs: float | None = None,
     ) -> TransportOptions:
-        """``options`` (default: the defaults) with the user's flags laid over it: ``paper`` draws the
-        ``paper`` kind, ``angles`` the lean, ``radius`` and ``max_pairs`` as given (None: as they were)."""
-        base = cls() if options is None else options
+        """``options`` (default: the defaults; a kind's name: the defaults with that kind) with the user's
+        flags laid over it: ``paper`` draws the ``paper`` kind, ``angles`` the lean, ``radius`` and
+        ``max_pairs`` as given (None: as they were)."""
+        base = cls() if options is None else cls(kind=options) if isinstance(options, str) else options
         if not isinstance(base, cls):
             raise TranslucencyError(f"transport: expected TransportOptions, got {type(base).__name__}")
         changes = {}
         if paper:
+            if base.kind not in ("default", "paper"):
+                raise TranslucencyError(
+                    f"--paper draws the paper's model; --transport {base.kind}: choose one"
+                )
             changes["kind"] = "paper"
         if angles:
             changes["angles"] = True

@@ -55,7 +55,7 @@ GATHER = 256
 GATHER_VERTICES = 160
 #: the split radius, as the energy radius of the model's profiles (the share of a point's planar energy
 #: within it)
-SPLIT_SHARE = 0.05
+SPLIT_SHARE = 0.6
 
 
 @dataclass(frozen=True)

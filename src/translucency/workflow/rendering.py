@@ -63,7 +63,7 @@ class Rendering:
 def render_model(
     model, out=None, *, light=DEFAULT_LIGHT, view=(1.0, -1.6, 0.7), resolution=(320, 240),
     exposure: str = "fixed", reference: bool = False, spp: int = 32, radius: float | None = None,
-    paper: bool = False, angles: bool = False, transport: TransportOptions | None = None,
+    paper: bool = False, angles: bool = False, transport: TransportOptions | str | None = None,
     overwrite: bool = False, max_memory: str | int | None = None, reporter: Reporter | None = None,
 ) -> Rendering:  # fmt: skip
     """Relight a fitted object under a light: its prepared transport drawn through a Mitsuba camera.
@@ -104,10 +104,11 @@ def render_model(
         Lean the near transport toward the light's and the camera's directions (a model fitted from a
         data set with oblique beams, :mod:`translucency.model.lean`; a light of one direction per vertex);
         the summary's ``angles`` says whether it did.
-    transport : TransportOptions, optional
+    transport : TransportOptions or str, optional
         The transport's choices as one object (:class:`translucency.transport.TransportOptions`: a variant
-        registered by name, an experimental incidence law); ``radius``, ``paper`` and ``angles`` are laid
-        over it.
+        registered by name, an experimental incidence law), or a kind's name (``"walked"``: the light that
+        crosses the body walked through the medium estimated from the scan,
+        :mod:`translucency.transport.walk`); ``radius``, ``paper`` and ``angles`` are laid over it.
     overwrite : bool
         Replace an earlier output folder of translucency at ``out`` (never anything else).
     max_memory : str or int, optional
