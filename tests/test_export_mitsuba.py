@@ -1,4 +1,4 @@
-"""``translucency export MODEL --mitsuba DIR`` (medium/mitsuba_scene.py): the scene Mitsuba loads holds the
+"""``translucency export MODEL --mitsuba DIR`` (render/medium_scene.py): the scene Mitsuba loads holds the
 estimated medium's voxels where the Volume has them (the z flip included), a fitted ball's scene renders, the
 folder is refused without --overwrite and a model without a medium in one line, and (slow) the exported scene
 renders as the project's own volpath reference of the same Volume in the same mesh."""
@@ -19,9 +19,9 @@ from translucency import load_model, save_model
 from translucency.acquire.mesh import acquire_mesh, object_volume
 from translucency.cli.app import app
 from translucency.fit.mesh import fit_mesh
-from translucency.medium.mitsuba_scene import FILES, scene_volume, write_mitsuba_scene
 from translucency.mitsuba import mitsuba
 from translucency.render import Camera, coverage, object_of_model, parse_light, rel_rmse, render_reference
+from translucency.render.medium_scene import FILES, scene_volume, write_mitsuba_scene
 
 runner = CliRunner()
 

@@ -43,31 +43,35 @@ MAY_IMPORT: dict[str, frozenset[str]] = {
     **{unit: _BASE for unit in SHARED},
     # the pipeline: an earlier stage never imports a later one
     "acquire": _BASE,
-    "fit": _BASE | {"acquire"},
+    # the object as a medium, estimated from the scan and walked (its walk is acquire's photon walk): read
+    # by the fit that stores it and by the transport that walks the light crossing the body
+    "medium": _BASE | {"acquire"},
+    "fit": _BASE | {"acquire", "medium"},
     "evaluate": _BASE | {"acquire", "fit"},
     # a fitted object's light transport, prepared once and drawn by every renderer: on the model alone
-    "transport": _BASE,
-    "render": _BASE | {"acquire", "fit", "evaluate", "transport"},
+    "transport": _BASE | {"medium"},
+    "render": _BASE | {"acquire", "medium", "fit", "evaluate", "transport"},
     # a user's Mitsuba scene with fitted objects in it: the prepared objects' transport inside a scene
-    "scene": _BASE | {"acquire", "fit", "evaluate", "transport", "render"},
+    "scene": _BASE | {"acquire", "medium", "fit", "evaluate", "transport", "render"},
     # looking at a fitted model: the page and the live viewer, on the prepared object's transport and transfer
-    "view": _BASE | {"acquire", "fit", "evaluate", "transport", "render"},
+    "view": _BASE | {"acquire", "medium", "fit", "evaluate", "transport", "render"},
     # experiments kept for a benchmark or an ablation (unstable): beside the renderers, imported by none
-    "experimental": _BASE | {"acquire", "fit", "evaluate", "transport", "render", "scene"},
+    "experimental": _BASE | {"acquire", "medium", "fit", "evaluate", "transport", "render", "scene"},
     # a real rig: photographs → a data set as acquire writes it (acquire's place in the pipeline); its
     # near peak walks photons on the scan with acquire's own mesh walk (the same stage, sideways)
     "rig": _BASE | {"acquire"},
     # cross-checks beside the pipeline (tests, benchmarks)
-    "validate": _BASE | {"acquire", "fit", "evaluate", "transport", "render"},
+    "validate": _BASE | {"acquire", "medium", "fit", "evaluate", "transport", "render"},
     # on top: the workflow as functions (``translucency.fit(...)``), the main job, the commands,
     # ``python -m translucency`` and the façade
     "workflow": _BASE
-    | {"acquire", "fit", "evaluate", "transport", "render", "scene", "rig", "view", "pipeline"},
+    | {"acquire", "medium", "fit", "evaluate", "transport", "render", "scene", "rig", "view", "pipeline"},
     "pipeline": _BASE
-    | {"acquire", "fit", "evaluate", "transport", "render", "scene", "rig", "view", "validate"},
+    | {"acquire", "medium", "fit", "evaluate", "transport", "render", "scene", "rig", "view", "validate"},
     "cli": _BASE
     | {
         "acquire",
+        "medium",
         "fit",
         "evaluate",
         "transport",
@@ -83,6 +87,7 @@ MAY_IMPORT: dict[str, frozenset[str]] = {
     "translucency": _BASE
     | {
         "acquire",
+        "medium",
         "fit",
         "evaluate",
         "transport",

@@ -27,46 +27,59 @@ from ._common import (
 DEFAULT_LIGHT = "point:60,-80,120,2e4"
 
 
+_MODEL = typer.Argument(..., help="A per-vertex model file (translucency fit on a mesh data set).")
+
+_PLY = typer.Option(
+    None,
+    "--ply",
+    help="Write the model's mesh here (binary PLY, mm, the model's vertex order): the shape a Mitsuba "
+    "scene places with its to_world for render scene.",
+)
+
+_GLTF = typer.Option(
+    None,
+    "--gltf",
+    help="Write glTF 2.0 binary here (.glb, metres): the mesh, the exitance under --light baked as "
+    "vertex colours (COLOR_0, linear, scaled into [0, 1]: the scale in the file's extras) and per-vertex "
+    "attributes _ALBEDO, _MFP_MM, _BURLEY_S (Christensen-Burley per channel) and _REDUCTION_ERROR.",
+)
+
+_MITSUBA = typer.Option(
+    None,
+    "--mitsuba",
+    metavar="DIR",
+    help="Write a Mitsuba 3 scene into this folder: scene.xml (volpath; the mesh filled with the medium "
+    "estimated from the scan, a heterogeneous medium behind an index-matched null boundary; a default "
+    "camera and the --light to keep or replace), object.ply (mm) and the medium as grid volumes "
+    "sigma_t.vol (extinction, 1/mm, RGB) and albedo.vol (RGB). The model must be fitted with this "
+    "version.",
+)
+
+_LIGHT = typer.Option(
+    DEFAULT_LIGHT,
+    "--light",
+    metavar="LIGHT",
+    help="With --gltf: the light baked (as render's); with --mitsuba: the scene's emitter.",
+    rich_help_panel=PANEL_LIGHT,
+)
+
+_ANGLES = typer.Option(
+    False,
+    "--angles",
+    help="With --gltf: bake the model's lean (the transport leaned toward the light, as render "
+    "--angles); a model without one bakes the paper's model.",
+    rich_help_panel=PANEL_TRANSPORT,
+)
+
+
 @user_errors
 def export(
-    model: Path = typer.Argument(..., help="A per-vertex model file (translucency fit on a mesh data set)."),
-    ply: Path = typer.Option(
-        None,
-        "--ply",
-        help="Write the model's mesh here (binary PLY, mm, the model's vertex order): the shape a Mitsuba "
-        "scene places with its to_world for render scene.",
-    ),
-    gltf: Path = typer.Option(
-        None,
-        "--gltf",
-        help="Write glTF 2.0 binary here (.glb, metres): the mesh, the exitance under --light baked as "
-        "vertex colours (COLOR_0, linear, scaled into [0, 1]: the scale in the file's extras) and per-vertex "
-        "attributes _ALBEDO, _MFP_MM, _BURLEY_S (Christensen-Burley per channel) and _REDUCTION_ERROR.",
-    ),
-    mitsuba: Path = typer.Option(
-        None,
-        "--mitsuba",
-        metavar="DIR",
-        help="Write a Mitsuba 3 scene into this folder: scene.xml (volpath; the mesh filled with the medium "
-        "estimated from the scan, a heterogeneous medium behind an index-matched null boundary; a default "
-        "camera and the --light to keep or replace), object.ply (mm) and the medium as grid volumes "
-        "sigma_t.vol (extinction, 1/mm, RGB) and albedo.vol (RGB). The model must be fitted with this "
-        "version.",
-    ),
-    light: str = typer.Option(
-        DEFAULT_LIGHT,
-        "--light",
-        metavar="LIGHT",
-        help="With --gltf: the light baked (as render's); with --mitsuba: the scene's emitter.",
-        rich_help_panel=PANEL_LIGHT,
-    ),
-    angles: bool = typer.Option(
-        False,
-        "--angles",
-        help="With --gltf: bake the model's lean (the transport leaned toward the light, as render "
-        "--angles); a model without one bakes the paper's model.",
-        rich_help_panel=PANEL_TRANSPORT,
-    ),
+    model: Path = _MODEL,
+    ply: Path = _PLY,
+    gltf: Path = _GLTF,
+    mitsuba: Path = _MITSUBA,
+    light: str = _LIGHT,
+    angles: bool = _ANGLES,
     overwrite: bool = overwrite_option(),
     max_memory: str = max_memory_option(),
     quiet: bool = quiet_option(),

@@ -48,7 +48,7 @@ from scipy.spatial import cKDTree
 from .._validate import TranslucencyError
 from ..acquire.volume import Volume
 from ..geometry import vertex_areas
-from ..model.half_space import _table
+from ..model.half_space import half_space_table as _table
 from .scan import virtual_scan
 
 #: rings of distance the profile is matched on, from the exclusion radius to ``r_fit``

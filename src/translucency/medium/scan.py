@@ -14,11 +14,47 @@ acquisition's (:mod:`translucency.acquire.mesh`), on rows that are returned inst
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from ..acquire.mesh import exit_barycentric, splat_barycentric
 from ..acquire.mesh_walk import EXIT, mesh_random_walk
 from ..geometry import vertex_areas
+
+
+@dataclass(frozen=True)
+class Exits:
+    """The photons of a walk that left scattered (:func:`walk_beams`): per exit, its beam (index into the
+    entries), where it left (mm), its flight direction there, its triangle's vertices and barycentric
+    weights."""
+
+    beam: np.ndarray  # (n,)
+    position: np.ndarray  # (n, 3) mm
+    direction: np.ndarray  # (n, 3) unit, outwards
+    face: np.ndarray  # (n,)
+    tri: np.ndarray  # (n, 3) the exit triangle's vertices
+    bary: np.ndarray  # (n, 3) the exit's barycentric weights there
+
+
+def walk_beams(
+    mesh, volume, channel: int, entry, normal, *, incoming=None, seed: int = 0, scene=None
+) -> Exits:
+    """One photon per entry (``entry``, ``normal`` (n, 3), arriving along ``incoming`` or −``normal``)
+    walked through ``volume`` in ``channel`` behind an index-matched boundary, light that leaves one part
+    through the air into another followed; the exits of the photons that scattered (the unscattered light,
+    a delta along its beam, is left out)."""
+    from ..mitsuba import mesh_scene  # Mitsuba loads only to walk
+
+    scene = mesh_scene(mesh) if scene is None else scene
+    res = mesh_random_walk(
+        scene, mesh.bounds, volume, channel, entry, normal, 1, seed=seed, index_matched=True, reentry=True,
+        incoming=incoming,
+    )  # fmt: skip
+    ok = np.flatnonzero((res.code == EXIT) & (res.scatters > 0))
+    position = res.position[ok].astype(np.float64)
+    tri, bary = exit_barycentric(mesh, res.face[ok], position)
+    return Exits(ok, position, res.direction[ok], res.face[ok], tri, bary)
 
 
 def virtual_scan(mesh, volume, incident, photons: int, *, seed: int = 0, scene=None) -> np.ndarray:

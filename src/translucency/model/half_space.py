@@ -47,6 +47,13 @@ def _table():
     return np.log(centre), np.log1p(-t["albedo"]), logf, t["R_total"]
 
 
+def half_space_table():
+    """The shipped table as :func:`half_space_R_d` reads it: (log ρ at the annuli's centres (B,), log(1 − α)
+    of its albedos (A,), log f (A, B) with the tails extrapolated, the total diffuse reflectance (A,)) —
+    for a search over the albedos (:mod:`translucency.medium.estimate`)."""
+    return _table()
+
+
 def albedo_range() -> tuple[float, float]:
     """The albedos the table spans (outside, the nearest table albedo is used)."""
     _, u, _, _ = _table()
@@ -98,4 +105,4 @@ def half_space_total(albedo: float) -> float:
     return float(np.interp(-np.log1p(-albedo), -u, total))
 
 
-__all__ = ["half_space_R_d", "half_space_total", "albedo_range"]
+__all__ = ["half_space_R_d", "half_space_total", "half_space_table", "albedo_range"]

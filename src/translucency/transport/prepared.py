@@ -146,7 +146,7 @@ class PreparedObject:
     def medium_volume(self):
         """The medium the model's fit estimated from the scan (:mod:`translucency.medium`), on the voxel grid
         a walk reads."""
-        from ..medium import medium_of
+        from ..medium import medium_of  # only a kind that walks reads the medium
 
         return medium_of(self.model).volume(self.mesh)
 

@@ -76,7 +76,7 @@ class WalkedTransport:
         """What a renderer without a light's direction draws (a scene's relight, the viewer, the glTF
         bake: the irradiance alone, :meth:`PreparedObject.through`): the default's transport, the
         through-body table standing for the walk."""
-        from ..medium import medium_of
+        from ..medium import medium_of  # (the medium's module loads with the walk's kind only)
 
         if medium_of(model) is None:
             raise TranslucencyError(
@@ -102,7 +102,7 @@ class WalkedTransport:
     def relight(self, prepared, light, eye, scene):
         """The radiance toward ``eye`` (V, 3) and the irradiance E: the near part as every transport draws
         it, plus the walk of the crossed light."""
-        from .relight import relight_object
+        from .relight import relight_object  # relight imports the kinds' module: a cycle at load
 
         near = self.near(prepared)
         law = prepared.law
@@ -169,8 +169,7 @@ def walk_crossed(
     ``photons`` from the lit vertices along the light, walked through ``volume`` in each channel with the
     same random numbers (the channels' noise is alike: it shows as brightness, not as colour); each vertex
     gathers ``gather`` exits (:func:`_gathered`; 0: its own tally alone, :math:`\mathrm{splat}_o / A_o`)."""
-    from ..acquire.mesh import exit_barycentric
-    from ..acquire.mesh_walk import EXIT, mesh_random_walk
+    from ..medium import walk_beams  # the walk loads Mitsuba: only where a light is walked
 
     X = np.asarray(mesh.vertices, dtype=np.float64)
     N = np.asarray(mesh.vertex_normals, dtype=np.float64)
@@ -191,17 +190,12 @@ def walk_crossed(
     face_n = np.asarray(mesh.face_normals, dtype=np.float64)
     splat, count = np.zeros((V, 3)), np.zeros((V, 3))
     for ch in range(3):
-        res = mesh_random_walk(
-            scene, mesh.bounds, volume, ch, X[src], N[src], 1, seed=seed,
-            index_matched=True, reentry=True, incoming=inward[src],
-        )  # fmt: skip
-        ok = np.flatnonzero((res.code == EXIT) & (res.scatters > 0))  # the unscattered: a delta, left out
-        pos, face, j = res.position[ok].astype(np.float64), res.face[ok], src[ok]
-        far = np.linalg.norm(pos - X[j], axis=1) >= split
-        crossed = far | (np.einsum("nk,nk->n", N[j], face_n[face]) <= 0)  # the pairs the near part leaves
-        pos, face, d = pos[crossed], face[crossed], res.direction[ok][crossed]
-        power_c = carried[j[crossed], ch]
-        tri, bary = exit_barycentric(mesh, face, pos)
+        out = walk_beams(mesh, volume, ch, X[src], N[src], incoming=inward[src], seed=seed, scene=scene)
+        j = src[out.beam]
+        far = np.linalg.norm(out.position - X[j], axis=1) >= split
+        crossed = far | (np.einsum("nk,nk->n", N[j], face_n[out.face]) <= 0)  # the pairs the near part leaves
+        pos, face, d = out.position[crossed], out.face[crossed], out.direction[crossed]
+        tri, bary, power_c = out.tri[crossed], out.bary[crossed], carried[j[crossed], ch]
         radiance = power_c / np.pi  # as exitance: Φ / π per unit area
         if eye is not None and eta == 1.0:  # by its own direction, toward the camera
             radiance = power_c * _lobe(d, np.asarray(eye, dtype=np.float64) - pos, face_n[face], lobe)

@@ -6,7 +6,7 @@ exitance under a light baked as vertex colours (the render stage's chain) and ea
 to Christensen–Burley's albedo and mean free path per channel (with the reduction's error).
 :func:`export_model` is ``translucency export``: any of these, every check before any file is written, and
 with ``mitsuba=DIR`` the medium estimated from the scan filling the mesh as a Mitsuba 3 scene
-(:func:`translucency.medium.mitsuba_scene.write_mitsuba_scene`).
+(:func:`translucency.render.medium_scene.write_mitsuba_scene`).
 Units: mm (glTF positions in metres), radiance in W/(mm² sr), linear RGB.
 """
 
@@ -70,7 +70,7 @@ def export_model(
         Write a Mitsuba 3 scene into this folder: ``scene.xml`` (``volpath``, the shape filled with a
         ``heterogeneous`` medium behind an index-matched ``null`` boundary, a default camera and the light
         ``light``), ``object.ply`` and the medium estimated from the scan as grid volumes ``sigma_t.vol``
-        and ``albedo.vol`` (mm⁻¹, RGB): :func:`translucency.medium.mitsuba_scene.write_mitsuba_scene`.  The
+        and ``albedo.vol`` (mm⁻¹, RGB): :func:`translucency.render.medium_scene.write_mitsuba_scene`.  The
         model must carry the estimate (fitted with this version).
     light : str
         With ``gltf``: the light baked (as :func:`render_model`'s); with ``mitsuba``: the scene's emitter.
@@ -115,7 +115,7 @@ def export_model(
     run = Run("export", max_memory=max_memory)
     fitted, mesh, acquisition, inputs = _object(model)
     if mitsuba is not None:  # the model's medium and the folder, checked before any file is written
-        from ..medium.mitsuba_scene import medium_or_refuse
+        from ..render.medium_scene import medium_or_refuse
 
         name = str(model) if inputs else "model"
         medium_or_refuse(fitted, name)
@@ -258,7 +258,7 @@ def _write_ply(mesh, path: Path) -> None:
 def _write_scene(fitted, mesh, folder: Path, light, overwrite: bool, inputs, name: str) -> dict:
     """Write the Mitsuba scene of the model's medium into ``folder`` under ``light`` (placed); what the
     summary states."""
-    from ..medium.mitsuba_scene import scene_volume, write_mitsuba_scene
+    from ..render.medium_scene import scene_volume, write_mitsuba_scene  # Mitsuba loads only to export
 
     scene = write_mitsuba_scene(
         fitted, mesh, folder, light=light, overwrite=overwrite, inputs=inputs, option="mitsuba", name=name

@@ -123,8 +123,7 @@ def _medium_record(model) -> dict | None:
     albedo, and what the estimate assumes; None for a model without one."""
     if "medium" not in (model.measured or {}):
         return None
-    from .. import fit  # noqa: F401 — fit.mesh imports medium.estimate, which imports fit: fit loads first
-    from ..medium.estimate import medium_of
+    from ..medium.estimate import medium_of  # info of a model without a medium loads none of it
 
     return {**medium_of(model).summary(), "index_matched": True, "assumed": MEDIUM_ASSUMED}
 

@@ -45,8 +45,8 @@ from .._validate import TranslucencyError
 from .._version import __version__
 from ..io.atomic import atomic_path
 from ..io.outputs import PLY_COMMENT, claim_folder, release_output
+from ..medium.estimate import VOXELS, medium_of
 from ..mitsuba.scenes import NO_ROULETTE
-from .estimate import VOXELS, medium_of
 
 __all__ = ["FILES", "medium_or_refuse", "scene_volume", "write_mitsuba_scene"]
 
@@ -140,8 +140,8 @@ def write_mitsuba_scene(
     PosixPath('ball-mitsuba/scene.xml')
     """
     from ..mitsuba import mitsuba, slab_medium_dict, write_ply  # Mitsuba loads only to write
-    from ..render import Camera, parse_light
-    from ..render.reference import check_reference
+    from . import Camera, parse_light
+    from .reference import check_reference
 
     eta = float(eta)
     if not (np.isfinite(eta) and eta > 0):
