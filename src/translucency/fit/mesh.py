@@ -319,8 +319,12 @@ def _attach_measured(result: FitResult, ds, exclusion: float, chunk_points: int)
         result.model.measured["lean"] = fit_lean(ds, chunk_points)
     elif (from_shots := fit_lean_from_shots(ds)) is not None:  # a lab's oblique shots
         result.model.measured["lean"] = from_shots
-    # the medium that reproduces the scan (medium/estimate.py): what a walk of the crossed light reads
-    result.model.measured["medium"] = estimate_medium(ds).stacked()
+    # the medium that reproduces the scan (medium/estimate.py): what a walk of the crossed light reads; a
+    # scan too coarse for it (no point with lit rings) keeps the model without one, said in a warning
+    try:
+        result.model.measured["medium"] = estimate_medium(ds).stacked()
+    except TranslucencyError as exc:
+        warnings.warn(f"fit: no medium estimated ({exc})", stacklevel=2)
     # the photons per point: how far the physical bounds let a total exceed 1 by noise (model/bounds.py)
     result.model.tally_photons = int(ds.header["photons"]) if ds.header.get("photons") else None
     result.acquisition = ds.header

@@ -57,6 +57,8 @@ RINGS = 16
 R_FIT = 16.0
 #: pairs count as the beam's own side where n_i · n_o exceeds this
 SAME_SIDE = 0.5
+#: the lit rings a point needs for its own estimate (fewer: its nearest neighbours')
+MIN_RINGS = 3
 #: the extinction grid searched, mm⁻¹ (log-spaced)
 SIGMA_T_GRID = np.geomspace(0.01, 200.0, 241)
 #: albedos searched: the table's own and 7 between each two, in log(1 − α)
@@ -226,13 +228,17 @@ def estimate_medium(
     scene = None
     for step in range(rounds + 1):
         # each point's rings matched by the half-space, evaluated where the ring's vertices lie
-        a_s, resid, H_b = np.empty((len(rows), 3, 2), int), np.empty((len(rows), 3)), np.empty_like(E_b)
+        a_s, resid, H_b = np.full((len(rows), 3, 2), -1), np.zeros((len(rows), 3)), np.zeros_like(E_b)
         for k in range(len(rows)):
             grid = _profile_grid(r_b[k])
             for c in range(3):
-                a, s_, resid[k, c] = _match(grid, A_b[k], E_b[k, :, c] / G[k, :, c], T[k, c] / G_T[k, c])
+                found = _match(grid, A_b[k], E_b[k, :, c] / G[k, :, c], T[k, c] / G_T[k, c])
+                if found is None:  # too few lit rings: the nearest points' estimate, below
+                    continue
+                a, s_, resid[k, c] = found
                 a_s[k, c] = a, s_
                 H_b[k, :, c] = np.exp(grid[1][a, s_]) * A_b[k]
+        a_s = _filled(a_s, v[incident[rows]])
         albedo, sigma_t = _albedos()[a_s[..., 0]], SIGMA_T_GRID[a_s[..., 1]]
         medium = Medium(v[incident[rows]], albedo * sigma_t, (1 - albedo) * sigma_t, resid)
         if step == rounds:
@@ -316,17 +322,36 @@ def _profile_grid(radii: np.ndarray):
     return -np.expm1(uu), logprof
 
 
-def _match(grid, A_b: np.ndarray, E_b: np.ndarray, total: float | None = None) -> tuple[int, int, float]:
+def _filled(a_s: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """The grid indices (n, 3, 2) with each point and channel that had too few lit rings (−1) given those of
+    the nearest point that had enough; one line where no point had."""
+    missing = a_s[..., 0] < 0
+    if not missing.any():
+        return a_s
+    for c in range(3):
+        have = np.flatnonzero(~missing[:, c])
+        if have.size == 0:
+            raise TranslucencyError(
+                f"data set: no incident point has {MIN_RINGS} lit rings within the fit's reach on its own "
+                "side; the medium cannot be estimated (too few photons, or too coarse a mesh)"
+            )
+        lack = np.flatnonzero(missing[:, c])
+        _, near = cKDTree(x[have]).query(x[lack])
+        a_s[lack, c] = a_s[have[near], c]
+    return a_s
+
+
+def _match(
+    grid, A_b: np.ndarray, E_b: np.ndarray, total: float | None = None
+) -> tuple[int, int, float] | None:
     """(albedo index, σ_t index, RMS log residual) of the half-space that best matches one point's rings in
     one channel (``A_b`` the rings' areas mm², ``E_b`` their measured energies Σ A R_d; ``total``: the
-    point's whole exitance, matched by the half-space's total reflectance, which holds the albedo)."""
+    point's whole exitance, matched by the half-space's total reflectance, which holds the albedo); None
+    where fewer than ``MIN_RINGS`` rings were lit."""
     albedo, logprof = grid
     ok = (A_b > 0) & (E_b > 0)
-    if ok.sum() < 3:
-        raise TranslucencyError(
-            "data set: an incident point has fewer than 3 lit rings within 16 mm on its own side; "
-            "the medium cannot be estimated there (too few photons or too coarse a mesh)"
-        )
+    if ok.sum() < MIN_RINGS:
+        return None
     m = np.log(E_b[ok] / A_b[ok])
     w = E_b[ok] / E_b[ok].sum()
     P = logprof[..., ok]  # (Aα, G, B)

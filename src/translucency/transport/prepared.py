@@ -174,10 +174,16 @@ class PreparedObject:
     def describe(self) -> dict:
         """What is drawn, as a summary states it: the kind, the near radius, the law, the table, the lean."""
         T = self.transport
-        return {
+        out = {
             "transport": self.kind.name,
             "radius_mm": self.radius,
             "incidence": self.law.name,
             "through": bool(T.through),
             "angles": self.has_lean,
         }
+        if hasattr(self.kind, "relight"):  # a kind that draws a light its own way: where it does not
+            out["irradiance_only"] = (
+                "a relight from the irradiance alone (a scene, the viewer, glTF) draws the default's "
+                "through-body table instead of the walk"
+            )
+        return out
