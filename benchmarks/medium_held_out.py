@@ -67,7 +67,7 @@ def held_out(path: Path) -> dict:
         rows[name] = {"rel_rms": err, "noise": noise, "ratio": err / noise, "data_mean": float(d.mean())}
     summary = medium.summary()
     truth = _truth(ds.header)
-    return {"data": str(path), "points_seen": len(seen), "points_held_out": len(unseen), "photons": photons,
+    return {"data": path.name, "points_seen": len(seen), "points_held_out": len(unseen), "photons": photons,
             "bands": rows, "estimate": summary, "truth": truth}  # fmt: skip
 
 

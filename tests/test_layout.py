@@ -47,7 +47,7 @@ MAY_IMPORT: dict[str, frozenset[str]] = {
     # by the fit that stores it and by the transport that walks the light crossing the body
     "medium": _BASE | {"acquire"},
     "fit": _BASE | {"acquire", "medium"},
-    "evaluate": _BASE | {"acquire", "fit"},
+    "evaluate": _BASE | {"acquire", "medium", "fit"},
     # a fitted object's light transport, prepared once and drawn by every renderer: on the model alone
     "transport": _BASE | {"medium"},
     "render": _BASE | {"acquire", "medium", "fit", "evaluate", "transport"},

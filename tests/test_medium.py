@@ -28,7 +28,7 @@ from translucency.fit.mesh import fit_mesh  # (before medium: fit.mesh and mediu
 from translucency.geometry import vertex_areas
 from translucency.io.mesh_dataset import HEADER_KEY, open_mesh_dataset
 from translucency.medium import estimate_medium, medium_of
-from translucency.medium.estimate import RINGS, SIGMA_T_GRID, _match, _profile_grid
+from translucency.medium.estimate import ASSUMED, RINGS, SIGMA_T_GRID, _match, _profile_grid
 from translucency.medium.scan import virtual_scan
 from translucency.model.half_space import half_space_R_d
 from translucency.model.materials import material
@@ -287,7 +287,7 @@ def test_info_states_the_estimate(fitted, tmp_path):
     for key in ("sigma_s", "sigma_a", "albedo"):
         np.testing.assert_allclose(got[key], want[key])
         assert np.array(got[key]).shape == (3, 3)
-    assert got["assumed"] == MEDIUM_ASSUMED == "g = 0 assumed (similar medium), index-matched"
+    assert got["assumed"] == MEDIUM_ASSUMED == ASSUMED == "g = 0 assumed (similar medium), index-matched"
     assert got["g"] == 0.0 and got["index_matched"] is True and got["points"] == 16
     runner = CliRunner()
     res = runner.invoke(app, ["info", str(path), "--json"])

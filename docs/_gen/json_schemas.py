@@ -302,6 +302,24 @@ EVALUATE = record(
 )
 
 # -- evaluate on a mesh data set ---------------------------------------------------------------------
+_MEDIUM = record(
+    "The medium estimated from the scan alone (measured/medium): per channel R, G, B the "
+    "[min, median, max] over the incident points; absent for a model without one.",
+    {
+        "sigma_s": array("Scattering coefficient σ_s, per channel [min, median, max].", RGB, "mm^-1"),
+        "sigma_a": array("Absorption coefficient σ_a, per channel [min, median, max].", RGB, "mm^-1"),
+        "albedo": array("Single-scattering albedo σ_s / σ_t, per channel [min, median, max].", RGB),
+        "rings_rms_log_residual": field(
+            "number", "RMS log residual of the half-space's match over the rings (when stored)."
+        ),
+        "g": field("number", "The mean cosine assumed: 0 (the similar medium, σ_s = σ_s')."),
+        "points": field("integer", "Incident points estimated."),
+        "index_matched": field("boolean", "The boundary assumed: index-matched (always true)."),
+        "assumed": field("string", "What the estimate assumes, in words."),
+    },
+    optional=("rings_rms_log_residual",),
+)
+
 _SURFACE_BANDS = ("near", "mid", "far", "surface")
 _MESH_ERRORS = {
     **{k: v for k, v in _ERRORS.items() if k not in ("energy_error", "energy_noise", "per_point")},
@@ -355,8 +373,9 @@ _MESH_MODEL_ERRORS = record(
         **_MESH_ERRORS,
         "in_sample": field("object", "The same numbers against the fitted data (with --truth)."),
         "oblique": _OBLIQUE,
+        "medium": _MEDIUM,
     },
-    optional=("in_sample", "oblique"),
+    optional=("in_sample", "oblique", "medium"),
 )
 EVALUATE_MESH = record(
     "`translucency evaluate --json` on a mesh data set (per-vertex models): the same names as on a planar "
@@ -729,23 +748,7 @@ INFO_MODEL = record(
             "(the through-body table, drawn by render unless --paper), lean (κ, render --angles), medium "
             "(the medium estimated from the scan); empty for planar models.",
         ),
-        "medium": record(
-            "The medium estimated from the scan alone (measured/medium): per channel R, G, B the "
-            "[min, median, max] over the incident points; absent for a model without one.",
-            {
-                "sigma_s": array("Scattering coefficient σ_s, per channel [min, median, max].", RGB, "mm^-1"),
-                "sigma_a": array("Absorption coefficient σ_a, per channel [min, median, max].", RGB, "mm^-1"),
-                "albedo": array("Single-scattering albedo σ_s / σ_t, per channel [min, median, max].", RGB),
-                "rings_rms_log_residual": field(
-                    "number", "RMS log residual of the half-space's match over the rings (when stored)."
-                ),
-                "g": field("number", "The mean cosine assumed: 0 (the similar medium, σ_s = σ_s')."),
-                "points": field("integer", "Incident points estimated."),
-                "index_matched": field("boolean", "The boundary assumed: index-matched (always true)."),
-                "assumed": field("string", "What the estimate assumes, in words."),
-            },
-            optional=("rings_rms_log_residual",),
-        ),
+        "medium": _MEDIUM,
         **BOUNDS,
     },
     optional=(

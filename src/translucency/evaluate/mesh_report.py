@@ -26,6 +26,7 @@ import numpy as np
 from .._version import __version__
 from ..io.atomic import write_json
 from ..io.mesh_dataset import MeshDataset, open_mesh_dataset
+from ..medium import medium_of
 from ..model.bounds import check_physics
 from .errors import BANDS, finite_or_null
 from .labels import labelled_models, noise_label
@@ -149,6 +150,9 @@ def _model_summary(name, e, model, in_sample, held_out, reference, flagged: dict
     oblique = oblique_errors(model, reference, exclusion_mm=exclusion.get(name))
     if oblique is not None:
         s["oblique"] = oblique
+    medium = medium_of(model)  # the medium the fit estimated from the scan, as info states it
+    if medium is not None:
+        s["medium"] = medium.summary()
     return s
 
 

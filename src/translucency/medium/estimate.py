@@ -51,6 +51,8 @@ from ..geometry import vertex_areas
 from ..model.half_space import half_space_table as _table
 from .scan import virtual_scan
 
+#: what the estimate assumes where the data cannot tell (module docstring), as info and evaluate say it
+ASSUMED = "g = 0 assumed (similar medium), index-matched"
 #: rings of distance the profile is matched on, from the exclusion radius to ``r_fit``
 RINGS = 16
 #: the farthest ring, mm (the bands of the scan the estimate is checked on run to 16 mm)
@@ -164,6 +166,8 @@ class Medium:
             out["rings_rms_log_residual"] = float(np.sqrt(np.mean(self.residual**2)))
         out["g"] = self.g
         out["points"] = len(self.x)
+        out["index_matched"] = True
+        out["assumed"] = ASSUMED
         return out
 
     def stacked(self) -> np.ndarray:

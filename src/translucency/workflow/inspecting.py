@@ -27,7 +27,9 @@ __all__ = ["MODEL_FIELDS", "describe", "describe_materials"]
 #: the header fields of a model file that a description lists, in order
 MODEL_FIELDS = ("format", "version", "kind", "geometry", "n_points", "n_terms", "n_directions", "colour")
 #: what the medium estimated from the scan assumes (medium/estimate.py), stated beside its numbers
-MEDIUM_ASSUMED = "g = 0 assumed (similar medium), index-matched"
+MEDIUM_ASSUMED = (
+    "g = 0 assumed (similar medium), index-matched"  # = medium.estimate.ASSUMED (a test holds them equal)
+)
 
 
 def describe(path) -> dict:
@@ -125,7 +127,7 @@ def _medium_record(model) -> dict | None:
         return None
     from ..medium.estimate import medium_of  # info of a model without a medium loads none of it
 
-    return {**medium_of(model).summary(), "index_matched": True, "assumed": MEDIUM_ASSUMED}
+    return medium_of(model).summary()
 
 
 def describe_materials(eta: float = 1.3) -> dict:
