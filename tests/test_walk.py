@@ -89,3 +89,63 @@ def test_the_split_leaves_the_near_pairs_out_of_the_walk():
     cap = n[:, 2] > 0.95
     assert crossed[cap].max() < 0.05 * all_of_it[cap].mean()
     assert crossed[n[:, 2] < -0.5].mean() > 0.5 * all_of_it[n[:, 2] < -0.5].mean()
+
+
+@pytest.fixture
+def box_model(tmp_path):
+    """A random per-vertex model on a box (10 × 6 × 4 mm) carrying a medium that varies from point to point,
+    saved; and the same model without its medium (fitted before the estimate existed)."""
+    from helpers import random_exponential_model
+    from translucency import save_model
+
+    rng = np.random.default_rng(7)
+    box = trimesh.creation.box(extents=(10.0, 6.0, 4.0)).subdivide().subdivide()
+    points = rng.choice(len(box.vertices), 12, replace=False)
+    model = random_exponential_model(rng, geometry="mesh", mesh=box, points=points)
+    model.faces = np.asarray(box.faces)
+    medium = np.stack([rng.uniform(0.5, 2.0, (12, 3)), rng.uniform(0.01, 0.2, (12, 3))], axis=1)
+    model.measured = {"medium": medium}
+    with_medium = save_model(model, tmp_path / "box.model.zip")
+    model.measured = {}
+    return with_medium, save_model(model, tmp_path / "old.model.zip")
+
+
+def test_render_draws_a_walked_kind_by_name_and_refuses_in_one_line(box_model, tmp_path):
+    """``render --transport KIND``: a walked kind (registered small here) draws a finite, non-negative picture
+    whose summary names it; a model without a medium, --paper beside it and an unknown kind each get one
+    line and exit status 2."""
+    import json
+
+    from typer.testing import CliRunner
+
+    from helpers import error_line
+    from translucency.cli.app import app
+    from translucency.transport.kinds import TRANSPORTS, register_transport
+    from translucency.transport.walk import WalkedTransport
+
+    path, old = box_model
+    register_transport(WalkedTransport(name="walked-small", photons=4000))
+    try:
+        res = CliRunner().invoke(
+            app,
+            ["render", str(path), "--out", str(tmp_path / "r"), "--transport", "walked-small",
+             "--light", "directional@back,10", "--resolution", "32", "24", "--json", "-q"],
+        )  # fmt: skip
+        assert res.exit_code == 0, res.output
+        summary = json.loads(res.stdout)
+        from translucency.mitsuba import mitsuba as mi_of
+
+        picture = np.array(mi_of().Bitmap(str(tmp_path / "r" / "ours.exr")))
+        assert np.isfinite(picture).all() and picture.min() >= 0 and picture.max() > 0
+        assert summary["command"] == "render"
+    finally:
+        del TRANSPORTS["walked-small"]
+    line = error_line(["render", old, "--out", tmp_path / "o", "--transport", "walked"])
+    assert (
+        line
+        == "error: transport walked: the model holds no estimated medium (fit it again with this version)"
+    )
+    line = error_line(["render", path, "--out", tmp_path / "p", "--transport", "walked", "--paper"])
+    assert line == "error: --paper draws the paper's model; --transport walked: choose one"
+    line = error_line(["render", path, "--out", tmp_path / "n", "--transport", "nonsense"])
+    assert line.startswith("error: transport: 'nonsense' is not one of default, paper, walked")
