@@ -44,6 +44,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy.spatial import cKDTree
+from scipy.special import logsumexp
 
 from .._validate import TranslucencyError
 from ..acquire.volume import Volume
@@ -70,7 +71,7 @@ BLEND = 4
 #: virtual scans that correct the half-space's rings for the object's shape (:func:`estimate_medium`)
 ROUNDS = 2
 #: photons per point and channel of each of them
-SCAN_PHOTONS = 1000
+SCAN_PHOTONS = 500
 #: voxels along the longest side of the grid a walk reads (:meth:`Medium.volume`)
 VOXELS = 48
 
@@ -360,7 +361,9 @@ def _match(
     w = E_b[ok] / E_b[ok].sum()
     P = logprof[..., ok]  # (Aα, G, B)
     shape = ((P - m) ** 2 * w).sum(axis=-1)
-    energy = (np.log(np.exp(P) @ A_b[ok]) - np.log(E_b[ok].sum())) ** 2
+    energy = (
+        logsumexp(P, axis=-1, b=A_b[ok]) - np.log(E_b[ok].sum())
+    ) ** 2  # log Σ_b A_b H(r_b), no underflow
     if total is not None and total > 0:
         energy = energy + (np.log(_half_space_totals()) - np.log(total))[:, None] ** 2
     a, s = np.unravel_index(np.argmin(shape + energy), shape.shape)
