@@ -86,6 +86,7 @@ VOCABULARY: dict[str, tuple[str, str]] = {
     "--profiles": ("I,J,K", "incident points whose profiles are drawn"),
     "--truth": ("PATH", "an independent acquisition of the same incident points"),
     "--paper": ("", "the paper's model: each point's radial profile alone"),
+    "--transport": ("KIND", "the transport drawn, by its registered name (default, walked, paper)"),
     # -- render, export, view
     "--light": ("LIGHT", "a light in the object's frame"),
     "--view": ("X,Y,Z", "direction from the object's centre towards the camera"),
@@ -104,6 +105,7 @@ VOCABULARY: dict[str, tuple[str, str]] = {
     "--picture-spp": ("INT", "samples per pixel of our picture"),
     "--ply": ("PATH", "the mesh written as PLY"),
     "--gltf": ("PATH", "glTF 2.0 binary written"),
+    "--mitsuba": ("DIR", "a Mitsuba 3 scene of the estimated medium written into this folder"),
     "--export": ("PATH", "a static page written into this folder"),
     "--port": ("INT", "the port served on"),
     "--browser": ("", "open the page in the default browser"),
