@@ -71,7 +71,7 @@ BLEND = 4
 #: virtual scans that correct the half-space's rings for the object's shape (:func:`estimate_medium`)
 ROUNDS = 2
 #: photons per point and channel of each of them
-SCAN_PHOTONS = 500
+SCAN_PHOTONS = 1000
 #: voxels along the longest side of the grid a walk reads (:meth:`Medium.volume`)
 VOXELS = 48
 
