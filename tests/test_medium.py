@@ -104,10 +104,10 @@ class _Scan:
 
 @pytest.mark.xfail(
     strict=True,
-    reason="rounds=0 matches each ring's vertex-sampled mean with the profile at one radius per ring (the "
-    "area-weighted geometric mean of its vertices' distances); on a plate of 0.5 mm pitch the inner rings hold "
-    "a few vertices over a steep profile, and the match misses the table's own half-space by more than the "
-    "grid's steps.  The virtual-scan rounds absorb it on a real object.",
+    reason="rounds=0 matches each ring's vertex-sampled mean with the profile at one radius per ring "
+    "(the area-weighted geometric mean of its vertices' distances); on a plate of 0.5 mm pitch the inner "
+    "rings hold a few vertices over a steep profile, and the match misses the table's own half-space by "
+    "more than the grid's steps.  The virtual-scan rounds absorb it on a real object.",
 )
 def test_half_space_match_recovers_a_flat_plates_half_space():
     """The estimate with ``rounds=0`` on a flat plate (48 × 48 mm, 0.5 mm pitch) whose R_d at each vertex is
