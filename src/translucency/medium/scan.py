@@ -38,23 +38,23 @@ class Exits:
 
 
 def walk_beams(
-    mesh, volume, channel: int, entry, normal, *, incoming=None, seed: int = 0, scene=None
+    mesh, volume, channel: int, entry, normal, *, photons: int = 1, incoming=None, seed: int = 0, scene=None
 ) -> Exits:
-    """One photon per entry (``entry``, ``normal`` (n, 3), arriving along ``incoming`` or −``normal``)
+    """``photons`` photons per entry (``entry``, ``normal`` (n, 3); arriving along ``incoming`` or −normal)
     walked through ``volume`` in ``channel`` behind an index-matched boundary, light that leaves one part
     through the air into another followed; the exits of the photons that scattered (the unscattered light,
-    a delta along its beam, is left out)."""
+    a delta along its beam, is left out), each with the entry it came from."""
     from ..mitsuba import mesh_scene  # Mitsuba loads only to walk
 
     scene = mesh_scene(mesh) if scene is None else scene
     res = mesh_random_walk(
-        scene, mesh.bounds, volume, channel, entry, normal, 1, seed=seed, index_matched=True, reentry=True,
-        incoming=incoming,
+        scene, mesh.bounds, volume, channel, entry, normal, photons, seed=seed, index_matched=True,
+        reentry=True, incoming=incoming,
     )  # fmt: skip
     ok = np.flatnonzero((res.code == EXIT) & (res.scatters > 0))
     position = res.position[ok].astype(np.float64)
     tri, bary = exit_barycentric(mesh, res.face[ok], position)
-    return Exits(ok, position, res.direction[ok], res.face[ok], tri, bary)
+    return Exits(ok // photons, position, res.direction[ok], res.face[ok], tri, bary)
 
 
 def virtual_scan(mesh, volume, incident, photons: int, *, seed: int = 0, scene=None) -> np.ndarray:
@@ -77,15 +77,9 @@ def virtual_scan(mesh, volume, incident, photons: int, *, seed: int = 0, scene=N
     incident = np.asarray(incident, dtype=np.int64)
     V, n = len(mesh.vertices), len(incident)
     area = vertex_areas(mesh)
-    normals = np.asarray(mesh.vertex_normals)
-    point = np.repeat(np.arange(n), photons)
+    entry, normal = np.asarray(mesh.vertices)[incident], np.asarray(mesh.vertex_normals)[incident]
     R = np.zeros((n, V, 3), np.float64)
-    for ch in range(3):
-        res = mesh_random_walk(
-            scene, mesh.bounds, volume, ch, np.asarray(mesh.vertices)[incident], normals[incident], photons,
-            seed=seed + 7919 * ch, index_matched=True, reentry=True,
-        )  # fmt: skip
-        ok = (res.code == EXIT) & (res.scatters > 0)  # the unscattered light apart, as acquired
-        tri, bary = exit_barycentric(mesh, res.face[ok], res.position[ok])
-        R[..., ch] = splat_barycentric(tri, bary, point[ok], n, V) / (photons * area)
+    for ch in range(3):  # the unscattered light apart, as acquired
+        out = walk_beams(mesh, volume, ch, entry, normal, photons=photons, seed=seed + 7919 * ch, scene=scene)
+        R[..., ch] = splat_barycentric(out.tri, out.bary, out.beam, n, V) / (photons * area)
     return R

@@ -9,19 +9,20 @@ the pair is **near** when they are closer than the split radius :math:`R_s` (mm)
   its measured total that its profile puts within :math:`R_s` on the plane,
   :math:`f_i = \sum_k \frac{c_k}{d_k^2}\bigl(1 - (1 - d_k R_s) e^{d_k R_s}\bigr) / \sum_k \frac{c_k}{d_k^2}`;
 - the crossed pairs are a walk of the light itself.  Photons enter where the light reaches the surface
-  (each lit vertex by its share of the power :math:`E_j A_j`, W), **along the light's own direction**,
-  walk through the estimated medium (:mod:`translucency.medium`, behind an index-matched boundary) and are
-  tallied where they leave if their exit is crossed from their entry.  Toward a camera at ``eye`` each exit
-  within ``cone_deg`` of the direction to it counts by its own direction,
+  (drawn by the lit vertices' mean power over the channels :math:`E_j A_j`, W, each carrying its channel's
+  share), **along the light's own direction**, walk through the estimated medium (:mod:`translucency.medium`,
+  behind an index-matched boundary; the three channels with the same random numbers) and are tallied where
+  they leave if their exit is crossed from their entry.  Toward a camera at ``eye`` each exit counts by its
+  own direction d, spread over a normalised lobe about the direction e to the camera,
 
-  .. math:: L_o = \frac{1}{N} \sum_{\text{exits at } o \text{ in the cone}}
-            \frac{\Phi\, \phi_o(y)}{A_o\, \pi \sin^2\!\gamma\, \cos\theta_o}
-            \quad [\text{W}/(\text{mm}^2\,\text{sr})],
+  .. math:: \mathrm{splat}_o = \sum_{\text{exits}} \Phi\, \phi_o(y)\,
+            \frac{n + 1}{2\pi} \frac{(d \cdot e)_+^n}{\cos\theta_o} \quad [\text{W/sr}],
 
-  (Φ the power a photon carries, :math:`\phi_o` the exit's barycentric weight, γ the cone's half-angle);
-  without a camera (a scene's relight, the viewer) every exit counts as exitance,
-  :math:`L_o = \frac{1}{N}\sum \Phi \phi_o / (\pi A_o)`.  The light that crossed a thin part unscattered is
-  left out (a delta along the beam, seen only looking down it).
+  (Φ the power a photon carries, :math:`\phi_o` the exit's barycentric weight); without a camera (every
+  exit as exitance) :math:`\mathrm{splat}_o = \sum \Phi \phi_o / \pi`.  The radiance is a photon map's
+  density estimate over the surface, :math:`L_o = \sum_q k_q \mathrm{splat}_q / \sum_q k_q A_q`
+  (:func:`_gathered`, W/(mm² sr)).  The light that crossed a thin part unscattered is left out (a delta
+  along the beam, seen only looking down it).
 
 The split makes the two parts complementary: no pair is in both, and each pair is in one.  Behind a
 dielectric boundary (η ≠ 1) the walk's power holds the entry's :math:`F_t(\theta_i)/F_t(0)` and its exits
@@ -209,8 +210,8 @@ def walk_crossed(
 
 def _lobe(d, to_eye, m, n: float) -> np.ndarray:
     r"""Each exit's radiance toward the eye per unit of its power and of area (sr⁻¹): its direction d spread
-    over the normalised lobe :math:`K = rac{n + 1}{2\pi} (d \cdot e)^n` about the direction e to the eye,
-    over the exit face's :math:`\cos	heta_o = m \cdot e` (at least 0.1)."""
+    over the normalised lobe :math:`K = \frac{n + 1}{2\pi} (d \cdot e)^n` about the direction e to the eye,
+    over the exit face's :math:`\cos\theta_o = m \cdot e` (at least 0.1)."""
     e = to_eye / np.linalg.norm(to_eye, axis=1, keepdims=True)
     d = d / np.linalg.norm(d, axis=1, keepdims=True)
     cos_o = np.maximum(np.einsum("nk,nk->n", m, e), 0.1)
