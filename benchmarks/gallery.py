@@ -1,9 +1,12 @@
 """The documentation's gallery: the main job's figures, picked from a demo's output folder and made small.
 
 Reads the figures ``make demo`` (``translucency demo --out RESULTS``) writes, scales each to at most
-:data:`MAX_WIDTH` pixels wide with a palette of 256 colours, writes them into DOCS_GALLERY and the page's
-captions, with the numbers of the run, into the gallery page (``DOCS_GALLERY.md`` beside the folder,
-between this script's markers):
+:data:`MAX_WIDTH` pixels wide with a palette of 256 colours, writes them into DOCS_GALLERY, the run's
+numbers into the data file ``DOCS_GALLERY.json`` (``figure2``, ``paper``, ``relight``: the demo's
+``figure2.json``, ``figure2_paper.json`` and ``relight.json``; ``command``, ``software``) and the page's
+captions, which read those numbers (``{{ data.gallery.figure2.flip_mean_object | f3 }}``, the site's macros:
+docs/_ext/numbers.py), into the gallery page (``DOCS_GALLERY.md`` beside the folder, between this script's
+markers).  Every page that states these numbers (the home page's picture among them) reads them from there:
 
     make demo && python benchmarks/gallery.py results docs/gallery
 """
@@ -32,7 +35,7 @@ class Figure:
     source: str  # relative to the demo folder
     name: str  # the file in the gallery folder
     title: str
-    caption: str  # may name the run's numbers: {figure2[...]}, {paper[...]}, {relight[...]}
+    caption: str  # may name the run's numbers as the site's macros do: {{ data.gallery.figure2.… | f3 }}
 
 
 FIGURES = (
@@ -40,11 +43,12 @@ FIGURES = (
         "report/figure2.png",
         "figure2.png",
         "An object rendered from its fitted model",
-        "The procedural alabaster pig (a generated marble filling), path-traced through its volume by "
-        "Mitsuba's volpath (left) and rendered from the per-vertex model fitted to its virtual acquisition, "
-        "as `fit` and `render` do by default (middle); right, their difference (FLIP). Over the object: "
-        "FLIP {figure2[flip_mean_object]:.3f}, relative RMSE {figure2[rel_rmse]:.3f}; preparing and drawing "
-        "the model's picture took {figure2[speedup_vs_reference]:.0f}× less time than path-tracing the "
+        "The procedural pig filled with veined marble (the `marble` generator), path-traced through its "
+        "volume by Mitsuba's volpath (left) and rendered from the per-vertex model fitted to its virtual "
+        "acquisition, as `fit` and `render` do by default (middle); right, their difference (FLIP). Over the "
+        "object: FLIP {{ data.gallery.figure2.flip_mean_object | f3 }}, relative RMSE "
+        "{{ data.gallery.figure2.rel_rmse | f3 }}; preparing and drawing the model's picture took "
+        "{{ data.gallery.figure2.speedup_vs_reference | times(0) }} less time than path-tracing the "
         "reference.",
     ),
     Figure(
@@ -53,7 +57,8 @@ FIGURES = (
         "The same object with the paper's model",
         "The same data fitted with the paper's choice (isotropic, n = 3, one fall-off scaled per colour "
         "channel) and drawn from each point's radial profile alone (`render --paper`): FLIP "
-        "{paper[flip_mean_object]:.3f}, relative RMSE {paper[rel_rmse]:.3f} over the object.",
+        "{{ data.gallery.paper.flip_mean_object | f3 }}, relative RMSE "
+        "{{ data.gallery.paper.rel_rmse | f3 }} over the object.",
     ),
     Figure(
         "report/profiles.png",
@@ -97,7 +102,8 @@ FIGURES = (
         "The sample under a 2 mm stripe of light: photon transport (the reference) against the fitted "
         "models, each the superposition of its R_d over the lit cells (green channel); below, a profile "
         "across the stripe and each model's difference. Relative L2 error: "
-        "{relight_errors}.",
+        "{% for name, error in data.gallery.relight.rel_l2.items() %}{{ ', ' if not loop.first }}{{ name }} "
+        "{{ error | pct }} %{% endfor %}.",
     ),
     Figure(
         "baselines.png",
@@ -109,17 +115,17 @@ FIGURES = (
 )
 
 
-def numbers(results: Path) -> dict:
-    """The run's numbers the captions name, from its JSON files."""
+def numbers(results: Path, gallery: Path) -> dict:
+    """The run's numbers the captions name, from its JSON files: the gallery's data file."""
     report = results / "report"
-    relight = json.loads((report / "relight.json").read_text())
     run = json.loads((report / "report.json").read_text())
     return {
+        "source": f"make demo && python benchmarks/gallery.py RESULTS {gallery}",
         "command": run["command_line"],
         "software": run["written_by"],
         "figure2": json.loads((report / "figure2.json").read_text()),
         "paper": json.loads((report / "paper" / "figure2_paper.json").read_text()),
-        "relight_errors": ", ".join(f"{k} {100 * v:.1f} %" for k, v in relight["rel_l2"].items()),
+        "relight": json.loads((report / "relight.json").read_text()),
     }
 
 
@@ -143,7 +149,7 @@ def main() -> None:
     missing = [f.source for f in FIGURES if not (args.results / f.source).is_file()]
     if missing:
         raise SystemExit(f"error: {args.results}: not a demo's output folder (no {', '.join(missing)})")
-    values = numbers(args.results)
+    values = numbers(args.results, args.gallery)
     args.gallery.mkdir(parents=True, exist_ok=True)
     total, sections = 0, []
     for figure in FIGURES:
@@ -152,19 +158,22 @@ def main() -> None:
         print(f"{figure.name:20s} {size / 1e3:7.1f} kB", flush=True)
         link = f"{args.gallery.name}/{figure.name}"
         sections += [f"## {figure.title}", "", f"[![{figure.title}]({link})]({link})", ""]
-        sections += [figure.caption.format(**values), ""]
+        sections += [figure.caption, ""]
     if total > MAX_TOTAL:
         raise SystemExit(f"error: the gallery weighs {total / 1e6:.2f} MB, more than {MAX_TOTAL / 1e6:g} MB")
     text = "\n".join(
         [
             f"Written by `python benchmarks/gallery.py RESULTS {args.gallery}` from the output of "
-            f"`{values['command']}` ({values['software']}).",
+            "`{{ data.gallery.command }}` ({{ data.gallery.software }}); its numbers: "
+            f"`{page.with_suffix('.json').name}`.",
             "",
             *sections,
         ]
     ).rstrip("\n")
     write_between_markers(page, text, "benchmarks/gallery.py")
-    print(f"{len(FIGURES)} figures, {total / 1e6:.2f} MB, into {args.gallery} and {page}")
+    data = page.with_suffix(".json")
+    data.write_text(json.dumps(values, indent=2) + "\n")
+    print(f"{len(FIGURES)} figures, {total / 1e6:.2f} MB, into {args.gallery}, {page} and {data}")
 
 
 if __name__ == "__main__":
