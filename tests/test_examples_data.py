@@ -32,7 +32,7 @@ from translucency.rig.shared.hdr import read_hdr
 runner = CliRunner()
 
 #: how the documentation reads each mesh: (scale_mm, up) and about how large that makes it (mm)
-MESHES = {"spot.obj": (60.0, "y", 103.1), "cow.obj": (10.0, "y", 104.4)}
+MESHES = {"spot.obj": (1.0, "z", 103.1), "cow.obj": (1.0, "z", 104.4)}
 
 
 def test_the_package_holds_every_example_and_nothing_else():
@@ -85,7 +85,7 @@ def examples_folder(tmp_path_factory):
 
 def test_the_scene_parses_with_its_object_on_the_floor(examples_folder):
     """scene.xml in millimetres around object.ply (here spot.obj as the tutorial's model would export it)."""
-    spot = load_mesh(examples_folder / "spot.obj", scale_mm=60.0, up="y")
+    spot = load_mesh(examples_folder / "spot.obj")
     spot.export(examples_folder / "object.ply")
     scene = load_user_scene(examples_folder / "scene.xml")
     shapes = shapes_by_id(scene)
@@ -132,7 +132,7 @@ def test_acquire_planar_reads_the_filling(examples_folder, tmp_path):
 
 def test_acquire_mesh_reads_spot_with_the_filling(examples_folder, tmp_path):
     out = tmp_path / "spot.zarr"
-    args = ["acquire", "mesh", "--mesh", str(examples_folder / "spot.obj"), "--up", "y", "--scale", "60"]
+    args = ["acquire", "mesh", "--mesh", str(examples_folder / "spot.obj")]
     args += ["--volume", str(examples_folder / "filling.npz"), "--points", "2", "--photons", "200"]
     args += ["--chunk", "2", "--out", str(out), "-q"]
     res = runner.invoke(app, args)

@@ -34,9 +34,9 @@ def test_import_object_with_the_walks_exit_law(tmp_path):
     (geometric mean 1.3), and 0.85 to 6.3 (1.3) at 64 x 48 pixels and 16 spp."""
     rig = tmp_path / "rig"
     _run(
-        "acquire", "object-photographs", "--mesh", example_path("spot.obj"), "--up", "y", "--scale", "20",
+        "acquire", "object-photographs", "--mesh", example_path("spot.obj"), "--scale", "0.33",
         "--material", "skin", "--points", "2", "--cameras", "2", "--resolution", "32", "24", "--spp", "4",
-        "--out", rig,
+        "--index-matched", "--out", rig,
     )  # fmt: skip
     walked = _run("import", "object", rig, "--exit-law", "walk", "--out", tmp_path / "r.zarr")
     default = _run("import", "object", rig, "--out", tmp_path / "d.zarr")

@@ -46,7 +46,7 @@ class Photographs:
     Examples
     --------
     >>> import translucency as tl
-    >>> shots = tl.acquire_object_photographs("cow.obj", "cow-rig", scale_mm=10, points=4)  # doctest: +SKIP
+    >>> shots = tl.acquire_object_photographs(tl.example_path("cow.obj"), "cow-rig", points=4)  # doctest: +SKIP
     >>> (shots.folder / "object.json").is_file(), len(shots.record["incident"])  # doctest: +SKIP
     (True, 4)
     """
@@ -195,7 +195,7 @@ def acquire_object_photographs(
     resolution=(128, 128),
     spp: int = 64,
     beam_mm: float = 0.3,
-    eta: float = 1.0,
+    eta: float | None = None,
     checkerboards: bool = False,
     exposures: str = "brackets",
     seed: int = 0,
@@ -229,9 +229,10 @@ def acquire_object_photographs(
         Samples per pixel of each of the two repeated frames.
     beam_mm : float
         Radius of the laser's spot on the surface, mm.
-    eta : float
+    eta : float, optional
         The boundary's relative index: 1 index-matched; > 1 a smooth dielectric (the laser enters through
-        a window over its spot, :func:`translucency.rig.object.photographs.render_shot`).
+        a window over its spot, :func:`translucency.rig.object.photographs.render_shot`).  Default: the
+        filling's own (``Volume.eta``: 1.3 for the generated materials), as in :func:`acquire_mesh`.
     checkerboards : bool
         Give the intrinsics as checkerboard photographs (OpenCV calibrates them on import).
     exposures : {"brackets", "single"}
@@ -260,7 +261,7 @@ def acquire_object_photographs(
     cameras = int(check_option("cameras", whole_number("cameras", cameras), hi=64))
     spp, seed = whole_number("spp", spp), whole_number("seed", seed, lo=0)
     beam_mm = float(check_option("beam_mm", beam_mm, lo=0, open_lo=True))
-    eta = float(check_option("eta", eta, lo=1.0))
+    eta = None if eta is None else float(check_option("eta", eta, lo=1.0))
     voxel_mm = float(check_option("voxel_mm", voxel_mm, lo=0, open_lo=True))
     scale_mm = float(check_option("scale_mm", scale_mm, lo=0, open_lo=True))
     resolution, image_format = _resolution(resolution), _image_format(image_format)
@@ -272,6 +273,7 @@ def acquire_object_photographs(
     if points > len(obj.vertices):
         raise TranslucencyError(f"points: need 1 to {len(obj.vertices):,} laser positions, got {points:,}")
     volume = object_volume(sample, obj, voxel_mm, seed=seed)
+    eta = float(volume.eta) if eta is None else eta
     check_filling(obj, volume)
     _check_object_shots(run, out, obj, volume, points, cameras, resolution, spp, exposures)
     with run.reporter.progress("photograph", points) as update:
