@@ -22,8 +22,9 @@ float16.
     ``import object`` (:mod:`translucency.model.half_space`).
 ``examples/``
     The files the documentation's commands use (:data:`EXAMPLES`, :func:`example_path`; ``translucency
-    examples FOLDER`` copies them): two meshes, a sky, a Mitsuba scene and a filling, with
-    ``LICENSES.md`` (:mod:`.make_examples` generates the sky and the filling).
+    examples FOLDER`` copies them): two meshes, a sky, a Mitsuba scene, a filling and a small fitted object
+    (``spot_coarse.model.zip``), with ``LICENSES.md`` (:mod:`.make_examples` generates the sky, the filling
+    and the fitted object).
 """
 
 from importlib.resources import files
@@ -96,7 +97,9 @@ def default_truth() -> PlanarDataset:
 
 
 #: the example files (``data/examples``), as ``translucency examples`` copies them
-EXAMPLES = ("spot.obj", "cow.obj", "sky.exr", "scene.xml", "filling.npz", "LICENSES.md")
+EXAMPLES = (
+    "spot.obj", "cow.obj", "sky.exr", "scene.xml", "filling.npz", "spot_coarse.model.zip", "LICENSES.md",
+)  # fmt: skip
 
 
 def example_path(name: str) -> Path:
@@ -105,8 +108,8 @@ def example_path(name: str) -> Path:
     Parameters
     ----------
     name : str
-        The file's name: ``spot.obj``, ``cow.obj``, ``sky.exr``, ``scene.xml``, ``filling.npz`` or
-        ``LICENSES.md``.
+        The file's name: ``spot.obj``, ``cow.obj``, ``sky.exr``, ``scene.xml``, ``filling.npz``,
+        ``spot_coarse.model.zip`` or ``LICENSES.md``.
 
     Returns
     -------

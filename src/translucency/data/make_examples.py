@@ -148,8 +148,8 @@ def coarse_model(path, *, seed: int = 1) -> Path:
     mesh = load_mesh(example_path("spot.obj")).simplify_quadric_decimation(face_count=COARSE_FACES)
     with tempfile.TemporaryDirectory(prefix="translucency-examples-") as scratch:
         data = acquire_mesh(
-            mesh, Path(scratch) / "spot_coarse.zarr", "marble", voxel_mm=COARSE_VOXEL_MM, points=COARSE_POINTS,
-            photons=COARSE_PHOTONS, seed=seed, index_matched=True,
+            mesh, Path(scratch) / "spot_coarse.zarr", "marble", voxel_mm=COARSE_VOXEL_MM,
+            points=COARSE_POINTS, photons=COARSE_PHOTONS, seed=seed, index_matched=True,
         )  # fmt: skip
         result = fit_model(data, "iso", n_terms=2).result
     return save_model(result.model, path, dtype="float16", meta=result.metadata("spot_coarse.zarr"),

@@ -39,7 +39,7 @@ def copy_examples(out, *, overwrite: bool = False, reporter: Reporter | None = N
     >>> import tempfile, translucency as tl
     >>> folder = tempfile.mkdtemp()
     >>> sorted(tl.copy_examples(folder)["written"])
-    ['LICENSES.md', 'cow.obj', 'filling.npz', 'scene.xml', 'sky.exr', 'spot.obj']
+    ['LICENSES.md', 'cow.obj', 'filling.npz', 'scene.xml', 'sky.exr', 'spot.obj', 'spot_coarse.model.zip']
     >>> tl.copy_examples(folder)["unchanged"] == tl.data.EXAMPLES   # the same files: nothing to do
     True
     >>> from pathlib import Path
