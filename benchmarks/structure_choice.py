@@ -6,7 +6,7 @@ against an independent 400,000-photon acquisition — the default fit and every 
 have chosen (isotropic with per-channel or shared colour, anisotropic with m = 2, 4, 8, 16, and the
 paper's m = 8 with shared colour) are fitted to the data and scored against the truth (relative L2 over
 all pairs, the truth's noise beside).  Then the choice's cost: the default fit, the chosen structure
-fitted directly and the isotropic fit, timed side by side on the main job's data set (1,024 points), with
+fitted directly and the isotropic fit, timed side by side on the demo's data set (1,024 points), with
 ratios.  Writes a section of docs/accuracy.md.
 
     python benchmarks/structure_choice.py --out docs/accuracy.md
@@ -58,7 +58,7 @@ def score(ds: Path, truth: Path) -> dict:
 
 def timing(repeats: int, ds=None) -> dict:
     """Median seconds of the default fit, the chosen structure fitted directly, and iso n = 3, on ``ds`` (a
-    planar or mesh data set; default the main job's planar data), after one warm-up of each so that
+    planar or mesh data set; default the demo's planar data), after one warm-up of each so that
     compiled kernels are loaded."""
     ds = ds or default_dataset_path()
     on_mesh = isinstance(open_any_dataset(ds), MeshDataset)
@@ -123,8 +123,8 @@ def markdown(results: dict, times: dict, args) -> str:
             "",
             f"Every sample: {'**met**' if met_all else '**not met**'}.",
             "",
-            f"The choice's cost on the main job's data set (1,024 points, 33 × 33 pixels; median of "
-            f"{args.repeats} after a warm-up, this machine): {d_label} {d:.2f} s; {c_label} {c:.2f} s; "
+            f"The choice's cost on the demo's data set (1,024 points, 33 × 33 pixels; median of "
+            f"{args.repeats} after a warm-up, 2 CPU cores): {d_label} {d:.2f} s; {c_label} {c:.2f} s; "
             f"{i_label} {i:.2f} s.  Ratio **{d / c:.2f}×** the chosen structure's own fit, "
             f"**{d / i:.2f}×** the isotropic fit (target ≤ 2× one fit).",
             "",

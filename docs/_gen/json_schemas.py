@@ -76,9 +76,7 @@ TIME_ESTIMATE = record(
     "How long the command was estimated to take.",
     {
         "seconds": field("number", "Estimated time.", "s"),
-        "source": field(
-            "string", "Where the estimate comes from (this machine's calibration, a probe, ...)."
-        ),
+        "source": field("string", "Where the estimate comes from (the local calibration, a probe, ...)."),
         "startup_seconds": field(
             "number", "Seconds already spent before the estimate (imports, checks).", "s"
         ),
@@ -668,7 +666,7 @@ VIEW = record(
     extra=field("number", "Seconds of one step of preparing the page (`*_s`).", "s"),
 )
 DEMO = record(
-    "`translucency demo --json`: the main job's outputs.",
+    "`translucency demo --json`: the demo's outputs (the paper's two figures).",
     {
         "command": _command("demo"),
         "out": field("string", "The output folder."),

@@ -1,4 +1,4 @@
-"""``translucency demo``: the main job on the embedded default data
+"""``translucency demo``: the paper's two figures reproduced on the embedded default data
 (:func:`translucency.workflow.run_demo`)."""
 
 from __future__ import annotations
@@ -20,10 +20,10 @@ def demo(
     quiet: bool = quiet_option(),
     as_json: bool = json_option(),
 ):
-    """The main job on the embedded default data: baselines per material; Figure 1 (the default fit, the
+    """The paper's figures from the embedded data: baselines per material; Figure 1 (the default fit, the
     paper's, iso, dipole and Burley, scored against an independent scan); Figure 2 (a marble pig fitted per
     vertex and rendered beside a path-traced reference)."""
-    from ..workflow.demo import run_demo  # heavy: the main job loads every stage and Mitsuba
+    from ..workflow.demo import run_demo  # heavy: the demo loads every stage and Mitsuba
 
     outputs = run_demo(
         out, n_terms=terms, overwrite=overwrite, max_memory=max_memory, reporter=RichReporter(quiet)

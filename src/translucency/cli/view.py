@@ -55,8 +55,8 @@ _COMPARE = typer.Option(
 _REFERENCE_RENDER = typer.Option(
     None,
     "--reference-render",
-    help="A render folder with its path-traced reference (translucency render --reference, or the main "
-    "job's results/report): its error map (FLIP) and numbers beside the model.",
+    help="A render folder with its path-traced reference (translucency render --reference, or the "
+    "demo's results/report): its error map (FLIP) and numbers beside the model.",
     rich_help_panel=PANEL_COMPARISON,
 )
 _TRUTH = typer.Option(
