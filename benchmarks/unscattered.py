@@ -5,7 +5,11 @@ camera sees only head-on; counted in R_d it is drawn as diffuse exitance.  For e
 (one seed) are tallied both ways, fitted with the paper's shared colour and with a fall-off per channel,
 and the object rendered by ``render``'s chain beside a converged volpath reference:
 
-    python benchmarks/unscattered.py --meshes ../shared/meshes --spp 2304 --case CASE [--case CASE ...]
+    python benchmarks/unscattered.py --meshes MESHES --spp 2304 --case CASE [--case CASE ...] [--json OUT]
+
+``--json docs/unscattered.json`` writes the rows as the site's data file (``written_by``: the command;
+``rows``: case, tally, colour, rel_rmse, flip, brightness, unlit_hue, reference_noise …), which the pages
+read (through-body.md, lean.md).
 
 A case is as in ``objects_budget.py`` (``name:mesh:mm per unit:up:material:points:photons:light:view``;
 the material may hold a colon, ``homogeneous:potato``), or ``pig`` (the main job's Figure 2, its shipped
@@ -18,6 +22,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 import tempfile
 import time
 from pathlib import Path
@@ -70,6 +75,7 @@ def main() -> int:
         action="store_true",
         help="also evaluate both colours against another acquisition (seed 4, 4x the photons, same filling)",
     )
+    ap.add_argument("--json", type=Path, help="also write the rows here (the site's docs/unscattered.json)")
     args = ap.parse_args()
     args.work.mkdir(parents=True, exist_ok=True)
     out = []
@@ -138,6 +144,9 @@ def main() -> int:
                     flush=True,
                 )
     (args.work / "unscattered.json").write_text(json.dumps(out, indent=2))
+    if args.json:
+        written_by = "python benchmarks/unscattered.py " + " ".join(sys.argv[1:])
+        args.json.write_text(json.dumps({"written_by": written_by, "rows": out}, indent=1) + "\n")
     figure(args.work, sorted({r["case"] for r in out}, key=[r["case"] for r in out].index))
     print(f"written: {args.work / 'unscattered.json'}, {args.work / 'unscattered.png'}")
     return 0

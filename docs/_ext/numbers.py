@@ -13,7 +13,8 @@ Filters
     ``f1`` … ``f4`` (that many decimals: ``0.0801 | f3`` → ``0.080``), ``fmt(x, 3)`` (the same, as a
     function too), ``pct`` (per cent: ``0.1803 | pct`` → ``18.0``; ``pct(2)`` two decimals), ``sig(3)``
     (significant digits), ``times`` (a ratio: ``0.99 | times`` → ``0.99×``, ``21.4 | times(0)`` → ``21×``),
-    ``thousands`` (``27370`` → ``27,370``).
+    ``thousands`` (``27370`` → ``27,370``), ``rfb`` (a row's relative RMSE / FLIP / brightness),
+    ``slash`` (a vector: ``[0.86, 1.01, 1.21] | slash`` → ``0.86 / 1.01 / 1.21``).
 Functions
     ``pick(rows, case="pig", transport="default")``: the one row of a list whose fields match.
 """
@@ -99,8 +100,31 @@ def pick(rows, **match):
     return found[0]
 
 
+#: Jinja's comment delimiters on the pages (mkdocs.yml's j2_comment_*): attr_list's anchors are ``{#id}``
+J2 = {"comment_start_string": "{##", "comment_end_string": "##}"}
+
+def rfb(row) -> str:
+    """A comparison's relative RMSE / FLIP / brightness, 3 decimals each (the pages' tables).
+
+    >>> rfb({"rel_rmse": 0.0615, "flip": 0.0801, "brightness": 0.9971})
+    '0.061 / 0.080 / 0.997'
+    """
+    return " / ".join(fmt(row[k]) for k in ("rel_rmse", "flip", "brightness"))
+
+
+def slash(values, decimals: int = 2) -> str:
+    """A vector (a hue, R / G / B) with ``decimals`` decimals.
+
+    >>> slash([0.86, 1.01, 1.214])
+    '0.86 / 1.01 / 1.21'
+    """
+    return " / ".join(fmt(v, decimals) for v in values)
+
+
 FILTERS = {
     "fmt": fmt,
+    "slash": slash,
+    "rfb": rfb,
     "f1": lambda x: fmt(x, 1),
     "f2": lambda x: fmt(x, 2),
     "f3": lambda x: fmt(x, 3),
