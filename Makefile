@@ -22,8 +22,7 @@ test: $(STAMP)
 	$(VENV)/bin/ruff check src tests benchmarks docs/_gen && $(VENV)/bin/ruff format --check src tests benchmarks docs/_gen && $(PY) -m pytest -q -m "not slow" -n auto
 
 # the documentation site (mkdocs-material, mkdocstrings) into build/site; --strict: every warning fails the
-# build, a broken link or anchor among them; then the built site in headless Chromium with the network refused
-# (tests/test_site_offline.py: formulas drawn, search answers, pictures load, nothing fetched from elsewhere)
+# build, a broken link or anchor among them
 DOCS_STAMP := $(VENV)/.docs-installed
 $(DOCS_STAMP): $(STAMP)
 	$(PY) -m pip install --quiet -e '.[docs]'
@@ -31,7 +30,6 @@ $(DOCS_STAMP): $(STAMP)
 
 docs: $(DOCS_STAMP)
 	NO_MKDOCS_2_WARNING=1 $(VENV)/bin/mkdocs build --strict --site-dir build/site
-	TRANSLUCENCY_SITE=build/site $(PY) -m pytest -q -p no:cacheprovider tests/test_site_offline.py
 
 # the generated pages, rewritten from the commands and the schemas of --json (docs/_gen: generators, not
 # part of the package); tests/test_docs_site.py, test_commands.py and test_json.py hold them current
