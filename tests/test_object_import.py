@@ -741,7 +741,7 @@ def test_a_clipped_spot_is_flagged_counted_and_recovered_within_its_variance(tmp
 def test_clipped_pixels_bound_a_larger_cell_by_their_share_of_it():
     """A cell four times a clipped pixel's footprint: the clipped pixel says the cell's mean is at least its
     value over a quarter of the cell (the rest at least 0), not its value — which read a coarse scan's
-    flank shot 1.6-2.9x the tally at 24 cameras (docs/object-rig.md §7)."""
+    flank shot 1.6-2.9x the tally at 24 cameras (docs/validation/object-rig.md, Limits)."""
     from types import SimpleNamespace
 
     from translucency.rig.object.fusion import fuse

@@ -25,7 +25,8 @@ def test_an_object_from_its_photographs_draws_the_picture_its_tally_draws(tmp_pa
     point light: its picture within 0.05 of the tally's (relative RMSE; measured 0.041) and as far from
     volpath as the tally's within 0.05 (measured 0.229 against 0.197: this small rig's photographs are 3.5 %
     brighter than the tally, which is already brighter than volpath; on spot.obj at 24 cameras the two are
-    within 0.011, docs/object-rig.md §6); and the check can tell — the same import with R_d 30 % high is
+    within 0.011, docs/validation/object-rig.md); and the check can tell — the same import with R_d 30 % high
+    is
     0.2 or more away."""
     from generators.splat_rig import cameras_on_sphere, splat_rig
 

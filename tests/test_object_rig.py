@@ -4,7 +4,7 @@ per-vertex data, energy and picture as the photon tally of the same object (issu
 The photographs (:mod:`translucency.rig.object.photographs`) are Mitsuba's ``volpath``, the tally our
 photon walk: two independent estimators of one experiment.  The photographs' own noise floor is measured
 with a second, independent set of photographs (:mod:`translucency.pipeline.object_rig_check`).  Figures
-at larger settings: ``python benchmarks/object_rig.py sphere|torus|pig`` (docs/object-rig.md).
+at larger settings: ``python benchmarks/object_rig.py sphere|torus|pig`` (docs/reference/object-rig.md).
 """
 
 from __future__ import annotations
@@ -63,7 +63,7 @@ def test_sphere_of_skin_photographed_and_imported(sphere):
 def test_sphere_render_from_photographs_within_1_25x_of_the_tally(sphere):
     """The render from photographs within 1.25x the tally path's error against volpath (measured 0.90x:
     0.217 against 0.240, the reference's noise 0.106; 1.6x before the default transport and the near peak's
-    walks, docs/object-rig.md section 6)."""
+    walks, docs/validation/object-rig.md)."""
     assert sphere["render_ratio"] <= 1.25, sphere
 
 

@@ -538,7 +538,8 @@ def rig_sample():
 
 
 #: α's pooling radius (mm) of the held-out comparison: chosen on the photon tallies alone (held-out error of
-#: the tally's model 0.106 per pixel, 0.045 / 0.043 / 0.044 pooled over 1 / 2 / 3 mm; docs/rig.md §4)
+#: the tally's model 0.106 per pixel, 0.045 / 0.043 / 0.044 pooled over 1 / 2 / 3 mm;
+#: docs/validation/planar-rig.md)
 ALPHA_RADIUS = 2.0
 
 
@@ -730,7 +731,8 @@ def test_photographs_import_and_fit_like_the_photon_tally(tmp_path):
     # held out, against a tally of 16× the photons: issue 15 asks for the photographs' model within 10 % of
     # the tally's.  α per pixel (≤ 4 windows per pixel) follows the data's noise: measured 0.297 / 0.106
     # (α at 1 for both: 0.074 / 0.044).  Pooled over 2 mm: 0.097 / 0.043 — the rest is the photographs'
-    # render noise (1.7–3.7 × the tally's per pixel) and their scale (+3 %), not the fit (docs/rig.md §4);
+    # render noise (1.7–3.7 × the tally's per pixel) and their scale (+3 %), not the fit
+    # (docs/validation/planar-rig.md);
     # the target is not met, these bounds guard against regressions
     held, pooled = figures["held_out_rel_l2"], figures["held_out_rel_l2_pooled_alpha"]
     assert held["photo"] <= 4 * held["tally"], held

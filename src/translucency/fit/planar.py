@@ -40,7 +40,7 @@ that distance, :math:`\alpha_j = \sum_{|j'-j| \le \rho} \sum w^2 P y / \sum_{|j'
 (as the mesh fit's α over a disc of vertices).  Per pixel (the default) α is free
 at every pixel; where few windows overlap a pixel — a sparse grid of incident
 points, or noisy data such as rendered or real photographs — it then follows the
-noise of those few values (docs/rig.md, section 4), and the pooled α keeps only
+noise of those few values (docs/validation/planar-rig.md), and the pooled α keeps only
 the modulation on scales beyond ρ.
 
 Work runs in chunks of incident points read from the Zarr store, so a data
@@ -187,7 +187,7 @@ def fit_planar(dataset, model: str = "auto", *, n_terms: int | str | None = None
         α at a pixel pools the statistics of the pixels within this distance (mm) of it
         (module docstring); default ``None`` or 0: α per pixel.  For data where few windows
         overlap each pixel or the data are noisy (photographs), where a radius of a few mm lowers the
-        held-out error (docs/fitting.md, docs/rig.md section 4).
+        held-out error (docs/fitting.md, docs/validation/planar-rig.md).
 
     Returns
     -------

@@ -2,13 +2,14 @@
 
 * **The planar importer** (:mod:`.planar`, ``translucency import images``, :func:`import_images`): HDR
   photographs of a laser spot scanned over a flat sample, with the camera's plane-to-image homography and
-  radiometric calibration → a planar data set, as ``acquire planar`` writes it (docs/rig.md).  Its
+  radiometric calibration → a planar data set, as ``acquire planar`` writes it
+  (docs/reference/planar-rig.md).  Its
   virtual rig, :mod:`.planar.photographs` (:func:`photograph_sample`), renders a virtual DISCO sample
   with Mitsuba 3 and writes what a lab would hand over.
 * **The object importer** (:mod:`.object`, ``translucency import object``, :func:`import_object`):
   multi-view HDR photographs of a laser stepped over a scanned mesh, with calibrated cameras
   (``object.json``, :func:`read_object_rig`) → a mesh data set, as ``acquire mesh`` writes it
-  (docs/object-rig.md).  Its virtual rig, :mod:`.object.photographs` (:func:`photograph_object`),
+  (docs/reference/object-rig.md).  Its virtual rig, :mod:`.object.photographs` (:func:`photograph_object`),
   renders a filled mesh lit by a laser from cameras around it.
 
 The layout: :mod:`.contract` is what both importers are — a setup read and checked, chunks of laser

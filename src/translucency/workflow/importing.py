@@ -278,7 +278,7 @@ def import_object(
     Parameters
     ----------
     rig : path
-        The rig file ``object.json`` (or its folder): mesh, cameras, shots (docs/object-rig.md).
+        The rig file ``object.json`` (or its folder): mesh, cameras, shots (docs/reference/object-rig.md).
     out : str or Path
         The mesh data set folder; an unfinished import of the same inputs resumes.
     exit_law : {"from-views", "dielectric", "lambertian", "walk"}, optional

@@ -1,6 +1,6 @@
 r"""Calibrated cameras in OpenCV's conventions: projection, pixel rays, and their Mitsuba 3 sensor.
 
-Conventions, stated once for every coordinate of an object rig (docs/object-rig.md):
+Conventions, stated once for every coordinate of an object rig (docs/reference/object-rig.md):
 
 * **object frame**: the scanned mesh's coordinates, millimetres (after ``--scale``/``--up``);
 * **camera frame**: OpenCV's — x to the right of the picture, y down, z forward (the optical axis);

@@ -423,7 +423,7 @@ class ObjectImport:
 #: conversions with the walks' law (``exit_law: "walk"``) after the first with π L, each at the material
 #: the one before fitted: under π L the near peak reads skin1's red albedo 0.73-0.82 for 0.96, after one
 #: round 0.93-0.96 (spot.obj, three shots); a second round moved the energies by up to 20 % and no nearer
-#: (docs/object-rig.md §7)
+#: (docs/validation/object-rig.md, Limits)
 WALK_ROUNDS = 1
 
 #: a gap this wide (mm) in the distances of the clipped cells from the hit ends the hit's own peak
@@ -462,7 +462,7 @@ def shot_energy(R, var, flags, area):
 
     It states the noise and the near-peak model's uncertainty, not the systematic errors of measured cells
     (a footprint's blur, a thin part's silhouette): on photographs without a clipped pixel it is 0.2–1.5 %
-    where the error measured 1–23 % (docs/object-rig.md §6).
+    where the error measured 1–23 % (docs/validation/object-rig.md).
 
     Examples
     --------

@@ -1,6 +1,6 @@
 """An object rig's hand-over: the ``object.json`` a lab writes beside its photographs, read and checked.
 
-The file (every path relative to its folder; JSON schema in docs/object-rig.md)::
+The file (every path relative to its folder; JSON schema in docs/reference/object-rig.md)::
 
     {"format": "translucency-object-rig", "version": 1,
      "mesh": {"file": "scan.ply", "scale_mm": 1.0, "up": "z"},
@@ -225,7 +225,8 @@ def read_object_rig(path) -> ObjectRig:
         raise TranslucencyError(f"{path}: boundary: eta must be >= 1 (the object's index over the air's)")
     cameras = _read_cameras(raw, folder, path)
     shots = _read_shots(raw, folder, path, {c.name for c in cameras})
-    # default (measured, docs/object-rig.md §7): π L for index-matched, the diffusion law for a dielectric
+    # default (measured, docs/validation/object-rig.md, Limits): π L for index-matched, the diffusion law
+    # for a dielectric
     law = str(raw.get("exit_law", "dielectric" if eta > 1.0 else "lambertian"))
     return ObjectRig(
         path=path,

@@ -6,7 +6,7 @@ assumes a flat surface.  On a convex part the surface falls away from its tangen
 :math:`r^2 / 2\rho` (ρ the radius of curvature), into the light diffusing beneath: on a 15 mm ball in
 skin1 the exits at 2–3 mm from the hit are 14–25 % brighter than the half-space's, at 4–6 mm 28–45 %.  A
 ring fitted with the flat profile reads that excess as a shallower profile, and the peak comes out low
-(0.5–0.7 of the tally's on two of three shots, docs/object-rig.md §4).
+(0.5–0.7 of the tally's on two of three shots, docs/reference/object-rig.md, What the import does).
 
 The gain of a cell v is the ratio of a photon walk on the mesh itself
 (:func:`translucency.acquire.mesh_walk.mesh_random_walk`, index-matched, entering at the hit along the

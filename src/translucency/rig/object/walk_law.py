@@ -4,7 +4,8 @@ near peak fitted (``exit_law: "walk"``, a step of :mod:`.importer`).
 A camera sees a cell's exitance M through one direction; what it reads is the radiance there,
 :math:`\pi L = \gamma M`, and near the hit γ depends on the view and on where the cell lies (light leaves
 leaning away from the hit and following the surface's shape: :mod:`.exit_law`).  A law pooled over every
-vertex of a band of distance is not the law of the vertices a camera sees (docs/object-rig.md §7).  This
+vertex of a band of distance is not the law of the vertices a camera sees (docs/validation/object-rig.md,
+Limits).  This
 one is the transport's own, cell by cell and camera by camera: for each shot, a walk on the mesh
 (:func:`translucency.acquire.mesh_walk.mesh_random_walk`, a homogeneous medium at the (σ_t, α) per
 channel the near peak fitted to the same shot under π L, entering at the hit, through the boundary of

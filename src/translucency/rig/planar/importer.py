@@ -97,7 +97,7 @@ def import_images(
         order; the laser positions are the first table's).  Each view is resampled onto the same windows
         with its own calibration and the views are averaged where all of them are valid: two cameras at
         opposite azimuths cancel the part of the exit radiance that leans away from the beam, which one
-        oblique camera sees as a strong gradient across the window (see docs/rig.md, section 4).
+        oblique camera sees as a strong gradient across the window (see docs/validation/planar-rig.md).
 
     Returns
     -------
