@@ -21,6 +21,7 @@ from translucency.cli.app import app
 from translucency.fit.mesh import fit_mesh
 from translucency.mitsuba import mitsuba
 from translucency.render import Camera, coverage, object_of_model, parse_light, rel_rmse, render_reference
+from translucency.render.lights import DEFAULT_LIGHT, Placement, place_light
 from translucency.render.medium_scene import FILES, scene_volume, write_mitsuba_scene
 
 runner = CliRunner()
@@ -205,7 +206,8 @@ def test_the_exported_scene_renders_as_the_volpath_reference_of_the_same_volume(
         params.update()
         channels.append(np.asarray(mi.render(scene, seed=c), dtype=np.float64)[..., c])
     ours = np.stack(channels, axis=2)
-    light = parse_light("point:60,-80,120,2e4")  # the scene's default light (export's --light default)
+    view = np.subtract(camera.origin, camera.target)  # the scene's default light, placed for its camera
+    light = place_light(parse_light(DEFAULT_LIGHT), Placement.of(mesh, view))
     reference, _ = render_reference(mesh, scene_volume(model, mesh), light, camera, spp=spp, seed=1)
     error = rel_rmse(ours, reference, mask)
     print(f"exported scene against the reference: relative RMSE {error:.4f} over {mask.sum()} pixels")

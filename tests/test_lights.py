@@ -17,6 +17,8 @@ from translucency.cli.app import app
 from translucency.render.lights import (
     DEFAULT_DISTANCE,
     DEFAULT_INTENSITY,
+    DEFAULT_IRRADIANCE,
+    DEFAULT_LIGHT,
     DirectionalLight,
     Placement,
     PointLight,
@@ -35,7 +37,7 @@ BOX = Placement(((-10.0, -10.0, 0.0), (10.0, 10.0, 20.0)), view=(0.0, -1.0, 0.0)
 
 def test_render_help_states_every_default_unit_and_direction():
     out = " ".join(runner.invoke(app, ["render", "--help"], terminal_width=300).output.split())
-    assert "[default: point:60,-80,120,2e4]" in out  # the light's default, hidden before
+    assert "[default: point@key]" in out  # the light's default, hidden before
     assert "[default: fixed]" in out and "--exposure" in out
     assert "TRAVELS" in out and "+z up" in out and "mm" in out and "W/sr" in out and "W/mm^2" in out
     for form in ("point@AZ,EL", "spot@AZ,EL", "directional@AZ,EL", "env:MAP.exr", "camera", "back"):
@@ -53,7 +55,11 @@ def test_relative_lights_are_placed_around_the_object():
     np.testing.assert_allclose(north.position, centre + [0, 2 * size, 0], atol=1e-9)
     above = parse_light("point@123,90", BOX)  # the default distance and power
     np.testing.assert_allclose(above.position, centre + [0, 0, DEFAULT_DISTANCE * size], atol=1e-9)
-    assert above.intensity == DEFAULT_INTENSITY
+    # with no power given, I brings DEFAULT_IRRADIANCE to the centre: E = I / d² at d = 1.5 sizes
+    assert above.intensity / (DEFAULT_DISTANCE * size) ** 2 == pytest.approx(DEFAULT_IRRADIANCE, rel=1e-12)
+    assert parse_light("point:0,0,100").intensity == DEFAULT_INTENSITY  # a position in mm: the fixed default
+    far = parse_light("point@123,90,100", BOX)  # 100 mm: E = 1 there too, whatever the size
+    assert far.irradiance_scale(100.0) == pytest.approx(DEFAULT_IRRADIANCE, rel=1e-12)
     # a directional light comes FROM its angles: it travels the other way
     sun = parse_light("directional@45,30,2", BOX)
     u = np.array([np.cos(np.radians(30)) * np.cos(np.radians(45))] * 2 + [np.sin(np.radians(30))])
@@ -67,6 +73,15 @@ def test_relative_lights_are_placed_around_the_object():
     np.testing.assert_allclose(parse_light("point@camera,30", BOX).position, centre + [0, -30, 0], atol=1e-12)
     np.testing.assert_allclose(parse_light("point@back,30", BOX).position, centre + [0, 30, 0], atol=1e-12)
     np.testing.assert_allclose(parse_light("directional@back", BOX).direction, [0, -1, 0], atol=1e-12)
+    # the key light (the default light): the view (azimuth -90, elevation 0 here) turned 28° about +z and
+    # raised 20°, written out by hand
+    az, el = np.radians(-90.0 + 28.0), np.radians(20.0)
+    key = parse_light(DEFAULT_LIGHT, BOX)
+    assert DEFAULT_LIGHT == "point@key" and isinstance(key, PointLight)
+    u = np.array([np.cos(el) * np.cos(az), np.cos(el) * np.sin(az), np.sin(el)])
+    np.testing.assert_allclose(key.position, centre + DEFAULT_DISTANCE * size * u, atol=1e-9)
+    steep = Placement(BOX.bounds, view=(0.0, 0.0, 1.0))  # from straight above: raised no further than 85°
+    np.testing.assert_allclose(parse_light("directional@key", steep).direction[2], -np.sin(np.radians(85.0)))
     # without a placement the text is checked and kept until the object is known
     later = parse_light("point@-60,40")
     assert isinstance(later, RelativeLight)
@@ -168,7 +183,9 @@ def test_two_lights_on_one_object_share_one_exposure(ball_model, tmp_path):
     camera = Camera.looking_at(ball, width=48, height=36)
     place = Placement.of(ball, (1.0, -1.6, 0.7))
     summary = {}
-    for name, text in (("front", "point@-60,40"), ("side", "point@60,10,2x")):
+    # one power (1e4 W/sr) at two distances: one fixed exposure (a relative light without a power would
+    # get the I that brings 1 W/mm² from where it stands: another power)
+    for name, text in (("front", "point@-60,40,1.5x,1e4"), ("side", "point@60,10,2x,1e4")):
         for how in ("fixed", "auto"):
             out = tmp_path / f"{name}-{how}"
             render_still(

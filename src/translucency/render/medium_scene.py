@@ -55,8 +55,6 @@ FILES = {"scene": "scene.xml", "mesh": "object.ply", "sigma_t": "sigma_t.vol", "
 #: the scene's own defaults of its parameters ``$spp``, ``$resx``, ``$resy`` (``mitsuba -Dspp=...``)
 DEFAULT_SPP = 64
 DEFAULT_RESOLUTION = (320, 240)
-#: ``translucency render``'s light, the scene's emitter when none is given (object frame, mm, W/sr)
-DEFAULT_LIGHT = "point:60,-80,120,2e4"
 
 
 def medium_or_refuse(model, name: str = "model"):
@@ -105,8 +103,8 @@ def write_mitsuba_scene(
         coefficients, so a dielectric adds a boundary the estimate does not expect.
     light : Light, optional
         The scene's emitter (:func:`translucency.render.parse_light`, placed); default ``translucency
-        render``'s light, ``point:60,-80,120,2e4``.  With η ≠ 1 a point, spot or directional light cannot
-        reach the inside for ``volpath`` (a delta refraction): refused.
+        render``'s light (``point@key``: beside and above the camera).  With η ≠ 1 a point, spot or
+        directional light cannot reach the inside for ``volpath`` (a delta refraction): refused.
     camera : Camera, optional
         The scene's sensor (:class:`translucency.render.Camera`); default ``Camera.looking_at(mesh)``
         (``translucency render``'s view).  Its ``width`` and ``height`` become ``$resx``, ``$resy``.
@@ -141,14 +139,16 @@ def write_mitsuba_scene(
     """
     from ..mitsuba import mitsuba, slab_medium_dict, write_ply  # Mitsuba loads only to write
     from . import Camera, parse_light
+    from .lights import DEFAULT_LIGHT, Placement, place_light
     from .reference import check_reference
 
     eta = float(eta)
     if not (np.isfinite(eta) and eta > 0):
         raise TranslucencyError(f"eta: expected a relative index > 0, got {eta!r}")
     volume = scene_volume(model, mesh, voxels=voxels, name=name)
-    if light is None:
-        light = parse_light(DEFAULT_LIGHT)
+    if light is None:  # render's light, placed for this camera
+        view = np.subtract(camera.origin, camera.target) if camera is not None else (1.0, -1.6, 0.7)
+        light = place_light(parse_light(DEFAULT_LIGHT), Placement.of(mesh, view))
     check_reference(light, eta)  # a dielectric under a delta light: volpath renders its inside black
     camera = camera or Camera.looking_at(mesh, width=DEFAULT_RESOLUTION[0], height=DEFAULT_RESOLUTION[1])
     mi = mitsuba()

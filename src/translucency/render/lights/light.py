@@ -27,10 +27,20 @@ MIN_CUTOFF_DEG = 0.01
 #: the distance from the object's centre of a light placed relative to it when none is given, in object
 #: sizes (the size: its bounding box's diagonal); the camera sits at 1.9
 DEFAULT_DISTANCE = 1.5
-#: the power of a light when none is given, in every form: I of a point or spot (W/sr), E of a
-#: directional light (W/mm²)
+#: the power of a light when none is given: I of a point or spot at a position in mm (W/sr), E of a
+#: directional light (W/mm²).  A point or spot placed relative to the object gets the I that brings
+#: DEFAULT_IRRADIANCE to the object's centre from where it stands (I = E d², d its distance in mm), so the
+#: default light lights a 10 mm bead and a 1 m statue alike
 DEFAULT_INTENSITY = 1.0e4
 DEFAULT_IRRADIANCE = 1.0
+#: the ``key`` anchor: the camera's direction turned this many degrees about +z (counter-clockwise seen
+#: from above) and raised this many degrees, so the light stands beside and above the camera
+KEY_TURN_DEG, KEY_RAISE_DEG = 28.0, 20.0
+#: the light of ``render``, ``export`` and the Python functions when none is given: a point light
+#: beside and above the camera, 1.5 object sizes from the centre, bringing 1 W/mm² there — placed
+#: relative to the object and the view, so every object at any scale and from any view is lit from the
+#: front; with the ``fixed`` exposure (render/tonemap.py) its picture is exposed alike
+DEFAULT_LIGHT = "point@key"
 #: the cone of a spot placed relative to the object when none is given, degrees
 DEFAULT_CUTOFF_DEG = 20.0
 
@@ -38,8 +48,9 @@ DEFAULT_CUTOFF_DEG = 20.0
 #: every kind of light by the word its text begins with (``point:``, ``env:``), in the order the messages
 #: list them; a :class:`Light` subclass that states its :attr:`~Light.prefix` is one
 KINDS: dict[str, type[Light]] = {}
-#: the keywords that place a light along the camera's direction (towards it, or opposite it)
-ANCHORS = ("camera", "back")
+#: the keywords that place a light by the camera's direction: at the camera, opposite it (behind the
+#: object), or beside and above it (KEY_TURN_DEG, KEY_RAISE_DEG)
+ANCHORS = ("camera", "back", "key")
 
 
 class Light(ABC):

@@ -9,7 +9,15 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..._validate import TranslucencyError
-from .light import DEFAULT_CUTOFF_DEG, DEFAULT_DISTANCE, KINDS, Light
+from .light import (
+    DEFAULT_CUTOFF_DEG,
+    DEFAULT_DISTANCE,
+    DEFAULT_IRRADIANCE,
+    KEY_RAISE_DEG,
+    KEY_TURN_DEG,
+    KINDS,
+    Light,
+)
 
 
 @dataclass(frozen=True)
@@ -65,8 +73,10 @@ class RelativeLight:
     The light lies in the direction (azimuth, elevation) from the object's centre: azimuth in degrees
     from +x towards +y, elevation in degrees above the xy plane (+z up); or along the camera's direction
     (``anchor="camera"``: from the camera's side) or opposite it (``"back"``: behind the object, seen
-    from the camera).  A point or spot stands ``distance`` from the centre (mm, or object sizes with
-    ``in_sizes``), a spot aimed at the centre; a directional light comes from that direction.
+    from the camera), or beside and above it (``"key"``: the camera's direction turned
+    :data:`~.light.KEY_TURN_DEG` about +z and raised :data:`~.light.KEY_RAISE_DEG`). A point or spot stands
+    ``distance`` from the centre (mm, or object sizes with ``in_sizes``), a spot aimed at the centre; a
+    directional light comes from that direction.
     """
 
     kind: str
@@ -84,6 +94,10 @@ class RelativeLight:
             if placement.view is None:
                 raise TranslucencyError(f"light: '{self.anchor}' needs the camera's direction (view=)")
             u = np.asarray(placement.view, dtype=np.float64)
+            if self.anchor == "key":  # the view's azimuth turned, its elevation raised (at most 85°)
+                az = np.arctan2(u[1], u[0]) + np.radians(KEY_TURN_DEG)
+                el = min(np.arcsin(np.clip(u[2], -1.0, 1.0)) + np.radians(KEY_RAISE_DEG), np.radians(85.0))
+                return np.array([np.cos(el) * np.cos(az), np.cos(el) * np.sin(az), np.sin(el)])
             return u if self.anchor == "camera" else -u
         az, el = np.radians(self.azimuth), np.radians(self.elevation)
         return np.array([np.cos(el) * np.cos(az), np.cos(el) * np.sin(az), np.sin(el)])
@@ -99,6 +113,12 @@ class RelativeLight:
     def power_or(self, default: float) -> float:
         """Its power, or ``default`` where its text gave none."""
         return float(default if self.power is None else self.power)
+
+    def intensity(self, placement: Placement) -> float:
+        """A point's or spot's I (W/sr): its power, or where its text gave none the I that brings
+        :data:`~.light.DEFAULT_IRRADIANCE` to the object's centre from its distance d: E d²."""
+        d = self.distance * placement.size if self.in_sizes else self.distance
+        return self.power_or(DEFAULT_IRRADIANCE * d * d)
 
     def place(self, placement: Placement) -> Light:
         """The light in the object's frame: its kind's :meth:`~.light.Light.placed`."""

@@ -80,7 +80,7 @@ class PointLight(_DeltaLight):
     @classmethod
     def placed(cls, relative: RelativeLight, placement: Placement) -> PointLight:
         position, _ = relative.position(placement)
-        return cls(position, relative.power_or(DEFAULT_INTENSITY))
+        return cls(position, relative.intensity(placement))
 
     def emitter_dict(self) -> dict:
         return {

@@ -65,7 +65,7 @@ class SpotLight(_DeltaLight):
     @classmethod
     def placed(cls, relative: RelativeLight, placement: Placement) -> SpotLight:
         position, centre = relative.position(placement)
-        intensity = relative.power_or(DEFAULT_INTENSITY)
+        intensity = relative.intensity(placement)
         return cls(position, tuple(float(x) for x in centre), float(relative.cutoff_deg), intensity)
 
     @property
