@@ -155,10 +155,13 @@ def fit_model(
 
     Examples
     --------
+    The embedded scan, two exponential terms, one round (seconds; the defaults choose the structure and
+    take up to three rounds, about a minute):
+
     >>> import translucency as tl
-    >>> fitting = tl.fit_model(tl.data.default_dataset(), "iso", n_terms=3)  # doctest: +SKIP
-    >>> fitting.model.n_points, fitting.summary["rounds"]  # doctest: +SKIP
-    (1024, 3)
+    >>> fitting = tl.fit_model(tl.data.default_dataset(), "iso", n_terms=2, max_rounds=1)
+    >>> fitting.model.n_points, fitting.model.n_terms, fitting.summary["rounds"], fitting.path
+    (1024, 2, 1, None)
     """
     # the arguments first (no file read), then the data set and what it implies, then the output, then work
     parse_scheduler(scheduler)  # a bad value or an unreachable cluster: one line, before work

@@ -47,10 +47,14 @@ class Rendering:
 
     Examples
     --------
+    The example model the package ships, drawn small; no folder given, so none is kept:
+
     >>> import translucency as tl
-    >>> shot = tl.render_model("pig.model.zip", "render", reference=True)  # doctest: +SKIP
-    >>> shot.picture.shape, shot.numbers["rel_rmse"] < 0.1  # doctest: +SKIP
-    ((240, 320, 3), True)
+    >>> shot = tl.render_model(tl.data.example_path("spot_coarse.model.zip"), resolution=(64, 48))
+    >>> shot.picture.shape, shot.reference is None, shot.folder is None
+    ((48, 64, 3), True, True)
+    >>> bool(shot.picture.max() > 0), shot.summary["command"]
+    (True, 'render')
     """
 
     picture: np.ndarray  # (H, W, 3) linear radiance, our model's
@@ -123,10 +127,19 @@ def render_model(
 
     Examples
     --------
+    The example model under a light from the upper left, its pictures kept in a folder:
+
+    >>> import tempfile
+    >>> from pathlib import Path
     >>> import translucency as tl
-    >>> pic = tl.render_model("pig_iso.model.zip", resolution=(160, 120))  # doctest: +SKIP
-    >>> pic.picture.shape  # doctest: +SKIP
-    (120, 160, 3)
+    >>> out = Path(tempfile.mkdtemp()) / "render"
+    >>> shot = tl.render_model(tl.data.example_path("spot_coarse.model.zip"), out, light="point@-45,40",
+    ...                        resolution=(64, 48))
+    >>> shot.picture.shape, sorted(p.name for p in out.glob("ours.*"))
+    ((48, 64, 3), ['ours.exr', 'ours.png'])
+
+    With ``reference=True`` Mitsuba's volpath path-traces the filling too and ``shot.numbers`` holds
+    their relative RMSE (tens of seconds for this object at ``spp=4``).
     """
     # the arguments first (no file read), then the model and what it implies, then the output, then work
     check_option("spp", whole_number("spp", spp), lo=1)

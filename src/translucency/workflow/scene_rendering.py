@@ -41,10 +41,18 @@ class SceneRendering:
 
     Examples
     --------
+    The example scene around the example model (its shape ``object`` reads ``object.ply``, written beside
+    it), lit quickly with few samples:
+
+    >>> import tempfile
+    >>> from pathlib import Path
     >>> import translucency as tl
-    >>> shot = tl.render_scene("scene.xml", {"pig": "pig.model.zip"}, "shot")  # doctest: +SKIP
-    >>> (shot.folder / "scene.json").is_file()  # doctest: +SKIP
-    True
+    >>> folder, model = Path(tempfile.mkdtemp()), tl.data.example_path("spot_coarse.model.zip")
+    >>> _ = tl.copy_examples(folder), tl.export_ply(model, folder / "object.ply")
+    >>> shot = tl.render_scene(folder / "scene.xml", {"object": model}, folder / "shot", samples=4, passes=1,
+    ...                        picture_spp=2)
+    >>> shot.picture.shape, shot.reference is None, (shot.folder / "scene.json").is_file()
+    ((240, 320, 3), True, True)
     """
 
     picture: np.ndarray  # (H, W, 3) linear radiance of the scene with the fitted objects glowing in it
@@ -110,10 +118,21 @@ def render_scene(
 
     Examples
     --------
+    The example scene (:func:`translucency.copy_examples`) with the example model in its shape ``object``;
+    the scene reads the shape's mesh from ``object.ply``, which :func:`translucency.export_ply` writes:
+
+    >>> import tempfile
+    >>> from pathlib import Path
     >>> import translucency as tl
-    >>> shot = tl.render_scene("scene.xml", {"pig": "pig.model.zip"}, "shot")  # doctest: +SKIP
-    >>> shot.summary["objects"]["pig"]["vertices"]  # doctest: +SKIP
-    27012
+    >>> folder, model = Path(tempfile.mkdtemp()), tl.data.example_path("spot_coarse.model.zip")
+    >>> _ = tl.copy_examples(folder), tl.export_ply(model, folder / "object.ply")
+    >>> shot = tl.render_scene(folder / "scene.xml", {"object": model}, folder / "shot", samples=4, passes=1,
+    ...                        picture_spp=2)
+    >>> shot.summary["objects"]["object"]["vertices"], sorted(p.name for p in shot.folder.glob("ours.*"))
+    (402, ['ours.exr', 'ours.png'])
+
+    The defaults (32 irradiance samples a vertex, two passes, 16 samples a pixel) take longer and are less
+    noisy; ``reference=True`` path-traces the scene with the object's filling in place.
     """
     for name, value in (("samples", samples), ("passes", passes), ("max_depth", max_depth),
                         ("picture_spp", picture_spp), ("spp", spp)):  # fmt: skip

@@ -118,9 +118,15 @@ def view_model(
 
     Examples
     --------
+    The example model's page written into a folder (with ``export=None`` it is served instead):
+
+    >>> import tempfile
+    >>> from pathlib import Path
     >>> import translucency as tl
-    >>> tl.view_model("pig_iso.model.zip", "pig_page")["page_mb"] < PAGE_BUDGET_MB  # doctest: +SKIP
-    True
+    >>> from translucency.workflow.viewing import PAGE_BUDGET_MB
+    >>> page = tl.view_model(tl.data.example_path("spot_coarse.model.zip"), Path(tempfile.mkdtemp()) / "page")
+    >>> page["page"].name, page["page_mb"] < PAGE_BUDGET_MB
+    ('index.html', True)
     """
     reporter = reporter or Silent()
     environment = _check_options(sky, bands, radius, port)
