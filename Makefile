@@ -7,7 +7,7 @@ PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 OUT    ?= results
 
-.PHONY: demo test test-slow test-all bench clean default-data default-reference docs docs-pages
+.PHONY: demo test test-install test-slow test-all bench clean default-data default-reference docs docs-pages
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -22,7 +22,8 @@ test: $(STAMP)
 	$(VENV)/bin/ruff check src tests benchmarks docs/_gen && $(VENV)/bin/ruff format --check src tests benchmarks docs/_gen && $(PY) -m pytest -q -m "not slow" -n auto
 
 # the documentation site (mkdocs-material, mkdocstrings) into build/site; --strict: every warning fails the
-# build, a broken link or anchor among them
+# build, a broken link or anchor among them; then the built site in headless Chromium with the network refused
+# (tests/test_site_offline.py: formulas drawn, search answers, pictures load, nothing fetched from elsewhere)
 DOCS_STAMP := $(VENV)/.docs-installed
 $(DOCS_STAMP): $(STAMP)
 	$(PY) -m pip install --quiet -e '.[docs]'
@@ -30,6 +31,7 @@ $(DOCS_STAMP): $(STAMP)
 
 docs: $(DOCS_STAMP)
 	NO_MKDOCS_2_WARNING=1 $(VENV)/bin/mkdocs build --strict --site-dir build/site
+	TRANSLUCENCY_SITE=build/site $(PY) -m pytest -q -p no:cacheprovider tests/test_site_offline.py
 
 # the generated pages, rewritten from the commands and the schemas of --json (docs/_gen: generators, not
 # part of the package); tests/test_docs_site.py, test_commands.py and test_json.py hold them current
@@ -37,6 +39,10 @@ docs-pages: $(STAMP)
 	$(PY) docs/_gen/cli_reference.py > docs/reference/cli.md
 	$(PY) docs/_gen/cli_reference.py --api docs/api.md
 	$(PY) docs/_gen/json_schemas.py > docs/json.md
+
+# the README's install and first-result lines, as written, in a fresh virtual environment (pip downloads)
+test-install: $(STAMP)
+	$(PY) -m pytest -q -m install tests/test_install.py
 
 test-slow: $(STAMP)
 	$(PY) -m pytest -q -m slow
