@@ -1,5 +1,5 @@
 """A Griffe extension for the site's API reference: what the docstrings write in reStructuredText, as
-Markdown.  Sphinx roles (``:func:`~a.b```) become code (``b``); ``:math:`` becomes MathJax's inline
+Markdown.  Sphinx roles (``:func:`~a.b```) become code (``b``); ``:math:`` becomes arithmatex's inline
 mathematics; a definition list (a line holding only ``literals``, its description indented below) becomes
 Markdown's (``def_list``); doctest directives are left out.  mkdocs.yml loads it (mkdocstrings'
 ``extensions``)."""
@@ -14,7 +14,7 @@ import griffe
 ROLE = re.compile(
     r":(?:py:)?(?:func|class|mod|data|meth|attr|exc|obj|const):`(~?)\.?([^`<]+?)(?:\s*<[^>]*>)?`"
 )
-#: inline mathematics, :math:`\\vec x_i`, drawn by MathJax (pymdownx.arithmatex)
+#: inline mathematics, :math:`\\vec x_i`, drawn as MathML (pymdownx.arithmatex, docs/_ext/mathml.py)
 MATH = re.compile(r":math:`([^`]+)`")
 #: a doctest directive at the end of an example's line (``# doctest: +SKIP``): the reader's copy goes without
 DIRECTIVE = re.compile(r"[ \t]*# doctest:[^\n]*")
@@ -50,7 +50,7 @@ def definitions(text: str) -> str:
 
 def plain(text: str) -> str:
     """``text`` with each role replaced by a code span of its target (its last name under ``~``), and its
-    mathematics marked for MathJax."""
+    mathematics marked for arithmatex (MathML: docs/_ext/mathml.py)."""
     text = MATH.sub(lambda m: f"\\({m[1]}\\)", text)
     return ROLE.sub(lambda m: f"`{m[2].rsplit('.', 1)[-1] if m[1] else m[2]}`", text)
 
