@@ -278,3 +278,32 @@ def test_the_help_states_the_default_distance_of_the_constant():
     help_text = CliRunner().invoke(app, ["render", "--help"], terminal_width=400).output
     text = " ".join(help_text.replace("│", " ").split())  # (the words, whatever the box's wrapping)
     assert f"default {DEFAULT_DISTANCE:g}x" in text
+
+
+@pytest.mark.parametrize(("name", "scale"), [("spot.obj", 1.0), ("cow.obj", 1.0), ("spot.obj", 0.1)])
+def test_the_default_light_exposes_every_example_object(name, scale, tmp_path):
+    """The default render of each example mesh, as shipped and ten times smaller:
+    at most 2 % of the object's pixels clipped, its median pixel between 60 and 220 of 255 — the default
+    light (point@key, I = E d²) and the fixed exposure together, whatever the object's size."""
+    from translucency import render_model, save_model
+    from translucency.data import example_path
+    from translucency.io.mesh import load_mesh
+    from translucency.mitsuba import mitsuba
+
+    mesh = load_mesh(example_path(name), scale_mm=scale)
+    rng = np.random.default_rng(5)
+    # a physical random model (total reflectance < 1, fall-off within 6 mm) on every 20th vertex
+    model = random_exponential_model(
+        rng, geometry="mesh", mesh=mesh, points=np.arange(0, len(mesh.vertices), 20)
+    )
+    model.faces = np.asarray(mesh.faces)
+    path = tmp_path / "m.model.zip"
+    save_model(model, path)
+    out = tmp_path / "render"
+    render_model(path, out, resolution=(80, 60))
+    linear = np.asarray(mitsuba().Bitmap(str(out / "ours.exr")), dtype=np.float64)
+    on = linear.sum(axis=2) > 0  # the object's pixels (the background is black)
+    pixels = np.round(_png(out / "ours.png")[on] * 255)
+    assert on.mean() > 0.1, on.mean()  # the object fills the picture
+    clipped, median = (pixels >= 255).any(axis=1).mean(), float(np.median(pixels.mean(axis=1)))
+    assert clipped <= 0.02 and 60 <= median <= 220, (clipped, median)
