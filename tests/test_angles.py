@@ -227,8 +227,8 @@ def test_acquire_planar_with_the_angle_axes_from_the_command_line(tmp_path):
     assert ds.group["R_d_oblique"].shape == (4, 2, 7, 7, 3)
     assert ds.group["exit_bins"].shape == (4, 3, 7, 7, 3, 4)
     assert not ds.damaged_chunks()
-    line = error_line([*args[:3], str(tmp_path / "other.zarr"), *args[4:], "--angle", "30"])
-    assert "--angle" in line and "--incidence" in line
+    line = error_line([*args[:3], str(tmp_path / "other.zarr"), *args[4:], "--tilt", "30"])
+    assert "--tilt" in line and "--incidence" in line
 
 
 def _cosine_directions(n: int, rng) -> np.ndarray:

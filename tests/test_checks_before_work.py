@@ -262,7 +262,8 @@ def test_the_reference_of_a_users_filling_renders_while_the_file_is_unchanged(ba
     header = zarr.open_group(str(ball["data"]), mode="r").attrs["translucency_mesh_dataset"]
     assert header["filling"]["path"] == str(ball["filling"].resolve())
     assert len(header["filling"]["sha256"]) == 64
-    args = ["render", str(ball["model"]), "--reference", "--resolution", "24", "18", "--spp", "2", "-q"]
+    args = ["render", str(ball["model"]), "--reference", "--resolution", "24", "18", "--reference-spp", "2"]
+    args += ["-q"]
     res = runner.invoke(app, [*args, "--out", str(tmp_path / "r")])
     assert res.exit_code == 0, res.output
     assert (tmp_path / "r" / "reference.exr").is_file()

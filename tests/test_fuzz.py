@@ -304,7 +304,7 @@ OPTIONS = {
             "--window",
             "--voxel",
             "--g",
-            "--angle",
+            "--tilt",
             "--chunk",
         ],
     ),
@@ -454,7 +454,7 @@ LIGHTS = [
     "spot:0,-30,30,{},0,0,{},{}",
     "env:{}",
 ]
-RENDER_OPTIONS = ["--resolution", "--radius", "--spp", "--view"]
+RENDER_OPTIONS = ["--resolution", "--radius", "--reference-spp", "--view"]
 
 
 @fuzz_settings(12)

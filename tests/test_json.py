@@ -61,7 +61,7 @@ def outputs(tmp_path_factory):
             "--out",
             tmp / "scn",
         ]
-        + ["--samples", "4", "--picture-spp", "2", "--reference", "--spp", "2", "-q"]
+        + ["--irradiance-samples", "4", "--picture-spp", "2", "--reference", "--reference-spp", "2", "-q"]
     )
     for name in ("a.zarr", "b.zarr", "a.model.zip", "b.model.zip"):
         out[f"info {name}"] = _json(["info", tmp / name])

@@ -339,6 +339,9 @@ ARGUMENT = {
     "--material": "sample",  # the sample (a generator's name, or a --volume file)
     "--volume": "sample",
     "--model": "family",  # fit: the model family
+    "--tilt": "angle",  # acquire planar: the scan's one beam tilted by this angle
+    "--index-matched": "eta",  # acquire planar|mesh|object-photographs: eta=1
+    "--dtype": ("dtype", "float16"),  # acquire and import: dtype; fit: float16=True
 }
 
 
@@ -356,7 +359,8 @@ def _named_alike(option: str, argument: str) -> bool:
     """Whether ``argument`` is the library's name for ``option``: a word in common, or :data:`ARGUMENT`."""
     words = {w.removesuffix("s") for w in option.lstrip("-").split("-")}  # --object → objects
     names = {w.removesuffix("s") for w in argument.rpartition(".")[2].split("_")}
-    return ARGUMENT.get(option) == argument or bool(words & names)
+    library = ARGUMENT.get(option, ())
+    return argument in ((library,) if isinstance(library, str) else library) or bool(words & names)
 
 
 @pytest.fixture(scope="module")

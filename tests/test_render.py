@@ -196,7 +196,7 @@ def test_fit_and_render_cli_on_a_mesh(tmp_path):
             "64",
             "48",
             "--reference",
-            "--spp",
+            "--reference-spp",
             "8",
         ],
     )

@@ -255,7 +255,7 @@ def test_render_scene_from_the_command_line_against_its_reference(fitted_ball):
     scene = _write_scene(folder)
     out = folder / "render"
     args = ["render", "scene", str(scene), "--object", f"ball={model}", "--out", str(out), "--reference"]
-    res = runner.invoke(app, args + ["--spp", "32", "--samples", "32"])
+    res = runner.invoke(app, args + ["--reference-spp", "32", "--irradiance-samples", "32"])
     assert res.exit_code == 0, res.output
     summary = json.loads((out / "scene.json").read_text())
     for name in ("ours.exr", "ours.png", "reference.exr", "reference.png", "scene.png"):

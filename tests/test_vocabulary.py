@@ -4,10 +4,11 @@ meaning and metavar)."""
 import re
 import typing
 
+import pytest
 import typer
 from typer.testing import CliRunner
 
-from translucency.cli import _vocabulary
+from translucency.cli import _renamed, _vocabulary
 from translucency.cli.app import app
 
 runner = CliRunner()
@@ -137,3 +138,72 @@ def test_an_old_name_before_the_first_release_is_an_unknown_option():
     res = runner.invoke(app, ["render", "m.model.zip", "--size", "8", "6"])
     assert res.exit_code == 2
     assert "--size" in res.output
+
+
+# -- retired names: they still work, with one warning line naming the new one ---------------------------
+#: command, a retired option (with its value), the new words, the parameter it lands on, the value there
+RETIRED = [
+    ("acquire planar", ["--angle", "30"], "--tilt", "tilt", 30.0),
+    ("acquire planar", ["--angle=30"], "--tilt", "tilt", 30.0),
+    ("fit", ["--float16"], "--dtype float16", "dtype", "float16"),
+    ("render", ["--spp", "8"], "--reference-spp", "reference_spp", 8),
+    ("render scene", ["--spp", "8"], "--reference-spp", "reference_spp", 8),
+    ("render scene", ["--samples", "12"], "--irradiance-samples", "irradiance_samples", 12),
+]
+#: each command's required arguments and options, to reach its parsing
+REQUIRED = {
+    "acquire planar": ["-m", "marble", "-o", "d.zarr"],
+    "fit": ["d.zarr", "-o", "m.model.zip"],
+    "render": ["m.model.zip"],
+    "render scene": ["s.xml", "--object", "a=m.model.zip"],
+}
+
+
+@pytest.mark.parametrize("command,old,new,param,value", RETIRED, ids=[f"{c} {o[0]}" for c, o, *_ in RETIRED])
+def test_a_retired_name_still_works_with_one_warning_line(monkeypatch, command, old, new, param, value):
+    seen = {}
+
+    def parsed(self, ctx, args):  # the command's parse, recorded, then stopped before any work
+        original(self, ctx, args)
+        seen.update(ctx.params)
+        raise typer.Exit(0)
+
+    original = typer.core.TyperCommand.parse_args
+    monkeypatch.setattr(typer.core.TyperCommand, "parse_args", parsed)
+    res = runner.invoke(app, [*command.split(), *REQUIRED[command], *old])
+    assert res.exit_code == 0, res.output
+    assert res.stderr == f"warning: translucency {command} {old[0].split('=')[0]} is now {new}\n"
+    assert seen[param] == value
+
+
+def test_a_retired_name_warns_once_and_only_in_its_command():
+    """Given twice: one line; acquire's --spp (its photographs') and the words after ``--`` stay."""
+    top = typer.main.get_command(app)
+    args = ["render", "scene", "s.xml", "--samples", "4", "--samples=8"]
+    assert _renamed.renamed(top, args)[3:] == ["--irradiance-samples", "4", "--irradiance-samples", "8"]
+    args = ["acquire", "photographs", "--spp", "4", "--", "--angle"]
+    assert _renamed.renamed(top, args) == args
+    options = {}
+    for command, name, _ in _options():
+        options.setdefault(command, set()).add(name)
+    for command, table in _vocabulary.RENAMED.items():  # a retired name is no option of its command
+        assert not set(table) & options[command], command
+
+
+def test_index_matched_is_eta_1_and_both_at_odds_is_one_line(tmp_path):
+    """acquire planar|mesh|object-photographs: --index-matched is --eta 1; with another --eta, one line."""
+    commands = (["acquire", "planar", "-m", "marble"], ["acquire", "mesh"], ["acquire", "object-photographs"])
+    for command in commands:
+        res = runner.invoke(app, [*command, "-o", str(tmp_path / "x"), "--index-matched", "--eta", "1.4"])
+        assert res.exit_code == 2 and res.output.count("\n") == 1, res.output
+        assert "--index-matched is --eta 1" in res.output
+
+
+def test_tilt_with_oblique_beams_and_demo_terms_beyond_the_model_are_one_line(tmp_path):
+    res = runner.invoke(app, ["acquire", "planar", "-m", "marble", "-o", str(tmp_path / "d.zarr"), "--tilt",
+                              "30", "--incidence", "45"])  # fmt: skip
+    assert res.exit_code == 2 and "--tilt and --incidence" in res.output and res.output.count("\n") == 1
+    res = runner.invoke(app, ["demo", "--terms", "5", "-o", str(tmp_path / "r")])
+    assert res.exit_code == 2 and "--terms: must be a whole number between 1 and 4, got 5" in res.output
+    res = runner.invoke(app, ["fit", str(tmp_path / "d.zarr"), "-o", str(tmp_path / "m"), "--dtype", "int8"])
+    assert res.exit_code == 2 and "--dtype: expected float32 or float16, got 'int8'" in res.output

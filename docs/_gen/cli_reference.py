@@ -43,7 +43,12 @@ DEFAULT_PANEL = "Options"
 #: options that are the command line's own (how it prints), not the library's
 PRINTING = {"--help", "--quiet", "--json", "--version"}
 #: the library's ``sample`` takes a generator's name (``--material``) as well as a volume's file
-ALIASES = {"--material": {"sample"}}
+ALIASES = {
+    "--material": {"sample"},
+    "--dtype": {"float16"},  # fit: float16=True
+    "--reference-spp": {"spp"},  # render, render scene: the reference's spp
+    "--index-matched": {"eta"},  # eta=1 (acquire planar and mesh also take index_matched=True)
+}
 
 #: a code span, kept as it is; Markdown's specials are escaped only outside one
 _CODE = re.compile(r"(`[^`]*`)")

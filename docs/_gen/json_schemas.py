@@ -449,7 +449,7 @@ RENDER = record(
         "reference_s": field("number", "Path tracing the reference.", "s"),
         "reference_noise": field(["number", "null"], "The reference's own noise (with --reference)."),
         "reference_cached": field("boolean", "The reference came from the cache."),
-        "reference_spp": field("integer", "Samples per pixel of the reference."),
+        "reference_spp": field("integer", "Samples per pixel of the reference (--reference-spp)."),
         "speedup_vs_reference": field("number", "Reference time over ours."),
         **_WORKING,
     },
@@ -498,7 +498,9 @@ RENDER_SCENE = record(
         "light_s": field("number", "The light-in and through-the-body passes.", "s"),
         "draw_s": field("number", "Path tracing our picture.", "s"),
         "passes": field("integer", "Light-in / through-the-body passes (--passes)."),
-        "samples": field("integer", "Irradiance samples per vertex of the first pass (--samples)."),
+        "samples": field(
+            "integer", "Irradiance samples per vertex of the first pass (--irradiance-samples)."
+        ),
         "picture_spp": field("integer", "Samples per pixel of our picture (--picture-spp)."),
         "object_pixels": field("integer", "Pixels whose centre ray meets a fitted object."),
         "exposure": field("number", "Exposure of the PNGs: the linear scale before sRGB."),
@@ -508,7 +510,9 @@ RENDER_SCENE = record(
             {"object": _SCENE_PART, "lit": _SCENE_PART, "rest": _SCENE_PART},
         ),
         "reference_noise": field("number", "The reference's own noise over the objects (with --reference)."),
-        "reference_spp": field("integer", "Samples per pixel of each of the reference's two renders."),
+        "reference_spp": field(
+            "integer", "Samples per pixel of each of the reference's two renders (--reference-spp)."
+        ),
         "reference_s": field("number", "Path tracing the reference.", "s"),
         "speedup_vs_reference": field("number", "Reference time over our passes and picture."),
         **_WORKING,
@@ -704,7 +708,7 @@ INFO_MODEL = record(
         "n_terms": field("integer", "Exponential terms n (exponential models)."),
         "n_directions": field("integer", "Directions m (exponential models; 1: isotropic)."),
         "colour": field("string", "shared or per-channel (exponential models)."),
-        "dtype": field("string", "Storage of the parameters: float32 or float16."),
+        "dtype": field("string", "Storage of the parameters: float32 or float16 (fit --dtype)."),
         "meta": field(
             "object", "What the fit recorded (data set, options, objective, acquisition), in full."
         ),

@@ -89,8 +89,8 @@ class PlanarSetup:
             raise TranslucencyError(f"angle: must lie in [0, 90) degrees, got {self.theta_inc_deg}")
         if self.theta_inc_deg != 0 and self.incidence.count > 1:
             raise TranslucencyError(
-                "angle: with --incidence the first beam is the normal one and the oblique ones are the "
-                f"--incidence angles; leave --angle at 0 (got {self.theta_inc_deg:g})"
+                f"angle: must be 0 with oblique beams (incidence), whose first beam is the normal one; got "
+                f"{self.theta_inc_deg:g}"
             )
         if self.dtype not in ("float32", "float16"):
             raise TranslucencyError(f"dtype: expected float32 or float16, got {self.dtype!r}")

@@ -178,6 +178,41 @@ PANEL_RUN = "Run"
 
 
 # -- options shared by several commands ---------------------------------------------------------------
+def eta_option(own: str):
+    """``--eta``: the boundary's index (acquire planar|mesh|object-photographs); ``own``: what the
+    sample's own index is in that command."""
+    return typer.Option(
+        None,
+        "--eta",
+        help=f"The boundary's relative index of refraction: 1 index-matched, > 1 a smooth dielectric. "
+        f"Default: the sample's own ({own}).",
+        rich_help_panel=PANEL_SAMPLE,
+    )
+
+
+def index_matched_option():
+    """``--index-matched``: ``--eta 1`` (acquire planar|mesh|object-photographs)."""
+    return typer.Option(
+        False,
+        "--index-matched",
+        help="No Fresnel reflection at the boundary: the same as --eta 1.",
+        rich_help_panel=PANEL_SAMPLE,
+    )
+
+
+def boundary_eta(eta: float | None, index_matched: bool) -> float | None:
+    """The boundary's η of ``--eta`` and ``--index-matched`` (None: the sample's own); both given, one line.
+
+    Examples
+    --------
+    >>> boundary_eta(None, True), boundary_eta(1.4, False), boundary_eta(None, False)
+    (1.0, 1.4, None)
+    """
+    if index_matched and eta is not None and eta != 1.0:
+        raise TranslucencyError(f"--index-matched is --eta 1: give one of them, not --eta {eta:g} too")
+    return 1.0 if index_matched else eta
+
+
 def scheduler_option():
     """``--scheduler``: where work runs (acquire planar|mesh, fit, evaluate, import images)."""
     return typer.Option(

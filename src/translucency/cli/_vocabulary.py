@@ -2,8 +2,10 @@
 it, and the metavar ``--help`` shows for it.
 
 A new option takes a name from here with its meaning, or adds a new name; a name is never given a second
-meaning (tests/test_vocabulary.py walks every command against this table).  Options whose name changed
-were renamed before the first release (docs/changelog.md).
+meaning (tests/test_vocabulary.py walks every command against this table).  A name retired for a clearer
+one goes into :data:`RENAMED`: it still works, with one ``warning:`` line naming the new one
+(cli/_renamed.py rewrites it before the command line is parsed); the names changed before the first
+release are not accepted (docs/changelog.md).
 """
 
 from __future__ import annotations
@@ -29,8 +31,8 @@ VOCABULARY: dict[str, tuple[str, str]] = {
     "--size": ("W H T", "a generated slab's width, height and thickness, mm"),
     "--voxel": ("FLOAT", "voxel size of a generated sample or filling, mm"),
     "--g": ("FLOAT", "Henyey-Greenstein anisotropy of a generated sample"),
-    "--eta": ("FLOAT", "relative index of refraction of the sample's boundary"),
-    "--index-matched": ("", "no Fresnel reflection at the boundary"),
+    "--eta": ("FLOAT", "relative index of refraction of the sample's boundary (default: the sample's own)"),
+    "--index-matched": ("", "no Fresnel reflection at the boundary: --eta 1"),
     "--seed": ("INT", "random seed"),
     "--sample-seed": ("INT", "seed of the generated sample"),
     # -- acquisition
@@ -40,12 +42,12 @@ VOCABULARY: dict[str, tuple[str, str]] = {
     "--span": ("FLOAT", "side of the incident grid, mm"),
     "--pitch": ("FLOAT", "pixel size on the sample, mm"),
     "--window": ("FLOAT", "window side around each incident point, mm"),
-    "--angle": ("FLOAT", "angle of incidence from the normal, degrees"),
-    "--incidence": ("DEGREES", "oblique beams: a polar angle from the normal, degrees"),
+    "--tilt": ("DEGREES", "the scan's one beam tilted from the normal, degrees"),
+    "--incidence": ("DEGREES", "oblique beams besides the normal one: their angle from the normal"),
     "--azimuths": ("INT", "azimuths per --incidence angle"),
     "--exit-bins": ("INT", "exit direction bins"),
     "--chunk": ("INT", "incident points per chunk of work"),
-    "--dtype": ("TEXT", "storage of R_d and variance"),
+    "--dtype": ("TEXT", "the floating-point type the output stores its arrays in: float32 or float16"),
     "--reentry": ("", "light leaving one part through the air walks on in another"),
     "--unscattered": ("TEXT", "how light that leaves without scattering is kept"),
     # -- cameras and photographs
@@ -53,7 +55,7 @@ VOCABULARY: dict[str, tuple[str, str]] = {
     "--cameras": ("INT", "how many cameras"),
     "--fov": ("FLOAT", "horizontal field of view, degrees"),
     "--resolution": ("W H", "image width and height, pixels"),
-    "--spp": ("INT", "samples per pixel of a path-traced render"),
+    "--spp": ("INT", "samples per pixel of the path-traced photographs"),
     "--format": ("TEXT", "image file format"),
     "--beam": ("FLOAT", "radius of the laser's spot on the surface, mm"),
     "--beam-rms": ("FLOAT", "the laser beam's rms radius, mm"),
@@ -79,7 +81,6 @@ VOCABULARY: dict[str, tuple[str, str]] = {
     "--exclusion": ("FLOAT", "pixels closer than this to x_i ignored, mm"),
     "--rounds": ("INT", "most alternation rounds"),
     "--alpha-radius": ("FLOAT", "alpha's statistics pooled within this distance, mm"),
-    "--float16": ("", "parameters stored as float16"),
     # -- evaluate
     "--report": ("PATH", "the report's folder"),
     "--compare": ("PATH", "another model file of the same data"),
@@ -98,11 +99,12 @@ VOCABULARY: dict[str, tuple[str, str]] = {
     "--scene": ("PATH", "a Mitsuba 3 scene file"),
     "--object": ("ID=FILE", "a shape of the scene that is this per-vertex model"),
     "--scene-unit": ("FLOAT", "millimetres per scene unit"),
-    "--samples": ("INT", "irradiance samples per vertex"),
+    "--irradiance-samples": ("INT", "irradiance samples per vertex"),
     "--passes": ("INT", "light-in / through-the-body passes"),
     "--max-depth": ("INT", "longest light path, bounces"),
     "--roughness": ("FLOAT", "GGX roughness of the boundary"),
     "--picture-spp": ("INT", "samples per pixel of our picture"),
+    "--reference-spp": ("INT", "samples per pixel of the path-traced reference"),
     "--ply": ("PATH", "the mesh written as PLY"),
     "--gltf": ("PATH", "glTF 2.0 binary written"),
     "--mitsuba": ("DIR", "a Mitsuba 3 scene of the estimated medium written into this folder"),
@@ -112,6 +114,14 @@ VOCABULARY: dict[str, tuple[str, str]] = {
     "--sky": ("ENV", "the environment light"),
     "--bands": ("INT", "bands of the spherical-harmonics light basis"),
     "--seconds": ("FLOAT", "serve this long, then stop"),
+}
+
+#: command → {retired name: the words that replace it}; the old name still works, with one warning line
+RENAMED: dict[str, dict[str, list[str]]] = {
+    "acquire planar": {"--angle": ["--tilt"]},
+    "fit": {"--float16": ["--dtype", "float16"]},
+    "render": {"--spp": ["--reference-spp"]},
+    "render scene": {"--spp": ["--reference-spp"], "--samples": ["--irradiance-samples"]},
 }
 
 #: short option → the long option it is in every command

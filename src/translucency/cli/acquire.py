@@ -18,9 +18,12 @@ from ._common import (
     PANEL_RUN,
     PANEL_SAMPLE,
     PANEL_SCAN,
+    boundary_eta,
     chunk_option,
     dataset_overwrite_option,
+    eta_option,
     finish,
+    index_matched_option,
     json_option,
     max_memory_option,
     quiet_option,
@@ -32,6 +35,8 @@ from ._run import RichReporter
 
 #: the sample generators, as --help lists them (the one list make_sample refuses others with)
 SAMPLES = ", ".join(GENERATORS) + " (<name>: one of `translucency materials`)"
+#: what the sample's own index of refraction is (--eta's default)
+OWN_ETA = "1.3 for the generated materials; a volume file's eta"
 
 app = typer.Typer(
     help="Virtual DISCO: simulate measurements by photon transport (Mitsuba 3 / Dr.Jit).",
@@ -84,7 +89,10 @@ class PhotographsOptions:
         (64, 64), "--resolution", help="Image width and height, pixels.", rich_help_panel=PANEL_CAMERA
     )
     spp = typer.Option(
-        64, "--spp", help="Samples per pixel of Mitsuba's volpath.", rich_help_panel=PANEL_CAMERA
+        64,
+        "--spp",
+        help="Samples per pixel of the path-traced photographs (Mitsuba's volpath).",
+        rich_help_panel=PANEL_CAMERA,
     )
     seed = typer.Option(0, "--seed", help="Random seed of the sample, renders and sensor noise.")
     image_format = typer.Option("pfm", "--format", help="pfm or exr.", rich_help_panel=PANEL_OUTPUT)
@@ -152,9 +160,9 @@ class AngleOptions:
     incidence = typer.Option(
         [],
         "--incidence",
-        help="Also beams arriving at this polar angle (degrees from the normal), at --azimuths azimuths "
-        "about it (a mesh point's tangent frame; a slab's x, y); repeat for more angles. Cost: photons x "
-        "directions.",
+        help="Oblique beams besides the normal one: also beams arriving at this polar angle (degrees from "
+        "the normal), at --azimuths azimuths about it (a mesh point's tangent frame; a slab's x, y), stored "
+        "beside the normal beam's R_d; repeat for more angles. Cost: photons x directions.",
         rich_help_panel=PANEL_SCAN,
     )
     azimuths = typer.Option(
@@ -216,15 +224,19 @@ class PlanarOptions:
     g = typer.Option(
         0.0, "--g", help="Henyey-Greenstein anisotropy of generated samples.", rich_help_panel=PANEL_SAMPLE
     )
-    angle = typer.Option(
-        0.0, "--angle", help="Angle of incidence from the normal, degrees.", rich_help_panel=PANEL_SCAN
+    tilt = typer.Option(
+        0.0,
+        "--tilt",
+        help="Tilt the scan's one beam: every incident point lit at this angle from the normal instead of "
+        "along it, degrees (the data set is of that angle alone; oblique beams besides the normal one: "
+        "--incidence).",
+        rich_help_panel=PANEL_SCAN,
     )
     incidence = AngleOptions.incidence
     azimuths = AngleOptions.azimuths
     exit_bins = AngleOptions.exit_bins
-    index_matched = typer.Option(
-        False, "--index-matched", help="No Fresnel reflection at the boundary.", rich_help_panel=PANEL_SAMPLE
-    )
+    eta = eta_option(OWN_ETA)
+    index_matched = index_matched_option()
     chunk = chunk_option(16)
     dtype = typer.Option(
         "float32",
@@ -255,10 +267,11 @@ def acquire_planar_cmd(
     size: tuple[float, float, float] = PlanarOptions.size,
     voxel: float = PlanarOptions.voxel,
     g: float = PlanarOptions.g,
-    angle: float = PlanarOptions.angle,
+    tilt: float = PlanarOptions.tilt,
     incidence: list[float] = PlanarOptions.incidence,
     azimuths: int = PlanarOptions.azimuths,
     exit_bins: int = PlanarOptions.exit_bins,
+    eta: float = PlanarOptions.eta,
     index_matched: bool = PlanarOptions.index_matched,
     dtype: str = PlanarOptions.dtype,
     chunk: int = PlanarOptions.chunk,
@@ -271,6 +284,10 @@ def acquire_planar_cmd(
     """Scan a pencil beam over a planar sample and record R_d around each incident point."""
     from ..workflow.acquiring import acquire_planar  # heavy: Mitsuba, Dask and SciPy load only when it runs
 
+    if tilt and incidence:
+        raise TranslucencyError(
+            "--tilt and --incidence: oblique beams begin with the normal one; leave --tilt at 0 with them"
+        )
     ds = acquire_planar(
         _one_sample(material, volume),
         out,
@@ -284,11 +301,11 @@ def acquire_planar_cmd(
         size=size,
         voxel_mm=voxel,
         g=g,
-        angle=angle,
+        angle=tilt,
         incidence=incidence,
         azimuths=azimuths,
         exit_bins=exit_bins,
-        index_matched=index_matched,
+        eta=boundary_eta(eta, index_matched),
         chunk_points=chunk,
         dtype=dtype,
         overwrite=overwrite,
@@ -325,7 +342,7 @@ class MeshOptions:
         64,
         "--points",
         help="Incident points (farthest-point sample of the vertices). On small objects more points with "
-        "fewer photons each, for the same time, render closer (docs/through-body.md).",
+        "fewer photons each, for the same time, render closer (documentation: 'Light through the body').",
         rich_help_panel=PANEL_SCAN,
     )
     photons = typer.Option(20_000, "--photons", "-N", help="Photons per incident point and channel.")
@@ -333,9 +350,8 @@ class MeshOptions:
     sample_seed = PlanarOptions.sample_seed
     g = typer.Option(0.0, "--g", help="Henyey-Greenstein anisotropy.", rich_help_panel=PANEL_SAMPLE)
     chunk = chunk_option(8)
-    index_matched = typer.Option(
-        False, "--index-matched", help="No Fresnel reflection at the surface.", rich_help_panel=PANEL_SAMPLE
-    )
+    eta = eta_option(OWN_ETA)
+    index_matched = index_matched_option()
     reentry = typer.Option(
         True,
         "--reentry/--no-reentry",
@@ -375,6 +391,7 @@ def acquire_mesh_cmd(
     sample_seed: int = MeshOptions.sample_seed,
     g: float = MeshOptions.g,
     chunk: int = MeshOptions.chunk,
+    eta: float = MeshOptions.eta,
     index_matched: bool = MeshOptions.index_matched,
     reentry: bool = MeshOptions.reentry,
     unscattered: str = MeshOptions.unscattered,
@@ -403,7 +420,7 @@ def acquire_mesh_cmd(
         seed=seed,
         sample_seed=sample_seed,
         chunk_points=chunk,
-        index_matched=index_matched,
+        eta=boundary_eta(eta, index_matched),
         reentry=reentry,
         unscattered=unscattered,
         incidence=incidence,

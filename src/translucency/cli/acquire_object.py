@@ -14,7 +14,10 @@ from ._common import (
     PANEL_OUTPUT,
     PANEL_SAMPLE,
     PANEL_SCAN,
+    boundary_eta,
+    eta_option,
     finish,
+    index_matched_option,
     json_option,
     max_memory_option,
     overwrite_option,
@@ -53,18 +56,14 @@ class ObjectPhotographsOptions:
     spp = typer.Option(
         64,
         "--spp",
-        help="Samples per pixel of each of the two repeated frames.",
+        help="Samples per pixel of the path-traced photographs (each of the two repeated frames).",
         rich_help_panel=PANEL_CAMERA,
     )
     beam = typer.Option(
         0.3, "--beam", help="Radius of the laser's spot on the surface, mm.", rich_help_panel=PANEL_SCAN
     )
-    eta = typer.Option(
-        1.0,
-        "--eta",
-        help="The boundary: 1 index-matched, > 1 a smooth dielectric.",
-        rich_help_panel=PANEL_SAMPLE,
-    )
+    eta = eta_option("1.3 for the generated materials; > 1: the laser enters through a window over its spot")
+    index_matched = index_matched_option()
     checkerboards = typer.Option(
         False,
         "--checkerboards",
@@ -99,6 +98,7 @@ def acquire_object_photographs_cmd(
     spp: int = ObjectPhotographsOptions.spp,
     beam: float = ObjectPhotographsOptions.beam,
     eta: float = ObjectPhotographsOptions.eta,
+    index_matched: bool = ObjectPhotographsOptions.index_matched,
     checkerboards: bool = ObjectPhotographsOptions.checkerboards,
     exposures: str = ObjectPhotographsOptions.exposures,
     seed: int = ObjectPhotographsOptions.seed,
@@ -125,7 +125,7 @@ def acquire_object_photographs_cmd(
         resolution=resolution,
         spp=spp,
         beam_mm=beam,
-        eta=eta,
+        eta=boundary_eta(eta, index_matched),
         checkerboards=checkerboards,
         exposures=exposures,
         seed=seed,

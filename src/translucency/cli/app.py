@@ -30,6 +30,7 @@ from . import (
     view,
 )
 from ._common import console, err_console
+from ._renamed import renamed
 from ._vocabulary import METAVARS
 
 
@@ -60,7 +61,8 @@ class _Command(typer.core.TyperCommand):
 
 class _OneLineErrors(_Group):
     """The top command: a usage error (unknown option, a value of the wrong type) is one ``error:`` line
-    naming the option, exit status 2, like every other error — not Click's usage box."""
+    naming the option, exit status 2, like every other error — not Click's usage box.  A retired option
+    name (cli/_vocabulary.py's RENAMED) is read as its new one, with one warning line."""
 
     def resolve_command(self, ctx, args):
         """``render scene ...`` is the command ``render scene`` (its own command, listed as such): two
@@ -70,6 +72,7 @@ class _OneLineErrors(_Group):
         return super().resolve_command(ctx, args)
 
     def main(self, args=None, prog_name=None, complete_var=None, standalone_mode=True, **extra):
+        args = renamed(self, list(sys.argv[1:] if args is None else args))
         if not standalone_mode:
             return super().main(args, prog_name, complete_var, standalone_mode=False, **extra)
         try:

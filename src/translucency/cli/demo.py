@@ -14,7 +14,13 @@ from ._run import RichReporter
 @user_errors
 def demo(
     out: Path = typer.Option(Path("results"), "--out", "-o", help="Directory for the figures and files."),
-    terms: int = typer.Option(3, "--terms", "-n", min=1, max=8, help="Exponential terms n of the fits."),
+    terms: int = typer.Option(
+        3,
+        "--terms",
+        "-n",
+        help="Exponential terms n (1-4, as in fit) of the sum of exponentials fitted to each material's "
+        "dipole profile (the baselines).",
+    ),
     overwrite: bool = overwrite_option(),
     max_memory: str = max_memory_option(),
     quiet: bool = quiet_option(),

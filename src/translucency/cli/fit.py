@@ -7,6 +7,7 @@ from pathlib import Path
 
 import typer
 
+from .._validate import TranslucencyError
 from ._common import (
     PANEL_FITTING,
     PANEL_MODEL,
@@ -85,11 +86,15 @@ _ALPHA_RADIUS = typer.Option(
     "--alpha-radius",
     help="Pool alpha's statistics over the pixels (vertices) within this distance, mm. Default: alpha "
     "per pixel on planar data (dense scans), 12 mean edge lengths on meshes (at least 4 mm). For sparse "
-    "grids of incident points or noisy data such as photographs (docs/rig.md).",
+    "grids of incident points or noisy data such as photographs (documentation: 'Photograph and calibrate a "
+    "flat sample').",
     rich_help_panel=PANEL_FITTING,
 )
-_FLOAT16 = typer.Option(
-    False, "--float16", help="Store parameters as float16 (smaller file).", rich_help_panel=PANEL_OUTPUT
+_DTYPE = typer.Option(
+    "float32",
+    "--dtype",
+    help="Storage of the parameters: float32 or float16 (a smaller file).",
+    rich_help_panel=PANEL_OUTPUT,
 )
 
 
@@ -105,7 +110,7 @@ def fit(
     exclusion: float = _EXCLUSION,
     rounds: int = _ROUNDS,
     alpha_radius: float = _ALPHA_RADIUS,
-    float16: bool = _FLOAT16,
+    dtype: str = _DTYPE,
     chunk: int = _CHUNK,
     overwrite: bool = overwrite_option(),
     scheduler: str = scheduler_option(),
@@ -121,6 +126,8 @@ def fit(
         fit_model,
     )  # heavy: the fitter loads Dask, SciPy and Numba only when it runs
 
+    if dtype not in ("float32", "float16"):
+        raise TranslucencyError(f"--dtype: expected float32 or float16, got {dtype!r}")
     fitting = fit_model(
         data,
         model,
@@ -133,7 +140,7 @@ def fit(
         exclusion_mm=exclusion,
         alpha_radius=alpha_radius,
         chunk_points=chunk,
-        float16=float16,
+        float16=dtype == "float16",
         overwrite=overwrite,
         scheduler=scheduler,
         max_memory=max_memory,

@@ -24,7 +24,8 @@ from ._run import RichReporter
 def import_object_cmd(
     rig: Path = typer.Argument(
         ...,
-        help="The rig file object.json (or its folder): mesh, cameras, shots (docs/object-rig.md).",
+        help="The rig file object.json (or its folder): mesh, cameras, shots (documentation: 'The object "
+        "rig's files').",
     ),
     out: Path = typer.Option(..., "--out", "-o", help="Output mesh data set (Zarr directory)."),
     exit_law: str = typer.Option(

@@ -9,7 +9,7 @@ from pathlib import Path
 import typer
 from rich.table import Table
 
-from .._validate import TranslucencyError
+from .._validate import TranslucencyError, check_option
 from ._common import (
     PANEL_CAMERA,
     PANEL_COMPARISON,
@@ -79,10 +79,10 @@ _REFERENCE = typer.Option(
     help="Also path-trace the reference (Mitsuba volpath) and compare.",
     rich_help_panel=PANEL_COMPARISON,
 )
-_SPP = typer.Option(
+_REFERENCE_SPP = typer.Option(
     32,
-    "--spp",
-    help="Samples per pixel of each of the two reference renders.",
+    "--reference-spp",
+    help="Samples per pixel of each of the two path-traced reference renders (with --reference).",
     rich_help_panel=PANEL_COMPARISON,
 )
 _RADIUS = typer.Option(
@@ -97,8 +97,8 @@ _PAPER = typer.Option(
     False,
     "--paper",
     help="Draw the paper's model: each point's radial profile alone, without the through-body table the "
-    "model holds (light between sides whose normals face apart, measured against the fit; drawn by default, "
-    "docs/through-body.md).",
+    "model holds (light between sides whose normals face apart, measured against the fit; drawn by default; "
+    "documentation: 'Light through the body').",
     rich_help_panel=PANEL_TRANSPORT,
 )
 _TRANSPORT = typer.Option(
@@ -107,7 +107,8 @@ _TRANSPORT = typer.Option(
     metavar="KIND",
     help="The transport drawn: default (the fitted model with its through-body table) | walked (the "
     "model's near field, and the light that crosses the body walked through the medium the fit estimated "
-    "from the scan, entered along the light's own direction; back-lit objects, docs/through-body.md) | "
+    "from the scan, entered along the light's own direction; back-lit objects; documentation: 'Light "
+    "through the body') | "
     "paper (as --paper).",
     rich_help_panel=PANEL_TRANSPORT,
 )
@@ -115,7 +116,8 @@ _ANGLES = typer.Option(
     False,
     "--angles",
     help="Lean the transport toward the light's direction (the model's lean, fitted from a data set "
-    "acquired with --incidence; model/lean.py): back-lit objects, docs/lean.md. A light of many "
+    "acquired with --incidence): back-lit objects (documentation: 'The light's direction: angle axes and the "
+    "lean'). A light of many "
     "directions (env, a scene's) leans by its irradiance-weighted mean direction; a model without a lean "
     "is drawn without it.",
     rich_help_panel=PANEL_TRANSPORT,
@@ -131,7 +133,7 @@ def render(
     exposure: str = _EXPOSURE,
     resolution: tuple[int, int] = _RESOLUTION,
     reference: bool = _REFERENCE,
-    spp: int = _SPP,
+    reference_spp: int = _REFERENCE_SPP,
     radius: float = _RADIUS,
     paper: bool = _PAPER,
     transport: str = _TRANSPORT,
@@ -146,11 +148,11 @@ def render(
 
     if len(light) > 1:
         raise TranslucencyError("--light: one light per render for now (run once per light)")
+    check_option("--reference-spp", reference_spp, lo=1)  # the library's spp is acquire's --spp
     rendering = render_model(
         model, out, light=light[0], view=view, resolution=resolution, exposure=exposure, reference=reference,
-        spp=spp, radius=radius, paper=paper, transport=transport, angles=angles, overwrite=overwrite,
-        max_memory=max_memory,
-        reporter=RichReporter(quiet),
+        spp=reference_spp, radius=radius, paper=paper, transport=transport, angles=angles,
+        overwrite=overwrite, max_memory=max_memory, reporter=RichReporter(quiet),
     )  # fmt: skip
     table = Table(title=f"render of {model.name}", show_header=False)
     for k, v in rendering.numbers.items():

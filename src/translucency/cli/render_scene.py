@@ -9,7 +9,7 @@ from pathlib import Path
 import typer
 from rich.table import Table
 
-from .._validate import TranslucencyError
+from .._validate import TranslucencyError, check_option
 from ._common import (
     PANEL_SAMPLING,
     PANEL_TRANSPORT,
@@ -21,13 +21,13 @@ from ._common import (
     user_errors,
 )
 from ._run import RichReporter
-from .render import _ANGLES, _EXPOSURE, _OUT, _PAPER, _RADIUS, _REFERENCE, _SPP
+from .render import _ANGLES, _EXPOSURE, _OUT, _PAPER, _RADIUS, _REFERENCE, _REFERENCE_SPP
 
 # -- the options (their help is what --help shows) --------------------------------------------------
 _SCENE = typer.Argument(
     ...,
     help="A Mitsuba 3 scene file (XML): its emitters, shapes, sensor and film as they are; name the fitted "
-    "objects with --object (docs/scenes.md).",
+    "objects with --object (documentation: 'Fitted objects in your Mitsuba 3 scene').",
 )
 _OBJECTS = typer.Option(
     [],
@@ -37,9 +37,9 @@ _OBJECTS = typer.Option(
     "export MODEL --ply', placed by to_world). Repeat for several objects.",
 )
 _SCENE_UNIT = typer.Option(1.0, "--scene-unit", help="Millimetres per scene unit.")
-_SAMPLES = typer.Option(
+_IRRADIANCE_SAMPLES = typer.Option(
     32,
-    "--samples",
+    "--irradiance-samples",
     help="Irradiance samples per vertex of the first pass, path-traced (a later pass, the "
     "objects' glow alone, takes a quarter of them).",
     rich_help_panel=PANEL_SAMPLING,
@@ -60,7 +60,10 @@ _ROUGHNESS = typer.Option(
     rich_help_panel=PANEL_TRANSPORT,
 )
 _PICTURE_SPP = typer.Option(
-    16, "--picture-spp", help="Samples per pixel of our picture.", rich_help_panel=PANEL_SAMPLING
+    16,
+    "--picture-spp",
+    help="Samples per pixel of our picture (anti-aliasing: the picture has no noise otherwise).",
+    rich_help_panel=PANEL_SAMPLING,
 )
 
 
@@ -70,14 +73,14 @@ def render_scene(
     objects: list[str] = _OBJECTS,
     out: Path = _OUT,
     scene_unit: float = _SCENE_UNIT,
-    samples: int = _SAMPLES,
+    irradiance_samples: int = _IRRADIANCE_SAMPLES,
     passes: int = _PASSES,
     max_depth: int = _MAX_DEPTH,
     roughness: float = _ROUGHNESS,
     picture_spp: int = _PICTURE_SPP,
     exposure: str = _EXPOSURE,
     reference: bool = _REFERENCE,
-    spp: int = _SPP,
+    reference_spp: int = _REFERENCE_SPP,
     radius: float = _RADIUS,
     paper: bool = _PAPER,
     angles: bool = _ANGLES,
@@ -89,11 +92,12 @@ def render_scene(
     """Render fitted objects in a Mitsuba 3 scene: lit by its lights, drawn through its camera (EXR + PNG)."""  # noqa: E501 — Typer lists the docstring verbatim as the command's one-line help
     from ..workflow.scene_rendering import render_scene as render  # heavy: Mitsuba, Numba, trimesh
 
+    check_option("--reference-spp", reference_spp, lo=1)  # the library's spp is acquire's --spp
     shot = render(
-        scene, parse_objects(objects), out, scene_unit=scene_unit, samples=samples, passes=passes,
-        max_depth=max_depth, roughness=roughness, picture_spp=picture_spp, exposure=exposure,
-        reference=reference, spp=spp, radius=radius, paper=paper, angles=angles, overwrite=overwrite,
-        max_memory=max_memory, reporter=RichReporter(quiet),
+        scene, parse_objects(objects), out, scene_unit=scene_unit, samples=irradiance_samples,
+        passes=passes, max_depth=max_depth, roughness=roughness, picture_spp=picture_spp, exposure=exposure,
+        reference=reference, spp=reference_spp, radius=radius, paper=paper, angles=angles,
+        overwrite=overwrite, max_memory=max_memory, reporter=RichReporter(quiet),
     )  # fmt: skip
     finish(as_json, quiet, shot.summary, [_scene_table(scene, shot.summary, reference), f"images: {out}"])
 

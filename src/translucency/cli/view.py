@@ -76,7 +76,7 @@ _RADIUS = typer.Option(
 _ANGLES = typer.Option(
     False,
     "--angles",
-    help="Draw the model's lean (fitted from a data set acquired with --incidence; model/lean.py): every "
+    help="Draw the model's lean (fitted from a data set acquired with --incidence): every "
     "light and sky leans the transport toward the directions it arrives from, as render --angles. The "
     "transfer takes one relight per direction of its lattice (256): slower to prepare.",
     rich_help_panel=PANEL_TRANSPORT,

@@ -16,8 +16,10 @@ from __future__ import annotations
 
 import itertools
 import json
+import numbers
 from collections.abc import Callable
 
+from .._validate import TranslucencyError
 from ..data import default_dataset_path, default_fine_profiles_path, default_truth_path
 from ..evaluate.baselines import fits_model, material_profiles, plot_profiles
 from ..evaluate.report import write_report
@@ -102,6 +104,9 @@ def run_demo(
     ...
     translucency._validate.TranslucencyError: out ...: exists and is not a translucency output folder; ...
     """
+    # the terms of the sum of exponentials: 1 to 4, as in every fit (translucency.fit.check_fit_options)
+    if isinstance(n_terms, bool) or not isinstance(n_terms, numbers.Integral) or not 1 <= n_terms <= 4:
+        raise TranslucencyError(f"n_terms: must be a whole number between 1 and 4, got {n_terms!r}")
     if reporter is not None:  # the steps as one progress, then the job itself
         job = dict(n_terms=n_terms, dataset=dataset, max_rounds=max_rounds, overwrite=overwrite)
         return _with_progress(reporter, out_dir, step, job)

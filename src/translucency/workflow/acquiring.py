@@ -67,6 +67,7 @@ def acquire_planar(
     azimuths: int = 4,
     exit_bins: int = 0,
     index_matched: bool = False,
+    eta: float | None = None,
     chunk_points: int = 16,
     dtype: str = "float32",
     overwrite: bool = False,
@@ -115,7 +116,10 @@ def acquire_planar(
         Also tally each exit by direction: this many polar bins × 2 halves
         (:class:`translucency.angles.ExitBins`); 0: none.
     index_matched : bool
-        No Fresnel reflection at the boundary.
+        No Fresnel reflection at the boundary: ``eta=1``.
+    eta : float, optional
+        The boundary's relative index of refraction (>= 1; 1: index-matched).  Default: the sample's own
+        (``Volume.eta``: 1.3 for the generated materials).
     chunk_points : int
         Incident points per chunk (the unit of resuming).
     dtype : {"float32", "float16"}
@@ -151,6 +155,7 @@ def acquire_planar(
     """
     parse_scheduler(scheduler)  # a bad value or an unreachable cluster: one line, before work
     out = as_path("out", out)
+    eta, index_matched = _boundary(eta, index_matched)
     setup = _planar_setup(grid, span, pitch, window, photons, seed, angle, index_matched, chunk_points, dtype)
     angles, bins = _angle_axes(incidence, azimuths, exit_bins)
     setup = dataclasses.replace(setup, incidence=angles, exit_bins=bins)
@@ -167,6 +172,7 @@ def acquire_planar(
     else:
         volume = volume if path is None else load_volume(path)
         estimate = _planar_estimate(run, out, setup, volume.sigma_s.size / 3)
+    volume = _with_eta(volume, eta)
     setup.check(volume)
     state = _timed_planar(run, volume, setup, out, estimate)
     P = setup.grid[0] * setup.grid[1]
@@ -266,7 +272,7 @@ def _timed_planar(run: Run, volume: Volume, setup: PlanarSetup, out: Path, estim
 
 def acquire_mesh(mesh, out, sample="marble", *, voxel_mm: float = 0.5, g: float = 0.0, points: int = 64,
     photons: int = 20_000, seed: int = 0, sample_seed: int | None = None, chunk_points: int = 8,
-    index_matched: bool = False, reentry: bool = True, unscattered: str = "apart",
+    index_matched: bool = False, eta: float | None = None, reentry: bool = True, unscattered: str = "apart",
     incidence: Sequence[float] = (), azimuths: int = 4, exit_bins: int = 0, scale_mm: float = 1.0,
     up: str = "z", overwrite: bool = False, progress: Callable[[int, int], None] | None = None,
     scheduler: str | None = "threads", max_memory: str | int | None = None, reporter: Reporter | None = None,
@@ -295,7 +301,10 @@ def acquire_mesh(mesh, out, sample="marble", *, voxel_mm: float = 0.5, g: float 
         Seed of a generated filling (default ``seed``): the same ``sample_seed`` with another ``seed`` is
         a held-out truth of the same object.
     index_matched : bool
-        No Fresnel reflection at the surface.
+        No Fresnel reflection at the surface: ``eta=1``.
+    eta : float, optional
+        The surface's relative index of refraction (>= 1; 1: index-matched).  Default: the filling's own
+        (``Volume.eta``: 1.3 for the generated materials).
     reentry : bool
         Light that leaves one part through the air into another walks on there, tallied where it finally
         escapes (as a photograph sees it); ``False``: tallied where it first left.
@@ -337,6 +346,7 @@ def acquire_mesh(mesh, out, sample="marble", *, voxel_mm: float = 0.5, g: float 
     photons, seed = whole_number("photons", photons), whole_number("seed", seed, lo=0)
     sample_seed = whole_number("sample_seed", seed if sample_seed is None else sample_seed, lo=0)
     points, chunk_points = whole_number("points", points), whole_number("chunk_points", chunk_points)
+    eta, index_matched = _boundary(eta, index_matched)
     angles, bins = _angle_axes(incidence, azimuths, exit_bins)
     g, scale_mm, voxel_mm = _object_numbers(g, scale_mm, voxel_mm, up, unscattered)
     run = Run("acquire mesh", max_memory=max_memory, reporter=reporter)
@@ -353,6 +363,7 @@ def acquire_mesh(mesh, out, sample="marble", *, voxel_mm: float = 0.5, g: float 
     else:  # before the filling is generated
         estimate = _mesh_estimate(run, out, obj, scan, resources.memory.object_voxels(obj.extents, voxel_mm))
         volume = object_volume(name, obj, voxel_mm, g=g, seed=sample_seed)
+    volume = _with_eta(volume, eta)
     check_filling(obj, volume)
     state = _timed_mesh(run, out, obj, volume, scan, estimate)
     with run.work("acquire", total=points, fresh=state is None and bytes_at(out) == 0) as work:
@@ -362,6 +373,30 @@ def acquire_mesh(mesh, out, sample="marble", *, voxel_mm: float = 0.5, g: float 
     ds = open_mesh_dataset(out)
     ds.summary = _mesh_summary(run, out, ds, len(obj.vertices), photons, seed)
     return ds
+
+
+def _boundary(eta, index_matched) -> tuple[float | None, bool]:
+    """(η of the boundary or None: the sample's own, whether it is index-matched) of ``eta`` and
+    ``index_matched`` (``eta=1``), checked.
+
+    Examples
+    --------
+    >>> _boundary(None, False), _boundary(1.0, False), _boundary(None, True), _boundary(1.4, False)
+    ((None, False), (None, True), (None, True), (1.4, False))
+    """
+    if eta is None:
+        return None, bool(index_matched)
+    eta = float(check_option("eta", eta, lo=1.0))
+    if index_matched and eta != 1.0:
+        raise TranslucencyError(f"eta: index_matched=True is eta=1; give one of them, not eta={eta:g} too")
+    return (None, True) if eta == 1.0 else (eta, False)
+
+
+def _with_eta(volume: Volume, eta: float | None) -> Volume:
+    """``volume`` with its boundary's η (None: as it is); its description says so (a resume compares it)."""
+    if eta is None or eta == volume.eta:
+        return volume
+    return dataclasses.replace(volume, eta=eta, description={**volume.description, "eta": eta})
 
 
 def _object_numbers(g, scale_mm, voxel_mm, up, unscattered):
