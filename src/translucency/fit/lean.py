@@ -109,7 +109,17 @@ def fit_lean(ds, chunk_points: int = 32, progress=None) -> np.ndarray:
 
     Examples
     --------
-    >>> lean = fit_lean(open_mesh_dataset("spot_angles.zarr"))  # doctest: +SKIP
+    A ball scanned with beams at 45° besides the normal ones (two azimuths):
+
+    >>> import tempfile, trimesh
+    >>> import translucency as tl
+    >>> from translucency.fit.lean import fit_lean
+    >>> ball = trimesh.creation.icosphere(2, radius=4.0)
+    >>> data = tl.acquire_mesh(ball, tempfile.mkdtemp() + "/ball.zarr", "homogeneous:marble", voxel_mm=1.0,
+    ...                        points=4, photons=300, index_matched=True, incidence=(45,), azimuths=2)
+    >>> lean = fit_lean(data)
+    >>> lean.shape, bool((lean >= 0).all())
+    ((4, 2, 3), True)
     """
     inc = ds.incidence
     if inc.count == 1:

@@ -196,7 +196,10 @@ def fit_planar(dataset, model: str = "auto", *, n_terms: int | str | None = None
     Examples
     --------
     >>> from translucency.data import default_dataset_path
-    >>> fit = fit_planar(default_dataset_path(), "iso", max_rounds=1)   # doctest: +SKIP
+    >>> from translucency.fit import fit_planar
+    >>> fit = fit_planar(default_dataset_path(), "iso", n_terms=2, max_rounds=1)
+    >>> fit.model.n_points, fit.model.n_terms, len(fit.history)
+    (1024, 2, 1)
     """
     t0 = time.perf_counter()
     structure = _planar_structure(model, n_terms, n_directions, colour, rel_sigma, weighting)

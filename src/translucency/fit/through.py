@@ -64,7 +64,15 @@ def measure_through(ds, model, *, exclusion: float | None = None, pool: int = PO
 
     Examples
     --------
-    >>> k = measure_through(open_mesh_dataset("cow.zarr"), fit.model)  # doctest: +SKIP
+    >>> import tempfile, trimesh
+    >>> import translucency as tl
+    >>> from translucency.fit.through import measure_through
+    >>> ball = trimesh.creation.icosphere(2, radius=4.0)
+    >>> data = tl.acquire_mesh(ball, tempfile.mkdtemp() + "/ball.zarr", "homogeneous:marble", voxel_mm=1.0,
+    ...                        points=4, photons=300, index_matched=True)
+    >>> fitting = tl.fit_model(data, "iso", n_terms=1, max_rounds=1)
+    >>> measure_through(data, fitting.model).shape   # points, 4 normal cells, 8 distance cells, RGB
+    (4, 4, 8, 3)
     """
     meas, mod = cell_energies(ds, model, exclusion=exclusion, chunk_points=chunk_points)
     P = len(meas)

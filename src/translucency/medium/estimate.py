@@ -212,8 +212,16 @@ def estimate_medium(
 
     Examples
     --------
-    >>> medium = estimate_medium(open_mesh_dataset("spot.zarr"))  # doctest: +SKIP
-    >>> medium.summary()["sigma_a"]  # doctest: +SKIP
+    >>> import tempfile, trimesh
+    >>> import numpy as np
+    >>> import translucency as tl
+    >>> from translucency.medium.estimate import estimate_medium
+    >>> ball = trimesh.creation.icosphere(2, radius=4.0)
+    >>> data = tl.acquire_mesh(ball, tempfile.mkdtemp() + "/ball.zarr", "homogeneous:marble", voxel_mm=1.0,
+    ...                        points=4, photons=300, index_matched=True)
+    >>> medium = estimate_medium(data)
+    >>> np.shape(medium.summary()["sigma_a"]), bool(np.all(np.asarray(medium.summary()["sigma_a"]) >= 0))
+    ((3, 3), True)
     """
     g = ds.group
     mesh = ds.mesh()

@@ -304,10 +304,20 @@ def import_object(
 
     Examples
     --------
+    A ball photographed by a virtual rig (:func:`acquire_object_photographs`, its boundary a dielectric of
+    η = 1.3) and imported with the matching exit law (about two minutes, so not run here):
+
+    >>> import tempfile, trimesh
+    >>> from pathlib import Path
     >>> import translucency as tl
-    >>> ds = tl.import_object("rig/object.json", "object.zarr", exit_law="dielectric")  # doctest: +SKIP
-    >>> ds.summary["exit_law"]["law"]  # doctest: +SKIP
-    'dielectric'
+    >>> folder = Path(tempfile.mkdtemp())
+    >>> ball = trimesh.creation.icosphere(2, radius=6.0)
+    >>> shots = tl.acquire_object_photographs(ball, folder / "rig", points=2, cameras=3, resolution=(32, 32),
+    ...                                       spp=4, eta=1.3)  # doctest: +SKIP
+    >>> ds = tl.import_object(shots.folder / "object.json", folder / "ball.zarr",
+    ...                       exit_law="dielectric")  # doctest: +SKIP
+    >>> ds.n_points, ds.summary["exit_law"]["law"]  # doctest: +SKIP
+    (2, 'dielectric')
     """
     require("rig")  # the cameras' projection (OpenCV): a missing extra is one line before any work
     chunk_points = whole_number("chunk_points", chunk_points)
