@@ -19,8 +19,17 @@ class ReducedScene(FittedScene):
 
     Examples
     --------
-    >>> fs = ReducedScene("scene.xml", {"pig": "pig.model.zip"}, irradiance_spacing=2.0)  # doctest: +SKIP
-    >>> fs.light()  # doctest: +SKIP
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> import translucency as tl
+    >>> folder, model = Path(tempfile.mkdtemp()), tl.data.example_path("spot_coarse.model.zip")
+    >>> _ = tl.copy_examples(folder), tl.export_ply(model, folder / "object.ply")   # the scene's object
+    >>> from translucency.experimental.scene import ReducedScene
+    >>> fs = ReducedScene(folder / "scene.xml", {"object": model}, irradiance_spacing=2.0, samples=4,
+    ...                   passes=1)
+    >>> E = fs.light()
+    >>> [len(r.traced) < 402 for r in fs.reduced]   # fewer vertices traced than the object's 402
+    [True]
     """
 
     def __init__(self, scene, models: dict, *, irradiance_spacing: float = 0.0, **options):

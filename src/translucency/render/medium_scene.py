@@ -130,12 +130,16 @@ def write_mitsuba_scene(
 
     Examples
     --------
-    >>> from translucency import load_model
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> import translucency as tl
     >>> from translucency.render import object_of_model
-    >>> model = load_model("ball.model.zip")  # doctest: +SKIP
-    >>> mesh, _ = object_of_model(model, {})  # doctest: +SKIP
-    >>> write_mitsuba_scene(model, mesh, "ball-mitsuba")  # doctest: +SKIP
-    PosixPath('ball-mitsuba/scene.xml')
+    >>> model = tl.load_model(tl.data.example_path("spot_coarse.model.zip"))   # the example object
+    >>> mesh, _ = object_of_model(model, {})
+    >>> from translucency.render.medium_scene import write_mitsuba_scene
+    >>> out = write_mitsuba_scene(model, mesh, Path(tempfile.mkdtemp()) / "spot-mitsuba")
+    >>> out.name, sorted(p.name for p in out.parent.glob("[!.]*"))
+    ('scene.xml', ['albedo.vol', 'object.ply', 'scene.xml', 'sigma_t.vol'])
     """
     from ..mitsuba import mitsuba, slab_medium_dict, write_ply  # Mitsuba loads only to write
     from . import Camera, parse_light

@@ -66,10 +66,22 @@ class FittedScene:
 
     Examples
     --------
-    >>> fs = FittedScene("scene.xml", {"pig": "pig.model.zip"})  # doctest: +SKIP
-    >>> fs.prepare()  # the transports, once  # doctest: +SKIP
-    >>> fs.light()  # doctest: +SKIP
-    >>> image = fs.render(spp=16)  # doctest: +SKIP
+    The example scene (:func:`translucency.copy_examples`) with the example model in its shape
+    ``object``, few samples:
+
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> import translucency as tl
+    >>> folder, model = Path(tempfile.mkdtemp()), tl.data.example_path("spot_coarse.model.zip")
+    >>> _ = tl.copy_examples(folder), tl.export_ply(model, folder / "object.ply")   # the scene's object
+    >>> from translucency.scene import FittedScene
+    >>> fs = FittedScene(folder / "scene.xml", {"object": model}, samples=4, passes=1)
+    >>> fs.prepare()  # the transports, once
+    >>> [E.shape for E in fs.light()]   # each object's irradiance per vertex
+    [(402, 3)]
+    >>> image = fs.render(spp=2)
+    >>> image.shape
+    (240, 320, 3)
     """
 
     def __init__(

@@ -303,8 +303,27 @@ def leaned(transport, mesh, scene, light, eye, *, eta: float = 1.0, exit: bool =
 
     Examples
     --------
-    >>> T_lean = leaned(T, mesh, scene, light, camera.origin)  # doctest: +SKIP
-    >>> L = relight_vertices(T_lean, E)  # doctest: +SKIP
+    A ball scanned with oblique beams (so its fit has a lean), lit from above and seen from the side:
+
+    >>> import tempfile, trimesh
+    >>> import numpy as np
+    >>> import translucency as tl
+    >>> from translucency.mitsuba import mesh_scene
+    >>> from translucency.render import parse_light
+    >>> from translucency.transport.lean import leaned
+    >>> from translucency.transport.matrices import transport_matrices
+    >>> from translucency.transport.relight import relight_vertices
+    >>> ball = trimesh.creation.icosphere(2, radius=4.0)
+    >>> data = tl.acquire_mesh(ball, tempfile.mkdtemp() + "/ball.zarr", "homogeneous:marble", voxel_mm=1.0,
+    ...                        points=4, photons=300, index_matched=True, incidence=(45,), azimuths=2)
+    >>> model, mesh = tl.fit_model(data, "iso", n_terms=1, max_rounds=1).model, data.mesh()
+    >>> T = transport_matrices(model, mesh)
+    >>> T_lean = leaned(T, mesh, mesh_scene(mesh), parse_light("directional:0,0,-1,1"), [40.0, 0.0, 0.0])
+    >>> T_lean.tilt is not None
+    True
+    >>> L = relight_vertices(T_lean, np.ones(len(mesh.vertices)))
+    >>> L.shape
+    (162, 3)
     """
     if not lean_applies(transport, light):
         return None

@@ -57,7 +57,14 @@ def default_radius(model, mesh, *, max_pairs: float = MAX_PAIRS) -> float:
 
     Examples
     --------
-    >>> r = default_radius(model, mesh)  # doctest: +SKIP
+    >>> import translucency as tl
+    >>> from translucency.render import object_of_model
+    >>> model = tl.load_model(tl.data.example_path("spot_coarse.model.zip"))   # the example object
+    >>> mesh, _ = object_of_model(model, {})
+    >>> from translucency.transport.matrices import default_radius
+    >>> r = default_radius(model, mesh)
+    >>> bool(0 < r <= model.energy_radius(0.99).max())
+    True
     """
     V = len(mesh.vertices)
     fit_pairs = np.sqrt(0.5 * max_pairs * mesh.area / (np.pi * V**2))
@@ -157,8 +164,18 @@ def transport_matrices(
 
     Examples
     --------
-    >>> T = transport_matrices(model, mesh)  # doctest: +SKIP
-    >>> L = relight_vertices(T, E)  # doctest: +SKIP
+    >>> import numpy as np
+    >>> import translucency as tl
+    >>> from translucency.render import object_of_model
+    >>> model = tl.load_model(tl.data.example_path("spot_coarse.model.zip"))   # the example object
+    >>> mesh, _ = object_of_model(model, {})
+    >>> from translucency.transport.matrices import transport_matrices
+    >>> from translucency.transport.relight import relight_vertices
+    >>> T = transport_matrices(model, mesh)
+    >>> E = np.ones(len(mesh.vertices))   # a uniform irradiance, W/mm²
+    >>> L = relight_vertices(T, E)
+    >>> L.shape, bool((L > 0).all())
+    ((402, 3), True)
     """
     v = np.asarray(mesh.vertices, dtype=np.float64)
     V = len(v)

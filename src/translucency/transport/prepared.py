@@ -54,9 +54,17 @@ class PreparedObject:
 
     Examples
     --------
+    >>> import translucency as tl
+    >>> from translucency.render import object_of_model
+    >>> model = tl.load_model(tl.data.example_path("spot_coarse.model.zip"))   # the example object
+    >>> mesh, _ = object_of_model(model, {})
+    >>> from translucency.render import Camera, parse_light
     >>> from translucency.transport import PreparedObject, TransportOptions
-    >>> obj = PreparedObject(model, mesh, eta=1.0, options=TransportOptions())  # doctest: +SKIP
-    >>> L, E = obj.relight(light, camera.origin)  # doctest: +SKIP
+    >>> obj = PreparedObject(model, mesh, eta=1.0, options=TransportOptions())
+    >>> light, camera = parse_light("point:60,-80,120,2e4"), Camera.looking_at(mesh)
+    >>> L, E = obj.relight(light, camera.origin)   # radiance toward the camera and irradiance, per vertex
+    >>> L.shape, bool(L.max() > 0)
+    ((402, 3), True)
     """
 
     def __init__(self, model, mesh, *, eta: float = 1.0, options: TransportOptions | None = None):

@@ -248,7 +248,19 @@ def relight_object(
 
     Examples
     --------
-    >>> L, E, law = relight_object(T, mesh, scene, light, camera.origin)  # doctest: +SKIP
+    >>> import translucency as tl
+    >>> from translucency.render import object_of_model
+    >>> model = tl.load_model(tl.data.example_path("spot_coarse.model.zip"))   # the example object
+    >>> mesh, _ = object_of_model(model, {})
+    >>> from translucency.mitsuba import mesh_scene
+    >>> from translucency.render import Camera, parse_light
+    >>> from translucency.transport.matrices import transport_matrices
+    >>> from translucency.transport.relight import relight_object
+    >>> T = transport_matrices(model, mesh)
+    >>> light, camera = parse_light("point:60,-80,120,2e4"), Camera.looking_at(mesh)
+    >>> L, E, law = relight_object(T, mesh, mesh_scene(mesh), light, camera.origin)
+    >>> L.shape, law.name
+    ((402, 3), 'half-space')
     """
     law = transport.incidence(incidence, eta) if isinstance(incidence, str) else incidence
     E = vertex_irradiance(mesh, scene, light, eta, law)
