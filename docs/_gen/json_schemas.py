@@ -159,6 +159,17 @@ _STRUCTURE = record(
         "held_out": field(
             "number", "The chosen structure's held-out error on the points it was chosen on.", "fraction"
         ),
+        "noise": field(
+            ["number", "null"],
+            "The held-out pairs' own noise sqrt(sum of variance / sum R_d^2): what a perfect model scores "
+            "there (null where the data set records no variance).",
+            "fraction",
+        ),
+        "ratio_to_noise": field(
+            ["number", "null"],
+            "held_out / noise, the figure the command prints first: 1 is the best any model can score.",
+        ),
+        "ratio_se": field(["number", "null"], "The standard error of that ratio over the incident points."),
         "axes": record(
             "Per axis searched (colour, n_terms, n_directions), its candidates simplest first.",
             {},

@@ -94,21 +94,21 @@ def evaluate(
         overwrite=overwrite, scheduler=scheduler, max_memory=max_memory, reporter=RichReporter(quiet),
         paper=paper,
     )  # fmt: skip
-    title = (
-        f"relative L2 error against the truth {truth}"
-        if truth
-        else f"relative L2 error on {data} (in-sample)"
-    )
-    lines = [_table(evaluation, title, truth is not None), f"report: {evaluation.report / 'index.html'}"]
+    lines = [_table(evaluation, data, truth), f"report: {evaluation.report / 'index.html'}"]
     finish(as_json, quiet, evaluation.summary, lines)
 
 
-def _table(evaluation, title: str, held_out: bool) -> Table:
+def _table(evaluation, data: Path, truth: Path | None) -> Table:
     """The errors per model (and the noise floor) as a table: planar models with their total reflectance,
-    per-vertex models held out with their error beyond the noise."""
-    summary, mesh = evaluation.summary, evaluation.geometry == "mesh"
-    table = Table(title=title)
-    columns = ["model", "all", "near <1 mm", "mid 1-4 mm", "far >4 mm"] + ([] if mesh else ["total refl."])
+    per-vertex models held out with their error beyond the noise; its title says what the errors are
+    measured against, its caption what the bands and the noise row mean and which figure to trust."""
+    from ..evaluate.labels import table_caption
+
+    summary, mesh, held_out = evaluation.summary, evaluation.geometry == "mesh", truth is not None
+    where = "vertices" if mesh else "pixels"
+    table = Table(title=_title(data, truth, where), caption=table_caption(held_out, where))
+    columns = ["model", "all", "near <1 mm", "mid 1-4 mm", "far >4 mm\nfrom the light"]
+    columns += [] if mesh else ["total refl."]
     if held_out:
         columns += (["beyond noise (all)"] if mesh else []) + ["in-sample all"]
     for col in columns:
@@ -124,7 +124,15 @@ def _table(evaluation, title: str, held_out: bool) -> Table:
         table.add_row(name, *cells)
     nf = summary["noise_floor"]
     table.add_row(
-        f"[dim]{evaluation.noise}[/]",
+        f"[dim]{evaluation.noise} (the floor)[/]",
         *(f"[dim]{100 * nf[k]:.2f} %[/]" for k in ("all", "near", "mid", "far")),
     )
     return table
+
+
+def _title(data: Path, truth: Path | None, where: str) -> str:
+    """What the errors are measured against, in words."""
+    error = "relative L2 error ||model - R_d|| / ||R_d||"
+    if truth is not None:
+        return f"{error} against the truth {truth}, held out: an independent acquisition the model never saw"
+    return f"{error} on {data}, in-sample: the very {where} the model was fitted to"

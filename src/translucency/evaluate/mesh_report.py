@@ -29,7 +29,7 @@ from ..io.mesh_dataset import MeshDataset, open_mesh_dataset
 from ..medium import medium_of
 from ..model.bounds import check_physics
 from .errors import BANDS, finite_or_null
-from .labels import labelled_models, noise_label
+from .labels import labelled_models, noise_label, table_caption
 from .mesh_errors import check_same_points, mesh_errors
 from .mesh_figure import plot_mesh_errors
 from .oblique_errors import oblique_errors
@@ -219,7 +219,8 @@ def _page(s: dict) -> str:
         if s["truth"]
         else "the fitted data (in-sample)"
     )
-    head = "".join(f"<th>{h}</th>" for h in ("model", "all", "near &lt;1 mm", "mid 1–4 mm", "far &gt;4 mm"))
+    bands = ("near &lt;1 mm", "mid 1–4 mm", "far &gt;4 mm from the light")
+    head = "".join(f"<th>{h}</th>" for h in ("model", "all", *bands))
     rows = [row for name, m in s["models"].items() for row in _model_rows(name, m)]
     nf = s["noise_floor"]
     noise = noise_label(s["truth"] is not None)
@@ -243,6 +244,7 @@ def _page(s: dict) -> str:
         f"<p>Relative L2 error of R_d per pair of incident vertex and vertex, against {against}. "
         f"{verdict}.</p>"
         f"<table><tr>{head}</tr>{''.join(rows)}</table>"
+        f"<p><small>{html.escape(table_caption(s['truth'] is not None, 'vertices'))}</small></p>"
         "<p><img src='mesh_errors.png' alt='error against distance and per vertex'></p>"
         f"<dl>{defs}</dl><p><small>{html.escape(s['written_by'])}, {html.escape(s['date'])}: "
         f"<code>{html.escape(s['command_line'])}</code></small></p></body></html>"

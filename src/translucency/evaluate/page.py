@@ -9,7 +9,7 @@ import numpy as np
 
 from ..io.atomic import atomic_path
 from ..io.dataset import PlanarDataset
-from .labels import noise_label
+from .labels import noise_label, table_caption
 
 
 def _percent(v) -> str:
@@ -41,7 +41,9 @@ def write_page(path: Path, ds: PlanarDataset, summary: dict, extra: list) -> Non
         if held_out
         else "the data the models were fitted to (in-sample: a model that fits noise scores well here)"
     )
-    own_noise = "The last row's in-sample cell is the fitted data's own noise." if held_out else ""
+    own_noise = html.escape(table_caption(held_out).split(". ", 1)[1])
+    if held_out:
+        own_noise += " The last row's in-sample cell is the fitted data's own noise."
     beyond_head = "<th>beyond noise, all</th><th>beyond noise, near</th>" if held_out else ""
     in_head = "<th>in-sample, all</th>" if held_out else ""
     defs = _definitions(summary, held_out)
@@ -61,8 +63,10 @@ img{{max-width:100%}} .summary{{background:#f2f5f9;border-left:4px solid #3a7;pa
 <code>{html.escape(summary["command_line"])}</code>. Paths are relative to this page's folder.</p>
 <p>Data set: <code>{html.escape(summary["dataset"])}</code> — {ds.n_points} incident points,
 windows {ds.window[0]}×{ds.window[1]} px at {ds.pitch} mm.</p>
-<h2>Errors</h2><p>Against {against}. Relative, RGB summed.</p>
-<table><tr><th>model</th><th>all</th><th>near &lt; 1 mm</th><th>mid 1–4 mm</th><th>far &gt; 4 mm</th>
+<h2>Errors</h2><p>Against {against}. Relative L2 error ‖model − R_d‖ / ‖R_d‖, RGB summed;
+{html.escape(table_caption(held_out).split(". ", 1)[0])}.</p>
+<table><tr><th>model</th><th>all</th><th>near &lt; 1 mm</th><th>mid 1–4 mm</th>
+<th>far &gt; 4 mm from the light</th>
 {beyond_head}<th>energy, near</th><th>energy, mid</th><th>total reflectance per point</th>{in_head}
 <th>flagged points</th><th>unphysical points (ρ &gt; 1 or over half the energy beyond the sample)</th></tr>
 {"".join(rows)}

@@ -100,8 +100,9 @@ class _MeshSource:
 
 
 def _held_out(fit: FitResult, ds):
-    """Per point, the held-out squared error and data norm of a half fit (structure choice)."""
-    return mesh_held_out_terms(fit, ds.group)
+    """Per point, the held-out squared error, data norm and variance of a half fit (structure choice: the
+    variance gives its noise floor)."""
+    return mesh_held_out_terms(fit, ds.group, variance=True)
 
 
 def fit_mesh(

@@ -85,8 +85,9 @@ NEAR_MM = 1.0
 
 
 def _held_out(fit: FitResult, ds: PlanarDataset):
-    """Per point, the held-out squared error and data norm beyond :data:`NEAR_MM` (structure choice)."""
-    return held_out_terms(fit, ds, near=NEAR_MM)
+    """Per point, the held-out squared error, data norm and variance beyond :data:`NEAR_MM` (structure
+    choice: the variance gives its noise floor)."""
+    return held_out_terms(fit, ds, near=NEAR_MM, variance=True)
 
 
 #: the result of :func:`fit_planar` (the name before the alternation was shared with meshes)

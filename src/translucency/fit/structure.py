@@ -12,6 +12,14 @@ scored on the other (:mod:`.held_out`): per incident point i its held-out square
 
 .. math:: E(c) = \sqrt{\textstyle\sum_i e_i(c) / \sum_i y_i}.
 
+The held-out half's own noise is in it (a model fitted on the other half cannot follow it), so :math:`E`
+never falls below the noise of those pairs, :math:`N = \sqrt{\textstyle\sum_i v_i / \sum_i y_i}` with
+:math:`v_i` the point's summed variance (:mod:`.held_out`), and the ratio :math:`E / N` is what the fit
+prints first: 1 is the best any model can score on those photons, :math:`\sqrt 2 \approx 1.41` a model
+that misses as much as the noise (:math:`E^2 = N^2 + B^2`, B the model's own error); with
+:math:`\rho = E / N` its standard error over the points is
+:math:`\sqrt{P}\,\mathrm{std}_i(e_i - \rho^2 v_i) / (2 \rho \sum_i v_i)`.
+
 Two candidates b, c fitted and scored on the same halves differ by
 :math:`\Delta = \sum_i (e_i(c) - e_i(b)) / \sum_i y_i`, whose standard error over the points,
 :math:`\mathrm{SE} = \sqrt{P}\, \mathrm{std}_i(e_i(c) - e_i(b)) / \sum_i y_i`, is the split's noise.
@@ -83,6 +91,9 @@ RULE = (
     f"each axis keeps its prior (per-channel, n=3, m=1) unless the best candidate beats it by more than "
     f"{SELECT_SE:g} standard error; then the candidate within that of the best nearest the prior"
 )
+#: a held-out error at most this far above its noise (a ratio up to 1.05), or within one standard error of
+#: it, is said to be at the noise
+AT_NOISE = 0.05
 #: the share of the incident points the candidates are fitted on ...
 SELECT_SHARE = 0.0625
 #: ... and at least this many (all of them when the data set has fewer)
@@ -137,7 +148,8 @@ class Choice:
 
     ``axes[axis]`` lists the candidates, simplest first, each a dict with ``value``, ``held_out`` and
     ``delta``, ``se`` (fractions of the squared norm: the candidate's squared error minus the best
-    one's, and its standard error over the points).
+    one's, and its standard error over the points).  ``noise`` is the chosen structure's held-out pairs'
+    own noise (NaN where the scores gave no variance), ``ratio_se`` the standard error of held_out / noise.
     """
 
     structure: Structure
@@ -148,6 +160,17 @@ class Choice:
     points: int = 0
     of_points: int = 0
     seconds: float = 0.0
+    noise: float = float("nan")  # the held-out pairs' own noise, sqrt(Σ variance / Σ y²) (fraction)
+    ratio_se: float = float("nan")  # the standard error of held_out / noise over the points
+    pairs: str = "pairs"  # what a held-out pair's outgoing end is called: pixels (planar), vertices (mesh)
+
+    @property
+    def ratio(self) -> float:
+        """The held-out error over the held-out pairs' own noise: 1 is the best a model can score there
+        (NaN where the noise is not known, inf where the data set records none)."""
+        if not self.noise > 0:
+            return float("inf") if self.noise == 0 else float("nan")
+        return self.held_out / self.noise
 
     def record(self) -> dict:
         """The choice as stored in the model file and printed by ``--json``."""
@@ -158,6 +181,9 @@ class Choice:
                 "label": self.structure.label,
             },
             "held_out": self.held_out,
+            "noise": self.noise,
+            "ratio_to_noise": self.ratio,
+            "ratio_se": self.ratio_se,
             "axes": self.axes,
             "guard": self.guard,
             "margins": self.margins,
@@ -184,9 +210,17 @@ class Choice:
         return {"label": label, "held_out": best["held_out"], "axis": best["axis"]}
 
     def summary_line(self) -> str:
-        """One line for the run's summary: the structure, its held-out error and, per axis where a richer
-        value was kept, by how much it won over the best simpler one (or that the simpler one was within
-        the noise)."""
+        """One line for the run's summary: the held-out error over its own noise (:meth:`held_out_words`),
+        the structure and, per axis where a richer value was kept, by how much it won over the best
+        simpler one (or that the simpler one was within the noise).
+
+        Examples
+        --------
+        >>> print(Choice(Structure(), {}, held_out=0.25, noise=0.2, ratio_se=0.03, points=16).summary_line())
+        held-out error 1.25 × the data's own noise (± 0.03; 1 is the best any model can score): 25.0 % on \
+the pairs the fit did not see, where their noise alone is 20.0 %; beyond the noise the model misses 15.0 %; \
+structure iso n=3 per-channel (16 points; nothing richer than the simplest candidates)
+        """
         said = []
         for axis, m in self.margins.items():
             value, gain = asdict(self.structure)[axis], 100 * m["held_out"]
@@ -196,10 +230,42 @@ class Choice:
             else:  # the prior, kept: the simpler value was within the noise
                 said.append(f"{axis} {value} kept, {m['over']} within the noise ({-gain:+.2f} pt{units})")
         how = "; ".join(said) if said else "nothing richer than the simplest candidates"
-        where = f"held-out {100 * self.held_out:.2f} % on {self.points} points"
         second = self.runner_up()
         runner = f"; runner-up {second['label']} {100 * second['held_out']:.2f} %" if second else ""
-        return f"structure {self.structure.label} ({where}; {how}{runner})"
+        return (
+            f"{self.held_out_words()}; structure {self.structure.label} ({self.points} points; {how}{runner})"
+        )
+
+    def held_out_words(self) -> str:
+        """The held-out error in words: its ratio to the held-out pairs' own noise first (1 is the best any
+        model can score), then both percentages, and whether the model is at the noise or what it misses
+        beyond it, √(E² − N²) (the held-out noise is independent of the model: their squares add).
+
+        Examples
+        --------
+        >>> choice = Choice(Structure(), {}, held_out=0.8378, noise=0.829, ratio_se=0.02, pairs="pixels")
+        >>> print(choice.held_out_words())
+        held-out error 1.01 × the data's own noise (± 0.02; 1 is the best any model can score): 83.8 % on \
+the pixels the fit did not see, where their noise alone is 82.9 %; the model is at the noise
+        >>> print(Choice(Structure(), {}, held_out=0.1, noise=0.0).held_out_words())
+        held-out error 10.0 % on the pairs the fit did not see (the data set records no noise to \
+compare it with)
+        """
+        error = f"{100 * self.held_out:.1f} % on the {self.pairs} the fit did not see"
+        if not self.noise > 0:
+            none = " (the data set records no noise to compare it with)" if self.noise == 0 else ""
+            return f"held-out error {error}{none}"
+        ratio, se = self.ratio, self.ratio_se
+        spread = f"± {se:.2f}; " if np.isfinite(se) else ""
+        at_noise = ratio - 1 <= max(SELECT_SE * (se if np.isfinite(se) else 0.0), AT_NOISE)
+        beyond = 100 * np.sqrt(max(self.held_out**2 - self.noise**2, 0.0))  # E² = N² + the model's own²
+        verdict = (
+            "the model is at the noise" if at_noise else f"beyond the noise the model misses {beyond:.1f} %"
+        )
+        return (
+            f"held-out error {ratio:.2f} × the data's own noise ({spread}1 is the best any model can score): "
+            f"{error}, where their noise alone is {100 * self.noise:.1f} %; {verdict}"
+        )
 
 
 def free_axes(model: str, n_terms, n_directions, colour, *, planar: bool):
@@ -313,8 +379,9 @@ def choose(score: Callable[[Structure], tuple], base: Structure, free: tuple, *,
     Parameters
     ----------
     score : callable
-        ``score(structure) -> (e, y)``: per incident point the held-out squared error and data norm, (P,)
-        each, of the structure fitted on one half of the pairs (:func:`.held_out.held_out_terms`).
+        ``score(structure) -> (e, y)`` or ``(e, y, v)``: per incident point the held-out squared error, data
+        norm and (optionally) summed variance, (P,) each, of the structure fitted on one half of the pairs
+        (:func:`.held_out.held_out_terms`); with v the choice knows its noise floor.
     base : Structure
         The fixed axes' values, and where the search starts.
     free : tuple of str
@@ -356,7 +423,7 @@ def choose(score: Callable[[Structure], tuple], base: Structure, free: tuple, *,
                 batch = []  # the next candidates, up to ``workers`` of them still to fit
                 while values and sum(c not in scored for c in batch) < max(1, workers):
                     batch.append(replace(current, **{axis: values.pop(0)}))
-                for c, (e, y) in zip(batch, terms(*batch), strict=True):
+                for c, (e, y, *_) in zip(batch, terms(*batch), strict=True):
                     if worse >= PATIENCE:
                         break
                     candidates.append(c)
@@ -375,13 +442,35 @@ def choose(score: Callable[[Structure], tuple], base: Structure, free: tuple, *,
         if delta > SELECT_SE * se:  # worse than the base by more than the split's noise: keep the base
             guard["kept"] = "base"
             current, margins = base, {}
-    e, y = e_base if current == base else e_current
-    return Choice(current, axes, float(np.sqrt(e.sum() / max(y.sum(), 1e-300))), guard, margins)
+    chosen = e_base if current == base else e_current
+    e, y = chosen[:2]
+    choice = Choice(current, axes, float(np.sqrt(e.sum() / max(y.sum(), 1e-300))), guard, margins)
+    if len(chosen) > 2:
+        choice.noise, choice.ratio_se = _noise(*chosen)
+    return choice
+
+
+def _noise(e: np.ndarray, y: np.ndarray, v: np.ndarray) -> tuple[float, float]:
+    """The held-out pairs' noise N = sqrt(Σv / Σy) and the standard error over the points of E / N.
+
+    Examples
+    --------
+    >>> n, se = _noise(np.array([1.0, 1.2, 0.8]), np.full(3, 100.0), np.ones(3))
+    >>> round(n, 3), round(se, 3)
+    (0.1, 0.058)
+    """
+    sy, sv = float(y.sum()), float(v.sum())
+    if not (sy > 0 and sv > 0):
+        return (0.0 if sy > 0 else float("nan")), float("nan")
+    ratio2 = float(e.sum()) / sv  # (E / N)²
+    d = (e - ratio2 * v)[y > 0]  # a ratio estimator's residuals, per point with held-out data
+    se2 = np.sqrt(len(d)) * float(np.std(d, ddof=1)) / sv if len(d) > 1 else float("nan")
+    return float(np.sqrt(sv / sy)), float(se2 / (2 * np.sqrt(ratio2))) if ratio2 > 0 else float("nan")
 
 
 def _difference(a: tuple, b: tuple) -> tuple[float, float]:
     """Δ = Σ(e_a − e_b) / Σy and its standard error over the points (both relative, of the squared norm)."""
-    (e_a, y_a), (e_b, y_b) = a, b
+    (e_a, y_a), (e_b, y_b) = a[:2], b[:2]
     y = 0.5 * (y_a.sum() + y_b.sum())
     if not y > 0:  # no held-out data at all: nothing tells the candidates apart
         return 0.0, 0.0
@@ -398,7 +487,7 @@ def _one_se(candidates: list, terms: list, axis: str, prior):
     standard error; otherwise the candidate within one standard error of the best nearest to ``prior``
     (the simpler at equal distance) is chosen.  The bias guard: a choice worse than a simpler candidate by
     more than their own difference's standard error gives way to the best of those simpler ones."""
-    errors = [float(np.sqrt(e.sum() / max(y.sum(), 1e-300))) for e, y in terms]
+    errors = [float(np.sqrt(e.sum() / max(y.sum(), 1e-300))) for e, y, *_ in terms]
     best = int(np.argmin(errors))
     table, near_best = [], []
     for k, (t, err) in enumerate(zip(terms, errors, strict=True)):
@@ -432,7 +521,8 @@ def fit_chosen(fit: Callable, ds, score_terms: Callable, *, free: tuple, base: S
     ds : PlanarDataset or MeshDataset
         The data set (finished).
     score_terms : callable
-        ``score_terms(fit_result, subset) -> (e, y)`` per point (:mod:`.held_out`).
+        ``score_terms(fit_result, subset) -> (e, y, v)`` per point (:mod:`.held_out`; v, the summed
+        variance, may be left out).
     free, base :
         From :func:`free_axes`.
     planar : bool
@@ -467,6 +557,7 @@ def fit_chosen(fit: Callable, ds, score_terms: Callable, *, free: tuple, base: S
             warnings.simplefilter("ignore")
             choice = choose(score, base, free, workers=workers)
     choice.points, choice.of_points, choice.seconds = len(points), ds.n_points, time.perf_counter() - t0
+    choice.pairs = "pixels" if planar else "vertices"
     result = fit(ds.path, **choice.structure.options(planar=planar), progress=progress, **kw)
     result.options["structure"] = choice.record()
     result.seconds += choice.seconds
