@@ -101,7 +101,7 @@ def _demo_outputs(out_dir) -> dict:
 PHOTOGRAPHS = ["acquire", "photographs", "--material", "homogeneous:skin1", "--grid", "1", "--span", "1"]
 PHOTOGRAPHS += ["--size", "8", "8", "3", "--voxel", "1", "--spp", "4"]
 OBJECT_PHOTOGRAPHS = ["acquire", "object-photographs", "--material", "homogeneous:skin1", "--points", "2"]
-OBJECT_PHOTOGRAPHS += ["--cameras", "3", "--resolution", "32", "32", "--spp", "4"]
+OBJECT_PHOTOGRAPHS += ["--cameras", "3", "--resolution", "32", "32", "--spp", "4", "--index-matched"]
 
 
 #: a small scene around the mesh of b.model.zip (render scene)
