@@ -45,10 +45,18 @@ class Photographs:
 
     Examples
     --------
+    A small slab of skin photographed at one incident point (:func:`acquire_photographs`):
+
+    >>> import tempfile
+    >>> from pathlib import Path
     >>> import translucency as tl
-    >>> shots = tl.acquire_object_photographs(tl.example_path("cow.obj"), "cow-rig", points=4)  # doctest: +SKIP
-    >>> (shots.folder / "object.json").is_file(), len(shots.record["incident"])  # doctest: +SKIP
-    (True, 4)
+    >>> shots = tl.acquire_photographs("homogeneous:skin1", Path(tempfile.mkdtemp()) / "shots", grid=1,
+    ...                                size=(8, 8, 3), voxel_mm=1.0, spp=8)
+    >>> shots.folder.name, sorted(shots.record)
+    ('shots', ['homography', 'marked', 'power', 'rms_px'])
+
+    An object's (:func:`acquire_object_photographs`) holds ``object.json`` and a ``record`` of its
+    ``incident`` vertices and true ``cameras``.
     """
 
     folder: Path
