@@ -36,8 +36,9 @@ def half_space_table(photons: int = 400_000, *, seed: int = 0) -> dict:
 
     Examples
     --------
-    >>> t = half_space_table(2_000)  # doctest: +SKIP
-    >>> t["f"].shape, bool((t["R_total"] < 1).all())  # doctest: +SKIP
+    >>> from translucency.acquire.half_space import half_space_table
+    >>> t = half_space_table(2_000)   # the shipped table: 2,000,000 photons an albedo (minutes)
+    >>> t["f"].shape, bool((t["R_total"] < 1).all())
     ((15, 90), True)
     """
     shape = (int(DEPTH / VOXEL), int(WIDTH / VOXEL), int(WIDTH / VOXEL))

@@ -141,20 +141,21 @@ def plot_profiles(profiles: list[MaterialProfiles], path, channel: int = 1) -> N
 
     Examples
     --------
-    Four panels a row, each 4 × 3.2 inches at 110 dpi (about a second a figure, so not run here):
+    Four panels a row, each 4 × 3.2 inches at 110 dpi (about a second a figure):
 
     >>> import tempfile
-    >>> import matplotlib.image as mpimg  # doctest: +SKIP
+    >>> import matplotlib.image as mpimg
+    >>> import numpy as np
     >>> from pathlib import Path
+    >>> from translucency.evaluate.baselines import material_profiles, plot_profiles
     >>> from translucency.model import material
     >>> marble = material_profiles(material("marble"), r=np.linspace(0.1, 10.0, 60))
     >>> path = Path(tempfile.mkdtemp()) / "profiles.png"
-    >>> plot_profiles([marble], path)  # doctest: +SKIP
-    >>> mpimg.imread(path).shape  # one row: 352 × 1760 pixels, RGBA  # doctest: +SKIP
+    >>> plot_profiles([marble], path)
+    >>> mpimg.imread(path).shape  # one row: 352 × 1760 pixels, RGBA
     (352, 1760, 4)
-    >>> plot_profiles([marble] * 5, path)  # doctest: +SKIP
-    >>> mpimg.imread(path).shape  # five materials: two rows  # doctest: +SKIP
-    (704, 1760, 4)
+
+    Five materials or more take two rows (704 × 1760 pixels), nine or more three.
     """
     plt = pyplot()
 

@@ -68,13 +68,14 @@ def render_reference(
     --------
     >>> import trimesh
     >>> from translucency.acquire import make_sample
-    >>> from translucency.render import EnvironmentLight, PointLight
+    >>> from translucency.render import Camera, EnvironmentLight, PointLight
+    >>> from translucency.render.reference import render_reference
     >>> ball = trimesh.creation.icosphere(2, radius=5.0)
     >>> volume = make_sample("homogeneous:marble", (10.0, 10.0, 10.0), 0.5)
     >>> camera = Camera.looking_at(ball, width=32, height=24)
     >>> sky = EnvironmentLight(0.1)
-    >>> image, seconds = render_reference(ball, volume, sky, camera, spp=64)  # doctest: +SKIP
-    >>> image.shape  # doctest: +SKIP
+    >>> image, seconds = render_reference(ball, volume, sky, camera, spp=64)
+    >>> image.shape
     (24, 32, 3)
 
     A point light cannot reach the inside of a dielectric object (η ≠ 1) for ``volpath``: refused before
@@ -176,21 +177,24 @@ def converged_reference(
 
     Examples
     --------
-    Two renders of 64 samples a pixel (seconds), their relative noise 5 %; a second call reads the cache:
+    Two renders of 64 samples a pixel (seconds), their relative noise 5 %; a second call reads the cache
+    (here a folder of its own; by default the shipped references, then the user's cache):
 
-    >>> import trimesh
+    >>> import tempfile, trimesh
     >>> from translucency.acquire import make_sample
-    >>> from translucency.render import EnvironmentLight, coverage
+    >>> from translucency.render import Camera, EnvironmentLight, coverage
+    >>> from translucency.render.reference import converged_reference
     >>> ball = trimesh.creation.icosphere(2, radius=5.0)
     >>> volume = make_sample("homogeneous:marble", (10.0, 10.0, 10.0), 0.5)
     >>> camera = Camera.looking_at(ball, width=32, height=24)
     >>> mask = coverage(ball, camera)
     >>> sky = EnvironmentLight(0.1)
-    >>> image, info = converged_reference(ball, volume, sky, camera, mask, spp=64)  # doctest: +SKIP
-    >>> image.shape, info["renders"], round(info["noise"], 2), info["cached"]  # doctest: +SKIP
+    >>> cache = tempfile.mkdtemp()
+    >>> image, info = converged_reference(ball, volume, sky, camera, mask, spp=64, cache=cache)
+    >>> image.shape, info["renders"], round(info["noise"], 2), info["cached"]
     ((24, 32, 3), 2, 0.05, None)
-    >>> converged_reference(ball, volume, sky, camera, mask, spp=64)[1]["cached"]  # doctest: +SKIP
-    '/home/me/.cache/translucency/references'
+    >>> converged_reference(ball, volume, sky, camera, mask, spp=64, cache=cache)[1]["cached"] == cache
+    True
     """
     key = reference_key(mesh, volume, light, camera, spp, eta)
     folders = [] if cache is False else ([Path(cache)] if cache is not True else [SHIPPED, cache_dir()])

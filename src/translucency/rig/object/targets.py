@@ -145,9 +145,11 @@ def render_checkerboards(
 
     Examples
     --------
+    >>> from translucency.rig.object.cameras import Camera
+    >>> from translucency.rig.object.targets import render_checkerboards
     >>> cam = Camera.looking_at((0.0, 0.0, 100.0), (0.0, 0.0, 0.0), 80, 60, fov_deg=40.0)
-    >>> images = render_checkerboards(cam, (7, 5), 4.0, n=2, spp=4)  # doctest: +SKIP
-    >>> images[0].shape, images[0].dtype  # doctest: +SKIP
+    >>> images = render_checkerboards(cam, (7, 5), 4.0, n=2, spp=4)
+    >>> images[0].shape, images[0].dtype
     ((60, 80, 3), dtype('float32'))
     """
     if int(spp) < 1:
