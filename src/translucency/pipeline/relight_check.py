@@ -55,15 +55,19 @@ def relight_check(
 
     Examples
     --------
-    The shipped scan relit with an isotropic fit (the fit and the transport take minutes):
+    The shipped scan relit with a quick isotropic fit; its sample (the data set records a volume made by
+    :func:`translucency.pipeline.demo_volume`) is given for the photon reference (10-20 s, so not run
+    here):
 
     >>> import tempfile
+    >>> from translucency.data import default_dataset
     >>> from translucency.fit.planar import fit_planar
-    >>> from translucency.data import DATA_DIR
-    >>> from translucency.io.dataset import open_dataset
-    >>> ds = open_dataset(DATA_DIR / "marble_default.zarr")  # doctest: +SKIP
-    >>> models = {"iso": fit_planar(ds, "iso", n_terms=2).model}  # doctest: +SKIP
-    >>> out = relight_check(ds, models, tempfile.mkdtemp() + "/relight.png")  # doctest: +SKIP
+    >>> from translucency.pipeline import demo_volume
+    >>> from translucency.pipeline.relight_check import relight_check
+    >>> ds = default_dataset()
+    >>> models = {"iso": fit_planar(ds, "iso", n_terms=2, max_rounds=1).model}  # doctest: +SKIP
+    >>> out = relight_check(ds, models, tempfile.mkdtemp() + "/relight.png", volume=demo_volume(),
+    ...                     photons=200)  # doctest: +SKIP
     >>> sorted(out), sorted(out["rel_l2"])  # doctest: +SKIP
     (['pattern', 'photons_per_entry', 'rel_l2', 'total_ratio'], ['iso'])
     """

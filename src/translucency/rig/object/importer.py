@@ -117,10 +117,20 @@ def import_object(
     ...     print(str(exc).split("/")[-1])
     object.json: cannot read (No such file or directory)
 
-    A virtual rig's hand-over (:func:`~translucency.rig.object.photographs.photograph_object`)
-    imported (ray casting and reading the images take seconds):
+    A virtual rig's hand-over (:func:`~translucency.rig.object.photographs.photograph_object`, tens of
+    seconds) imported (ray casting and reading the images, a minute or more):
 
-    >>> info = import_object("sphere-rig", "sphere.zarr", exit_law="lambertian")  # doctest: +SKIP
+    >>> import trimesh
+    >>> from pathlib import Path
+    >>> from translucency.acquire.mesh import object_volume
+    >>> from translucency.rig.object.importer import import_object
+    >>> from translucency.rig.object.photographs import photograph_object
+    >>> mesh, folder = trimesh.creation.icosphere(subdivisions=2, radius=6.0), Path(tempfile.mkdtemp())
+    >>> volume = object_volume("homogeneous:skin1", mesh, 0.5, seed=1)
+    >>> _ = photograph_object(mesh, volume, folder / "sphere-rig", n_points=2, n_cameras=3,
+    ...                       resolution=(32, 32), spp=4)  # doctest: +SKIP
+    >>> info = import_object(folder / "sphere-rig", folder / "sphere.zarr",
+    ...                      exit_law="lambertian")  # doctest: +SKIP
     >>> sorted(info["flags"]), len(info["energy"]), len(info["energy"][0])  # doctest: +SKIP
     (['grazing', 'saturated', 'spot', 'unseen'], 2, 3)
     """
@@ -176,10 +186,18 @@ class ObjectImport:
     Read, posed and mapped once (seconds), then run chunk by chunk, resumable:
 
     >>> from translucency.rig.contract import run_import
-    >>> imp = ObjectImport.from_setup("sphere-rig", chunk_points=1)  # doctest: +SKIP
+    >>> import tempfile, trimesh
+    >>> from pathlib import Path
+    >>> from translucency.acquire.mesh import object_volume
+    >>> from translucency.rig.object.photographs import photograph_object
+    >>> mesh, rig = trimesh.creation.icosphere(subdivisions=2, radius=6.0), Path(tempfile.mkdtemp()) / "rig"
+    >>> _ = photograph_object(mesh, object_volume("homogeneous:skin1", mesh, 0.5, seed=1), rig, n_points=2,
+    ...                       n_cameras=3, resolution=(32, 32), spp=4)  # tens of seconds  # doctest: +SKIP
+    >>> imp = ObjectImport.from_setup(rig, chunk_points=1)  # doctest: +SKIP
     >>> imp.n_points, [c.camera.name for c in imp.cameras]  # doctest: +SKIP
     (2, ['cam0', 'cam1', 'cam2'])
-    >>> flags = run_import(imp, "sphere.zarr")  # pairs unseen, saturated, grazing, spot  # doctest: +SKIP
+    >>> out = tempfile.mkdtemp() + "/sphere.zarr"
+    >>> flags = run_import(imp, out)  # pairs unseen, saturated, grazing, spot  # doctest: +SKIP
     >>> flags.shape  # doctest: +SKIP
     (4,)
     """

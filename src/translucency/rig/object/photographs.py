@@ -252,11 +252,13 @@ def photograph_object(
 
     A sphere of skin from three cameras (renders take tens of seconds):
 
-    >>> import tempfile, trimesh  # doctest: +SKIP
-    >>> from translucency.acquire.mesh import object_volume  # doctest: +SKIP
-    >>> mesh = trimesh.creation.icosphere(subdivisions=2, radius=6.0)  # doctest: +SKIP
-    >>> volume = object_volume("homogeneous:skin1", mesh, 0.5, seed=1)  # doctest: +SKIP
-    >>> folder = Path(tempfile.mkdtemp()) / "sphere-rig"  # doctest: +SKIP
+    >>> import tempfile, trimesh
+    >>> from pathlib import Path
+    >>> from translucency.acquire.mesh import object_volume
+    >>> from translucency.rig.object.photographs import photograph_object
+    >>> mesh = trimesh.creation.icosphere(subdivisions=2, radius=6.0)
+    >>> volume = object_volume("homogeneous:skin1", mesh, 0.5, seed=1)
+    >>> folder = Path(tempfile.mkdtemp()) / "sphere-rig"
     >>> out = photograph_object(mesh, volume, folder, n_points=2, n_cameras=3, resolution=(32, 32),
     ...                         spp=4)  # doctest: +SKIP
     >>> sorted(out), len(out["incident"]), len(out["cameras"])  # doctest: +SKIP
