@@ -172,6 +172,9 @@ def write_figure2_reference(folder=None, *, spp: int = FIGURE2_REFERENCE_SPP, si
     The shipped reference was rendered at :data:`FIGURE2_REFERENCE_SPP` samples per pixel, twice:
 
     >>> import json
+    >>> from pathlib import Path
+    >>> from translucency.pipeline.figure2 import FIGURE2_REFERENCE_SPP, write_figure2_reference
+    >>> from translucency.render.reference import SHIPPED as SHIPPED_REFERENCES
     >>> shipped = [json.loads(p.read_text()) for p in SHIPPED_REFERENCES.glob("*.json")]
     >>> [(ref["spp"], ref["renders"]) for ref in shipped] == [(FIGURE2_REFERENCE_SPP, 2)]
     True
@@ -179,8 +182,8 @@ def write_figure2_reference(folder=None, *, spp: int = FIGURE2_REFERENCE_SPP, si
     With the default arguments it is found there and nothing is rendered (a few seconds: the scene and
     its key); into another folder the two renders take about 13 minutes:
 
-    >>> info = write_figure2_reference()  # doctest: +SKIP
-    >>> info["spp"], info["renders"], Path(info["cached"]).name  # doctest: +SKIP
+    >>> info = write_figure2_reference()
+    >>> info["spp"], info["renders"], Path(info["cached"]).name
     (256, 2, 'references')
     """
     pig, volume, light, camera = figure2_scene(size)
