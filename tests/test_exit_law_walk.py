@@ -34,7 +34,7 @@ def test_import_object_with_the_walks_exit_law(tmp_path):
     (geometric mean 1.3), and 0.85 to 6.3 (1.3) at 64 x 48 pixels and 16 spp."""
     rig = tmp_path / "rig"
     _run(
-        "acquire", "object-photographs", "--mesh", example_path("spot.obj"), "--scale", "0.33",
+        "acquire", "object-photographs", "--mesh", example_path("spot.obj"), "--scale", "0.333333",
         "--material", "skin", "--points", "2", "--cameras", "2", "--resolution", "32", "24", "--spp", "4",
         "--index-matched", "--out", rig,
     )  # fmt: skip

@@ -6,6 +6,7 @@ import functools
 import json
 from pathlib import Path
 
+import numpy as np
 import pytest
 import trimesh
 from json_schemas import COMMAND, SCHEMAS, check, markdown, schema_of
@@ -192,8 +193,15 @@ def test_info_prints_the_bounds_of_a_mesh_object(outputs):
 
 
 def test_render_json_names_the_light_as_an_object(outputs):
+    """The default light (point@key) as placed on the 8 mm ball seen from (1, -1.6, 0.7): the view's azimuth
+    turned 28 deg, its elevation raised 20 deg, 1.5 sizes (the box's diagonal) out, I = 1 W/mm^2 x d^2."""
     light = outputs["render"]["light"]
-    assert light["kind"] == "point" and light["position"] == [60.0, -80.0, 120.0]
+    view = np.array([1.0, -1.6, 0.7]) / np.linalg.norm([1.0, -1.6, 0.7])
+    az, el = np.arctan2(view[1], view[0]) + np.radians(28.0), np.arcsin(view[2]) + np.radians(20.0)
+    d = 1.5 * np.sqrt(3 * 8.0**2)
+    u = [np.cos(el) * np.cos(az), np.cos(el) * np.sin(az), np.sin(el)]
+    assert light["kind"] == "point" and light["position"] == pytest.approx(d * np.array(u), abs=0.01)
+    assert light["intensity"] == pytest.approx(d * d, rel=1e-3)
 
 
 def test_materials_json(outputs):

@@ -24,7 +24,7 @@ from ._common import (
 
 #: the light baked when none is given (the library's ``DEFAULT_LIGHT``, stated here so that ``--help``
 #: loads no renderer)
-DEFAULT_LIGHT = "point:60,-80,120,2e4"
+DEFAULT_LIGHT = "point@key"
 
 
 _MODEL = typer.Argument(..., help="A per-vertex model file (translucency fit on a mesh data set).")

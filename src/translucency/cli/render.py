@@ -27,7 +27,7 @@ from ._run import RichReporter
 
 #: the light of a render when none is given (the library's ``DEFAULT_LIGHT``, stated here so that
 #: ``--help`` loads no renderer)
-DEFAULT_LIGHT = "point:60,-80,120,2e4"
+DEFAULT_LIGHT = "point@key"
 #: the camera direction and picture resolution when none is given (the library's defaults)
 DEFAULT_VIEW, DEFAULT_RESOLUTION = "1,-1.6,0.7", (320, 240)
 

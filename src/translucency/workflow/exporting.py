@@ -26,7 +26,7 @@ from ..io.outputs import PLY_COMMENT, claim_output
 from ..model.burley import burley_of_exponentials, burley_shape
 from ..model.lean import NO_LEAN, has_lean
 from ..render import boundary_eta, object_of_model
-from ..render.lights import Placement, parse_light, place_light
+from ..render.lights import DEFAULT_LIGHT, Placement, parse_light, place_light
 from ..resources.memory import transport_pairs
 from ..resources.run import Run
 from ..transport import PreparedObject, TransportOptions
@@ -35,8 +35,6 @@ from ._arguments import as_path, model_and_record
 
 __all__ = ["DEFAULT_LIGHT", "export_gltf", "export_model", "export_ply"]
 
-#: the light baked into a glTF when none is given (render's default light), mm
-DEFAULT_LIGHT = "point:60,-80,120,2e4"
 
 
 def export_model(

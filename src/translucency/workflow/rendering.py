@@ -25,7 +25,7 @@ from ..model.lean import NO_LEAN, has_lean
 from ..render import Camera, parse_light
 from ..render.camera import view_direction
 from ..render.compare import FLIP_SKIPPED, flip_available
-from ..render.lights import Placement, place_light
+from ..render.lights import DEFAULT_LIGHT, Placement, place_light
 from ..render.object import boundary_eta, check_light_outside, object_of_model, volume_of_dataset
 from ..render.reference import check_reference
 from ..render.still import render_still
@@ -36,9 +36,6 @@ from ..transport import PreparedObject, TransportOptions
 from ._arguments import model_and_record, whole_number
 
 __all__ = ["DEFAULT_LIGHT", "Rendering", "render_model"]
-
-#: the light of a render when none is given: above and in front of the default view, in mm
-DEFAULT_LIGHT = "point:60,-80,120,2e4"
 
 
 @dataclasses.dataclass
