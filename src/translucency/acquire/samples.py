@@ -226,6 +226,7 @@ def make_sample(name: str, size_mm, voxel_mm: float, *, g: float = 0.0, seed: in
 
     Examples
     --------
+    >>> from translucency import make_sample
     >>> v = make_sample("homogeneous:marble", (4.0, 4.0, 2.0), 0.5)
     >>> v.shape
     (4, 8, 8)

@@ -98,6 +98,7 @@ class ModelFileError(TranslucencyError):
 
     Examples
     --------
+    >>> from translucency import ModelFileError, TranslucencyError, load_model
     >>> import os, tempfile
     >>> p = os.path.join(tempfile.mkdtemp(), "notes.model.zip")
     >>> _ = open(p, "w").write("not a zip")
@@ -148,6 +149,7 @@ def save_model(
 
     Examples
     --------
+    >>> from translucency import load_model, save_model
     >>> import tempfile, translucency as tl
     >>> m = tl.ExponentialModel([[0.0, 0.0]], [[[[1.0]]]], [[[[-2.0]]]],
     ...                         tl.PlanarAlpha.uniform((2, 2)), s_g=[1.0], s_b=[1.0])
@@ -367,6 +369,7 @@ def load_model(path) -> ReflectanceModel:
     A round trip through float16 keeps a one-term fit's total reflectance 2πc/d² (c = 1 mm⁻²,
     d = −2 mm⁻¹: π/2):
 
+    >>> from translucency import load_model, save_model
     >>> import tempfile, translucency as tl
     >>> m = tl.ExponentialModel([[0.0, 0.0]], [[[[1.0]]]], [[[[-2.0]]]],
     ...                         tl.PlanarAlpha.uniform((2, 2)), s_g=[1.0], s_b=[1.0])

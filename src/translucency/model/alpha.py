@@ -35,6 +35,8 @@ class PlanarAlpha:
 
     Examples
     --------
+    >>> import numpy as np
+    >>> from translucency.model import PlanarAlpha
     >>> a = PlanarAlpha.uniform((4, 4), origin=(0.0, 0.0), pitch=0.5)
     >>> a.at(np.array([[0.1, 1.9]]))
     array([1.])
@@ -92,6 +94,8 @@ class VertexAlpha:
 
     Examples
     --------
+    >>> import numpy as np
+    >>> from translucency.model import VertexAlpha
     >>> a = VertexAlpha([1.0, 2.0, 3.0], np.eye(3))   # α = 1, 2, 3 at the unit points on x, y, z
     >>> a.at(np.array([[0.9, 0.1, 0.0], [0.0, 0.2, 0.7]]))   # the nearest vertex's value
     array([1., 3.])

@@ -160,7 +160,7 @@ class BurleyModel(ReflectanceModel):
 
     Examples
     --------
-    >>> from translucency.model import PlanarAlpha
+    >>> from translucency.model import BurleyModel, PlanarAlpha
     >>> m = BurleyModel([[0.0, 0.0]], [[0.8, 0.6, 0.4]], [[2.0, 2.0, 2.0]], PlanarAlpha.uniform((8, 8)))
     >>> m.total_reflectance()   # the profile integrates to the albedo A
     array([[0.8, 0.6, 0.4]])

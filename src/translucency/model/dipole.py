@@ -163,7 +163,7 @@ class DipoleModel(MediumStorage, ReflectanceModel):
 
     Examples
     --------
-    >>> from translucency.model import PlanarAlpha, material
+    >>> from translucency.model import DipoleModel, PlanarAlpha, material
     >>> marble = material("marble")
     >>> m = DipoleModel([[0.0, 0.0]], marble.sigma_a[None], marble.sigma_s_prime[None], marble.eta,
     ...                 PlanarAlpha.uniform((8, 8), (-2, -2), 0.5))

@@ -68,7 +68,8 @@ class ExponentialModel(ReflectanceModel):
 
     Examples
     --------
-    >>> from translucency.model import PlanarAlpha
+    >>> import numpy as np
+    >>> from translucency.model import ExponentialModel, PlanarAlpha
     >>> c = np.array([[[[0.5, 0.1, 0.01]]]]); d = np.array([[[[-4.0, -1.5, -0.6]]]])
     >>> m = ExponentialModel([[0.0, 0.0]], c, d, PlanarAlpha.uniform((8, 8), (-2, -2), 0.5),
     ...                      s_g=[0.8], s_b=[0.6])

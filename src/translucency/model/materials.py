@@ -71,6 +71,7 @@ def material(name: str) -> Material:
 
     Examples
     --------
+    >>> from translucency.model import material
     >>> material("Marble").sigma_s_prime
     array([2.19, 2.62, 3.  ])
     """

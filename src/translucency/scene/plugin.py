@@ -94,13 +94,17 @@ def register_mitsuba_plugin() -> None:
 
     Examples
     --------
+    >>> from translucency import register_mitsuba_plugin
     >>> from translucency.mitsuba import mitsuba
     >>> mi = mitsuba()
     >>> register_mitsuba_plugin()
-    >>> integrator = mi.load_dict({"type": "translucency", "models": "pig=/data/pig.model.zip",
-    ...                            "samples": 8})
-    >>> integrator.models, integrator.options["samples"], integrator.options["scene_unit_mm"]
-    ({'pig': PosixPath('/data/pig.model.zip')}, 8, 1.0)
+    >>> import translucency as tl
+    >>> model = tl.data.example_path("spot_coarse.model.zip")   # the shape id "object" is fitted by it
+    >>> integrator = mi.load_dict({"type": "translucency", "models": f"object={model}", "samples": 8})
+    >>> integrator.models == {"object": model}, integrator.options["samples"]
+    (True, 8)
+    >>> integrator.options["scene_unit_mm"]
+    1.0
     >>> try:
     ...     mi.load_dict({"type": "translucency", "models": "pig"})
     ... except RuntimeError as exc:  # Mitsuba wraps the plugin's error; its last line is ours

@@ -75,6 +75,9 @@ def register_transport(kind: TransportKind) -> TransportKind:
     Examples
     --------
     >>> from dataclasses import dataclass
+    >>> from translucency import register_transport
+    >>> from translucency.transport import TRANSPORTS
+    >>> from translucency.transport.kinds import MeasuredTransport
     >>> @dataclass(frozen=True)
     ... class Dimmer:  # the default at half its strength
     ...     name: str = "dimmer"

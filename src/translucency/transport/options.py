@@ -35,6 +35,7 @@ class TransportOptions:
 
     Examples
     --------
+    >>> from translucency import TransportOptions
     >>> TransportOptions().kind, TransportOptions.of(paper=True).kind
     ('default', 'paper')
     >>> TransportOptions(radius=-1.0)  # doctest: +ELLIPSIS

@@ -38,6 +38,7 @@ def run_demo(
 
     Examples
     --------
+    >>> from translucency import run_demo
     >>> run_demo("results", max_memory="1M")  # doctest: +ELLIPSIS
     Traceback (most recent call last):
     ...

@@ -57,6 +57,7 @@ def describe(path) -> dict:
 
     Examples
     --------
+    >>> from translucency import describe
     >>> import translucency as tl
     >>> record = describe(tl.data.default_dataset_path())
     >>> record["what"], record["n_points"], record["chunks_done"] == record["chunks"]
@@ -153,6 +154,7 @@ def describe_materials(eta: float = 1.3) -> dict:
 
     Examples
     --------
+    >>> from translucency import describe_materials
     >>> record = describe_materials(1.3)
     >>> "marble" in record["materials"], len(record["materials"]["marble"]["R_d_dipole"])
     (True, 3)
