@@ -59,7 +59,7 @@ class ShotWalkLaw:
     >>> from translucency.rig.object.walk_law import ShotWalkLaw
     >>> ball = trimesh.creation.icosphere(3, radius=6.0)
     >>> law = ShotWalkLaw(ball, mesh_scene(ball), ball.vertices[0], ball.vertex_normals[0],
-    ...                   [(1.0, 0.95)] * 3, [np.array([0.0, 0.0, 60.0])], photons=20_000)
+    ...                   [(1.0, 0.95)] * 3, [np.array([0.0, 0.0, 60.0])], photons=4_000)
     >>> law.gamma[0].shape
     (642, 3)
     """
