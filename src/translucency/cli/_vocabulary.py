@@ -108,6 +108,7 @@ VOCABULARY: dict[str, tuple[str, str]] = {
     "--ply": ("PATH", "the mesh written as PLY"),
     "--gltf": ("PATH", "glTF 2.0 binary written"),
     "--mitsuba": ("DIR", "a Mitsuba 3 scene of the estimated medium written into this folder"),
+    "--preview": ("", "a quick rehearsal: smaller settings where none are given"),
     "--export": ("PATH", "a static page written into this folder"),
     "--port": ("INT", "the port served on"),
     "--browser": ("", "open the page in the default browser"),

@@ -77,6 +77,12 @@ class ObjectPhotographsOptions:
         rich_help_panel=PANEL_CAMERA,
     )
     seed = typer.Option(0, "--seed", help="Random seed of the filling, the renders and the sensor.")
+    preview = typer.Option(
+        False,
+        "--preview",
+        help="A quick rehearsal: --points 4 --cameras 4 --resolution 48 36 --spp 4 --voxel 1 where those "
+        "options are not given (a first imported object in minutes, not a model to trust).",
+    )
     image_format = typer.Option("pfm", "--format", help="pfm or exr.", rich_help_panel=PANEL_OUTPUT)
     overwrite = overwrite_option()
     max_memory = max_memory_option()
@@ -86,6 +92,7 @@ class ObjectPhotographsOptions:
 
 @user_errors
 def acquire_object_photographs_cmd(
+    ctx: typer.Context,
     out: Path = ObjectPhotographsOptions.out,
     mesh: Path = ObjectPhotographsOptions.mesh,
     scale: float = ObjectPhotographsOptions.scale,
@@ -102,6 +109,7 @@ def acquire_object_photographs_cmd(
     checkerboards: bool = ObjectPhotographsOptions.checkerboards,
     exposures: str = ObjectPhotographsOptions.exposures,
     seed: int = ObjectPhotographsOptions.seed,
+    preview: bool = ObjectPhotographsOptions.preview,
     image_format: str = ObjectPhotographsOptions.image_format,
     overwrite: bool = ObjectPhotographsOptions.overwrite,
     max_memory: str = ObjectPhotographsOptions.max_memory,
@@ -111,19 +119,20 @@ def acquire_object_photographs_cmd(
     """Photograph a virtual object with Mitsuba 3 (a laser spot per point, N calibrated cameras, sensor noise,
     dark offset, vignetting, a saturated spot, drifting power): a lab's hand-over for `import object`."""
     # heavy: Mitsuba and trimesh load only when it runs
-    from ..workflow.photographing import acquire_object_photographs
+    from ..workflow.photographing import PREVIEW, acquire_object_photographs
 
+    given = {"points": points, "cameras": cameras, "resolution": resolution, "spp": spp, "voxel_mm": voxel}
+    if preview:  # the rehearsal's values, where the command line gave none
+        option = {"voxel_mm": "voxel"}
+        source = ctx.get_parameter_source
+        given.update({k: v for k, v in PREVIEW.items() if source(option.get(k, k)).name == "DEFAULT"})
     shots = acquire_object_photographs(
         mesh,
         out,
         sample=material,
         scale_mm=scale,
         up=up,
-        voxel_mm=voxel,
-        points=points,
-        cameras=cameras,
-        resolution=resolution,
-        spp=spp,
+        **given,
         beam_mm=beam,
         eta=boundary_eta(eta, index_matched),
         checkerboards=checkerboards,

@@ -60,7 +60,7 @@ def import_object_cmd(
         f"exit law {s['exit_law']['law']}; unseen {s['flags']['unseen']:,} pairs filled; "
         f"saturated {s['flags']['saturated']:,} pairs ({s['saturated_views']:,} views dropped), "
         f"spot {s['flags']['spot']:,}: {s['near_peak']:,} from the near-peak model; "
-        f"a shot's energy uncertain by up to {_worst_share(s['energy_sigma'], s['energy']):.0%} (1 σ))"
+        f"a shot's energy uncertain by {_uncertainty(_worst_share(s['energy_sigma'], s['energy']))})"
     )
     finish(as_json, quiet, s, [line])
 
@@ -69,6 +69,21 @@ def _worst_share(sigma, energy) -> float:
     """The largest σ_E / E over shots and channels (0 for no shot)."""
     shares = [s / max(e, 1e-30) for ss, ee in zip(sigma, energy) for s, e in zip(ss, ee)]
     return max(shares, default=0.0)
+
+
+def _uncertainty(share: float) -> str:
+    """The worst σ_E / E in words: a percentage, or — beyond 100 % — that the energy is not measured.
+
+    Examples
+    --------
+    >>> _uncertainty(0.034)
+    'up to 3% (1 σ)'
+    >>> _uncertainty(4e24)
+    'more than its value in one shot and channel (σ_E/E up to 4e+24): too noisy to measure it'
+    """
+    if share <= 1.0:
+        return f"up to {share:.0%} (1 σ)"
+    return f"more than its value in one shot and channel (σ_E/E up to {share:.3g}): too noisy to measure it"
 
 
 def _pose_check(report: dict) -> str:
