@@ -119,13 +119,14 @@ def acquire_object_photographs_cmd(
     """Photograph a virtual object with Mitsuba 3 (a laser spot per point, N calibrated cameras, sensor noise,
     dark offset, vignetting, a saturated spot, drifting power): a lab's hand-over for `import object`."""
     # heavy: Mitsuba and trimesh load only when it runs
-    from ..workflow.photographing import PREVIEW, acquire_object_photographs
+    from ..workflow.photographing import acquire_object_photographs
 
+    # the settings the command line gave; with --preview the others are the workflow's rehearsal's
     given = {"points": points, "cameras": cameras, "resolution": resolution, "spp": spp, "voxel_mm": voxel}
-    if preview:  # the rehearsal's values, where the command line gave none
+    if preview:
         option = {"voxel_mm": "voxel"}
-        source = ctx.get_parameter_source
-        given.update({k: v for k, v in PREVIEW.items() if source(option.get(k, k)).name == "DEFAULT"})
+        given = {k: None if ctx.get_parameter_source(option.get(k, k)).name == "DEFAULT" else v
+                 for k, v in given.items()}  # fmt: skip
     shots = acquire_object_photographs(
         mesh,
         out,
@@ -133,6 +134,7 @@ def acquire_object_photographs_cmd(
         scale_mm=scale,
         up=up,
         **given,
+        preview=preview,
         beam_mm=beam,
         eta=boundary_eta(eta, index_matched),
         checkerboards=checkerboards,

@@ -32,14 +32,22 @@ from ._arguments import (
     whole_number,
 )
 
-__all__ = ["IMAGE_FORMATS", "PREVIEW", "Photographs", "acquire_object_photographs", "acquire_photographs"]
+__all__ = [
+    "FULL",
+    "IMAGE_FORMATS",
+    "PREVIEW",
+    "Photographs",
+    "acquire_object_photographs",
+    "acquire_photographs",
+]
 
 #: the image formats of a virtual rig's photographs
 IMAGE_FORMATS = ("pfm", "exr")
-#: a virtual object rig's rehearsal (``acquire object-photographs --preview``): a first imported object in
-#: about two minutes on 2 cores (photographs and ``import object``, the 100 mm example cow in skin),
-#: against about ten at the defaults; noisy photographs, a coarse filling — for trying the chain, not for
-#: a model to trust.  ``acquire_object_photographs(mesh, out, **PREVIEW)``
+#: a virtual object rig's settings where none are given: :data:`FULL`, or with ``preview`` (``acquire
+#: object-photographs --preview``) a rehearsal — a first imported object in about two minutes on 2 cores
+#: (photographs and ``import object``, the 100 mm example cow in skin) against about ten; noisy
+#: photographs, a coarse filling: for trying the chain, not for a model to trust
+FULL = {"points": 8, "cameras": 6, "resolution": (128, 128), "spp": 64, "voxel_mm": 0.5}
 PREVIEW = {"points": 4, "cameras": 4, "resolution": (48, 36), "spp": 4, "voxel_mm": 1.0}
 
 
@@ -211,11 +219,12 @@ def acquire_object_photographs(
     sample: str = "marble",
     scale_mm: float = 1.0,
     up: str = "z",
-    voxel_mm: float = 0.5,
-    points: int = 8,
-    cameras: int = 6,
-    resolution=(128, 128),
-    spp: int = 64,
+    voxel_mm: float | None = None,
+    points: int | None = None,
+    cameras: int | None = None,
+    resolution=None,
+    spp: int | None = None,
+    preview: bool = False,
     beam_mm: float = 0.3,
     eta: float | None = None,
     checkerboards: bool = False,
@@ -243,12 +252,16 @@ def acquire_object_photographs(
         The folder to write.
     sample : str
         The filling's generator name, made over the mesh's bounding box at ``voxel_mm`` with ``seed``.
-    points, cameras : int
+    points, cameras : int, optional
         Laser positions (a farthest-point sample of the vertices) and cameras (1–64).
-    resolution : (int, int)
+    resolution : (int, int), optional
         Image width and height, pixels (8–8192).
-    spp : int
+    spp : int, optional
         Samples per pixel of each of the two repeated frames.
+    preview : bool
+        Where ``voxel_mm``, ``points``, ``cameras``, ``resolution`` or ``spp`` is None, take it from
+        :data:`PREVIEW` (a quick rehearsal) instead of :data:`FULL` (8 points, 6 cameras, 128 × 128 px,
+        64 spp, 0.5 mm voxels).
     beam_mm : float
         Radius of the laser's spot on the surface, mm.
     eta : float, optional
@@ -293,6 +306,12 @@ def acquire_object_photographs(
     photographed the same way, in minutes.
     """
     require("rig")  # the cameras' projection (OpenCV): a missing extra is one line before any work
+    settings = PREVIEW if preview else FULL  # where the caller gave None
+    voxel_mm, points, cameras, resolution, spp = (
+        settings[k] if v is None else v
+        for k, v in (("voxel_mm", voxel_mm), ("points", points), ("cameras", cameras),
+                     ("resolution", resolution), ("spp", spp))
+    )  # fmt: skip
     points = whole_number("points", points)
     cameras = int(check_option("cameras", whole_number("cameras", cameras), hi=64))
     spp, seed = whole_number("spp", spp), whole_number("seed", seed, lo=0)
