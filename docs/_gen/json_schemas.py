@@ -365,7 +365,7 @@ _MESH_ERRORS = {
 }
 _OBLIQUE = record(
     "With oblique beams in the truth (or the data: acquire mesh --incidence): the model's errors on them, "
-    "each beam's total from the model's own incidence law (evaluate/oblique_errors.py).",
+    "each beam's total from the model's own incidence law (`translucency.evaluate.oblique_errors`).",
     {
         "paper": field(
             "number", "Relative L2 error of the paper's model (the normal beam's shape).", "fraction"
@@ -727,7 +727,7 @@ INFO_MODEL = record(
         "intact": field("boolean", "The file reads back as written."),
         "problem": field(["string", "null"], "Why it is not valid, or null."),
         "physical": record(
-            "The physical bounds (model/bounds.py).",
+            "The physical bounds (`translucency.model.bounds`).",
             {
                 "ok": field("boolean", "Every point within the bounds."),
                 "description": field("string", "The same in words."),
@@ -947,15 +947,16 @@ def _is(value, type_: str) -> bool:
 _INTRO = """\
 # JSON output of the commands
 
+<!-- written by `python docs/_gen/json_schemas.py > docs/json.md`: edit the schemas there, not this page -->
+
 Every command that takes `--json` prints one JSON object on stdout and nothing else there (progress and
 warnings go to stderr): numbers as numbers, booleans as booleans, objects as objects, nothing cut short;
 NaN and infinity as `null`. `evaluate --json-out PATH` writes the same object to a file. Errors are one
 `error:` line on stderr, exit status 2.
 
 Below, each command's keys, their types and units ("fraction": 0.05 is 5 %). `a.b` is key `b` inside
-object `a`; `a.*` any key of an object keyed by names. This page is generated from
-`docs/_gen/json_schemas.py` (`python docs/_gen/json_schemas.py > docs/json.md`), and
-`tests/test_json.py` checks every command's actual output against it.
+object `a`; `a.*` any key of an object keyed by names. The tables are written from the same schemas
+the test suite checks every command's actual output against.
 """
 
 
