@@ -36,7 +36,6 @@ from ._arguments import as_path, model_and_record
 __all__ = ["DEFAULT_LIGHT", "export_gltf", "export_model", "export_ply"]
 
 
-
 def export_model(
     model,
     *,
