@@ -26,8 +26,9 @@ def examples(
     quiet: bool = quiet_option(),
     as_json: bool = json_option(),
 ):
-    """Copy the example files into OUT: spot.obj and cow.obj (meshes), sky.exr (a sky), scene.xml (a
-    Mitsuba scene around object.ply), filling.npz (a volume for --volume) and LICENSES.md."""
+    """Copy the example files into OUT: spot.obj and cow.obj (meshes in mm, +z up), sky.exr (a sky),
+    scene.xml (a Mitsuba scene around object.ply), filling.npz (a volume for --volume),
+    spot_coarse.model.zip (a small fitted model to render at once) and LICENSES.md."""
     from ..workflow.examples import copy_examples  # the package's data folder and the atomic writes
 
     done = copy_examples(out, overwrite=overwrite, reporter=RichReporter(quiet or as_json))
