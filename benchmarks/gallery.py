@@ -163,8 +163,9 @@ def main() -> None:
         raise SystemExit(f"error: the gallery weighs {total / 1e6:.2f} MB, more than {MAX_TOTAL / 1e6:g} MB")
     text = "\n".join(
         [
-            f"Written by `python benchmarks/gallery.py RESULTS {args.gallery}` from the output of "
-            "`{{ data.gallery.command }}` ({{ data.gallery.software }}); its numbers: "
+            # the command that writes this section is in the page's "Reproducing these pictures", after it
+            "From the output of `{{ data.gallery.command }}` ({{ data.gallery.software }}), made small for "
+            "this page ([Reproducing these pictures](#reproducing-these-pictures)); its numbers: "
             f"`{page.with_suffix('.json').name}`.",
             "",
             *sections,
