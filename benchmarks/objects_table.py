@@ -173,8 +173,9 @@ def _write_structure_table(rows: list, args) -> None:
 
     lines = [
         "Each cell: relative RMSE / FLIP / brightness (ours over the reference's) against the mean of two "
-        "256-spp volpath renders (`python benchmarks/objects_table.py --meshes ../shared/meshes "
-        "--size 128 96 --compare structure --case …`, the specs below; 128 incident points × 4,000 photons, "
+        # the commands are in the page's own "Reproducing these measurements" section, after the table
+        "256-spp volpath renders (the benchmark of this page, [Reproducing these measurements]"
+        "(#reproducing-these-measurements), with the specs below; 128 incident points × 4,000 photons, "
         "index-matched, 1 mm voxels, seed 3). The first three columns are drawn as `render` draws by "
         "default (half-space incidence, through-body table); the last is the paper's choice drawn as the "
         "paper does (`render --paper`).",
