@@ -146,8 +146,9 @@ def markdown(results: dict, args) -> str:
     head = [
         "# Accuracy of the planar fits (held-out)",
         "",
-        "Written by `python benchmarks/accuracy_table.py --out docs/accuracy.md "
-        f"--grid {args.grid} --photons {args.photons} --truth-factor {args.truth_factor}`.",
+        # the command is in the page's own "Reproducing these measurements" section, at its end
+        "Measured by the benchmark of this page, "
+        "[Reproducing these measurements](#reproducing-these-measurements).",
         "",
         f"Virtual DISCO data: {args.grid}×{args.grid} incident points over 6 mm, 8 mm windows of 0.25 mm "
         "pixels; slab 20×20×8 mm, 0.25 mm voxels, g = 0, η = 1.3, each generator's volume seed 1. "

@@ -56,8 +56,9 @@ def main() -> None:
     )
     text = "\n".join(
         [
-            "Held out, % (RGB summed; written by `python benchmarks/figure1_table.py RESULTS --out "
-            "docs/accuracy.md` from a `make demo` folder):",
+            # the command is in the page's own "Reproducing these measurements" section, at its end
+            "Held out, % (RGB summed; from a `make demo` folder, "
+            "[Reproducing these measurements](#reproducing-these-measurements)):",
             "",
             head + "| in-sample all |",
             "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |",

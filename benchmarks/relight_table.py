@@ -27,8 +27,9 @@ def table(relight: dict) -> str:
         for name, err in relight["rel_l2"].items()
     ]
     source = (
-        "from `results/report/relight.json` (written by `python benchmarks/relight_table.py RESULTS "
-        "--out docs/accuracy.md` from a `make demo` folder):"
+        # the command is in the page's own "Reproducing these measurements" section, at its end
+        "from `results/report/relight.json` of a `make demo` folder "
+        "([Reproducing these measurements](#reproducing-these-measurements)):"
     )
     return "\n".join(
         [

@@ -108,7 +108,9 @@ def markdown(results: dict, times: dict, args) -> str:
         [
             "## The default's structure against every fixed one (held-out)",
             "",
-            "Written by `python benchmarks/structure_choice.py --out docs/accuracy.md` "
+            # the command is in the page's own "Reproducing these measurements" section, at its end
+            "Measured by the structure benchmark of this page, "
+            "[Reproducing these measurements](#reproducing-these-measurements) "
             f"({args.photons:,}-photon data and a 3× truth for the table's samples; the two kept aside at "
             "20,000 photons against 400,000).  `fit` chooses the colour, n and m by held-out error on its "
             "own data (docs/fitting.md, *The structure*); each fixed structure is fitted too, and all are "
