@@ -228,6 +228,11 @@ def filling_record(path) -> dict:
     return {"path": str(path), "sha256": h.hexdigest()}
 
 
+#: the variance of the barycentric tally of a vertex over its Poisson value R_d / (N A_v): a photon adds
+#: its barycentric weights φ_v, so Var = N E[φ²] = N E[φ] (A/6)/(A/3) for exits spread evenly over the
+#: vertex's triangles; σ² = R_d / (2 N A_v) mm⁻⁴ (:mod:`translucency.evaluate.mesh_errors` measures it)
+TALLY_VARIANCE_FACTOR = 0.5
+
 #: what becomes of the light that leaves without scattering (:func:`acquire_mesh`, module notes)
 UNSCATTERED = ("apart", "counted")
 

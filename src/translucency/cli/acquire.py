@@ -285,9 +285,7 @@ def acquire_planar_cmd(
     from ..workflow.acquiring import acquire_planar  # heavy: Mitsuba, Dask and SciPy load only when it runs
 
     if tilt and incidence:
-        raise TranslucencyError(
-            "--tilt and --incidence: oblique beams begin with the normal one; leave --tilt at 0 with them"
-        )
+        raise TranslucencyError(TILT_AND_INCIDENCE)
     ds = acquire_planar(
         _one_sample(material, volume),
         out,
@@ -314,6 +312,10 @@ def acquire_planar_cmd(
         reporter=RichReporter(quiet),
     )
     finish(as_json, quiet, ds.summary, [f"data set: {out}"])
+
+
+#: --tilt tilts the scan's one beam; --incidence adds oblique beams beside the normal one: not both
+TILT_AND_INCIDENCE = "--tilt and --incidence: oblique beams begin with the normal one; leave --tilt at 0"
 
 
 class MeshOptions:

@@ -102,7 +102,7 @@ def _table(evaluation, data: Path, truth: Path | None) -> Table:
     """The errors per model (and the noise floor) as a table: planar models with their total reflectance,
     per-vertex models held out with their error beyond the noise; its title says what the errors are
     measured against, its caption what the bands and the noise row mean and which figure to trust."""
-    from ..evaluate.labels import table_caption
+    from ..workflow.evaluating import table_caption  # the report's words, loaded with the evaluation
 
     summary, mesh, held_out = evaluation.summary, evaluation.geometry == "mesh", truth is not None
     where = "vertices" if mesh else "pixels"

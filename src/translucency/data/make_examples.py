@@ -1,5 +1,4 @@
-"""The generated example files: a small sky (``sky.exr``), a user's filling (``filling.npz``) and a small
-fitted object (``spot_coarse.model.zip``).
+"""The generated example files: a small sky (``sky.exr``) and a user's filling (``filling.npz``).
 
 Regenerate them, the same bytes of arrays each time::
 
@@ -19,13 +18,8 @@ models and ``scene.xml`` is written by hand; ``LICENSES.md`` beside them says wh
     ``sigma_s``, ``sigma_a`` (Z, Y, X, 3) in mm⁻¹, ``voxel_mm``, ``g`` and ``eta``, as
     ``acquire planar --volume`` and ``acquire mesh --volume`` read them
     (:func:`translucency.acquire.load_volume`).
-``spot_coarse.model.zip``
-    A fitted object to render, export and view at once (the documentation's examples use it): ``spot.obj``
-    reduced to :data:`COARSE_FACES` triangles (quadric decimation, the ``viewer`` extra), acquired in
-    generated marble at :data:`COARSE_VOXEL_MM` mm, index-matched, :data:`COARSE_POINTS` incident points of
-    :data:`COARSE_PHOTONS` photons per channel (photon seed 1), and the isotropic model with two terms
-    fitted per vertex, stored as float16 (about 40 kB; a minute to make).  A sketch to try things on, not
-    a measurement: its own fit is ``translucency acquire mesh`` and ``translucency fit`` on a mesh.
+``spot_coarse.model.zip``, the small fitted object, is made by the library's own acquisition and fit:
+:mod:`translucency.workflow.examples` (``python -m translucency.workflow.examples [FOLDER]``).
 """
 
 from __future__ import annotations
@@ -50,9 +44,6 @@ FILLING_SIZE_MM = FILLING_VOXELS * FILLING_VOXEL_MM
 MARBLE_SIGMA_S = (2.19, 2.62, 3.00)
 MARBLE_SIGMA_A = (0.0021, 0.0041, 0.0071)
 VEIN_SIGMA_A = (0.060, 0.030, 0.050)
-#: the coarse fitted object: spot.obj's triangles kept, the generated filling's voxel (mm), its incident
-#: points and photons per point and channel
-COARSE_FACES, COARSE_VOXEL_MM, COARSE_POINTS, COARSE_PHOTONS = 800, 2.0, 12, 2000
 
 
 def sky_directions(width: int, height: int) -> np.ndarray:
@@ -132,40 +123,14 @@ def filling(seed: int = 7) -> dict:
     }
 
 
-def coarse_model(path, *, seed: int = 1) -> Path:
-    """Acquire and fit the coarse example object (``spot_coarse.model.zip``) into ``path``; returns it.
-
-    Its record names the data set only as ``spot_coarse.zarr`` (the scratch folder it was acquired in
-    is gone); its acquisition header stays whole, so the filling is rebuilt for a reference render.
-    """
-    import tempfile
-
-    from ..io.mesh import load_mesh
-    from ..io.model_file import save_model
-    from ..workflow import acquire_mesh, fit_model
-    from . import example_path
-
-    mesh = load_mesh(example_path("spot.obj")).simplify_quadric_decimation(face_count=COARSE_FACES)
-    with tempfile.TemporaryDirectory(prefix="translucency-examples-") as scratch:
-        data = acquire_mesh(
-            mesh, Path(scratch) / "spot_coarse.zarr", "marble", voxel_mm=COARSE_VOXEL_MM,
-            points=COARSE_POINTS, photons=COARSE_PHOTONS, seed=seed, index_matched=True,
-        )  # fmt: skip
-        result = fit_model(data, "iso", n_terms=2).result
-    return save_model(result.model, path, dtype="float16", meta=result.metadata("spot_coarse.zarr"),
-                      overwrite=True)  # fmt: skip
-
-
 def write_examples(folder) -> list[Path]:
-    """Write ``sky.exr``, ``filling.npz`` and ``spot_coarse.model.zip`` into ``folder`` (atomically);
-    returns their paths."""
+    """Write ``sky.exr`` and ``filling.npz`` into ``folder`` (atomically); returns their paths."""
     folder = Path(folder)
     with atomic_path(folder / "sky.exr") as tmp:
         mitsuba().Bitmap(sky()).write(str(tmp))
     with atomic_path(folder / "filling.npz") as tmp:
         np.savez_compressed(tmp, **filling())
-    coarse_model(folder / "spot_coarse.model.zip")
-    return [folder / "sky.exr", folder / "filling.npz", folder / "spot_coarse.model.zip"]
+    return [folder / "sky.exr", folder / "filling.npz"]
 
 
 if __name__ == "__main__":  # pragma: no cover

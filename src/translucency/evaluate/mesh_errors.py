@@ -42,6 +42,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._validate import TranslucencyError
+from ..acquire.mesh import TALLY_VARIANCE_FACTOR  # the tally's variance over its Poisson value
 from ..fit.mesh import exclusion_radius, mean_edge_length, read_pairs
 from ..io.mesh_dataset import MeshDataset, open_mesh_dataset
 from ..io.vertex_model import check_vertex_model
@@ -53,8 +54,6 @@ DISTANCE_EDGES = np.array(
     [0.0, 0.5, 1.0, 1.5, 2.0, 3.0, 4.0, 6.0, 8.0, 12.0, 16.0, 24.0, 32.0, 48.0, 64.0, 128.0]
 )
 
-#: the variance of a barycentric tally over its Poisson value R_d / (N A_v) (module docstring)
-TALLY_VARIANCE_FACTOR = 0.5
 
 
 @dataclass

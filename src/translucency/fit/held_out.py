@@ -151,7 +151,7 @@ def mesh_held_out_terms(fit: FitResult, group, *, chunk_points: int = 32, varian
     vertex's area A_v (mm²), so that a finely meshed region does not count more than a coarse one.
     α at v was fitted from the other points' pairs on v (pooled over its disc).  σ² is the data set's
     ``R_d_var`` where it holds one (measured from photographs), else the simulated tally's
-    :data:`~translucency.evaluate.mesh_errors.TALLY_VARIANCE_FACTOR` R_d / (N A_v); 0 where neither is known.
+    :data:`~translucency.acquire.mesh.TALLY_VARIANCE_FACTOR` R_d / (N A_v); 0 where neither is known.
 
     Examples
     --------
@@ -198,8 +198,8 @@ def mesh_held_out_terms(fit: FitResult, group, *, chunk_points: int = 32, varian
 
 def _tally_variance_scale(group, area: np.ndarray) -> np.ndarray:
     """σ² / R_d per vertex (V,) of a simulated mesh data set, mm⁻²: the barycentric tally's
-    :data:`~translucency.evaluate.mesh_errors.TALLY_VARIANCE_FACTOR` / (N A_v); 0 without a photon count."""
-    from ..evaluate.mesh_errors import TALLY_VARIANCE_FACTOR  # (the evaluation imports the fit)
+    :data:`~translucency.acquire.mesh.TALLY_VARIANCE_FACTOR` / (N A_v); 0 without a photon count."""
+    from ..acquire.mesh import TALLY_VARIANCE_FACTOR  # the acquisition (trimesh, Mitsuba) loads only here
 
     photons = (group.attrs.get(MESH_HEADER_KEY) or {}).get("photons")
     if not photons:

@@ -14,7 +14,11 @@ import numpy as np
 from .. import resources
 from .._validate import TranslucencyError, check_option
 from ..evaluate.errors import PlanarErrors, planar_errors
-from ..evaluate.labels import model_label, noise_label
+from ..evaluate.labels import (
+    model_label,
+    noise_label,
+    table_caption,  # noqa: F401 — the command line's words under its table
+)
 from ..evaluate.mesh_errors import MeshErrors, check_model_points, check_same_points, mesh_errors
 from ..io.atomic import write_json
 from ..io.dataset import PlanarDataset, dataset_identity
