@@ -23,8 +23,8 @@ float16.
 ``examples/``
     The files the documentation's commands use (:data:`EXAMPLES`, :func:`example_path`; ``translucency
     examples FOLDER`` copies them): two meshes, a sky, a Mitsuba scene, a filling and a small fitted object
-    (``spot_coarse.model.zip``), with ``LICENSES.md`` (:mod:`.make_examples` generates the sky and the filling,
-    :mod:`translucency.workflow.examples` the fitted object).
+    (``spot_coarse.model.zip``), with ``LICENSES.md`` (:mod:`.make_examples` generates the sky and the
+    filling, :mod:`translucency.workflow.examples` the fitted object).
 """
 
 from importlib.resources import files
