@@ -55,7 +55,6 @@ DISTANCE_EDGES = np.array(
 )
 
 
-
 @dataclass
 class MeshErrors:
     """Error statistics of one per-vertex model on one mesh data set (the reference)."""
