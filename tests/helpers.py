@@ -4,6 +4,7 @@ Import them as ``from helpers import random_exponential_model`` (pytest puts tes
 """
 
 import re
+import shutil
 
 import numpy as np
 from hypothesis import HealthCheck, settings
@@ -17,6 +18,14 @@ FUZZ = {
     "deadline": None,
     "suppress_health_check": [HealthCheck.function_scoped_fixture, HealthCheck.too_slow],
 }
+
+
+def chromium_executable() -> str | None:
+    """The system's headless-capable Chromium (the browser tests drive it through playwright), or None."""
+    for name in ("chromium", "chromium-browser", "google-chrome"):
+        if shutil.which(name):
+            return shutil.which(name)
+    return None
 
 
 def fuzz_settings(fast_examples: int):

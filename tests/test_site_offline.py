@@ -10,11 +10,12 @@ import functools
 import http.server
 import os
 import re
-import shutil
 import threading
 from pathlib import Path
 
 import pytest
+
+from helpers import chromium_executable
 
 SITE, SHOTS = (
     Path(os.environ[name]).resolve() if os.environ.get(name) else None
@@ -49,13 +50,6 @@ def test_no_page_or_style_loads_from_another_host():
     assert not found, "\n".join(found)
 
 
-def _chromium() -> str | None:
-    for name in ("chromium", "chromium-browser", "google-chrome"):
-        if shutil.which(name):
-            return shutil.which(name)
-    return None
-
-
 class _Quiet(http.server.SimpleHTTPRequestHandler):
     def log_message(self, *args) -> None:
         pass
@@ -75,7 +69,7 @@ def server():
 @pytest.fixture(scope="module")
 def browser():
     playwright = pytest.importorskip("playwright.sync_api")
-    exe = _chromium()
+    exe = chromium_executable()
     if exe is None:
         pytest.skip("no Chromium installed (apt-get install chromium)")
     with playwright.sync_playwright() as p:

@@ -6,7 +6,6 @@ from __future__ import annotations
 import base64
 import json
 import math
-import shutil
 import socket
 import subprocess
 import sys
@@ -18,7 +17,7 @@ import pytest
 import trimesh
 from typer.testing import CliRunner
 
-from helpers import random_exponential_model
+from helpers import chromium_executable, random_exponential_model
 from translucency.cli.app import app
 from translucency.transport import sh
 
@@ -272,17 +271,10 @@ def test_a_port_in_use_takes_another_and_says_which(prepared):
 # both pages in a real browser
 
 
-def _chromium() -> str | None:
-    for name in ("chromium", "chromium-browser", "google-chrome"):
-        if shutil.which(name):
-            return shutil.which(name)
-    return None
-
-
 @pytest.fixture(scope="module")
 def browser():
     playwright = pytest.importorskip("playwright.sync_api")
-    exe = _chromium()
+    exe = chromium_executable()
     if exe is None:
         pytest.skip("no Chromium installed (apt-get install chromium)")
     with playwright.sync_playwright() as p:
