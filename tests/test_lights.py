@@ -78,6 +78,9 @@ def test_relative_lights_are_placed_around_the_object():
     az, el = np.radians(-90.0 + 28.0), np.radians(20.0)
     key = parse_light(DEFAULT_LIGHT, BOX)
     assert DEFAULT_LIGHT == "point@key" and isinstance(key, PointLight)
+    from translucency.cli import export, render  # their copies, kept so that --help loads no renderer
+
+    assert render.DEFAULT_LIGHT == export.DEFAULT_LIGHT == DEFAULT_LIGHT
     u = np.array([np.cos(el) * np.cos(az), np.cos(el) * np.sin(az), np.sin(el)])
     np.testing.assert_allclose(key.position, centre + DEFAULT_DISTANCE * size * u, atol=1e-9)
     steep = Placement(BOX.bounds, view=(0.0, 0.0, 1.0))  # from straight above: raised no further than 85°

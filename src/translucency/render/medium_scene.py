@@ -150,11 +150,11 @@ def write_mitsuba_scene(
     if not (np.isfinite(eta) and eta > 0):
         raise TranslucencyError(f"eta: expected a relative index > 0, got {eta!r}")
     volume = scene_volume(model, mesh, voxels=voxels, name=name)
+    camera = camera or Camera.looking_at(mesh, width=DEFAULT_RESOLUTION[0], height=DEFAULT_RESOLUTION[1])
     if light is None:  # render's light, placed for this camera
-        view = np.subtract(camera.origin, camera.target) if camera is not None else (1.0, -1.6, 0.7)
+        view = np.subtract(camera.origin, camera.target)
         light = place_light(parse_light(DEFAULT_LIGHT), Placement.of(mesh, view))
     check_reference(light, eta)  # a dielectric under a delta light: volpath renders its inside black
-    camera = camera or Camera.looking_at(mesh, width=DEFAULT_RESOLUTION[0], height=DEFAULT_RESOLUTION[1])
     mi = mitsuba()
     # the reference's own grids (flipped in z) and placement, one channel at a time: stacked into RGB here
     lo, hi = (np.asarray(b, dtype=np.float64) for b in mesh.bounds)

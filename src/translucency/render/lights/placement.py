@@ -102,13 +102,16 @@ class RelativeLight:
         az, el = np.radians(self.azimuth), np.radians(self.elevation)
         return np.array([np.cos(el) * np.cos(az), np.cos(el) * np.sin(az), np.sin(el)])
 
+    def distance_mm(self, placement: Placement) -> float:
+        """A point's or spot's distance from the object's centre, mm (``distance`` in object sizes or mm)."""
+        return float(self.distance * placement.size if self.in_sizes else self.distance)
+
     def position(self, placement: Placement) -> tuple[tuple, np.ndarray]:
         """A point's or spot's position (mm) ``distance`` from the object's centre towards the light, and
         the centre."""
         u = self.direction(placement)
         centre = np.asarray(placement.centre, dtype=np.float64)
-        d = self.distance * placement.size if self.in_sizes else self.distance
-        return tuple(float(x) for x in centre + d * u), centre
+        return tuple(float(x) for x in centre + self.distance_mm(placement) * u), centre
 
     def power_or(self, default: float) -> float:
         """Its power, or ``default`` where its text gave none."""
@@ -117,8 +120,7 @@ class RelativeLight:
     def intensity(self, placement: Placement) -> float:
         """A point's or spot's I (W/sr): its power, or where its text gave none the I that brings
         :data:`~.light.DEFAULT_IRRADIANCE` to the object's centre from its distance d: E d²."""
-        d = self.distance * placement.size if self.in_sizes else self.distance
-        return self.power_or(DEFAULT_IRRADIANCE * d * d)
+        return self.power_or(DEFAULT_IRRADIANCE * self.distance_mm(placement) ** 2)
 
     def place(self, placement: Placement) -> Light:
         """The light in the object's frame: its kind's :meth:`~.light.Light.placed`."""
